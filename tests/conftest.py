@@ -1,0 +1,44 @@
+"""Shared fixtures: where the rig logs and protocol vectors live.
+
+Tests that need `../shared` (rig logs, protocol vectors) use the `shared_dir` or
+`rig_data` fixtures; they skip with a clear reason when the folder is absent, except
+when STATION_REQUIRE_SHARED=1 (CI), where a missing folder is a failure.
+"""
+
+import os
+from pathlib import Path
+
+import pytest
+
+REPO = Path(__file__).resolve().parents[1]
+
+
+def _require(path: Path, what: str) -> Path:
+    if path.exists():
+        return path
+    msg = f"{what} not found at {path} (set STATION_RIG_DATA or put ../shared beside the repo)"
+    if os.environ.get("STATION_REQUIRE_SHARED") == "1":
+        pytest.fail(msg + "; STATION_REQUIRE_SHARED=1 forbids skipping")
+    pytest.skip(msg)
+
+
+@pytest.fixture(scope="session")
+def shared_dir() -> Path:
+    """The shared folder (DESIGN.md, spec/, data/) beside the repository."""
+    return _require(REPO.parent / "shared", "shared folder")
+
+
+@pytest.fixture(scope="session")
+def rig_data() -> Path:
+    """Folder of the rig's logs: $STATION_RIG_DATA or ../shared/data/rig."""
+    env = os.environ.get("STATION_RIG_DATA")
+    path = Path(env) if env else REPO.parent / "shared" / "data" / "rig"
+    return _require(path, "rig data")
+
+
+@pytest.fixture(scope="session")
+def v1_vectors(shared_dir: Path) -> dict:
+    """The protocol v1 test vectors (spec/protocol-v1-vectors.json)."""
+    import json
+
+    return json.loads(_require(shared_dir / "spec" / "protocol-v1-vectors.json", "protocol vectors").read_text())
