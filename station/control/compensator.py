@@ -1,0 +1,121 @@
+"""The rig's compensator structure and the open-loop pass-through.
+
+DESIGN.md "Compensators": theta_d_hat = u - Ga(a) (u without Ga); e = theta_d_hat - theta;
+v = sat(Gth(e)) at +-limit; the Gth recursion remembers the saturated v (anti-windup),
+the Ga recursion its own output.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+from station.control.tf import DiscreteTF
+
+
+class Compensator:
+    """Lead/P compensator Gth with optional accelerometer feedback Ga.
+
+    Parameters
+    ----------
+    gth : DiscreteTF
+        Forward compensator from the error e (encoder counts) to v (DAC counts).
+    ga : DiscreteTF or None
+        Accelerometer feedback from a (accelerometer counts) to encoder counts.
+    limit : float or None
+        Saturation of v, DAC counts (the rig clamps at +-200); None for no clamp.
+    name : str
+        Short name for reports ("p", "lead", "lead-accel", a file name).
+    spec : dict
+        JSON-able description for log headers (kind, designs, z coefficients, limit).
+    """
+
+    def __init__(self, gth: DiscreteTF, ga: DiscreteTF | None = None, limit: float | None = 200.0,
+                 name: str = "", spec: dict[str, Any] | None = None):
+        if limit is not None and not limit > 0:
+            raise ValueError(f"limit must be positive or None, got {limit}")
+        self.gth = gth
+        self.ga = ga
+        self.limit = None if limit is None else float(limit)
+        self.name = name
+        self.spec = dict(spec) if spec else {}
+
+    def reset(self) -> None:
+        """Return both filters to rest."""
+        self.gth.reset()
+        if self.ga is not None:
+            self.ga.reset()
+
+    def step(self, u: float, theta: float, a: float) -> tuple[float, float]:
+        """Compute one command.
+
+        Parameters
+        ----------
+        u : float
+            Reference for this tick, encoder counts.
+        theta : float
+            Encoder reading used (per the alignment), encoder counts.
+        a : float
+            Accelerometer reading used, accelerometer counts.
+
+        Returns
+        -------
+        v : float
+            Command, DAC counts, within +-limit.
+        theta_d_hat : float
+            The reference after accelerometer feedback, encoder counts.
+        """
+        ga = self.ga
+        theta_d_hat = u - ga.step(a) if ga is not None else u
+        e = theta_d_hat - theta
+        gth = self.gth
+        v = gth.output(e)
+        lim = self.limit
+        if lim is not None:
+            if v > lim:
+                v = lim
+            elif v < -lim:
+                v = -lim
+        gth.commit(e, v)
+        return v, theta_d_hat
+
+    def __repr__(self) -> str:
+        return f"Compensator(name={self.name!r}, gth={self.gth!r}, ga={self.ga!r}, limit={self.limit})"
+
+
+class OpenLoop:
+    """Open loop: the reference is the command, v = u (clamped when a limit is given).
+
+    Parameters
+    ----------
+    limit : float or None
+        Clamp of v, DAC counts; None for none.
+    name : str
+        Short name for reports.
+    """
+
+    gth = None
+    ga = None
+
+    def __init__(self, limit: float | None = None, name: str = "open-loop"):
+        if limit is not None and not limit > 0:
+            raise ValueError(f"limit must be positive or None, got {limit}")
+        self.limit = None if limit is None else float(limit)
+        self.name = name
+        self.spec = {"kind": "open-loop", "limit": self.limit}
+
+    def reset(self) -> None:
+        """Nothing to reset (no state)."""
+
+    def step(self, u: float, theta: float, a: float) -> tuple[float, float]:
+        """Return ``(v, theta_d_hat) = (u, u)``, v clamped to +-limit; theta and a unused."""
+        v = u
+        lim = self.limit
+        if lim is not None:
+            if v > lim:
+                v = lim
+            elif v < -lim:
+                v = -lim
+        return v, u
+
+    def __repr__(self) -> str:
+        return f"OpenLoop(limit={self.limit})"

@@ -1,0 +1,273 @@
+"""The rig's compensator designs, compensator files (TOML) and ``make_controller``.
+
+Designs (DESIGN.md "Compensators"; thesis ch. V):
+
+- P: v = kp e.
+- Lead: Gth(s) = 5 (p/z) (s + z)/(s + p), p = 2 pi 20 rad/s, z = 2 pi 5 rad/s.
+- Accelerometer feedback: Ga(s) = (b1 s + b0)/(s^3 + a2 s^2 + a1 s + a0).
+
+Continuous designs are discretized by Tustin's method at the sample time.
+
+A compensator file is TOML::
+
+    name = "my-lead"          # optional
+    limit = 200.0             # optional, DAC counts; false for no clamp
+    [gth]
+    num = [20.0, 628.3185307179587]
+    den = [1.0, 125.66370614359172]
+    domain = "s"              # "s": Tustin at dt; "z": used as given (powers of z^-1)
+    [ga]                      # optional, same fields
+"""
+
+from __future__ import annotations
+
+import math
+import tomllib
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from station.control.compensator import Compensator, OpenLoop
+from station.control.tf import DiscreteTF, tustin
+from station.errors import StationError
+
+_P_LEAD = 2 * math.pi * 20.0
+_Z_LEAD = 2 * math.pi * 5.0
+
+LEAD_NUM_S = (5.0 * _P_LEAD / _Z_LEAD, 5.0 * _P_LEAD / _Z_LEAD * _Z_LEAD)
+"""Lead Gth(s) numerator, descending powers of s (DESIGN.md)."""
+LEAD_DEN_S = (1.0, _P_LEAD)
+"""Lead Gth(s) denominator, descending powers of s (DESIGN.md)."""
+
+_A2, _A1, _A0, _B1, _B0 = 36.49022971, 172.1552844, 15.39673089, 467.22634242, 281.56096177
+ACCEL_NUM_S = (_B1, _B0)
+"""Accelerometer feedback Ga(s) numerator, descending powers of s (DESIGN.md)."""
+ACCEL_DEN_S = (1.0, _A2, _A1, _A0)
+"""Accelerometer feedback Ga(s) denominator, descending powers of s (DESIGN.md)."""
+
+KINDS = ("p", "lead", "lead-accel", "open-loop")
+"""Built-in controller kinds of :func:`make_controller`."""
+
+
+def _stage(num: Any, den: Any, domain: str, dt: float) -> tuple[DiscreteTF, dict[str, Any]]:
+    """One filter and its JSON-able description (continuous design and z coefficients)."""
+    if domain == "s":
+        num_z, den_z = tustin(num, den, dt)
+        desc = {"domain": "s", "num_s": [float(c) for c in num], "den_s": [float(c) for c in den]}
+    else:
+        tf = DiscreteTF(num, den)
+        num_z, den_z = tf.num, tf.den
+        desc = {"domain": "z"}
+    desc["num_z"] = [float(c) for c in num_z]
+    desc["den_z"] = [float(c) for c in den_z]
+    return DiscreteTF(num_z, den_z), desc
+
+
+def _build(kind: str, name: str, gth: tuple, ga: tuple | None, limit: float | None, dt: float,
+           extra: dict[str, Any] | None = None) -> Compensator:
+    gth_tf, gth_desc = _stage(*gth, dt)
+    ga_tf, ga_desc = _stage(*ga, dt) if ga is not None else (None, None)
+    spec: dict[str, Any] = {"kind": kind, "name": name, "dt": dt}
+    spec.update(extra or {})
+    spec.update({"gth": gth_desc, "ga": ga_desc, "limit": None if limit is None else float(limit)})
+    return Compensator(gth_tf, ga_tf, limit=limit, name=name, spec=spec)
+
+
+def p_controller(kp: float = 2.0, limit: float | None = 200.0, dt: float = 0.002) -> Compensator:
+    """Proportional control v = sat(kp e) (thesis: kp = 2).
+
+    Parameters
+    ----------
+    kp : float
+        Gain, DAC counts per encoder count.
+    limit : float or None
+        Clamp of v, DAC counts.
+    dt : float
+        Sample time, s (recorded in the spec only).
+    """
+    return _build("p", "p", ([kp], [1.0], "z"), None, limit, dt, {"kp": float(kp)})
+
+
+def lead_controller(limit: float | None = 200.0, dt: float = 0.002, accel: bool = False) -> Compensator:
+    """The rig's lead compensator Gth, optionally with accelerometer feedback Ga (Tustin at dt).
+
+    Parameters
+    ----------
+    limit : float or None
+        Clamp of v, DAC counts.
+    dt : float
+        Sample time, s.
+    accel : bool
+        Add the accelerometer feedback Ga ("lead-accel").
+    """
+    ga = (ACCEL_NUM_S, ACCEL_DEN_S, "s") if accel else None
+    kind = "lead-accel" if accel else "lead"
+    return _build(kind, kind, (LEAD_NUM_S, LEAD_DEN_S, "s"), ga, limit, dt)
+
+
+def controller_from_spec(spec: dict[str, Any]) -> Compensator | OpenLoop:
+    """Rebuild a controller from the ``spec`` a log header holds (our format).
+
+    Uses the z coefficients as recorded (JSON floats round-trip exactly).
+
+    Parameters
+    ----------
+    spec : dict
+        ``Compensator.spec`` or ``OpenLoop.spec`` as written by :mod:`station.runlog`.
+
+    Raises
+    ------
+    StationError
+        If the spec lacks a field or holds bad coefficients.
+    """
+    try:
+        kind = spec["kind"]
+        limit = spec.get("limit")
+        if kind == "open-loop":
+            return OpenLoop(limit=limit)
+        stages = []
+        for key in ("gth", "ga"):
+            desc = spec.get(key)
+            if desc is None:
+                stages.append(None)
+                continue
+            stages.append(DiscreteTF(desc["num_z"], desc["den_z"]))
+        if stages[0] is None:
+            raise KeyError("gth")
+        return Compensator(stages[0], stages[1], limit=limit, name=str(spec.get("name", kind)), spec=spec)
+    except (KeyError, TypeError, ValueError) as exc:
+        raise StationError(f"controller spec in log header: bad or missing field {exc}") from None
+
+
+def _check_coeffs(path: Path, field: str, value: Any) -> list[float]:
+    if not isinstance(value, list) or not value:
+        raise StationError(f"{path}: {field}: expected a non-empty list of numbers, got {value!r}")
+    out = []
+    for i, c in enumerate(value):
+        if isinstance(c, bool) or not isinstance(c, (int, float)) or not math.isfinite(c):
+            raise StationError(f"{path}: {field}[{i}]: expected a finite number, got {c!r}")
+        out.append(float(c))
+    return out
+
+
+def _read_stage(path: Path, table: str, doc: dict[str, Any]) -> tuple[list[float], list[float], str]:
+    stage = doc[table]
+    if not isinstance(stage, dict):
+        raise StationError(f"{path}: [{table}]: expected a table with num, den and domain")
+    unknown = sorted(set(stage) - {"num", "den", "domain"})
+    if unknown:
+        raise StationError(f"{path}: [{table}].{unknown[0]}: unknown field (expected num, den, domain)")
+    for key in ("num", "den", "domain"):
+        if key not in stage:
+            raise StationError(f"{path}: [{table}].{key}: missing")
+    domain = stage["domain"]
+    if domain not in ("s", "z"):
+        raise StationError(f'{path}: [{table}].domain: expected "s" or "z", got {domain!r}')
+    num = _check_coeffs(path, f"[{table}].num", stage["num"])
+    den = _check_coeffs(path, f"[{table}].den", stage["den"])
+    if den[0] == 0.0:
+        raise StationError(f"{path}: [{table}].den[0]: must not be zero")
+    if domain == "s":
+        num_t = np.trim_zeros(np.asarray(num), "f")
+        if len(num_t) > len(den):
+            raise StationError(f"{path}: [{table}].num: improper design (numerator degree {len(num_t) - 1} "
+                               f"> denominator degree {len(den) - 1})")
+    return num, den, domain
+
+
+def load_compensator_file(path: str | Path, dt: float = 0.002, limit: float | None = 200.0) -> Compensator:
+    """Read a compensator file (TOML, see the module docstring).
+
+    Parameters
+    ----------
+    path : str or Path
+        The TOML file.
+    dt : float
+        Sample time for Tustin discretization of ``domain = "s"`` stages, s.
+    limit : float or None
+        Clamp used when the file has no ``limit``, DAC counts.
+
+    Returns
+    -------
+    Compensator
+        With ``spec["kind"] == "file"`` and ``spec["file"]`` the path.
+
+    Raises
+    ------
+    StationError
+        Naming the file and the field: unreadable file, invalid TOML, missing [gth],
+        unknown field, bad coefficients, bad domain, improper design, bad limit.
+    """
+    path = Path(path)
+    try:
+        text = path.read_text(encoding="utf-8")
+    except OSError as exc:
+        raise StationError(f"{path}: cannot read compensator file: {exc.strerror or exc}") from None
+    try:
+        doc = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise StationError(f"{path}: not valid TOML: {exc}") from None
+    unknown = sorted(set(doc) - {"gth", "ga", "limit", "name"})
+    if unknown:
+        raise StationError(f"{path}: {unknown[0]}: unknown field (expected gth, ga, limit, name)")
+    if "gth" not in doc:
+        raise StationError(f"{path}: [gth]: missing (the compensator from e to v)")
+    gth = _read_stage(path, "gth", doc)
+    ga = _read_stage(path, "ga", doc) if "ga" in doc else None
+    if "limit" in doc:
+        lim = doc["limit"]
+        if lim is False:
+            limit = None
+        elif isinstance(lim, bool) or not isinstance(lim, (int, float)) or not (math.isfinite(lim) and lim > 0):
+            raise StationError(f"{path}: limit: expected a positive number of DAC counts or false, got {lim!r}")
+        else:
+            limit = float(lim)
+    name = doc.get("name", path.stem)
+    if not isinstance(name, str) or not name:
+        raise StationError(f"{path}: name: expected a non-empty string, got {name!r}")
+    try:
+        return _build("file", name, gth, ga, limit, dt, {"file": str(path)})
+    except ValueError as exc:
+        raise StationError(f"{path}: {exc}") from None
+
+
+def make_controller(kind: str, dt: float = 0.002, kp: float = 2.0,
+                    limit: float | None = 200.0) -> Compensator | OpenLoop:
+    """Build a controller by name or from a compensator file.
+
+    Parameters
+    ----------
+    kind : str
+        "p" (v = kp e), "lead" (Gth), "lead-accel" (Gth + Ga), "open-loop" (v = u),
+        or a path to a TOML compensator file.
+    dt : float
+        Sample time, s (0.002 on the rig).
+    kp : float
+        P gain, DAC counts per encoder count (kind "p" only).
+    limit : float or None
+        Clamp of v, DAC counts (the rig: 200); None for none. A file's own ``limit``
+        takes precedence.
+
+    Returns
+    -------
+    Compensator or OpenLoop
+
+    Raises
+    ------
+    StationError
+        Unknown kind that is not an existing file, or a bad compensator file.
+    """
+    if kind == "p":
+        return p_controller(kp, limit, dt)
+    if kind == "lead":
+        return lead_controller(limit, dt)
+    if kind == "lead-accel":
+        return lead_controller(limit, dt, accel=True)
+    if kind == "open-loop":
+        return OpenLoop(limit=limit)
+    path = Path(kind)
+    if not path.is_file():
+        raise StationError(f"controller {kind!r}: expected one of {', '.join(KINDS)} "
+                           f"or a compensator file (TOML); no such file")
+    return load_compensator_file(path, dt, limit)
