@@ -1,0 +1,63 @@
+"""``station step``: a step test on the rig or the simulated rig."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+from station import DT
+from station import experiment as ex
+
+NAME = "step"
+HELP = "run a step test (default: lead compensator, 100 counts, on the built-in simulated rig)"
+
+
+def configure(parser) -> None:
+    """Add ``station step``'s options to ``parser``."""
+    parser.add_argument("--controller", default=ex.DEFAULT_CONTROLLER,
+                        help="p, lead, lead-accel, open-loop or a compensator FILE.toml (default lead)")
+    parser.add_argument("--kp", type=float, default=2.0, help="P gain for --controller p (default 2)")
+    parser.add_argument("--limit", type=float, default=200.0, help="controller clamp, ±DAC counts (default 200)")
+    parser.add_argument("--amplitude", type=float, default=ex.DEFAULT_AMPLITUDE, metavar="COUNTS",
+                        help="step height in encoder counts (default 100)")
+    parser.add_argument("--duration", type=float, default=ex.DEFAULT_DURATION, metavar="S", help="run length (default 2 s)")
+    parser.add_argument("--step-time", type=float, default=ex.DEFAULT_STEP_TICK * DT, metavar="S",
+                        help="when the step starts (default 0.02 s = tick 10)")
+    parser.add_argument("--port", default=ex.DEFAULT_PORT, metavar="URL",
+                        help="port path or pyserial URL (default sim://, the simulated rig)")
+    parser.add_argument("--protocol", choices=("v1", "legacy"), default="v1", help="wire protocol (default v1)")
+    parser.add_argument("--baud", type=int, default=None, help="baud rate (default 921600 for v1, 115200 legacy)")
+    parser.add_argument("--timeout", type=float, default=ex.DEFAULT_TIMEOUT, metavar="S",
+                        help="longest wait for a sample before stopping safely (default 0.1 s)")
+    parser.add_argument("--soft-limit", type=float, default=ex.DEFAULT_SOFT_LIMIT, metavar="COUNTS",
+                        help="stop safely when |θ| exceeds this (default 2048 = two revolutions)")
+    parser.add_argument("--out", type=Path, default=None, metavar="FILE", help="run log (default runs/step-*.tsv)")
+    parser.add_argument("--json", type=Path, default=None, metavar="FILE", help="write metrics and timing as JSON")
+    viz = parser.add_mutually_exclusive_group()
+    viz.add_argument("--rrd", type=Path, default=None, metavar="FILE", help="record the run to a rerun .rrd file")
+    viz.add_argument("--spawn", action="store_true", help="stream the run to a rerun viewer")
+
+
+def run(args) -> int:
+    """Run the test; exit code 0 when it completed, 1 when it was stopped by a fault."""
+    sinks = []
+    if args.rrd is not None or args.spawn:
+        from station.viz import RerunSink
+
+        sinks.append(RerunSink(rrd_path=args.rrd, spawn=args.spawn, name="station step"))
+    try:
+        report = ex.run_step(port=args.port, protocol=args.protocol, controller=args.controller,
+                             amplitude=args.amplitude, duration=args.duration,
+                             step_tick=int(round(args.step_time / DT)), out=args.out, sinks=sinks,
+                             kp=args.kp, limit=args.limit, soft_limit=args.soft_limit,
+                             timeout=args.timeout, baudrate=args.baud)
+    finally:
+        for sink in sinks:
+            sink.close()
+    print(ex.format_report(report))
+    if args.rrd is not None:
+        print(f"rerun recording: {args.rrd}")
+    if args.json is not None:
+        args.json.parent.mkdir(parents=True, exist_ok=True)
+        args.json.write_text(json.dumps(report.to_json(), indent=1) + "\n")
+    return 0 if report.result.ok else 1
