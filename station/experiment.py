@@ -74,7 +74,8 @@ def run_step(port: str = DEFAULT_PORT, protocol: str = "v1", controller: str = D
              amplitude: float = DEFAULT_AMPLITUDE, duration: float = DEFAULT_DURATION,
              step_tick: int = DEFAULT_STEP_TICK, out: str | Path | None = None, sinks=(),
              kp: float = 2.0, limit: float = 200.0, soft_limit: float = DEFAULT_SOFT_LIMIT,
-             timeout: float = DEFAULT_TIMEOUT, baudrate: int | None = None, dt: float = DT) -> StepReport:
+             timeout: float = DEFAULT_TIMEOUT, baudrate: int | None = None, dt: float = DT,
+             lean: bool = True) -> StepReport:
     """Run a step test on a device and log it.
 
     Parameters
@@ -100,6 +101,8 @@ def run_step(port: str = DEFAULT_PORT, protocol: str = "v1", controller: str = D
         Encoder soft limit, counts: passing it stops the run safely.
     timeout : float
         Longest wait for one sample, s.
+    lean : bool
+        The loop's real-time settings (see :func:`station.loop.run_loop`).
 
     Returns
     -------
@@ -140,7 +143,7 @@ def run_step(port: str = DEFAULT_PORT, protocol: str = "v1", controller: str = D
         }
         writer = RunLogWriter(log_path, meta, sinks=sinks)
         try:
-            result = run_loop(session, ctrl, u, writer, soft_limit=soft_limit, dt=dt)
+            result = run_loop(session, ctrl, u, writer, soft_limit=soft_limit, dt=dt, lean=lean)
         finally:
             writer.close()  # after the loop has sent command 0 and stop
     return StepReport(log_path, result, _metrics_of(log_path, amplitude))

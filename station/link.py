@@ -16,7 +16,7 @@ not report it), status the v1 status bits (0 for legacy).
 from __future__ import annotations
 
 import time
-from urllib.parse import parse_qsl, urlencode, urlsplit, urlunsplit
+from urllib.parse import parse_qsl, urlencode, urlsplit
 
 import serial
 
@@ -52,7 +52,7 @@ def sim_url(url: str, protocol: str) -> str:
         return url
     query = dict(parse_qsl(parts.query))
     query.setdefault("protocol", protocol)
-    return urlunsplit(parts._replace(query=urlencode(query)))
+    return f"sim://{parts.netloc}{parts.path}?{urlencode(query)}"
 
 
 def open_port(url: str, protocol: str = "v1", timeout: float = 0.1, baudrate: int | None = None) -> serial.SerialBase:

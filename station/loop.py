@@ -122,7 +122,7 @@ def _restore_priority() -> None:
 
 
 def run_loop(session: Session, controller, reference: np.ndarray, writer, soft_limit: float = 2048.0,
-             dt: float = DT, realtime_priority: bool = True) -> RunResult:
+             dt: float = DT, lean: bool = True) -> RunResult:
     """Run one test: start the device, answer every sample, stop it safely.
 
     Parameters
@@ -140,8 +140,10 @@ def run_loop(session: Session, controller, reference: np.ndarray, writer, soft_l
         |θ| above this many encoder counts stops the run.
     dt : float
         Sample time, s (for the t column).
-    realtime_priority : bool
-        Try SCHED_FIFO / nice for the loop's thread.
+    lean : bool
+        Garbage collection off, a short GIL switch interval and a raised scheduling
+        priority (SCHED_FIFO / nice, where the OS allows) during the run. False runs a
+        plain loop (the benchmark's baseline).
 
     Returns
     -------
@@ -158,14 +160,15 @@ def run_loop(session: Session, controller, reference: np.ndarray, writer, soft_l
     old_switch = sys.getswitchinterval()
     old_term = _install_sigterm()
     gc_was_enabled = gc.isenabled()
-    priority = raise_priority() if realtime_priority else "default"
+    priority = raise_priority() if lean else "default"
     perf_ns = time.perf_counter_ns
     read_sample, send_command, step, append = session.read_sample, session.send_command, controller.step, writer.append
     try:
         session.start(n_ticks)
-        gc.collect()
-        gc.disable()
-        sys.setswitchinterval(5e-5)
+        if lean:
+            gc.collect()
+            gc.disable()
+            sys.setswitchinterval(5e-5)  # the writer thread must not hold the GIL for ms
         v_k, dhat_k, lat_k = 0.0, u[0], NAN  # tick 0 outputs 0
         last = n_ticks - 1
         while True:

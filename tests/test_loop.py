@@ -63,7 +63,7 @@ def test_command_on_sample_k_uses_theta_k_and_reference_k_plus_1():
     theta = [0, 0, 3, 7, 12, 20]
     u = np.array([0, 0, 50, 50, 50, 50], float)
     session, writer = ScriptedSession(_samples(theta), events), ListWriter(events)
-    result = run_loop(session, make_controller("p", kp=2.0), u, writer, realtime_priority=False)
+    result = run_loop(session, make_controller("p", kp=2.0), u, writer, lean=False)
     assert result.ok and result.ticks == 6
     commands = [e for e in events if e[0] == "command"]
     # the last sample (n = 5) is not answered: the run ends with it
@@ -87,7 +87,7 @@ def test_faults_send_zero_and_stop_before_the_log_is_flushed(fault, reason):
     events = []
     session = ScriptedSession(_samples([0] * 20), events, fault_at=7, fault=fault)
     writer = ListWriter(events)
-    result = run_loop(session, make_controller("lead"), np.full(20, 100.0), writer, realtime_priority=False)
+    result = run_loop(session, make_controller("lead"), np.full(20, 100.0), writer, lean=False)
     writer.close()
     assert result.reason == reason and not result.ok
     assert events[-2:] == [("stop",), ("log closed", 7)]
@@ -107,7 +107,7 @@ def test_controller_exception_stops_safely():
 
     events = []
     session = ScriptedSession(_samples([0] * 10), events)
-    result = run_loop(session, Exploding(), np.zeros(10), ListWriter(events), realtime_priority=False)
+    result = run_loop(session, Exploding(), np.zeros(10), ListWriter(events), lean=False)
     assert result.reason == "controller" and "ZeroDivisionError" in result.message and "tick 3" in result.message
     assert events[-1] == ("stop",)
     assert [e for e in events if e[0] == "command"][-1] == ("command", 2, 1.0)  # nothing sent after the fault
@@ -117,7 +117,7 @@ def test_soft_limit_stops_and_logs_the_offending_sample():
     events = []
     theta = [0, 100, 900, 2100, 2200]
     session, writer = ScriptedSession(_samples(theta), events), ListWriter(events)
-    result = run_loop(session, make_controller("p"), np.full(5, 50.0), writer, soft_limit=2048, realtime_priority=False)
+    result = run_loop(session, make_controller("p"), np.full(5, 50.0), writer, soft_limit=2048, lean=False)
     assert result.reason == "soft-limit" and "2100" in result.message
     assert events[-1] == ("stop",)
     assert [r[4] for r in writer.rows] == [0, 100, 900, 2100]
@@ -127,6 +127,6 @@ def test_soft_limit_stops_and_logs_the_offending_sample():
 def test_saturation_applies_to_logged_and_sent_commands():
     events = []
     session, writer = ScriptedSession(_samples([0] * 5), events), ListWriter(events)
-    run_loop(session, make_controller("p", kp=10.0, limit=200.0), np.full(5, 100.0), writer, realtime_priority=False)
+    run_loop(session, make_controller("p", kp=10.0, limit=200.0), np.full(5, 100.0), writer, lean=False)
     assert all(abs(e[2]) <= 200.0 for e in events if e[0] == "command")
     assert max(r[3] for r in writer.rows) == 200.0

@@ -1,0 +1,54 @@
+"""Opening ports: missing, busy and bad URLs give one-line errors naming the port."""
+
+import os
+import pty
+import subprocess
+import sys
+
+import pytest
+
+from station.errors import StationError
+from station.link import open_session, sim_url
+
+
+def test_missing_port_names_it():
+    with pytest.raises(StationError, match=r"cannot open port /dev/does-not-exist-42"):
+        open_session("/dev/does-not-exist-42")
+
+
+def test_busy_port_is_reported_busy():
+    master, slave = pty.openpty()
+    path = os.ttyname(slave)
+    first = open_session(path, timeout=0.05)
+    try:
+        with pytest.raises(StationError, match=rf"cannot open port {path}: port is busy"):
+            open_session(path, timeout=0.05)
+    finally:
+        first.close()
+        os.close(master)
+        os.close(slave)
+
+
+def test_unknown_protocol_is_rejected():
+    with pytest.raises(StationError, match="unknown protocol 'v2'"):
+        open_session("loop://", protocol="v2")
+
+
+def test_device_that_does_not_answer_hello():
+    with open_session("loop://", timeout=0.02) as session:  # loop:// echoes HELLO back: no INFO
+        with pytest.raises(StationError, match="no INFO from loop://"):
+            session.hello()
+
+
+def test_sim_url_gets_the_protocol_only_when_missing():
+    assert sim_url("sim://", "legacy") == "sim://?protocol=legacy"
+    assert sim_url("sim://?protocol=v1&seed=3", "legacy") == "sim://?protocol=v1&seed=3"
+    assert sim_url("/dev/ttyACM0", "legacy") == "/dev/ttyACM0"
+
+
+def test_cli_error_is_one_line_without_traceback():
+    proc = subprocess.run([sys.executable, "-m", "station", "step", "--port", "/dev/does-not-exist-42"],
+                          capture_output=True, text=True, timeout=60)
+    assert proc.returncode == 2
+    assert proc.stderr.strip().count("\n") == 0, proc.stderr
+    assert proc.stderr.startswith("station: error: cannot open port /dev/does-not-exist-42")
