@@ -1,0 +1,19 @@
+"""FEM plant model of the SFLR (thesis ch. III–IV, DESIGN.md "FEM plant"); no I/O.
+
+- `load_params`, `Params`: parameter sets (``params/<name>.toml``), SI units.
+- `build_continuous`: continuous state space from v (DAC counts) to [theta, a] (counts).
+- `DiscretePlant`, `Sensors`: the exact-ZOH sampled plant and the rig's sensors.
+- `simulate`: a whole closed- or open-loop run, compiled sample loop.
+- `beam_frequencies`, `beam_modes`: the beam-only eigen-solver (verification).
+- `modal_summary`: natural frequencies and theta/v antiresonances of the SFLR model.
+"""
+
+from station.plant.discrete import DiscretePlant, Sensors, quantize
+from station.plant.fem import beam_frequencies, beam_modes, build_continuous, state_matrices
+from station.plant.parameters import Params, load_params
+from station.plant.simulate import simulate
+
+__all__ = [
+    "DiscretePlant", "Params", "Sensors", "beam_frequencies", "beam_modes", "build_continuous",
+    "load_params", "quantize", "simulate", "state_matrices",
+]

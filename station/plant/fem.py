@@ -1,0 +1,270 @@
+"""FEM model of the SFLR: Hermite cubic Euler–Bernoulli elements, consistent mass.
+
+Thesis chapters III–IV (DESIGN.md "FEM plant"), in SI units with no element-length
+scaling of the rotational DOFs. Generalized coordinates of the SFLR model::
+
+    q = [theta_m, theta_b, phi_0, w_1, phi_1, ..., w_n, phi_n]
+
+motor angle, base angle, beam root slope (rad), then the lateral displacement w (m) and
+slope phi (rad) of each beam node; the root's lateral displacement is pinned (w_0 = 0).
+w is measured in the inertial frame, positive towards increasing theta, so a rigid
+rotation by theta gives w(x) = x·theta, phi = theta.
+"""
+
+from __future__ import annotations
+
+import control
+import numpy as np
+import scipy.linalg
+
+from station.plant.parameters import Params
+
+N_ELEMENTS_MAX = 100
+"""Largest supported element count."""
+
+BOUNDARY_CONDITIONS = ("pinned-free", "cantilever", "free-free")
+
+
+def element_matrices(EI: float, mu: float, h: float) -> tuple[np.ndarray, np.ndarray]:
+    """Stiffness and consistent mass matrices of one Hermite cubic beam element.
+
+    Parameters
+    ----------
+    EI : float
+        Flexural rigidity, N·m².
+    mu : float
+        Mass per length, kg/m.
+    h : float
+        Element length, m.
+
+    Returns
+    -------
+    K, M : ndarray, shape (4, 4)
+        Over the element DOFs [w_i, phi_i, w_i+1, phi_i+1] (m, rad, m, rad);
+        K in N/m, N, N·m (per the DOF pair), M in kg, kg·m, kg·m².
+        Standard Euler–Bernoulli element (thesis ch. III).
+    """
+    K = (EI / h**3) * np.array(
+        [
+            [12.0, 6 * h, -12.0, 6 * h],
+            [6 * h, 4 * h**2, -6 * h, 2 * h**2],
+            [-12.0, -6 * h, 12.0, -6 * h],
+            [6 * h, 2 * h**2, -6 * h, 4 * h**2],
+        ]
+    )
+    M = (mu * h / 420.0) * np.array(
+        [
+            [156.0, 22 * h, 54.0, -13 * h],
+            [22 * h, 4 * h**2, 13 * h, -3 * h**2],
+            [54.0, 13 * h, 156.0, -22 * h],
+            [-13 * h, -3 * h**2, -22 * h, 4 * h**2],
+        ]
+    )
+    return K, M
+
+
+def _check_n(n_elements: int) -> int:
+    if isinstance(n_elements, bool) or int(n_elements) != n_elements or not 1 <= n_elements <= N_ELEMENTS_MAX:
+        raise ValueError(f"n_elements must be an integer in 1..{N_ELEMENTS_MAX}, got {n_elements!r}")
+    return int(n_elements)
+
+
+def assemble_beam(n_elements: int, EI: float, mu: float, L: float) -> tuple[np.ndarray, np.ndarray]:
+    """Free-free stiffness and consistent mass matrices of a uniform beam.
+
+    Parameters
+    ----------
+    n_elements : int
+        Number of equal Hermite cubic elements, 1..100.
+    EI, mu, L : float
+        Flexural rigidity N·m², mass per length kg/m, length m.
+
+    Returns
+    -------
+    K, M : ndarray, shape (2 n + 2, 2 n + 2)
+        Over [w_0, phi_0, w_1, phi_1, ..., w_n, phi_n] (node 0 at the root).
+    """
+    n = _check_n(n_elements)
+    Ke, Me = element_matrices(EI, mu, L / n)
+    size = 2 * n + 2
+    K = np.zeros((size, size))
+    M = np.zeros((size, size))
+    for e in range(n):
+        s = slice(2 * e, 2 * e + 4)
+        K[s, s] += Ke
+        M[s, s] += Me
+    return K, M
+
+
+def _beam_free_dofs(n: int, bc: str) -> np.ndarray:
+    if bc == "pinned-free":
+        return np.arange(1, 2 * n + 2)
+    if bc == "cantilever":
+        return np.arange(2, 2 * n + 2)
+    if bc == "free-free":
+        return np.arange(0, 2 * n + 2)
+    raise ValueError(f"bc must be one of {BOUNDARY_CONDITIONS}, got {bc!r}")
+
+
+def beam_modes(
+    n_elements: int, bc: str = "pinned-free", EI: float = 1.0, mu: float = 1.0, L: float = 1.0
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Elastic natural frequencies and mode shapes of a uniform beam alone.
+
+    Generalized symmetric eigenproblem K φ = ω² M φ (scipy.linalg.eigh) of the
+    assembled Hermite cubic model; the rigid-body modes of the boundary condition
+    (one for pinned-free, two for free-free) are dropped.
+
+    Parameters
+    ----------
+    n_elements : int
+        Element count, 1..100.
+    bc : {"pinned-free", "cantilever", "free-free"}
+        Boundary condition at the root (x = 0); the tip is free.
+    EI, mu, L : float
+        Flexural rigidity N·m², mass per length kg/m, length m.
+
+    Returns
+    -------
+    omega : ndarray, shape (m,)
+        Natural frequencies, rad/s, ascending.
+    x : ndarray, shape (n + 1,)
+        Node positions, m.
+    w : ndarray, shape (n + 1, m)
+        Lateral displacement of each mode at the nodes (0 where pinned/clamped),
+        each column scaled to unit maximum magnitude, sign such that the tip is >= 0.
+
+    Raises
+    ------
+    ValueError
+        Unknown bc or element count out of range.
+    """
+    n = _check_n(n_elements)
+    K, M = assemble_beam(n, EI, mu, L)
+    free = _beam_free_dofs(n, bc)
+    lam, vec = scipy.linalg.eigh(K[np.ix_(free, free)], M[np.ix_(free, free)])
+    rigid = {"pinned-free": 1, "cantilever": 0, "free-free": 2}[bc]
+    lam, vec = lam[rigid:], vec[:, rigid:]
+    full = np.zeros((2 * n + 2, vec.shape[1]))
+    full[free] = vec
+    w = full[0::2]
+    w = w / np.abs(w).max(axis=0)
+    w = w * np.where(w[-1] < 0, -1.0, 1.0)
+    return np.sqrt(lam), np.linspace(0.0, L, n + 1), w
+
+
+def beam_frequencies(
+    n_elements: int, bc: str = "pinned-free", EI: float = 1.0, mu: float = 1.0, L: float = 1.0
+) -> np.ndarray:
+    """Elastic natural frequencies (rad/s, ascending) of a uniform beam alone.
+
+    See `beam_modes` (same parameters); thesis Table 3.1 lists the pinned-free case
+    with EI = mu = L = 1.
+    """
+    return beam_modes(n_elements, bc, EI, mu, L)[0]
+
+
+class SecondOrderModel:
+    """M q'' + C q' + K q = b v of the SFLR, SI units (see module docstring for q).
+
+    Attributes
+    ----------
+    M, C, K : ndarray, shape (n_dof, n_dof)
+        Mass kg(·m²), damping and stiffness matrices; n_dof = 2 n + 3.
+    b : ndarray, shape (n_dof,)
+        Generalized force per DAC count: k_tau on the motor DOF, N·m/count.
+    base, tip_w : int
+        Indices of the base angle and of the tip's lateral displacement.
+    """
+
+    def __init__(self, params: Params, n_elements: int = 4):
+        n = _check_n(n_elements)
+        p = params
+        Kb, Mb = assemble_beam(n, p.EI, p.mu, p.L)
+        beam = np.arange(1, 2 * n + 2)  # drop w_0 (pinned root)
+        Kb, Mb = Kb[np.ix_(beam, beam)], Mb[np.ix_(beam, beam)]
+        n_dof = 2 + beam.size
+        self.n_elements = n
+        self.base, self.root, self.tip_w = 1, 2, n_dof - 2
+        tip_phi = n_dof - 1
+        M = np.zeros((n_dof, n_dof))
+        K = np.zeros((n_dof, n_dof))
+        C = np.zeros((n_dof, n_dof))
+        M[0, 0] = p.J_m
+        M[1, 1] = p.J_base
+        M[2:, 2:] = Mb
+        M[self.tip_w, self.tip_w] += p.m_accel
+        M[tip_phi, tip_phi] += p.J_accel
+        K[2:, 2:] = Kb
+        C[2:, 2:] = p.beam_beta * Kb
+        C[0, 0] += p.c_m
+        for i, j, k, c in ((0, 1, p.drive_k, p.drive_c), (1, 2, p.clamp_k, p.clamp_c)):
+            spring = np.array([[1.0, -1.0], [-1.0, 1.0]])
+            K[np.ix_([i, j], [i, j])] += k * spring
+            C[np.ix_([i, j], [i, j])] += c * spring
+        b = np.zeros(n_dof)
+        b[0] = p.k_tau
+        self.M, self.C, self.K, self.b = M, C, K, b
+
+
+def state_matrices(params: Params, n_elements: int = 4) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """First-order matrices x' = A x + B v, y = C x of the SFLR, x = [q, q'].
+
+    Parameters
+    ----------
+    params : Params
+        Parameter set (SI).
+    n_elements : int
+        Beam element count, 1..100.
+
+    Returns
+    -------
+    A : ndarray, shape (2 n_dof, 2 n_dof)
+    B : ndarray, shape (2 n_dof, 1)
+        Per DAC count.
+    C : ndarray, shape (2, 2 n_dof)
+        Rows: theta = H·theta_b (encoder counts) and a = a_gain·w_tip'' (ADC counts,
+        positive towards increasing theta). The accelerometer row is
+        a_gain·[-M⁻¹K, -M⁻¹C] at the tip; its feed-through a_gain·(M⁻¹b)_tip is zero
+        because the torque acts on the motor only (DESIGN.md).
+    """
+    m = SecondOrderModel(params, n_elements)
+    n_dof = m.M.shape[0]
+    Minv_K = scipy.linalg.solve(m.M, m.K, assume_a="pos")
+    Minv_C = scipy.linalg.solve(m.M, m.C, assume_a="pos")
+    Minv_b = scipy.linalg.solve(m.M, m.b, assume_a="pos")
+    A = np.block([[np.zeros((n_dof, n_dof)), np.eye(n_dof)], [-Minv_K, -Minv_C]])
+    B = np.concatenate([np.zeros(n_dof), Minv_b])[:, None]
+    C = np.zeros((2, 2 * n_dof))
+    C[0, m.base] = params.H
+    C[1] = params.a_gain * A[n_dof + m.tip_w]
+    return A, B, C
+
+
+def build_continuous(params: Params | None = None, n_elements: int = 4) -> control.StateSpace:
+    """Continuous-time state-space model of the SFLR from v to [theta, a].
+
+    Parameters
+    ----------
+    params : Params, optional
+        Parameter set; default ``load_params("tmm-fit")``.
+    n_elements : int, default 4
+        Beam element count, 1..100.
+
+    Returns
+    -------
+    control.StateSpace
+        Input v (DAC counts); outputs [theta (encoder counts, float), a (accelerometer
+        counts, float)]; D = 0; states x = [q, q'] (SI), 2·(2 n + 3) of them.
+
+    Raises
+    ------
+    ValueError
+        Element count out of range.
+    """
+    if params is None:
+        from station.plant.parameters import load_params
+
+        params = load_params()
+    A, B, C = state_matrices(params, n_elements)
+    return control.ss(A, B, C, np.zeros((2, 1)), inputs=["v"], outputs=["theta", "a"])
