@@ -1,0 +1,517 @@
+"""Run logs: a lossless streaming writer for ours, one reader for ours and the rig's.
+
+Our format (tab-separated text, one row per tick, DESIGN.md "Timing and log rows")::
+
+    t	n	u	v	theta	a	theta_d_hat	v_applied	status	latency_us
+    # station-runlog 1
+    # {"controller": {...}, "reference": {...}, ...}      (one-line JSON metadata)
+    0.0	0	0.0	0.0	0	0	0.0	0	0	nan
+    ...
+
+The column-name line comes first so that both ``pandas.read_csv(path, sep="\\t",
+comment="#")`` and ``numpy.genfromtxt(path, names=True, delimiter="\\t", comments="#")``
+read the file as is (genfromtxt takes its names from the first line, commented or not).
+:func:`read_log` also accepts the two ``#`` lines before the column-name line.
+Numbers are written so that they round-trip: ints as ints, floats by ``repr`` (shortest
+exact form), NaN as ``nan``.
+
+The rig's format (its lab software, ../shared/data/rig): ``#`` header lines (test name
+``#SLFR RTP P_control_Test``, gains ``#kp=2.0`` or ``#kp = 1.0``, filter coefficients
+``#Gth num=[ 18.3 -17.2]``, ``#Ga num=[]``) of which the last names the columns
+(``#t	n	u	v	$\\theta$	a	$\\hat{\\theta}_d$``), then tab-separated rows.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import numbers
+import re
+import threading
+import warnings
+import weakref
+from collections import deque
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Iterable
+
+import numpy as np
+
+from station.errors import StationError
+
+COLUMNS = ("t", "n", "u", "v", "theta", "a", "theta_d_hat", "v_applied", "status", "latency_us")
+"""Columns of our run log, in row order (units: s, tick, counts, DAC counts, encoder
+counts, accelerometer counts, encoder counts, DAC counts, status bits, µs)."""
+
+MAGIC = "# station-runlog 1"
+"""First ``#`` line of our format (version 1)."""
+
+FLUSH_INTERVAL_S = 0.005
+"""How often the writer thread wakes to write and flush (the contract: at least every 20 ms)."""
+
+_COLUMN_LINE = "\t".join(COLUMNS)
+
+RIG_COLUMN_NAMES = {
+    "t": "t", "n": "n", "u": "u", "v": "v", "$\\theta$": "theta", "theta": "theta", "a": "a",
+    "$\\hat{\\theta}_d$": "theta_d_hat", "theta_d_hat": "theta_d_hat",
+}
+"""The rig's column names -> standard names."""
+
+
+class RunLogError(StationError):
+    """A run log that cannot be read or written; names the file, line and what was expected."""
+
+
+# --- writing ----------------------------------------------------------------------------
+
+def format_value(x: Any) -> str:
+    """One value as text that reads back to the same number.
+
+    Parameters
+    ----------
+    x : int, float, bool, None or numpy scalar
+
+    Returns
+    -------
+    str
+        ints as ints; floats by ``repr`` (shortest exact form, ``nan``, ``inf``); None
+        as ``nan``.
+    """
+    tp = type(x)
+    if tp is float:
+        return repr(x)
+    if tp is int:
+        return str(x)
+    if x is None:
+        return "nan"
+    if isinstance(x, (bool, np.bool_)):
+        return "1" if x else "0"
+    if isinstance(x, numbers.Integral):
+        return str(int(x))
+    return repr(float(x))
+
+
+def _json_default(obj: Any) -> Any:
+    if isinstance(obj, np.ndarray):
+        return obj.tolist()
+    if isinstance(obj, np.generic):
+        return obj.item()
+    if isinstance(obj, Path):
+        return str(obj)
+    raise TypeError(f"{type(obj).__name__} is not JSON serializable")
+
+
+def _nan_to_none(obj: Any) -> Any:
+    if isinstance(obj, float) and not math.isfinite(obj):
+        return None
+    if isinstance(obj, dict):
+        return {k: _nan_to_none(v) for k, v in obj.items()}
+    if isinstance(obj, (list, tuple)):
+        return [_nan_to_none(v) for v in obj]
+    return obj
+
+
+def header_lines(meta: dict[str, Any]) -> list[str]:
+    """The header of our format for ``meta``: column names, magic line, ``# {json}``.
+
+    Non-finite floats in ``meta`` become JSON ``null`` (strict JSON).
+
+    Raises
+    ------
+    RunLogError
+        If ``meta`` is not JSON-serializable.
+    """
+    try:
+        text = json.dumps(_nan_to_none(json.loads(json.dumps(meta, default=_json_default))),
+                          allow_nan=False, separators=(", ", ": "))
+    except (TypeError, ValueError) as exc:
+        raise RunLogError(f"run log metadata is not JSON-serializable: {exc}") from None
+    return [_COLUMN_LINE, MAGIC, "# " + text]
+
+
+class _Pump:
+    """The writer thread's state: queue -> text file (+ sinks). Holds no reference to the writer."""
+
+    def __init__(self, path: Path, fh, sinks: Iterable[Any]):
+        self.path = path
+        self.fh = fh
+        self.queue: deque = deque()
+        self.sinks = list(sinks)
+        self.sink_errors: list[str] = []
+        self.write_error: OSError | None = None
+        self.unwritten: list[tuple] = []
+        self.rows_written = 0
+        self.stop_event = threading.Event()
+        self.thread = threading.Thread(target=self.run, name=f"runlog:{path.name}", daemon=True)
+        self.closed = False
+
+    def run(self) -> None:
+        while not self.stop_event.wait(FLUSH_INTERVAL_S):
+            self.drain()
+        self.drain()
+
+    def drain(self) -> None:
+        q = self.queue
+        batch = []
+        pop = q.popleft
+        try:
+            while True:
+                batch.append(pop())
+        except IndexError:
+            pass
+        if not batch:
+            return
+        self._write(batch)
+        self._feed_sinks(batch)
+
+    def _write(self, batch: list[tuple]) -> None:
+        if self.write_error is not None:
+            self.unwritten.extend(batch)
+            return
+        fmt = format_value
+        text = "".join("\t".join([fmt(x) for x in row]) + "\n" for row in batch)
+        try:
+            self.fh.write(text)
+            self.fh.flush()
+        except OSError as exc:
+            self.write_error = exc
+            self.unwritten.extend(batch)
+            return
+        self.rows_written += len(batch)
+
+    def _feed_sinks(self, batch: list[tuple]) -> None:
+        if not self.sinks:
+            return
+        arr = np.array(batch, dtype=float).reshape(len(batch), len(COLUMNS))
+        columns = {name: arr[:, i] for i, name in enumerate(COLUMNS)}
+        for sink in list(self.sinks):
+            try:
+                sink.write_rows(columns)
+            except Exception as exc:  # noqa: BLE001 - a sink must never cost log rows
+                self.sinks.remove(sink)
+                msg = f"{self.path}: run log sink {sink!r} failed and was dropped ({type(exc).__name__}: {exc}); the log file is unaffected"
+                self.sink_errors.append(msg)
+                warnings.warn(msg, RuntimeWarning, stacklevel=1)
+
+    def shutdown(self) -> None:
+        if self.closed:
+            return
+        self.closed = True
+        self.stop_event.set()
+        if self.thread.is_alive() and self.thread is not threading.current_thread():
+            self.thread.join()
+        self.drain()
+        try:
+            self.fh.close()
+        except OSError as exc:
+            if self.write_error is None:
+                self.write_error = exc
+
+
+class RunLogWriter:
+    """Streaming writer of our run log; safe to feed from a real-time loop.
+
+    ``append`` only puts the row on a queue (O(1), no formatting, no I/O). A background
+    thread formats the queued rows, writes them, flushes them to the OS every
+    ``FLUSH_INTERVAL_S`` (well inside the 20 ms of the contract, so a killed process loses
+    at most the last few ms), and hands each batch to every sink. A sink that raises is
+    reported once (``RuntimeWarning``, ``sink_errors``) and dropped; the file never loses
+    a row because of it.
+
+    Parameters
+    ----------
+    path : str or Path
+        Log file to create (overwritten). Its folder must exist.
+    meta : dict
+        JSON-able metadata for the header: controller spec, reference, protocol,
+        device info, plant parameters, alignment, start time.
+    sinks : iterable
+        Objects with ``write_rows(columns: dict[str, numpy.ndarray])`` (one array of
+        shape (rows,) per name in :data:`COLUMNS`, float, NaN where missing), e.g.
+        :class:`station.viz.RerunSink`. Called from the writer thread; not closed here.
+
+    Raises
+    ------
+    RunLogError
+        If the file cannot be created or ``meta`` is not JSON-serializable.
+
+    Examples
+    --------
+    >>> with RunLogWriter("run.tsv", {"controller": spec}) as log:   # doctest: +SKIP
+    ...     log.append((t, n, u, v, theta, a, theta_d_hat, v_applied, status, latency_us))
+    """
+
+    def __init__(self, path: str | Path, meta: dict[str, Any], sinks: Iterable[Any] = ()):
+        self.path = Path(path)
+        self.meta = meta
+        lines = header_lines(meta)
+        try:
+            fh = open(self.path, "w", encoding="utf-8", newline="\n")
+        except OSError as exc:
+            raise RunLogError(f"{self.path}: cannot create run log: {exc.strerror or exc}") from None
+        try:
+            fh.write("\n".join(lines) + "\n")
+            fh.flush()
+        except OSError as exc:
+            fh.close()
+            raise RunLogError(f"{self.path}: cannot write run log header: {exc.strerror or exc}") from None
+        self._pump = _Pump(self.path, fh, sinks)
+        self._queue_append = self._pump.queue.append
+        self._finalizer = weakref.finalize(self, self._pump.shutdown)
+        self._pump.thread.start()
+
+    def append(self, row: tuple) -> None:
+        """Queue one row (a tuple in :data:`COLUMNS` order). O(1); no formatting or I/O.
+
+        Raises
+        ------
+        RunLogError
+            If the writer is closed.
+        ValueError
+            If the row does not have ``len(COLUMNS)`` values.
+        """
+        if self._pump.closed:
+            raise RunLogError(f"{self.path}: append after close")
+        if len(row) != 10:
+            raise ValueError(f"run log row needs {len(COLUMNS)} values ({', '.join(COLUMNS)}), got {len(row)}")
+        self._queue_append(row)
+
+    @property
+    def rows_written(self) -> int:
+        """Rows written to the file so far."""
+        return self._pump.rows_written
+
+    @property
+    def sink_errors(self) -> list[str]:
+        """One message per sink that failed and was dropped."""
+        return list(self._pump.sink_errors)
+
+    def close(self) -> None:
+        """Write every queued row, flush and close the file. Idempotent.
+
+        Raises
+        ------
+        RunLogError
+            If writing failed (disk full, ...): names the file and how many rows are
+            missing from it (they stay available as ``unwritten_rows``).
+        """
+        self._finalizer()
+        err = self._pump.write_error
+        if err is not None:
+            raise RunLogError(f"{self.path}: writing the run log failed ({err.strerror or err}); "
+                              f"{len(self._pump.unwritten)} rows are not in the file")
+
+    @property
+    def unwritten_rows(self) -> list[tuple]:
+        """Rows that could not be written because of a write error (normally empty)."""
+        return list(self._pump.unwritten)
+
+    def __enter__(self) -> "RunLogWriter":
+        return self
+
+    def __exit__(self, *exc_info) -> None:
+        self.close()
+
+
+# --- reading ----------------------------------------------------------------------------
+
+@dataclass
+class RunLog:
+    """A run log read by :func:`read_log`.
+
+    Attributes
+    ----------
+    path : Path
+    format : {"station", "rig"}
+    meta : dict
+        Ours: the header JSON. The rig's: ``title`` (whole first line), ``test``
+        (e.g. "P_control_Test"), gains (``kp``, ``ki``, ``kd``) as floats, ``Gth`` / ``Ga``
+        as ``{"num": [...], "den": [...]}`` (empty lists when printed empty), and
+        ``columns`` (the names as printed).
+    data : dict of numpy.ndarray
+        Shape (rows,), float64, for every name in :data:`COLUMNS` (NaN where the format
+        lacks the column), plus any extra columns under their own names.
+    header : list of str
+        The header lines as in the file (without newlines).
+    """
+
+    path: Path
+    format: str
+    meta: dict[str, Any]
+    data: dict[str, np.ndarray]
+    header: list[str] = field(default_factory=list)
+
+    def __len__(self) -> int:
+        return int(self.data["t"].size)
+
+
+_KV = re.compile(r"^\s*([A-Za-z_]\w*)\s*=\s*(.*?)\s*$")
+_COEF = re.compile(r"^\s*(\w+)\s+(num|den)\s*=\s*\[(.*)\]\s*$")
+
+
+def _parse_rig_header(path: Path, comment_lines: list[str]) -> tuple[dict[str, Any], list[str]]:
+    """meta and standard column names from the rig's ``#`` lines (the last names the columns)."""
+    if not comment_lines:
+        raise RunLogError(f"{path}: line 1: expected '#' header lines naming the columns")
+    meta: dict[str, Any] = {}
+    *info, col_line = comment_lines
+    names = [c.strip() for c in col_line[1:].split("\t")]
+    if len(names) < 2 or "t" not in names:
+        raise RunLogError(f"{path}: line {len(comment_lines)}: expected the column-name line "
+                          f"(#t<TAB>n<TAB>u<TAB>v<TAB>$\\theta$<TAB>a...), got {col_line!r}")
+    meta["columns"] = names
+    other = []
+    for i, line in enumerate(info):
+        body = line[1:].strip()
+        coef = _COEF.match(body)
+        kv = _KV.match(body)
+        if i == 0 and not kv and not coef:
+            meta["title"] = body
+            parts = body.split()
+            meta["test"] = parts[-1] if parts else ""
+        elif coef:
+            try:
+                values = [float(x) for x in coef.group(3).split()]
+            except ValueError:
+                raise RunLogError(f"{path}: line {i + 1}: expected numbers in {coef.group(1)} "
+                                  f"{coef.group(2)}=[...], got {line!r}") from None
+            meta.setdefault(coef.group(1), {})[coef.group(2)] = values
+        elif kv:
+            key, val = kv.groups()
+            try:
+                meta[key] = float(val)
+            except ValueError:
+                meta[key] = val
+        else:
+            other.append(body)
+    if other:
+        meta["notes"] = other
+    std = [RIG_COLUMN_NAMES.get(name, name) for name in names]
+    return meta, std
+
+
+def _parse_rows(path: Path, lines: list[str], first_lineno: int, names: list[str],
+                ends_with_newline: bool, fmt: str) -> tuple[np.ndarray, int]:
+    """Rows -> array (rows, len(names)); returns also the number of torn rows skipped (0/1)."""
+    ncol = len(names)
+    rows: list[list[float]] = []
+    torn = 0
+    last = len(lines) - 1
+    while last >= 0 and not lines[last].strip():
+        last -= 1
+    for idx, raw in enumerate(lines):
+        line = raw.rstrip("\r")
+        if not line.strip() or line.startswith("#"):
+            continue
+        lineno = first_lineno + idx
+        parts = line.split("\t")
+        problem = None
+        if len(parts) != ncol:
+            problem = f"expected {ncol} tab-separated numbers, got {len(parts)}"
+        else:
+            try:
+                values = [float(p) for p in parts]
+            except ValueError:
+                bad = next(j for j, p in enumerate(parts) if not _is_number(p))
+                problem = f"expected a number in column {names[bad]!r}, got {parts[bad]!r}"
+        is_last_unterminated = idx == last and not ends_with_newline
+        if is_last_unterminated and (problem is not None or fmt == "station"):
+            torn += 1
+            warnings.warn(f"{path}: line {lineno}: torn last line (no newline; the writer was "
+                          f"interrupted mid-row) skipped", RuntimeWarning, stacklevel=3)
+            continue
+        if problem is not None:
+            raise RunLogError(f"{path}: line {lineno}: {problem}")
+        rows.append(values)
+    arr = np.array(rows, dtype=float).reshape(len(rows), ncol)
+    return arr, torn
+
+
+def _is_number(text: str) -> bool:
+    try:
+        float(text)
+    except ValueError:
+        return False
+    return True
+
+
+def read_log(path: str | Path) -> RunLog:
+    """Read a run log, ours or the rig's (format detected from the header).
+
+    Parameters
+    ----------
+    path : str or Path
+
+    Returns
+    -------
+    RunLog
+        ``data`` holds every name of :data:`COLUMNS` (NaN-filled where the format lacks
+        the column; the rig's logs have no v_applied, status, latency_us, and no
+        theta_d_hat without accelerometer feedback).
+
+    Raises
+    ------
+    RunLogError
+        File missing or unreadable, unknown format, bad header, or a malformed row other
+        than a torn last line (names the file, line number and what was expected).
+
+    Warns
+    -----
+    RuntimeWarning
+        When a torn last line (interrupted write) is skipped.
+    """
+    path = Path(path)
+    try:
+        text = path.read_text(encoding="utf-8")
+    except OSError as exc:
+        raise RunLogError(f"{path}: cannot read run log: {exc.strerror or exc}") from None
+    except UnicodeDecodeError as exc:
+        raise RunLogError(f"{path}: not a text run log ({exc.reason} at byte {exc.start})") from None
+    ends_with_newline = text.endswith("\n")
+    lines = text.split("\n")
+    if ends_with_newline:
+        lines.pop()
+    lines = [ln.rstrip("\r") for ln in lines]
+    if not lines:
+        raise RunLogError(f"{path}: empty file, expected a run log header")
+
+    if MAGIC in lines[:2]:
+        fmt = "station"
+        magic_at = lines.index(MAGIC)
+        if magic_at == 0:  # magic, json, column line
+            header = lines[:3]
+            json_line, col_line, first = (lines[1] if len(lines) > 1 else ""), (lines[2] if len(lines) > 2 else ""), 3
+            json_no, col_no = 2, 3
+        else:  # column line, magic, json
+            header = lines[:3]
+            col_line, json_line, first = lines[0], (lines[2] if len(lines) > 2 else ""), 3
+            json_no, col_no = 3, 1
+        if not json_line.startswith("# "):
+            raise RunLogError(f"{path}: line {json_no}: expected '# ' and the JSON metadata")
+        try:
+            meta = json.loads(json_line[2:])
+        except json.JSONDecodeError as exc:
+            raise RunLogError(f"{path}: line {json_no}: metadata is not valid JSON ({exc.msg})") from None
+        if not isinstance(meta, dict):
+            raise RunLogError(f"{path}: line {json_no}: expected a JSON object of metadata")
+        names = col_line.split("\t")
+        if tuple(names[:len(COLUMNS)]) != COLUMNS:
+            raise RunLogError(f"{path}: line {col_no}: expected the column names {_COLUMN_LINE!r}, got {col_line!r}")
+    elif lines[0].startswith("#"):
+        fmt = "rig"
+        n_head = 0
+        while n_head < len(lines) and lines[n_head].startswith("#"):
+            n_head += 1
+        header = lines[:n_head]
+        meta, names = _parse_rig_header(path, header)
+        first = n_head
+    else:
+        raise RunLogError(f"{path}: line 1: expected '{MAGIC}' (station run log) or the rig's "
+                          f"'#' header, got {lines[0][:60]!r}")
+
+    arr, _ = _parse_rows(path, lines[first:], first + 1, names, ends_with_newline, fmt)
+    n = arr.shape[0]
+    data = {name: np.full(n, np.nan) for name in COLUMNS}
+    for j, name in enumerate(names):
+        data[name] = arr[:, j].copy()
+    return RunLog(path=path, format=fmt, meta=meta, data=data, header=header)

@@ -1,0 +1,273 @@
+"""station.runlog: our format round-trips, stays readable by pandas/numpy, survives SIGKILL;
+the rig's logs read with their header variants."""
+
+import json
+import math
+import os
+import signal
+import subprocess
+import sys
+import textwrap
+import time
+import warnings
+
+import numpy as np
+import pytest
+
+from station.errors import StationError
+from station.runlog import COLUMNS, MAGIC, RunLogError, RunLogWriter, read_log
+
+RIG_FILES = {
+    "OL_pulse_test_sys_check_SLFR_RTP_OL_Test_uend=0.txt": ("OL_Test", 1000, False),
+    "SFLR_P_control_step_kp_2_SLFR_RTP_P_control_kp=2.0.txt": ("P_control_Test", 1000, False),
+    "log_dec_hold_and_release_1_SLFR_RTP_OL_Test_uend=77.txt": ("OL_Test", 5000, False),
+    "step_response_Gth_comp_Ga_opt_amp_200_duration_1000_opt_case43_SLFR_RTP_Motor_Comp_Gth.txt":
+        ("Motor_Comp_w_accel_fb", 1000, True),
+    "step_response_Gth_comp_no_accel_FB_amp_100_duration_1000_SLFR_RTP_Motor_Comp_Gth.txt":
+        ("Motor_Comp_w_accel_fb", 1000, True),
+    "swept_sine_kp_1_amp_50.txt": ("PID_control_Test", 11000, False),
+}
+
+# Values chosen to stress round-tripping: shortest-repr floats, tiny/huge, NaN, ints.
+ROWS = [
+    (0.0, 0, 0.0, 0.0, 0, 0, 0.0, 0, 0, float("nan")),
+    (0.002, 1, 100.0, -0.0003305725339, 1, -2, 199.9972881, 0, 16, 57.25),
+    (0.004, 2, 100.0, 0.1 + 0.2, -3, 7, 1e-300, 200, 1, 1.7976931348623157e308),
+    (np.float64(0.006), np.int64(3), np.float32(0.5), 200.0, 2048, -5, float("inf"), None, 0, 12.0),
+]
+META = {"controller": {"kind": "lead", "gth": {"num_z": [18.325471824430103, -17.209119707383508]}},
+        "alignment": 1, "reference": {"kind": "step", "amplitude": 100.0}, "note": "tab\there, ünïcode"}
+
+
+def _write(path, rows=ROWS, meta=META, sinks=()):
+    with RunLogWriter(path, meta, sinks=sinks) as w:
+        for r in rows:
+            w.append(r)
+    return path
+
+
+def _expected(col):
+    out = []
+    for r in ROWS:
+        x = r[COLUMNS.index(col)]
+        out.append(math.nan if x is None else float(x))
+    return np.array(out)
+
+
+def test_roundtrip_exact(tmp_path):
+    log = read_log(_write(tmp_path / "run.tsv"))
+    assert log.format == "station"
+    assert log.meta == META
+    assert set(COLUMNS) <= set(log.data)
+    for col in COLUMNS:
+        np.testing.assert_array_equal(log.data[col], _expected(col), err_msg=col)
+    assert log.data["v"][2] == 0.1 + 0.2  # not 0.3: repr round-trips
+
+
+def test_file_text_ints_as_ints_nan_as_nan(tmp_path):
+    lines = _write(tmp_path / "run.tsv").read_text().splitlines()
+    assert lines[0] == "\t".join(COLUMNS)
+    assert lines[1] == MAGIC
+    assert json.loads(lines[2][2:]) == META and lines[2].startswith("# ")
+    assert lines[3].split("\t") == ["0.0", "0", "0.0", "0.0", "0", "0", "0.0", "0", "0", "nan"]
+    assert lines[6].split("\t")[1] == "3" and lines[6].split("\t")[7] == "nan"
+
+
+def test_pandas_reads_it(tmp_path):
+    pd = pytest.importorskip("pandas")
+    df = pd.read_csv(_write(tmp_path / "run.tsv"), sep="\t", comment="#")
+    assert list(df.columns) == list(COLUMNS)
+    assert len(df) == len(ROWS)
+    np.testing.assert_array_equal(df["v"].to_numpy(), _expected("v"))
+    np.testing.assert_array_equal(df["latency_us"].to_numpy(), _expected("latency_us"))
+
+
+def test_numpy_reads_it(tmp_path):
+    arr = np.genfromtxt(_write(tmp_path / "run.tsv"), names=True, delimiter="\t", comments="#")
+    assert arr.dtype.names == COLUMNS
+    assert arr.shape == (len(ROWS),)
+    np.testing.assert_array_equal(arr["theta_d_hat"], _expected("theta_d_hat"))
+
+
+def test_reads_magic_first_order_too(tmp_path):
+    lines = _write(tmp_path / "run.tsv").read_text().splitlines()
+    alt = tmp_path / "alt.tsv"
+    alt.write_text("\n".join([lines[1], lines[2], lines[0]] + lines[3:]) + "\n")
+    log = read_log(alt)
+    assert log.format == "station" and log.meta == META
+    np.testing.assert_array_equal(log.data["v"], _expected("v"))
+
+
+def test_torn_last_line_skipped_with_warning(tmp_path):
+    path = _write(tmp_path / "run.tsv")
+    text = path.read_text()
+    # The process died while writing the next row: "0.008\t4\t10" without a newline.
+    path.write_text(text + "0.008\t4\t10")
+    with pytest.warns(RuntimeWarning, match=str(path)):
+        log = read_log(path)
+    assert len(log) == len(ROWS)
+    # A complete-looking but unterminated last row may have a cut-off number: also torn.
+    path.write_text(text + "0.008\t4\t1.0\t2.0\t3\t4\t5.0\t6\t0\t1")
+    with pytest.warns(RuntimeWarning, match="torn"):
+        assert len(read_log(path)) == len(ROWS)
+
+
+def test_malformed_row_mid_file_is_an_error(tmp_path):
+    path = _write(tmp_path / "run.tsv")
+    lines = path.read_text().splitlines()
+    lines[4] = "\t".join(lines[4].split("\t")[:7])
+    path.write_text("\n".join(lines) + "\n")
+    with pytest.raises(RunLogError) as err:
+        read_log(path)
+    assert isinstance(err.value, StationError)
+    assert str(path) in str(err.value) and "line 5" in str(err.value)
+    assert "expected 10 tab-separated numbers, got 7" in str(err.value)
+
+
+def test_non_number_names_the_column(tmp_path):
+    path = _write(tmp_path / "run.tsv")
+    lines = path.read_text().splitlines()
+    parts = lines[3].split("\t")
+    parts[4] = "abc"
+    lines[3] = "\t".join(parts)
+    path.write_text("\n".join(lines) + "\n")
+    with pytest.raises(RunLogError, match=r"line 4: expected a number in column 'theta', got 'abc'"):
+        read_log(path)
+
+
+def test_not_a_log(tmp_path):
+    path = tmp_path / "x.txt"
+    path.write_text("hello\n1 2 3\n")
+    with pytest.raises(RunLogError, match="line 1"):
+        read_log(path)
+    with pytest.raises(RunLogError, match="cannot read"):
+        read_log(tmp_path / "missing.tsv")
+
+
+class _Collect:
+    def __init__(self):
+        self.batches = []
+
+    def write_rows(self, columns):
+        self.batches.append(columns)
+
+
+class _Broken:
+    def __init__(self):
+        self.calls = 0
+
+    def write_rows(self, columns):
+        self.calls += 1
+        raise RuntimeError("viewer went away")
+
+
+def test_sinks_get_every_row_and_a_broken_sink_costs_nothing(tmp_path):
+    good, bad = _Collect(), _Broken()
+    rows = [(k * 0.002, k, 1.0, 2.0, k, -k, 3.0, 2, 0, 10.0) for k in range(500)]
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        w = RunLogWriter(tmp_path / "run.tsv", META, sinks=[good, bad])
+        for r in rows:
+            w.append(r)
+        w.close()
+    assert bad.calls == 1
+    assert len(w.sink_errors) == 1 and "viewer went away" in w.sink_errors[0]
+    assert sum("viewer went away" in str(c.message) for c in caught) == 1
+    got = np.concatenate([b["n"] for b in good.batches])
+    np.testing.assert_array_equal(got, np.arange(500))
+    assert set(good.batches[0]) == set(COLUMNS)
+    np.testing.assert_array_equal(read_log(tmp_path / "run.tsv").data["n"], np.arange(500))
+
+
+def test_append_validates_and_close_is_idempotent(tmp_path):
+    w = RunLogWriter(tmp_path / "run.tsv", META)
+    with pytest.raises(ValueError, match="10 values"):
+        w.append((1.0, 2))
+    w.close()
+    w.close()
+    with pytest.raises(RunLogError, match="after close"):
+        w.append(ROWS[0])
+
+
+def test_bad_meta_and_bad_path(tmp_path):
+    with pytest.raises(RunLogError, match="JSON"):
+        RunLogWriter(tmp_path / "run.tsv", {"x": object()})
+    with pytest.raises(RunLogError, match="cannot create"):
+        RunLogWriter(tmp_path / "no" / "such" / "run.tsv", META)
+
+
+_CHILD = textwrap.dedent("""
+    import sys, time
+    from station.runlog import RunLogWriter
+    w = RunLogWriter(sys.argv[1], {"test": "sigkill"})
+    t0 = time.monotonic()
+    k = 0
+    while True:
+        # t column: the monotonic time of the append (CLOCK_MONOTONIC is system-wide)
+        w.append((time.monotonic(), k, 1.0, 2.5, k, -k, 0.1, 2, 0, 33.0))
+        k += 1
+        delay = t0 + k * 0.002 - time.monotonic()
+        if delay > 0:
+            time.sleep(delay)
+""")
+
+
+def test_sigkill_loses_nothing_older_than_100ms(tmp_path):
+    path = tmp_path / "killed.tsv"
+    proc = subprocess.Popen([sys.executable, "-c", _CHILD, str(path)])
+    try:
+        # Wait (bounded) until the child has logged a second of rows, then kill it.
+        deadline = time.monotonic() + 60
+        while time.monotonic() < deadline:
+            if path.exists() and path.read_text().count("\n") > 503:
+                break
+            time.sleep(0.05)
+        time.sleep(0.2)
+        t_kill = time.monotonic()
+        os.kill(proc.pid, signal.SIGKILL)
+    finally:
+        proc.wait()
+    assert proc.returncode == -signal.SIGKILL
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # a torn last line is allowed
+        log = read_log(path)
+    n = log.data["n"]
+    assert n.size > 500
+    np.testing.assert_array_equal(n, np.arange(n.size))  # no gaps, no garbage
+    # Row n.size (the first missing one) was appended after every logged row; every row
+    # appended before t_kill - 0.1 s is in the file, so the first missing one is younger.
+    # The last logged row's successor was appended at most ~one period after it.
+    assert log.data["t"][-1] >= t_kill - 0.1 - 0.002 * 2
+
+
+@pytest.mark.parametrize("name", sorted(RIG_FILES))
+def test_every_rig_log_reads(rig_data, name):
+    test, rows, has_dhat = RIG_FILES[name]
+    log = read_log(rig_data / name)
+    assert log.format == "rig"
+    assert log.meta["test"] == test
+    assert len(log) == rows
+    np.testing.assert_array_equal(log.data["n"], np.arange(rows))
+    np.testing.assert_allclose(log.data["t"], np.arange(rows) * 0.002, atol=1e-9)
+    for col in ("u", "v", "theta", "a"):
+        assert not np.any(np.isnan(log.data[col])), col
+    assert np.all(np.isnan(log.data["theta_d_hat"])) != has_dhat
+    for col in ("v_applied", "status", "latency_us"):
+        assert np.all(np.isnan(log.data[col]))
+    # Independent check of the column mapping against numpy's own parse of the file.
+    raw = np.loadtxt(rig_data / name, comments="#", delimiter="\t")
+    for j, col in enumerate(("t", "n", "u", "v", "theta", "a", "theta_d_hat")[:raw.shape[1]]):
+        np.testing.assert_array_equal(log.data[col], raw[:, j])
+
+
+def test_rig_header_variants(rig_data):
+    p = read_log(rig_data / "SFLR_P_control_step_kp_2_SLFR_RTP_P_control_kp=2.0.txt")
+    assert p.meta["kp"] == 2.0
+    pid = read_log(rig_data / "swept_sine_kp_1_amp_50.txt")
+    assert (pid.meta["kp"], pid.meta["ki"], pid.meta["kd"]) == (1.0, 0.0, 0.0)
+    acc = read_log(rig_data / "step_response_Gth_comp_Ga_opt_amp_200_duration_1000_opt_case43_SLFR_RTP_Motor_Comp_Gth.txt")
+    assert acc.meta["Gth"] == {"num": [18.32547182, -17.20911971], "den": [1.0, -0.77672958]}
+    assert acc.meta["Ga"]["den"] == [1.0, -2.9289362, 2.85853684, -0.92960052]
+    lead = read_log(rig_data / "step_response_Gth_comp_no_accel_FB_amp_100_duration_1000_SLFR_RTP_Motor_Comp_Gth.txt")
+    assert lead.meta["Ga"] == {"num": [], "den": []}
+    assert lead.meta["columns"][-1] == "$\\hat{\\theta}_d$"
