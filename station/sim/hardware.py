@@ -1,0 +1,89 @@
+"""The simulated rig's hardware as the firmware sees it: DAC, encoder, accelerometer.
+
+Both protocols' device logic drive the plant through :class:`Hardware`, so the physics
+(clamp at the DAC, latch before the tick's output acts, the accelerometer's offset at
+rest, software zeroing) is written once. Source: ``shared/DESIGN.md`` ("The rig",
+"Timing and log rows") and ``shared/spec/protocol.md`` (v1 tick order, START).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+ACCEL_OFFSET = -2.0
+"""Accelerometer reading at rest, ADC counts (DESIGN.md: "offset ≈ −2 counts at rest")."""
+
+ZERO_ACCEL_READINGS = 16
+"""Readings averaged by START bit1 (spec: "averages 16 accelerometer readings")."""
+
+
+@dataclass(frozen=True, slots=True)
+class Reading:
+    """One latch of the sensors: theta (encoder counts since zeroing), a (ADC counts, offset removed when zeroed)."""
+
+    theta: int
+    a: int
+
+
+class Hardware:
+    """Plant + sensors + the firmware's zero offsets.
+
+    Parameters
+    ----------
+    plant : object
+        ``reset()``, ``outputs() -> (theta, a)`` noise-free floats (encoder counts, ADC
+        counts), ``advance(v)`` one zero-order-hold step of ``dt``; e.g.
+        ``station.plant.DiscretePlant``. Reset here.
+    sensors : object
+        ``read(theta, a) -> (int, int)``: quantised, noisy readings; e.g.
+        ``station.plant.Sensors``.
+    accel_offset : float, default :data:`ACCEL_OFFSET`
+        Added to the plant's acceleration before the ADC reads it, counts.
+    v_limit : int, default 255
+        The DAC's range, ±counts; :meth:`clamp` limits every output to it.
+    """
+
+    def __init__(self, plant, sensors, accel_offset: float = ACCEL_OFFSET, v_limit: int = 255) -> None:
+        self.plant = plant
+        self.sensors = sensors
+        self.accel_offset = float(accel_offset)
+        self.v_limit = int(v_limit)
+        self.encoder_zero = 0
+        self.accel_zero = 0
+        plant.reset()
+
+    def clamp(self, v: int) -> tuple[int, bool]:
+        """``v`` limited to ±v_limit, and whether it had to be (SATURATED)."""
+        c = max(-self.v_limit, min(self.v_limit, int(v)))
+        return c, c != v
+
+    def read(self) -> Reading:
+        """Latch both sensors at the plant's current state, without advancing it."""
+        theta, a = self.plant.outputs()
+        raw_theta, raw_a = self.sensors.read(theta, a + self.accel_offset)
+        return Reading(raw_theta - self.encoder_zero, raw_a - self.accel_zero)
+
+    def tick(self, v: int) -> Reading:
+        """One interrupt tick with output ``v`` (already clamped): latch, then let ``v`` act for one step.
+
+        The readings see the state x_k, before ``v`` has had any effect (DESIGN.md,
+        "Timing and log rows"); the plant then advances to x_{k+1}.
+        """
+        reading = self.read()
+        self.plant.advance(v)
+        return reading
+
+    def zero_encoder(self) -> None:
+        """Make the current encoder position read 0 (v1 START bit0, legacy '7')."""
+        self.encoder_zero += self.read().theta
+
+    def zero_accel(self) -> None:
+        """Average :data:`ZERO_ACCEL_READINGS` readings at the tick rate (output 0) and subtract that from later ones.
+
+        The average is rounded to whole counts (half away from zero), as integer
+        firmware would subtract it.
+        """
+        self.accel_zero = 0
+        total = sum(self.tick(0).a for _ in range(ZERO_ACCEL_READINGS))
+        mean = total / ZERO_ACCEL_READINGS
+        self.accel_zero = int(mean + 0.5) if mean >= 0 else -int(-mean + 0.5)

@@ -1,0 +1,269 @@
+"""pyserial URL handler ``sim://``: the simulated SFLR rig, opened like a real port.
+
+``serial.serial_for_url("sim://?protocol=v1&seed=3")`` finds this module once
+``"station.sim"`` is in ``serial.protocol_handler_packages`` (``station.link`` adds it).
+The device is :class:`station.sim.device.SimDevice` on the FEM plant, driven by
+:class:`station.sim.driver.DeviceDriver`.
+
+URL format: ``sim://[?option=value[&option=value...]]``
+
+options:
+
+- ``protocol=v1|legacy``: the firmware's protocol (default ``v1``).
+- ``pacing=lockstep|realtime``: ``lockstep`` (default) ticks as fast as the station
+  answers: after START (legacy 'q') tick 0 is sent at once and each command for the
+  current sample (legacy: each '/') makes the next tick happen inside ``write``;
+  ``realtime`` ticks every 2 ms on its own clock thread (absolute deadlines) and never
+  waits for the station: missing commands give LATE / hold / WATCHDOG as on the rig.
+- ``seed=N``: seed of the sensor noise and of injected garbage (default 0).
+- ``elements=N``: FEM element count of the plant (default 4).
+- ``noise=STD``: accelerometer noise std, ADC counts (default 0.3).
+- ``watchdog=N``: v1 watchdog_ticks, 1..255 (default 10).
+- ``silent_after=N``: fault: nothing is sent after tick N of a run; the device keeps
+  running.
+- ``garbage_every=N``: fault, v1: after every N-th sample, random bytes and a frame with
+  a bad CRC (two rx errors for the station). Ignored by legacy.
+- ``skip_tick=N``: fault, legacy: n jumps by one at tick N (a lost record). Ignored by
+  v1.
+
+An unknown option, a repeated option or a bad value raises ``serial.SerialException``
+naming it. The baud rate and the line settings are accepted and ignored.
+
+Reads: ``read(size)`` returns as soon as ``size`` bytes are there, or when ``timeout``
+runs out with what there is; in lockstep pacing nothing can arrive between writes, so a
+read returns at once what is buffered when it is not empty. ``in_waiting``,
+``reset_input_buffer`` and ``write`` behave as on a port.
+"""
+
+from __future__ import annotations
+
+import threading
+import time
+import urllib.parse
+
+from serial.serialutil import PortNotOpenError, SerialBase, SerialException, to_bytes
+
+from station.sim.device import RATE_HZ, SimDevice
+from station.sim.driver import DeviceDriver, Faults
+
+_FORMAT = ('expected "sim://[?protocol=v1|legacy&pacing=lockstep|realtime&seed=N&elements=N&noise=STD'
+           '&watchdog=N&silent_after=N&garbage_every=N&skip_tick=N]"')
+
+
+def _choice(*allowed: str):
+    def parse(text: str) -> str:
+        if text not in allowed:
+            raise ValueError(f"expected one of {', '.join(allowed)}")
+        return text
+    return parse
+
+
+def _count(minimum: int):
+    def parse(text: str) -> int:
+        n = int(text)
+        if n < minimum:
+            raise ValueError(f"expected an integer >= {minimum}")
+        return n
+    return parse
+
+
+def _std(text: str) -> float:
+    x = float(text)
+    if not x >= 0:
+        raise ValueError("expected a number >= 0")
+    return x
+
+
+_OPTIONS = {  # name: (parser, default)
+    "protocol": (_choice("v1", "legacy"), "v1"),
+    "pacing": (_choice("lockstep", "realtime"), "lockstep"),
+    "seed": (_count(0), 0),
+    "elements": (_count(1), 4),
+    "noise": (_std, 0.3),
+    "watchdog": (_count(1), 10),
+    "silent_after": (_count(0), None),
+    "garbage_every": (_count(1), None),
+    "skip_tick": (_count(0), None),
+}
+
+
+def parse_url(url: str) -> dict:
+    """The options of a ``sim://`` URL, defaults filled in.
+
+    Raises
+    ------
+    serial.SerialException
+        Not a ``sim://`` URL, unknown or repeated option, or a bad value; the message
+        names the option.
+    """
+    parts = urllib.parse.urlsplit(url)
+    if parts.scheme.lower() != "sim":
+        raise SerialException(f"{_FORMAT}: not starting with sim:// ({url!r})")
+    if parts.netloc or parts.path not in ("", "/"):
+        raise SerialException(f"{_FORMAT}: unexpected {parts.netloc + parts.path!r} before '?'")
+    opts = {name: default for name, (_, default) in _OPTIONS.items()}
+    seen = set()
+    for name, value in urllib.parse.parse_qsl(parts.query, keep_blank_values=True, strict_parsing=False):
+        if name not in _OPTIONS:
+            raise SerialException(f"{_FORMAT}: unknown option {name!r}")
+        if name in seen:
+            raise SerialException(f"{_FORMAT}: option {name!r} given twice")
+        seen.add(name)
+        try:
+            opts[name] = _OPTIONS[name][0](value)
+        except ValueError as e:
+            raise SerialException(f"sim:// option {name}={value!r}: {e}") from None
+    return opts
+
+
+class Serial(SerialBase):
+    """The simulated rig behind a pyserial port (see the module docstring for the URL)."""
+
+    def __init__(self, *args, **kwargs) -> None:
+        self._buf = bytearray()
+        self._cond = threading.Condition()
+        self._driver: DeviceDriver | None = None
+        self._clock: threading.Thread | None = None
+        self._closing = threading.Event()
+        self.options: dict = {}
+        super().__init__(*args, **kwargs)
+
+    # -- open / close ------------------------------------------------------------
+
+    def open(self) -> None:
+        """Build the device from the URL's options; realtime pacing starts its clock thread."""
+        if self.is_open:
+            raise SerialException("Port is already open.")
+        if self._port is None:
+            raise SerialException("Port must be configured before it can be used.")
+        self.from_url(self.port)
+        o = self.options
+        device = SimDevice(o["protocol"], seed=o["seed"], n_elements=o["elements"],
+                           accel_noise_std=o["noise"], watchdog_ticks=o["watchdog"])
+        faults = Faults(o["silent_after"], o["garbage_every"], o["skip_tick"], seed=o["seed"])
+        self._driver = DeviceDriver(device, faults, lockstep=o["pacing"] == "lockstep")
+        self._buf.clear()
+        self._closing.clear()
+        self.is_open = True
+        if o["pacing"] == "realtime":
+            self._clock = threading.Thread(target=self._run_clock, name="sim-clock", daemon=True)
+            self._clock.start()
+
+    def from_url(self, url: str) -> None:
+        """Parse ``url`` into :attr:`options` (the one place options are read); see :func:`parse_url`."""
+        self.options = parse_url(url)
+
+    def close(self) -> None:
+        """Stop the clock thread (realtime) and wake any blocked read."""
+        if self.is_open:
+            self.is_open = False
+            self._closing.set()
+            with self._cond:
+                self._cond.notify_all()
+            if self._clock is not None and self._clock is not threading.current_thread():
+                self._clock.join()
+            self._clock = None
+        super().close()
+
+    def _reconfigure_port(self) -> None:
+        """Baud rate and line settings do not matter to the simulation."""
+
+    @property
+    def device(self) -> SimDevice:
+        """The simulated device (for tests and benchmarks: counters, plant)."""
+        if self._driver is None:
+            raise PortNotOpenError()
+        return self._driver.device
+
+    # -- the clock ---------------------------------------------------------------
+
+    def _run_clock(self) -> None:
+        """500 Hz ticks on absolute deadlines; a late wake-up runs the missed ticks at once."""
+        period = 1.0 / RATE_HZ
+        deadline = time.perf_counter() + period
+        while not self._closing.is_set():
+            delay = deadline - time.perf_counter()
+            if delay > 0:
+                time.sleep(delay)
+            with self._cond:
+                out = self._driver.clock_tick()
+                if out:
+                    self._buf += out
+                    self._cond.notify_all()
+            deadline += period
+
+    # -- port interface ----------------------------------------------------------
+
+    @property
+    def in_waiting(self) -> int:
+        """Bytes the device has sent that have not been read."""
+        if not self.is_open:
+            raise PortNotOpenError()
+        return len(self._buf)
+
+    def read(self, size: int = 1) -> bytes:
+        """Up to ``size`` bytes: waits until there are ``size`` or ``timeout`` runs out (None: no limit)."""
+        if not self.is_open:
+            raise PortNotOpenError()
+        lockstep = self._driver.lockstep
+        with self._cond:
+            self._cond.wait_for(
+                lambda: len(self._buf) >= size or (lockstep and self._buf) or not self.is_open,
+                timeout=self._timeout)
+            data = bytes(self._buf[:size])
+            del self._buf[:size]
+        return data
+
+    def write(self, data) -> int:
+        """Send ``data`` to the device; in lockstep, the ticks it triggers are sent before this returns."""
+        if not self.is_open:
+            raise PortNotOpenError()
+        data = to_bytes(data)
+        with self._cond:
+            out = self._driver.feed(data)
+            if out:
+                self._buf += out
+                self._cond.notify_all()
+        return len(data)
+
+    def reset_input_buffer(self) -> None:
+        """Discard what the device has sent and was not read."""
+        if not self.is_open:
+            raise PortNotOpenError()
+        with self._cond:
+            self._buf.clear()
+
+    def reset_output_buffer(self) -> None:
+        """Nothing is ever pending towards the device: writes reach it at once."""
+        if not self.is_open:
+            raise PortNotOpenError()
+
+    @property
+    def out_waiting(self) -> int:
+        """Always 0 (writes reach the device at once)."""
+        return 0
+
+    def _update_break_state(self) -> None:
+        pass
+
+    def _update_rts_state(self) -> None:
+        pass
+
+    def _update_dtr_state(self) -> None:
+        pass
+
+    @property
+    def cts(self) -> bool:
+        return True
+
+    @property
+    def dsr(self) -> bool:
+        return True
+
+    @property
+    def ri(self) -> bool:
+        return False
+
+    @property
+    def cd(self) -> bool:
+        return True
