@@ -1,0 +1,46 @@
+"""Goodness of fit of a simulated signal to a measured one (DESIGN.md "Model diagnosis")."""
+
+from __future__ import annotations
+
+import numpy as np
+
+
+def nrmse_fit(y, yhat) -> float:
+    """NRMSE fit in percent: 100 (1 - ||y - yhat|| / ||y - mean(y)||).
+
+    100 is a perfect fit, 0 is no better than the measured mean, negative is worse.
+
+    Parameters
+    ----------
+    y : array_like, shape (N,) or (N, ...)
+        Measured signal (e.g. theta in encoder counts, a in accelerometer counts).
+    yhat : array_like, same shape as ``y``
+        Predicted signal, same units.
+
+    Returns
+    -------
+    float
+        The fit, percent; NaN when ``y`` is constant (the fit is undefined).
+
+    Raises
+    ------
+    ValueError
+        Shapes differ, arrays are empty, or either holds NaN.
+
+    Notes
+    -----
+    Source: DESIGN.md "Model diagnosis contract" (fit_pct); the same as MATLAB's
+    ``goodnessOfFit(yhat, y, 'NRMSE')`` times 100 and System Identification's "fit".
+    """
+    y = np.asarray(y, dtype=float)
+    yhat = np.asarray(yhat, dtype=float)
+    if y.shape != yhat.shape:
+        raise ValueError(f"y and yhat must have the same shape, got {y.shape} and {yhat.shape}")
+    if y.size == 0:
+        raise ValueError("y and yhat are empty")
+    if np.any(np.isnan(y)) or np.any(np.isnan(yhat)):
+        raise ValueError("y or yhat holds NaN samples")
+    denom = np.linalg.norm(y - y.mean())
+    if denom == 0.0:
+        return float("nan")
+    return float(100.0 * (1.0 - np.linalg.norm(y - yhat) / denom))
