@@ -83,8 +83,10 @@ def run_step(port: str = DEFAULT_PORT, protocol: str = "v1", controller: str = D
     port : str
         Port path or pyserial URL; ``sim://`` is the built-in simulated rig (lockstep).
     protocol : {"v1", "legacy"}
-    controller : str
-        "p", "lead", "lead-accel", "open-loop" or a compensator TOML file.
+    controller : str or controller object
+        "p", "lead", "lead-accel", "open-loop", a compensator TOML file, or any object
+        with ``step(u, theta, a) -> (v, theta_d_hat)``, ``reset()`` and a JSON-able
+        ``spec`` dict (e.g. a :class:`station.control.Compensator` built in Python).
     amplitude : float
         Step height, encoder counts (open loop: DAC counts).
     duration : float
@@ -120,9 +122,13 @@ def run_step(port: str = DEFAULT_PORT, protocol: str = "v1", controller: str = D
         raise StationError(f"--duration {duration} s is shorter than two samples of {dt} s")
     if not 0 <= step_tick < n_ticks:
         raise StationError(f"step tick {step_tick} is outside the run's {n_ticks} ticks")
-    ctrl = make_controller(controller, dt=dt, kp=kp, limit=limit)
+    if isinstance(controller, (str, Path)):
+        ctrl = make_controller(str(controller), dt=dt, kp=kp, limit=limit)
+    else:
+        ctrl = controller
+        ctrl.reset()
     u = step_reference(amplitude, n_ticks, at_tick=step_tick)
-    log_path = Path(out) if out is not None else default_log_path(controller)
+    log_path = Path(out) if out is not None else default_log_path(str(ctrl.spec.get("kind", "custom")))
     log_path.parent.mkdir(parents=True, exist_ok=True)
     with open_session(port, protocol, timeout=timeout, baudrate=baudrate) as session:
         info = session.hello()

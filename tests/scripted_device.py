@@ -1,0 +1,128 @@
+"""A scripted rig on a pty, written from the protocol spec, as an independent test oracle.
+
+It plays the device side of protocol v1 or legacy at 500 Hz on the master end of a pty
+(the station opens the slave as a real port), records the wall time each sample was
+sent and every command the station wrote, and can misbehave on cue: go silent, send
+garbage and corrupted frames, or skip a legacy tick number.
+"""
+
+from __future__ import annotations
+
+import os
+import pty
+import select
+import threading
+import time
+import tty
+
+from station.protocol import legacy, v1
+
+
+class ScriptedDevice:
+    """Device side of a protocol on a pty; start with :meth:`start`, then open ``path``.
+
+    Parameters: protocol "v1" | "legacy"; theta(k) -> encoder counts of tick k;
+    silent_after: stop sending after this tick; garbage_every: (v1) garbage + a corrupted
+    frame after every N-th sample; skip_at: (legacy) n jumps by one at this tick.
+    """
+
+    def __init__(self, protocol="v1", theta=lambda k: 0, silent_after=None, garbage_every=None,
+                 skip_at=None, period=0.002):
+        self.protocol = protocol
+        self.theta = theta
+        self.silent_after, self.garbage_every, self.skip_at = silent_after, garbage_every, skip_at
+        self.period = period
+        self.master, self.slave = pty.openpty()
+        tty.setraw(self.master)
+        tty.setraw(self.slave)
+        self.path = os.ttyname(self.slave)
+        self.sent: list[tuple[int, float]] = []     # (tick, wall time the sample was written)
+        self.received: list = []                     # v1 messages / legacy command tuples, in order
+        self.outputs: list[int] = []                 # the output applied at each tick
+        self._stop = threading.Event()
+        self._thread = threading.Thread(target=self._run, daemon=True)
+
+    def start(self):
+        self._thread.start()
+        return self
+
+    def close(self):
+        self._stop.set()
+        self._thread.join(timeout=2)
+        for fd in (self.master, self.slave):
+            try:
+                os.close(fd)
+            except OSError:
+                pass
+
+    def wait_for(self, predicate, timeout=1.0) -> bool:
+        """Poll ``predicate(self)`` until true or ``timeout`` s pass; returns its last value."""
+        deadline = time.perf_counter() + timeout
+        while not predicate(self) and time.perf_counter() < deadline:
+            time.sleep(0.005)
+        return predicate(self)
+
+    def commands(self):
+        """The (seq or None, v) of every command the station sent, in order."""
+        if self.protocol == "v1":
+            return [(m.seq, m.v) for m in self.received if isinstance(m, v1.Command)]
+        return [(None, c[1]) for c in self.received if c[0] == "/"]
+
+    def _write(self, data: bytes):
+        os.write(self.master, data)
+
+    def _run(self):
+        decoder = v1.Decoder() if self.protocol == "v1" else legacy.CommandDecoder()
+        running, k, next_tick, output, last_cmd = False, 0, 0.0, 0, None
+        while not self._stop.is_set():
+            timeout = max(0.0, next_tick - time.perf_counter()) if running else 0.01
+            ready, _, _ = select.select([self.master], [], [], timeout)
+            if ready:
+                try:
+                    data = os.read(self.master, 4096)
+                except OSError:
+                    return
+                for msg in decoder.feed(data):
+                    self.received.append(msg)
+                    if self.protocol == "v1":
+                        if isinstance(msg, v1.Hello):
+                            self._write(v1.encode(v1.Info(1, 0, 9, 0, 500, 255, 1024, 10, "SCRIPTED")))
+                        elif isinstance(msg, v1.Start):
+                            running, k, next_tick, output, last_cmd = True, 0, time.perf_counter(), 0, None
+                        elif isinstance(msg, v1.Command):
+                            last_cmd = msg.v
+                        elif isinstance(msg, v1.Stop):
+                            running, output = False, 0
+                            self.outputs.append(0)
+                            self._write(v1.encode(v1.Stopped(0, k, 0, 0, decoder.rx_errors)))
+                    else:
+                        if msg[0] == "r":
+                            self._write(legacy.encode_word(0))
+                        elif msg[0] == "q":
+                            self._write(legacy.encode_word(0))
+                            running, k, next_tick, output = True, 0, time.perf_counter(), 0
+                        elif msg[0] == "/":
+                            last_cmd = msg[1]
+                        elif msg[0] == "s":
+                            running = False
+            if running and time.perf_counter() >= next_tick:
+                if last_cmd is not None:
+                    output = last_cmd
+                self.outputs.append(output)
+                if self.silent_after is None or k <= self.silent_after:
+                    self._send_tick(k, output)
+                k += 1
+                next_tick += self.period
+
+    def _send_tick(self, k, output):
+        if self.protocol == "v1":
+            data = v1.encode(v1.Sample(k & 0xFFFF, self.theta(k), 0, output, 0))
+            if self.garbage_every and k and k % self.garbage_every == 0:
+                bad = bytearray(v1.encode(v1.Sample(k & 0xFFFF, 99, 0, 0, 0)))
+                bad[3] ^= 0x40  # corrupt one byte: CRC fails
+                data = b"\x13\x37\xff\x00" + data + bytes(bad)
+        else:
+            n = k + 1 if self.skip_at is not None and k >= self.skip_at else k
+            data = legacy.tick_bytes(legacy.Tick(n, self.theta(k), 0))
+        self._write(data)
+        self.sent.append((k, time.time()))

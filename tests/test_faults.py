@@ -1,0 +1,144 @@
+"""Fault tests end to end: the station against a scripted rig on a pty.
+
+Each fault must end the run with a clear message, command 0 (and stop) sent before the
+log is closed, and every sample before the fault in the log.
+"""
+
+import json
+import os
+import signal
+import subprocess
+import sys
+import time
+
+import numpy as np
+import pytest
+
+from station.experiment import run_step
+from station.runlog import read_log
+from tests.scripted_device import ScriptedDevice
+
+
+@pytest.fixture
+def device_factory():
+    made = []
+
+    def make(**kw):
+        dev = ScriptedDevice(**kw).start()
+        made.append(dev)
+        return dev
+
+    yield make
+    for dev in made:
+        dev.close()
+
+
+def test_device_going_silent_stops_with_command_zero(device_factory, tmp_path):
+    dev = device_factory(protocol="v1", theta=lambda k: 0, silent_after=100)
+    report = run_step(port=dev.path, controller="p", amplitude=50, duration=2.0, out=tmp_path / "log.tsv")
+    assert report.result.reason == "timeout"
+    assert "went silent" in report.result.message and "tick 100" in report.result.message
+    cmds = dev.commands()
+    assert cmds[-1] == (100, 0)                       # command 0 for the last sample...
+    assert isinstance(dev.received[-1], type(dev.received[-1])) and type(dev.received[-1]).__name__ == "Stop"
+    assert dev.outputs[-1] == 0                       # ...and the device's output is 0 after STOP
+    log = read_log(tmp_path / "log.tsv")
+    assert np.array_equal(log.data["n"], np.arange(101))
+
+
+def test_v1_garbage_and_corrupt_frames_are_counted_and_survived(device_factory, tmp_path):
+    dev = device_factory(protocol="v1", garbage_every=50)
+    report = run_step(port=dev.path, controller="lead", duration=1.0, out=tmp_path / "log.tsv")
+    assert report.result.ok, report.result.message
+    assert report.result.dropped == 0
+    assert report.result.extra["rx_errors"] == 2 * (499 // 50)  # garbage + corrupted frame each time
+    assert np.array_equal(read_log(tmp_path / "log.tsv").data["n"], np.arange(500))
+
+
+def test_legacy_tick_number_jump_stops_safely(device_factory, tmp_path):
+    dev = device_factory(protocol="legacy", skip_at=120)
+    report = run_step(port=dev.path, protocol="legacy", controller="p", amplitude=50, duration=2.0,
+                      out=tmp_path / "log.tsv")
+    assert report.result.reason == "sequence" and "jumped from 119 to 121" in report.result.message
+    assert dev.wait_for(lambda d: d.received and d.received[-1] == ("s",))  # no reply in legacy: wait for it
+    assert dev.commands()[-1] == (None, 0)
+    assert dev.received[-1] == ("s",)
+    assert len(read_log(tmp_path / "log.tsv").data["n"]) == 120
+
+
+def test_soft_limit_stops_safely(device_factory, tmp_path):
+    dev = device_factory(protocol="v1", theta=lambda k: 5 * k)
+    report = run_step(port=dev.path, controller="p", duration=2.0, soft_limit=300, out=tmp_path / "log.tsv")
+    assert report.result.reason == "soft-limit" and "305" in report.result.message
+    assert dev.commands()[-1][1] == 0 and type(dev.received[-1]).__name__ == "Stop"
+
+
+class _FailingController:
+    """Commands +30 until its 50th call, then raises (a bug in a user's controller)."""
+
+    spec = {"kind": "test", "name": "fails at call 50"}
+
+    def __init__(self):
+        self.calls = 0
+
+    def reset(self):
+        self.calls = 0
+
+    def step(self, u, theta, a):
+        self.calls += 1
+        if self.calls == 50:
+            raise FloatingPointError("overflow in my filter")
+        return 30.0, u
+
+
+def test_controller_exception_stops_safely(device_factory, tmp_path):
+    dev = device_factory(protocol="v1", theta=lambda k: 1)
+    report = run_step(port=dev.path, controller=_FailingController(), duration=1.0, out=tmp_path / "log.tsv")
+    assert report.result.reason == "controller"
+    assert "FloatingPointError: overflow in my filter at tick 49" in report.result.message
+    assert dev.commands()[-2:] == [(48, 30), (49, 0)]     # nothing from the broken step, then 0
+    assert type(dev.received[-1]).__name__ == "Stop" and dev.outputs[-1] == 0
+    assert len(read_log(tmp_path / "log.tsv").data["n"]) == 49
+
+
+def test_sigkill_leaves_every_row_older_than_100ms(device_factory, tmp_path):
+    dev = device_factory(protocol="v1", theta=lambda k: k % 7)
+    log = tmp_path / "killed.tsv"
+    proc = subprocess.Popen([sys.executable, "-m", "station", "step", "--port", dev.path, "--duration", "20",
+                             "--out", str(log)], stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)
+    deadline = time.time() + 30
+    while len(dev.sent) < 500 and time.time() < deadline:  # one second of samples
+        time.sleep(0.05)
+    kill_time = time.time()
+    proc.send_signal(signal.SIGKILL)
+    proc.wait(timeout=10)
+    assert len(dev.sent) >= 500, proc.stderr.read().decode()
+    with pytest.warns(UserWarning) if _torn(log) else _no_warning():
+        data = read_log(log).data
+    must_have = [k for k, sent_at in dev.sent if sent_at < kill_time - 0.1]
+    assert len(must_have) > 400
+    assert data["n"][: len(must_have)].tolist() == must_have
+
+
+def _torn(path) -> bool:
+    return not path.read_bytes().endswith(b"\n")
+
+
+class _no_warning:
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        return False
+
+
+def test_cli_reports_a_fault_with_exit_code_1_and_json(device_factory, tmp_path):
+    dev = device_factory(protocol="v1", silent_after=30)
+    out = tmp_path / "r.json"
+    proc = subprocess.run([sys.executable, "-m", "station", "step", "--port", dev.path, "--out",
+                           str(tmp_path / "l.tsv"), "--json", str(out)], capture_output=True, text=True, timeout=60)
+    assert proc.returncode == 1
+    assert "STOPPED SAFELY (timeout)" in proc.stdout and "command 0 sent" in proc.stdout
+    result = json.loads(out.read_text())
+    assert result["reason"] == "timeout" and result["timing"]["dropped"] == 0
+    assert os.path.exists(result["log"])
