@@ -264,3 +264,22 @@ def test_legacy_unknown_bytes_are_counted():
     dev.receive(legacy.START)
     dev.receive(b"xz")
     assert dev.rx_errors == 2
+
+
+# -- the FEM plant (default) ------------------------------------------------------
+
+def test_fem_plant_constant_positive_v_moves_theta_up_and_the_tip_first_lags():
+    dev = SimDevice(seed=0, accel_noise_std=0.0)
+    dev.receive(v1.encode(v1.Start(v1.START_ZERO_ACCEL | v1.START_RESET_ENCODER, 0)))
+    theta, accel = [], []
+    for k in range(101):  # 0.2 s of v = +50
+        s = sample(dev)
+        theta.append(s.theta)
+        accel.append(s.accel)
+        command(dev, k, 50)
+    assert theta[0] == 0 and accel[0] == 0
+    assert theta[-1] > 20
+    assert all(b >= a for a, b in zip(theta, theta[1:]))
+    first = next(a for a in accel if a != 0)
+    assert first < 0  # the tip lags: it first accelerates away from increasing theta
+    assert max(accel) > 5  # then follows

@@ -131,3 +131,37 @@ def test_reset_input_buffer_discards_unread_bytes():
         assert port.in_waiting > 0
         port.reset_input_buffer()
         assert port.in_waiting == 0
+
+
+def test_realtime_ticks_about_500_per_second_and_answered_commands_are_on_time():
+    import time
+
+    with open_sim("pacing=realtime", timeout=0.5) as port:
+        dec = v1.Decoder()
+        port.write(v1.encode(v1.Start(0, 0)))
+        t0 = time.perf_counter()
+        samples = []
+        while time.perf_counter() - t0 < 1.0:
+            for m in dec.feed(port.read(max(1, port.in_waiting))):
+                samples.append(m)
+                port.write(v1.encode(v1.Command(m.seq, 10)))
+        clock = port._clock
+        assert 300 <= len(samples) <= 700
+        assert [s.seq for s in samples] == list(range(len(samples)))
+        late = sum(1 for s in samples if s.status & v1.LATE)
+        assert late < len(samples) / 4
+    assert not clock.is_alive()  # close() stops the clock thread
+
+
+def test_realtime_does_not_wait_for_the_station_watchdog_trips():
+    import time
+
+    with open_sim("pacing=realtime&watchdog=5") as port:
+        port.write(v1.encode(v1.Start(0, 0)))
+        time.sleep(0.1)
+        samples = v1.Decoder().feed(port.read(port.in_waiting))
+        assert len(samples) >= 20
+        assert samples[0].status == 0
+        assert all(s.status & v1.LATE for s in samples[1:])
+        assert all(s.status & v1.WATCHDOG for s in samples[5:])
+        assert not any(s.status & v1.WATCHDOG for s in samples[:5])

@@ -1,0 +1,142 @@
+"""The simulated device on a pseudo-terminal, for out-of-process use (``station sim-device --pty``).
+
+The first line on stdout is the pty's slave path (flushed), so a parent process can read
+it and open the port like a real device. The device then runs on the master side until
+SIGTERM or SIGINT, and prints a one-line JSON summary of the last run's counters,
+``{"ticks": .., "late": .., "watchdog_trips": .., "rx_errors": ..}``, which benchmarks
+parse. Pacing as for ``sim://`` (:mod:`station.sim.driver`): lockstep, or realtime
+(500 Hz on absolute deadlines, ``select`` with a timeout up to the next deadline).
+
+Run it as ``python -m station.sim.pty_server [--realtime] [--protocol legacy] [--seed N]
+[--elements N]``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import select
+import signal
+import sys
+import time
+import tty
+
+from station.sim.device import RATE_HZ, SimDevice
+from station.sim.driver import DeviceDriver, Faults
+
+
+def _raise_priority() -> str:
+    """SCHED_FIFO when allowed, else a lower nice value, else nothing; what was obtained."""
+    try:
+        os.sched_setscheduler(0, os.SCHED_FIFO, os.sched_param(10))
+        return "SCHED_FIFO"
+    except (PermissionError, OSError, AttributeError):
+        pass
+    try:
+        os.nice(-10)
+        return "nice -10"
+    except (PermissionError, OSError):
+        return "default"
+
+
+def _write_all(fd: int, data: bytes) -> None:
+    view = memoryview(data)
+    while view:
+        try:
+            n = os.write(fd, view)
+        except BlockingIOError:
+            select.select([], [fd], [], 0.01)
+            continue
+        view = view[n:]
+
+
+def serve_pty(protocol: str = "v1", realtime: bool = False, seed: int = 0, n_elements: int = 4,
+              accel_noise_std: float = 0.3, watchdog_ticks: int = 10, faults: Faults | None = None,
+              out=None) -> dict:
+    """Run the simulated device on a new pty until SIGTERM/SIGINT.
+
+    Parameters
+    ----------
+    protocol : {"v1", "legacy"}, default "v1"
+    realtime : bool, default False
+        500 Hz own clock (True) or lockstep with the station (False).
+    seed, n_elements, accel_noise_std, watchdog_ticks
+        As for :class:`station.sim.device.SimDevice`.
+    faults : Faults, optional
+        Faults to inject (:class:`station.sim.driver.Faults`).
+    out : text file, default sys.stdout
+        Gets the slave path (first line) and, at the end, the JSON summary line.
+
+    Returns
+    -------
+    dict
+        The summary printed at exit: ticks, late, watchdog_trips, rx_errors of the last
+        run (all 0 when no run was started).
+    """
+    out = out or sys.stdout
+    device = SimDevice(protocol, seed=seed, n_elements=n_elements, accel_noise_std=accel_noise_std,
+                       watchdog_ticks=watchdog_ticks)
+    driver = DeviceDriver(device, faults, lockstep=not realtime)
+    master, slave = os.openpty()
+    tty.setraw(slave)  # no echo, no line editing, no CR/LF translation for the station
+    tty.setraw(master)
+    os.set_blocking(master, False)
+    stop = []
+    previous = {sig: signal.signal(sig, lambda *_: stop.append(True)) for sig in (signal.SIGTERM, signal.SIGINT)}
+    _raise_priority()
+    print(os.ttyname(slave), file=out, flush=True)
+    period = 1.0 / RATE_HZ
+    deadline = time.perf_counter() + period
+    try:
+        while not stop:
+            timeout = max(0.0, deadline - time.perf_counter()) if realtime else 0.1
+            try:
+                readable, _, _ = select.select([master], [], [], timeout)
+            except InterruptedError:
+                continue
+            if readable:
+                try:
+                    data = os.read(master, 4096)
+                except (BlockingIOError, OSError):
+                    data = b""  # EIO: no process has the slave open right now
+                if data:
+                    _write_all(master, driver.feed(data))
+            if realtime and time.perf_counter() >= deadline:
+                _write_all(master, driver.clock_tick())
+                deadline += period
+    finally:
+        for sig, handler in previous.items():
+            signal.signal(sig, handler)
+        os.close(master)
+        os.close(slave)
+    c = device.counters
+    summary = {"ticks": c.ticks, "late": c.late, "watchdog_trips": c.watchdog_trips, "rx_errors": c.rx_errors}
+    print(json.dumps(summary), file=out, flush=True)
+    return summary
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    """The server's options (shared by ``station sim-device`` and ``python -m station.sim.pty_server``)."""
+    parser.add_argument("--protocol", choices=("v1", "legacy"), default="v1", help="device protocol (default v1)")
+    parser.add_argument("--realtime", action="store_true",
+                        help="tick on the device's own 500 Hz clock (default: lockstep with the station)")
+    parser.add_argument("--seed", type=int, default=0, help="sensor noise seed (default 0)")
+    parser.add_argument("--elements", type=int, default=4, help="FEM element count of the plant (default 4)")
+
+
+def serve_from_args(args: argparse.Namespace) -> dict:
+    """:func:`serve_pty` with the options of :func:`add_arguments`."""
+    return serve_pty(args.protocol, args.realtime, args.seed, args.elements)
+
+
+def main(argv: list[str] | None = None) -> int:
+    """``python -m station.sim.pty_server``: serve until SIGTERM/SIGINT."""
+    parser = argparse.ArgumentParser(prog="python -m station.sim.pty_server", description=__doc__.splitlines()[0])
+    add_arguments(parser)
+    serve_from_args(parser.parse_args(argv))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
