@@ -14,7 +14,6 @@ import time
 from dataclasses import dataclass
 from pathlib import Path
 
-import numpy as np
 
 from station import DT, __version__
 from station.analysis.metrics import StepMetrics, step_metrics
@@ -59,10 +58,9 @@ class StepReport:
         }
 
 
-def default_log_path(controller: str, when: _dt.datetime | None = None) -> Path:
-    """``runs/step-<controller>-<UTC time>.tsv`` under the current directory."""
+def default_log_path(tag: str, when: _dt.datetime | None = None) -> Path:
+    """``runs/step-<tag>-<UTC time>.tsv`` under the current directory (tag: controller name)."""
     when = when or _dt.datetime.now(_dt.timezone.utc)
-    tag = Path(controller).stem if controller.endswith(".toml") else controller
     return Path("runs") / f"step-{tag}-{when:%Y%m%d-%H%M%S}.tsv"
 
 
@@ -124,11 +122,13 @@ def run_step(port: str = DEFAULT_PORT, protocol: str = "v1", controller: str = D
         raise StationError(f"step tick {step_tick} is outside the run's {n_ticks} ticks")
     if isinstance(controller, (str, Path)):
         ctrl = make_controller(str(controller), dt=dt, kp=kp, limit=limit)
+        tag = Path(controller).stem if str(controller).endswith(".toml") else str(controller)
     else:
         ctrl = controller
         ctrl.reset()
+        tag = str(ctrl.spec.get("kind", "custom"))
     u = step_reference(amplitude, n_ticks, at_tick=step_tick)
-    log_path = Path(out) if out is not None else default_log_path(str(ctrl.spec.get("kind", "custom")))
+    log_path = Path(out) if out is not None else default_log_path(tag)
     log_path.parent.mkdir(parents=True, exist_ok=True)
     with open_session(port, protocol, timeout=timeout, baudrate=baudrate) as session:
         info = session.hello()
