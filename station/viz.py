@@ -1,0 +1,132 @@
+"""Rerun recordings of runs and replays: theta, a, u, v, theta_d_hat as time series.
+
+Uses a :class:`rerun.RecordingStream` object per sink (no global recording), columnar
+``send_columns`` on the ``sample`` sequence timeline (tick n) and a ``time`` duration
+timeline (s). Entity layout, one plot per parent in the viewer:
+
+- ``theta/measured``, ``theta/reference`` (u), ``theta/theta_d_hat``, ``theta/model``
+  (encoder counts);
+- ``a/measured``, ``a/model`` (accelerometer counts);
+- ``v/command``, ``v/applied``, ``v/model`` (DAC counts).
+"""
+
+from __future__ import annotations
+
+import uuid
+from pathlib import Path
+from typing import Mapping
+
+import numpy as np
+
+from station.errors import StationError
+
+LOG_ENTITIES = {
+    "theta": "theta/measured",
+    "u": "theta/reference",
+    "theta_d_hat": "theta/theta_d_hat",
+    "a": "a/measured",
+    "v": "v/command",
+    "v_applied": "v/applied",
+}
+"""Run-log column -> rerun entity path."""
+
+MODEL_ENTITIES = {"theta": "theta/model", "a": "a/model", "v": "v/model"}
+"""Model prediction key -> rerun entity path."""
+
+
+class RerunSink:
+    """A run-log sink (``write_rows``) that records time series with rerun.
+
+    Parameters
+    ----------
+    rrd_path : str or Path, optional
+        Write the recording to this .rrd file.
+    spawn : bool
+        Stream to a newly spawned rerun viewer instead.
+    name : str
+        Application id shown in the viewer.
+
+    Without ``rrd_path`` or ``spawn`` the data stays in the stream's memory buffer
+    (useful in notebooks and tests only).
+
+    Raises
+    ------
+    StationError
+        Both ``rrd_path`` and ``spawn`` given, or the .rrd file cannot be created or the
+        viewer cannot be spawned.
+    """
+
+    def __init__(self, rrd_path: str | Path | None = None, spawn: bool = False, name: str = "station"):
+        import rerun as rr
+
+        if rrd_path is not None and spawn:
+            raise StationError("rerun: give either an .rrd file or --spawn, not both")
+        self._rr = rr
+        self.rrd_path = None if rrd_path is None else Path(rrd_path)
+        self.rec = rr.RecordingStream(application_id=name, recording_id=uuid.uuid4())
+        try:
+            if self.rrd_path is not None:
+                self.rec.save(self.rrd_path)
+            elif spawn:
+                self.rec.spawn()
+        except Exception as exc:  # noqa: BLE001 - the SDK raises various types
+            target = self.rrd_path if self.rrd_path is not None else "a rerun viewer"
+            raise StationError(f"rerun: cannot record to {target}: {exc}") from None
+        self._closed = False
+
+    def _send(self, n: np.ndarray, t: np.ndarray | None, entity: str, values: np.ndarray) -> None:
+        rr = self._rr
+        values = np.asarray(values, dtype=float)
+        keep = ~np.isnan(values)
+        if not np.any(keep):
+            return
+        indexes = [rr.TimeColumn("sample", sequence=n[keep].astype(np.int64))]
+        if t is not None:
+            indexes.append(rr.TimeColumn("time", duration=t[keep]))
+        self.rec.send_columns(entity, indexes=indexes, columns=rr.Scalars.columns(scalars=values[keep]))
+
+    def write_rows(self, columns: Mapping[str, np.ndarray]) -> None:
+        """Record a batch of run-log rows.
+
+        Parameters
+        ----------
+        columns : mapping of str to numpy.ndarray, each shape (rows,)
+            At least ``n`` (tick); ``t`` (s) when present; any of ``theta``, ``u``,
+            ``theta_d_hat``, ``a``, ``v``, ``v_applied`` (NaN samples are skipped).
+        """
+        if self._closed:
+            raise StationError("rerun sink: write after close")
+        n = np.asarray(columns["n"], dtype=float)
+        t = np.asarray(columns["t"], dtype=float) if "t" in columns else None
+        ok = ~np.isnan(n)
+        n = n[ok].astype(np.int64)
+        t = None if t is None else t[ok]
+        for key, entity in LOG_ENTITIES.items():
+            if key in columns:
+                self._send(n, t, entity, np.asarray(columns[key], dtype=float)[ok])
+
+    def log_prediction(self, prediction: Mapping[str, np.ndarray], n=None) -> None:
+        """Record a model prediction beside the logged signals.
+
+        Parameters
+        ----------
+        prediction : mapping of str to numpy.ndarray, each shape (N,)
+            ``station.plant.simulate`` output: ``theta`` (encoder counts), ``a``
+            (accelerometer counts), ``v`` (DAC counts), optionally ``t`` (s).
+        n : array_like of int, shape (N,), optional
+            Ticks of the samples; default 0..N-1.
+        """
+        theta = np.asarray(prediction["theta"], dtype=float)
+        n = np.arange(theta.size) if n is None else np.asarray(n, dtype=np.int64)
+        t = np.asarray(prediction["t"], dtype=float) if "t" in prediction else None
+        for key, entity in MODEL_ENTITIES.items():
+            if key in prediction:
+                self._send(n, t, entity, prediction[key])
+
+    def close(self) -> None:
+        """Flush the recording and close the file or viewer connection. Idempotent."""
+        if self._closed:
+            return
+        self._closed = True
+        self.rec.flush()
+        self.rec.disconnect()
