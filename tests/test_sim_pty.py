@@ -56,7 +56,7 @@ def test_v1_lockstep_round_trip_and_summary():
             assert dec.rx_errors == 0
     finally:
         summary = stop(proc)
-    assert summary == {"ticks": 21, "late": 0, "watchdog_trips": 0, "rx_errors": 0}
+    assert summary == {"ticks": 21, "late": 0, "watchdog_trips": 0, "rx_errors": 0, "tx_lost": 0}
 
 
 def test_legacy_realtime_ticks_without_the_station():
@@ -75,6 +75,20 @@ def test_legacy_realtime_ticks_without_the_station():
         summary = stop(proc)
     assert summary["ticks"] >= 50
     assert summary["late"] >= summary["ticks"] - 2  # one '/' in the whole run
+
+
+def test_realtime_device_whose_station_stopped_reading_still_exits_on_sigterm():
+    import time
+
+    proc, path = start("--realtime", "--protocol", "v1", "--seed", "2")
+    try:
+        with serial.Serial(path, timeout=1) as port:
+            port.write(v1.encode(v1.Start(0, 0)))
+            time.sleep(2.0)  # ~1000 samples (16 kB) never read
+    finally:
+        summary = stop(proc)
+    assert summary["ticks"] > 500
+    assert summary["watchdog_trips"] == 0 and summary["late"] == summary["ticks"] - 1
 
 
 def test_command_without_pty_is_a_one_line_station_error():

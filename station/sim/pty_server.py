@@ -3,8 +3,9 @@
 The first line on stdout is the pty's slave path (flushed), so a parent process can read
 it and open the port like a real device. The device then runs on the master side until
 SIGTERM or SIGINT, and prints a one-line JSON summary of the last run's counters,
-``{"ticks": .., "late": .., "watchdog_trips": .., "rx_errors": ..}``, which benchmarks
-parse. Pacing as for ``sim://`` (:mod:`station.sim.driver`): lockstep, or realtime
+``{"ticks": .., "late": .., "watchdog_trips": .., "rx_errors": .., "tx_lost": ..}``, which
+benchmarks parse (tx_lost: bytes the device sent that did not fit into the pty because
+nobody read them; the device never blocks on them). Pacing as for ``sim://`` (:mod:`station.sim.driver`): lockstep, or realtime
 (500 Hz on absolute deadlines, ``select`` with a timeout up to the next deadline).
 
 Run it as ``python -m station.sim.pty_server [--realtime] [--protocol legacy] [--seed N]
@@ -40,15 +41,19 @@ def _raise_priority() -> str:
         return "default"
 
 
-def _write_all(fd: int, data: bytes) -> None:
+def _send(fd: int, data: bytes) -> int:
+    """Write ``data`` to the pty master without ever blocking the device; bytes that do not fit are lost.
+
+    Like a UART whose receiver stopped reading: the transmitter goes on and the bytes
+    are lost at the far end. Returns how many were lost.
+    """
     view = memoryview(data)
     while view:
         try:
-            n = os.write(fd, view)
+            view = view[os.write(fd, view):]
         except BlockingIOError:
-            select.select([], [fd], [], 0.01)
-            continue
-        view = view[n:]
+            return len(view)
+    return 0
 
 
 def serve_pty(protocol: str = "v1", realtime: bool = False, seed: int = 0, n_elements: int = 4,
@@ -72,7 +77,7 @@ def serve_pty(protocol: str = "v1", realtime: bool = False, seed: int = 0, n_ele
     -------
     dict
         The summary printed at exit: ticks, late, watchdog_trips, rx_errors of the last
-        run (all 0 when no run was started).
+        run (all 0 when no run was started), tx_lost over the whole session.
     """
     out = out or sys.stdout
     device = SimDevice(protocol, seed=seed, n_elements=n_elements, accel_noise_std=accel_noise_std,
@@ -88,6 +93,7 @@ def serve_pty(protocol: str = "v1", realtime: bool = False, seed: int = 0, n_ele
     print(os.ttyname(slave), file=out, flush=True)
     period = 1.0 / RATE_HZ
     deadline = time.perf_counter() + period
+    lost = 0
     try:
         while not stop:
             timeout = max(0.0, deadline - time.perf_counter()) if realtime else 0.1
@@ -101,9 +107,9 @@ def serve_pty(protocol: str = "v1", realtime: bool = False, seed: int = 0, n_ele
                 except (BlockingIOError, OSError):
                     data = b""  # EIO: no process has the slave open right now
                 if data:
-                    _write_all(master, driver.feed(data))
+                    lost += _send(master, driver.feed(data))
             if realtime and time.perf_counter() >= deadline:
-                _write_all(master, driver.clock_tick())
+                lost += _send(master, driver.clock_tick())
                 deadline += period
     finally:
         for sig, handler in previous.items():
@@ -111,7 +117,8 @@ def serve_pty(protocol: str = "v1", realtime: bool = False, seed: int = 0, n_ele
         os.close(master)
         os.close(slave)
     c = device.counters
-    summary = {"ticks": c.ticks, "late": c.late, "watchdog_trips": c.watchdog_trips, "rx_errors": c.rx_errors}
+    summary = {"ticks": c.ticks, "late": c.late, "watchdog_trips": c.watchdog_trips, "rx_errors": c.rx_errors,
+               "tx_lost": lost}
     print(json.dumps(summary), file=out, flush=True)
     return summary
 
