@@ -37,7 +37,8 @@ class DiscretePlant:
     Cd : ndarray, shape (2, n_x)
         Outputs [theta (encoder counts), a (accelerometer counts)]; D = 0.
     x : ndarray, shape (n_x,)
-        Current state [q, q'] in SI units (zero after `reset`).
+        Current state in the scaled modal coordinates of `fem.state_matrices`
+        (zero after `reset`: the plant at rest at the origin).
     params, n_elements, dt
         As given.
     """

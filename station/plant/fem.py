@@ -208,7 +208,16 @@ class SecondOrderModel:
 
 
 def state_matrices(params: Params, n_elements: int = 4) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """First-order matrices x' = A x + B v, y = C x of the SFLR, x = [q, q'].
+    """First-order realization x' = A x + B v, y = C x of the SFLR, in scaled modal form.
+
+    The undamped problem K φ = ω² M φ (scipy.linalg.eigh, mass-normalized modes Φ,
+    q = Φ η) gives one rigid-body mode (the whole link turning: K r = 0; its ω is set to
+    exactly 0) and the elastic modes. The state is x = [S η, η'] with S = diag(ω_i)
+    (1 for the rigid mode), so that each undamped mode is the skew block
+    [[0, ω], [−ω, 0]]: a nearly normal A whose norm is ω_max, not ω_max², which keeps
+    the ZOH matrix exponential and the sampled stepping accurate at 100 elements
+    (the physical coordinates [q, q'] have ‖A‖ ≈ 1e15 there). The damping Φᵀ C Φ
+    (motor, drive train, clamp, Rayleigh beam damping) couples the modes.
 
     Parameters
     ----------
@@ -220,24 +229,28 @@ def state_matrices(params: Params, n_elements: int = 4) -> tuple[np.ndarray, np.
     Returns
     -------
     A : ndarray, shape (2 n_dof, 2 n_dof)
+        n_dof = 2 n + 3; units 1/s.
     B : ndarray, shape (2 n_dof, 1)
-        Per DAC count.
+        Per DAC count (torque k_tau·v on the motor DOF).
     C : ndarray, shape (2, 2 n_dof)
-        Rows: theta = H·theta_b (encoder counts) and a = a_gain·w_tip'' (ADC counts,
-        positive towards increasing theta). The accelerometer row is
-        a_gain·[-M⁻¹K, -M⁻¹C] at the tip; its feed-through a_gain·(M⁻¹b)_tip is zero
-        because the torque acts on the motor only (DESIGN.md).
+        Rows: theta = H·theta_b (encoder counts) and a = a_gain·w_tip'' (accelerometer
+        counts, positive towards increasing theta). The accelerometer's feed-through
+        a_gain·(M⁻¹ b)_tip is zero (the torque acts on the motor only, DESIGN.md), so
+        D = 0.
     """
     m = SecondOrderModel(params, n_elements)
     n_dof = m.M.shape[0]
-    Minv_K = scipy.linalg.solve(m.M, m.K, assume_a="pos")
-    Minv_C = scipy.linalg.solve(m.M, m.C, assume_a="pos")
-    Minv_b = scipy.linalg.solve(m.M, m.b, assume_a="pos")
-    A = np.block([[np.zeros((n_dof, n_dof)), np.eye(n_dof)], [-Minv_K, -Minv_C]])
-    B = np.concatenate([np.zeros(n_dof), Minv_b])[:, None]
+    w2, Phi = scipy.linalg.eigh(m.K, m.M)
+    omega = np.sqrt(np.clip(w2, 0.0, None))
+    omega[0] = 0.0  # the single rigid-body mode (K r = 0 up to rounding)
+    scale = np.where(omega > 0.0, omega, 1.0)
+    damping = Phi.T @ m.C @ Phi
+    Z = np.zeros((n_dof, n_dof))
+    A = np.block([[Z, np.diag(scale)], [-np.diag(omega**2 / scale), -damping]])
+    B = np.concatenate([np.zeros(n_dof), Phi.T @ m.b])[:, None]
     C = np.zeros((2, 2 * n_dof))
-    C[0, m.base] = params.H
-    C[1] = params.a_gain * A[n_dof + m.tip_w]
+    C[0, :n_dof] = params.H * Phi[m.base] / scale
+    C[1] = params.a_gain * (Phi[m.tip_w] @ A[n_dof:])
     return A, B, C
 
 
@@ -255,7 +268,8 @@ def build_continuous(params: Params | None = None, n_elements: int = 4) -> contr
     -------
     control.StateSpace
         Input v (DAC counts); outputs [theta (encoder counts, float), a (accelerometer
-        counts, float)]; D = 0; states x = [q, q'] (SI), 2·(2 n + 3) of them.
+        counts, float)]; D = 0; 2·(2 n + 3) states in scaled modal form (see
+        `state_matrices`).
 
     Raises
     ------
