@@ -74,7 +74,26 @@ class RerunSink:
             raise StationError(f"rerun: cannot record to {target}: {exc}") from None
         self._closed = False
 
+    def log_series(self, entity: str, values, n=None, t=None) -> None:
+        """Record one scalar time series (NaN samples skipped).
+
+        Parameters
+        ----------
+        entity : str
+            Rerun entity path, e.g. "v/replayed".
+        values : array_like, shape (N,)
+        n : array_like of int, shape (N,), optional
+            Ticks (``sample`` timeline); default 0..N-1.
+        t : array_like, shape (N,), optional
+            Times, s (``time`` timeline).
+        """
+        values = np.asarray(values, dtype=float)
+        n = np.arange(values.size) if n is None else np.asarray(n, dtype=np.int64)
+        self._send(n, None if t is None else np.asarray(t, dtype=float), entity, values)
+
     def _send(self, n: np.ndarray, t: np.ndarray | None, entity: str, values: np.ndarray) -> None:
+        if self._closed:
+            raise StationError("rerun sink: write after close")
         rr = self._rr
         values = np.asarray(values, dtype=float)
         keep = ~np.isnan(values)
@@ -94,8 +113,6 @@ class RerunSink:
             At least ``n`` (tick); ``t`` (s) when present; any of ``theta``, ``u``,
             ``theta_d_hat``, ``a``, ``v``, ``v_applied`` (NaN samples are skipped).
         """
-        if self._closed:
-            raise StationError("rerun sink: write after close")
         n = np.asarray(columns["n"], dtype=float)
         t = np.asarray(columns["t"], dtype=float) if "t" in columns else None
         ok = ~np.isnan(n)

@@ -1,0 +1,395 @@
+"""Replay a logged run: re-run its controller on the logged samples, prove it reproduces
+the logged commands, and overlay the FEM model's prediction.
+
+DESIGN.md "Compensators" and "Timing and log rows": v[k] = C(u[k], theta[k-d], a[k-d]) with
+the alignment d in {0, 1} detected from the data (the rig's 2009 logs d = 0, its later
+logs and protocol v1 d = 1). The rig's headers print the compensators' z coefficients to
+8 decimals; when they equal the Tustin coefficients of the known continuous designs to
+the printed digits, the unrounded designs are used (the printed Ga alone replays the
+accelerometer run only to 0.03 counts).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from station.analysis.fit import nrmse_fit
+from station.analysis.metrics import StepMetrics, step_metrics
+from station.control import (
+    Compensator,
+    DiscreteTF,
+    OpenLoop,
+    controller_from_spec,
+    lead_controller,
+    p_controller,
+)
+from station.runlog import RunLog, read_log
+
+ALIGNMENTS = (0, 1)
+"""Computational delays replay tries, samples."""
+
+RIG_LIMIT = 200.0
+"""The rig software's clamp of v, DAC counts (DESIGN.md)."""
+
+PRINTED_TOLERANCE = 5.0001e-9
+"""Largest difference between a coefficient and its 8-decimal print (half a unit in the 8th place)."""
+
+REPRODUCED_TOLERANCE = 1e-6
+"""max |v_replayed - v_logged| (DAC counts) under which a replay counts as reproducing the log."""
+
+
+@dataclass
+class ReplayReport:
+    """Outcome of :func:`replay`.
+
+    Attributes
+    ----------
+    file : str
+    format : {"station", "rig"}
+    controller : str or None
+        "p", "lead", "lead-accel", "open-loop", a compensator name, or None when the log
+        does not name its controller (model only).
+    controller_spec : dict or None
+        The controller that was replayed (``Compensator.spec``).
+    alignment : int or None
+        Detected computational delay d, samples (None: open loop or not replayed).
+    samples : int
+    max_abs_dv : float or None
+        max |v_replayed - v_logged|, DAC counts.
+    metrics : StepMetrics or None
+        Of the logged theta with u_final = the last u, for closed-loop step logs.
+    reference : dict
+        What the logged u is: ``{"kind": "step", "amplitude", "tick"}``, ``{"kind": "zero"}``
+        or ``{"kind": "other"}``.
+    fit_pct : dict or None
+        NRMSE fit (percent) of the model's theta and a to the logged ones.
+    notes : list of str
+        What was assumed or could not be done.
+    v_replayed, prediction : numpy arrays (not in the JSON)
+        The replayed commands, shape (N,); the model's ``simulate`` output (t, u, v,
+        theta, a, theta_d_hat).
+    log : RunLog (not in the JSON)
+        The log that was replayed.
+    """
+
+    file: str
+    format: str
+    controller: str | None
+    controller_spec: dict[str, Any] | None
+    alignment: int | None
+    samples: int
+    max_abs_dv: float | None
+    metrics: StepMetrics | None
+    reference: dict[str, Any]
+    fit_pct: dict[str, float | None] | None = None
+    n_elements: int | None = None
+    notes: list[str] = field(default_factory=list)
+    v_replayed: np.ndarray | None = field(default=None, repr=False)
+    prediction: dict[str, np.ndarray] | None = field(default=None, repr=False)
+    log: RunLog | None = field(default=None, repr=False)
+
+    @property
+    def reproduced(self) -> bool:
+        """True when the replay reproduces the logged v within ``REPRODUCED_TOLERANCE``."""
+        return self.max_abs_dv is not None and self.max_abs_dv <= REPRODUCED_TOLERANCE
+
+    def to_json(self) -> dict[str, Any]:
+        """The report as JSON-able dict (``station replay --json``).
+
+        Keys: file, format, controller, controller_spec, alignment, samples, max_abs_dv,
+        reproduced, reference, metrics {overshoot_pct, settling_time_s} (nulls when not a
+        closed-loop step), model {fit_pct {theta, accel}, n_elements} or null, notes.
+        """
+        m = self.metrics
+        return {
+            "file": self.file,
+            "format": self.format,
+            "controller": self.controller,
+            "controller_spec": self.controller_spec,
+            "alignment": self.alignment,
+            "samples": self.samples,
+            "max_abs_dv": self.max_abs_dv,
+            "reproduced": self.reproduced if self.max_abs_dv is not None else None,
+            "reference": self.reference,
+            "metrics": {"overshoot_pct": None if m is None else m.overshoot_pct,
+                        "settling_time_s": None if m is None else m.settling_time_s},
+            "model": None if self.fit_pct is None else {"fit_pct": dict(self.fit_pct),
+                                                        "n_elements": self.n_elements},
+            "notes": list(self.notes),
+        }
+
+
+# --- which controller ran ---------------------------------------------------------------
+
+def _matches_printed(printed: list[float], exact: np.ndarray) -> bool:
+    return len(printed) == exact.size and bool(np.all(np.abs(np.asarray(printed) - exact) <= PRINTED_TOLERANCE))
+
+
+def _rig_stage(meta: dict, key: str, design: DiscreteTF, notes: list[str]) -> tuple[DiscreteTF | None, bool]:
+    """The filter printed in a rig header: the exact design when it matches, else as printed."""
+    coeffs = meta.get(key)
+    if not coeffs or not coeffs.get("num"):
+        return None, True
+    num, den = coeffs.get("num", []), coeffs.get("den", [])
+    if _matches_printed(num, design.num) and _matches_printed(den, design.den):
+        return design, True
+    notes.append(f"{key} coefficients as printed in the header (8 decimals; not a known design)")
+    return DiscreteTF(num, den), False
+
+
+def rig_controller(meta: dict[str, Any], dt: float = 0.002) -> tuple[Compensator | OpenLoop | None, list[str]]:
+    """The controller a rig log's header names.
+
+    Parameters
+    ----------
+    meta : dict
+        ``RunLog.meta`` of a rig log (see :func:`station.runlog.read_log`).
+    dt : float
+        Sample time, s.
+
+    Returns
+    -------
+    controller : Compensator, OpenLoop or None
+        P_control (kp) and PID_control with ki = kd = 0 -> P; Motor_Comp with Gth (and Ga)
+        -> lead / lead-accel (exact designs when the printed coefficients match them);
+        OL_Test -> open loop; None when the header does not say.
+    notes : list of str
+    """
+    notes: list[str] = []
+    test = str(meta.get("test", ""))
+    if "Gth" in meta:
+        ref = lead_controller(RIG_LIMIT, dt, accel=True)
+        gth, gth_known = _rig_stage(meta, "Gth", ref.gth, notes)
+        if gth is None:
+            return None, [f"header has an empty Gth ({test}): controller unknown"]
+        ga, ga_known = _rig_stage(meta, "Ga", ref.ga, notes)
+        known = gth_known and ga_known
+        name = ("lead-accel" if ga is not None else "lead") if known else "rig-printed"
+        spec = {"kind": name, "name": name, "dt": dt, "limit": RIG_LIMIT, "source": "rig header",
+                "gth": {"num_z": gth.num.tolist(), "den_z": gth.den.tolist()},
+                "ga": None if ga is None else {"num_z": ga.num.tolist(), "den_z": ga.den.tolist()}}
+        if known:
+            notes.append("printed coefficients equal the Tustin designs to their 8 decimals: unrounded designs used")
+        return Compensator(gth, ga, limit=RIG_LIMIT, name=name, spec=spec), notes
+    if "kp" in meta:
+        kp = float(meta["kp"])
+        ki, kd = float(meta.get("ki", 0.0) or 0.0), float(meta.get("kd", 0.0) or 0.0)
+        if ki != 0.0 or kd != 0.0:
+            return None, [f"PID with ki = {ki}, kd = {kd}: the rig's PID discretization is not known"]
+        if "ki" in meta or "kd" in meta:
+            notes.append("PID_control with ki = kd = 0: P control")
+        return p_controller(kp, RIG_LIMIT, dt), notes
+    if "OL" in test.split("_") or test.startswith("OL"):
+        return OpenLoop(limit=None), notes
+    return None, notes
+
+
+def log_controller(log: RunLog) -> tuple[Compensator | OpenLoop | None, list[str]]:
+    """The controller a log (ours or the rig's) names, or None; with notes."""
+    if log.format == "station":
+        spec = log.meta.get("controller")
+        if not isinstance(spec, dict):
+            return None, []
+        return controller_from_spec(spec), []
+    dt = _dt_of(log)
+    return rig_controller(log.meta, dt)
+
+
+def _dt_of(log: RunLog) -> float:
+    dt = log.meta.get("dt") if isinstance(log.meta.get("dt"), (int, float)) else None
+    if dt is None:
+        t = log.data["t"]
+        dt = float(np.median(np.diff(t))) if t.size > 1 else 0.002
+        dt = round(dt, 9) or 0.002
+    return float(dt)
+
+
+# --- replaying the commands -------------------------------------------------------------
+
+def replay_commands(controller: Compensator | OpenLoop, u, theta, a, alignment: int) -> tuple[np.ndarray, np.ndarray]:
+    """Run a controller over logged samples: v[k] = C(u[k], theta[k-d], a[k-d]).
+
+    Before the first sample (k < d) the controller sees theta = a = 0 (the rig at rest,
+    its filters at rest; the rig's logs start with v[0] = 0).
+
+    Parameters
+    ----------
+    controller : Compensator or OpenLoop
+        Reset before the run.
+    u : array_like, shape (N,)
+        Reference, encoder counts (DAC counts in open loop).
+    theta, a : array_like, shape (N,)
+        Logged encoder and accelerometer counts.
+    alignment : int
+        d >= 0, samples.
+
+    Returns
+    -------
+    v, theta_d_hat : numpy.ndarray, shape (N,)
+    """
+    d = int(alignment)
+    if d < 0:
+        raise ValueError(f"alignment must be >= 0, got {alignment}")
+    u = np.asarray(u, dtype=float).tolist()
+    n = len(u)
+    th = ([0.0] * d + np.asarray(theta, dtype=float).tolist())[:n]
+    ac = ([0.0] * d + np.asarray(a, dtype=float).tolist())[:n]
+    controller.reset()
+    step = controller.step
+    out = [step(u[k], th[k], ac[k]) for k in range(n)]
+    controller.reset()
+    arr = np.array(out, dtype=float).reshape(n, 2)
+    return arr[:, 0], arr[:, 1]
+
+
+def classify_reference(u) -> dict[str, Any]:
+    """What a logged reference is: a step from 0, all zeros, or something else.
+
+    Returns
+    -------
+    dict
+        ``{"kind": "step", "amplitude": float, "tick": int}`` when u is 0 up to one tick
+        and a non-zero constant from it to the end; ``{"kind": "zero"}``; else
+        ``{"kind": "other"}``.
+    """
+    u = np.asarray(u, dtype=float)
+    if u.size == 0 or np.all(u == 0):
+        return {"kind": "zero"}
+    change = np.flatnonzero(np.diff(u) != 0)
+    if change.size == 1 and u[0] == 0 and u[-1] != 0:
+        return {"kind": "step", "amplitude": float(u[-1]), "tick": int(change[0] + 1)}
+    return {"kind": "other"}
+
+
+# --- the model --------------------------------------------------------------------------
+
+def _model(report: ReplayReport, log: RunLog, controller, n_elements: int) -> None:
+    try:
+        from station.plant import DiscretePlant, simulate
+    except ImportError as exc:
+        report.notes.append(f"model not available ({exc}): no prediction")
+        return
+    data = log.data
+    u, v_log = data["u"], data["v"]
+    plant = DiscretePlant(n_elements=n_elements, dt=_dt_of(log))
+    plant.reset()
+    theta_meas = data["theta"]
+    if controller is None or isinstance(controller, OpenLoop):
+        pred = simulate(plant, OpenLoop(), u, alignment=0, v_open=v_log)
+        if theta_meas.size and theta_meas[0] != 0:
+            theta_meas = theta_meas - theta_meas[0]
+            report.notes.append("open loop: logged theta compared relative to its first sample")
+        how = "the logged v (open loop)"
+    else:
+        pred = simulate(plant, controller, u, alignment=report.alignment if report.alignment is not None else 1)
+        how = f"the log's controller and reference, alignment {report.alignment}"
+    report.prediction = pred
+    report.n_elements = n_elements
+    fits = {}
+    for key, meas in (("theta", theta_meas), ("accel", data["a"])):
+        fit = nrmse_fit(meas, pred["theta" if key == "theta" else "a"])
+        fits[key] = None if np.isnan(fit) else fit
+    report.fit_pct = fits
+    if fits["theta"] is not None and fits["theta"] < -100.0:
+        report.notes.append(f"the model's theta diverges from the log (fit {fits['theta']:.3g} %): "
+                            "was the logged v really applied (motor powered, no hold)?")
+    report.notes.append(f"model: FEM plant, {n_elements} elements, driven by {how}")
+
+
+# --- replay -----------------------------------------------------------------------------
+
+def replay(path: str | Path, model: bool = True, n_elements: int = 4) -> ReplayReport:
+    """Replay a run log.
+
+    Parameters
+    ----------
+    path : str or Path
+        A run log, ours or the rig's.
+    model : bool
+        Also run the FEM plant model on the same reference (closed loop, with the log's
+        controller and alignment) or the logged v (open loop) and report the NRMSE fit of
+        theta and a.
+    n_elements : int
+        Beam elements of the model.
+
+    Returns
+    -------
+    ReplayReport
+
+    Raises
+    ------
+    station.runlog.RunLogError
+        The log cannot be read.
+    StationError
+        Our log's controller spec is malformed.
+    """
+    log = read_log(path)
+    data = log.data
+    n = len(log)
+    controller, notes = log_controller(log)
+    reference = classify_reference(data["u"])
+    report = ReplayReport(file=str(path), format=log.format, controller=None, controller_spec=None,
+                          alignment=None, samples=n, max_abs_dv=None, metrics=None, reference=reference,
+                          notes=list(notes), log=log)
+    if controller is None:
+        report.notes.append("the log does not name its controller: commands not replayed, model only (logged v)")
+    elif n == 0:
+        report.notes.append("the log has no rows")
+    else:
+        report.controller = controller.name
+        report.controller_spec = controller.spec
+        if isinstance(controller, OpenLoop):
+            v_hat, _ = replay_commands(controller, data["u"], data["theta"], data["a"], 0)
+            report.max_abs_dv = float(np.max(np.abs(v_hat - data["v"])))
+            report.v_replayed = v_hat
+            report.notes.append("open loop: v = u")
+        else:
+            best = None
+            for d in ALIGNMENTS:
+                v_hat, _ = replay_commands(controller, data["u"], data["theta"], data["a"], d)
+                err = float(np.max(np.abs(v_hat - data["v"])))
+                if best is None or err < best[0]:
+                    best = (err, d, v_hat)
+            report.max_abs_dv, report.alignment, report.v_replayed = best
+            logged_d = log.meta.get("alignment") if log.format == "station" else None
+            if isinstance(logged_d, int) and logged_d != report.alignment:
+                report.notes.append(f"header says alignment {logged_d}, the data say {report.alignment}")
+            if not report.reproduced:
+                report.notes.append(f"the replay does NOT reproduce the logged v (max |dv| = "
+                                    f"{report.max_abs_dv:.3g} counts)")
+            if reference["kind"] == "step":
+                report.metrics = step_metrics(data["t"], data["theta"], data["u"][-1])
+    if model and n > 0:
+        _model(report, log, controller, n_elements)
+    return report
+
+
+def format_report(report: ReplayReport) -> str:
+    """A readable summary of a replay (what ``station replay`` prints)."""
+    lines = [f"{report.file}", f"  format {report.format}, {report.samples} samples"]
+    if report.controller is None:
+        lines.append("  controller: not named in the log (model only)")
+    else:
+        lines.append(f"  controller: {report.controller}")
+    if report.max_abs_dv is not None:
+        verdict = "reproduces" if report.reproduced else "does NOT reproduce"
+        align = "" if report.alignment is None else f", alignment d = {report.alignment}"
+        lines.append(f"  replay {verdict} the logged v: max |dv| = {report.max_abs_dv:.3g} counts{align}")
+    ref = report.reference
+    if ref["kind"] == "step":
+        lines.append(f"  reference: step of {ref['amplitude']:g} at tick {ref['tick']}")
+    if report.metrics is not None:
+        m = report.metrics
+        settle = "not settled" if m.settling_time_s is None else f"{m.settling_time_s:.3f} s"
+        lines.append(f"  overshoot {m.overshoot_pct:.2f} %   settling time {settle}")
+    if report.fit_pct is not None:
+        f = report.fit_pct
+        fmt = lambda x: "n/a" if x is None else f"{x:.1f} %"  # noqa: E731
+        lines.append(f"  model fit (NRMSE): theta {fmt(f['theta'])}, accel {fmt(f['accel'])}")
+    for note in report.notes:
+        lines.append(f"  note: {note}")
+    return "\n".join(lines)

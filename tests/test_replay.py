@@ -1,0 +1,167 @@
+"""station.replay against the rig logs (DESIGN.md: the designs reproduce the logged v) and
+against logs of the simulated plant with a known alignment."""
+
+import argparse
+import json
+import math
+
+import numpy as np
+import pytest
+
+from station.control import Compensator, DiscreteTF, make_controller
+from station.errors import StationError
+from station.replay import replay, replay_commands, rig_controller
+from station.runlog import RunLogWriter, read_log
+
+P_LOG = "SFLR_P_control_step_kp_2_SLFR_RTP_P_control_kp=2.0.txt"
+LEAD_LOG = "step_response_Gth_comp_no_accel_FB_amp_100_duration_1000_SLFR_RTP_Motor_Comp_Gth.txt"
+ACCEL_LOG = "step_response_Gth_comp_Ga_opt_amp_200_duration_1000_opt_case43_SLFR_RTP_Motor_Comp_Gth.txt"
+SWEEP = "swept_sine_kp_1_amp_50.txt"
+OL_PULSE = "OL_pulse_test_sys_check_SLFR_RTP_OL_Test_uend=0.txt"
+
+
+@pytest.mark.parametrize("name, controller, kp", [
+    (P_LOG, "p", 2.0), (LEAD_LOG, "lead", None), (ACCEL_LOG, "lead-accel", None), (SWEEP, "p", 1.0)])
+def test_rig_closed_loop_logs_reproduce(rig_data, name, controller, kp):
+    r = replay(rig_data / name, model=False)
+    assert r.format == "rig"
+    assert r.controller == controller
+    if kp is not None:
+        assert r.controller_spec["kp"] == kp
+    assert r.alignment == 1
+    assert r.max_abs_dv < 1e-6
+    assert r.reproduced
+
+
+def test_ol_pulse_is_v_equals_u(rig_data):
+    r = replay(rig_data / OL_PULSE, model=False)
+    assert r.controller == "open-loop" and r.alignment is None
+    assert r.max_abs_dv == 0.0
+    assert r.metrics is None
+    assert any("v = u" in note for note in r.notes)
+
+
+@pytest.mark.parametrize("name, overshoot, settling", [
+    (P_LOG, 24.00, 1.250), (LEAD_LOG, 10.00, None), (ACCEL_LOG, 21.50, 0.608)])
+def test_step_metrics_in_report(rig_data, name, overshoot, settling):
+    m = replay(rig_data / name, model=False).to_json()["metrics"]
+    assert round(m["overshoot_pct"], 2) == overshoot
+    assert m["settling_time_s"] == (None if settling is None else pytest.approx(settling))
+
+
+def test_sweep_has_no_step_metrics(rig_data):
+    r = replay(rig_data / SWEEP, model=False)
+    assert r.reference == {"kind": "other"} and r.metrics is None
+
+
+def test_printed_ga_alone_is_not_enough(rig_data):
+    """DESIGN.md: the header's 8-digit Ga replays the accel run only to ~0.03 counts,
+    so replay must use the unrounded design; a perturbed header falls back to the print."""
+    log = read_log(rig_data / ACCEL_LOG)
+    d = log.data
+    exact, notes = rig_controller(log.meta)
+    assert exact.name == "lead-accel" and any("unrounded" in n for n in notes)
+    # one coefficient off by 2 units in the 8th decimal: not the design any more
+    other = dict(log.meta, Ga=dict(log.meta["Ga"], num=[log.meta["Ga"]["num"][0] + 2e-8] + log.meta["Ga"]["num"][1:]))
+    ctrl, notes = rig_controller(other)
+    assert ctrl.name == "rig-printed" and any("as printed" in n for n in notes)
+    printed = Compensator(exact.gth, DiscreteTF(log.meta["Ga"]["num"], log.meta["Ga"]["den"]), limit=200.0)
+    v, _ = replay_commands(printed, d["u"], d["theta"], d["a"], 1)
+    assert np.max(np.abs(v - d["v"])) > 1e-3
+    v, _ = replay_commands(exact, d["u"], d["theta"], d["a"], 1)
+    assert np.max(np.abs(v - d["v"])) < 1e-6
+
+
+def _simulated_log(path, kind, alignment, amplitude=100.0, meta_controller=True):
+    """A station-format log of the FEM plant (station.plant.simulate) under `kind`."""
+    plant_mod = pytest.importorskip("station.plant")
+    ctrl = make_controller(kind)
+    u = np.zeros(600)
+    u[10:] = amplitude
+    plant = plant_mod.DiscretePlant()
+    plant.reset()
+    sim = plant_mod.simulate(plant, ctrl, u, alignment=alignment)
+    meta = {"alignment": alignment, "dt": 0.002}
+    if meta_controller:
+        meta["controller"] = ctrl.spec
+    with RunLogWriter(path, meta) as w:
+        for k in range(u.size):
+            w.append((sim["t"][k], k, sim["u"][k], sim["v"][k], sim["theta"][k], sim["a"][k],
+                      sim["theta_d_hat"][k], round(sim["v"][k]), 0, math.nan))
+    return sim
+
+
+@pytest.mark.parametrize("kind, alignment", [("p", 0), ("lead", 1), ("lead-accel", 0), ("lead-accel", 1)])
+def test_our_logs_replay_and_alignment_is_detected(tmp_path, kind, alignment):
+    path = tmp_path / "sim.tsv"
+    _simulated_log(path, kind, alignment)
+    r = replay(path, model=True)
+    assert r.format == "station" and r.controller == kind
+    assert r.alignment == alignment
+    assert r.max_abs_dv < 1e-6
+    # The model is the plant that made the log, run the same way: a perfect fit.
+    assert r.fit_pct["theta"] == pytest.approx(100.0, abs=1e-9)
+    assert r.fit_pct["accel"] == pytest.approx(100.0, abs=1e-9)
+
+
+def test_log_without_controller_is_model_only(tmp_path):
+    path = tmp_path / "anon.tsv"
+    _simulated_log(path, "lead", 1, meta_controller=False)
+    r = replay(path)
+    assert r.controller is None and r.max_abs_dv is None
+    assert any("does not name its controller" in n for n in r.notes)
+    # open loop on the logged v reproduces the closed-loop run of the same plant exactly
+    assert r.fit_pct["theta"] == pytest.approx(100.0, abs=1e-9)
+
+
+def test_model_fit_on_rig_step_logs(rig_data):
+    """The thesis's FEM predicts the rig's step responses well in theta (not perfectly)."""
+    pytest.importorskip("station.plant")
+    for name in (P_LOG, LEAD_LOG, ACCEL_LOG):
+        fit = replay(rig_data / name).fit_pct
+        assert 50.0 < fit["theta"] < 100.0, name
+        assert fit["accel"] < fit["theta"], name  # noisy accelerometer, unmodelled friction
+
+
+def _args(file, **kw):
+    from station.commands import replay as cmd
+
+    parser = argparse.ArgumentParser()
+    cmd.configure(parser)
+    argv = [str(file)]
+    for key, value in kw.items():
+        argv += [f"--{key}", str(value)]
+    return cmd, parser.parse_args(argv)
+
+
+def test_command_writes_json_and_rrd(rig_data, tmp_path, capsys):
+    out, rrd = tmp_path / "r.json", tmp_path / "r.rrd"
+    cmd, args = _args(rig_data / ACCEL_LOG, json=out, rrd=rrd)
+    assert cmd.run(args) == 0
+    text = capsys.readouterr().out
+    assert "lead-accel" in text and "21.50 %" in text and "alignment d = 1" in text
+    rep = json.loads(out.read_text())
+    assert {"file", "format", "controller", "alignment", "samples", "max_abs_dv", "metrics", "model"} <= set(rep)
+    assert rep["samples"] == 1000 and rep["alignment"] == 1 and rep["max_abs_dv"] < 1e-6
+    assert set(rep["metrics"]) == {"overshoot_pct", "settling_time_s"}
+    assert set(rep["model"]["fit_pct"]) == {"theta", "accel"}
+    assert rrd.stat().st_size > 0
+
+
+def test_command_exit_code_when_not_reproduced(rig_data, tmp_path, capsys):
+    text = (rig_data / P_LOG).read_text().splitlines()
+    parts = text[500].split("\t")
+    parts[3] = str(float(parts[3]) + 1.0)  # tamper with one logged v
+    text[500] = "\t".join(parts)
+    bad = tmp_path / "tampered.txt"
+    bad.write_text("\n".join(text) + "\n")
+    cmd, args = _args(bad)
+    args.model = False
+    assert cmd.run(args) == 1
+    assert "does NOT reproduce" in capsys.readouterr().out
+
+
+def test_command_bad_file_is_a_station_error(tmp_path):
+    cmd, args = _args(tmp_path / "missing.tsv")
+    with pytest.raises(StationError, match="missing.tsv"):
+        cmd.run(args)
