@@ -283,3 +283,14 @@ def test_fem_plant_constant_positive_v_moves_theta_up_and_the_tip_first_lags():
     first = next(a for a in accel if a != 0)
     assert first < 0  # the tip lags: it first accelerates away from increasing theta
     assert max(accel) > 5  # then follows
+
+
+def test_stopped_reports_late_and_watchdog_trips_of_the_run():
+    dev = started(watchdog_ticks=2)
+    sample(dev)
+    for _ in range(3):
+        s = sample(dev)  # misses 1..3: trip from the 2nd
+    command(dev, s.seq, 1)
+    sample(dev)
+    dev.receive(v1.encode(v1.Stop()))
+    assert frames(dev.take_output()) == [v1.Stopped(0, 5, 3, 1, 0)]

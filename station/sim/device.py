@@ -102,8 +102,7 @@ class _V1Firmware(_Firmware):
             elif isinstance(msg, v1.Start):
                 self._start(msg)
             elif isinstance(msg, v1.Stop):
-                self._stop(v1.STOPPED_BY_STOP)
-                self._out += self._stopped
+                self._out += self._stop(v1.STOPPED_BY_STOP)
             # SAMPLE, INFO, STOPPED are device→station: a station never sends them; ignored.
         self.counters.rx_errors = self.decoder.rx_errors - self._rx_at_start
 
@@ -121,15 +120,12 @@ class _V1Firmware(_Firmware):
         self.stale = False
         self._rx_at_start = self._rx_seen = self.decoder.rx_errors
 
-    def _stop(self, reason: int) -> None:
+    def _stop(self, reason: int) -> bytes:
+        """End the run (output 0 at once); the STOPPED frame that reports it."""
         self.running = False
         self.output = 0
-        self._reason = reason
-
-    @property
-    def _stopped(self) -> bytes:
         c = self.counters
-        return v1.encode(v1.Stopped(self._reason, c.ticks, min(c.late, 0xFFFF), min(c.watchdog_trips, 0xFFFF),
+        return v1.encode(v1.Stopped(reason, c.ticks, min(c.late, 0xFFFF), min(c.watchdog_trips, 0xFFFF),
                                     min(c.rx_errors, 0xFFFF)))
 
     def tick(self) -> bytes:
@@ -172,8 +168,7 @@ class _V1Firmware(_Firmware):
         self.k += 1
         c.ticks += 1
         if self.n_ticks and self.k >= self.n_ticks:
-            self._stop(v1.STOPPED_N_TICKS)
-            out += self._stopped
+            out += self._stop(v1.STOPPED_N_TICKS)
         return out
 
 
