@@ -164,11 +164,11 @@ def run_loop(session: Session, controller, reference: np.ndarray, writer, soft_l
     perf_ns = time.perf_counter_ns
     read_sample, send_command, step, append = session.read_sample, session.send_command, controller.step, writer.append
     try:
-        session.start(n_ticks)
-        if lean:
+        if lean:  # before START: once the device ticks, every ms counts
             gc.collect()
             gc.disable()
             sys.setswitchinterval(5e-5)  # the writer thread must not hold the GIL for ms
+        session.start(n_ticks)
         v_k, dhat_k, lat_k = 0.0, u[0], NAN  # tick 0 outputs 0
         last = n_ticks - 1
         while True:
