@@ -477,17 +477,18 @@ def read_log(path: str | Path) -> RunLog:
 
     if MAGIC in lines[:2]:
         fmt = "station"
-        magic_at = lines.index(MAGIC)
-        if magic_at == 0:  # magic, json, column line
-            header = lines[:3]
-            json_line, col_line, first = (lines[1] if len(lines) > 1 else ""), (lines[2] if len(lines) > 2 else ""), 3
-            json_no, col_no = 2, 3
-        else:  # column line, magic, json
-            header = lines[:3]
-            col_line, json_line, first = lines[0], (lines[2] if len(lines) > 2 else ""), 3
-            json_no, col_no = 3, 1
+        header = lines[:3]
+        if len(header) < 3:
+            raise RunLogError(f"{path}: line {len(header) + 1}: expected the header to go on "
+                              f"(column names, '{MAGIC}', '# ' and the JSON metadata)")
+        # Ours: column line, magic, JSON (what we write); or magic, JSON, column line.
+        if lines[0] == MAGIC:
+            (json_no, json_line), (col_no, col_line) = (2, lines[1]), (3, lines[2])
+        else:
+            (json_no, json_line), (col_no, col_line) = (3, lines[2]), (1, lines[0])
+        first = 3
         if not json_line.startswith("# "):
-            raise RunLogError(f"{path}: line {json_no}: expected '# ' and the JSON metadata")
+            raise RunLogError(f"{path}: line {json_no}: expected '# ' and the JSON metadata, got {json_line[:60]!r}")
         try:
             meta = json.loads(json_line[2:])
         except json.JSONDecodeError as exc:

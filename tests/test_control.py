@@ -234,3 +234,14 @@ def test_pulse_equals_rig_ol_log(rig_data):
 def test_pulse_rejects_overlap():
     with pytest.raises(ValueError, match="overlaps"):
         pulse_reference(100.0, 1000, 20, 50, return_tick=40)
+
+
+def test_file_reference_reads_a_log_column(rig_data):
+    from station.control import file_reference
+
+    u = file_reference(rig_data / SWEEP, "u")
+    np.testing.assert_array_equal(u, swept_sine_reference(11000))
+    with pytest.raises(StationError, match="no column 'w'"):
+        file_reference(rig_data / SWEEP, "w")
+    with pytest.raises(StationError, match="holds no values"):
+        file_reference(rig_data / SWEEP, "theta_d_hat")

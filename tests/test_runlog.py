@@ -271,3 +271,12 @@ def test_rig_header_variants(rig_data):
     lead = read_log(rig_data / "step_response_Gth_comp_no_accel_FB_amp_100_duration_1000_SLFR_RTP_Motor_Comp_Gth.txt")
     assert lead.meta["Ga"] == {"num": [], "den": []}
     assert lead.meta["columns"][-1] == "$\\hat{\\theta}_d$"
+
+
+def test_bad_metadata_line_names_the_line(tmp_path):
+    lines = _write(tmp_path / "run.tsv").read_text().splitlines()
+    lines[2] = "# {not json"
+    bad = tmp_path / "bad.tsv"
+    bad.write_text("\n".join(lines) + "\n")
+    with pytest.raises(RunLogError, match=r"bad.tsv: line 3: metadata is not valid JSON"):
+        read_log(bad)
