@@ -27,6 +27,7 @@ from station.control import (
     lead_controller,
     p_controller,
 )
+from station.errors import StationError
 from station.runlog import RunLog, read_log
 
 ALIGNMENTS = (0, 1)
@@ -275,7 +276,10 @@ def _model(report: ReplayReport, log: RunLog, controller, n_elements: int) -> No
         return
     data = log.data
     u, v_log = data["u"], data["v"]
-    plant = DiscretePlant(n_elements=n_elements, dt=_dt_of(log))
+    try:
+        plant = DiscretePlant(n_elements=n_elements, dt=_dt_of(log))
+    except ValueError as exc:
+        raise StationError(f"model: {exc}") from None
     plant.reset()
     theta_meas = data["theta"]
     if controller is None or isinstance(controller, OpenLoop):
@@ -325,7 +329,7 @@ def replay(path: str | Path, model: bool = True, n_elements: int = 4) -> ReplayR
     station.runlog.RunLogError
         The log cannot be read.
     StationError
-        Our log's controller spec is malformed.
+        Our log's controller spec is malformed, or ``n_elements`` is out of the model's range.
     """
     log = read_log(path)
     data = log.data

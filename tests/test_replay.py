@@ -165,3 +165,9 @@ def test_command_bad_file_is_a_station_error(tmp_path):
     cmd, args = _args(tmp_path / "missing.tsv")
     with pytest.raises(StationError, match="missing.tsv"):
         cmd.run(args)
+
+
+def test_bad_element_count_is_a_station_error(rig_data):
+    pytest.importorskip("station.plant")
+    with pytest.raises(StationError, match="n_elements"):
+        replay(rig_data / P_LOG, n_elements=500)
