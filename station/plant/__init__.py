@@ -6,14 +6,18 @@
 - `simulate`: a whole closed- or open-loop run, compiled sample loop.
 - `beam_frequencies`, `beam_modes`: the beam-only eigen-solver (verification).
 - `modal_summary`: natural frequencies and theta/v antiresonances of the SFLR model.
+- `closed_loop`, `closed_loop_spectral_radius`: small-signal closed-loop poles.
 """
 
 from station.plant.discrete import DiscretePlant, Sensors, quantize
 from station.plant.fem import beam_frequencies, beam_modes, build_continuous, state_matrices
+from station.plant.modes import ModalSummary, modal_summary
 from station.plant.parameters import Params, load_params
 from station.plant.simulate import simulate
+from station.plant.stability import closed_loop, closed_loop_spectral_radius
 
 __all__ = [
-    "DiscretePlant", "Params", "Sensors", "beam_frequencies", "beam_modes", "build_continuous",
-    "load_params", "quantize", "simulate", "state_matrices",
+    "DiscretePlant", "ModalSummary", "Params", "Sensors", "beam_frequencies", "beam_modes",
+    "build_continuous", "closed_loop", "closed_loop_spectral_radius", "load_params",
+    "modal_summary", "quantize", "simulate", "state_matrices",
 ]

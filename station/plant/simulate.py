@@ -25,6 +25,26 @@ except ImportError:  # pragma: no cover - exercised only without numba
     numba = None
 
 
+def _commit(num, den, xs, ys, x, y):  # pragma: no cover - compiled by numba
+    """Push input x and output y into a direct-form I history; return the next
+    output's history term sum(num[i] x[k+1-i]) - sum(den[i] y[k+1-i]) (i >= 1),
+    summed in the order of station.control.DiscreteTF."""
+    for i in range(xs.shape[0] - 1, 0, -1):
+        xs[i] = xs[i - 1]
+    if xs.shape[0] > 0:
+        xs[0] = x
+    for i in range(ys.shape[0] - 1, 0, -1):
+        ys[i] = ys[i - 1]
+    if ys.shape[0] > 0:
+        ys[0] = y
+    acc = 0.0
+    for i in range(xs.shape[0]):
+        acc += num[i + 1] * xs[i]
+    for i in range(ys.shape[0]):
+        acc -= den[i + 1] * ys[i]
+    return acc
+
+
 def _loop(lam, bm, cm, z0, u, v_open, use_v_open, closed, gnum, gden, anum, aden, use_ga,
           limit, d, quantize):  # pragma: no cover - compiled by numba
     n = u.shape[0]
@@ -34,10 +54,12 @@ def _loop(lam, bm, cm, z0, u, v_open, use_v_open, closed, gnum, gden, anum, aden
     thd = np.zeros(n)
     z = z0.copy()
     m = z.shape[0]
-    ex = np.zeros(gnum.shape[0])   # Gth input history, ex[0] = newest
-    vy = np.zeros(gden.shape[0])   # Gth output history (saturated v)
-    ax = np.zeros(anum.shape[0])   # Ga input history
-    ay = np.zeros(aden.shape[0])   # Ga output history
+    gx = np.zeros(gnum.shape[0] - 1)  # Gth input history (newest first)
+    gy = np.zeros(gden.shape[0] - 1)  # Gth output history: the saturated v
+    ax = np.zeros(anum.shape[0] - 1)  # Ga input history
+    ay = np.zeros(aden.shape[0] - 1)  # Ga output history
+    g_acc = 0.0
+    a_acc = 0.0
     for k in range(n):
         y0 = 0.0
         y1 = 0.0
@@ -50,50 +72,27 @@ def _loop(lam, bm, cm, z0, u, v_open, use_v_open, closed, gnum, gden, anum, aden
         theta[k] = y0
         acc[k] = y1
         j = k - d if k >= d else 0
-        th_in = theta[j]
-        a_in = acc[j]
         uk = u[k]
+        td = uk
+        e = 0.0
         if use_v_open:
             vk = v_open[k]
-            td = uk
-        elif not closed:
-            vk = uk
-            if vk > limit:
-                vk = limit
-            elif vk < -limit:
-                vk = -limit
-            td = uk
         else:
-            td = uk
-            if use_ga:
-                for i in range(ax.shape[0] - 1, 0, -1):
-                    ax[i] = ax[i - 1]
-                ax[0] = a_in
-                g = 0.0
-                for i in range(ax.shape[0]):
-                    g += anum[i] * ax[i]
-                for i in range(1, aden.shape[0]):
-                    g -= aden[i] * ay[i - 1]
-                for i in range(ay.shape[0] - 1, 0, -1):
-                    ay[i] = ay[i - 1]
-                ay[0] = g
-                td = uk - g
-            e = td - th_in
-            for i in range(ex.shape[0] - 1, 0, -1):
-                ex[i] = ex[i - 1]
-            ex[0] = e
-            vk = 0.0
-            for i in range(ex.shape[0]):
-                vk += gnum[i] * ex[i]
-            for i in range(1, gden.shape[0]):
-                vk -= gden[i] * vy[i - 1]
+            if closed:
+                if use_ga:
+                    g = anum[0] * acc[j] + a_acc
+                    a_acc = _commit(anum, aden, ax, ay, acc[j], g)
+                    td = uk - g
+                e = td - theta[j]
+                vk = gnum[0] * e + g_acc
+            else:
+                vk = uk
             if vk > limit:
                 vk = limit
             elif vk < -limit:
                 vk = -limit
-            for i in range(vy.shape[0] - 1, 0, -1):
-                vy[i] = vy[i - 1]
-            vy[0] = vk
+            if closed:
+                g_acc = _commit(gnum, gden, gx, gy, e, vk)
         v[k] = vk
         thd[k] = td
         for i in range(m):
@@ -101,7 +100,11 @@ def _loop(lam, bm, cm, z0, u, v_open, use_v_open, closed, gnum, gden, anum, aden
     return theta, acc, v, thd
 
 
-_kernel = numba.njit(cache=True, nogil=True)(_loop) if numba is not None else _loop
+if numba is not None:
+    _commit = numba.njit(cache=True, nogil=True)(_commit)
+    _kernel = numba.njit(cache=True, nogil=True)(_loop)
+else:  # pragma: no cover
+    _kernel = _loop
 
 COMPILED = numba is not None
 """True when the sample loop runs compiled (numba installed)."""
