@@ -130,7 +130,9 @@ def header_lines(meta: dict[str, Any]) -> list[str]:
 
 
 class _Pump:
-    """The writer thread's state: queue -> text file (+ sinks). Holds no reference to the writer."""
+    """The writer threads' state: queue -> text file, and batches -> sinks on a second
+    thread so that a slow sink never delays the file's flushes. Holds no reference to
+    the writer (so the writer can be finalized)."""
 
     def __init__(self, path: Path, fh, sinks: Iterable[Any]):
         self.path = path
@@ -141,14 +143,32 @@ class _Pump:
         self.write_error: OSError | None = None
         self.unwritten: list[tuple] = []
         self.rows_written = 0
+        self.sink_queue: deque = deque()
         self.stop_event = threading.Event()
+        self.sink_stop = threading.Event()
         self.thread = threading.Thread(target=self.run, name=f"runlog:{path.name}", daemon=True)
+        self.sink_thread = threading.Thread(target=self.run_sinks, name=f"runlog-sinks:{path.name}", daemon=True)
         self.closed = False
+
+    def start(self) -> None:
+        self.thread.start()
+        if self.sinks:
+            self.sink_thread.start()
 
     def run(self) -> None:
         while not self.stop_event.wait(FLUSH_INTERVAL_S):
             self.drain()
         self.drain()
+
+    def run_sinks(self) -> None:
+        while not self.sink_stop.wait(FLUSH_INTERVAL_S):
+            self.drain_sinks()
+        self.drain_sinks()
+
+    def drain_sinks(self) -> None:
+        q = self.sink_queue
+        while q:
+            self._feed_sinks(q.popleft())
 
     def drain(self) -> None:
         q = self.queue
@@ -162,7 +182,8 @@ class _Pump:
         if not batch:
             return
         self._write(batch)
-        self._feed_sinks(batch)
+        if self.sinks:
+            self.sink_queue.append(batch)
 
     def _write(self, batch: list[tuple]) -> None:
         if self.write_error is not None:
@@ -201,6 +222,10 @@ class _Pump:
         if self.thread.is_alive() and self.thread is not threading.current_thread():
             self.thread.join()
         self.drain()
+        self.sink_stop.set()
+        if self.sink_thread.is_alive() and self.sink_thread is not threading.current_thread():
+            self.sink_thread.join()
+        self.drain_sinks()
         try:
             self.fh.close()
         except OSError as exc:
@@ -212,11 +237,12 @@ class RunLogWriter:
     """Streaming writer of our run log; safe to feed from a real-time loop.
 
     ``append`` only puts the row on a queue (O(1), no formatting, no I/O). A background
-    thread formats the queued rows, writes them, flushes them to the OS every
+    thread formats the queued rows, writes them and flushes them to the OS every
     ``FLUSH_INTERVAL_S`` (well inside the 20 ms of the contract, so a killed process loses
-    at most the last few ms), and hands each batch to every sink. A sink that raises is
-    reported once (``RuntimeWarning``, ``sink_errors``) and dropped; the file never loses
-    a row because of it.
+    at most the last few ms); a second thread hands each written batch to every sink, so
+    a slow sink never delays the file. A sink that raises is reported once
+    (``RuntimeWarning``, ``sink_errors``) and dropped; the file never loses a row because
+    of it.
 
     Parameters
     ----------
@@ -228,7 +254,8 @@ class RunLogWriter:
     sinks : iterable
         Objects with ``write_rows(columns: dict[str, numpy.ndarray])`` (one array of
         shape (rows,) per name in :data:`COLUMNS`, float, NaN where missing), e.g.
-        :class:`station.viz.RerunSink`. Called from the writer thread; not closed here.
+        :class:`station.viz.RerunSink`. Called from the sink thread, in row order; not
+        closed here.
 
     Raises
     ------
@@ -258,7 +285,7 @@ class RunLogWriter:
         self._pump = _Pump(self.path, fh, sinks)
         self._queue_append = self._pump.queue.append
         self._finalizer = weakref.finalize(self, self._pump.shutdown)
-        self._pump.thread.start()
+        self._pump.start()
 
     def append(self, row: tuple) -> None:
         """Queue one row (a tuple in :data:`COLUMNS` order). O(1); no formatting or I/O.

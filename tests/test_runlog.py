@@ -280,3 +280,33 @@ def test_bad_metadata_line_names_the_line(tmp_path):
     bad.write_text("\n".join(lines) + "\n")
     with pytest.raises(RunLogError, match=r"bad.tsv: line 3: metadata is not valid JSON"):
         read_log(bad)
+
+
+class _Slow:
+    """A sink that blocks until released: the file must keep being written meanwhile."""
+
+    def __init__(self):
+        import threading
+
+        self.release = threading.Event()
+        self.rows = 0
+
+    def write_rows(self, columns):
+        self.release.wait()
+        self.rows += columns["n"].size
+
+
+def test_a_blocked_sink_does_not_hold_up_the_file(tmp_path):
+    slow = _Slow()
+    path = tmp_path / "run.tsv"
+    w = RunLogWriter(path, META, sinks=[slow])
+    for k in range(50):
+        w.append((k * 0.002, k, 0.0, 0.0, k, 0, 0.0, 0, 0, 1.0))
+    deadline = time.monotonic() + 30
+    while w.rows_written < 50 and time.monotonic() < deadline:
+        time.sleep(0.01)
+    assert w.rows_written == 50  # on disk while the sink is still blocked
+    np.testing.assert_array_equal(read_log(path).data["n"], np.arange(50))
+    slow.release.set()
+    w.close()
+    assert slow.rows == 50
