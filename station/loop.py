@@ -100,25 +100,40 @@ class _Terminate(BaseException):
     """SIGTERM turned into an exception so the fail-safe path runs."""
 
 
-def raise_priority() -> str:
-    """Raise this thread's scheduling priority as far as the OS allows; returns what was set."""
+def _threads() -> list[int]:
+    """Native ids of this process's threads (Linux); just this thread elsewhere."""
     try:
-        os.sched_setscheduler(0, os.SCHED_FIFO, os.sched_param(10))
+        return [int(tid) for tid in os.listdir("/proc/self/task")]
+    except OSError:
+        return [0]
+
+
+def raise_priority() -> str:
+    """Raise the scheduling priority of every thread of this process, as far as the OS allows.
+
+    All threads, not only the loop's: the log writer's thread holds the GIL while it
+    formats rows, and if ordinary load could preempt it then, the loop would wait for
+    the GIL behind that load (priority inversion). Returns what was set.
+    """
+    try:
+        for tid in _threads():
+            os.sched_setscheduler(tid, os.SCHED_FIFO, os.sched_param(10))
         return "SCHED_FIFO 10"
     except (AttributeError, PermissionError, OSError):
-        pass
+        _restore_priority()
     try:
-        os.nice(-10)
+        os.nice(-10)  # the whole process
         return "nice -10"
     except (AttributeError, PermissionError, OSError):
         return "default"
 
 
 def _restore_priority() -> None:
-    try:
-        os.sched_setscheduler(0, os.SCHED_OTHER, os.sched_param(0))
-    except (AttributeError, PermissionError, OSError):
-        pass
+    for tid in _threads():
+        try:
+            os.sched_setscheduler(tid, os.SCHED_OTHER, os.sched_param(0))
+        except (AttributeError, PermissionError, OSError):
+            pass
 
 
 def run_loop(session: Session, controller, reference: np.ndarray, writer, soft_limit: float = 2048.0,
