@@ -190,7 +190,25 @@ def rig_controller(meta: dict[str, Any], dt: float = 0.002) -> tuple[Compensator
 
 
 def log_controller(log: RunLog) -> tuple[Compensator | OpenLoop | None, list[str]]:
-    """The controller a log (ours or the rig's) names, or None; with notes."""
+    """The controller a log names.
+
+    Parameters
+    ----------
+    log : RunLog
+        Ours (the header's ``controller`` spec) or the rig's (see :func:`rig_controller`).
+
+    Returns
+    -------
+    controller : Compensator, OpenLoop or None
+        None when the log does not name its controller.
+    notes : list of str
+        What was assumed.
+
+    Raises
+    ------
+    StationError
+        Our header's controller spec is malformed.
+    """
     if log.format == "station":
         spec = log.meta.get("controller")
         if not isinstance(spec, dict):
@@ -249,6 +267,11 @@ def replay_commands(controller: Compensator | OpenLoop, u, theta, a, alignment: 
 
 def classify_reference(u) -> dict[str, Any]:
     """What a logged reference is: a step from 0, all zeros, or something else.
+
+    Parameters
+    ----------
+    u : array_like, shape (N,)
+        Logged reference, encoder counts (DAC counts in open loop).
 
     Returns
     -------
@@ -373,7 +396,18 @@ def replay(path: str | Path, model: bool = True, n_elements: int = 4) -> ReplayR
 
 
 def format_report(report: ReplayReport) -> str:
-    """A readable summary of a replay (what ``station replay`` prints)."""
+    """A readable summary of a replay (what ``station replay`` prints).
+
+    Parameters
+    ----------
+    report : ReplayReport
+
+    Returns
+    -------
+    str
+        Several lines: file, format, controller, replay verdict with max |dv| (DAC
+        counts) and alignment, reference, overshoot / settling time, NRMSE fits, notes.
+    """
     lines = [f"{report.file}", f"  format {report.format}, {report.samples} samples"]
     if report.controller is None:
         lines.append("  controller: not named in the log (model only)")

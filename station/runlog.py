@@ -114,7 +114,16 @@ def _nan_to_none(obj: Any) -> Any:
 def header_lines(meta: dict[str, Any]) -> list[str]:
     """The header of our format for ``meta``: column names, magic line, ``# {json}``.
 
-    Non-finite floats in ``meta`` become JSON ``null`` (strict JSON).
+    Parameters
+    ----------
+    meta : dict
+        JSON-able metadata (numpy arrays and scalars and Paths are converted);
+        non-finite floats become JSON ``null`` (strict JSON).
+
+    Returns
+    -------
+    list of str
+        Three lines without newlines.
 
     Raises
     ------

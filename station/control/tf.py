@@ -130,7 +130,14 @@ class DiscreteTF:
         return y
 
     def dc_gain(self) -> float:
-        """Steady-state gain b(1)/a(1) (``inf`` for a pole at z = 1)."""
+        """Steady-state (DC) gain.
+
+        Returns
+        -------
+        float
+            b(1)/a(1), i.e. sum(num)/sum(den); ``inf`` (signed) for a pole at z = 1,
+            NaN for 0/0.
+        """
         a1 = float(np.sum(self.den))
         b1 = float(np.sum(self.num))
         if a1 == 0.0:
