@@ -1,0 +1,159 @@
+#!/usr/bin/env python3
+"""Benchmark: 2 s closed-loop runs of the FEM plant, against real time and the thesis's way.
+
+For each element count (default 1, 4, 10, 100) and controller (lead + accelerometer
+feedback, step 200; P kp = 2, step 50; open loop, the rig's ±100 pulse) it times
+`station.plant.simulate` (exact ZOH, modal form, compiled sample loop; the plant built
+once beforehand, the best of several runs) and, for n <= 10, a baseline that steps the
+continuous model as the thesis did: one scipy.integrate.odeint call per sample with v
+held, the compensator stepped in Python. Printed side by side: seconds, real-time
+factor (2 s / seconds), baseline seconds and baseline / ours, and whether the run is
+stable (closed loop: small-signal closed-loop poles inside the unit circle and the
+simulated hub angle bounded; open loop: no eigenvalue of Ad outside the unit circle).
+
+Targets (issue "FEM model ..."): n = 4 >= 1000x real time and >= 50x the baseline;
+n = 100 >= 50x real time; lead + accel stable at every n.
+
+Usage: ``python scripts/bench_sim.py [--elements 1 4 10 100] [--baseline-max 10]
+[--repeats 5] [--json FILE]``. The JSON is
+``{"cases": [{"n_elements", "controller", "seconds", "baseline_seconds",
+"realtime_factor", "baseline_ratio", "stable"}]}`` (baseline fields null where not run).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+import time
+
+import numpy as np
+import scipy.integrate
+
+from station.control import make_controller, pulse_reference, step_reference
+from station.plant import DiscretePlant, closed_loop_spectral_radius, simulate
+
+DURATION_S = 2.0
+DT = 0.002
+SOFT_LIMIT = 2048.0  # encoder soft limit, counts (DESIGN.md station defaults)
+CASES = {  # controller -> reference of one 2 s run
+    "lead-accel": lambda n: step_reference(200.0, n, at_tick=10),
+    "p": lambda n: step_reference(50.0, n, at_tick=10),
+    "open-loop": lambda n: pulse_reference(100.0, n, 20, 50, return_tick=700),
+}
+
+
+def baseline_run(plant: DiscretePlant, controller, u: np.ndarray, alignment: int = 1) -> np.ndarray:
+    """The thesis's way: one odeint call per sample on the continuous model.
+
+    Parameters
+    ----------
+    plant : DiscretePlant
+        Gives the parameters and element count; the continuous model is rebuilt from it.
+    controller : Compensator or OpenLoop
+        Stepped in Python, sample by sample.
+    u : ndarray, shape (N,)
+        Reference per tick.
+    alignment : int
+        Computational delay, samples.
+
+    Returns
+    -------
+    ndarray, shape (N,)
+        Hub angle, encoder counts (rounded).
+    """
+    from station.plant import state_matrices
+
+    A, B, C = state_matrices(plant.params, plant.n_elements)
+    b = B[:, 0]
+    x = np.zeros(A.shape[0])
+    controller.reset()
+    theta = np.zeros(u.size)
+    accel = np.zeros(u.size)
+    for k in range(u.size):
+        y = C @ x
+        theta[k], accel[k] = np.floor(y[0] + 0.5), np.floor(y[1] + 0.5)
+        j = max(k - alignment, 0)
+        v, _ = controller.step(u[k], theta[j], accel[j])
+        x = scipy.integrate.odeint(lambda s, _t, vv=v: A @ s + b * vv, x, [0.0, plant.dt],
+                                   Dfun=lambda _s, _t: A)[-1]
+    return theta
+
+
+def _best_time(fn, repeats: int) -> float:
+    best = np.inf
+    for _ in range(repeats):
+        t0 = time.perf_counter()
+        fn()
+        best = min(best, time.perf_counter() - t0)
+    return best
+
+
+def bench(elements=(1, 4, 10, 100), controllers=tuple(CASES), baseline_max: int = 10, repeats: int = 5,
+          out=sys.stdout) -> dict:
+    """Run the benchmark; returns ``{"cases": [...]}`` (see the module docstring).
+
+    Parameters
+    ----------
+    elements : sequence of int
+        Element counts.
+    controllers : sequence of str
+        Keys of CASES.
+    baseline_max : int
+        Run the odeint baseline for n <= baseline_max (0: never).
+    repeats : int
+        Timed runs of `simulate` per case; the best is reported.
+    out : file or None
+        Where to print the table.
+    """
+    n_ticks = int(round(DURATION_S / DT))
+    cases = []
+    if out:
+        print(f"{'n':>4} {'controller':<11} {'seconds':>10} {'x real time':>12} {'baseline s':>11} "
+              f"{'x baseline':>11} {'stable':>7}", file=out)
+    for n in elements:
+        plant = DiscretePlant(n_elements=n, dt=DT)
+        for kind in controllers:
+            controller = make_controller(kind)
+            u = CASES[kind](n_ticks)
+            run = simulate(plant, controller, u)  # compiles once, caches the modal form
+            seconds = _best_time(lambda: simulate(plant, controller, u), repeats)
+            bounded = bool(np.all(np.isfinite(run["theta"])) and np.abs(run["theta"]).max() < SOFT_LIMIT)
+            radius = closed_loop_spectral_radius(plant, controller)
+            stable = bounded and (radius < 1.0 if controller.gth is not None else radius <= 1.0 + 1e-12)
+            base = None
+            if n <= baseline_max:
+                t0 = time.perf_counter()
+                baseline_run(plant, controller, u)
+                base = time.perf_counter() - t0
+            case = {
+                "n_elements": n, "controller": kind, "seconds": seconds,
+                "baseline_seconds": base, "realtime_factor": DURATION_S / seconds,
+                "baseline_ratio": None if base is None else base / seconds, "stable": stable,
+            }
+            cases.append(case)
+            if out:
+                b = "-" if base is None else f"{base:11.3f}"
+                r = "-" if base is None else f"{base / seconds:11.0f}"
+                print(f"{n:>4} {kind:<11} {seconds:10.2e} {DURATION_S / seconds:12.0f} {b:>11} {r:>11} "
+                      f"{str(stable):>7}", file=out, flush=True)
+    return {"cases": cases}
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--elements", type=int, nargs="+", default=[1, 4, 10, 100])
+    ap.add_argument("--controllers", nargs="+", default=list(CASES), choices=list(CASES))
+    ap.add_argument("--baseline-max", type=int, default=10, help="odeint baseline for n <= this (0: none)")
+    ap.add_argument("--repeats", type=int, default=5)
+    ap.add_argument("--json", metavar="FILE")
+    args = ap.parse_args(argv)
+    result = bench(args.elements, args.controllers, args.baseline_max, args.repeats)
+    if args.json:
+        with open(args.json, "w") as fh:
+            json.dump(result, fh, indent=1)
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
