@@ -1,0 +1,137 @@
+/*
+ * hal_psoc5lp.c - the core's HAL on PSoC Creator components (CY8CKIT-059, CY8C5888LTI-LP097).
+ *
+ * Encoder:   QuadDec, 32-bit counter, 4x resolution: a 256-line encoder gives the
+ *            rig's 1024 counts per base revolution.
+ * Accel:     ADC_DelSig "ADC", continuous conversion; the tick reads the latest result.
+ * Motor:     two DVDACs (12-bit, 0-4.080 V range) buffered by opamp followers drive the
+ *            amplifier's differential input: V = V(P) - V(N), each side moving half of it
+ *            around mid-scale, so +-255 counts = +-2.5 V and 0 counts = 0 V exactly.
+ * Enable:    pin AMP_EN, inactive level at reset (set in the pin's initial drive state).
+ * Link:      USBUART (USB CDC on the kit's PSoC USB connector, /dev/ttyACM0 on Linux).
+ */
+#include "hal_psoc5lp.h"
+
+#include "project.h"
+#include "sflr_hal.h"
+
+/* Rig wiring; flip a sign here rather than rewiring (see README "first power-up"). */
+#ifndef ENCODER_SIGN
+#define ENCODER_SIGN 1
+#endif
+#ifndef ACCEL_SIGN
+#define ACCEL_SIGN 1
+#endif
+#ifndef AMP_EN_ACTIVE
+#define AMP_EN_ACTIVE 1u /* level that enables the amplifier */
+#endif
+
+/* DVDAC codes: 12 bits over 4.080 V = 0.99609 mV per code. One DAC count is
+ * 2.5 V / 255 = 9.8039 mV differential, 4.9020 mV per side = 4.9212 codes. */
+#define DAC_MID 2048
+#define DAC_MILLICODES_PER_COUNT 4921 /* per side, x1000 */
+#define DAC_FULL_SCALE 255             /* DAC counts for 2.5 V */
+
+/* ------------------------------------------------------------ HAL functions */
+
+int32_t hal_encoder_read(void) { return (int32_t)ENCODER_SIGN * (int32_t)QuadDec_GetCounter(); }
+
+void hal_encoder_reset(void) { QuadDec_SetCounter(0); }
+
+int16_t hal_accel_read(void)
+{
+    /* Latest continuous-mode result: never waits inside the tick interrupt. */
+    return (int16_t)(ACCEL_SIGN * ADC_GetResult16());
+}
+
+void hal_dac_write(int16_t v)
+{
+    int32_t c = v > DAC_FULL_SCALE ? DAC_FULL_SCALE : (v < -DAC_FULL_SCALE ? -DAC_FULL_SCALE : v);
+    /* nearest code, halves away from zero, integer only (interrupt context) */
+    int32_t m = c * DAC_MILLICODES_PER_COUNT;
+    int32_t half = m >= 0 ? (m + 500) / 1000 : -((-m + 500) / 1000);
+    DAC_P_SetValue((uint16)(DAC_MID + half));
+    DAC_N_SetValue((uint16)(DAC_MID - half));
+}
+
+void hal_amp_enable(bool on) { AMP_EN_Write(on ? AMP_EN_ACTIVE : (uint8)(AMP_EN_ACTIVE ^ 1u)); }
+
+/* Transmit queue: filled from the tick interrupt (and from received-frame handling,
+ * which runs with interrupts masked), drained to USB by the main loop. */
+#define TXQ_SIZE 512u /* power of two; > 2 ms of SAMPLEs plus an INFO and a STOPPED */
+static uint8 txq[TXQ_SIZE];
+static volatile uint16 txq_head, txq_tail; /* head: write index, tail: read index */
+static volatile uint16 txq_dropped;
+
+void hal_uart_write(const uint8_t *data, size_t n)
+{
+    uint8 s = CyEnterCriticalSection();
+    uint16 used = (uint16)((txq_head - txq_tail) & (TXQ_SIZE - 1u));
+    if (n <= (size_t)(TXQ_SIZE - 1u - used)) { /* whole frames only: drop rather than block */
+        for (size_t i = 0; i < n; i++) {
+            txq[txq_head] = data[i];
+            txq_head = (uint16)((txq_head + 1u) & (TXQ_SIZE - 1u));
+        }
+    } else {
+        txq_dropped++;
+    }
+    CyExitCriticalSection(s);
+}
+
+/* ------------------------------------------------------------ init and main loop */
+
+void hal_psoc5lp_init(void)
+{
+    /* Enable inactive first (the pin's reset state already is), then the DAC at 0 V. */
+    hal_amp_enable(false);
+    DAC_P_Start();
+    DAC_N_Start();
+    hal_dac_write(0);
+    BUF_P_Start();
+    BUF_N_Start();
+    QuadDec_Start();
+    QuadDec_SetCounter(0);
+    ADC_Start();
+    ADC_StartConvert();
+    Clock_tick_Start();
+}
+
+#define USB_PACKET 64u
+
+static void tx_service(void)
+{
+    if (txq_head == txq_tail || USBUART_CDCIsReady() == 0u) {
+        return;
+    }
+    uint8 chunk[USB_PACKET];
+    uint16 n = 0u;
+    uint8 s = CyEnterCriticalSection();
+    while (txq_tail != txq_head && n < USB_PACKET - 1u) { /* < 64: no zero-length packet needed */
+        chunk[n++] = txq[txq_tail];
+        txq_tail = (uint16)((txq_tail + 1u) & (TXQ_SIZE - 1u));
+    }
+    CyExitCriticalSection(s);
+    USBUART_PutData(chunk, n);
+}
+
+void hal_psoc5lp_poll(sflr_dev_t *dev)
+{
+    if (USBUART_IsConfigurationChanged() != 0u && USBUART_GetConfiguration() != 0u) {
+        (void)USBUART_CDC_Init(); /* (re)enumerated: arm the CDC OUT endpoint */
+    }
+    if (USBUART_GetConfiguration() == 0u) {
+        return;
+    }
+    if (USBUART_DataIsReady() != 0u) {
+        uint8 rx[USB_PACKET];
+        uint16 n = USBUART_GetAll(rx);
+        if (n > USB_PACKET) {
+            n = USB_PACKET;
+        }
+        /* The tick interrupt must not run while a frame is handled (sflr_device.h). */
+        uint8 s = CyEnterCriticalSection();
+        sflr_rx_bytes(dev, rx, n);
+        CyExitCriticalSection(s);
+    }
+    tx_service();
+}
