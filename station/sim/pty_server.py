@@ -22,9 +22,10 @@ import signal
 import sys
 import time
 import tty
+from typing import TYPE_CHECKING
 
-from station.sim.device import RATE_HZ, SimDevice
-from station.sim.driver import DeviceDriver, Faults
+if TYPE_CHECKING:
+    from station.sim.driver import Faults
 
 
 def _raise_priority() -> str:
@@ -79,6 +80,9 @@ def serve_pty(protocol: str = "v1", realtime: bool = False, seed: int = 0, n_ele
         The summary printed at exit: ticks, late, watchdog_trips, rx_errors of the last
         run (all 0 when no run was started), tx_lost over the whole session.
     """
+    from station.sim.device import RATE_HZ, SimDevice  # the FEM plant: not needed to build the CLI
+    from station.sim.driver import DeviceDriver
+
     out = out or sys.stdout
     device = SimDevice(protocol, seed=seed, n_elements=n_elements, accel_noise_std=accel_noise_std,
                        watchdog_ticks=watchdog_ticks)
