@@ -6,7 +6,8 @@
  * Accel:     ADC_DelSig "ADC", continuous conversion; the tick reads the latest result.
  * Motor:     two DVDACs (12-bit, 0-4.080 V range) buffered by opamp followers drive the
  *            amplifier's differential input: V = V(P) - V(N), each side moving half of it
- *            around mid-scale, so +-255 counts = +-2.5 V and 0 counts = 0 V exactly.
+ *            around mid-scale, so +-255 counts = +-2.5 V and 0 counts = 0 V exactly
+ *            (within half a DVDAC code, 0.5 mV).
  * Enable:    pin AMP_EN, inactive level at reset (set in the pin's initial drive state).
  * Link:      USBUART (USB CDC on the kit's PSoC USB connector, /dev/ttyACM0 on Linux).
  */
@@ -27,9 +28,9 @@
 #endif
 
 /* DVDAC codes: 12 bits over 4.080 V = 0.99609 mV per code. One DAC count is
- * 2.5 V / 255 = 9.8039 mV differential, 4.9020 mV per side = 4.9212 codes. */
+ * 2.5 V / 255 = 9.8039 mV differential = 9.8424 codes, split between the two sides. */
 #define DAC_MID 2048
-#define DAC_MILLICODES_PER_COUNT 4921 /* per side, x1000 */
+#define DAC_MILLICODES_PER_COUNT 9842 /* differential, x1000 */
 #define DAC_FULL_SCALE 255             /* DAC counts for 2.5 V */
 
 /* ------------------------------------------------------------ HAL functions */
@@ -49,9 +50,10 @@ void hal_dac_write(int16_t v)
     int32_t c = v > DAC_FULL_SCALE ? DAC_FULL_SCALE : (v < -DAC_FULL_SCALE ? -DAC_FULL_SCALE : v);
     /* nearest code, halves away from zero, integer only (interrupt context) */
     int32_t m = c * DAC_MILLICODES_PER_COUNT;
-    int32_t half = m >= 0 ? (m + 500) / 1000 : -((-m + 500) / 1000);
-    DAC_P_SetValue((uint16)(DAC_MID + half));
-    DAC_N_SetValue((uint16)(DAC_MID - half));
+    int32_t d = m >= 0 ? (m + 500) / 1000 : -((-m + 500) / 1000); /* differential codes */
+    int32_t p = d / 2;                                               /* P takes half, N the rest: */
+    DAC_P_SetValue((uint16)(DAC_MID + p));                           /* P - N == d exactly */
+    DAC_N_SetValue((uint16)(DAC_MID - (d - p)));
 }
 
 void hal_amp_enable(bool on) { AMP_EN_Write(on ? AMP_EN_ACTIVE : (uint8)(AMP_EN_ACTIVE ^ 1u)); }

@@ -6,6 +6,7 @@
 #include <stdint.h>
 #include <stdio.h>
 
+#include "check.h"
 #include "sflr_device.h"
 
 extern int32_t fake_encoder;      /* what hal_encoder_read returns */
@@ -23,11 +24,5 @@ void fake_reset(void);
 /* Decode everything the device sent since the last call; returns how many messages. */
 int fake_take(sflr_msg_t *out, int max);
 
-/* Test bookkeeping: every CHECK counts; the closing line is "N passed, M failed". */
-extern unsigned t_passed, t_failed;
-#define CHECK(c) do { if (c) t_passed++; else { t_failed++; \
-    printf("FAIL %s:%d: %s\n", __FILE__, __LINE__, #c); } } while (0)
-bool msg_eq(const sflr_msg_t *a, const sflr_msg_t *b);
-int t_finish(void);
 
 #endif
