@@ -1,0 +1,189 @@
+"""Model vs rig for logged runs: step metrics and NRMSE fits next to the thesis's table.
+
+Each log is simulated as the rig ran it: the log's controller (station.replay reads it
+from the header, with the rig's ±200 clamp), the log's reference and alignment 1 (all
+the rig's step logs have d = 1); an open-loop log is driven by its logged v. Step metrics
+use the thesis's definitions (station.analysis.metrics), fits the NRMSE fit
+(station.analysis.fit).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from station.analysis.fit import nrmse_fit
+from station.analysis.metrics import StepMetrics, step_metrics
+
+THESIS_TABLE = {
+    # controller: (experiment (overshoot %, settling s), thesis FEM (overshoot %, settling s));
+    # settling None = "> 2 s" / not settled. DESIGN.md "Step metrics as the thesis reports them".
+    "p": ((24.00, 1.250), (38.20, None)),
+    "lead": ((10.00, None), (18.85, 1.980)),
+    "lead-accel": ((21.50, 0.608), (20.74, 0.708)),
+}
+
+ALIGNMENT = 1
+"""Computational delay the model runs with (the rig's later logs and protocol v1)."""
+
+
+@dataclass
+class RunComparison:
+    """Model vs rig for one log.
+
+    Attributes
+    ----------
+    file : str
+    controller : str or None
+        The log's controller name ("p", "lead", "lead-accel", "open-loop", ...).
+    step : float or None
+        Final reference (the step size), encoder counts; None when not a step.
+    rig, model : StepMetrics or None
+        Metrics of the logged and the simulated θ (None when not a step).
+    thesis_experiment, thesis_fem : StepMetrics or None
+        The thesis's table for this controller, when it has one.
+    fit_pct : dict
+        NRMSE fit of the model's ``theta`` and ``accel`` to the log, percent.
+    data, prediction : dict of ndarray
+        The log's columns and the simulation's output (t, u, v, theta, a, theta_d_hat).
+    notes : list of str
+    """
+
+    file: str
+    controller: str | None
+    step: float | None
+    rig: StepMetrics | None
+    model: StepMetrics | None
+    thesis_experiment: StepMetrics | None
+    thesis_fem: StepMetrics | None
+    fit_pct: dict
+    data: dict = field(repr=False)
+    prediction: dict = field(repr=False)
+    notes: list = field(default_factory=list)
+
+    def to_json(self) -> dict:
+        """JSON-able summary (metrics as {overshoot_pct, settling_time_s} or null)."""
+        j = lambda m: None if m is None else m.to_json()  # noqa: E731
+        return {"file": self.file, "controller": self.controller, "step": self.step, "rig": j(self.rig),
+                "model": j(self.model), "thesis_experiment": j(self.thesis_experiment),
+                "thesis_fem": j(self.thesis_fem), "fit_pct": dict(self.fit_pct), "notes": list(self.notes)}
+
+
+def compare_run(path, plant) -> RunComparison:
+    """Simulate a logged run on the model as the rig ran it and compare.
+
+    Parameters
+    ----------
+    path : str or Path
+        A run log (ours or the rig's), read with station.runlog.read_log.
+    plant : station.plant.DiscretePlant
+        The model (its dt should be the log's, 0.002 s for the rig).
+
+    Returns
+    -------
+    RunComparison
+
+    Raises
+    ------
+    StationError
+        Unreadable log, or a log that does not name its controller.
+    """
+    from station.errors import StationError
+    from station.plant import simulate
+    from station.replay import log_controller
+    from station.runlog import read_log
+
+    log = read_log(path)
+    data = log.data
+    controller, notes = log_controller(log)
+    if controller is None:
+        raise StationError(f"{path}: the log does not name its controller; cannot simulate it")
+    u = data["u"]
+    plant.reset()
+    closed = getattr(controller, "gth", None) is not None
+    if closed:
+        pred = simulate(plant, controller, u, alignment=ALIGNMENT)
+        notes.append(f"model: {controller.name} on the log's reference, clamp ±{controller.limit:g}, "
+                     f"alignment {ALIGNMENT}")
+    else:
+        pred = simulate(plant, controller, u, alignment=0, v_open=data["v"])
+        notes.append("model: open loop, driven by the logged v")
+    theta_log = data["theta"] - (0.0 if closed else data["theta"][0])
+    fits = {}
+    for key, meas, sim in (("theta", theta_log, pred["theta"]), ("accel", data["a"], pred["a"])):
+        fit = nrmse_fit(meas, sim)
+        fits[key] = None if np.isnan(fit) else fit
+    step = float(u[-1]) if closed and u.size and u[-1] != 0 and np.unique(u).size == 2 else None
+    rig = model = exp = fem = None
+    if step is not None:
+        rig = step_metrics(data["t"], data["theta"], step)
+        model = step_metrics(pred["t"], pred["theta"], step)
+        if controller.name in THESIS_TABLE:
+            (eo, es), (fo, fs) = THESIS_TABLE[controller.name]
+            exp, fem = StepMetrics(eo, es), StepMetrics(fo, fs)
+    return RunComparison(str(path), controller.name, step, rig, model, exp, fem, fits, data, pred, notes)
+
+
+def format_comparison(c: RunComparison) -> str:
+    """The table ``station compare`` prints for one log.
+
+    Parameters
+    ----------
+    c : RunComparison
+
+    Returns
+    -------
+    str
+        Rows rig / thesis experiment / thesis FEM / model with overshoot %, settling
+        time s ("> 2 s" / "not settled" for None) and the model's NRMSE fits.
+    """
+    def fmt(m: StepMetrics | None) -> str:
+        if m is None:
+            return f"{'-':>12} {'-':>12}"
+        s = "not settled" if m.settling_time_s is None else f"{m.settling_time_s:.3f}"
+        return f"{m.overshoot_pct:12.2f} {s:>12}"
+
+    def pct(x):
+        return "-" if x is None else f"{x:.1f}"
+
+    lines = [f"{Path(c.file).name}: controller {c.controller}"
+             + ("" if c.step is None else f", step {c.step:g} counts"),
+             f"  {'':<18} {'overshoot %':>12} {'settling s':>12} {'fit θ %':>8} {'fit a %':>8}",
+             f"  {'rig (this log)':<18} {fmt(c.rig)}",
+             f"  {'thesis experiment':<18} {fmt(c.thesis_experiment)}",
+             f"  {'thesis FEM':<18} {fmt(c.thesis_fem)}",
+             f"  {'model':<18} {fmt(c.model)} {pct(c.fit_pct['theta']):>8} {pct(c.fit_pct['accel']):>8}"]
+    lines += [f"  note: {n}" for n in c.notes]
+    return "\n".join(lines)
+
+
+def plot_comparison(c: RunComparison, path: Path) -> None:
+    """Write θ, a and v of the log and the model over time as a PNG.
+
+    Parameters
+    ----------
+    c : RunComparison
+    path : Path
+        PNG file.
+    """
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    t = c.data["t"]
+    fig, ax = plt.subplots(3, 1, figsize=(8, 8), sharex=True)
+    ax[0].plot(t, c.data["u"], "k:", lw=0.8, label="u")
+    for row, key, label in ((0, "theta", "θ (counts)"), (1, "a", "a (counts)"), (2, "v", "v (DAC counts)")):
+        ax[row].plot(t, c.data[key], lw=0.9, label="rig")
+        ax[row].plot(c.prediction["t"], c.prediction[key], lw=0.9, label="model")
+        ax[row].set_ylabel(label)
+        ax[row].legend(loc="best", fontsize=8)
+    ax[2].set_xlabel("t (s)")
+    fits = ", ".join(f"{k} {v:.1f} %" for k, v in c.fit_pct.items() if v is not None)
+    fig.suptitle(f"{Path(c.file).name}\n{c.controller}: NRMSE fit {fits}", fontsize=9)
+    fig.tight_layout()
+    fig.savefig(path, dpi=100)
+    plt.close(fig)

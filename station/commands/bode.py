@@ -1,0 +1,116 @@
+"""``station bode FILE``: measured frequency response of a run (H1 estimate with
+coherence) against the FEM model's, and the θ/v antiresonances of both."""
+
+from __future__ import annotations
+
+import argparse
+import json
+from pathlib import Path
+
+import numpy as np
+
+NAME = "bode"
+HELP = "H1 frequency response (θ/v, a/v) of a swept-sine log against the FEM model; antiresonances"
+
+
+def configure(parser: argparse.ArgumentParser) -> None:
+    """Add the command's arguments to its subparser."""
+    parser.add_argument("file", type=Path, metavar="FILE", help="run log (station or rig format), e.g. a swept sine")
+    parser.add_argument("--elements", type=int, default=4, metavar="N", help="beam elements of the model (default 4)")
+    parser.add_argument("--params", default="tmm-fit", metavar="SET", help="parameter set name or TOML file")
+    parser.add_argument("--nperseg", type=int, default=4096, metavar="N",
+                        help="Welch segment length, samples (default 4096: 0.12 Hz at 500 Hz)")
+    parser.add_argument("--png", type=Path, default=None, metavar="OUT",
+                        help="figure file (default FILE's stem + _bode.png in the current folder)")
+    parser.add_argument("--json", type=Path, default=None, metavar="OUT", help="write the antiresonances as JSON")
+
+
+def plot(cmp, path: Path, title: str) -> None:
+    """Write the Bode magnitude/phase of θ/v, a/v (measured and model) and the coherence.
+
+    Parameters
+    ----------
+    cmp : station.analysis.frequency.BodeComparison
+    path : Path
+        PNG file to write.
+    title : str
+        Figure title.
+    """
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    f = cmp.theta.f
+    band = (f >= 0.5) & (f <= 40.0)
+    fig, ax = plt.subplots(4, 1, figsize=(8, 10), sharex=True)
+    for row, (est, model, label) in enumerate(((cmp.theta, cmp.model[0], "θ/v"), (cmp.accel, cmp.model[1], "a/v"))):
+        ax[row].semilogx(f[band], 20 * np.log10(np.abs(est.H[band])), label=f"measured {label} (H1)")
+        ax[row].semilogx(f[band], 20 * np.log10(np.abs(model[band])), label=f"model {label}, n = {cmp.n_elements}")
+        ax[row].set_ylabel(f"|{label}| (dB, counts/count)")
+        ax[row].legend(loc="lower left", fontsize=8)
+    ax[2].semilogx(f[band], np.degrees(np.angle(cmp.theta.H[band])), ".", ms=2, label="measured θ/v")
+    ax[2].semilogx(f[band], np.degrees(np.angle(cmp.model[0][band])), label="model θ/v")
+    ax[2].set_ylabel("phase θ/v (deg, wrapped)")
+    ax[2].legend(loc="lower left", fontsize=8)
+    ax[3].semilogx(f[band], cmp.theta.coherence[band], label="θ")
+    ax[3].semilogx(f[band], cmp.accel.coherence[band], label="a")
+    ax[3].set_ylabel("coherence γ²")
+    ax[3].set_xlabel("frequency (Hz)")
+    ax[3].set_ylim(0, 1.05)
+    ax[3].legend(loc="lower left", fontsize=8)
+    for fz in cmp.antiresonances_measured_hz:
+        for a in ax[:3]:
+            a.axvline(fz, color="grey", lw=0.6, ls=":")
+    fig.suptitle(title)
+    fig.tight_layout()
+    fig.savefig(path, dpi=100)
+    plt.close(fig)
+
+
+def run(args: argparse.Namespace) -> int:
+    """Estimate, compare, print the antiresonances, write the figure (and JSON).
+
+    Returns
+    -------
+    int
+        0.
+
+    Raises
+    ------
+    StationError
+        Unreadable log or parameter set, a log shorter than one Welch segment, bad
+        element count, unwritable output.
+    """
+    from station.analysis.frequency import compare_bode
+    from station.errors import StationError
+    from station.plant import DiscretePlant, load_params
+    from station.runlog import read_log
+
+    log = read_log(args.file)
+    t = log.data["t"]
+    dt = float(np.median(np.diff(t))) if t.size > 1 else 0.002
+    try:
+        plant = DiscretePlant(load_params(args.params), n_elements=args.elements, dt=dt)
+        cmp = compare_bode(log.data["v"], log.data["theta"], log.data["a"], dt, plant, nperseg=args.nperseg)
+    except ValueError as exc:
+        raise StationError(f"{args.file}: {exc}") from None
+    print(f"{args.file}: H1 estimate, {len(t)} samples, resolution {cmp.theta.f[1] - cmp.theta.f[0]:.3f} Hz; "
+          f"model {plant.params.name}, {args.elements} elements")
+    print(f"{'antiresonance':>13} {'measured Hz':>12} {'model Hz':>9} {'error %':>8}")
+    for i, (m, z, e) in enumerate(zip(cmp.antiresonances_measured_hz, cmp.antiresonances_model_hz,
+                                      cmp.antiresonance_error_pct), 1):
+        print(f"{i:>13} {m:12.3f} {z:9.3f} {e:+8.1f}")
+    png = args.png if args.png is not None else Path(f"{args.file.stem}_bode.png")
+    try:
+        plot(cmp, png, f"{args.file.name}: measured vs FEM model (n = {args.elements})")
+        if args.json is not None:
+            args.json.write_text(json.dumps({
+                "file": str(args.file), "n_elements": args.elements,
+                "antiresonances": [{"measured_hz": float(m), "model_hz": float(z), "error_pct": float(e)}
+                                   for m, z, e in zip(cmp.antiresonances_measured_hz, cmp.antiresonances_model_hz,
+                                                      cmp.antiresonance_error_pct)]}, indent=1))
+    except OSError as exc:
+        raise StationError(f"cannot write output: {exc}") from None
+    print(f"figure: {png}")
+    return 0
