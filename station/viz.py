@@ -12,7 +12,10 @@ timeline (s). Entity layout, one plot per parent in the viewer:
 
 from __future__ import annotations
 
+import os
+import sys
 import uuid
+import warnings
 from pathlib import Path
 from typing import Mapping
 
@@ -32,6 +35,23 @@ LOG_ENTITIES = {
 
 MODEL_ENTITIES = {"theta": "theta/model", "a": "a/model", "v": "v/model"}
 """Model prediction key -> rerun entity path."""
+
+
+def _check_display() -> None:
+    """On Linux the viewer needs a display; fail before the run rather than hang after it."""
+    if sys.platform.startswith("linux") and not (os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY")):
+        raise StationError("--spawn needs a display (neither DISPLAY nor WAYLAND_DISPLAY is set): "
+                           "record with --rrd FILE and open it with `rerun FILE` where there is a screen")
+
+
+def _viewer_executable() -> str | None:
+    """The ``rerun`` viewer installed beside this Python (a venv's bin/), else None (PATH lookup).
+
+    A venv's console scripts run without the venv on PATH, where the SDK alone would
+    not find the viewer that rerun-sdk installed.
+    """
+    candidate = Path(sys.executable).parent / "rerun"
+    return str(candidate) if candidate.is_file() else None
 
 
 class RerunSink:
@@ -68,10 +88,12 @@ class RerunSink:
             if self.rrd_path is not None:
                 self.rec.save(self.rrd_path)
             elif spawn:
-                self.rec.spawn()
+                _check_display()
+                rr.spawn(executable_path=_viewer_executable(), recording=self.rec)
         except Exception as exc:  # noqa: BLE001 - the SDK raises various types
             target = self.rrd_path if self.rrd_path is not None else "a rerun viewer"
-            raise StationError(f"rerun: cannot record to {target}: {exc}") from None
+            first_line = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
+            raise StationError(f"rerun: cannot record to {target}: {first_line}") from None
         self._closed = False
 
     def log_series(self, entity: str, values, n=None, t=None) -> None:
@@ -145,5 +167,9 @@ class RerunSink:
         if self._closed:
             return
         self._closed = True
-        self.rec.flush()
-        self.rec.disconnect()
+        try:
+            self.rec.flush(timeout_sec=2.0)
+            self.rec.disconnect()
+        except Exception as exc:  # noqa: BLE001 - the run and its log are done; only the view is lost
+            first_line = (str(exc).strip().splitlines() or [type(exc).__name__])[0]
+            warnings.warn(f"rerun: the recording could not be flushed: {first_line}", RuntimeWarning, stacklevel=2)

@@ -66,3 +66,19 @@ def test_bad_options_are_one_line_errors(tmp_path, capsys):
     assert "shorter than two samples" in capsys.readouterr().err
     assert main(["step", "--controller", str(tmp_path / "missing.toml")]) == 2
     assert "missing.toml" in capsys.readouterr().err
+
+
+def test_spawn_without_a_display_fails_before_the_run(tmp_path, monkeypatch, capsys):
+    monkeypatch.delenv("DISPLAY", raising=False)
+    monkeypatch.delenv("WAYLAND_DISPLAY", raising=False)
+    log = tmp_path / "never.tsv"
+    assert main(["step", "--spawn", "--out", str(log)]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "--spawn needs a display" in err and "--rrd" in err
+    assert not log.exists()  # nothing started
+
+
+def test_rrd_recording_is_written(tmp_path):
+    rrd = tmp_path / "run.rrd"
+    assert main(["step", "--duration", "0.3", "--rrd", str(rrd), "--out", str(tmp_path / "r.tsv")]) == 0
+    assert rrd.stat().st_size > 1000
