@@ -59,3 +59,27 @@ def test_closed_loop_stable_at_100_elements(kind):
     plant = DiscretePlant(n_elements=100)
     for d in (0, 1):
         assert closed_loop_spectral_radius(plant, make_controller(kind), alignment=d) < 1.0
+
+
+def test_beam_damping_reaches_target_and_matches_rayleigh_perturbation(params):
+    """Stiffness-proportional beam damping adds ζ ≈ (β ω / 2)·(beam's share of the mode's
+    strain energy) to the hub-held first mode (first-order modal perturbation)."""
+    import scipy.linalg
+
+    from station.plant import with_beam_damping
+    from station.plant.fem import SecondOrderModel
+
+    damped = with_beam_damping(params, 0.01, 10)
+    assert modal_summary(damped, 10).antiresonance_damping[0] == pytest.approx(0.01, rel=1e-6)
+    m = SecondOrderModel(params, 10)
+    keep = np.arange(2, m.M.shape[0])  # motor and base held
+    K, M = m.K[np.ix_(keep, keep)], m.M[np.ix_(keep, keep)]
+    w2, phi = scipy.linalg.eigh(K, M)
+    mode = phi[:, 0]
+    K_beam = K.copy()
+    K_beam[0, 0] -= params.clamp_k  # the clamp spring acts on the root slope only
+    share = (mode @ K_beam @ mode) / (mode @ K @ mode)
+    zeta0 = modal_summary(params, 10).antiresonance_damping[0]
+    assert zeta0 + damped.beam_beta * np.sqrt(w2[0]) / 2 * share == pytest.approx(0.01, rel=0.02)
+    with pytest.raises(ValueError, match="out of reach"):
+        with_beam_damping(params, 0.001, 4)

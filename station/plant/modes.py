@@ -96,3 +96,51 @@ def base_held_matrix(params: Params, n_elements: int = 4) -> np.ndarray:
     M, Cm, K = (X[np.ix_(keep, keep)] for X in (m.M, m.C, m.K))
     n = keep.size
     return np.block([[np.zeros((n, n)), np.eye(n)], [-np.linalg.solve(M, K), -np.linalg.solve(M, Cm)]])
+
+
+def with_beam_damping(params: Params, zeta: float, n_elements: int = 4) -> Params:
+    """The parameter set with the Rayleigh beam damping that gives a first-mode ζ.
+
+    DESIGN.md's ``beam_damping`` effect: the total damping ratio of the first beam mode
+    with the motor and base held still, reached by stiffness-proportional damping of
+    the beam elements (C_beam = beam_beta·K_beam). The ratio grows monotonically with
+    beam_beta; it is solved for by scipy.optimize.brentq.
+
+    Parameters
+    ----------
+    params : Params
+        Parameter set (its own beam_beta is replaced).
+    zeta : float
+        Target damping ratio of the first hub-held mode, 1 (tmm-fit with beam_beta = 0:
+        0.0054 from the clamp damper alone).
+    n_elements : int, default 4
+        Element count of the model the value is meant for.
+
+    Returns
+    -------
+    Params
+        A copy with ``beam_beta`` set, s.
+
+    Raises
+    ------
+    ValueError
+        zeta below the clamp damper's own contribution or above 0.5.
+    """
+    import dataclasses
+
+    import scipy.optimize
+
+    def first_zeta(beta: float) -> float:
+        p = dataclasses.replace(params, beam_beta=beta)
+        return float(modal_summary(p, n_elements).antiresonance_damping[0])
+
+    floor = first_zeta(0.0)
+    if not floor <= zeta <= 0.5:
+        raise ValueError(f"first-mode damping ratio {zeta} out of reach: {floor:.4g} (no beam damping) .. 0.5")
+    if zeta == floor:
+        return dataclasses.replace(params, beam_beta=0.0)
+    hi = 1e-4
+    while first_zeta(hi) < zeta:
+        hi *= 4.0
+    beta = scipy.optimize.brentq(lambda b: first_zeta(b) - zeta, 0.0, hi, xtol=1e-14, rtol=1e-12)
+    return dataclasses.replace(params, beam_beta=beta)
