@@ -67,7 +67,7 @@ def _det(matrix):
 def test_table_3_1_n2_first_entry_is_a_typo():
     """The table prints 15.51451 for n = 2; the method gives 15.51421.
 
-    Evidence: all 20 other entries are reproduced to every printed digit; the two
+    Evidence: all 19 other entries are reproduced to every printed digit; the two
     numbers differ in one digit; and the exact (rational-arithmetic) characteristic
     determinant det(K − ω² M) of the 2-element pinned-free model changes sign in
     [15.514205, 15.514215] but not in [15.51446, 15.51456], so 15.51451 is no
