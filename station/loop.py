@@ -24,6 +24,7 @@ import gc
 import math
 import os
 import sys
+import threading
 import time
 from dataclasses import dataclass, field
 
@@ -101,19 +102,21 @@ class _Terminate(BaseException):
 
 
 def _threads() -> list[int]:
-    """Native ids of this process's threads (Linux); just this thread elsewhere."""
-    try:
-        return [int(tid) for tid in os.listdir("/proc/self/task")]
-    except OSError:
-        return [0]
+    """Native ids of this process's Python threads (the loop, the log writer, sinks).
+
+    Only Python threads: they are the ones that can hold the GIL. Native pools (e.g.
+    OpenBLAS's workers, which busy-wait after a numpy call) must stay at normal
+    priority, or they would starve the kernel's tty work at real-time priority.
+    """
+    return [t.native_id for t in threading.enumerate() if t.native_id is not None]
 
 
 def raise_priority() -> str:
-    """Raise the scheduling priority of every thread of this process, as far as the OS allows.
+    """Raise the scheduling priority of this process's Python threads, as far as the OS allows.
 
-    All threads, not only the loop's: the log writer's thread holds the GIL while it
-    formats rows, and if ordinary load could preempt it then, the loop would wait for
-    the GIL behind that load (priority inversion). Returns what was set.
+    Not only the loop's thread: the log writer's thread holds the GIL while it formats
+    rows, and if ordinary load could preempt it then, the loop would wait for the GIL
+    behind that load (priority inversion). Returns what was set.
     """
     try:
         for tid in _threads():
@@ -258,7 +261,6 @@ def _safe_stop(session: Session) -> dict | None:
 
 def _install_sigterm():
     import signal
-    import threading
 
     if threading.current_thread() is not threading.main_thread():
         return None
