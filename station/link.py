@@ -15,6 +15,7 @@ not report it), status the v1 status bits (0 for legacy).
 
 from __future__ import annotations
 
+import errno
 import time
 from urllib.parse import parse_qsl, urlencode, urlsplit
 
@@ -86,7 +87,8 @@ def open_port(url: str, protocol: str = "v1", timeout: float = 0.1, baudrate: in
         return serial.serial_for_url(url, **kwargs)
     except (serial.SerialException, ValueError, OSError) as exc:
         reason = str(exc).replace("\n", " ")
-        busy = "lock" in reason.lower() or "busy" in reason.lower()
+        # pyserial: "Could not exclusively lock port ..." (flock) or EBUSY from open()
+        busy = "exclusively lock" in reason or getattr(exc, "errno", None) == errno.EBUSY
         raise StationError(f"cannot open port {url}: {'port is busy: ' if busy else ''}{reason}") from None
 
 

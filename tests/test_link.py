@@ -52,3 +52,9 @@ def test_cli_error_is_one_line_without_traceback():
     assert proc.returncode == 2
     assert proc.stderr.strip().count("\n") == 0, proc.stderr
     assert proc.stderr.startswith("station: error: cannot open port /dev/does-not-exist-42")
+
+
+def test_unknown_sim_option_is_not_reported_as_busy():
+    with pytest.raises(StationError) as info:
+        open_session("sim://?bogus=1")
+    assert "unknown option 'bogus'" in str(info.value) and "busy" not in str(info.value)
