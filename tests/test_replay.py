@@ -116,7 +116,6 @@ def test_log_without_controller_is_model_only(tmp_path):
 
 def test_model_fit_on_rig_step_logs(rig_data):
     """The thesis's FEM predicts the rig's step responses well in theta (not perfectly)."""
-    import station.plant  # noqa: F401
     for name in (P_LOG, LEAD_LOG, ACCEL_LOG):
         fit = replay(rig_data / name).fit_pct
         assert 50.0 < fit["theta"] < 100.0, name
@@ -168,6 +167,5 @@ def test_command_bad_file_is_a_station_error(tmp_path):
 
 
 def test_bad_element_count_is_a_station_error(rig_data):
-    import station.plant  # noqa: F401
     with pytest.raises(StationError, match="n_elements"):
         replay(rig_data / P_LOG, n_elements=500)
