@@ -15,9 +15,11 @@ from dataclasses import dataclass
 from pathlib import Path
 
 
+import numpy as np
+
 from station import DT, __version__
 from station.analysis.metrics import StepMetrics, step_metrics
-from station.control import make_controller, step_reference
+from station.control import file_reference, make_controller, pulse_reference, step_reference, swept_sine_reference
 from station.errors import StationError
 from station.link import open_session
 from station.loop import RunResult, run_loop
@@ -30,6 +32,72 @@ DEFAULT_STEP_TICK = 10
 DEFAULT_DURATION = 2.0
 DEFAULT_SOFT_LIMIT = 2048.0
 DEFAULT_TIMEOUT = 0.1
+REFERENCES = ("step", "pulse", "swept-sine")
+"""Built-in reference laws; a run log's column (``FILE[:COLUMN]``) is the other kind."""
+PULSE_WIDTH = 0.1
+"""Width of the open-loop pulse, s (the rig's pulse test)."""
+SWEPT_SINE_DURATION = 22.0
+"""Default length of a swept-sine run, s: the law spans 1 < t <= 21 s (DESIGN.md)."""
+
+
+def make_reference(kind: str, amplitude: float, duration: float | None, step_tick: int,
+                   dt: float = DT) -> tuple[np.ndarray, dict]:
+    """The reference u[k] of a test, and its description for the log header.
+
+    Parameters
+    ----------
+    kind : str
+        "step" (amplitude from ``step_tick`` on), "pulse" (open loop: +amplitude for
+        0.1 s from ``step_tick``), "swept-sine" (u = trunc(amplitude sin(2π(t−1)²)) for
+        1 < t ≤ 21 s, DESIGN.md), or ``FILE[:COLUMN]``: a column (default u) of a run log,
+        ours or the rig's.
+    amplitude : float
+        Counts (encoder counts closed loop, DAC counts open loop); unused for a file.
+    duration : float or None
+        Run length, s; None: 2 s (step, pulse), 22 s (swept sine), the file's length.
+    step_tick : int
+        Tick of the step or pulse start.
+    dt : float
+        Sample time, s.
+
+    Returns
+    -------
+    u : ndarray, shape (n_ticks,)
+    meta : dict
+        JSON-able description (kind, amplitude, ticks, file).
+
+    Raises
+    ------
+    StationError
+        Unknown kind, unreadable file or column, a run shorter than two samples, or a
+        step tick outside the run.
+    """
+    if kind in REFERENCES:
+        if duration is None:
+            duration = SWEPT_SINE_DURATION if kind == "swept-sine" else DEFAULT_DURATION
+        n_ticks = int(round(duration / dt))
+        if n_ticks < 2:
+            raise StationError(f"--duration {duration} s is shorter than two samples of {dt} s")
+        if kind != "swept-sine" and not 0 <= step_tick < n_ticks:
+            raise StationError(f"step tick {step_tick} is outside the run's {n_ticks} ticks")
+        if kind == "step":
+            u = step_reference(amplitude, n_ticks, at_tick=step_tick)
+        elif kind == "pulse":
+            u = pulse_reference(amplitude, n_ticks, step_tick, int(round(PULSE_WIDTH / dt)))
+        else:
+            u = swept_sine_reference(n_ticks, amplitude, dt)
+        return u, {"kind": kind, "amplitude": amplitude, "step_tick": step_tick, "n_ticks": n_ticks}
+    path, _, column = kind.partition(":") if not Path(kind).exists() else (kind, "", "")
+    if not Path(path).exists():
+        raise StationError(f"reference {kind!r}: expected one of {', '.join(REFERENCES)} or FILE[:COLUMN] "
+                           f"of a run log; no file {path}")
+    u = file_reference(path, column or "u")
+    if duration is not None:
+        n_ticks = int(round(duration / dt))
+        u = np.concatenate([u[:n_ticks], np.full(max(0, n_ticks - u.size), u[-1] if u.size else 0.0)])
+    if u.size < 2:
+        raise StationError(f"reference {kind!r}: fewer than two samples")
+    return u, {"kind": "file", "file": str(path), "column": column or "u", "n_ticks": int(u.size)}
 
 
 @dataclass
@@ -69,8 +137,9 @@ def _plant_meta(port) -> dict | None:
 
 
 def run_step(port: str = DEFAULT_PORT, protocol: str = "v1", controller: str = DEFAULT_CONTROLLER,
-             amplitude: float = DEFAULT_AMPLITUDE, duration: float = DEFAULT_DURATION,
-             step_tick: int = DEFAULT_STEP_TICK, out: str | Path | None = None, sinks=(),
+             amplitude: float = DEFAULT_AMPLITUDE, duration: float | None = None,
+             step_tick: int = DEFAULT_STEP_TICK, reference: str = "step",
+             out: str | Path | None = None, sinks=(),
              kp: float = 2.0, limit: float = 200.0, soft_limit: float = DEFAULT_SOFT_LIMIT,
              timeout: float = DEFAULT_TIMEOUT, baudrate: int | None = None, dt: float = DT,
              lean: bool = True) -> StepReport:
@@ -87,10 +156,14 @@ def run_step(port: str = DEFAULT_PORT, protocol: str = "v1", controller: str = D
         ``spec`` dict (e.g. a :class:`station.control.Compensator` built in Python).
     amplitude : float
         Step height, encoder counts (open loop: DAC counts).
-    duration : float
-        Run length, s; the run has round(duration/dt) ticks.
+    duration : float or None
+        Run length, s; the run has round(duration/dt) ticks. None: the reference's
+        default (:func:`make_reference`; 2 s for a step).
     step_tick : int
         Tick at which the step starts (default 10, t = 0.02 s).
+    reference : str
+        "step" (default), "pulse", "swept-sine" or ``FILE[:COLUMN]``
+        (:func:`make_reference`). Step metrics are computed for steps only.
     out : path, optional
         Log file; default :func:`default_log_path`.
     sinks : sequence
@@ -115,11 +188,7 @@ def run_step(port: str = DEFAULT_PORT, protocol: str = "v1", controller: str = D
         Bad arguments, a port that cannot be opened or a device that does not answer
         (nothing was started then).
     """
-    n_ticks = int(round(duration / dt))
-    if n_ticks < 2:
-        raise StationError(f"--duration {duration} s is shorter than two samples of {dt} s")
-    if not 0 <= step_tick < n_ticks:
-        raise StationError(f"step tick {step_tick} is outside the run's {n_ticks} ticks")
+    u, reference_meta = make_reference(reference, amplitude, duration, step_tick, dt)
     if isinstance(controller, (str, Path)):
         ctrl = make_controller(str(controller), dt=dt, kp=kp, limit=limit)
         tag = Path(controller).stem if str(controller).endswith(".toml") else str(controller)
@@ -127,7 +196,6 @@ def run_step(port: str = DEFAULT_PORT, protocol: str = "v1", controller: str = D
         ctrl = controller
         ctrl.reset()
         tag = str(ctrl.spec.get("kind", "custom"))
-    u = step_reference(amplitude, n_ticks, at_tick=step_tick)
     log_path = Path(out) if out is not None else default_log_path(tag)
     log_path.parent.mkdir(parents=True, exist_ok=True)
     with open_session(port, protocol, timeout=timeout, baudrate=baudrate) as session:
@@ -136,7 +204,7 @@ def run_step(port: str = DEFAULT_PORT, protocol: str = "v1", controller: str = D
             "station_version": __version__,
             "kind": "step",
             "controller": ctrl.spec,
-            "reference": {"kind": "step", "amplitude": amplitude, "step_tick": step_tick, "n_ticks": n_ticks},
+            "reference": reference_meta,
             "protocol": protocol,
             "port": session.url,
             "device": info,
@@ -152,7 +220,7 @@ def run_step(port: str = DEFAULT_PORT, protocol: str = "v1", controller: str = D
             result = run_loop(session, ctrl, u, writer, soft_limit=soft_limit, dt=dt, lean=lean)
         finally:
             writer.close()  # after the loop has sent command 0 and stop
-    return StepReport(log_path, result, _metrics_of(log_path, amplitude))
+    return StepReport(log_path, result, _metrics_of(log_path, amplitude) if reference == "step" else None)
 
 
 def _metrics_of(log_path: Path, amplitude: float) -> StepMetrics | None:

@@ -82,3 +82,28 @@ def test_rrd_recording_is_written(tmp_path):
     rrd = tmp_path / "run.rrd"
     assert main(["step", "--duration", "0.3", "--rrd", str(rrd), "--out", str(tmp_path / "r.tsv")]) == 0
     assert rrd.stat().st_size > 1000
+
+
+def test_swept_sine_reference_is_the_rig_law(tmp_path, rig_data):
+    report = run_step(controller="p", kp=1.0, reference="swept-sine", amplitude=50, out=tmp_path / "sw.tsv")
+    assert report.result.ok and report.metrics is None  # no step metrics for a sweep
+    ours = read_log(tmp_path / "sw.tsv").data["u"]
+    rig = read_log(rig_data / "swept_sine_kp_1_amp_50.txt").data["u"]
+    assert np.array_equal(ours, rig)  # 22 s by default, trunc(50 sin(2π(t−1)²)) for 1 < t ≤ 21 s
+
+
+def test_file_reference_replays_the_rig_pulse_test_open_loop(tmp_path, rig_data):
+    src = rig_data / "OL_pulse_test_sys_check_SLFR_RTP_OL_Test_uend=0.txt"
+    report = run_step(controller="open-loop", reference=f"{src}:u", out=tmp_path / "ol.tsv")
+    d = read_log(tmp_path / "ol.tsv").data
+    assert report.result.ok and np.array_equal(d["u"], read_log(src).data["u"])
+    assert np.array_equal(d["v"][1:], d["u"][1:])  # open loop: v[k] = u[k] (tick 0 outputs 0)
+    assert np.array_equal(d["v_applied"], d["v"])
+
+
+def test_pulse_reference_and_bad_reference(tmp_path, capsys):
+    report = run_step(controller="open-loop", reference="pulse", amplitude=80, duration=0.5, out=tmp_path / "p.tsv")
+    u = read_log(report.log_path).data["u"]
+    assert np.array_equal(np.flatnonzero(u), np.arange(10, 60)) and set(u[u != 0]) == {80.0}
+    assert main(["step", "--reference", "triangle"]) == 2
+    assert "expected one of step, pulse, swept-sine or FILE[:COLUMN]" in capsys.readouterr().err

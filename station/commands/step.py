@@ -9,7 +9,8 @@ from station import DT
 from station import experiment as ex
 
 NAME = "step"
-HELP = "run a step test (default: lead compensator, 100 counts, on the built-in simulated rig)"
+HELP = ("run a step test (default: lead compensator, 100 counts, on the built-in simulated rig); "
+        "also pulse, swept-sine or file references")
 
 
 def configure(parser) -> None:
@@ -20,7 +21,11 @@ def configure(parser) -> None:
     parser.add_argument("--limit", type=float, default=200.0, help="controller clamp, ±DAC counts (default 200)")
     parser.add_argument("--amplitude", type=float, default=ex.DEFAULT_AMPLITUDE, metavar="COUNTS",
                         help="step height in encoder counts (default 100)")
-    parser.add_argument("--duration", type=float, default=ex.DEFAULT_DURATION, metavar="S", help="run length (default 2 s)")
+    parser.add_argument("--duration", type=float, default=None, metavar="S",
+                        help="run length (default 2 s; swept sine 22 s; a file reference: its length)")
+    parser.add_argument("--reference", default="step", metavar="KIND",
+                        help="step (default), pulse (open loop, 0.1 s), swept-sine, or FILE[:COLUMN] "
+                             "of a run log (e.g. a rig log's u)")
     parser.add_argument("--step-time", type=float, default=ex.DEFAULT_STEP_TICK * DT, metavar="S",
                         help="when the step starts (default 0.02 s = tick 10)")
     parser.add_argument("--port", default=ex.DEFAULT_PORT, metavar="URL",
@@ -48,7 +53,8 @@ def run(args) -> int:
     try:
         report = ex.run_step(port=args.port, protocol=args.protocol, controller=args.controller,
                              amplitude=args.amplitude, duration=args.duration,
-                             step_tick=int(round(args.step_time / DT)), out=args.out, sinks=sinks,
+                             step_tick=int(round(args.step_time / DT)), reference=args.reference,
+                             out=args.out, sinks=sinks,
                              kp=args.kp, limit=args.limit, soft_limit=args.soft_limit,
                              timeout=args.timeout, baudrate=args.baud)
     finally:
