@@ -4,10 +4,10 @@
  * Encoder:   QuadDec, 32-bit counter, 4x resolution: a 256-line encoder gives the
  *            rig's 1024 counts per base revolution.
  * Accel:     ADC_DelSig "ADC", continuous conversion; the tick reads the latest result.
- * Motor:     two DVDACs (12-bit, 0-4.080 V range) buffered by opamp followers drive the
- *            amplifier's differential input: V = V(P) - V(N), each side moving half of it
- *            around mid-scale, so +-255 counts = +-2.5 V and 0 counts = 0 V exactly
- *            (within half a DVDAC code, 0.5 mV).
+ * Motor:     two DVDACs (12-bit, 0-4.080 V range: SetValue takes 0..0xFF0, 1 mV per
+ *            code) buffered by opamp followers drive the amplifier's differential input:
+ *            V = V(P) - V(N), each side moving half of it around 2.048 V, so +-255 counts
+ *            = +-2.5 V and 0 counts = 0 V exactly (within half a DVDAC code, 0.5 mV).
  * Enable:    pin AMP_EN, inactive level at reset (set in the pin's initial drive state).
  * Link:      USBUART (USB CDC on the kit's PSoC USB connector, /dev/ttyACM0 on Linux).
  */
@@ -27,11 +27,13 @@
 #define AMP_EN_ACTIVE 1u /* level that enables the amplifier */
 #endif
 
-/* DVDAC codes: 12 bits over 4.080 V = 0.99609 mV per code. One DAC count is
- * 2.5 V / 255 = 9.8039 mV differential = 9.8424 codes, split between the two sides. */
-#define DAC_MID 2048
-#define DAC_MILLICODES_PER_COUNT 9842 /* differential, x1000 */
-#define DAC_FULL_SCALE 255             /* DAC counts for 2.5 V */
+/* DVDAC codes: a 12-bit DVDAC dithers the 8-bit VDAC (16 mV per step in its 0-4.080 V
+ * range) over 16 sub-steps: 1 mV per code, valid codes 0..0xFF0 (4080 = 4.080 V), not
+ * 4096 codes over 4.080 V. One DAC count is 2.5 V / 255 = 2500/255 = 9.8039 codes
+ * differential, split between the two sides. */
+#define DAC_MID 2048            /* 2.048 V on each side at 0 V differential */
+#define DAC_MV_FULL_SCALE 2500  /* differential codes (mV) for DAC_FULL_SCALE */
+#define DAC_FULL_SCALE 255      /* DAC counts for 2.5 V */
 
 /* ------------------------------------------------------------ HAL functions */
 
@@ -48,9 +50,11 @@ int16_t hal_accel_read(void)
 void hal_dac_write(int16_t v)
 {
     int32_t c = v > DAC_FULL_SCALE ? DAC_FULL_SCALE : (v < -DAC_FULL_SCALE ? -DAC_FULL_SCALE : v);
-    /* nearest code, halves away from zero, integer only (interrupt context) */
-    int32_t m = c * DAC_MILLICODES_PER_COUNT;
-    int32_t d = m >= 0 ? (m + 500) / 1000 : -((-m + 500) / 1000); /* differential codes */
+    /* nearest code, integer only (interrupt context); 255 is odd, so c*2500/255 is never
+     * exactly half-way between two codes */
+    int32_t m = c * DAC_MV_FULL_SCALE;
+    int32_t d = m >= 0 ? (m + DAC_FULL_SCALE / 2) / DAC_FULL_SCALE
+                       : -((-m + DAC_FULL_SCALE / 2) / DAC_FULL_SCALE); /* differential codes */
     int32_t p = d / 2;                                               /* P takes half, N the rest: */
     DAC_P_SetValue((uint16)(DAC_MID + p));                           /* P - N == d exactly */
     DAC_N_SetValue((uint16)(DAC_MID - (d - p)));

@@ -63,9 +63,12 @@ void USBUART_PutData(const uint8 p[], uint16 n)
     usb_tx_len += n;
 }
 
-static double volts(void) /* differential output: 12-bit codes over 4.080 V */
+/* Differential output. A 12-bit DVDAC in its 0-4.080 V range takes codes 0..0xFF0
+ * (16 sub-steps of the VDAC8's 16 mV step): 1 mV per code, not 4.080 V / 4096. */
+#define DVDAC_MAX 0xFF0u
+static double volts(void)
 {
-    return ((double)dac_p - (double)dac_n) * 4.080 / 4096.0;
+    return ((double)dac_p - (double)dac_n) * 1e-3;
 }
 
 int main(void)
@@ -83,16 +86,18 @@ int main(void)
         worst = err > worst ? err : worst;
         monotonic &= volts() > prev;
         prev = volts();
-        in_range &= dac_p <= 4095u && dac_n <= 4095u && abs(dac_p + dac_n - 4096) <= 1; /* common mode at mid */
+        in_range &= dac_p <= DVDAC_MAX && dac_n <= DVDAC_MAX && abs(dac_p + dac_n - 4096) <= 1; /* common mode at mid */
     }
-    CHECK(worst <= 0.6 * 4.080 / 4096.0); /* half a code, plus the 9.842 approximation */
+    CHECK(worst <= 0.5e-3 + 1e-9); /* nearest code: within half a code (0.5 mV) */
     CHECK(monotonic && in_range);
-    hal_dac_write(255);
-    CHECK(fabs(volts() - 2.5) < 0.002);
+    hal_dac_write(255); /* full scale is exactly 2500 codes: 2.500 V */
+    CHECK(dac_p - dac_n == 2500 && dac_p == 2048 + 1250);
     hal_dac_write(-300); /* beyond the DAC's range: saturates at -2.5 V, no wrap */
-    CHECK(fabs(volts() + 2.5) < 0.002);
+    CHECK(dac_n - dac_p == 2500);
     hal_dac_write(INT16_MAX);
-    CHECK(fabs(volts() - 2.5) < 0.002);
+    CHECK(dac_p - dac_n == 2500);
+    hal_dac_write(1); /* one count = 9.804 mV -> 10 codes */
+    CHECK(dac_p - dac_n == 10);
 
     hal_amp_enable(true);
     CHECK(amp_level == 1);
