@@ -102,6 +102,37 @@ void hal_psoc5lp_init(void)
     Clock_tick_Start();
 }
 
+/* Hardware watchdog: fed by the main loop, but only when the tick interrupt has run
+ * since the last feed (tick_count is written by the interrupt only; a 32-bit aligned
+ * load on the Cortex-M3 is atomic). */
+static volatile uint32 tick_count;
+static uint32 tick_count_fed;
+
+void hal_psoc5lp_tick(sflr_dev_t *dev)
+{
+    sflr_tick(dev);
+    tick_count++;
+}
+
+void hal_psoc5lp_watchdog_start(void)
+{
+#ifndef SFLR_NO_HW_WATCHDOG
+    CyILO_Start1K(); /* the WDT counts the 1 kHz ILO */
+    CyWdtStart(CYWDT_16_TICKS, CYWDT_LPMODE_NOCHANGE);
+#endif
+}
+
+static void watchdog_service(void)
+{
+    uint32 now = tick_count;
+    if (now != tick_count_fed) {
+        tick_count_fed = now;
+#ifndef SFLR_NO_HW_WATCHDOG
+        CyWdtClear();
+#endif
+    }
+}
+
 #define USB_PACKET 64u
 
 static void tx_service(void)
@@ -122,6 +153,7 @@ static void tx_service(void)
 
 void hal_psoc5lp_poll(sflr_dev_t *dev)
 {
+    watchdog_service();
     if (USBUART_IsConfigurationChanged() != 0u && USBUART_GetConfiguration() != 0u) {
         (void)USBUART_CDC_Init(); /* (re)enumerated: arm the CDC OUT endpoint */
     }

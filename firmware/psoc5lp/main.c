@@ -13,7 +13,7 @@ static sflr_dev_t dev;
 /* 500 Hz from Clock_tick: one protocol tick (choose, apply, latch, send). */
 CY_ISR(tick_isr)
 {
-    sflr_tick(&dev);
+    hal_psoc5lp_tick(&dev);
 }
 
 int main(void)
@@ -23,6 +23,7 @@ int main(void)
     isr_tick_StartEx(tick_isr);
     CyGlobalIntEnable; /* USBUART_Start needs interrupts */
     USBUART_Start(0u, USBUART_5V_OPERATION);
+    hal_psoc5lp_watchdog_start(); /* from here a hang or fault resets the chip */
     for (;;) {
         hal_psoc5lp_poll(&dev);
     }

@@ -23,6 +23,11 @@ static uint8 usb_tx[4096];
 static size_t usb_tx_len;
 static unsigned crit_depth, crit_max;
 
+static int wdt_started = -1;
+static unsigned wdt_clears, ilo_1k;
+void CyILO_Start1K(void) { ilo_1k++; }
+void CyWdtStart(uint8 ticks, uint8 lp) { (void)lp; wdt_started = ticks; }
+void CyWdtClear(void) { wdt_clears++; }
 uint8 CyEnterCriticalSection(void) { crit_depth++; crit_max = crit_depth > crit_max ? crit_depth : crit_max; return 0; }
 void CyExitCriticalSection(uint8 s) { (void)s; crit_depth--; }
 void QuadDec_Start(void) {}
@@ -145,5 +150,21 @@ int main(void)
     hal_psoc5lp_poll(&dev);
     CHECK(crit_max >= 1u && crit_depth == 0u);
     CHECK(usb_tx_len == 24u && usb_tx[1] == SFLR_INFO && usb_tx[23] == 0u);
+
+    /* hardware watchdog: started (32-48 ms), fed by the main loop only while ticks run */
+    hal_psoc5lp_watchdog_start();
+    CHECK(wdt_started == CYWDT_16_TICKS && ilo_1k == 1u);
+    unsigned c0 = wdt_clears;
+    hal_psoc5lp_poll(&dev);
+    hal_psoc5lp_poll(&dev);
+    CHECK(wdt_clears == c0); /* no tick since the last feed: a stopped interrupt starves it */
+    hal_psoc5lp_tick(&dev);
+    hal_psoc5lp_poll(&dev);
+    hal_psoc5lp_poll(&dev);
+    CHECK(wdt_clears == c0 + 1u);
+    hal_psoc5lp_tick(&dev);
+    hal_psoc5lp_tick(&dev);
+    hal_psoc5lp_poll(&dev);
+    CHECK(wdt_clears == c0 + 2u);
     return t_finish();
 }
