@@ -24,9 +24,10 @@ def _python_run(plant, controller, u, d, quantize, v_open=None):
             theta, a = np.floor(theta + 0.5), np.floor(a + 0.5)
         rows["theta"].append(theta)
         rows["a"].append(a)
-        j = k - d if k >= d else 0
-        if v_open is None:
-            v, thd = controller.step(u[k], rows["theta"][j], rows["a"][j])
+        if v_open is None and k < d:
+            v, thd = 0.0, u[k]  # no sample yet: the device outputs 0
+        elif v_open is None:
+            v, thd = controller.step(u[k], rows["theta"][k - d], rows["a"][k - d])
         else:
             v, thd = v_open[k], u[k]
         rows["v"].append(v)

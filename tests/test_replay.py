@@ -169,3 +169,24 @@ def test_command_bad_file_is_a_station_error(tmp_path):
 def test_bad_element_count_is_a_station_error(rig_data):
     with pytest.raises(StationError, match="n_elements"):
         replay(rig_data / P_LOG, n_elements=500)
+
+
+@pytest.mark.parametrize("kind", ["p", "open-loop"])
+def test_loop_log_with_step_at_tick_0_replays_with_d1_and_the_model_is_the_loop(tmp_path, kind):
+    """Row 0 of a d = 1 run: v[0] = 0 (the device's tick 0) and the controller is first
+    stepped on sample 0 for v[1]. Replay and the model must follow the same convention,
+    also when u[0] != 0 (a step at tick 0)."""
+    from station.experiment import run_step
+
+    rep = run_step(port="sim://?noise=0", controller=kind, amplitude=50.0, step_tick=0, duration=0.6,
+                   out=tmp_path / "t0.tsv", lean=False)
+    assert rep.result.ok, rep.result.message
+    r = replay(tmp_path / "t0.tsv", model=True)
+    assert r.log.data["u"][0] == 50.0 and r.log.data["v"][0] == 0.0
+    assert r.reproduced, r.notes
+    if kind == "p":
+        assert r.alignment == 1
+    # noise-free simulated rig, integer commands: the model is the loop + device, exactly
+    np.testing.assert_array_equal(r.prediction["v"], r.log.data["v"])
+    np.testing.assert_array_equal(r.prediction["theta"], r.log.data["theta"])
+    np.testing.assert_array_equal(r.prediction["a"], r.log.data["a"])

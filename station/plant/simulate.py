@@ -8,7 +8,7 @@ kernel runs as plain Python (same results, about 1000x slower).
 
 Timing (ARCHITECTURE.md, DESIGN.md "Timing and log rows"): at tick k the sensors latch
 theta[k], a[k] from x_k; the command is v[k] = C(u[k], theta[k-d], a[k-d]) with the
-alignment d; then x_{k+1} = Ad x_k + Bd v[k].
+alignment d (v[k] = 0 for k < d, before the first sample); then x_{k+1} = Ad x_k + Bd v[k].
 """
 
 from __future__ import annotations
@@ -71,12 +71,14 @@ def _loop(lam, bm, cm, z0, u, v_open, use_v_open, closed, gnum, gden, anum, aden
             y1 = math.floor(y1 + 0.5)
         theta[k] = y0
         acc[k] = y1
-        j = k - d if k >= d else 0
+        j = k - d
         uk = u[k]
         td = uk
         e = 0.0
         if use_v_open:
             vk = v_open[k]
+        elif k < d:
+            vk = 0.0  # no sample yet: the device outputs 0 (v1 tick 0), the filters stay at rest
         else:
             if closed:
                 if use_ga:
@@ -137,8 +139,9 @@ def simulate(plant, controller, u, alignment: int = 1, v_open=None, quantize: bo
     u : array_like, shape (N,)
         Reference per tick: encoder counts (closed loop) or DAC counts (open loop).
     alignment : int, default 1
-        Computational delay d >= 0: v[k] = C(u[k], theta[k-d], a[k-d]). For k < d the
-        controller sees the first sample (the plant was at rest before the run).
+        Computational delay d >= 0: v[k] = C(u[k], theta[k-d], a[k-d]). For k < d there
+        is no sample to compute from: v[k] = 0 and the controller is not stepped, as on
+        the device (v1 tick 0 outputs 0) and in :func:`station.loop.run_loop`.
     v_open : array_like, shape (N,), optional
         When given, the command applied at each tick (e.g. a log's v); the controller
         is not used and theta_d_hat = u.
