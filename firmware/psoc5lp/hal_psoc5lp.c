@@ -43,8 +43,10 @@ void hal_encoder_reset(void) { QuadDec_SetCounter(0); }
 
 int16_t hal_accel_read(void)
 {
-    /* Latest continuous-mode result: never waits inside the tick interrupt. */
-    return (int16_t)(ACCEL_SIGN * ADC_GetResult16());
+    /* Latest continuous-mode result: never waits inside the tick interrupt. Flipping a
+     * saturated -32768 gives +32767, not a wrap back to -32768. */
+    int32_t a = (int32_t)ACCEL_SIGN * (int32_t)ADC_GetResult16();
+    return a > INT16_MAX ? (int16_t)INT16_MAX : (int16_t)a;
 }
 
 void hal_dac_write(int16_t v)

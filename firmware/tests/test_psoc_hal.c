@@ -11,6 +11,20 @@
 #include "project.h"
 #include "sflr_hal.h"
 
+/* The wiring options of hal_psoc5lp.c; the Makefile builds this test twice, with the
+ * defaults and with every sign and level flipped (test_psoc_hal_flipped). */
+#ifndef ENCODER_SIGN
+#define ENCODER_SIGN 1
+#endif
+#ifndef ACCEL_SIGN
+#define ACCEL_SIGN 1
+#endif
+#ifndef AMP_EN_ACTIVE
+#define AMP_EN_ACTIVE 1u
+#endif
+#define AMP_ON_LEVEL ((int)(AMP_EN_ACTIVE))
+#define AMP_OFF_LEVEL ((int)(AMP_EN_ACTIVE ^ 1u))
+
 /* ---- fakes of the component APIs ---- */
 static uint16 dac_p, dac_n;
 static int dac_started, amp_level = -1, amp_writes_before_dac_start;
@@ -79,7 +93,7 @@ static double volts(void)
 int main(void)
 {
     hal_psoc5lp_init();
-    CHECK(amp_level == 0 && amp_writes_before_dac_start == 1); /* disabled before anything */
+    CHECK(amp_level == AMP_OFF_LEVEL && amp_writes_before_dac_start == 1); /* disabled before anything */
     CHECK(dac_p == 2048 && dac_n == 2048);                    /* 0 V */
 
     /* mapping: +-255 counts = +-2.5 V within half a DVDAC step per side, monotonic */
@@ -105,15 +119,19 @@ int main(void)
     CHECK(dac_p - dac_n == 10);
 
     hal_amp_enable(true);
-    CHECK(amp_level == 1);
+    CHECK(amp_level == AMP_ON_LEVEL);
     hal_amp_enable(false);
-    CHECK(amp_level == 0);
+    CHECK(amp_level == AMP_OFF_LEVEL);
     quad_count = -1234;
-    CHECK(hal_encoder_read() == -1234);
+    CHECK(hal_encoder_read() == ENCODER_SIGN * -1234);
     hal_encoder_reset();
     CHECK(quad_count == 0);
     adc_result = -3;
-    CHECK(hal_accel_read() == -3);
+    CHECK(hal_accel_read() == ACCEL_SIGN * -3);
+    adc_result = INT16_MIN; /* a saturated ADC keeps its sign when flipped: no wrap */
+    CHECK(hal_accel_read() == (ACCEL_SIGN > 0 ? INT16_MIN : INT16_MAX));
+    adc_result = INT16_MAX;
+    CHECK(hal_accel_read() == (ACCEL_SIGN > 0 ? INT16_MAX : -INT16_MAX));
 
     /* transmit queue: whole frames or nothing, drained in < 64-byte USB packets */
     uint8_t frame[16];
