@@ -466,6 +466,71 @@ static void test_seq_wrap_and_restart(void)
     CHECK(dev.late == 0);
 }
 
+/* START bit1's 16 averaging ticks: STOP, HELLO and COMMAND arriving meanwhile. */
+static void test_during_zeroing(void)
+{
+    fresh(&sflr_default_config);
+    sflr_msg_t m[4];
+    send_start(SFLR_START_ZERO_ACCEL | SFLR_START_RESET_ENCODER, 0);
+    CHECK(fake_amp && fake_dac == 0);
+    for (int i = 0; i < 5; i++) {
+        sflr_tick(&dev);
+    }
+    send_simple(SFLR_HELLO); /* answered at any time, also while averaging */
+    CHECK(fake_take(m, 4) == 1 && m[0].type == SFLR_INFO);
+    send_command(0, 99); /* nothing to answer yet: ignored, never applied */
+    send_simple(SFLR_STOP);
+    CHECK(fake_dac == 0 && !fake_amp); /* at once */
+    CHECK(fake_take(m, 4) == 1 && m[0].type == SFLR_STOPPED && m[0].u.stopped.reason == SFLR_REASON_STOP &&
+          m[0].u.stopped.ticks == 0u);
+    for (int i = 0; i < 40; i++) {
+        sflr_tick(&dev);
+    }
+    CHECK(fake_take(m, 4) == 0 && fake_dac == 0 && !fake_amp); /* no late tick 0, no reset */
+    CHECK(fake_encoder_resets == 0u);
+
+    /* a COMMAND while averaging does not leak into tick 0 or tick 1 */
+    send_start(SFLR_START_ZERO_ACCEL, 0);
+    for (int i = 0; i < 16; i++) {
+        send_command(0, 77);
+        sflr_tick(&dev);
+    }
+    CHECK(fake_take(m, 4) == 0);
+    sflr_msg_t s = tick_sample();
+    CHECK(s.u.sample.seq == 0 && s.u.sample.v_applied == 0 && s.u.sample.status == 0);
+    s = tick_sample();
+    CHECK(s.u.sample.seq == 1 && s.u.sample.v_applied == 0 && s.u.sample.status == SFLR_ST_LATE);
+}
+
+/* START while the watchdog has the amplifier off: 0 V first, then enable; a clean run. */
+static void test_restart_after_watchdog(void)
+{
+    sflr_config_t cfg = sflr_default_config;
+    cfg.watchdog_ticks = 2;
+    fresh(&cfg);
+    send_start(0, 0);
+    tick_sample();
+    send_command(0, -120);
+    CHECK(tick_sample().u.sample.v_applied == -120);
+    tick_sample();
+    sflr_msg_t s = tick_sample();
+    CHECK((s.u.sample.status & SFLR_ST_WATCHDOG) && !fake_amp && fake_dac == 0);
+    send_start(0, 3);
+    CHECK(fake_amp && fake_dac == 0 && zero_before_last_enable() && fake_unsafe_enables == 0);
+    s = tick_sample();
+    CHECK(s.u.sample.seq == 0 && s.u.sample.status == 0 && s.u.sample.v_applied == 0);
+    send_command(0, 30);
+    s = tick_sample();
+    CHECK(s.u.sample.v_applied == 30 && s.u.sample.status == 0);
+    send_command(1, 31);
+    tick_sample();
+    sflr_msg_t m[2];
+    sflr_tick(&dev); /* n_ticks = 3 reached */
+    CHECK(fake_take(m, 2) == 1 && m[0].type == SFLR_STOPPED && m[0].u.stopped.reason == SFLR_REASON_DONE);
+    CHECK(m[0].u.stopped.ticks == 3u && m[0].u.stopped.late == 0u && m[0].u.stopped.watchdog_trips == 0u);
+    CHECK(!fake_amp && fake_dac == 0);
+}
+
 int main(void)
 {
     test_crc();
@@ -485,5 +550,7 @@ int main(void)
     test_n_ticks();
     test_zero_accel();
     test_seq_wrap_and_restart();
+    test_during_zeroing();
+    test_restart_after_watchdog();
     return t_finish();
 }
