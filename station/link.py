@@ -220,10 +220,20 @@ class V1Session(Session):
         self.port.write(v1.encode(v1.Command(n & 0xFFFF, v1.round_command(v))))
 
     def stop(self) -> dict | None:
-        """Command 0 for the last sample, then STOP; wait for STOPPED. Returns its fields or None."""
+        """Command 0 for the last sample, then STOP; wait for STOPPED. Returns its fields or None.
+
+        STOP is sent even when the COMMAND could not be written (then the error is raised
+        after it): STOP alone sets the device's output to 0.
+        """
+        failed = None
         if self._last_seq >= 0:
-            self._write(v1.Command(self._last_seq, 0))
+            try:
+                self._write(v1.Command(self._last_seq, 0))
+            except StationError as exc:
+                failed = exc
         self._write(v1.Stop())
+        if failed is not None:
+            raise failed
         deadline = time.perf_counter() + HANDSHAKE_TIMEOUT
         while (left := deadline - time.perf_counter()) > 0:
             msg = self._next_message(left)

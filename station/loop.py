@@ -180,6 +180,7 @@ def run_loop(session: Session, controller, reference: np.ndarray, writer, soft_l
     gc_was_enabled = gc.isenabled()
     priority = raise_priority() if lean else "default"
     perf_ns = time.perf_counter_ns
+    pending = None  # the row of a sample received but not yet logged
     read_sample, send_command, step, append = session.read_sample, session.send_command, controller.step, writer.append
     try:
         if lean:  # before START: once the device ticks, every ms counts
@@ -198,6 +199,10 @@ def run_loop(session: Session, controller, reference: np.ndarray, writer, soft_l
                 append((n * dt, n, u[n], v_k, theta, accel, dhat_k,
                         NAN if v_applied is None else v_applied, status, lat_k))
                 raise SoftLimitError(f"encoder at {theta} counts passed the soft limit ±{soft_limit:g} at tick {n}")
+            # sample n is in: its row is complete (v[n] was sent on sample n-1) and must be
+            # logged whatever happens next (a controller fault, a failed write)
+            pending = (n * dt, n, u[n], v_k, theta, accel, dhat_k,
+                       NAN if v_applied is None else v_applied, status, lat_k)
             if n < last:
                 try:
                     v_next, dhat_next = step(u[n + 1], theta, accel)
@@ -206,8 +211,8 @@ def run_loop(session: Session, controller, reference: np.ndarray, writer, soft_l
                 send_command(n, v_next)
                 lat_next = (perf_ns() - t_recv) / 1000.0
                 latencies[n + 1] = lat_next
-            append((n * dt, n, u[n], v_k, theta, accel, dhat_k,
-                    NAN if v_applied is None else v_applied, status, lat_k))
+            append(pending)
+            pending = None
             ticks += 1
             if n == last:
                 break
@@ -229,13 +234,18 @@ def run_loop(session: Session, controller, reference: np.ndarray, writer, soft_l
     except Exception as exc:  # noqa: BLE001 - whatever broke, the motor goes to 0 first
         reason, message = "error", f"{type(exc).__name__}: {exc}"
     finally:
+        stop_info = _safe_stop(session)  # first: command 0 and stop, before anything else
         sys.setswitchinterval(old_switch)
         if gc_was_enabled:
             gc.enable()
         if priority != "default":
             _restore_priority()
-        stop_info = _safe_stop(session)
         _restore_sigterm(old_term)
+    if pending is not None:  # after the stop, before the caller closes the log
+        try:
+            append(pending)
+        except Exception:  # noqa: BLE001 - never raises; the writer reports its own failures
+            pass
     if stop_info is not None:
         stopped = stop_info
     late = session.late if stopped is None else max(session.late, stopped.get("late", 0))
@@ -248,15 +258,19 @@ class _ControllerFault(Exception):
 
 
 def _safe_stop(session: Session) -> dict | None:
-    """Command 0 and stop; never raises (the port may already be gone)."""
-    try:
-        return session.stop()
-    except Exception:  # noqa: BLE001 - try the bare minimum again, then give up quietly
+    """Command 0 and stop; never raises (the port may already be gone).
+
+    A second Ctrl-C / SIGTERM while stopping must not skip the stop: anything raised,
+    BaseException included, gets one more attempt, then is given up quietly (the run is
+    ending anyway and its reason is already recorded). ``session.stop`` itself sends
+    command 0 and stop (v1: COMMAND for the last sample, then STOP).
+    """
+    for _ in range(2):
         try:
-            session.send_command(0, 0.0)
-        except Exception:  # noqa: BLE001
-            pass
-        return None
+            return session.stop()
+        except BaseException:  # noqa: BLE001 - the motor must get its 0 whatever happened
+            continue
+    return None
 
 
 def _install_sigterm():

@@ -98,7 +98,9 @@ def test_controller_exception_stops_safely(device_factory, tmp_path):
     assert "FloatingPointError: overflow in my filter at tick 49" in report.result.message
     assert dev.commands()[-2:] == [(48, 30), (49, 0)]     # nothing from the broken step, then 0
     assert type(dev.received[-1]).__name__ == "Stop" and dev.outputs[-1] == 0
-    assert len(read_log(tmp_path / "log.tsv").data["n"]) == 49
+    data = read_log(tmp_path / "log.tsv").data
+    assert np.array_equal(data["n"], np.arange(50))  # sample 49 was received: its row is logged too
+    assert data["v"][49] == 30.0 and data["theta"][49] == 1
 
 
 def test_sigkill_leaves_every_row_older_than_100ms(device_factory, tmp_path):

@@ -58,3 +58,34 @@ def test_unknown_sim_option_is_not_reported_as_busy():
     with pytest.raises(StationError) as info:
         open_session("sim://?bogus=1")
     assert "unknown option 'bogus'" in str(info.value) and "busy" not in str(info.value)
+
+
+def test_v1_stop_sends_stop_even_when_the_command_write_fails():
+    """STOP alone sets the device's output to 0: a failed COMMAND write must not skip it."""
+    import serial
+
+    from station.link import V1Session
+    from station.protocol import v1
+
+    class Port:
+        def __init__(self):
+            self.frames = []
+
+        def write(self, data):
+            msg = v1.Decoder().feed(data)[0]
+            if isinstance(msg, v1.Command):
+                raise serial.SerialTimeoutException("Write timeout")
+            self.frames.append(msg)
+            return len(data)
+
+        def read(self, size=1):
+            return b""
+
+        in_waiting = 0
+
+    port = Port()
+    session = V1Session(port, "fake://", timeout=0.01)
+    session._last_seq = 41
+    with pytest.raises(StationError, match="write to fake:// failed"):
+        session.stop()
+    assert port.frames == [v1.Stop()]

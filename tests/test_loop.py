@@ -130,3 +130,53 @@ def test_saturation_applies_to_logged_and_sent_commands():
     run_loop(session, make_controller("p", kp=10.0, limit=200.0), np.full(5, 100.0), writer, lean=False)
     assert all(abs(e[2]) <= 200.0 for e in events if e[0] == "command")
     assert max(r[3] for r in writer.rows) == 200.0
+
+
+class _FailingWriteSession(ScriptedSession):
+    """send_command fails (a write timeout) at sample ``fail_at``."""
+
+    def __init__(self, samples, events, fail_at):
+        super().__init__(samples, events)
+        self.fail_at = fail_at
+
+    def send_command(self, n, v):
+        if n == self.fail_at:
+            raise OSError("write timeout")
+        super().send_command(n, v)
+
+
+def test_sample_of_a_controller_fault_or_failed_write_is_logged_after_the_stop():
+    """The sample that was in when the controller raised (or the write failed) is a full
+    row (v[n] was sent on sample n-1): it must be in the log, after command 0 and stop."""
+    class Exploding:
+        def step(self, u, theta, a):
+            if theta == 3:
+                raise ZeroDivisionError("boom")
+            return 1.0, u
+
+    for session_of in (lambda ev: ScriptedSession(_samples([0, 1, 2, 3, 4, 5]), ev),
+                       lambda ev: _FailingWriteSession(_samples([0, 1, 2, 4, 4, 5]), ev, fail_at=3)):
+        events = []
+        writer = ListWriter(events)
+        result = run_loop(session_of(events), Exploding(), np.zeros(6), writer, lean=False)
+        writer.close()
+        assert result.reason in ("controller", "error")
+        assert [r[1] for r in writer.rows] == [0, 1, 2, 3]
+        assert writer.rows[3][3] == 1.0  # v[3], sent on sample 2, acted during tick 3
+        assert events[-2:] == [("stop",), ("log closed", 4)]
+
+
+def test_interrupt_while_stopping_does_not_skip_the_stop():
+    """A second Ctrl-C that lands inside stop() gets the stop retried; run_loop never raises."""
+    class InterruptedOnce(ScriptedSession):
+        def stop(self):
+            self.events.append(("stop",))
+            if self.events.count(("stop",)) == 1:
+                raise KeyboardInterrupt
+            return None
+
+    events = []
+    result = run_loop(InterruptedOnce(_samples([0] * 10), events, fault_at=5, fault=KeyboardInterrupt()),
+                      make_controller("p"), np.zeros(10), ListWriter(events), lean=False)
+    assert result.reason == "interrupted"
+    assert events[-2:] == [("stop",), ("stop",)]
