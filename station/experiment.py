@@ -197,7 +197,10 @@ def run_step(port: str = DEFAULT_PORT, protocol: str = "v1", controller: str = D
         ctrl.reset()
         tag = str(ctrl.spec.get("kind", "custom"))
     log_path = Path(out) if out is not None else default_log_path(tag)
-    log_path.parent.mkdir(parents=True, exist_ok=True)
+    try:
+        log_path.parent.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise StationError(f"{log_path}: cannot create the run log's folder: {exc.strerror or exc}") from None
     with open_session(port, protocol, timeout=timeout, baudrate=baudrate) as session:
         info = session.hello()
         meta = {

@@ -107,3 +107,18 @@ def test_pulse_reference_and_bad_reference(tmp_path, capsys):
     assert np.array_equal(np.flatnonzero(u), np.arange(10, 60)) and set(u[u != 0]) == {80.0}
     assert main(["step", "--reference", "triangle"]) == 2
     assert "expected one of step, pulse, swept-sine or FILE[:COLUMN]" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("args, message", [
+    (["--limit", "-5"], "controller 'lead'"),
+    (["--controller", "p", "--kp", "nan"], "controller 'p'"),
+    (["--controller", "open-loop", "--limit", "0"], "limit must be positive"),
+    (["--out", "/proc/no-such-dir/x.tsv"], "/proc/no-such-dir/x.tsv: cannot create"),
+    (["--duration", "0.1", "--json", "/proc/no-such-dir/r.json"], "/proc/no-such-dir/r.json: cannot write"),
+])
+def test_bad_options_are_one_line_errors(tmp_path, capsys, args, message):
+    if "--out" not in args:
+        args = args + ["--out", str(tmp_path / "x.tsv")]
+    assert main(["step", *args]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("station: error: ") and message in err and err.count("\n") == 1, err

@@ -7,6 +7,7 @@ from pathlib import Path
 
 from station import DT
 from station import experiment as ex
+from station.errors import StationError
 
 NAME = "step"
 HELP = ("run a step test (default: lead compensator, 100 counts, on the built-in simulated rig); "
@@ -64,6 +65,9 @@ def run(args) -> int:
     if args.rrd is not None:
         print(f"rerun recording: {args.rrd}")
     if args.json is not None:
-        args.json.parent.mkdir(parents=True, exist_ok=True)
-        args.json.write_text(json.dumps(report.to_json(), indent=1) + "\n")
+        try:
+            args.json.parent.mkdir(parents=True, exist_ok=True)
+            args.json.write_text(json.dumps(report.to_json(), indent=1) + "\n")
+        except OSError as exc:
+            raise StationError(f"{args.json}: cannot write the JSON report: {exc.strerror or exc}") from None
     return 0 if report.result.ok else 1

@@ -256,16 +256,20 @@ def make_controller(kind: str, dt: float = 0.002, kp: float = 2.0,
     Raises
     ------
     StationError
-        Unknown kind that is not an existing file, or a bad compensator file.
+        Unknown kind that is not an existing file, a bad compensator file, or a bad
+        kp / limit / dt (not finite, limit not positive).
     """
-    if kind == "p":
-        return p_controller(kp, limit, dt)
-    if kind == "lead":
-        return lead_controller(limit, dt)
-    if kind == "lead-accel":
-        return lead_controller(limit, dt, accel=True)
-    if kind == "open-loop":
-        return OpenLoop(limit=limit)
+    if kind in KINDS:
+        try:
+            if kind == "p":
+                return p_controller(kp, limit, dt)
+            if kind == "lead":
+                return lead_controller(limit, dt)
+            if kind == "lead-accel":
+                return lead_controller(limit, dt, accel=True)
+            return OpenLoop(limit=limit)
+        except ValueError as exc:  # a bad kp, limit or dt from the user
+            raise StationError(f"controller {kind!r} (kp {kp:g}, limit {limit}, dt {dt:g}): {exc}") from None
     path = Path(kind)
     if not path.is_file():
         raise StationError(f"controller {kind!r}: expected one of {', '.join(KINDS)} "
