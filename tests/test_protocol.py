@@ -76,7 +76,8 @@ def test_crc_is_ccitt_false():
 
 @pytest.mark.parametrize("v, expected", [
     (0.5, 1), (-0.5, -1), (1.4999, 1), (-2.5, -3), (199.6, 200), (1e9, 32767), (-1e9, -32768),
-    (float("inf"), 32767)])
+    (float("inf"), 32767), (0.49999999999999994, 0), (-0.49999999999999994, 0), (32766.5, 32767),
+    (-0.0, 0), (1e-300, 0)])
 def test_round_command_halves_away_from_zero(v, expected):
     assert v1.round_command(v) == expected
 

@@ -13,6 +13,7 @@ frames without ever raising.
 from __future__ import annotations
 
 import binascii
+import math
 import struct
 from dataclasses import dataclass, fields
 
@@ -233,4 +234,8 @@ def round_command(v: float) -> int:
     if v != v:
         raise ValueError("command is NaN")
     v = max(-32768.0, min(32767.0, v))
-    return int(v + 0.5) if v >= 0 else -int(-v + 0.5)
+    mag = abs(v)
+    whole = math.floor(mag)
+    if mag - whole >= 0.5:  # exact (no v + 0.5: 0.49999999999999994 + 0.5 rounds to 1.0)
+        whole += 1
+    return int(whole) if v >= 0 else -int(whole)
