@@ -267,6 +267,34 @@ def replay_commands(controller: Compensator | OpenLoop, u, theta, a, alignment: 
     return arr[:, 0], arr[:, 1]
 
 
+def detect_alignment(controller: Compensator | OpenLoop, u, theta, a, v) -> tuple[int, float, np.ndarray]:
+    """The computational delay d in :data:`ALIGNMENTS` with which ``controller`` best
+    reproduces the logged commands ``v`` (DESIGN.md: headers do not say; the data do).
+
+    Parameters
+    ----------
+    controller : Compensator or OpenLoop
+    u, theta, a, v : array_like, shape (N,), N >= 1
+        The log's reference, samples and commands.
+
+    Returns
+    -------
+    d : int
+        The best alignment (the smaller one on a tie).
+    max_abs_dv : float
+        max |v_replayed - v| with it, DAC counts.
+    v_replayed : numpy.ndarray, shape (N,)
+    """
+    v = np.asarray(v, dtype=float)
+    best = None
+    for d in ALIGNMENTS:
+        v_hat, _ = replay_commands(controller, u, theta, a, d)
+        err = float(np.max(np.abs(v_hat - v)))
+        if best is None or err < best[1]:
+            best = (d, err, v_hat)
+    return best
+
+
 def classify_reference(u) -> dict[str, Any]:
     """What a logged reference is: a step from 0, all zeros, or something else.
 
@@ -371,24 +399,13 @@ def replay(path: str | Path, model: bool = True, n_elements: int = 4) -> ReplayR
     else:
         report.controller = controller.name
         report.controller_spec = controller.spec
+        d, report.max_abs_dv, report.v_replayed = detect_alignment(controller, data["u"], data["theta"],
+                                                                  data["a"], data["v"])
         if isinstance(controller, OpenLoop):
             # v = u: d only decides whether v[0] is u[0] (d = 0) or 0 (d = 1, no sample yet)
-            best = None
-            for d in ALIGNMENTS:
-                v_hat, _ = replay_commands(controller, data["u"], data["theta"], data["a"], d)
-                err = float(np.max(np.abs(v_hat - data["v"])))
-                if best is None or err < best[0]:
-                    best = (err, v_hat)
-            report.max_abs_dv, report.v_replayed = best
             report.notes.append("open loop: v = u")
         else:
-            best = None
-            for d in ALIGNMENTS:
-                v_hat, _ = replay_commands(controller, data["u"], data["theta"], data["a"], d)
-                err = float(np.max(np.abs(v_hat - data["v"])))
-                if best is None or err < best[0]:
-                    best = (err, d, v_hat)
-            report.max_abs_dv, report.alignment, report.v_replayed = best
+            report.alignment = d
             logged_d = log.meta.get("alignment") if log.format == "station" else None
             if isinstance(logged_d, int) and logged_d != report.alignment:
                 report.notes.append(f"header says alignment {logged_d}, the data say {report.alignment}")

@@ -54,3 +54,31 @@ def test_compare_command(rig_data, tmp_path, capsys):
     assert runs[0]["thesis_fem"] == {"overshoot_pct": 38.2, "settling_time_s": None}
     assert len(list(tmp_path.glob("*_compare.png"))) == 2
     assert "thesis FEM" in capsys.readouterr().out
+
+
+@pytest.mark.parametrize("alignment, limit", [(0, 200.0), (1, 200.0), (0, None)])
+def test_each_log_is_simulated_with_its_own_alignment(tmp_path, plant, alignment, limit):
+    """DESIGN.md: every log is simulated with its own d (detected from the data), so the
+    plant that made a log fits it exactly; a controller without clamp is fine too."""
+    import math
+
+    import numpy as np
+
+    from station.control import make_controller
+    from station.plant import simulate
+    from station.runlog import RunLogWriter
+
+    ctrl = make_controller("lead", limit=limit)
+    u = np.zeros(600)
+    u[10:] = 100.0
+    plant.reset()
+    sim = simulate(plant, ctrl, u, alignment=alignment)
+    path = tmp_path / f"d{alignment}.tsv"
+    with RunLogWriter(path, {"controller": ctrl.spec, "dt": 0.002}) as w:
+        for k in range(u.size):
+            w.append((sim["t"][k], k, u[k], sim["v"][k], sim["theta"][k], sim["a"][k], sim["theta_d_hat"][k],
+                      round(sim["v"][k]), 0, math.nan))
+    c = compare_run(path, plant)
+    assert c.fit_pct["theta"] == pytest.approx(100.0, abs=1e-9)
+    assert c.fit_pct["accel"] == pytest.approx(100.0, abs=1e-9)
+    assert any(f"alignment {alignment}" in n for n in c.notes)

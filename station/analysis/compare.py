@@ -1,8 +1,9 @@
 """Model vs rig for logged runs: step metrics and NRMSE fits next to the thesis's table.
 
 Each log is simulated as the rig ran it: the log's controller (station.replay reads it
-from the header, with the rig's ±200 clamp), the log's reference and alignment 1 (all
-the rig's step logs have d = 1); an open-loop log is driven by its logged v. Step metrics
+from the header, with the rig's ±200 clamp), the log's reference and the log's own
+alignment d, detected from the data as replay does (the rig's later logs and protocol v1
+have d = 1, its 2009 logs d = 0); an open-loop log is driven by its logged v. Step metrics
 use the thesis's definitions (station.analysis.metrics), fits the NRMSE fit
 (station.analysis.fit).
 """
@@ -24,9 +25,6 @@ THESIS_TABLE = {
     "lead": ((10.00, None), (18.85, 1.980)),
     "lead-accel": ((21.50, 0.608), (20.74, 0.708)),
 }
-
-ALIGNMENT = 1
-"""Computational delay the model runs with (the rig's later logs and protocol v1)."""
 
 
 @dataclass
@@ -92,7 +90,7 @@ def compare_run(path, plant) -> RunComparison:
     """
     from station.errors import StationError
     from station.plant import simulate
-    from station.replay import log_controller
+    from station.replay import detect_alignment, log_controller
     from station.runlog import read_log
 
     log = read_log(path)
@@ -104,9 +102,11 @@ def compare_run(path, plant) -> RunComparison:
     plant.reset()
     closed = getattr(controller, "gth", None) is not None
     if closed:
-        pred = simulate(plant, controller, u, alignment=ALIGNMENT)
-        notes.append(f"model: {controller.name} on the log's reference, clamp ±{controller.limit:g}, "
-                     f"alignment {ALIGNMENT}")
+        d, max_dv, _ = detect_alignment(controller, u, data["theta"], data["a"], data["v"]) if u.size else (1, 0.0, None)
+        pred = simulate(plant, controller, u, alignment=d)
+        clamp = "no clamp" if controller.limit is None else f"clamp ±{controller.limit:g}"
+        notes.append(f"model: {controller.name} on the log's reference, {clamp}, alignment {d} "
+                     f"(detected: the replay reproduces the logged v to {max_dv:.3g} counts)")
     else:
         pred = simulate(plant, controller, u, alignment=0, v_open=data["v"])
         notes.append("model: open loop, driven by the logged v")
