@@ -203,8 +203,9 @@ class V1Session(Session):
             if isinstance(msg, v1.Stopped):
                 stopped = {k: getattr(msg, k) for k in msg.__dataclass_fields__}
                 raise DeviceStopped(f"device stopped (reason {msg.reason}) after {msg.ticks} ticks", stopped)
-        if self._last_seq < 0:
+        if self._last_seq < 0:  # the first sample of the run: the device counts from 0
             n = msg.seq
+            self.dropped += msg.seq
         else:
             step = (msg.seq - self._last_seq) & 0xFFFF
             self.dropped += step - 1

@@ -89,3 +89,31 @@ def test_v1_stop_sends_stop_even_when_the_command_write_fails():
     with pytest.raises(StationError, match="write to fake:// failed"):
         session.stop()
     assert port.frames == [v1.Stop()]
+
+
+def test_v1_lost_first_samples_count_as_dropped():
+    """After START the device counts from seq 0: a run whose first SAMPLE is seq 2 lost two."""
+    from station.link import V1Session
+    from station.protocol import v1
+
+    class Port:
+        def __init__(self, data):
+            self.data = bytearray(data)
+
+        def write(self, data):
+            return len(data)
+
+        def read(self, size=1):
+            out = bytes(self.data[:size])
+            del self.data[:size]
+            return out
+
+        @property
+        def in_waiting(self):
+            return len(self.data)
+
+    frames = b"".join(v1.encode(v1.Sample(seq, 0, 0, 0, 0)) for seq in (2, 3, 5))
+    session = V1Session(Port(frames), "fake://", timeout=0.01)
+    session.start(10)
+    assert [session.read_sample()[0] for _ in range(3)] == [2, 3, 5]
+    assert session.dropped == 3  # 0, 1 and 4
