@@ -96,3 +96,11 @@ def test_command_without_pty_is_a_one_line_station_error():
     sim_device.configure(parser)
     with pytest.raises(StationError, match="only --pty"):
         sim_device.run(parser.parse_args([]))
+
+
+@pytest.mark.parametrize("option", [["--elements", "0"], ["--seed", "-1"]])
+def test_sim_device_bad_option_is_a_station_error(option):
+    parser = argparse.ArgumentParser()
+    sim_device.configure(parser)
+    with pytest.raises(StationError, match="sim-device: "):
+        sim_device.run(parser.parse_args(["--pty", *option]))

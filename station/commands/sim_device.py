@@ -28,12 +28,16 @@ def run(args: argparse.Namespace) -> int:
     Raises
     ------
     StationError
-        Without ``--pty``: only the pty transport exists out of process.
+        Without ``--pty``: only the pty transport exists out of process; a bad
+        ``--elements`` or ``--seed``.
     """
     if not args.pty:
         raise StationError("sim-device: only --pty is supported for out-of-process use "
                            "(in-process, open the port URL sim:// instead)")
     from station.sim.pty_server import serve_from_args
 
-    serve_from_args(args)
+    try:
+        serve_from_args(args)
+    except ValueError as exc:  # a bad --elements / --seed, raised before the pty is opened
+        raise StationError(f"sim-device: {exc}") from None
     return 0
