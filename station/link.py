@@ -277,10 +277,15 @@ class LegacySession(Session):
         return self.info
 
     def start(self, n_ticks: int) -> None:
-        """Reset the encoder ('7'), start ('q') and read θ0. n_ticks is checked, not sent."""
+        """v = 0, reset the encoder ('7'), start ('q') and read θ0. n_ticks is checked, not sent.
+
+        The old firmware applies the last v it received from tick 0 on, whatever run it
+        came from (a station that died leaves it set): v = 0 goes first, so tick 0
+        outputs 0 as the log's row 0 says.
+        """
         if n_ticks > legacy.MAX_TICKS:
             raise StationError(f"the legacy protocol counts ticks in int16: at most {legacy.MAX_TICKS} ticks, asked {n_ticks}")
-        self.port.write(legacy.RESET + legacy.START)
+        self.port.write(legacy.command_bytes(0) + legacy.RESET + legacy.START)
         data = self._read_exact(2, HANDSHAKE_TIMEOUT)
         if data is None:
             raise StationError(f"no θ0 from {self.url} after 'q' within {HANDSHAKE_TIMEOUT} s")

@@ -117,3 +117,20 @@ def test_v1_lost_first_samples_count_as_dropped():
     session.start(10)
     assert [session.read_sample()[0] for _ in range(3)] == [2, 3, 5]
     assert session.dropped == 3  # 0, 1 and 4
+
+
+def test_legacy_start_zeroes_a_command_left_over_from_a_dead_station():
+    """The old firmware applies the last v received from tick 0 on: a previous station that
+    died after '/' 150 would drive the motor during tick 0 of the next run (logged as 0)."""
+    from station.protocol import legacy
+
+    session = open_session("sim://?noise=0", protocol="legacy")
+    try:
+        session.port.write(legacy.command_bytes(150))  # the dead station's last command
+        session.hello()
+        session.start(10)
+        assert session.read_sample()[0] == 0
+        plant = session.port.device._fw.hw.plant
+        assert not plant.x.any()  # tick 0 applied 0: the plant is still at rest
+    finally:
+        session.close()
