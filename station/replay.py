@@ -142,6 +142,14 @@ def _rig_stage(meta: dict, key: str, design: DiscreteTF, notes: list[str]) -> tu
     return DiscreteTF(num, den), False
 
 
+def _header_number(meta: dict[str, Any], key: str) -> float:
+    """A gain of a rig header (0 when absent); StationError naming the field when not a number."""
+    value = meta.get(key, 0.0)
+    if isinstance(value, bool) or not isinstance(value, (int, float)) or not np.isfinite(value):
+        raise StationError(f"{key}: expected a number, got {value!r}")
+    return float(value)
+
+
 def rig_controller(meta: dict[str, Any], dt: float = 0.002) -> tuple[Compensator | OpenLoop | None, list[str]]:
     """The controller a rig log's header names.
 
@@ -177,8 +185,7 @@ def rig_controller(meta: dict[str, Any], dt: float = 0.002) -> tuple[Compensator
             notes.append("printed coefficients equal the Tustin designs to their 8 decimals: unrounded designs used")
         return Compensator(gth, ga, limit=RIG_LIMIT, name=name, spec=spec), notes
     if "kp" in meta:
-        kp = float(meta["kp"])
-        ki, kd = float(meta.get("ki", 0.0) or 0.0), float(meta.get("kd", 0.0) or 0.0)
+        kp, ki, kd = (_header_number(meta, key) for key in ("kp", "ki", "kd"))
         if ki != 0.0 or kd != 0.0:
             return None, [f"PID with ki = {ki}, kd = {kd}: the rig's PID discretization is not known"]
         if "ki" in meta or "kd" in meta:
@@ -207,7 +214,8 @@ def log_controller(log: RunLog) -> tuple[Compensator | OpenLoop | None, list[str
     Raises
     ------
     StationError
-        Our header's controller spec is malformed.
+        Our header's controller spec is malformed, or a rig header's gain is not a
+        number (naming the file and line).
     """
     if log.format == "station":
         spec = log.meta.get("controller")
@@ -215,7 +223,14 @@ def log_controller(log: RunLog) -> tuple[Compensator | OpenLoop | None, list[str
             return None, []
         return controller_from_spec(spec), []
     dt = _dt_of(log)
-    return rig_controller(log.meta, dt)
+    try:
+        return rig_controller(log.meta, dt)
+    except StationError as exc:  # a header field: name the file and its line
+        key = str(exc).split(":", 1)[0]
+        line = next((i for i, text in enumerate(log.header, 1)
+                     if text[1:].strip().startswith(key) and "=" in text), None)
+        where = f"{log.path}: line {line}" if line else str(log.path)
+        raise StationError(f"{where}: {exc}") from None
 
 
 def _dt_of(log: RunLog) -> float:

@@ -82,3 +82,14 @@ def test_each_log_is_simulated_with_its_own_alignment(tmp_path, plant, alignment
     assert c.fit_pct["theta"] == pytest.approx(100.0, abs=1e-9)
     assert c.fit_pct["accel"] == pytest.approx(100.0, abs=1e-9)
     assert any(f"alignment {alignment}" in n for n in c.notes)
+
+
+def test_log_without_rows_is_a_station_error(tmp_path, plant):
+    from station.control import make_controller
+    from station.errors import StationError
+    from station.runlog import RunLogWriter
+
+    path = tmp_path / "empty.tsv"
+    RunLogWriter(path, {"controller": make_controller("p").spec}).close()
+    with pytest.raises(StationError, match="no rows"):
+        compare_run(path, plant)

@@ -190,3 +190,10 @@ def test_loop_log_with_step_at_tick_0_replays_with_d1_and_the_model_is_the_loop(
     np.testing.assert_array_equal(r.prediction["v"], r.log.data["v"])
     np.testing.assert_array_equal(r.prediction["theta"], r.log.data["theta"])
     np.testing.assert_array_equal(r.prediction["a"], r.log.data["a"])
+
+
+def test_rig_header_gain_that_is_not_a_number_names_file_and_line(tmp_path):
+    path = tmp_path / "bad_kp.txt"
+    path.write_text("#SLFR RTP PID_control_Test\n#kp = 2.0\n#ki = x1\n#t\tn\tu\tv\t$\\theta$\ta\n0\t0\t0\t0\t0\t0\n")
+    with pytest.raises(StationError, match=rf"{path}: line 3: ki: expected a number, got 'x1'"):
+        replay(path)

@@ -86,7 +86,7 @@ def compare_run(path, plant) -> RunComparison:
     Raises
     ------
     StationError
-        Unreadable log, or a log that does not name its controller.
+        Unreadable log, a log that does not name its controller or has no rows.
     """
     from station.errors import StationError
     from station.plant import simulate
@@ -98,11 +98,13 @@ def compare_run(path, plant) -> RunComparison:
     controller, notes = log_controller(log)
     if controller is None:
         raise StationError(f"{path}: the log does not name its controller; cannot simulate it")
+    if len(log) == 0:
+        raise StationError(f"{path}: the log has no rows; nothing to compare")
     u = data["u"]
     plant.reset()
     closed = getattr(controller, "gth", None) is not None
     if closed:
-        d, max_dv, _ = detect_alignment(controller, u, data["theta"], data["a"], data["v"]) if u.size else (1, 0.0, None)
+        d, max_dv, _ = detect_alignment(controller, u, data["theta"], data["a"], data["v"])
         pred = simulate(plant, controller, u, alignment=d)
         clamp = "no clamp" if controller.limit is None else f"clamp ±{controller.limit:g}"
         notes.append(f"model: {controller.name} on the log's reference, {clamp}, alignment {d} "
