@@ -195,17 +195,32 @@ class _Pump:
             self.sink_queue.append(batch)
 
     def _write(self, batch: list[tuple]) -> None:
+        """Write a batch with unbuffered writes, so that after an error exactly the rows
+        whose bytes all reached the file count as written (no buffer is left to reach it
+        later, at close, behind the count's back); the rest go to ``unwritten``."""
         if self.write_error is not None:
             self.unwritten.extend(batch)
             return
         fmt = format_value
-        text = "".join("\t".join([fmt(x) for x in row]) + "\n" for row in batch)
+        lines = ["\t".join([fmt(x) for x in row]) + "\n" for row in batch]
+        data = "".join(lines).encode("utf-8")
+        done = 0
         try:
-            self.fh.write(text)
-            self.fh.flush()
+            while done < len(data):
+                n = self.fh.write(data[done:])  # raw file: may write part of it
+                if not n:
+                    raise OSError(f"write returned {n!r} with {len(data) - done} bytes left")
+                done += n
         except OSError as exc:
             self.write_error = exc
-            self.unwritten.extend(batch)
+            complete, end = 0, 0
+            for line in lines:  # rows entirely in the file (a torn one is not: the reader skips it)
+                end += len(line.encode("utf-8"))
+                if end > done:
+                    break
+                complete += 1
+            self.rows_written += complete
+            self.unwritten.extend(batch[complete:])
             return
         self.rows_written += len(batch)
 
@@ -282,12 +297,14 @@ class RunLogWriter:
         self.meta = meta
         lines = header_lines(meta)
         try:
-            fh = open(self.path, "w", encoding="utf-8", newline="\n")
+            fh = open(self.path, "wb", buffering=0)  # raw: each write reaches the OS at once
         except OSError as exc:
             raise RunLogError(f"{self.path}: cannot create run log: {exc.strerror or exc}") from None
         try:
-            fh.write("\n".join(lines) + "\n")
-            fh.flush()
+            header = ("\n".join(lines) + "\n").encode("utf-8")
+            done = 0
+            while done < len(header):
+                done += fh.write(header[done:])
         except OSError as exc:
             fh.close()
             raise RunLogError(f"{self.path}: cannot write run log header: {exc.strerror or exc}") from None

@@ -310,3 +310,49 @@ def test_a_blocked_sink_does_not_hold_up_the_file(tmp_path):
     slow.release.set()
     w.close()
     assert slow.rows == 50
+
+
+_FULL_DISK_CHILD = textwrap.dedent("""
+    import json, math, resource, signal, sys, time
+    from station.runlog import RunLogError, RunLogWriter
+    signal.signal(signal.SIGXFSZ, signal.SIG_IGN)  # writes past the limit fail with EFBIG
+    path, room = sys.argv[1], int(sys.argv[2])
+    w = RunLogWriter(path, {"test": "full disk"})
+    soft, hard = resource.getrlimit(resource.RLIMIT_FSIZE)
+    resource.setrlimit(resource.RLIMIT_FSIZE, (room, hard))
+    rows = [(k * 0.002, k, 0.0, 0.0, 0, 0, 0.0, 0, 0, math.nan) for k in range(300)]
+    for r in rows[:200]:
+        w.append(r)
+    time.sleep(0.2)
+    resource.setrlimit(resource.RLIMIT_FSIZE, (soft, hard))  # space freed before close
+    for r in rows[200:]:
+        w.append(r)
+    try:
+        w.close()
+        error = None
+    except RunLogError as exc:
+        error = str(exc)
+    print(json.dumps({"written": w.rows_written, "unwritten": [r[1] for r in w.unwritten_rows], "error": error}))
+""")
+
+
+def test_write_error_counts_exactly_the_rows_in_the_file(tmp_path):
+    """Disk full mid-row, then space freed before close: the rows reported written are the
+    rows in the file, and unwritten_rows are exactly the others (no row in both)."""
+    from station.runlog import format_value
+
+    path = tmp_path / "full.tsv"
+    RunLogWriter(path, {"test": "full disk"}).close()
+    header = path.stat().st_size
+    rows = [(k * 0.002, k, 0.0, 0.0, 0, 0, 0.0, 0, 0, math.nan) for k in range(300)]
+    room = header + sum(len(("\t".join(format_value(x) for x in r) + "\n").encode()) for r in rows[:150]) + 7
+    proc = subprocess.run([sys.executable, "-c", _FULL_DISK_CHILD, str(path), str(room)],
+                          capture_output=True, text=True, timeout=60)
+    assert proc.returncode == 0, proc.stderr
+    out = json.loads(proc.stdout)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # row 150 is torn
+        in_file = read_log(path).data["n"].astype(int).tolist()
+    assert out["error"] is not None and f"{300 - len(in_file)} rows are not in the file" in out["error"]
+    assert out["written"] == len(in_file)
+    assert sorted(in_file + out["unwritten"]) == list(range(300))  # each row in exactly one place
