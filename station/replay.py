@@ -322,8 +322,9 @@ def classify_reference(u) -> dict[str, Any]:
     -------
     dict
         ``{"kind": "step", "amplitude": float, "tick": int}`` when u is 0 up to one tick
-        and a non-zero constant from it to the end; ``{"kind": "zero"}``; else
-        ``{"kind": "other"}``.
+        and a non-zero constant from it to the end (tick 0: constant throughout; the rig
+        was at rest before the run, as ``station step --step-time 0`` runs it);
+        ``{"kind": "zero"}``; else ``{"kind": "other"}``.
     """
     u = np.asarray(u, dtype=float)
     if u.size == 0 or np.all(u == 0):
@@ -331,6 +332,8 @@ def classify_reference(u) -> dict[str, Any]:
     change = np.flatnonzero(np.diff(u) != 0)
     if change.size == 1 and u[0] == 0 and u[-1] != 0:
         return {"kind": "step", "amplitude": float(u[-1]), "tick": int(change[0] + 1)}
+    if change.size == 0:  # non-zero constant: a step at tick 0
+        return {"kind": "step", "amplitude": float(u[-1]), "tick": 0}
     return {"kind": "other"}
 
 

@@ -184,6 +184,9 @@ def test_loop_log_with_step_at_tick_0_replays_with_d1_and_the_model_is_the_loop(
     r = replay(tmp_path / "t0.tsv", model=True)
     assert r.log.data["u"][0] == 50.0 and r.log.data["v"][0] == 0.0
     assert r.reproduced, r.notes
+    assert r.reference == {"kind": "step", "amplitude": 50.0, "tick": 0}
+    if kind == "p":  # the same metrics as station step reported
+        assert r.metrics == rep.metrics
     if kind == "p":
         assert r.alignment == 1
     # noise-free simulated rig, integer commands: the model is the loop + device, exactly
