@@ -40,7 +40,7 @@ def test_device_going_silent_stops_with_command_zero(device_factory, tmp_path):
     assert "went silent" in report.result.message and "tick 100" in report.result.message
     cmds = dev.commands()
     assert cmds[-1] == (100, 0)                       # command 0 for the last sample...
-    assert isinstance(dev.received[-1], type(dev.received[-1])) and type(dev.received[-1]).__name__ == "Stop"
+    assert type(dev.received[-1]).__name__ == "Stop"   # ...then STOP
     assert dev.outputs[-1] == 0                       # ...and the device's output is 0 after STOP
     log = read_log(tmp_path / "log.tsv")
     assert np.array_equal(log.data["n"], np.arange(101))
