@@ -22,6 +22,7 @@ from station.analysis.metrics import StepMetrics, step_metrics
 from station.control import file_reference, make_controller, pulse_reference, step_reference, swept_sine_reference
 from station.errors import StationError
 from station.link import open_session
+from station.protocol import legacy
 from station.loop import RunResult, run_loop
 from station.runlog import RunLogWriter, read_log
 
@@ -189,6 +190,9 @@ def run_step(port: str = DEFAULT_PORT, protocol: str = "v1", controller: str = D
         (nothing was started then).
     """
     u, reference_meta = make_reference(reference, amplitude, duration, step_tick, dt)
+    if protocol == "legacy" and u.size > legacy.MAX_TICKS:  # a user error: nothing started, no log
+        raise StationError(f"the legacy protocol counts ticks in int16: at most {legacy.MAX_TICKS} ticks "
+                           f"({legacy.MAX_TICKS * dt:g} s), asked {u.size}")
     if isinstance(controller, (str, Path)):
         ctrl = make_controller(str(controller), dt=dt, kp=kp, limit=limit)
         tag = Path(controller).stem if str(controller).endswith(".toml") else str(controller)

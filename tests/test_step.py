@@ -115,6 +115,7 @@ def test_pulse_reference_and_bad_reference(tmp_path, capsys):
     (["--controller", "open-loop", "--limit", "0"], "limit must be positive"),
     (["--out", "/proc/no-such-dir/x.tsv"], "/proc/no-such-dir/x.tsv: cannot create"),
     (["--duration", "0.1", "--json", "/proc/no-such-dir/r.json"], "/proc/no-such-dir/r.json: cannot write"),
+    (["--protocol", "legacy", "--duration", "70"], "at most 32767 ticks"),
 ])
 def test_bad_options_are_one_line_errors(tmp_path, capsys, args, message):
     if "--out" not in args:
