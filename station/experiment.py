@@ -207,6 +207,7 @@ def run_step(port: str = DEFAULT_PORT, protocol: str = "v1", controller: str = D
         raise StationError(f"{log_path}: cannot create the run log's folder: {exc.strerror or exc}") from None
     with open_session(port, protocol, timeout=timeout, baudrate=baudrate) as session:
         info = session.hello()
+        accel_zero = session.zero_accel()
         meta = {
             "station_version": __version__,
             "kind": "step",
@@ -217,6 +218,7 @@ def run_step(port: str = DEFAULT_PORT, protocol: str = "v1", controller: str = D
             "device": info,
             "plant": _plant_meta(session.port),
             "alignment": session.alignment,
+            "accel_zero": accel_zero,
             "dt": dt,
             "soft_limit": soft_limit,
             "start_time": _dt.datetime.now(_dt.timezone.utc).isoformat(),

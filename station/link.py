@@ -26,6 +26,8 @@ from station.protocol import legacy, v1
 
 SIM_HANDLERS = "station.sim"
 DEFAULT_BAUD = {"v1": 921600, "legacy": legacy.BAUDRATE}
+ZERO_ACCEL_TICKS = 16
+"""Readings averaged for the accelerometer's zero (protocol v1, START bit1)."""
 HANDSHAKE_TIMEOUT = 1.0
 """Seconds to wait for the device's answer to HELLO / θ0 / STOPPED."""
 
@@ -175,6 +177,10 @@ class V1Session(Session):
                 return self.info
         raise StationError(f"no INFO from {self.url} within {HANDSHAKE_TIMEOUT} s: is it a protocol v1 device?")
 
+    def zero_accel(self) -> dict:
+        """Nothing to do here: the device averages 16 readings on START (flag bit1)."""
+        return {"by": "device at START", "ticks": ZERO_ACCEL_TICKS}
+
     def start(self, n_ticks: int) -> None:
         """START with encoder reset and accelerometer zeroing; the device runs n_ticks ticks."""
         self._pending.clear()
@@ -255,6 +261,7 @@ class LegacySession(Session):
         self._n = -1
         self.info: dict | None = None
         self.late = 0  # the legacy device does not report late commands
+        self.accel_offset = 0  # subtracted from every accel sample (zero_accel)
 
     def _read_exact(self, size: int, timeout: float) -> bytes | None:
         deadline = time.perf_counter() + timeout
@@ -276,21 +283,64 @@ class LegacySession(Session):
         self.info = {"protocol": "legacy", "theta": legacy.decode_word(word[:2])}
         return self.info
 
-    def start(self, n_ticks: int) -> None:
-        """v = 0, reset the encoder ('7'), start ('q') and read θ0. n_ticks is checked, not sent.
+    def zero_accel(self) -> dict:
+        """Measure the accelerometer's offset at rest, as the v1 firmware does on START.
+
+        The old firmware cannot average before tick 0, so the station does what the
+        rig's software did: a short pre-run at v = 0 (16 ticks, like v1's START bit1),
+        stop, and subtract the rounded mean from every sample of the real run.
+        Returns ``{"by": "station pre-run", "ticks": 16, "offset": counts}``.
+
+        Raises
+        ------
+        StationError
+            The device does not start or goes silent during the pre-run (nothing is
+            left running: v = 0 and 's' are sent first).
+        """
+        self.accel_offset = 0
+        try:
+            self._begin()
+            total = 0
+            for _ in range(ZERO_ACCEL_TICKS):
+                n, _theta, a, _, _ = self.read_sample()
+                total += a
+                self.send_command(n, 0.0)
+        finally:
+            self.stop()
+            self._drain()
+        mean = total / ZERO_ACCEL_TICKS
+        self.accel_offset = int(mean + 0.5) if mean >= 0 else -int(-mean + 0.5)
+        return {"by": "station pre-run", "ticks": ZERO_ACCEL_TICKS, "offset": self.accel_offset}
+
+    def _drain(self, quiet: float = 0.02, limit: float = 0.5) -> None:
+        """Discard input until the line has been quiet for ``quiet`` s (ticks in flight after 's')."""
+        end = time.perf_counter() + limit
+        while time.perf_counter() < end:
+            if not self._read_some(time.perf_counter() + quiet):
+                break
+        self.port.reset_input_buffer()
+        self._decoder = legacy.TickDecoder()
+        self._pending = []
+
+    def _begin(self) -> None:
+        """v = 0, reset the encoder ('7'), start ('q'), read θ0.
 
         The old firmware applies the last v it received from tick 0 on, whatever run it
         came from (a station that died leaves it set): v = 0 goes first, so tick 0
         outputs 0 as the log's row 0 says.
         """
-        if n_ticks > legacy.MAX_TICKS:
-            raise StationError(f"the legacy protocol counts ticks in int16: at most {legacy.MAX_TICKS} ticks, asked {n_ticks}")
         self.port.write(legacy.command_bytes(0) + legacy.RESET + legacy.START)
         data = self._read_exact(2, HANDSHAKE_TIMEOUT)
         if data is None:
             raise StationError(f"no θ0 from {self.url} after 'q' within {HANDSHAKE_TIMEOUT} s")
         self._pending = self._decoder.feed(data[2:])
         self._n = -1
+
+    def start(self, n_ticks: int) -> None:
+        """Start the run (see :meth:`_begin`); n_ticks is checked, not sent (the device runs until 's')."""
+        if n_ticks > legacy.MAX_TICKS:
+            raise StationError(f"the legacy protocol counts ticks in int16: at most {legacy.MAX_TICKS} ticks, asked {n_ticks}")
+        self._begin()
 
     def read_sample(self) -> tuple:
         """Block for the next tick record; see :meth:`V1Session.read_sample`.
@@ -312,7 +362,7 @@ class LegacySession(Session):
         if tick.n != self._n + 1:
             raise SequenceError(f"legacy device {self.url}: tick number jumped from {self._n} to {tick.n}; stream out of step")
         self._n = tick.n
-        return (tick.n, tick.theta, tick.accel, None, 0)
+        return (tick.n, tick.theta, tick.accel - self.accel_offset, None, 0)
 
     def send_command(self, n: int, v: float) -> None:
         """Send '/' + v (truncated toward zero); n is implicit in this protocol."""

@@ -23,13 +23,15 @@ class ScriptedDevice:
 
     Parameters: protocol "v1" | "legacy"; theta(k) -> encoder counts of tick k;
     silent_after: stop sending after this tick; garbage_every: (v1) garbage + a corrupted
-    frame after every N-th sample; skip_at: (legacy) n jumps by one at this tick.
+    frame after every N-th sample; skip_at: (legacy) n jumps by one at this tick;
+    accel(k) -> accelerometer counts of tick k.
     """
 
     def __init__(self, protocol="v1", theta=lambda k: 0, silent_after=None, garbage_every=None,
-                 skip_at=None, period=0.002):
+                 skip_at=None, period=0.002, accel=lambda k: 0):
         self.protocol = protocol
         self.theta = theta
+        self.accel = accel
         self.silent_after, self.garbage_every, self.skip_at = silent_after, garbage_every, skip_at
         self.period = period
         self.master, self.slave = pty.openpty()
@@ -116,13 +118,13 @@ class ScriptedDevice:
 
     def _send_tick(self, k, output):
         if self.protocol == "v1":
-            data = v1.encode(v1.Sample(k & 0xFFFF, self.theta(k), 0, output, 0))
+            data = v1.encode(v1.Sample(k & 0xFFFF, self.theta(k), self.accel(k), output, 0))
             if self.garbage_every and k and k % self.garbage_every == 0:
                 bad = bytearray(v1.encode(v1.Sample(k & 0xFFFF, 99, 0, 0, 0)))
                 bad[3] ^= 0x40  # corrupt one byte: CRC fails
                 data = b"\x13\x37\xff\x00" + data + bytes(bad)
         else:
             n = k + 1 if self.skip_at is not None and k >= self.skip_at else k
-            data = legacy.tick_bytes(legacy.Tick(n, self.theta(k), 0))
+            data = legacy.tick_bytes(legacy.Tick(n, self.theta(k), self.accel(k)))
         self._write(data)
         self.sent.append((k, time.time()))

@@ -144,3 +144,19 @@ def test_cli_reports_a_fault_with_exit_code_1_and_json(device_factory, tmp_path)
     result = json.loads(out.read_text())
     assert result["reason"] == "timeout" and result["timing"]["dropped"] == 0
     assert os.path.exists(result["log"])
+
+
+def test_legacy_zeroes_the_accelerometer_with_a_pre_run(device_factory, tmp_path):
+    # the old firmware cannot average before tick 0: the station runs 16 ticks at v = 0 first
+    dev = device_factory(protocol="legacy", accel=lambda k: -3 + (k % 2))  # mean -2.5 -> offset -3
+    report = run_step(port=dev.path, protocol="legacy", controller="lead-accel", duration=0.2,
+                      out=tmp_path / "log.tsv")
+    assert report.result.ok, report.result.message
+    log = read_log(tmp_path / "log.tsv")
+    assert log.meta["accel_zero"] == {"by": "station pre-run", "ticks": 16, "offset": -3}
+    assert set(log.data["a"]) == {0.0, 1.0}  # raw -3/-2 minus the offset
+    dev.wait_for(lambda d: d.received and d.received[-1] == ("s",))
+    seq = dev.received
+    pre = [("r",), ("/", 0), ("7",), ("q",)] + [("/", 0)] * 16 + [("/", 0), ("s",)]  # after hello's r
+    assert seq[:len(pre)] == pre                       # v = 0 throughout the pre-run, then stop
+    assert seq[len(pre):len(pre) + 3] == [("/", 0), ("7",), ("q",)]   # the real run starts at v = 0

@@ -123,3 +123,13 @@ def test_bad_options_are_one_line_errors(tmp_path, capsys, args, message):
     assert main(["step", *args]) == 2
     err = capsys.readouterr().err
     assert err.startswith("station: error: ") and message in err and err.count("\n") == 1, err
+
+
+def test_legacy_lead_accel_settles_like_v1(tmp_path):
+    # without zeroing, the -2 count offset fed through Ga drives θ to ~210 and never settles
+    v1_run = run_step(controller="lead-accel", amplitude=200, out=tmp_path / "v1.tsv")
+    legacy_run = run_step(protocol="legacy", controller="lead-accel", amplitude=200, out=tmp_path / "lg.tsv")
+    theta = read_log(legacy_run.log_path).data["theta"]
+    assert abs(theta[-50:].mean() - 200) < 1.5
+    assert legacy_run.metrics.settling_time_s is not None
+    assert legacy_run.metrics.overshoot_pct == pytest.approx(v1_run.metrics.overshoot_pct, abs=1.0)
