@@ -339,33 +339,82 @@ def classify_reference(u) -> dict[str, Any]:
 
 # --- the model --------------------------------------------------------------------------
 
-def _model(report: ReplayReport, log: RunLog, controller, n_elements: int) -> None:
-    try:
-        from station.plant import DiscretePlant, simulate
-    except ImportError as exc:
-        report.notes.append(f"model not available ({exc}): no prediction")
-        return
+def command_quantization(log: RunLog) -> str:
+    """How the log's device turned v into DAC counts (for :func:`station.plant.simulate`).
+
+    Our logs name their protocol: v1 rounds (halves away from zero), legacy truncates;
+    a log of ours without a protocol did not come from a device (e.g. written from a
+    simulation): "none". The rig's logs were recorded with its legacy firmware:
+    truncation toward zero.
+    """
+    if log.format != "station":
+        return "trunc"
+    return {"v1": "round", "legacy": "trunc"}.get(log.meta.get("protocol"), "none")
+
+
+def simulate_log(log: RunLog, controller, alignment: int | None, plant) -> tuple[dict, np.ndarray, str]:
+    """Simulate a logged run on the plant as the rig ran it.
+
+    Closed loop: the log's controller, reference, clamp and alignment, the device's
+    command quantization (:func:`command_quantization`). Open loop (or no controller):
+    the plant driven by what was applied: ``v_applied`` where the log has it (our
+    logs), else the logged v quantized as the device did.
+
+    Parameters
+    ----------
+    log : RunLog
+    controller : Compensator, OpenLoop or None
+    alignment : int or None
+        The log's computational delay d (None: 1).
+    plant : station.plant.DiscretePlant
+        Reset here; its dt should be the log's.
+
+    Returns
+    -------
+    prediction : dict of ndarray, shape (N,)
+        As :func:`station.plant.simulate` (t, u, v, theta, a, theta_d_hat).
+    theta_measured : ndarray, shape (N,)
+        The logged θ to compare with; relative to its first sample in open loop (the
+        rig's encoder is not reset before an open-loop test).
+    how : str
+        One line saying how the model was driven.
+    """
+    from station.plant import simulate
+
     data = log.data
-    u, v_log = data["u"], data["v"]
+    u = data["u"]
+    plant.reset()
+    command = command_quantization(log)
+    if controller is None or isinstance(controller, OpenLoop):
+        applied = data["v_applied"]
+        if applied.size and np.all(np.isfinite(applied)):
+            pred = simulate(plant, OpenLoop(), u, alignment=0, v_open=applied)
+            how = "the logged v_applied (open loop)"
+        else:
+            pred = simulate(plant, OpenLoop(), u, alignment=0, v_open=data["v"], command=command)
+            how = f"the logged v (open loop), quantized as the device did ({command})"
+        theta = data["theta"]
+        return pred, (theta - theta[0] if theta.size else theta), how
+    d = 1 if alignment is None else alignment
+    pred = simulate(plant, controller, u, alignment=d, command=command)
+    return pred, data["theta"], (f"the log's controller and reference, alignment {d}, "
+                                 f"commands quantized as the device did ({command})")
+
+
+def _model(report: ReplayReport, log: RunLog, controller, n_elements: int) -> None:
+    from station.plant import DiscretePlant
+
     try:
         plant = DiscretePlant(n_elements=n_elements, dt=_dt_of(log))
     except ValueError as exc:
         raise StationError(f"model: {exc}") from None
-    plant.reset()
-    theta_meas = data["theta"]
-    if controller is None or isinstance(controller, OpenLoop):
-        pred = simulate(plant, OpenLoop(), u, alignment=0, v_open=v_log)
-        if theta_meas.size and theta_meas[0] != 0:
-            theta_meas = theta_meas - theta_meas[0]
-            report.notes.append("open loop: logged theta compared relative to its first sample")
-        how = "the logged v (open loop)"
-    else:
-        pred = simulate(plant, controller, u, alignment=report.alignment if report.alignment is not None else 1)
-        how = f"the log's controller and reference, alignment {report.alignment}"
+    pred, theta_meas, how = simulate_log(log, controller, report.alignment, plant)
+    if theta_meas.size and log.data["theta"][0] != 0 and theta_meas is not log.data["theta"]:
+        report.notes.append("open loop: logged theta compared relative to its first sample")
     report.prediction = pred
     report.n_elements = n_elements
     fits = {}
-    for key, meas in (("theta", theta_meas), ("accel", data["a"])):
+    for key, meas in (("theta", theta_meas), ("accel", log.data["a"])):
         fit = nrmse_fit(meas, pred["theta" if key == "theta" else "a"])
         fits[key] = None if np.isnan(fit) else fit
     report.fit_pct = fits

@@ -90,7 +90,7 @@ def test_plain_python_kernel_matches_compiled():
     gnum, gden = simulate_module._coeffs(controller.gth)
     anum, aden = simulate_module._coeffs(controller.ga)
     args = (lam, bm, np.ascontiguousarray(cm), np.zeros(lam.size, complex), u, np.zeros(1), False, True,
-            gnum, gden, anum, aden, True, 200.0, 1, True)
+            gnum, gden, anum, aden, True, 200.0, 1, True, 1)  # command quantization: round
     plain = simulate_module._loop(*args)
     compiled = simulate_module._kernel(*args)
     for x, y in zip(plain, compiled):

@@ -87,7 +87,7 @@ def _simulated_log(path, kind, alignment, amplitude=100.0, meta_controller=True)
     with RunLogWriter(path, meta) as w:
         for k in range(u.size):
             w.append((sim["t"][k], k, sim["u"][k], sim["v"][k], sim["theta"][k], sim["a"][k],
-                      sim["theta_d_hat"][k], round(sim["v"][k]), 0, math.nan))
+                      sim["theta_d_hat"][k], sim["v"][k], 0, math.nan))  # no device: v acted unrounded
     return sim
 
 
@@ -171,15 +171,17 @@ def test_bad_element_count_is_a_station_error(rig_data):
         replay(rig_data / P_LOG, n_elements=500)
 
 
-@pytest.mark.parametrize("kind", ["p", "open-loop"])
-def test_loop_log_with_step_at_tick_0_replays_with_d1_and_the_model_is_the_loop(tmp_path, kind):
+@pytest.mark.parametrize("protocol", ["v1", "legacy"])
+@pytest.mark.parametrize("kind", ["p", "open-loop", "lead", "lead-accel"])
+def test_loop_log_with_step_at_tick_0_replays_with_d1_and_the_model_is_the_loop(tmp_path, kind, protocol):
     """Row 0 of a d = 1 run: v[0] = 0 (the device's tick 0) and the controller is first
     stepped on sample 0 for v[1]. Replay and the model must follow the same convention,
-    also when u[0] != 0 (a step at tick 0)."""
+    also when u[0] != 0 (a step at tick 0), and quantize the commands as the device did
+    (v1 rounds, legacy truncates)."""
     from station.experiment import run_step
 
-    rep = run_step(port="sim://?noise=0", controller=kind, amplitude=50.0, step_tick=0, duration=0.6,
-                   out=tmp_path / "t0.tsv", lean=False)
+    rep = run_step(port="sim://?noise=0", protocol=protocol, controller=kind, amplitude=50.0, step_tick=0,
+                   duration=0.6, out=tmp_path / "t0.tsv", lean=False)
     assert rep.result.ok, rep.result.message
     r = replay(tmp_path / "t0.tsv", model=True)
     assert r.log.data["u"][0] == 50.0 and r.log.data["v"][0] == 0.0
@@ -189,7 +191,7 @@ def test_loop_log_with_step_at_tick_0_replays_with_d1_and_the_model_is_the_loop(
         assert r.metrics == rep.metrics
     if kind == "p":
         assert r.alignment == 1
-    # noise-free simulated rig, integer commands: the model is the loop + device, exactly
+    # noise-free simulated rig: the model is the loop + device, exactly
     np.testing.assert_array_equal(r.prediction["v"], r.log.data["v"])
     np.testing.assert_array_equal(r.prediction["theta"], r.log.data["theta"])
     np.testing.assert_array_equal(r.prediction["a"], r.log.data["a"])

@@ -89,8 +89,7 @@ def compare_run(path, plant) -> RunComparison:
         Unreadable log, a log that does not name its controller or has no rows.
     """
     from station.errors import StationError
-    from station.plant import simulate
-    from station.replay import detect_alignment, log_controller
+    from station.replay import detect_alignment, log_controller, simulate_log
     from station.runlog import read_log
 
     log = read_log(path)
@@ -101,18 +100,14 @@ def compare_run(path, plant) -> RunComparison:
     if len(log) == 0:
         raise StationError(f"{path}: the log has no rows; nothing to compare")
     u = data["u"]
-    plant.reset()
     closed = getattr(controller, "gth", None) is not None
+    d = None
     if closed:
         d, max_dv, _ = detect_alignment(controller, u, data["theta"], data["a"], data["v"])
-        pred = simulate(plant, controller, u, alignment=d)
         clamp = "no clamp" if controller.limit is None else f"clamp ±{controller.limit:g}"
-        notes.append(f"model: {controller.name} on the log's reference, {clamp}, alignment {d} "
-                     f"(detected: the replay reproduces the logged v to {max_dv:.3g} counts)")
-    else:
-        pred = simulate(plant, controller, u, alignment=0, v_open=data["v"])
-        notes.append("model: open loop, driven by the logged v")
-    theta_log = data["theta"] - (0.0 if closed else data["theta"][0])
+        notes.append(f"alignment {d} detected: the replay reproduces the logged v to {max_dv:.3g} counts; {clamp}")
+    pred, theta_log, how = simulate_log(log, controller, d, plant)
+    notes.append(f"model: driven by {how}")
     fits = {}
     for key, meas, sim in (("theta", theta_log, pred["theta"]), ("accel", data["a"], pred["a"])):
         fit = nrmse_fit(meas, sim)

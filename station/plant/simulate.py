@@ -46,7 +46,7 @@ def _commit(num, den, xs, ys, x, y):  # pragma: no cover - compiled by numba
 
 
 def _loop(lam, bm, cm, z0, u, v_open, use_v_open, closed, gnum, gden, anum, aden, use_ga,
-          limit, d, quantize):  # pragma: no cover - compiled by numba
+          limit, d, quantize, cmd_mode):  # pragma: no cover - compiled by numba
     n = u.shape[0]
     theta = np.zeros(n)
     acc = np.zeros(n)
@@ -97,6 +97,11 @@ def _loop(lam, bm, cm, z0, u, v_open, use_v_open, closed, gnum, gden, anum, aden
                 g_acc = _commit(gnum, gden, gx, gy, e, vk)
         v[k] = vk
         thd[k] = td
+        # what the device applies: whole DAC counts (the controller keeps the unrounded v)
+        if cmd_mode == 1:
+            vk = math.floor(vk + 0.5) if vk >= 0.0 else -math.floor(-vk + 0.5)
+        elif cmd_mode == 2:
+            vk = float(math.trunc(vk))
         for i in range(m):
             z[i] = lam[i] * z[i] + bm[i] * vk
     return theta, acc, v, thd
@@ -122,7 +127,13 @@ def _coeffs(tf) -> tuple[np.ndarray, np.ndarray]:
     return np.ascontiguousarray(num), np.ascontiguousarray(den)
 
 
-def simulate(plant, controller, u, alignment: int = 1, v_open=None, quantize: bool = True) -> dict:
+COMMAND_QUANTIZATION = {"none": 0, "round": 1, "trunc": 2}
+"""How a device turns the station's v into DAC counts: v1 rounds (halves away from zero),
+the rig's legacy firmware truncates toward zero (spec/protocol.md)."""
+
+
+def simulate(plant, controller, u, alignment: int = 1, v_open=None, quantize: bool = True,
+             command: str = "none") -> dict:
     """Simulate a whole run of the plant with a compensator, as the rig runs it.
 
     Starts from the plant's current state (at rest after ``plant.reset()``) and the
@@ -148,6 +159,10 @@ def simulate(plant, controller, u, alignment: int = 1, v_open=None, quantize: bo
     quantize : bool, default True
         Round theta and a to whole counts as the rig's sensors do (no noise added; see
         `Sensors` for a noisy accelerometer).
+    command : {"none", "round", "trunc"}, default "none"
+        How the device turns v into whole DAC counts before it acts on the plant:
+        "round" (protocol v1, halves away from zero), "trunc" (the legacy firmware,
+        toward zero), "none" (v acts unrounded). The returned v is the controller's.
 
     Returns
     -------
@@ -158,8 +173,11 @@ def simulate(plant, controller, u, alignment: int = 1, v_open=None, quantize: bo
     Raises
     ------
     ValueError
-        Negative alignment, or v_open of a different length than u.
+        Negative alignment, v_open of a different length than u, or an unknown
+        ``command``.
     """
+    if command not in COMMAND_QUANTIZATION:
+        raise ValueError(f"command quantization must be one of {', '.join(COMMAND_QUANTIZATION)}, got {command!r}")
     u = np.ascontiguousarray(np.asarray(u, dtype=float).ravel())
     d = int(alignment)
     if d < 0:
@@ -181,6 +199,7 @@ def simulate(plant, controller, u, alignment: int = 1, v_open=None, quantize: bo
     theta, a, v, thd = _kernel(
         lam, bm, np.ascontiguousarray(cm), z0, u, v_open, use_v_open, gth is not None,
         gnum, gden, anum, aden, ga is not None, math.inf if limit is None else float(limit), d, bool(quantize),
+        COMMAND_QUANTIZATION[command],
     )
     dt = getattr(plant, "dt", DT)
     return {"t": np.arange(u.size) * dt, "u": u, "v": v, "theta": theta, "a": a, "theta_d_hat": thd}
