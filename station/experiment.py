@@ -229,7 +229,9 @@ def run_step(port: str = DEFAULT_PORT, protocol: str = "v1", controller: str = D
             result = run_loop(session, ctrl, u, writer, soft_limit=soft_limit, dt=dt, lean=lean)
         finally:
             writer.close()  # after the loop has sent command 0 and stop
-    return StepReport(log_path, result, _metrics_of(log_path, amplitude) if reference == "step" else None)
+    # step metrics compare θ with the step in encoder counts: closed-loop steps only
+    closed_step = reference == "step" and ctrl.spec.get("kind") != "open-loop"
+    return StepReport(log_path, result, _metrics_of(log_path, amplitude) if closed_step else None)
 
 
 def _metrics_of(log_path: Path, amplitude: float) -> StepMetrics | None:

@@ -22,7 +22,6 @@ from __future__ import annotations
 
 import gc
 import math
-import os
 import sys
 import threading
 import time
@@ -32,6 +31,7 @@ import numpy as np
 
 from station import DT
 from station.link import DeviceStopped, LinkTimeout, SequenceError, Session
+from station.realtime import RealtimePriority
 
 NAN = math.nan
 
@@ -101,44 +101,6 @@ class _Terminate(BaseException):
     """SIGTERM turned into an exception so the fail-safe path runs."""
 
 
-def _threads() -> list[int]:
-    """Native ids of this process's Python threads (the loop, the log writer, sinks).
-
-    Only Python threads: they are the ones that can hold the GIL. Native pools (e.g.
-    OpenBLAS's workers, which busy-wait after a numpy call) must stay at normal
-    priority, or they would starve the kernel's tty work at real-time priority.
-    """
-    return [t.native_id for t in threading.enumerate() if t.native_id is not None]
-
-
-def raise_priority() -> str:
-    """Raise the scheduling priority of this process's Python threads, as far as the OS allows.
-
-    Not only the loop's thread: the log writer's thread holds the GIL while it formats
-    rows, and if ordinary load could preempt it then, the loop would wait for the GIL
-    behind that load (priority inversion). Returns what was set.
-    """
-    try:
-        for tid in _threads():
-            os.sched_setscheduler(tid, os.SCHED_FIFO, os.sched_param(10))
-        return "SCHED_FIFO 10"
-    except (AttributeError, PermissionError, OSError):
-        _restore_priority()
-    try:
-        os.nice(-10)  # the whole process
-        return "nice -10"
-    except (AttributeError, PermissionError, OSError):
-        return "default"
-
-
-def _restore_priority() -> None:
-    for tid in _threads():
-        try:
-            os.sched_setscheduler(tid, os.SCHED_OTHER, os.sched_param(0))
-        except (AttributeError, PermissionError, OSError):
-            pass
-
-
 def run_loop(session: Session, controller, reference: np.ndarray, writer, soft_limit: float = 2048.0,
              dt: float = DT, lean: bool = True) -> RunResult:
     """Run one test: start the device, answer every sample, stop it safely.
@@ -178,7 +140,8 @@ def run_loop(session: Session, controller, reference: np.ndarray, writer, soft_l
     old_switch = sys.getswitchinterval()
     old_term = _install_sigterm()
     gc_was_enabled = gc.isenabled()
-    priority = raise_priority() if lean else "default"
+    priority = RealtimePriority()
+    level = priority.raise_() if lean else priority.level
     perf_ns = time.perf_counter_ns
     pending = None  # the row of a sample received but not yet logged
     read_sample, send_command, step, append = session.read_sample, session.send_command, controller.step, writer.append
@@ -238,8 +201,7 @@ def run_loop(session: Session, controller, reference: np.ndarray, writer, soft_l
         sys.setswitchinterval(old_switch)
         if gc_was_enabled:
             gc.enable()
-        if priority != "default":
-            _restore_priority()
+        priority.restore()
         _restore_sigterm(old_term)
     if pending is not None:  # after the stop, before the caller closes the log
         try:
@@ -250,7 +212,7 @@ def run_loop(session: Session, controller, reference: np.ndarray, writer, soft_l
         stopped = stop_info
     late = session.late if stopped is None else max(session.late, stopped.get("late", 0))
     return RunResult(reason, message, ticks, latencies, late, session.dropped, stopped,
-                     {"priority": priority, "rx_errors": session.rx_errors})
+                     {"priority": level, "rx_errors": session.rx_errors})
 
 
 class _ControllerFault(Exception):

@@ -307,6 +307,11 @@ class SimDevice:
         return self._fw.ready
 
     @property
+    def plant(self):
+        """The plant behind the device (a :class:`station.plant.DiscretePlant` by default)."""
+        return self._fw.hw.plant
+
+    @property
     def tick_index(self) -> int:
         """k of the next tick of the run."""
         return self._fw.k

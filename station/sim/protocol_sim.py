@@ -37,6 +37,7 @@ read returns at once what is buffered when it is not empty. ``in_waiting``,
 
 from __future__ import annotations
 
+import dataclasses
 import threading
 import time
 import urllib.parse
@@ -174,6 +175,17 @@ class Serial(SerialBase):
         if self._driver is None:
             raise PortNotOpenError()
         return self._driver.device
+
+    @property
+    def plant_meta(self) -> dict:
+        """What this simulated rig is, for run-log headers: the FEM plant's parameters
+        (SI, DESIGN.md names), element count, sample time and the URL's options."""
+        plant = self.device.plant
+        params = getattr(plant, "params", None)
+        return {"model": "FEM (station.plant)", "n_elements": getattr(plant, "n_elements", self.options["elements"]),
+                "dt": getattr(plant, "dt", None),
+                "params": None if params is None else dataclasses.asdict(params),
+                "options": dict(self.options)}
 
     # -- the clock ---------------------------------------------------------------
 

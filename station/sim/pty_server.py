@@ -24,22 +24,10 @@ import time
 import tty
 from typing import TYPE_CHECKING
 
+from station.realtime import RealtimePriority
+
 if TYPE_CHECKING:
     from station.sim.driver import Faults
-
-
-def _raise_priority() -> str:
-    """SCHED_FIFO when allowed, else a lower nice value, else nothing; what was obtained."""
-    try:
-        os.sched_setscheduler(0, os.SCHED_FIFO, os.sched_param(10))
-        return "SCHED_FIFO"
-    except (PermissionError, OSError, AttributeError):
-        pass
-    try:
-        os.nice(-10)
-        return "nice -10"
-    except (PermissionError, OSError):
-        return "default"
 
 
 def _send(fd: int, data: bytes) -> int:
@@ -93,7 +81,7 @@ def serve_pty(protocol: str = "v1", realtime: bool = False, seed: int = 0, n_ele
     os.set_blocking(master, False)
     stop = []
     previous = {sig: signal.signal(sig, lambda *_: stop.append(True)) for sig in (signal.SIGTERM, signal.SIGINT)}
-    _raise_priority()
+    RealtimePriority().raise_()  # for the life of this process: no restore needed
     print(os.ttyname(slave), file=out, flush=True)
     period = 1.0 / RATE_HZ
     deadline = time.perf_counter() + period
