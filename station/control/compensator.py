@@ -12,6 +12,13 @@ from typing import Any
 from station.control.tf import DiscreteTF
 
 
+def saturate(v: float, limit: float | None) -> float:
+    """Clamp ``v`` to ±limit (DAC counts); None means no clamp."""
+    if limit is None:
+        return v
+    return limit if v > limit else -limit if v < -limit else v
+
+
 class Compensator:
     """Lead/P compensator Gth with optional accelerometer feedback Ga.
 
@@ -68,13 +75,7 @@ class Compensator:
         theta_d_hat = u - ga.step(a) if ga is not None else u
         e = theta_d_hat - theta
         gth = self.gth
-        v = gth.output(e)
-        lim = self.limit
-        if lim is not None:
-            if v > lim:
-                v = lim
-            elif v < -lim:
-                v = -lim
+        v = saturate(gth.output(e), self.limit)
         gth.commit(e, v)
         return v, theta_d_hat
 
@@ -108,14 +109,7 @@ class OpenLoop:
 
     def step(self, u: float, theta: float, a: float) -> tuple[float, float]:
         """Return ``(v, theta_d_hat) = (u, u)``, v clamped to +-limit; theta and a unused."""
-        v = u
-        lim = self.limit
-        if lim is not None:
-            if v > lim:
-                v = lim
-            elif v < -lim:
-                v = -lim
-        return v, u
+        return saturate(u, self.limit), u
 
     def __repr__(self) -> str:
         return f"OpenLoop(limit={self.limit})"
