@@ -129,7 +129,7 @@ class StepReport:
 
 def default_log_path(tag: str, when: _dt.datetime | None = None) -> Path:
     """``runs/step-<tag>-<UTC time>.tsv`` under the current directory (tag: controller name)."""
-    when = when or _dt.datetime.now(_dt.timezone.utc)
+    when = when or _dt.datetime.now(_dt.UTC)
     return Path("runs") / f"step-{tag}-{when:%Y%m%d-%H%M%S}.tsv"
 
 
@@ -221,7 +221,7 @@ def run_step(port: str = DEFAULT_PORT, protocol: str = "v1", controller: str = D
             "accel_zero": accel_zero,
             "dt": dt,
             "soft_limit": soft_limit,
-            "start_time": _dt.datetime.now(_dt.timezone.utc).isoformat(),
+            "start_time": _dt.datetime.now(_dt.UTC).isoformat(),
             "start_unix": time.time(),
         }
         writer = RunLogWriter(log_path, meta, sinks=sinks)

@@ -33,7 +33,8 @@ import weakref
 from collections import deque
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Iterable
+from typing import Any
+from collections.abc import Iterable
 
 import numpy as np
 
@@ -359,7 +360,7 @@ class RunLogWriter:
         """Rows that could not be written because of a write error (normally empty)."""
         return list(self._pump.unwritten)
 
-    def __enter__(self) -> "RunLogWriter":
+    def __enter__(self) -> RunLogWriter:
         return self
 
     def __exit__(self, *exc_info) -> None:

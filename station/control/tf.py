@@ -15,7 +15,7 @@ the 500 Hz real-time loop, where numpy's per-call overhead would dominate.
 from __future__ import annotations
 
 import math
-from typing import Sequence
+from collections.abc import Sequence
 
 import numpy as np
 
