@@ -352,8 +352,25 @@ def command_quantization(log: RunLog) -> str:
     return {"v1": "round", "legacy": "trunc"}.get(log.meta.get("protocol"), "none")
 
 
-def simulate_log(log: RunLog, controller, alignment: int | None, plant) -> tuple[dict, np.ndarray, str]:
-    """Simulate a logged run on the plant as the rig ran it.
+@dataclass
+class ModelRun:
+    """A logged run simulated on the plant (:func:`simulate_log`).
+
+    prediction: dict of arrays as :func:`station.plant.simulate` returns (t, u, v,
+    theta, a, theta_d_hat); theta_measured: the logged θ it is compared with (relative
+    to its first sample in open loop: the rig's encoder is not reset before an
+    open-loop test); fit_pct: NRMSE fit of θ and a, % ({"theta", "accel"}, None where
+    undefined); how: one line saying how the model was driven.
+    """
+
+    prediction: dict
+    theta_measured: np.ndarray
+    fit_pct: dict
+    how: str
+
+
+def simulate_log(log: RunLog, controller, alignment: int | None, plant) -> ModelRun:
+    """Simulate a logged run on the plant as the rig ran it, and fit it to the log.
 
     Closed loop: the log's controller, reference, clamp and alignment, the device's
     command quantization (:func:`command_quantization`). Open loop (or no controller):
@@ -371,18 +388,12 @@ def simulate_log(log: RunLog, controller, alignment: int | None, plant) -> tuple
 
     Returns
     -------
-    prediction : dict of ndarray, shape (N,)
-        As :func:`station.plant.simulate` (t, u, v, theta, a, theta_d_hat).
-    theta_measured : ndarray, shape (N,)
-        The logged θ to compare with; relative to its first sample in open loop (the
-        rig's encoder is not reset before an open-loop test).
-    how : str
-        One line saying how the model was driven.
+    ModelRun
     """
     from station.plant import simulate
 
     data = log.data
-    u = data["u"]
+    u, theta = data["u"], data["theta"]
     plant.reset()
     command = command_quantization(log)
     if controller is None or isinstance(controller, OpenLoop):
@@ -393,12 +404,16 @@ def simulate_log(log: RunLog, controller, alignment: int | None, plant) -> tuple
         else:
             pred = simulate(plant, OpenLoop(), u, alignment=0, v_open=data["v"], command=command)
             how = f"the logged v (open loop), quantized as the device did ({command})"
-        theta = data["theta"]
-        return pred, (theta - theta[0] if theta.size else theta), how
-    d = 1 if alignment is None else alignment
-    pred = simulate(plant, controller, u, alignment=d, command=command)
-    return pred, data["theta"], (f"the log's controller and reference, alignment {d}, "
-                                 f"commands quantized as the device did ({command})")
+        theta = theta - theta[0] if theta.size else theta
+    else:
+        d = 1 if alignment is None else alignment
+        pred = simulate(plant, controller, u, alignment=d, command=command)
+        how = f"the log's controller and reference, alignment {d}, commands quantized as the device did ({command})"
+    fits = {}
+    for key, meas, sim in (("theta", theta, pred["theta"]), ("accel", data["a"], pred["a"])):
+        fit = nrmse_fit(meas, sim)
+        fits[key] = None if np.isnan(fit) else fit
+    return ModelRun(pred, theta, fits, how)
 
 
 def _model(report: ReplayReport, log: RunLog, controller, n_elements: int) -> None:
@@ -408,20 +423,16 @@ def _model(report: ReplayReport, log: RunLog, controller, n_elements: int) -> No
         plant = DiscretePlant(n_elements=n_elements, dt=_dt_of(log))
     except ValueError as exc:
         raise StationError(f"model: {exc}") from None
-    pred, theta_meas, how = simulate_log(log, controller, report.alignment, plant)
-    if theta_meas.size and log.data["theta"][0] != 0 and theta_meas is not log.data["theta"]:
+    run = simulate_log(log, controller, report.alignment, plant)
+    if run.theta_measured is not log.data["theta"] and log.data["theta"][0] != 0:
         report.notes.append("open loop: logged theta compared relative to its first sample")
-    report.prediction = pred
+    report.prediction = run.prediction
     report.n_elements = n_elements
-    fits = {}
-    for key, meas in (("theta", theta_meas), ("accel", log.data["a"])):
-        fit = nrmse_fit(meas, pred["theta" if key == "theta" else "a"])
-        fits[key] = None if np.isnan(fit) else fit
-    report.fit_pct = fits
+    report.fit_pct = fits = run.fit_pct
     if fits["theta"] is not None and fits["theta"] < -100.0:
         report.notes.append(f"the model's theta diverges from the log (fit {fits['theta']:.3g} %): "
                             "was the logged v really applied (motor powered, no hold)?")
-    report.notes.append(f"model: FEM plant, {n_elements} elements, driven by {how}")
+    report.notes.append(f"model: FEM plant, {n_elements} elements, driven by {run.how}")
 
 
 # --- replay -----------------------------------------------------------------------------

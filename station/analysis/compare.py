@@ -15,7 +15,6 @@ from pathlib import Path
 
 import numpy as np
 
-from station.analysis.fit import nrmse_fit
 from station.analysis.metrics import StepMetrics, step_metrics
 
 THESIS_TABLE = {
@@ -106,12 +105,9 @@ def compare_run(path, plant) -> RunComparison:
         d, max_dv, _ = detect_alignment(controller, u, data["theta"], data["a"], data["v"])
         clamp = "no clamp" if controller.limit is None else f"clamp ±{controller.limit:g}"
         notes.append(f"alignment {d} detected: the replay reproduces the logged v to {max_dv:.3g} counts; {clamp}")
-    pred, theta_log, how = simulate_log(log, controller, d, plant)
-    notes.append(f"model: driven by {how}")
-    fits = {}
-    for key, meas, sim in (("theta", theta_log, pred["theta"]), ("accel", data["a"], pred["a"])):
-        fit = nrmse_fit(meas, sim)
-        fits[key] = None if np.isnan(fit) else fit
+    run = simulate_log(log, controller, d, plant)
+    pred, fits = run.prediction, run.fit_pct
+    notes.append(f"model: driven by {run.how}")
     step = float(u[-1]) if closed and u.size and u[-1] != 0 and np.unique(u).size == 2 else None
     rig = model = exp = fem = None
     if step is not None:
