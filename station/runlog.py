@@ -24,9 +24,11 @@ The rig's format (its lab software, ../shared/data/rig): ``#`` header lines (tes
 from __future__ import annotations
 
 import json
+import os
 import math
 import numbers
 import re
+import tempfile
 import threading
 import warnings
 import weakref
@@ -90,6 +92,12 @@ def format_value(x: Any) -> str:
     if isinstance(x, numbers.Integral):
         return str(int(x))
     return repr(float(x))
+
+
+def format_lines(rows: Iterable[tuple]) -> list[str]:
+    """Rows (tuples in :data:`COLUMNS` order) as tab-separated lines, each ending in a newline."""
+    fmt = format_value
+    return ["\t".join([fmt(x) for x in row]) + "\n" for row in rows]
 
 
 def _json_default(obj: Any) -> Any:
@@ -191,7 +199,12 @@ class _Pump:
             pass
         if not batch:
             return
-        self._write(batch)
+        try:
+            self._write(batch)
+        except Exception as exc:  # noqa: BLE001 - a bug here must not lose rows: keep them for the rescue
+            if self.write_error is None:
+                self.write_error = OSError(f"run log writer failed: {type(exc).__name__}: {exc}")
+            self.unwritten.extend(batch)
         if self.sinks:
             self.sink_queue.append(batch)
 
@@ -202,8 +215,7 @@ class _Pump:
         if self.write_error is not None:
             self.unwritten.extend(batch)
             return
-        fmt = format_value
-        lines = ["\t".join([fmt(x) for x in row]) + "\n" for row in batch]
+        lines = format_lines(batch)
         data = "".join(lines).encode("utf-8")
         done = 0
         try:
@@ -346,14 +358,34 @@ class RunLogWriter:
         Raises
         ------
         RunLogError
-            If writing failed (disk full, ...): names the file and how many rows are
-            missing from it (they stay available as ``unwritten_rows``).
+            If writing failed (disk full, ...): names the file, how many rows are
+            missing from it, and the rescue file in the temporary folder that holds
+            them with the same header (they also stay available as ``unwritten_rows``).
         """
         self._finalizer()
         err = self._pump.write_error
         if err is not None:
+            missing = len(self._pump.unwritten)
+            rescued = self._rescue()
+            where = (f"; they were saved to {rescued}" if rescued is not None
+                     else "; saving them to the temporary folder failed too" if missing else "")
             raise RunLogError(f"{self.path}: writing the run log failed ({err.strerror or err}); "
-                              f"{len(self._pump.unwritten)} rows are not in the file")
+                              f"{missing} rows are not in the file{where}")
+
+    def _rescue(self) -> Path | None:
+        """Write the unwritten rows, with this log's header, to a file in the temporary
+        folder (another disk, often): never lose rows. Returns its path, or None."""
+        rows = self._pump.unwritten
+        if not rows:
+            return None
+        path = Path(tempfile.gettempdir()) / f"{self.path.stem}.rescued-{os.getpid()}.tsv"
+        meta = {**self.meta, "rescued_from": str(self.path), "rescued_rows": len(rows)}
+        try:
+            with open(path, "w", encoding="utf-8") as fh:
+                fh.write("\n".join(header_lines(meta)) + "\n" + "".join(format_lines(rows)))
+        except (OSError, TypeError, ValueError):
+            return None
+        return path
 
     @property
     def unwritten_rows(self) -> list[tuple]:

@@ -7,6 +7,7 @@ import os
 import signal
 import subprocess
 import sys
+import tempfile
 import textwrap
 import time
 import warnings
@@ -346,8 +347,9 @@ def test_write_error_counts_exactly_the_rows_in_the_file(tmp_path):
     header = path.stat().st_size
     rows = [(k * 0.002, k, 0.0, 0.0, 0, 0, 0.0, 0, 0, math.nan) for k in range(300)]
     room = header + sum(len(("\t".join(format_value(x) for x in r) + "\n").encode()) for r in rows[:150]) + 7
+    env = {**os.environ, "TMPDIR": str(tmp_path)}  # where the rescue file goes
     proc = subprocess.run([sys.executable, "-c", _FULL_DISK_CHILD, str(path), str(room)],
-                          capture_output=True, text=True, timeout=60)
+                          capture_output=True, text=True, timeout=60, env=env)
     assert proc.returncode == 0, proc.stderr
     out = json.loads(proc.stdout)
     with warnings.catch_warnings():
@@ -356,3 +358,33 @@ def test_write_error_counts_exactly_the_rows_in_the_file(tmp_path):
     assert out["error"] is not None and f"{300 - len(in_file)} rows are not in the file" in out["error"]
     assert out["written"] == len(in_file)
     assert sorted(in_file + out["unwritten"]) == list(range(300))  # each row in exactly one place
+    # the rows that did not fit are not lost: a rescue file with the same header holds them
+    rescued = sorted(tmp_path.glob("full.rescued-*.tsv"))
+    assert len(rescued) == 1 and str(rescued[0]) in out["error"]
+    saved = read_log(rescued[0])
+    assert saved.data["n"].astype(int).tolist() == out["unwritten"]
+    assert saved.meta["rescued_from"] == str(path) and saved.meta["test"] == "full disk"
+
+
+def test_a_writer_bug_keeps_the_rows_for_the_rescue_file(tmp_path, monkeypatch):
+    import station.runlog as runlog
+
+    monkeypatch.setattr(tempfile, "tempdir", str(tmp_path))
+
+    def broken(rows):
+        raise RuntimeError("formatter bug")
+
+    w = RunLogWriter(tmp_path / "bug.tsv", {"test": "bug"})
+    monkeypatch.setattr(runlog, "format_lines", broken)
+    rows = [(k * 0.002, k, 0.0, 1.5, k, 0, 0.0, 2, 0, math.nan) for k in range(20)]
+    for r in rows:
+        w.append(r)
+    deadline = time.monotonic() + 5
+    while w._pump.write_error is None and time.monotonic() < deadline:  # the thread drains every 20 ms
+        time.sleep(0.01)
+    monkeypatch.undo()  # the rescue can format again
+    monkeypatch.setattr(tempfile, "tempdir", str(tmp_path))
+    with pytest.raises(RunLogError, match=r"formatter bug.*20 rows are not in the file; they were saved to"):
+        w.close()
+    saved = read_log(next(tmp_path.glob("bug.rescued-*.tsv")))
+    assert saved.data["n"].astype(int).tolist() == list(range(20))
