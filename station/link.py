@@ -26,6 +26,9 @@ from station.protocol import legacy, v1
 
 SIM_HANDLERS = "station.sim"
 DEFAULT_BAUD = {"v1": 921600, "legacy": legacy.BAUDRATE}
+FIRST_SEQ_WINDOW = 16
+"""v1: the first sample of a run must have seq <= this (the device restarts at 0 on START);
+a larger one was in flight from an earlier run and is ignored."""
 ZERO_ACCEL_TICKS = 16
 """Readings averaged for the accelerometer's zero (protocol v1, START bit1)."""
 HANDSHAKE_TIMEOUT = 1.0
@@ -146,6 +149,7 @@ class V1Session(Session):
         self._n = -1
         self.info: dict | None = None
         self.late = 0
+        self.stale_samples = 0
 
     def _next_message(self, timeout: float):
         deadline = time.perf_counter() + timeout
@@ -182,9 +186,16 @@ class V1Session(Session):
         return {"by": "device at START", "ticks": ZERO_ACCEL_TICKS}
 
     def start(self, n_ticks: int) -> None:
-        """START with encoder reset and accelerometer zeroing; the device runs n_ticks ticks."""
+        """START with encoder reset and accelerometer zeroing; the device runs n_ticks ticks.
+
+        Whatever is still in the input (samples of an earlier run, e.g. after a USB
+        replug) is discarded first.
+        """
+        self.port.reset_input_buffer()
         self._pending.clear()
+        self._decoder = v1.Decoder()
         self._last_seq, self._n = -1, -1
+        self.stale_samples = 0
         self._write(v1.Start(v1.START_RESET_ENCODER | v1.START_ZERO_ACCEL, n_ticks))
 
     def read_sample(self) -> tuple:
@@ -205,6 +216,9 @@ class V1Session(Session):
             if msg is None:
                 raise LinkTimeout(f"device {self.url} went silent: no sample for {self.timeout} s after tick {self._n}")
             if isinstance(msg, v1.Sample):
+                if self._last_seq < 0 and msg.seq > FIRST_SEQ_WINDOW:
+                    self.stale_samples += 1  # from before START: this run counts from seq 0
+                    continue
                 break
             if isinstance(msg, v1.Stopped):
                 stopped = {k: getattr(msg, k) for k in msg.__dataclass_fields__}

@@ -24,14 +24,16 @@ class ScriptedDevice:
     Parameters: protocol "v1" | "legacy"; theta(k) -> encoder counts of tick k;
     silent_after: stop sending after this tick; garbage_every: (v1) garbage + a corrupted
     frame after every N-th sample; skip_at: (legacy) n jumps by one at this tick;
-    accel(k) -> accelerometer counts of tick k.
+    accel(k) -> accelerometer counts of tick k; after_start: (v1) bytes sent right after
+    START, before tick 0.
     """
 
     def __init__(self, protocol="v1", theta=lambda k: 0, silent_after=None, garbage_every=None,
-                 skip_at=None, period=0.002, accel=lambda k: 0):
+                 skip_at=None, period=0.002, accel=lambda k: 0, after_start=b""):
         self.protocol = protocol
         self.theta = theta
         self.accel = accel
+        self.after_start = after_start  # v1: bytes sent right after START (e.g. a stale sample)
         self.silent_after, self.garbage_every, self.skip_at = silent_after, garbage_every, skip_at
         self.period = period
         self.master, self.slave = pty.openpty()
@@ -91,6 +93,8 @@ class ScriptedDevice:
                             self._write(v1.encode(v1.Info(1, 0, 9, 0, 500, 255, 1024, 10, "SCRIPTED")))
                         elif isinstance(msg, v1.Start):
                             running, k, next_tick, output, last_cmd = True, 0, time.perf_counter(), 0, None
+                            if self.after_start:
+                                self._write(self.after_start)
                         elif isinstance(msg, v1.Command):
                             last_cmd = msg.v
                         elif isinstance(msg, v1.Stop):

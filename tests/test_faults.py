@@ -160,3 +160,16 @@ def test_legacy_zeroes_the_accelerometer_with_a_pre_run(device_factory, tmp_path
     pre = [("r",), ("/", 0), ("7",), ("q",)] + [("/", 0)] * 16 + [("/", 0), ("s",)]  # after hello's r
     assert seq[:len(pre)] == pre                       # v = 0 throughout the pre-run, then stop
     assert seq[len(pre):len(pre) + 3] == [("/", 0), ("7",), ("q",)]   # the real run starts at v = 0
+
+
+def test_a_stale_sample_from_an_earlier_run_is_ignored(device_factory, tmp_path):
+    # e.g. in flight over USB after a replug: the run counts from seq 0, not from 5000
+    from station.protocol import v1
+
+    stale = v1.encode(v1.Sample(5000, 77, 0, 0, 0))
+    dev = device_factory(protocol="v1", theta=lambda k: 0, after_start=stale)
+    report = run_step(port=dev.path, controller="p", duration=0.5, out=tmp_path / "log.tsv")
+    assert report.result.ok and report.result.dropped == 0, report.result.message
+    d = read_log(tmp_path / "log.tsv").data
+    assert np.array_equal(d["n"], np.arange(250)) and not np.any(d["theta"] == 77)
+    assert dev.commands()[0][0] == 0

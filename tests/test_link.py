@@ -97,11 +97,19 @@ def test_v1_lost_first_samples_count_as_dropped():
     from station.protocol import v1
 
     class Port:
+        """Answers START with ``data`` (the device's samples), like a device would."""
+
         def __init__(self, data):
-            self.data = bytearray(data)
+            self.data = bytearray()
+            self.answer = bytes(data)
 
         def write(self, data):
+            if any(isinstance(m, v1.Start) for m in v1.Decoder().feed(data)):
+                self.data += self.answer
             return len(data)
+
+        def reset_input_buffer(self):
+            self.data.clear()
 
         def read(self, size=1):
             out = bytes(self.data[:size])
