@@ -1,0 +1,24 @@
+"""The README's examples stay true."""
+
+import re
+from pathlib import Path
+
+from station.control import make_controller
+
+README = Path(__file__).resolve().parents[1] / "README.md"
+
+
+def test_readme_compensator_file_example_loads(tmp_path):
+    block = re.search(r"```toml\n(.*?)```", README.read_text(), re.S).group(1)
+    path = tmp_path / "example.toml"
+    path.write_text(block)
+    ctrl = make_controller(str(path))
+    assert ctrl.limit == 200.0 and ctrl.ga is None
+    # Tustin of (31.4159 s + 986.96)/(s + 125.66) at 0.002 s keeps the DC gain 986.96/125.66
+    assert abs(sum(ctrl.gth.num) / sum(ctrl.gth.den) - 986.96 / 125.66) < 1e-9
+
+
+def test_readme_starts_with_the_two_setup_commands():
+    first_block = README.read_text().split("```")[1]
+    lines = [line for line in first_block.splitlines() if line.strip() and not line.startswith("sh")]
+    assert lines[0].endswith(".venv/bin/station step") and lines[1].endswith(".venv/bin/python -m pytest")
