@@ -16,16 +16,7 @@
 #include "project.h"
 #include "sflr_hal.h"
 
-/* Rig wiring; flip a sign here rather than rewiring (see README "first power-up"). */
-#ifndef ENCODER_SIGN
-#define ENCODER_SIGN 1
-#endif
-#ifndef ACCEL_SIGN
-#define ACCEL_SIGN 1
-#endif
-#ifndef AMP_EN_ACTIVE
-#define AMP_EN_ACTIVE 1u /* level that enables the amplifier */
-#endif
+#include "hal_wiring.h"
 
 /* DVDAC codes: a 12-bit DVDAC dithers the 8-bit VDAC (16 mV per step in its 0-4.080 V
  * range) over 16 sub-steps: 1 mV per code, valid codes 0..0xFF0 (4080 = 4.080 V), not

@@ -13,15 +13,7 @@
 
 /* The wiring options of hal_psoc5lp.c; the Makefile builds this test twice, with the
  * defaults and with every sign and level flipped (test_psoc_hal_flipped). */
-#ifndef ENCODER_SIGN
-#define ENCODER_SIGN 1
-#endif
-#ifndef ACCEL_SIGN
-#define ACCEL_SIGN 1
-#endif
-#ifndef AMP_EN_ACTIVE
-#define AMP_EN_ACTIVE 1u
-#endif
+#include "hal_wiring.h"
 #define AMP_ON_LEVEL ((int)(AMP_EN_ACTIVE))
 #define AMP_OFF_LEVEL ((int)(AMP_EN_ACTIVE ^ 1u))
 
