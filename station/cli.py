@@ -14,7 +14,7 @@ import sys
 from station import __version__
 from station.errors import StationError
 
-COMMANDS = ("step", "replay", "sim_device", "bode", "compare")
+COMMANDS = ("step", "replay", "sim_device", "bode", "compare", "modes")
 """Modules of :mod:`station.commands`, in the order ``--help`` lists them."""
 
 

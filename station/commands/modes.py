@@ -1,0 +1,71 @@
+"""``station modes``: the FEM model's natural frequencies and θ/v antiresonances against the rig's."""
+
+from __future__ import annotations
+
+import argparse
+import json
+from pathlib import Path
+
+from station.errors import StationError
+
+NAME = "modes"
+HELP = ("natural frequencies, damping and θ/v antiresonances of the FEM model for several element "
+        "counts (convergence), next to the rig's measured values")
+
+RIG = {"hub_held_beam_modes_hz": [2.52, 18.0], "hub_held_first_mode_damping": 0.005,
+       "antiresonances_hz": [2.5, 17.7]}
+"""The rig's measured dynamics (DESIGN.md "Measured dynamics")."""
+
+
+def configure(parser: argparse.ArgumentParser) -> None:
+    """Add ``station modes``'s options to ``parser``."""
+    parser.add_argument("--elements", type=int, nargs="+", default=[1, 2, 4, 10, 20, 50, 100], metavar="N",
+                        help="element counts (default 1 2 4 10 20 50 100)")
+    parser.add_argument("--params", default="tmm-fit", metavar="SET", help="parameter set name or TOML file")
+    parser.add_argument("--count", type=int, default=3, metavar="K", help="modes to show (default 3)")
+    parser.add_argument("--json", type=Path, default=None, metavar="OUT", help="write the numbers as JSON")
+
+
+def run(args: argparse.Namespace) -> int:
+    """Print one row per element count; 0.
+
+    Raises
+    ------
+    StationError
+        Unknown parameter set or an element count outside 1..100.
+    """
+    from station.plant import load_params, modal_summary
+
+    params = load_params(args.params)
+    k = max(1, args.count)
+    rows = []
+    for n in args.elements:
+        if not 1 <= n <= 100:
+            raise StationError(f"--elements {n}: expected 1..100")
+        m = modal_summary(params, n)
+        rows.append({"n_elements": n, "frequencies_hz": m.frequencies_hz[:k].tolist(),
+                     "damping": m.damping[:k].tolist(), "antiresonances_hz": m.antiresonances_hz[:k].tolist(),
+                     "antiresonance_damping": m.antiresonance_damping[:k].tolist()})
+    def cols(values, fmt):
+        return "  ".join(format(v, fmt) for v in values)
+
+    print(f"FEM model, parameter set {args.params}: oscillatory poles (motor free) and θ/v antiresonances "
+          "(= modes with the hub held)")
+    print(f"{'n':>4}  {'poles Hz':<{9 * k}} {'ζ':<{9 * k}} {'antiresonances Hz':<{9 * k}} ζ")
+    for r in rows:
+        print(f"{r['n_elements']:>4}  {cols(r['frequencies_hz'], '7.3f'):<{9 * k}} {cols(r['damping'], '7.4f'):<{9 * k}} "
+              f"{cols(r['antiresonances_hz'], '7.3f'):<{9 * k}} {cols(r['antiresonance_damping'], '7.4f')}")
+    last = rows[-1]
+    ar = last["antiresonances_hz"]
+    print(f" rig  hub-held beam modes {RIG['hub_held_beam_modes_hz'][0]} Hz (ζ ≈ {RIG['hub_held_first_mode_damping']}), "
+          f"≈ {RIG['hub_held_beam_modes_hz'][1]:g} Hz; θ/v antiresonances ≈ {RIG['antiresonances_hz'][0]} and "
+          f"{RIG['antiresonances_hz'][1]} Hz (DESIGN.md)")
+    errs = [100.0 * (m / r - 1.0) for m, r in zip(ar, RIG["antiresonances_hz"])]
+    print(f"model (n = {last['n_elements']}) vs rig antiresonances: " +
+          ", ".join(f"{m:.3f} vs {r} Hz ({e:+.1f} %)" for m, r, e in zip(ar, RIG["antiresonances_hz"], errs)))
+    if args.json is not None:
+        try:
+            args.json.write_text(json.dumps({"params": args.params, "models": rows, "rig": RIG}, indent=1) + "\n")
+        except OSError as exc:
+            raise StationError(f"{args.json}: cannot write: {exc.strerror or exc}") from None
+    return 0

@@ -1,0 +1,24 @@
+"""``station modes``: the model's modal numbers converge with n and are set beside the rig's."""
+
+import json
+
+from station.cli import main
+
+
+def test_modes_converge_and_compare_with_the_rig(tmp_path, capsys):
+    out = tmp_path / "modes.json"
+    assert main(["modes", "--elements", "2", "10", "50", "100", "--json", str(out)]) == 0
+    text = capsys.readouterr().out
+    assert "vs 2.5 Hz" in text and "vs 17.7 Hz" in text
+    models = {m["n_elements"]: m for m in json.loads(out.read_text())["models"]}
+    for key in ("frequencies_hz", "antiresonances_hz"):
+        coarse, fine, finest = (models[n][key][1] for n in (2, 50, 100))
+        assert abs(fine - finest) < 1e-3 < abs(coarse - finest)  # converged by 50, not at 2
+    # the first antiresonance (hub-held first beam mode) is the rig's 2.52 Hz within 2 %
+    assert abs(models[100]["antiresonances_hz"][0] / 2.52 - 1) < 0.02
+    assert 0.004 < models[100]["antiresonance_damping"][0] < 0.006  # tmm-fit: 0.0054, rig ≈ 0.005
+
+
+def test_modes_rejects_bad_element_count(capsys):
+    assert main(["modes", "--elements", "0"]) == 2
+    assert "--elements 0: expected 1..100" in capsys.readouterr().err
