@@ -15,6 +15,7 @@ not report it), status the v1 status bits (0 for legacy).
 
 from __future__ import annotations
 
+import dataclasses
 import errno
 import time
 from urllib.parse import parse_qsl, urlencode, urlsplit
@@ -110,6 +111,10 @@ class Session:
         self.timeout = timeout
         self.dropped = 0
         self.rx_errors = 0
+        self.late = 0  # late commands the device reported (the legacy device cannot)
+        self.info: dict | None = None
+        self._pending: list = []
+        self._n = -1  # tick number of the last sample
 
     def _read_some(self, deadline: float) -> bytes:
         """Block for at least one byte or until ``deadline`` (perf_counter s); b"" on timeout."""
@@ -144,11 +149,7 @@ class V1Session(Session):
     def __init__(self, port, url, timeout):
         super().__init__(port, url, timeout)
         self._decoder = v1.Decoder()
-        self._pending: list = []
         self._last_seq = -1
-        self._n = -1
-        self.info: dict | None = None
-        self.late = 0
         self.stale_samples = 0
 
     def _next_message(self, timeout: float):
@@ -177,7 +178,7 @@ class V1Session(Session):
         while (left := deadline - time.perf_counter()) > 0:
             msg = self._next_message(left)
             if isinstance(msg, v1.Info):
-                self.info = {"protocol": "v1", **{k: getattr(msg, k) for k in msg.__dataclass_fields__}}
+                self.info = {"protocol": "v1", **dataclasses.asdict(msg)}
                 return self.info
         raise StationError(f"no INFO from {self.url} within {HANDSHAKE_TIMEOUT} s: is it a protocol v1 device?")
 
@@ -221,7 +222,7 @@ class V1Session(Session):
                     continue
                 break
             if isinstance(msg, v1.Stopped):
-                stopped = {k: getattr(msg, k) for k in msg.__dataclass_fields__}
+                stopped = dataclasses.asdict(msg)
                 raise DeviceStopped(f"device stopped (reason {msg.reason}) after {msg.ticks} ticks", stopped)
         if self._last_seq < 0:  # the first sample of the run: the device counts from 0
             n = msg.seq
@@ -259,7 +260,7 @@ class V1Session(Session):
         while (left := deadline - time.perf_counter()) > 0:
             msg = self._next_message(left)
             if isinstance(msg, v1.Stopped):
-                return {k: getattr(msg, k) for k in msg.__dataclass_fields__}
+                return dataclasses.asdict(msg)
         return None
 
 
@@ -271,10 +272,6 @@ class LegacySession(Session):
     def __init__(self, port, url, timeout):
         super().__init__(port, url, timeout)
         self._decoder = legacy.TickDecoder()
-        self._pending: list = []
-        self._n = -1
-        self.info: dict | None = None
-        self.late = 0  # the legacy device does not report late commands
         self.accel_offset = 0  # subtracted from every accel sample (zero_accel)
 
     def _read_exact(self, size: int, timeout: float) -> bytes | None:
