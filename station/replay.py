@@ -17,7 +17,6 @@ from typing import Any
 
 import numpy as np
 
-from station.analysis.fit import nrmse_fit
 from station.analysis.metrics import StepMetrics, step_metrics
 from station.control import (
     Compensator,
@@ -28,6 +27,7 @@ from station.control import (
     p_controller,
 )
 from station.errors import StationError
+from station.modelrun import ModelRun, command_quantization, simulate_log  # noqa: F401 (moved; re-exported)
 from station.runlog import RunLog, read_log
 
 ALIGNMENTS = (0, 1)
@@ -338,83 +338,6 @@ def classify_reference(u) -> dict[str, Any]:
 
 
 # --- the model --------------------------------------------------------------------------
-
-def command_quantization(log: RunLog) -> str:
-    """How the log's device turned v into DAC counts (for :func:`station.plant.simulate`).
-
-    Our logs name their protocol: v1 rounds (halves away from zero), legacy truncates;
-    a log of ours without a protocol did not come from a device (e.g. written from a
-    simulation): "none". The rig's logs were recorded with its legacy firmware:
-    truncation toward zero.
-    """
-    if log.format != "station":
-        return "trunc"
-    return {"v1": "round", "legacy": "trunc"}.get(log.meta.get("protocol"), "none")
-
-
-@dataclass
-class ModelRun:
-    """A logged run simulated on the plant (:func:`simulate_log`).
-
-    prediction: dict of arrays as :func:`station.plant.simulate` returns (t, u, v,
-    theta, a, theta_d_hat); theta_measured: the logged θ it is compared with (relative
-    to its first sample in open loop: the rig's encoder is not reset before an
-    open-loop test); fit_pct: NRMSE fit of θ and a, % ({"theta", "accel"}, None where
-    undefined); how: one line saying how the model was driven.
-    """
-
-    prediction: dict
-    theta_measured: np.ndarray
-    fit_pct: dict
-    how: str
-
-
-def simulate_log(log: RunLog, controller, alignment: int | None, plant) -> ModelRun:
-    """Simulate a logged run on the plant as the rig ran it, and fit it to the log.
-
-    Closed loop: the log's controller, reference, clamp and alignment, the device's
-    command quantization (:func:`command_quantization`). Open loop (or no controller):
-    the plant driven by what was applied: ``v_applied`` where the log has it (our
-    logs), else the logged v quantized as the device did.
-
-    Parameters
-    ----------
-    log : RunLog
-    controller : Compensator, OpenLoop or None
-    alignment : int or None
-        The log's computational delay d (None: 1).
-    plant : station.plant.DiscretePlant
-        Reset here; its dt should be the log's.
-
-    Returns
-    -------
-    ModelRun
-    """
-    from station.plant import simulate
-
-    data = log.data
-    u, theta = data["u"], data["theta"]
-    plant.reset()
-    command = command_quantization(log)
-    if controller is None or isinstance(controller, OpenLoop):
-        applied = data["v_applied"]
-        if applied.size and np.all(np.isfinite(applied)):
-            pred = simulate(plant, OpenLoop(), u, alignment=0, v_open=applied)
-            how = "the logged v_applied (open loop)"
-        else:
-            pred = simulate(plant, OpenLoop(), u, alignment=0, v_open=data["v"], command=command)
-            how = f"the logged v (open loop), quantized as the device did ({command})"
-        theta = theta - theta[0] if theta.size else theta
-    else:
-        d = 1 if alignment is None else alignment
-        pred = simulate(plant, controller, u, alignment=d, command=command)
-        how = f"the log's controller and reference, alignment {d}, commands quantized as the device did ({command})"
-    fits = {}
-    for key, meas, sim in (("theta", theta, pred["theta"]), ("accel", data["a"], pred["a"])):
-        fit = nrmse_fit(meas, sim)
-        fits[key] = None if np.isnan(fit) else fit
-    return ModelRun(pred, theta, fits, how)
-
 
 def _model(report: ReplayReport, log: RunLog, controller, n_elements: int) -> None:
     from station.plant import DiscretePlant

@@ -88,7 +88,8 @@ def compare_run(path, plant) -> RunComparison:
         Unreadable log, a log that does not name its controller or has no rows.
     """
     from station.errors import StationError
-    from station.replay import detect_alignment, log_controller, simulate_log
+    from station.modelrun import simulate_log
+    from station.replay import detect_alignment, log_controller
     from station.runlog import read_log
 
     log = read_log(path)
