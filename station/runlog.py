@@ -46,6 +46,9 @@ COLUMNS = ("t", "n", "u", "v", "theta", "a", "theta_d_hat", "v_applied", "status
 """Columns of our run log, in row order (units: s, tick, counts, DAC counts, encoder
 counts, accelerometer counts, encoder counts, DAC counts, status bits, µs)."""
 
+END_PREFIX = "# end "
+"""Start of our log's last line, the run's outcome as JSON (DESIGN.md "Run outcome")."""
+
 MAGIC = "# station-runlog 1"
 """First ``#`` line of our format (version 1)."""
 
@@ -54,11 +57,46 @@ FLUSH_INTERVAL_S = 0.005
 
 _COLUMN_LINE = "\t".join(COLUMNS)
 
-RIG_COLUMN_NAMES = {
-    "t": "t", "n": "n", "u": "u", "v": "v", "$\\theta$": "theta", "theta": "theta", "a": "a",
-    "$\\hat{\\theta}_d$": "theta_d_hat", "theta_d_hat": "theta_d_hat",
+COLUMN_SYNONYMS = {
+    "t": ("t", "time", "time (sec.)", "time (s)", "time [s]", "time_s", "time_sec", "seconds"),
+    "n": ("n", "tick", "ticks", "sample", "index"),
+    "u": ("u", "r", "ref", "reference"),
+    "v": ("v", "cmd", "command", "v_cmd", "dac"),
+    "theta": ("theta", "θ", "$\\theta$", "\\theta", "enc", "encoder", "theta_counts"),
+    "a": ("a", "accel", "acc", "acceleration", "accelerometer", "a_counts"),
+    "theta_d_hat": ("theta_d_hat", "$\\hat{\\theta}_d$", "\\hat{\\theta}_d", "θ̂_d", "thetadhat"),
+    "v_applied": ("v_applied",),
+    "status": ("status",),
+    "latency_us": ("latency_us",),
 }
-"""The rig's column names -> standard names."""
+"""Standard column name -> the names logs use for it (compared case-insensitively,
+whitespace-trimmed): ours, the rig's (``$\\theta$``), its 2014 logs (``Time (sec.)``,
+``accel``) and cut-down copies (``t v theta a``)."""
+
+_SYNONYM_OF = {alias.lower(): std for std, aliases in COLUMN_SYNONYMS.items() for alias in aliases}
+
+SIGNAL_COLUMNS = ("u", "v", "theta", "a")
+"""A log is usable when it has a time base (t or n) and at least one of these."""
+
+RIG_DT = 0.002
+"""The rig's sample time, s (DESIGN.md); t = n·RIG_DT when a log has n but no t."""
+
+
+def standard_column(name: str) -> str:
+    """The standard name of a column as printed in a log (itself when not a known synonym).
+
+    Parameters
+    ----------
+    name : str
+        e.g. ``"Time (sec.)"``, ``"$\\theta$"``, ``"accel"``.
+
+    Returns
+    -------
+    str
+        One of :data:`COLUMNS` (see :data:`COLUMN_SYNONYMS`), else ``name`` stripped.
+    """
+    key = name.strip()
+    return _SYNONYM_OF.get(key.lower(), key)
 
 
 class RunLogError(StationError):
@@ -419,6 +457,19 @@ class RunLog:
         lacks the column), plus any extra columns under their own names.
     header : list of str
         The header lines as in the file (without newlines).
+    layout : str
+        How the file was laid out: "station" (ours), "rig" (``#`` header lines, the last
+        naming the columns) or "columns" (no ``#`` header: a first line of column names,
+        e.g. the rig's 2014 logs ``Time (sec.)	u	theta	accel	v`` and cut-down copies
+        ``t	v	theta	a``; their ``format`` is "rig").
+    sample_time : float or None
+        The sample time found in t, s (median step, rounded to 1 ns; None with fewer
+        than two rows).
+    outcome : dict or None
+        Our log's end record ``# end {json}`` (DESIGN.md "Run outcome"); None when the
+        log has none (the rig's logs, SIGKILL, power loss).
+    notes : list of str
+        What the reader derived or assumed (columns renamed, n derived from t, ...).
     """
 
     path: Path
@@ -426,6 +477,10 @@ class RunLog:
     meta: dict[str, Any]
     data: dict[str, np.ndarray]
     header: list[str] = field(default_factory=list)
+    layout: str = ""
+    sample_time: float | None = None
+    outcome: dict[str, Any] | None = None
+    notes: list[str] = field(default_factory=list)
 
     def __len__(self) -> int:
         return int(self.data["t"].size)
@@ -435,16 +490,39 @@ _KV = re.compile(r"^\s*([A-Za-z_]\w*)\s*=\s*(.*?)\s*$")
 _COEF = re.compile(r"^\s*(\w+)\s+(num|den)\s*=\s*\[(.*)\]\s*$")
 
 
-def _parse_rig_header(path: Path, comment_lines: list[str]) -> tuple[dict[str, Any], list[str]]:
-    """meta and standard column names from the rig's ``#`` lines (the last names the columns)."""
+def _split_names(line: str) -> tuple[list[str], str | None]:
+    """The names of a column-name line and its delimiter (tab, comma, semicolon; None:
+    whitespace)."""
+    for sep in ("\t", ",", ";"):
+        if sep in line:
+            return [c.strip() for c in line.split(sep)], sep
+    return line.split(), None
+
+
+def _map_columns(path: Path, lineno: int, printed: list[str]) -> list[str]:
+    """Standard names of the printed column names; RunLogError when none is usable."""
+    std = [standard_column(c) for c in printed]
+    if not ({"t", "n"} & set(std) and set(SIGNAL_COLUMNS) & set(std)):
+        found = ", ".join(repr(c[:30]) for c in printed[:10]) + (", ..." if len(printed) > 10 else "") or "none"
+        raise RunLogError(f"{path}: line {lineno}: no usable columns: found {found}; expected a time "
+                          f"column (t, time, 'Time (sec.)' or n) and at least one of u, v, "
+                          f"theta ($\\theta$), a (accel)")
+    dup = next((c for c in std if std.count(c) > 1), None)
+    if dup is not None:
+        raise RunLogError(f"{path}: line {lineno}: column {dup!r} appears twice "
+                          f"(as {', '.join(repr(p) for p, s in zip(printed, std) if s == dup)})")
+    return std
+
+
+def _parse_rig_header(path: Path, comment_lines: list[str]) -> tuple[dict[str, Any], list[str], str | None]:
+    """meta, standard column names and delimiter from the rig's ``#`` lines (the last
+    names the columns)."""
     if not comment_lines:
         raise RunLogError(f"{path}: line 1: expected '#' header lines naming the columns")
     meta: dict[str, Any] = {}
     *info, col_line = comment_lines
-    names = [c.strip() for c in col_line[1:].split("\t")]
-    if len(names) < 2 or "t" not in names:
-        raise RunLogError(f"{path}: line {len(comment_lines)}: expected the column-name line "
-                          f"(#t<TAB>n<TAB>u<TAB>v<TAB>$\\theta$<TAB>a...), got {col_line!r}")
+    names, sep = _split_names(col_line[1:])
+    std = _map_columns(path, len(comment_lines), names)
     meta["columns"] = names
     other = []
     for i, line in enumerate(info):
@@ -472,13 +550,13 @@ def _parse_rig_header(path: Path, comment_lines: list[str]) -> tuple[dict[str, A
             other.append(body)
     if other:
         meta["notes"] = other
-    std = [RIG_COLUMN_NAMES.get(name, name) for name in names]
-    return meta, std
+    return meta, std, sep
 
 
 def _parse_rows(path: Path, lines: list[str], first_lineno: int, names: list[str],
-                ends_with_newline: bool, fmt: str) -> tuple[np.ndarray, int]:
-    """Rows -> array (rows, len(names)); returns also the number of torn rows skipped (0/1)."""
+                ends_with_newline: bool, fmt: str, sep: str | None = "\t") -> tuple[np.ndarray, int]:
+    """Rows -> array (rows, len(names)); returns also the number of torn rows skipped (0/1).
+    ``sep``: the delimiter (None: any whitespace)."""
     ncol = len(names)
     rows: list[list[float]] = []
     torn = 0
@@ -490,10 +568,11 @@ def _parse_rows(path: Path, lines: list[str], first_lineno: int, names: list[str
         if not line.strip() or line.startswith("#"):
             continue
         lineno = first_lineno + idx
-        parts = line.split("\t")
+        parts = line.split(sep)
         problem = None
         if len(parts) != ncol:
-            problem = f"expected {ncol} tab-separated numbers, got {len(parts)}"
+            what = {"\t": "tab", ",": "comma", ";": "semicolon", None: "whitespace"}[sep]
+            problem = f"expected {ncol} {what}-separated numbers, got {len(parts)}"
         else:
             try:
                 values = [float(p) for p in parts]
@@ -524,6 +603,12 @@ def _is_number(text: str) -> bool:
 def read_log(path: str | Path) -> RunLog:
     """Read a run log, ours or the rig's (format detected from the header).
 
+    Layouts: ours; the rig's ``#`` header whose last line names the columns; or, without
+    a ``#`` header, a first line of column names (tab, comma, semicolon or whitespace
+    separated; the rig's 2014 logs and cut-down copies). Columns are mapped to the
+    standard names by :data:`COLUMN_SYNONYMS`; n is derived from t when missing (t from
+    n at 0.002 s when t is missing). A last line ``# end {json}`` is the run's outcome.
+
     Parameters
     ----------
     path : str or Path
@@ -533,13 +618,15 @@ def read_log(path: str | Path) -> RunLog:
     RunLog
         ``data`` holds every name of :data:`COLUMNS` (NaN-filled where the format lacks
         the column; the rig's logs have no v_applied, status, latency_us, and no
-        theta_d_hat without accelerometer feedback).
+        theta_d_hat without accelerometer feedback; cut-down copies may lack u, n, a),
+        ``sample_time`` the sample time found, ``notes`` what was derived.
 
     Raises
     ------
     RunLogError
-        File missing or unreadable, unknown format, bad header, or a malformed row other
-        than a torn last line (names the file, line number and what was expected).
+        File missing or unreadable, unknown format, bad header, no usable columns (lists
+        the columns found and expected), or a malformed row other than a torn last line
+        (names the file, line number and what was expected).
 
     Warns
     -----
@@ -561,8 +648,10 @@ def read_log(path: str | Path) -> RunLog:
     if not lines:
         raise RunLogError(f"{path}: empty file, expected a run log header")
 
+    reader_notes: list[str] = []
+    sep: str | None = "\t"
     if MAGIC in lines[:2]:
-        fmt = "station"
+        fmt = layout = "station"
         header = lines[:3]
         if len(header) < 3:
             raise RunLogError(f"{path}: line {len(header) + 1}: expected the header to go on "
@@ -585,20 +674,77 @@ def read_log(path: str | Path) -> RunLog:
         if tuple(names[:len(COLUMNS)]) != COLUMNS:
             raise RunLogError(f"{path}: line {col_no}: expected the column names {_COLUMN_LINE!r}, got {col_line!r}")
     elif lines[0].startswith("#"):
-        fmt = "rig"
+        fmt = layout = "rig"
         n_head = 0
         while n_head < len(lines) and lines[n_head].startswith("#"):
             n_head += 1
         header = lines[:n_head]
-        meta, names = _parse_rig_header(path, header)
+        meta, names, sep = _parse_rig_header(path, header)
         first = n_head
     else:
-        raise RunLogError(f"{path}: line 1: expected '{MAGIC}' (station run log) or the rig's "
-                          f"'#' header, got {lines[0][:60]!r}")
+        # No '#' header: a first line of column names (the rig's 2014 logs, cut-down copies).
+        printed, sep = _split_names(lines[0])
+        if printed and all(_is_number(c) for c in printed):
+            raise RunLogError(f"{path}: line 1: expected '{MAGIC}' (station run log), the rig's '#' "
+                              f"header or a line of column names, got numbers {lines[0][:60]!r}")
+        fmt, layout = "rig", "columns"
+        names = _map_columns(path, 1, printed)
+        meta = {"columns": printed}
+        header = lines[:1]
+        first = 1
+        renamed = [f"{p!r} -> {s}" for p, s in zip(printed, names) if p != s]
+        if renamed:
+            reader_notes.append("columns named by synonyms: " + ", ".join(renamed))
 
-    arr, _ = _parse_rows(path, lines[first:], first + 1, names, ends_with_newline, fmt)
+    arr, _ = _parse_rows(path, lines[first:], first + 1, names, ends_with_newline, fmt, sep)
     n = arr.shape[0]
     data = {name: np.full(n, np.nan) for name in COLUMNS}
     for j, name in enumerate(names):
         data[name] = arr[:, j].copy()
-    return RunLog(path=path, format=fmt, meta=meta, data=data, header=header)
+    sample_time = _complete_time_base(data, names, reader_notes)
+    return RunLog(path=path, format=fmt, meta=meta, data=data, header=header, layout=layout,
+                  sample_time=sample_time, outcome=_end_record(path, lines, ends_with_newline),
+                  notes=reader_notes)
+
+
+def _complete_time_base(data: dict[str, np.ndarray], names: list[str], notes: list[str]) -> float | None:
+    """Fill t from n (at the rig's 0.002 s) or n from t, in place; return the sample time
+    found in t (None with fewer than two rows)."""
+    t, n = data["t"], data["n"]
+    if "t" not in names and "n" in names:
+        data["t"] = t = n * RIG_DT
+        notes.append(f"no time column: t = n * {RIG_DT} s (the rig's sample time)")
+    if t.size < 2 or not np.all(np.isfinite(t)):
+        return None
+    steps = np.diff(t)
+    dt = float(round(float(np.median(steps)), 9))
+    if dt <= 0:
+        return None
+    if "n" not in names:
+        data["n"] = np.round((t - t[0]) / dt)
+        notes.append(f"no sample column: n derived from t (sample time {dt:g} s)")
+    if np.max(np.abs(steps - dt)) > 0.01 * dt:
+        notes.append(f"t is not evenly spaced (steps {np.min(steps):g} .. {np.max(steps):g} s; "
+                     f"median {dt:g} s used)")
+    return dt
+
+
+def _end_record(path: Path, lines: list[str], ends_with_newline: bool) -> dict[str, Any] | None:
+    """The run's outcome from a last ``# end {json}`` line (DESIGN.md "Run outcome"), or None."""
+    last = len(lines) - 1
+    while last >= 0 and not lines[last].strip():
+        last -= 1
+    if last < 0 or not lines[last].startswith(END_PREFIX):
+        return None
+    try:
+        outcome = json.loads(lines[last][len(END_PREFIX):])
+    except (json.JSONDecodeError, RecursionError) as exc:
+        if last == len(lines) - 1 and not ends_with_newline:  # torn while being written
+            warnings.warn(f"{path}: line {last + 1}: torn end record skipped (outcome unknown)",
+                          RuntimeWarning, stacklevel=3)
+            return None
+        msg = exc.msg if isinstance(exc, json.JSONDecodeError) else "nested too deeply"
+        raise RunLogError(f"{path}: line {last + 1}: end record is not valid JSON ({msg})") from None
+    if not isinstance(outcome, dict):
+        raise RunLogError(f"{path}: line {last + 1}: expected a JSON object after '{END_PREFIX.strip()}'")
+    return outcome
