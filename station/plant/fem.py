@@ -207,6 +207,27 @@ class SecondOrderModel:
         self.M, self.C, self.K, self.b = M, C, K, b
 
 
+def modal_basis(params: Params, n_elements: int = 4) -> tuple[SecondOrderModel, np.ndarray, np.ndarray, np.ndarray]:
+    """The undamped modes under `state_matrices`' state x = [S η, η'], q = Φ η.
+
+    Returns
+    -------
+    model : SecondOrderModel
+    Phi : ndarray, shape (n_dof, n_dof)
+        Mass-normalized mode shapes (scipy.linalg.eigh of K, M), rigid-body mode first.
+    omega : ndarray, shape (n_dof,)
+        Natural frequencies, rad/s (exactly 0 for the rigid-body mode).
+    scale : ndarray, shape (n_dof,)
+        S = diag(scale): omega, 1 for the rigid-body mode.
+    """
+    m = SecondOrderModel(params, n_elements)
+    w2, Phi = scipy.linalg.eigh(m.K, m.M)
+    omega = np.sqrt(np.clip(w2, 0.0, None))
+    omega[0] = 0.0  # the single rigid-body mode (K r = 0 up to rounding)
+    scale = np.where(omega > 0.0, omega, 1.0)
+    return m, Phi, omega, scale
+
+
 def state_matrices(params: Params, n_elements: int = 4) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """First-order realization x' = A x + B v, y = C x of the SFLR, in scaled modal form.
 
@@ -238,12 +259,8 @@ def state_matrices(params: Params, n_elements: int = 4) -> tuple[np.ndarray, np.
         a_gain·(M⁻¹ b)_tip is zero (the torque acts on the motor only, DESIGN.md), so
         D = 0.
     """
-    m = SecondOrderModel(params, n_elements)
+    m, Phi, omega, scale = modal_basis(params, n_elements)
     n_dof = m.M.shape[0]
-    w2, Phi = scipy.linalg.eigh(m.K, m.M)
-    omega = np.sqrt(np.clip(w2, 0.0, None))
-    omega[0] = 0.0  # the single rigid-body mode (K r = 0 up to rounding)
-    scale = np.where(omega > 0.0, omega, 1.0)
     damping = Phi.T @ m.C @ Phi
     Z = np.zeros((n_dof, n_dof))
     A = np.block([[Z, np.diag(scale)], [-np.diag(omega**2 / scale), -damping]])

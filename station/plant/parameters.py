@@ -136,6 +136,30 @@ def load_params(name_or_path: str | Path = "tmm-fit") -> Params:
         raise StationError(f"{path}: parameter file not found (packaged sets: {known})") from None
     except tomllib.TOMLDecodeError as exc:
         raise StationError(f"{path}: not valid TOML: {exc}") from None
+    return params_from_dict(raw, path)
+
+
+def params_from_dict(raw: dict, where: str | Path) -> Params:
+    """A parameter set from a mapping of the table's names to values (SI units).
+
+    Parameters
+    ----------
+    raw : dict
+        As a parameter-set TOML file holds them (``name`` and ``beam_beta`` optional).
+    where : str or Path
+        Named in error messages (a file, or a file and its table).
+
+    Returns
+    -------
+    Params
+
+    Raises
+    ------
+    StationError
+        A field missing, unknown, not a finite number or out of range (naming ``where``
+        and the field).
+    """
+    path = where
     values: dict[str, object] = {}
     for f in fields(Params):
         if f.name not in raw:
@@ -154,5 +178,5 @@ def load_params(name_or_path: str | Path = "tmm-fit") -> Params:
     unknown = sorted(set(raw) - {f.name for f in fields(Params)})
     if unknown:
         raise StationError(f"{path}: unknown field '{unknown[0]}'")
-    values.setdefault("name", path.stem)
+    values.setdefault("name", Path(str(path)).stem)
     return Params(**values)

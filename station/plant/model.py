@@ -1,0 +1,402 @@
+"""A model of the rig: a parameter set, an element count and effects (DESIGN.md "Model file").
+
+One object everywhere a model is used (simulated device, replay, compare, bode, modes,
+diagnosis) and one TOML file::
+
+    name = "rig-2013"            # free text
+    params = "tmm-fit"           # a built-in parameter set, or a path relative to this file
+    n_elements = 4
+    [effects]                    # optional; names and units of station.plant.effects
+    coulomb_friction = 5.0
+    "param:drive_c" = 2.0
+
+Built-in models live in ``station/plant/models/<name>.toml`` ("tmm-fit": the nominal
+4-element model). ``params`` may also be an inline table of the parameter set's fields
+(what :meth:`Model.to_toml` writes for a set that is not a file).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import functools
+import json
+import math
+import re
+import tomllib
+from collections.abc import Mapping
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any, NamedTuple
+
+import numpy as np
+
+from station import DT
+from station.errors import StationError
+from station.plant.effects import EFFECTS, check_effects
+from station.plant.parameters import PARAMS_DIR, Params, load_params, params_from_dict
+
+MODELS_DIR = Path(__file__).resolve().parent / "models"
+"""Folder of the built-in models (``<name>.toml``)."""
+
+SUBSTEPS = 10
+"""Default sub-steps per sample when friction or backlash act (tests/test_model_simulate.py
+shows the θ of a 2 s run converged to well under a count at this grid)."""
+
+_KEYS = ("name", "params", "n_elements", "effects")
+
+
+@dataclass(frozen=True)
+class Model:
+    """A parameter set, an element count and effects.
+
+    Attributes
+    ----------
+    name : str
+        Free text shown in reports and log headers.
+    params : Params
+        The nominal parameter set (param:NAME ratios are not folded in).
+    n_elements : int, default 4
+        Beam elements, 1..100.
+    effects : tuple of (str, float) pairs
+        Sorted by name, no neutral values (see :meth:`effect_dict`); validated with
+        :func:`station.plant.effects.check_effects`.
+    params_source : str, default "tmm-fit"
+        Where ``params`` came from: a built-in set's name or a file path.
+    """
+
+    name: str
+    params: Params
+    n_elements: int = 4
+    effects: tuple[tuple[str, float], ...] = ()
+    params_source: str = "tmm-fit"
+
+    def __post_init__(self) -> None:
+        if isinstance(self.n_elements, bool) or int(self.n_elements) != self.n_elements \
+                or not 1 <= self.n_elements <= 100:
+            raise StationError(f"model {self.name!r}: n_elements must be an integer in 1..100, got {self.n_elements!r}")
+        values = check_effects(dict(self.effects), f"model {self.name!r}")
+        pairs = tuple(sorted((k, v) for k, v in values.items() if v != EFFECTS[k].neutral))
+        object.__setattr__(self, "n_elements", int(self.n_elements))
+        object.__setattr__(self, "effects", pairs)
+
+    def effect_dict(self) -> dict[str, float]:
+        """The effects as {name: value} (only non-neutral ones)."""
+        return dict(self.effects)
+
+    def effect(self, name: str) -> float:
+        """The value of one effect, its neutral value when absent."""
+        return self.effect_dict().get(name, EFFECTS[name].neutral)
+
+    def with_effects(self, effects: Mapping[str, float], name: str | None = None) -> Model:
+        """A copy with ``effects`` updated over this model's (a neutral value removes one).
+
+        Raises
+        ------
+        StationError
+            Unknown effect or value out of range.
+        """
+        merged = self.effect_dict()
+        merged.update(check_effects(effects, f"model {name or self.name!r}"))
+        return dataclasses.replace(self, name=self.name if name is None else name, effects=tuple(merged.items()))
+
+    def nominal(self) -> Model:
+        """The same parameter set and element count, without effects."""
+        return dataclasses.replace(self, effects=())
+
+    @property
+    def has_plant_effects(self) -> bool:
+        """True when friction or backlash act (sub-stepped simulation)."""
+        return any(EFFECTS[k].kind == "plant" for k, _ in self.effects)
+
+    def linear_params(self) -> Params:
+        """The parameter set of the linear part: param:NAME ratios applied, then the
+        beam damping (``beam_beta``) that gives the beam_damping effect's first-mode ζ.
+
+        A beam_damping at or below what the (scaled) set has without beam damping
+        leaves ``beam_beta`` = 0.
+        """
+        linear = tuple((k, v) for k, v in self.effects if EFFECTS[k].kind == "linear")
+        return _linear_params(self.params, self.n_elements, linear)
+
+    def linear_form(self, dt: float = DT, substeps: int | None = None) -> LinearForm:
+        """The modal form of the linear part, cached per (parameters, elements, dt, sub-steps).
+
+        Parameters
+        ----------
+        dt : float
+            Sample time, s.
+        substeps : int, optional
+            Sub-steps per sample when friction or backlash act (default :data:`SUBSTEPS`);
+            ignored (1) without them.
+        """
+        m = (SUBSTEPS if substeps is None else int(substeps)) if self.has_plant_effects else 0
+        return linear_form(self.linear_params(), self.n_elements, float(dt), m)
+
+    def plant(self, dt: float = DT, substeps: int | None = None):
+        """A plant stepped tick by tick with this model's effects (for the simulated device).
+
+        Returns
+        -------
+        station.plant.simulate.ModelPlant
+            ``reset()``, ``outputs() -> (theta, a)``, ``advance(v)``; equal to
+            :func:`station.plant.simulate` sample for sample.
+        """
+        from station.plant.simulate import ModelPlant
+
+        return ModelPlant(self, dt, substeps)
+
+    def to_json(self) -> dict[str, Any]:
+        """JSON-able description for log headers and reports: name, params (source),
+        parameters (the set's values), n_elements, effects."""
+        return {"name": self.name, "params": self.params_source, "parameters": _params_dict(self.params),
+                "n_elements": self.n_elements, "effects": self.effect_dict()}
+
+    def to_toml(self) -> str:
+        """The model file's text (DESIGN.md "Model file"); :func:`load_model` reads it back."""
+        lines = [f"name = {json.dumps(self.name)}"]
+        inline = not _source_gives(self.params_source, self.params)
+        if not inline:
+            lines.append(f"params = {json.dumps(self.params_source)}")
+        lines.append(f"n_elements = {self.n_elements}")
+        if self.effects:
+            lines += ["", "[effects]"]
+            lines += [f"{json.dumps(k)} = {_toml_float(v)}" for k, v in self.effects]
+        if inline:
+            lines += ["", "[params]"]
+            for k, v in _params_dict(self.params).items():
+                lines.append(f"{k} = {json.dumps(v) if isinstance(v, str) else _toml_float(v)}")
+        return "\n".join(lines) + "\n"
+
+    def save(self, path: str | Path) -> None:
+        """Write :meth:`to_toml` to ``path``."""
+        Path(path).write_text(self.to_toml())
+
+
+def _params_dict(params: Params) -> dict[str, Any]:
+    return {f.name: getattr(params, f.name) for f in dataclasses.fields(params)}
+
+
+def _toml_float(x: float) -> str:
+    if math.isinf(x):
+        return "inf" if x > 0 else "-inf"
+    return repr(float(x))
+
+
+def _source_gives(source: str, params: Params) -> bool:
+    try:
+        return load_params(source) == params
+    except StationError:
+        return False
+
+
+def _is_path(text: str) -> bool:
+    return text.endswith(".toml") or "/" in text or "\\" in text
+
+
+def _line_of(text: str, key: str) -> str:
+    pattern = re.compile(rf'^\s*("{re.escape(key)}"|{re.escape(key)})\s*=', re.M)
+    m = pattern.search(text)
+    return f" line {text.count(chr(10), 0, m.start()) + 1}:" if m else ""
+
+
+def builtin_models() -> list[str]:
+    """Names of the built-in models (``station/plant/models/*.toml``)."""
+    return sorted(p.stem for p in MODELS_DIR.glob("*.toml"))
+
+
+def load_model(name_or_path: str | Path = "tmm-fit", n_elements: int | None = None,
+               params: str | Path | None = None) -> Model:
+    """Read a model: a built-in's name or a model file (DESIGN.md "Model file").
+
+    Parameters
+    ----------
+    name_or_path : str or Path, default "tmm-fit"
+        A built-in model's name (``station/plant/models/<name>.toml``) or a path to a
+        TOML model file.
+    n_elements : int, optional
+        Overrides the file's element count (``--elements``).
+    params : str or Path, optional
+        Overrides the file's parameter set (``--params``): a built-in set's name or a
+        parameter-set file.
+
+    Returns
+    -------
+    Model
+
+    Raises
+    ------
+    StationError
+        Missing file, invalid TOML, unknown key, a value of the wrong type, an unknown
+        effect or a value out of range: one line naming the file, line and key.
+    """
+    text_name = str(name_or_path)
+    path = Path(text_name) if _is_path(text_name) else MODELS_DIR / f"{text_name}.toml"
+    try:
+        text = path.read_text()
+    except FileNotFoundError:
+        raise StationError(f"{path}: model file not found (built-in models: {', '.join(builtin_models())})") from None
+    except OSError as exc:
+        raise StationError(f"{path}: cannot read the model file: {exc.strerror}") from None
+    try:
+        raw = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise StationError(f"{path}: not valid TOML: {exc}") from None
+
+    def bad(key: str, what: str) -> StationError:
+        return StationError(f"{path}:{_line_of(text, key)} {key}: {what}")
+
+    unknown = [k for k in raw if k not in _KEYS]
+    if unknown:
+        raise bad(unknown[0], f"unknown key (expected {', '.join(_KEYS)})")
+    name = raw.get("name", path.stem)
+    if not isinstance(name, str):
+        raise bad("name", f"expected a string, got {name!r}")
+    n = raw.get("n_elements", 4) if n_elements is None else n_elements
+    if isinstance(n, bool) or not isinstance(n, int) or not 1 <= n <= 100:
+        raise bad("n_elements", f"expected an integer in 1..100, got {n!r}")
+    source = raw.get("params", "tmm-fit") if params is None else str(params)
+    if isinstance(source, dict):
+        p = params_from_dict({"name": name, **source}, f"{path} [params]")
+        source = f"{path} [params]"
+    elif isinstance(source, str):
+        if params is None and _is_path(source) and not Path(source).is_absolute():
+            source = str(path.parent / source)  # relative to the model file
+        elif not _is_path(source) and not (PARAMS_DIR / f"{source}.toml").exists():
+            known = ", ".join(sorted(q.stem for q in PARAMS_DIR.glob("*.toml")))
+            raise bad("params", f"unknown parameter set {source!r} (built-in sets: {known})")
+        p = load_params(source)
+    else:
+        raise bad("params", f"expected a parameter set's name or path, got {source!r}")
+    effects = raw.get("effects", {})
+    if not isinstance(effects, dict):
+        raise bad("effects", "expected a table [effects]")
+    for key, value in effects.items():
+        try:
+            check_effects({key: value})
+        except StationError as exc:
+            raise bad(key, str(exc)) from None
+    return Model(name=name, params=p, n_elements=n, effects=tuple(effects.items()), params_source=source)
+
+
+def as_model(model: Model | str | Path | None, n_elements: int | None = None,
+             params: str | Path | None = None) -> Model:
+    """A Model as given, or loaded by :func:`load_model` (None: "tmm-fit")."""
+    if isinstance(model, Model):
+        if n_elements is not None:
+            model = dataclasses.replace(model, n_elements=n_elements)
+        if params is not None:
+            model = dataclasses.replace(model, params=load_params(params), params_source=str(params))
+        return model
+    return load_model("tmm-fit" if model is None else model, n_elements, params)
+
+
+# --- the linear part, cached ------------------------------------------------------------
+
+@functools.lru_cache(maxsize=512)
+def _linear_params(params: Params, n_elements: int, linear: tuple[tuple[str, float], ...]) -> Params:
+    from station.plant.modes import with_beam_damping
+
+    values = dict(linear)
+    ratios = {k.split(":", 1)[1]: v for k, v in values.items() if k.startswith("param:")}
+    p = dataclasses.replace(params, **{k: getattr(params, k) * r for k, r in ratios.items()}) if ratios else params
+    zeta = values.get("beam_damping")
+    if zeta is not None:
+        try:
+            p = with_beam_damping(p, zeta, n_elements)
+        except ValueError:  # at or below the set's own first-mode damping: no beam damping
+            p = dataclasses.replace(p, beam_beta=0.0)
+    return p
+
+
+class LinearForm(NamedTuple):
+    """Diagonal (modal) form of the exact-ZOH linear plant on a (sub-)step grid.
+
+    The state in modal coordinates z (complex, shape (n,)) evolves per step of
+    h = dt / substeps as z ← lam·z + bm·v + bp·T, v in DAC counts (torque k_tau·v on the
+    motor), T an extra torque pair, N·m, +T on the motor and −T on the base.
+
+    Attributes
+    ----------
+    lam, bm, bp : ndarray of complex, shape (n,)
+    cm : ndarray of complex, shape (2, n)
+        Sample outputs Re(cm @ z): theta (encoder counts), a (accelerometer counts).
+    co : ndarray of complex, shape (4, n)
+        Re(co @ z): δ = θ_motor − θ_base (rad), δ' (rad/s), ω_motor (rad/s), and
+        ω_motor after one free step (rows of co[2]·lam). Zero when ``substeps`` is 0.
+    vinv : ndarray of complex, shape (n, n)
+        Maps a state of `fem.state_matrices` into z. With sub-steps only one mode of
+        each complex-conjugate pair is kept (the state is real), its outputs counted
+        twice in cm and co, so n is about half the state count.
+    gw_v, gw_p : float
+        Change of ω_motor over one step per DAC count and per N·m of T.
+    substeps : int
+        Steps per sample; 0: sampled at dt by `DiscretePlant.modal_form` (no friction
+        or backlash: exactly today's plant), with bp and co zero.
+    """
+
+    lam: np.ndarray
+    bm: np.ndarray
+    bp: np.ndarray
+    cm: np.ndarray
+    co: np.ndarray
+    vinv: np.ndarray
+    gw_v: float
+    gw_p: float
+    substeps: int
+
+
+@functools.lru_cache(maxsize=256)
+def linear_form(params: Params, n_elements: int, dt: float, substeps: int) -> LinearForm:
+    """The (cached) :class:`LinearForm` of a parameter set.
+
+    Parameters
+    ----------
+    params : Params
+    n_elements : int
+    dt : float
+        Sample time, s.
+    substeps : int
+        0: sampled at dt exactly as `DiscretePlant` (bp, co zero); M >= 1: sub-step
+        grid dt / M with the outputs friction and backlash need.
+    """
+    import scipy.linalg
+    import scipy.signal
+
+    from station.plant.discrete import DiscretePlant
+    from station.plant.fem import modal_basis, state_matrices
+
+    if substeps == 0:
+        lam, bm, cm, vinv = DiscretePlant(params, n_elements, dt).modal_form()
+        n = lam.size
+        zeros = np.zeros(n, complex)
+        return LinearForm(lam, bm, zeros, np.ascontiguousarray(cm), np.zeros((4, n), complex), vinv, 0.0, 0.0, 0)
+    A, B, C = state_matrices(params, n_elements)
+    m, Phi, _, scale = modal_basis(params, n_elements)
+    n_dof = Phi.shape[0]
+    pair = np.zeros(n_dof)
+    pair[0], pair[m.base] = 1.0, -1.0
+    Bp = np.concatenate([np.zeros(n_dof), Phi.T @ pair])
+    rows = np.zeros((3, 2 * n_dof))
+    rows[0, :n_dof] = (Phi[0] - Phi[m.base]) / scale  # δ = θ_m − θ_b
+    rows[1, n_dof:] = Phi[0] - Phi[m.base]             # δ'
+    rows[2, n_dof:] = Phi[0]                            # ω_m
+    h = dt / substeps
+    Ad, Bd, _, _, _ = scipy.signal.cont2discrete((A, np.column_stack([B[:, 0], Bp]), C, np.zeros((2, 2))),
+                                                 h, method="zoh")
+    lam, V = scipy.linalg.eig(Ad)
+    vinv = scipy.linalg.lu_solve(scipy.linalg.lu_factor(V), np.eye(V.shape[0]))
+    # the state is real: keep one of each conjugate pair (LAPACK returns exact conjugates)
+    # and count its output twice, which halves the work per sub-step
+    keep = lam.imag >= 0.0
+    weight = np.where(lam.imag > 0.0, 2.0, 1.0)[keep]
+    lam, vinv = lam[keep], vinv[keep]
+    cm, rows_v = (C @ V)[:, keep] * weight, (rows @ V)[:, keep] * weight
+    bm, bp = vinv @ Bd[:, 0], vinv @ Bd[:, 1]
+    co = np.vstack([rows_v, rows_v[2] * lam])
+    gw_v, gw_p = float((rows_v[2] @ bm).real), float((rows_v[2] @ bp).real)
+    return LinearForm(lam, bm, bp, np.ascontiguousarray(cm), np.ascontiguousarray(co), vinv, gw_v, gw_p,
+                      int(substeps))
+
+
+__all__ = ["MODELS_DIR", "SUBSTEPS", "LinearForm", "Model", "as_model", "builtin_models", "linear_form",
+           "load_model"]
