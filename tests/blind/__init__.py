@@ -1,0 +1,8 @@
+"""Blind test generator: rig-format logs with a hidden effect, from an independent model.
+
+Written from ../shared/DESIGN.md alone, importing nothing from ``station.plant`` or
+``station.control`` (numpy/scipy only), so that tests of the model diagnosis never see logs
+made by the model they fit. ``fem`` assembles the plant, ``rig`` runs the rig's timing,
+compensators, amplifier and sensors with friction and backlash integrated on a sub-step
+grid, ``generator`` writes the rig's log files (:func:`generator.write_case`).
+"""
