@@ -14,10 +14,15 @@ simulated hub angle bounded; open loop: no eigenvalue of Ad outside the unit cir
 Targets (issue "FEM model ..."): n = 4 >= 1000x real time and >= 50x the baseline;
 n = 100 >= 50x real time; lead + accel stable at every n.
 
+Then a Model with effects (``bench_effects``): one 1000-sample lead + accel run with
+Coulomb friction, backlash (sub-stepped) or amplifier effects, in ms and as a ratio to
+the same Model without effects (target: friction under ~2 ms).
+
 Usage: ``python scripts/bench_sim.py [--elements 1 4 10 100] [--baseline-max 10]
 [--repeats 5] [--json FILE]``. The JSON is
 ``{"cases": [{"n_elements", "controller", "seconds", "baseline_seconds",
-"realtime_factor", "baseline_ratio", "stable"}]}`` (baseline fields null where not run).
+"realtime_factor", "baseline_ratio", "stable"}], "effects": [{"effects", "seconds", "ratio"}]}``
+(baseline fields null where not run).
 """
 
 from __future__ import annotations
@@ -140,6 +145,40 @@ def bench(elements=(1, 4, 10, 100), controllers=tuple(CASES), baseline_max: int 
     return {"cases": cases}
 
 
+EFFECT_CASES = {  # a 1000-sample lead + accel run (step 200) of the 4-element model with these effects
+    "none": {},
+    "coulomb_friction": {"coulomb_friction": 10.0},
+    "backlash": {"backlash": 10.0},
+    "friction+backlash": {"coulomb_friction": 10.0, "backlash": 10.0},
+    "amplifier": {"saturation": 150.0, "deadzone": 5.0, "delay": 2.0},
+}
+
+
+def bench_effects(repeats: int = 20, out=sys.stdout) -> list[dict]:
+    """Time `simulate` on a Model with effects (the diagnosis's inner loop) against none.
+
+    Returns ``[{"effects", "seconds", "ratio"}]``: best of ``repeats`` after the JIT
+    warm-up, and the ratio to the run without effects. Target: friction under ~2 ms.
+    """
+    from station.plant.model import load_model
+
+    nominal = load_model()
+    controller = make_controller("lead-accel")
+    u = step_reference(200.0, 1000, at_tick=10)
+    rows = []
+    for label, effects in EFFECT_CASES.items():
+        model = nominal.with_effects(effects)
+        simulate(model, controller, u, command="trunc")  # compile, cache the modal form
+        seconds = _best_time(lambda m=model: simulate(m, controller, u, command="trunc"), repeats)
+        rows.append({"effects": label, "seconds": seconds})
+    for row in rows:
+        row["ratio"] = row["seconds"] / rows[0]["seconds"]
+        if out:
+            print(f"model with {row['effects']:<18} 1000 samples: {row['seconds'] * 1e3:7.3f} ms "
+                  f"({row['ratio']:.1f}x no effects)", file=out, flush=True)
+    return rows
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--elements", type=int, nargs="+", default=[1, 4, 10, 100])
@@ -149,6 +188,7 @@ def main(argv=None) -> int:
     ap.add_argument("--json", metavar="FILE")
     args = ap.parse_args(argv)
     result = bench(args.elements, args.controllers, args.baseline_max, args.repeats)
+    result["effects"] = bench_effects(max(args.repeats, 20))
     if args.json:
         with open(args.json, "w") as fh:
             json.dump(result, fh, indent=1)

@@ -89,8 +89,11 @@ def test_plain_python_kernel_matches_compiled():
     lam, bm, cm, vinv = plant.modal_form()
     gnum, gden = simulate_module._coeffs(controller.gth)
     anum, aden = simulate_module._coeffs(controller.ga)
-    args = (lam, bm, np.ascontiguousarray(cm), np.zeros(lam.size, complex), u, np.zeros(1), False, True,
-            gnum, gden, anum, aden, True, 200.0, 1, True, 1)  # command quantization: round
+    n = lam.size
+    args = (lam, bm, np.zeros(n, complex), np.ascontiguousarray(cm), np.zeros((4, n), complex), 0.0, 0.0, 0,
+            np.zeros(n, complex), u, np.zeros(1), False, True,
+            gnum, gden, anum, aden, True, 200.0, 1, True, 1,  # command quantization: round
+            np.inf, 0.0, 0, 1.0, 0.0, 0.0, 0.0, 0.0)  # no effects
     plain = simulate_module._loop(*args)
     compiled = simulate_module._kernel(*args)
     for x, y in zip(plain, compiled):
