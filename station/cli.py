@@ -9,10 +9,12 @@ from __future__ import annotations
 
 import argparse
 import importlib
+import signal
 import sys
 
 from station import __version__
 from station.errors import StationError
+from station.signals import StopSignal
 
 COMMANDS = ("step", "replay", "sim_device", "bode", "compare", "modes")
 """Modules of :mod:`station.commands`, in the order ``--help`` lists them."""
@@ -39,18 +41,37 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+def _raise_on_sigterm(signum, frame):
+    raise StopSignal(signum)
+
+
 def main(argv: list[str] | None = None) -> int:
-    """Entry point of the ``station`` console script; returns the exit code."""
-    parser = build_parser()
-    args = parser.parse_args(argv)
+    """Entry point of the ``station`` console script; returns the exit code.
+
+    SIGINT or SIGTERM at any moment outside a run (start-up imports included) ends the
+    process with one line naming the signal and exit code 130 / 143; during a run the
+    loop handles them (command 0 and stop first, see :mod:`station.signals`).
+    """
     try:
+        old = signal.signal(signal.SIGTERM, _raise_on_sigterm)
+    except (ValueError, OSError):  # not the main thread: leave signals alone
+        old = None
+    try:
+        parser = build_parser()
+        args = parser.parse_args(argv)
         return int(args._run(args) or 0)
     except StationError as exc:
         print(f"station: error: {exc}", file=sys.stderr)
         return 2
     except KeyboardInterrupt:
-        print("station: interrupted", file=sys.stderr)
+        print("station: stopped by SIGINT", file=sys.stderr)
         return 130
+    except StopSignal as exc:
+        print(f"station: stopped by {exc}", file=sys.stderr)
+        return exc.exit_code
+    finally:
+        if old is not None:
+            signal.signal(signal.SIGTERM, old)
 
 
 if __name__ == "__main__":

@@ -21,10 +21,11 @@ from station import DT, __version__
 from station.analysis.metrics import StepMetrics, step_metrics
 from station.control import file_reference, make_controller, pulse_reference, step_reference, swept_sine_reference
 from station.errors import StationError
-from station.link import open_session
+from station.link import LinkLimits, open_session
 from station.protocol import legacy
 from station.loop import RunResult, run_loop
 from station.runlog import RunLogWriter, read_log
+from station.signals import StopSignals
 
 DEFAULT_PORT = "sim://"
 DEFAULT_CONTROLLER = "lead"
@@ -105,8 +106,9 @@ def make_reference(kind: str, amplitude: float, duration: float | None, step_tic
 class StepReport:
     """Outcome of one step test.
 
-    log_path: the run log; result: how the loop ended, with timing; metrics: overshoot
-    and settling time of the logged θ (None when no sample was logged).
+    log_path: the run log; result: how the loop ended (``result.outcome``), with timing;
+    metrics: overshoot and settling time of the logged θ (None unless a closed-loop step
+    run completed: a run cut short has no meaningful step metrics).
     """
 
     log_path: Path
@@ -114,13 +116,15 @@ class StepReport:
     metrics: StepMetrics | None
 
     def to_json(self) -> dict:
-        """``{"log", "ok", "reason", "message", "metrics": {...}, "timing": {...}}`` (``station step --json``)."""
+        """``{"log", "ok", "reason", "message", "outcome": {...}, "metrics": {...}, "timing": {...}}``
+        (``station step --json``; ``outcome`` as DESIGN.md "Run outcome")."""
         m = self.metrics
         return {
             "log": str(self.log_path),
             "ok": self.result.ok,
             "reason": self.result.reason,
             "message": self.result.message,
+            "outcome": self.result.outcome.to_json(),
             "metrics": {"overshoot_pct": None if m is None else m.overshoot_pct,
                         "settling_time_s": None if m is None else m.settling_time_s},
             "timing": self.result.timing().to_json(),
@@ -143,7 +147,7 @@ def run_step(port: str = DEFAULT_PORT, protocol: str = "v1", controller: str = D
              out: str | Path | None = None, sinks=(),
              kp: float = 2.0, limit: float = 200.0, soft_limit: float = DEFAULT_SOFT_LIMIT,
              timeout: float = DEFAULT_TIMEOUT, baudrate: int | None = None, dt: float = DT,
-             lean: bool = True) -> StepReport:
+             lean: bool = True, limits: LinkLimits | None = None) -> StepReport:
     """Run a step test on a device and log it.
 
     Parameters
@@ -177,17 +181,23 @@ def run_step(port: str = DEFAULT_PORT, protocol: str = "v1", controller: str = D
         Longest wait for one sample, s.
     lean : bool
         The loop's real-time settings (see :func:`station.loop.run_loop`).
+    limits : station.link.LinkLimits, optional
+        The link's fail-safe bounds (max lag, misses, encoder step, rate check);
+        default ``LinkLimits(timeout)``. Its timeout wins over ``timeout``.
 
     Returns
     -------
     StepReport
-        Also when the run was stopped by a fault; ``report.result.reason`` says why.
+        Also when the run was stopped by a fault or a signal; ``report.result.outcome``
+        says why. The log ends with the outcome's end record.
 
     Raises
     ------
     StationError
         Bad arguments, a port that cannot be opened or a device that does not answer
         (nothing was started then).
+    station.signals.StopSignal
+        SIGINT / SIGTERM before the run started (nothing was started then).
     """
     u, reference_meta = make_reference(reference, amplitude, duration, step_tick, dt)
     if protocol == "legacy" and u.size > legacy.MAX_TICKS:  # a user error: nothing started, no log
@@ -205,7 +215,8 @@ def run_step(port: str = DEFAULT_PORT, protocol: str = "v1", controller: str = D
         log_path.parent.mkdir(parents=True, exist_ok=True)
     except OSError as exc:
         raise StationError(f"{log_path}: cannot create the run log's folder: {exc.strerror or exc}") from None
-    with open_session(port, protocol, timeout=timeout, baudrate=baudrate) as session:
+    limits = limits or LinkLimits(timeout=timeout)
+    with StopSignals() as signals, open_session(port, protocol, baudrate=baudrate, limits=limits) as session:
         info = session.hello()
         accel_zero = session.zero_accel()
         meta = {
@@ -221,16 +232,22 @@ def run_step(port: str = DEFAULT_PORT, protocol: str = "v1", controller: str = D
             "accel_zero": accel_zero,
             "dt": dt,
             "soft_limit": soft_limit,
+            "limit": limit,
+            "limits": {"timeout": limits.timeout, "max_lag": limits.max_lag, "max_miss": limits.max_miss,
+                       "max_step": limits.max_step},
             "start_time": _dt.datetime.now(_dt.UTC).isoformat(),
             "start_unix": time.time(),
         }
         writer = RunLogWriter(log_path, meta, sinks=sinks)
+        result = None
         try:
-            result = run_loop(session, ctrl, u, writer, soft_limit=soft_limit, dt=dt, lean=lean)
+            result = run_loop(session, ctrl, u, writer, soft_limit=soft_limit, dt=dt, lean=lean, limit=limit,
+                              signals=signals)
         finally:
-            writer.close()  # after the loop has sent command 0 and stop
+            # after the loop has sent command 0 and stop; signals are only recorded here
+            writer.close(None if result is None else result.outcome.to_json())
     # step metrics compare θ with the step in encoder counts: closed-loop steps only
-    closed_step = reference == "step" and ctrl.spec.get("kind") != "open-loop"
+    closed_step = reference == "step" and ctrl.spec.get("kind") != "open-loop" and result.ok
     return StepReport(log_path, result, _metrics_of(log_path, amplitude) if closed_step else None)
 
 
@@ -245,12 +262,23 @@ def _metrics_of(log_path: Path, amplitude: float) -> StepMetrics | None:
 def format_report(report: StepReport) -> str:
     """Human-readable summary: outcome, overshoot, settling time, timing, log path."""
     r, m, tm = report.result, report.metrics, report.result.timing()
-    lines = [("run completed" if r.ok else f"run STOPPED SAFELY ({r.reason}): {r.message}; command 0 sent")
-             + f", {r.ticks} samples"]
+    o = r.outcome
+    if r.ok:
+        head = "run completed"
+    elif o.command_zero_sent:
+        head = f"run STOPPED SAFELY ({r.reason}): {r.message}; command 0 sent"
+    else:
+        head = f"run STOPPED ({r.reason}): {r.message}"
+    lines = [head + f", {r.ticks} samples"]
+    if not r.ok:
+        lines.append("no step metrics: the run was cut short")
     if m is not None:
         settle = "not settled" if m.settling_time_s is None else f"{m.settling_time_s:.3f} s"
         lines.append(f"overshoot {m.overshoot_pct:.2f} %   settling time {settle}")
     lines.append(f"latency p50 {tm.p50_us:.0f} us  p99 {tm.p99_us:.0f} us  max {tm.max_us:.0f} us   "
-                 f"late {tm.late}  dropped {tm.dropped}")
+                 f"late {tm.late}  dropped {tm.dropped}  stale {o.stale}  duplicates {o.duplicates}  "
+                 f"rx errors {o.rx_errors}")
+    if o.watchdog_trips:
+        lines.append(f"the device's watchdog tripped {o.watchdog_trips} time(s): commands were missing")
     lines.append(f"log: {report.log_path}")
     return "\n".join(lines)

@@ -12,10 +12,12 @@ thread. Garbage collection is off during the run, the GIL switch interval is sho
 the writer thread cannot hold the loop up, and the scheduling priority is raised where
 the OS allows it.
 
-Fail safe: on a timeout (device silent), Ctrl-C / SIGTERM, a legacy sequence gap, an
-exception in the controller or anywhere in the loop, or the encoder passing the soft
-limit, the loop sends command 0 and stop *first*, then the caller flushes the log, then
-the reason is reported (:class:`RunResult`).
+Fail safe: on any stop - a link fault (timeout, lag, sequence, rate, a failed port:
+:mod:`station.link`), SIGINT / SIGTERM (recorded by :mod:`station.signals`, acted on at
+the next sample), an exception or NaN from the controller, or the encoder passing the soft
+limit - the loop sends command 0 and stop *first*, then logs the last answered sample's
+row, then the caller closes the log, then the outcome is reported (:class:`RunResult`,
+:class:`station.outcome.Outcome`). Every command is clamped to ±limit before the wire.
 """
 
 from __future__ import annotations
@@ -23,15 +25,16 @@ from __future__ import annotations
 import gc
 import math
 import sys
-import threading
 import time
 from dataclasses import dataclass, field
 
 import numpy as np
 
 from station import DT
-from station.link import DeviceStopped, LinkTimeout, SequenceError, Session
+from station.link import DeviceStopped, LinkFault, Session
+from station.outcome import Outcome
 from station.realtime import RealtimePriority
+from station.signals import StopSignals
 
 NAN = math.nan
 
@@ -63,25 +66,35 @@ class TimingSummary:
 class RunResult:
     """How a run ended.
 
-    reason: "completed", "timeout", "interrupted", "sequence", "controller", "soft-limit"
-    or "error"; message: one line for the user; ticks: samples received; latency_us:
-    per-command compute latency, µs, shape (commands,); stopped: the device's STOPPED
-    counters (v1) or None.
+    Attributes
+    ----------
+    outcome : station.outcome.Outcome
+        Reason (DESIGN.md "Run outcome") and counters.
+    latency_us : ndarray, shape (n_ticks,)
+        Compute latency of each command (sample received → command written), µs;
+        NaN where no command was sent.
+    stopped : dict or None
+        The device's STOPPED counters (v1) or None.
+    extra : dict
+        ``priority`` (the scheduling level reached), ``max_lag`` (most samples seen
+        waiting).
     """
 
-    reason: str
-    message: str
-    ticks: int
+    outcome: Outcome
     latency_us: np.ndarray
-    late: int
-    dropped: int
     stopped: dict | None = None
     extra: dict = field(default_factory=dict)
+
+    reason = property(lambda self: self.outcome.reason, doc="Outcome reason (DESIGN.md vocabulary).")
+    message = property(lambda self: self.outcome.message, doc="One line for the user.")
+    ticks = property(lambda self: self.outcome.ticks, doc="Samples received and logged.")
+    late = property(lambda self: self.outcome.late, doc="Late commands.")
+    dropped = property(lambda self: self.outcome.dropped, doc="Samples missing from the sequence.")
 
     @property
     def ok(self) -> bool:
         """True when the run completed as planned."""
-        return self.reason == "completed"
+        return self.outcome.ok
 
     def timing(self) -> TimingSummary:
         """Latency percentiles and link counters of the run."""
@@ -97,19 +110,24 @@ class SoftLimitError(Exception):
     """The encoder passed the soft limit."""
 
 
-class _Terminate(BaseException):
-    """SIGTERM turned into an exception so the fail-safe path runs."""
+class _ControllerFault(Exception):
+    pass
+
+
+class _Signalled(Exception):
+    pass
 
 
 def run_loop(session: Session, controller, reference: np.ndarray, writer, soft_limit: float = 2048.0,
-             dt: float = DT, lean: bool = True) -> RunResult:
+             dt: float = DT, lean: bool = True, limit: float = 200.0, signals: StopSignals | None = None) -> RunResult:
     """Run one test: start the device, answer every sample, stop it safely.
 
     Parameters
     ----------
     session : station.link.Session
-        An open session (``hello()`` already done).
-    controller : station.control.Compensator or OpenLoop
+        An open session (``hello()`` already done); its :class:`~station.link.LinkLimits`
+        bound the timeout, lag, misses, encoder steps and rate.
+    controller : object
         ``step(u, theta, a) -> (v, theta_d_hat)``; reset before the run.
     reference : ndarray, shape (n_ticks,)
         u[k] for every tick, counts; its length is the run's length in ticks.
@@ -117,20 +135,42 @@ def run_loop(session: Session, controller, reference: np.ndarray, writer, soft_l
         Receives one row per sample (``append(row)``, O(1)); the caller closes it
         after this returns (the stop command goes out before the log is flushed).
     soft_limit : float
-        |θ| above this many encoder counts stops the run.
+        |θ| above this many encoder counts stops the run (finite, > 0).
     dt : float
         Sample time, s (for the t column).
     lean : bool
         Garbage collection off, a short GIL switch interval and a raised scheduling
         priority (SCHED_FIFO / nice, where the OS allows) during the run. False runs a
         plain loop (the benchmark's baseline).
+    limit : float
+        Every command is clamped to ±limit DAC counts before it reaches the wire,
+        whatever the controller returns (±inf, 1e300); NaN stops the run
+        ("controller-fault").
+    signals : station.signals.StopSignals, optional
+        The caller's signal guard (it stays installed while the caller closes the log);
+        default: one installed for the loop's duration. SIGINT / SIGTERM end the run
+        with reason "sigint" / "sigterm" at the next sample (or while waiting for one).
 
     Returns
     -------
     RunResult
-        Never raises for device, controller or user faults: they end the run, with
-        command 0 and stop already sent, and are described in the result.
+        Never raises for device, controller, user faults or signals: they end the run,
+        with command 0 and stop already sent (``outcome.command_zero_sent`` says whether
+        the port took them), and are described in the result.
+
+    Raises
+    ------
+    ValueError
+        ``soft_limit`` or ``limit`` not finite and positive (nothing started).
     """
+    for name, value in (("soft_limit", soft_limit), ("limit", limit)):
+        if not (math.isfinite(value) and value > 0):
+            raise ValueError(f"{name} must be finite and > 0, got {value!r}")
+    own_signals = signals is None
+    if own_signals:
+        signals = StopSignals().__enter__()
+    signals.defer()
+    session.stop_requested = lambda: signals.reason
     u = np.asarray(reference, dtype=float).tolist()
     n_ticks = len(u)
     latencies = np.full(n_ticks, NAN)
@@ -138,123 +178,125 @@ def run_loop(session: Session, controller, reference: np.ndarray, writer, soft_l
     reason, message = "completed", f"completed {n_ticks} ticks"
     stopped = None
     old_switch = sys.getswitchinterval()
-    old_term = _install_sigterm()
     gc_was_enabled = gc.isenabled()
     priority = RealtimePriority()
-    level = priority.raise_() if lean else priority.level
+    level = priority.level
     perf_ns = time.perf_counter_ns
     pending = None  # the row of a sample received but not yet logged
     read_sample, send_command, step, append = session.read_sample, session.send_command, controller.step, writer.append
+    lim, neg = float(limit), -float(limit)
+    stop_ok = True
     try:
-        if lean:  # before START: once the device ticks, every ms counts
-            gc.collect()
-            gc.disable()
-            sys.setswitchinterval(5e-5)  # the writer thread must not hold the GIL for ms
-        session.start(n_ticks)
-        v_k, dhat_k, lat_k = 0.0, u[0], NAN  # tick 0 outputs 0
-        last = n_ticks - 1
-        while True:
-            n, theta, accel, v_applied, status = read_sample()
-            t_recv = perf_ns()
-            if n > last:
-                break
-            if abs(theta) > soft_limit:
-                append((n * dt, n, u[n], v_k, theta, accel, dhat_k,
-                        NAN if v_applied is None else v_applied, status, lat_k))
-                raise SoftLimitError(f"encoder at {theta} counts passed the soft limit ±{soft_limit:g} at tick {n}")
-            # sample n is in: its row is complete (v[n] was sent on sample n-1) and must be
-            # logged whatever happens next (a controller fault, a failed write)
-            pending = (n * dt, n, u[n], v_k, theta, accel, dhat_k,
-                       NAN if v_applied is None else v_applied, status, lat_k)
-            if n < last:
-                try:
-                    v_next, dhat_next = step(u[n + 1], theta, accel)
-                except Exception as exc:  # noqa: BLE001 - any controller fault must stop the motor
-                    raise _ControllerFault(f"controller raised {type(exc).__name__}: {exc} at tick {n}") from exc
-                send_command(n, v_next)
-                lat_next = (perf_ns() - t_recv) / 1000.0
-                latencies[n + 1] = lat_next
-            append(pending)
-            pending = None
-            ticks += 1
-            if n == last:
-                break
-            v_k, dhat_k, lat_k = v_next, dhat_next, lat_next
+        try:
+            if lean:  # before START: once the device ticks, every ms counts
+                level = priority.raise_()
+                gc.collect()
+                gc.disable()
+                sys.setswitchinterval(5e-5)  # the writer thread must not hold the GIL for ms
+            session.start(n_ticks)
+            v_k, dhat_k, lat_k = 0.0, u[0], NAN  # tick 0 outputs 0
+            last = n_ticks - 1
+            while True:
+                n, theta, accel, v_applied, status = read_sample()
+                t_recv = perf_ns()
+                if n > last:
+                    break
+                # sample n is in: its row is complete (v[n] was sent on sample n-1) and must be
+                # logged whatever happens next (a signal, a controller fault, a failed write)
+                pending = (n * dt, n, u[n], v_k, theta, accel, dhat_k,
+                           NAN if v_applied is None else v_applied, status, lat_k)
+                if signals.signum is not None:
+                    raise _Signalled()
+                if abs(theta) > soft_limit:
+                    raise SoftLimitError(f"encoder at {theta} counts passed the soft limit ±{soft_limit:g} at tick {n}")
+                if n < last:
+                    try:
+                        v_next, dhat_next = step(u[n + 1], theta, accel)
+                    except BaseException as exc:  # noqa: BLE001 - any controller fault (SystemExit too) stops the motor
+                        raise _ControllerFault(f"controller raised {type(exc).__name__}: {exc} at tick {n}") from exc
+                    if not neg <= v_next <= lim:  # also False for NaN
+                        if v_next != v_next:
+                            raise _ControllerFault(f"controller returned NaN at tick {n}")
+                        v_next = lim if v_next > 0 else neg  # ±inf, 1e300: clamped before the wire
+                    send_command(n, v_next)
+                    lat_next = (perf_ns() - t_recv) / 1000.0
+                    latencies[n + 1] = lat_next
+                append(pending)
+                pending = None
+                ticks += 1
+                if n == last:
+                    break
+                v_k, dhat_k, lat_k = v_next, dhat_next, lat_next
+        finally:
+            # first: command 0 and stop, before anything else; signals are only recorded now
+            signals.defer()
+            stop_info, stop_ok, stop_error = _safe_stop(session)
     except DeviceStopped as exc:
         stopped = exc.stopped
         if ticks < n_ticks:
-            reason, message = "error", f"{exc} before the planned {n_ticks}"
-    except LinkTimeout as exc:
-        reason, message = "timeout", str(exc)
-    except SequenceError as exc:
-        reason, message = "sequence", str(exc)
+            reason, message = "link", f"{exc} before the planned {n_ticks}"
+    except LinkFault as exc:
+        reason, message = exc.reason, str(exc)
+    except _Signalled:
+        reason, message = signals.reason, f"{signals.name} at tick {ticks}"
+    except KeyboardInterrupt:  # raised by other code than our handler (e.g. not the main thread)
+        reason, message = "sigint", f"KeyboardInterrupt at tick {ticks}"
     except SoftLimitError as exc:
         reason, message = "soft-limit", str(exc)
     except _ControllerFault as exc:
-        reason, message = "controller", str(exc)
-    except (KeyboardInterrupt, _Terminate):
-        reason, message = "interrupted", f"interrupted by the user at tick {ticks}"
-    except Exception as exc:  # noqa: BLE001 - whatever broke, the motor goes to 0 first
-        reason, message = "error", f"{type(exc).__name__}: {exc}"
+        reason, message = "controller-fault", str(exc)
+    except Exception as exc:  # noqa: BLE001 - whatever broke, the motor went to 0 first
+        reason, message = "link", f"{type(exc).__name__}: {exc}"
     finally:
-        stop_info = _safe_stop(session)  # first: command 0 and stop, before anything else
         sys.setswitchinterval(old_switch)
         if gc_was_enabled:
             gc.enable()
-        priority.restore()
-        _restore_sigterm(old_term)
+        _quietly(priority.restore)
+        session.stop_requested = None
+        if own_signals:
+            signals.__exit__(None, None, None)
     if pending is not None:  # after the stop, before the caller closes the log
-        try:
-            append(pending)
-        except Exception:  # noqa: BLE001 - never raises; the writer reports its own failures
-            pass
+        _quietly(lambda: append(pending))
+        ticks += 1
+    if signals.signum is not None and reason not in ("sigint", "sigterm") and ticks < n_ticks:
+        reason, message = signals.reason, f"{signals.name} at tick {ticks} ({message})"
+    if not stop_ok and reason not in ("sigint", "sigterm"):
+        reason = "link"
+    if not stop_ok:
+        message += f"; command 0 and stop could NOT be sent ({stop_error})"
     if stop_info is not None:
         stopped = stop_info
-    late = session.late if stopped is None else max(session.late, stopped.get("late", 0))
-    return RunResult(reason, message, ticks, latencies, late, session.dropped, stopped,
-                     {"priority": level, "rx_errors": session.rx_errors})
+    counters = session.counters()
+    if stopped is not None and session.protocol == "v1":
+        counters["late"] = max(counters["late"], stopped.get("late", 0))
+        counters["watchdog_trips"] = max(counters["watchdog_trips"], stopped.get("watchdog_trips", 0))
+    outcome = Outcome(reason, message, ticks=ticks, command_zero_sent=stop_ok, **counters)
+    return RunResult(outcome, latencies, stopped, {"priority": level, "max_lag": session.max_lag_seen})
 
 
-class _ControllerFault(Exception):
-    pass
-
-
-def _safe_stop(session: Session) -> dict | None:
-    """Command 0 and stop; never raises (the port may already be gone).
-
-    A second Ctrl-C / SIGTERM while stopping must not skip the stop: anything raised,
-    BaseException included, gets one more attempt, then is given up quietly (the run is
-    ending anyway and its reason is already recorded). ``session.stop`` itself sends
-    command 0 and stop (v1: COMMAND for the last sample, then STOP).
-    """
+def _quietly(fn) -> None:
+    """Call ``fn``; whatever it raises (a late signal included) is dropped: the run is ending."""
     for _ in range(2):
         try:
-            return session.stop()
-        except BaseException:  # noqa: BLE001 - the motor must get its 0 whatever happened
+            fn()
+            return
+        except BaseException:  # noqa: BLE001
             continue
-    return None
 
 
-def _install_sigterm():
-    import signal
+def _safe_stop(session: Session) -> tuple[dict | None, bool, str]:
+    """Command 0 and stop; never raises (the port may already be gone).
 
-    if threading.current_thread() is not threading.main_thread():
-        return None
-
-    def handler(signum, frame):
-        raise _Terminate()
-
-    try:
-        return signal.signal(signal.SIGTERM, handler)
-    except (ValueError, OSError):
-        return None
-
-
-def _restore_sigterm(old) -> None:
-    import signal
-
-    if old is not None:
+    ``session.stop`` sends command 0 and stop (v1: COMMAND for the last sample, then
+    STOP; legacy: v = 0 then 's'). Anything raised, BaseException included, gets one
+    more attempt. Returns (the device's STOPPED counters or None, whether the writes
+    went out, the error if they did not).
+    """
+    error = ""
+    for _ in range(2):
         try:
-            signal.signal(signal.SIGTERM, old)
-        except (ValueError, OSError):
-            pass
+            return session.stop(), True, ""
+        except BaseException as exc:  # noqa: BLE001 - the motor must get its 0 whatever happened
+            error = str(exc) or type(exc).__name__
+            continue
+    return None, False, error

@@ -205,6 +205,7 @@ class _Pump:
         self.thread = threading.Thread(target=self.run, name=f"runlog:{path.name}", daemon=True)
         self.sink_thread = threading.Thread(target=self.run_sinks, name=f"runlog-sinks:{path.name}", daemon=True)
         self.closed = False
+        self.end_line: str | None = None  # "# end {json}": written after the last row at shutdown
 
     def start(self) -> None:
         self.thread.start()
@@ -297,6 +298,11 @@ class _Pump:
         if self.thread.is_alive() and self.thread is not threading.current_thread():
             self.thread.join()
         self.drain()
+        if self.end_line is not None and self.write_error is None:
+            try:
+                self.fh.write(self.end_line.encode("utf-8"))
+            except OSError as exc:
+                self.write_error = exc
         self.sink_stop.set()
         if self.sink_thread.is_alive() and self.sink_thread is not threading.current_thread():
             self.sink_thread.join()
@@ -390,8 +396,15 @@ class RunLogWriter:
         """One message per sink that failed and was dropped."""
         return list(self._pump.sink_errors)
 
-    def close(self) -> None:
+    def close(self, outcome: dict[str, Any] | None = None) -> None:
         """Write every queued row, flush and close the file. Idempotent.
+
+        Parameters
+        ----------
+        outcome : dict, optional
+            The run's outcome (DESIGN.md "Run outcome": reason and counters), written
+            after the last row as the end record ``# end {json}``. A log without it
+            (closed without an outcome, SIGKILL, power loss) has outcome null.
 
         Raises
         ------
@@ -400,6 +413,8 @@ class RunLogWriter:
             missing from it, and the rescue file in the temporary folder that holds
             them with the same header (they also stay available as ``unwritten_rows``).
         """
+        if outcome is not None and not self._pump.closed:
+            self._pump.end_line = f"{END_PREFIX}{json.dumps(_nan_to_none(outcome), default=_json_default)}\n"
         self._finalizer()
         err = self._pump.write_error
         if err is not None:

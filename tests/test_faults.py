@@ -51,7 +51,7 @@ def test_v1_garbage_and_corrupt_frames_are_counted_and_survived(device_factory, 
     report = run_step(port=dev.path, controller="lead", duration=1.0, out=tmp_path / "log.tsv")
     assert report.result.ok, report.result.message
     assert report.result.dropped == 0
-    assert report.result.extra["rx_errors"] == 2 * (499 // 50)  # garbage + corrupted frame each time
+    assert report.result.outcome.rx_errors == 2 * (499 // 50)  # garbage + corrupted frame each time
     assert np.array_equal(read_log(tmp_path / "log.tsv").data["n"], np.arange(500))
 
 
@@ -94,7 +94,7 @@ class _FailingController:
 def test_controller_exception_stops_safely(device_factory, tmp_path):
     dev = device_factory(protocol="v1", theta=lambda k: 1)
     report = run_step(port=dev.path, controller=_FailingController(), duration=1.0, out=tmp_path / "log.tsv")
-    assert report.result.reason == "controller"
+    assert report.result.reason == "controller-fault"
     assert "FloatingPointError: overflow in my filter at tick 49" in report.result.message
     assert dev.commands()[-2:] == [(48, 30), (49, 0)]     # nothing from the broken step, then 0
     assert type(dev.received[-1]).__name__ == "Stop" and dev.outputs[-1] == 0

@@ -8,7 +8,7 @@ import sys
 import pytest
 
 from station.errors import StationError
-from station.link import open_session, sim_url
+from station.link import LinkLimits, open_session, sim_url
 
 
 def test_missing_port_names_it():
@@ -84,7 +84,7 @@ def test_v1_stop_sends_stop_even_when_the_command_write_fails():
         in_waiting = 0
 
     port = Port()
-    session = V1Session(port, "fake://", timeout=0.01)
+    session = V1Session(port, "fake://", LinkLimits(timeout=0.01))
     session._last_seq = 41
     with pytest.raises(StationError, match="write to fake:// failed"):
         session.stop()
@@ -121,7 +121,7 @@ def test_v1_lost_first_samples_count_as_dropped():
             return len(self.data)
 
     frames = b"".join(v1.encode(v1.Sample(seq, 0, 0, 0, 0)) for seq in (2, 3, 5))
-    session = V1Session(Port(frames), "fake://", timeout=0.01)
+    session = V1Session(Port(frames), "fake://", LinkLimits(timeout=0.01))
     session.start(10)
     assert [session.read_sample()[0] for _ in range(3)] == [2, 3, 5]
     assert session.dropped == 3  # 0, 1 and 4

@@ -14,13 +14,19 @@ class ScriptedSession:
     """Plays back samples; records every command and stop, in order, in ``events``."""
 
     alignment = 1
+    protocol = "scripted"
+    max_lag_seen = 0
+    stop_requested = None
 
     def __init__(self, samples, events, fault_at=None, fault=None):
         self.samples = list(samples)
         self.events = events
         self.fault_at, self.fault = fault_at, fault
-        self.late = self.dropped = self.rx_errors = 0
         self.k = 0
+
+    def counters(self):
+        return {"late": 0, "late_seen": 0, "dropped": 0, "stale": 0, "duplicates": 0, "rx_errors": 0,
+                "watchdog_trips": 0}
 
     def start(self, n_ticks):
         self.events.append(("start", n_ticks))
@@ -80,8 +86,8 @@ def test_command_on_sample_k_uses_theta_k_and_reference_k_plus_1():
 @pytest.mark.parametrize("fault, reason", [
     (LinkTimeout("device went silent"), "timeout"),
     (SequenceError("tick number jumped"), "sequence"),
-    (KeyboardInterrupt(), "interrupted"),
-    (OSError("port vanished"), "error"),
+    (KeyboardInterrupt(), "sigint"),
+    (OSError("port vanished"), "link"),
 ])
 def test_faults_send_zero_and_stop_before_the_log_is_flushed(fault, reason):
     events = []
@@ -108,7 +114,7 @@ def test_controller_exception_stops_safely():
     events = []
     session = ScriptedSession(_samples([0] * 10), events)
     result = run_loop(session, Exploding(), np.zeros(10), ListWriter(events), lean=False)
-    assert result.reason == "controller" and "ZeroDivisionError" in result.message and "tick 3" in result.message
+    assert result.reason == "controller-fault" and "ZeroDivisionError" in result.message and "tick 3" in result.message
     assert events[-1] == ("stop",)
     assert [e for e in events if e[0] == "command"][-1] == ("command", 2, 1.0)  # nothing sent after the fault
 
@@ -160,7 +166,7 @@ def test_sample_of_a_controller_fault_or_failed_write_is_logged_after_the_stop()
         writer = ListWriter(events)
         result = run_loop(session_of(events), Exploding(), np.zeros(6), writer, lean=False)
         writer.close()
-        assert result.reason in ("controller", "error")
+        assert result.reason in ("controller-fault", "link")
         assert [r[1] for r in writer.rows] == [0, 1, 2, 3]
         assert writer.rows[3][3] == 1.0  # v[3], sent on sample 2, acted during tick 3
         assert events[-2:] == [("stop",), ("log closed", 4)]
@@ -178,5 +184,5 @@ def test_interrupt_while_stopping_does_not_skip_the_stop():
     events = []
     result = run_loop(InterruptedOnce(_samples([0] * 10), events, fault_at=5, fault=KeyboardInterrupt()),
                       make_controller("p"), np.zeros(10), ListWriter(events), lean=False)
-    assert result.reason == "interrupted"
+    assert result.reason == "sigint"
     assert events[-2:] == [("stop",), ("stop",)]

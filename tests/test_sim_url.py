@@ -32,13 +32,15 @@ def run_v1(port, n, v=lambda k: 0, flags=0, n_ticks=0, answer=lambda k: True):
     return got, dec
 
 
-def test_url_finds_the_handler_and_answers_hello():
-    with open_sim() as port:
+@pytest.mark.parametrize("query, rate_hz", [("", 0), ("pacing=realtime", 500)])
+def test_url_finds_the_handler_and_answers_hello(query, rate_hz):
+    # INFO rate_hz = 0 declares a lockstep device (spec); the realtime one ticks at 500 Hz
+    with open_sim(query) as port:
         assert isinstance(port, protocol_sim.Serial)
         port.write(v1.encode(v1.Hello()))
         (info,) = v1.Decoder().feed(port.read(64))
         assert (info.name, info.rate_hz, info.v_limit, info.counts_per_rev, info.watchdog_ticks) == \
-            ("SFLR-SIM", 500, 255, 1024, 10)
+            ("SFLR-SIM", rate_hz, 255, 1024, 10)
 
 
 @pytest.mark.parametrize("query, word", [

@@ -3,11 +3,13 @@
 from __future__ import annotations
 
 import json
+import math
 from pathlib import Path
 
 from station import DT
 from station import experiment as ex
 from station.errors import StationError
+from station.link import LinkLimits
 
 NAME = "step"
 HELP = ("run a step test (default: lead compensator, 100 counts, on the built-in simulated rig); "
@@ -37,6 +39,15 @@ def configure(parser) -> None:
                         help="longest wait for a sample before stopping safely (default 0.1 s)")
     parser.add_argument("--soft-limit", type=float, default=ex.DEFAULT_SOFT_LIMIT, metavar="COUNTS",
                         help="stop safely when |θ| exceeds this (default 2048 = two revolutions)")
+    parser.add_argument("--max-lag", type=int, default=LinkLimits.max_lag, metavar="TICKS",
+                        help="stop (reason lag) when more samples than this are already waiting when a command "
+                             "is due: never drive the motor from stale samples (default 2, range 0..100)")
+    parser.add_argument("--max-miss", type=int, default=LinkLimits.max_miss, metavar="TICKS",
+                        help="stop (reason sequence) when more of the last 100 ticks than this were dropped, "
+                             "stale, duplicated or late (default 10, range 0..99)")
+    parser.add_argument("--max-step", type=float, default=LinkLimits.max_step, metavar="COUNTS",
+                        help="largest plausible encoder change per tick; more stops the run (reason sequence; "
+                             "default 40, range 1..10000)")
     parser.add_argument("--out", type=Path, default=None, metavar="FILE", help="run log (default runs/step-*.tsv)")
     parser.add_argument("--json", type=Path, default=None, metavar="FILE", help="write metrics and timing as JSON")
     viz = parser.add_mutually_exclusive_group()
@@ -46,6 +57,7 @@ def configure(parser) -> None:
 
 def run(args) -> int:
     """Run the test; exit code 0 when it completed, 1 when it was stopped by a fault."""
+    limits = _limits(args)
     sinks = []
     if args.rrd is not None or args.spawn:
         from station.viz import RerunSink
@@ -57,7 +69,7 @@ def run(args) -> int:
                              step_tick=int(round(args.step_time / DT)), reference=args.reference,
                              out=args.out, sinks=sinks,
                              kp=args.kp, limit=args.limit, soft_limit=args.soft_limit,
-                             timeout=args.timeout, baudrate=args.baud)
+                             timeout=args.timeout, baudrate=args.baud, limits=limits)
     finally:
         for sink in sinks:
             sink.close()
@@ -70,4 +82,14 @@ def run(args) -> int:
             args.json.write_text(json.dumps(report.to_json(), indent=1) + "\n")
         except OSError as exc:
             raise StationError(f"{args.json}: cannot write the JSON report: {exc.strerror or exc}") from None
-    return 0 if report.result.ok else 1
+    return report.result.outcome.exit_code
+
+
+def _limits(args) -> LinkLimits:
+    """The link's fail-safe bounds from the options, each checked before anything starts."""
+    checks = (("--timeout", args.timeout, 1e-3, 60.0), ("--max-lag", args.max_lag, 0, 100),
+              ("--max-miss", args.max_miss, 0, 99), ("--max-step", args.max_step, 1.0, 10000.0))
+    for option, value, low, high in checks:
+        if not (math.isfinite(value) and low <= value <= high):
+            raise StationError(f"{option} {value}: expected a number in [{low:g}, {high:g}]")
+    return LinkLimits(timeout=args.timeout, max_lag=args.max_lag, max_miss=args.max_miss, max_step=args.max_step)

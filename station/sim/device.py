@@ -75,6 +75,7 @@ class _V1Firmware(_Firmware):
         super().__init__(hw)
         self.watchdog_ticks = watchdog_ticks
         self.name = name
+        self.rate_hz = RATE_HZ  # INFO's rate_hz: 0 declares a lockstep device (spec)
         self.decoder = v1.Decoder()
         self.n_ticks = 0
         self.output = 0  # the output held between ticks (DAC counts)
@@ -97,7 +98,7 @@ class _V1Firmware(_Firmware):
                 else:
                     self.stale = True
             elif isinstance(msg, v1.Hello):
-                self._out += v1.encode(v1.Info(v1.PROTOCOL_VERSION, *FW_VERSION, RATE_HZ, self.hw.v_limit,
+                self._out += v1.encode(v1.Info(v1.PROTOCOL_VERSION, *FW_VERSION, self.rate_hz, self.hw.v_limit,
                                                COUNTS_PER_REV, self.watchdog_ticks, self.name))
             elif isinstance(msg, v1.Start):
                 self._start(msg)
@@ -305,6 +306,11 @@ class SimDevice:
     def ready(self) -> bool:
         """Lockstep pacing: the next tick's command is in (or the next tick is tick 0), so it can run now."""
         return self._fw.ready
+
+    def set_lockstep(self, lockstep: bool) -> None:
+        """Declare the pacing in v1 INFO: rate_hz = 0 for lockstep, 500 for its own clock (spec)."""
+        if isinstance(self._fw, _V1Firmware):
+            self._fw.rate_hz = 0 if lockstep else RATE_HZ
 
     @property
     def plant(self):

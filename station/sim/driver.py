@@ -64,6 +64,7 @@ class DeviceDriver:
         self.device = device
         self.faults = faults or Faults()
         self.lockstep = lockstep
+        device.set_lockstep(lockstep)
         self._rng = np.random.default_rng(self.faults.seed)
 
     def feed(self, data: bytes) -> bytes:

@@ -1,0 +1,91 @@
+"""SIGINT / SIGTERM during a run: record them, never let them cut the stop sequence short.
+
+A run must answer any number of signals at any moment with command 0 and stop first,
+every answered sample's row in the log, one line naming the signal and exit code
+130 (SIGINT) or 143 (SIGTERM) (DESIGN.md "Run outcome"). An exception raised by a
+signal handler at an arbitrary bytecode can land inside the stop sequence or the log's
+close, so during the loop the handler only records the signal and the loop checks the
+record once per sample (and the link while it waits); before the loop (opening the
+port, HELLO) nothing can be lost, so the first signal raises :class:`StopSignal` there.
+"""
+
+from __future__ import annotations
+
+import signal
+import threading
+
+SIGNAL_REASONS = {signal.SIGINT: "sigint", signal.SIGTERM: "sigterm"}
+"""Outcome reason per signal."""
+
+
+class StopSignal(BaseException):
+    """SIGINT or SIGTERM arrived before the loop started (nothing was running yet).
+
+    A ``BaseException`` like ``KeyboardInterrupt``, so ``except Exception`` blocks do
+    not swallow it. ``signum``: the signal; ``reason``: "sigint" or "sigterm".
+    """
+
+    def __init__(self, signum: int):
+        super().__init__(signal.Signals(signum).name)
+        self.signum = signum
+        self.reason = SIGNAL_REASONS[signum]
+
+    @property
+    def exit_code(self) -> int:
+        """130 for SIGINT, 143 for SIGTERM (128 + the signal number)."""
+        return 128 + int(self.signum)
+
+
+class StopSignals:
+    """Context manager that owns SIGINT and SIGTERM for a run (main thread only).
+
+    The first signal raises :class:`StopSignal` until :meth:`defer` is called; after
+    that (and after the first raise) signals are only recorded: ``signum`` is the first
+    one, ``count`` how many arrived. Elsewhere than in the main thread it installs
+    nothing and only offers the same attributes (signals go to the main thread anyway).
+    """
+
+    def __init__(self) -> None:
+        self.signum: int | None = None
+        self.count = 0
+        self._raise = True
+        self._old: dict[int, object] = {}
+
+    @property
+    def reason(self) -> str | None:
+        """"sigint" or "sigterm" for the first signal received, None when none came."""
+        return None if self.signum is None else SIGNAL_REASONS[self.signum]
+
+    @property
+    def name(self) -> str | None:
+        """"SIGINT" or "SIGTERM" (None when none came)."""
+        return None if self.signum is None else signal.Signals(self.signum).name
+
+    def defer(self) -> None:
+        """From now on only record signals (the loop polls :attr:`signum`)."""
+        self._raise = False
+
+    def _handler(self, signum, frame) -> None:
+        self.count += 1
+        if self.signum is None:
+            self.signum = signum
+        if self._raise:
+            self._raise = False
+            raise StopSignal(signum)
+
+    def __enter__(self) -> StopSignals:
+        if threading.current_thread() is threading.main_thread():
+            for signum in SIGNAL_REASONS:
+                try:
+                    self._old[signum] = signal.signal(signum, self._handler)
+                except (ValueError, OSError):
+                    pass
+        return self
+
+    def __exit__(self, *exc) -> None:
+        for signum, old in self._old.items():
+            try:
+                signal.signal(signum, old)
+            except (ValueError, OSError, TypeError):
+                pass
+        self._old.clear()
