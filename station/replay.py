@@ -13,7 +13,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import Any, NamedTuple
 
 import numpy as np
 
@@ -32,6 +32,9 @@ from station.runlog import RunLog, read_log
 
 ALIGNMENTS = (0, 1)
 """Computational delays replay tries, samples."""
+
+RIG_DT = 0.002
+"""The rig's sample time, s: its compensators ran at it (DESIGN.md)."""
 
 RIG_LIMIT = 200.0
 """The rig software's clamp of v, DAC counts (DESIGN.md)."""
@@ -67,9 +70,20 @@ class ReplayReport:
         What the logged u is: ``{"kind": "step", "amplitude", "tick"}``, ``{"kind": "zero"}``
         or ``{"kind": "other"}``.
     fit_pct : dict or None
-        NRMSE fit (percent) of the model's theta and a to the logged ones.
+        NRMSE fit (percent) of the model's theta and a to the logged ones (None when no
+        model ran, or the model cannot represent the test, e.g. a hub-held beam test).
     notes : list of str
         What was assumed or could not be done.
+    controller_source : {"header", "inferred"} or None
+        Where the replayed controller came from (:func:`identify_controller`).
+    layout : str
+        The file's layout (:attr:`station.runlog.RunLog.layout`).
+    sample_time : float or None
+        Sample time found in the log, s.
+    beam_test : station.analysis.beam.BeamTestReport or None
+        First mode of a hub-held beam test (None for other runs).
+    outcome : dict or None
+        The log's end record (DESIGN.md "Run outcome"); None when it has none.
     v_replayed, prediction : numpy arrays (not in the JSON)
         The replayed commands, shape (N,); the model's ``simulate`` output (t, u, v,
         theta, a, theta_d_hat).
@@ -89,6 +103,11 @@ class ReplayReport:
     fit_pct: dict[str, float | None] | None = None
     n_elements: int | None = None
     notes: list[str] = field(default_factory=list)
+    controller_source: str | None = None
+    layout: str = ""
+    sample_time: float | None = None
+    beam_test: BeamTestReport | None = None
+    outcome: dict[str, Any] | None = None
     v_replayed: np.ndarray | None = field(default=None, repr=False)
     prediction: dict[str, np.ndarray] | None = field(default=None, repr=False)
     log: RunLog | None = field(default=None, repr=False)
@@ -101,15 +120,21 @@ class ReplayReport:
     def to_json(self) -> dict[str, Any]:
         """The report as JSON-able dict (``station replay --json``).
 
-        Keys: file, format, controller, controller_spec, alignment, samples, max_abs_dv,
+        Keys: file, format, layout, sample_time_s, controller, controller_source
+        ("header" | "inferred" | null), controller_spec, alignment, samples, max_abs_dv,
         reproduced, reference, metrics {overshoot_pct, settling_time_s} (nulls when not a
-        closed-loop step), model {fit_pct {theta, accel}, n_elements} or null, notes.
+        closed-loop step), model {fit_pct {theta, accel}, n_elements} or null, beam_test
+        {f1_hz, f1_hz_std, zeta1, zeta1_std, f1_model_hz, zeta1_model, ...} or null,
+        outcome, notes.
         """
         m = self.metrics
         return {
             "file": self.file,
             "format": self.format,
+            "layout": self.layout,
+            "sample_time_s": self.sample_time,
             "controller": self.controller,
+            "controller_source": self.controller_source,
             "controller_spec": self.controller_spec,
             "alignment": self.alignment,
             "samples": self.samples,
@@ -120,6 +145,8 @@ class ReplayReport:
                         "settling_time_s": None if m is None else m.settling_time_s},
             "model": None if self.fit_pct is None else {"fit_pct": dict(self.fit_pct),
                                                         "n_elements": self.n_elements},
+            "beam_test": None if self.beam_test is None else self.beam_test.to_json(),
+            "outcome": self.outcome,
             "notes": list(self.notes),
         }
 
@@ -186,8 +213,8 @@ def rig_controller(meta: dict[str, Any], dt: float = 0.002) -> tuple[Compensator
         return Compensator(gth, ga, limit=RIG_LIMIT, name=name, spec=spec), notes
     if "kp" in meta:
         kp, ki, kd = (_header_number(meta, key) for key in ("kp", "ki", "kd"))
-        if ki != 0.0 or kd != 0.0:
-            return None, [f"PID with ki = {ki}, kd = {kd}: the rig's PID discretization is not known"]
+        if ki != 0.0 or kd != 0.0:  # how the rig discretized it: the data decide (identify_controller)
+            return None, []
         if "ki" in meta or "kd" in meta:
             notes.append("PID_control with ki = kd = 0: P control")
         return p_controller(kp, RIG_LIMIT, dt), notes
@@ -196,8 +223,22 @@ def rig_controller(meta: dict[str, Any], dt: float = 0.002) -> tuple[Compensator
     return None, notes
 
 
+class ControllerId(NamedTuple):
+    """Which controller ran a log and where that came from (:func:`identify_controller`).
+
+    controller: Compensator, OpenLoop or None (none known: commands not replayed, the
+    model driven by the logged v); source: "header" (named by the log, including a PID
+    header matched to a standard discretization), "inferred" (identified from the data)
+    or None; notes: one line each on what was assumed or could not be done.
+    """
+
+    controller: Compensator | OpenLoop | None
+    source: str | None
+    notes: list[str]
+
+
 def log_controller(log: RunLog) -> tuple[Compensator | OpenLoop | None, list[str]]:
-    """The controller a log names.
+    """The controller that ran a log: named by its header, else identified from the data.
 
     Parameters
     ----------
@@ -207,7 +248,8 @@ def log_controller(log: RunLog) -> tuple[Compensator | OpenLoop | None, list[str
     Returns
     -------
     controller : Compensator, OpenLoop or None
-        None when the log does not name its controller.
+        None when the header names none and none reproduces the logged v
+        (:func:`identify_controller`).
     notes : list of str
         What was assumed.
 
@@ -217,6 +259,89 @@ def log_controller(log: RunLog) -> tuple[Compensator | OpenLoop | None, list[str
         Our header's controller spec is malformed, or a rig header's gain is not a
         number (naming the file and line).
     """
+    cid = identify_controller(log)
+    return cid.controller, cid.notes
+
+
+def identify_controller(log: RunLog) -> ControllerId:
+    """The controller that ran a log, and whether the header named it or the data did.
+
+    Order: the header's controller; a PID header with ki or kd != 0 matched against the
+    standard discretizations (:func:`station.analysis.identify.match_pid`); else a law
+    identified from u, θ and v (:func:`station.analysis.identify.infer_controller`:
+    open loop, P, linear e -> v up to order 3), accepted only when it reproduces every
+    logged v to 1e-6 DAC counts. A rig log sampled at another rate than the rig's
+    0.002 s cannot be replayed with a closed-loop controller (the rows it ran on are
+    missing): one note says so and the model is driven by the logged v.
+
+    Parameters
+    ----------
+    log : RunLog
+
+    Returns
+    -------
+    ControllerId
+
+    Raises
+    ------
+    StationError
+        As :func:`log_controller`.
+    """
+    from station.analysis.identify import infer_controller, match_pid
+
+    controller, notes = _named_controller(log)
+    dt = _dt_of(log)
+    data = log.data
+    u, theta, v, a = data["u"], data["theta"], data["v"], data["a"]
+    if log.format == "rig" and abs(dt - RIG_DT) > 1e-9 and not isinstance(controller, OpenLoop):
+        notes.append(f"sampled at {dt:g} s, not the rig's {RIG_DT:g} s: its controller ran on rows this "
+                     f"log lacks, so the commands cannot be replayed; the model is driven by the logged v")
+        return ControllerId(None, None, notes)
+    if controller is not None:
+        return ControllerId(controller, "header", notes)
+    missing = [name for name in ("u", "theta", "v") if not np.all(np.isfinite(data[name]))]
+    pid = _header_pid(log)
+    if pid is not None and not missing:
+        hit, best = match_pid(*pid, u, theta, v, a, dt, RIG_LIMIT)
+        gains = f"kp = {pid[0]:g}, ki = {pid[1]:g}, kd = {pid[2]:g}"
+        if hit is not None:
+            notes.append(f"PID header ({gains}) replayed with the {hit.law}")
+            return ControllerId(hit.controller, "header", notes)
+        notes.append(f"PID header ({gains}): no standard discretization (integral by backward Euler, "
+                     f"forward Euler or Tustin; derivative by backward difference) reproduces the logged v "
+                     f"(best max |dv| = {best:.3g} counts)")
+    elif pid is not None:
+        notes.append(f"PID header, but the log has no usable {', '.join(missing)}: commands not replayed")
+    if missing:
+        if pid is None:
+            notes.append(f"the log names no controller and has no usable {', '.join(missing)} column to "
+                         f"infer one from: commands not replayed, model driven by the logged v")
+        return ControllerId(None, None, notes)
+    hit = infer_controller(u, theta, v, a, dt, RIG_LIMIT)
+    if hit is not None:
+        notes.append(f"controller inferred from the data: {hit.law}, alignment {hit.alignment} "
+                     f"(reproduces the logged v to {hit.max_abs_dv:.2g} counts)")
+        return ControllerId(hit.controller, "inferred", notes)
+    if pid is None:
+        notes.append("the log names no controller and none could be inferred from the data (open loop, "
+                     "P, linear e -> v up to order 3): commands not replayed, model driven by the logged v")
+    return ControllerId(None, None, notes)
+
+
+def _header_pid(log: RunLog) -> tuple[float, float, float] | None:
+    """(kp, ki, kd) of a rig header whose PID has ki or kd != 0, else None."""
+    meta = log.meta
+    if log.format != "rig" or "kp" not in meta:
+        return None
+    try:
+        kp, ki, kd = (_header_number(meta, key) for key in ("kp", "ki", "kd"))
+    except StationError:
+        return None
+    return (kp, ki, kd) if (ki != 0.0 or kd != 0.0) else None
+
+
+def _named_controller(log: RunLog) -> tuple[Compensator | OpenLoop | None, list[str]]:
+    """The controller the log's header names (None when it names none)."""
     if log.format == "station":
         spec = log.meta.get("controller")
         if not isinstance(spec, dict):
@@ -339,40 +464,36 @@ def classify_reference(u) -> dict[str, Any]:
 
 # --- the model --------------------------------------------------------------------------
 
-def _model(report: ReplayReport, log: RunLog, controller, n_elements: int) -> None:
-    from station.plant import DiscretePlant
-
-    try:
-        plant = DiscretePlant(n_elements=n_elements, dt=_dt_of(log))
-    except ValueError as exc:
-        raise StationError(f"model: {exc}") from None
-    run = simulate_log(log, controller, report.alignment, plant)
+def _model(report: ReplayReport, log: RunLog, controller, model) -> None:
+    run = simulate_log(log, controller, report.alignment, model)
     if run.theta_measured is not log.data["theta"] and log.data["theta"][0] != 0:
         report.notes.append("open loop: logged theta compared relative to its first sample")
     report.prediction = run.prediction
-    report.n_elements = n_elements
+    report.n_elements = n_elements = model.n_elements
     report.fit_pct = fits = run.fit_pct
     if fits["theta"] is not None and fits["theta"] < -100.0:
         report.notes.append(f"the model's theta diverges from the log (fit {fits['theta']:.3g} %): "
                             "was the logged v really applied (motor powered, no hold)?")
-    report.notes.append(f"model: FEM plant, {n_elements} elements, driven by {run.how}")
+    effects = ", ".join(f"{k} = {v:g}" for k, v in model.effects) or "no effects"
+    report.notes.append(f"model: {model.name} (FEM plant, {n_elements} elements, {effects}), driven by {run.how}")
 
 
 # --- replay -----------------------------------------------------------------------------
 
-def replay(path: str | Path, model: bool = True, n_elements: int = 4) -> ReplayReport:
+def replay(path: str | Path, model=True, n_elements: int | None = None) -> ReplayReport:
     """Replay a run log.
 
     Parameters
     ----------
     path : str or Path
         A run log, ours or the rig's.
-    model : bool
-        Also run the FEM plant model on the same reference (closed loop, with the log's
-        controller and alignment) or the logged v (open loop) and report the NRMSE fit of
-        theta and a.
-    n_elements : int
-        Beam elements of the model.
+    model : bool, Model, str or Path
+        Also run a model on the same reference (closed loop, with the log's controller
+        and alignment) or the logged v (open loop) and report the NRMSE fit of theta and
+        a: True for the nominal "tmm-fit", a :class:`station.plant.model.Model`, or a
+        built-in model's name or model file; False: no model.
+    n_elements : int, optional
+        Beam elements of the model (default: the model's own, 4 for tmm-fit).
 
     Returns
     -------
@@ -383,7 +504,8 @@ def replay(path: str | Path, model: bool = True, n_elements: int = 4) -> ReplayR
     station.runlog.RunLogError
         The log cannot be read.
     StationError
-        Our log's controller spec is malformed, or ``n_elements`` is out of the model's range.
+        Our log's controller spec is malformed, the model cannot be read, or
+        ``n_elements`` is out of the model's range.
     """
     log = read_log(path)
     data = log.data
@@ -415,8 +537,10 @@ def replay(path: str | Path, model: bool = True, n_elements: int = 4) -> ReplayR
                                     f"{report.max_abs_dv:.3g} counts)")
             if reference["kind"] == "step":
                 report.metrics = step_metrics(data["t"], data["theta"], data["u"][-1])
-    if model and n > 0:
-        _model(report, log, controller, n_elements)
+    if model is not False and model is not None and n > 0:
+        from station.plant.model import as_model
+
+        _model(report, log, controller, as_model(None if model is True else model, n_elements))
     return report
 
 

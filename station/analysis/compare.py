@@ -75,8 +75,9 @@ def compare_run(path, plant) -> RunComparison:
     ----------
     path : str or Path
         A run log (ours or the rig's), read with station.runlog.read_log.
-    plant : station.plant.DiscretePlant
-        The model (its dt should be the log's, 0.002 s for the rig).
+    plant : station.plant.model.Model or station.plant.DiscretePlant
+        The model (a Model is simulated at the log's sample time with its effects; a
+        DiscretePlant's dt should be the log's, 0.002 s for the rig).
 
     Returns
     -------

@@ -16,8 +16,13 @@ HELP = "H1 frequency response (θ/v, a/v) of a swept-sine log against the FEM mo
 def configure(parser: argparse.ArgumentParser) -> None:
     """Add the command's arguments to its subparser."""
     parser.add_argument("file", type=Path, metavar="FILE", help="run log (station or rig format), e.g. a swept sine")
-    parser.add_argument("--elements", type=int, default=4, metavar="N", help="beam elements of the model (default 4)")
-    parser.add_argument("--params", default="tmm-fit", metavar="SET", help="parameter set name or TOML file")
+    parser.add_argument("--model", default=None, metavar="NAME|FILE",
+                        help="the model: a built-in model's name or a model file (default tmm-fit); its linear part "
+                             "(param:NAME, beam_damping) gives the response")
+    parser.add_argument("--elements", type=int, default=None, metavar="N",
+                        help="beam elements of the model (default: the model's, 4)")
+    parser.add_argument("--params", default=None, metavar="SET",
+                        help="parameter set name or TOML file (default: the model's, tmm-fit)")
     parser.add_argument("--nperseg", type=int, default=4096, metavar="N",
                         help="Welch segment length, samples (default 4096: 0.12 Hz at 500 Hz)")
     parser.add_argument("--png", type=Path, default=None, metavar="OUT",
@@ -84,19 +89,22 @@ def run(args: argparse.Namespace) -> int:
     """
     from station.analysis.frequency import compare_bode
     from station.errors import StationError
-    from station.plant import DiscretePlant, load_params
+    from station.plant import DiscretePlant
+    from station.plant.model import as_model
     from station.runlog import read_log
 
     log = read_log(args.file)
     t = log.data["t"]
     dt = float(np.median(np.diff(t))) if t.size > 1 else 0.002
+    model = as_model(args.model, args.elements, args.params)
+    args.elements = model.n_elements
     try:
-        plant = DiscretePlant(load_params(args.params), n_elements=args.elements, dt=dt)
+        plant = DiscretePlant(model.linear_params(), n_elements=model.n_elements, dt=dt)
         cmp = compare_bode(log.data["v"], log.data["theta"], log.data["a"], dt, plant, nperseg=args.nperseg)
     except ValueError as exc:
         raise StationError(f"{args.file}: {exc}") from None
     print(f"{args.file}: H1 estimate, {len(t)} samples, resolution {cmp.theta.f[1] - cmp.theta.f[0]:.3f} Hz; "
-          f"model {plant.params.name}, {args.elements} elements")
+          f"model {model.name} ({plant.params.name}), {args.elements} elements")
     print(f"{'antiresonance':>13} {'measured Hz':>12} {'model Hz':>9} {'error %':>8}")
     for i, (m, z, e) in enumerate(zip(cmp.antiresonances_measured_hz, cmp.antiresonances_model_hz,
                                       cmp.antiresonance_error_pct), 1):

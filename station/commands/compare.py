@@ -14,8 +14,12 @@ HELP = "simulate logged runs on the FEM model as the rig ran them; step metrics 
 def configure(parser: argparse.ArgumentParser) -> None:
     """Add the command's arguments to its subparser."""
     parser.add_argument("files", type=Path, nargs="+", metavar="FILE", help="run logs (station or rig format)")
-    parser.add_argument("--elements", type=int, default=4, metavar="N", help="beam elements of the model (default 4)")
-    parser.add_argument("--params", default="tmm-fit", metavar="SET", help="parameter set name or TOML file")
+    parser.add_argument("--model", default=None, metavar="NAME|FILE",
+                        help="the model: a built-in model's name (station/plant/models) or a model file (default tmm-fit)")
+    parser.add_argument("--elements", type=int, default=None, metavar="N",
+                        help="beam elements of the model (default: the model's, 4)")
+    parser.add_argument("--params", default=None, metavar="SET",
+                        help="parameter set name or TOML file (default: the model's, tmm-fit)")
     parser.add_argument("--out-dir", type=Path, default=Path("."), metavar="DIR",
                         help="folder for the figures, <log stem>_compare.png (default: current folder)")
     parser.add_argument("--json", type=Path, default=None, metavar="OUT", help="write the comparisons as JSON")
@@ -32,32 +36,29 @@ def run(args: argparse.Namespace) -> int:
     Raises
     ------
     StationError
-        Unreadable log or parameter set, a log without a named controller, bad element
+        Unreadable log, model file or parameter set, a log without a named controller, bad element
         count, unwritable output.
     """
     from station.analysis.compare import compare_run, format_comparison, plot_comparison
     from station.errors import StationError
-    from station.plant import DiscretePlant, load_params
+    from station.plant.model import as_model
 
-    params = load_params(args.params)
-    try:
-        plant = DiscretePlant(params, n_elements=args.elements)
-    except ValueError as exc:
-        raise StationError(str(exc)) from None
-    print(f"model: {params.name}, {args.elements} elements")
+    model = as_model(args.model, args.elements, args.params)
+    effects = ", ".join(f"{k} = {v:g}" for k, v in model.effects) or "no effects"
+    print(f"model: {model.name} ({model.params.name}, {model.n_elements} elements, {effects})")
     results = []
     try:
         args.out_dir.mkdir(parents=True, exist_ok=True)
         for path in args.files:
-            c = compare_run(path, plant)
+            c = compare_run(path, model)
             png = args.out_dir / f"{Path(path).stem}_compare.png"
             plot_comparison(c, png)
             print(format_comparison(c))
             print(f"  figure: {png}")
             results.append(c.to_json())
         if args.json is not None:
-            args.json.write_text(json.dumps({"n_elements": args.elements, "params": params.name,
-                                             "runs": results}, indent=1))
+            args.json.write_text(json.dumps({"n_elements": model.n_elements, "params": model.params.name,
+                                             "model": model.to_json(), "runs": results}, indent=1))
     except OSError as exc:
         raise StationError(f"cannot write output: {exc}") from None
     return 0

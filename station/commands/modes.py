@@ -21,7 +21,11 @@ def configure(parser: argparse.ArgumentParser) -> None:
     """Add ``station modes``'s options to ``parser``."""
     parser.add_argument("--elements", type=int, nargs="+", default=[1, 2, 4, 10, 20, 50, 100], metavar="N",
                         help="element counts (default 1 2 4 10 20 50 100)")
-    parser.add_argument("--params", default="tmm-fit", metavar="SET", help="parameter set name or TOML file")
+    parser.add_argument("--params", default=None, metavar="SET",
+                        help="parameter set name or TOML file (default: the model's, tmm-fit)")
+    parser.add_argument("--model", default=None, metavar="NAME|FILE",
+                        help="a built-in model's name or a model file (default tmm-fit); its linear part "
+                             "(param:NAME, beam_damping) is analysed")
     parser.add_argument("--count", type=int, default=3, metavar="K", help="modes to show (default 3)")
     parser.add_argument("--json", type=Path, default=None, metavar="OUT", help="write the numbers as JSON")
 
@@ -34,22 +38,25 @@ def run(args: argparse.Namespace) -> int:
     StationError
         Unknown parameter set or an element count outside 1..100.
     """
-    from station.plant import load_params, modal_summary
+    from station.plant import modal_summary
+    from station.plant.model import as_model
 
-    params = load_params(args.params)
+    model = as_model(args.model, None, args.params)
+    label = model.params.name if not model.effects else f"{model.name} ({model.params.name}, " + \
+        ", ".join(f"{k} = {v:g}" for k, v in model.effects) + ")"
     k = max(1, args.count)
     rows = []
     for n in args.elements:
         if not 1 <= n <= 100:
             raise StationError(f"--elements {n}: expected 1..100")
-        m = modal_summary(params, n)
+        m = modal_summary(as_model(model, n).linear_params(), n)
         rows.append({"n_elements": n, "frequencies_hz": m.frequencies_hz[:k].tolist(),
                      "damping": m.damping[:k].tolist(), "antiresonances_hz": m.antiresonances_hz[:k].tolist(),
                      "antiresonance_damping": m.antiresonance_damping[:k].tolist()})
     def cols(values, fmt):
         return "  ".join(format(v, fmt) for v in values)
 
-    print(f"FEM model, parameter set {args.params}: oscillatory poles (motor free) and θ/v antiresonances "
+    print(f"FEM model, parameter set {label}: oscillatory poles (motor free) and θ/v antiresonances "
           "(= modes with the hub held)")
     print(f"{'n':>4}  {'poles Hz':<{9 * k}} {'ζ':<{9 * k}} {'antiresonances Hz':<{9 * k}} ζ")
     for r in rows:
@@ -65,7 +72,7 @@ def run(args: argparse.Namespace) -> int:
           ", ".join(f"{m:.3f} vs {r} Hz ({e:+.1f} %)" for m, r, e in zip(ar, RIG["antiresonances_hz"], errs)))
     if args.json is not None:
         try:
-            args.json.write_text(json.dumps({"params": args.params, "models": rows, "rig": RIG}, indent=1) + "\n")
+            args.json.write_text(json.dumps({"params": model.params.name, "model": model.to_json(), "models": rows, "rig": RIG}, indent=1) + "\n")
         except OSError as exc:
             raise StationError(f"{args.json}: cannot write: {exc.strerror or exc}") from None
     return 0

@@ -18,8 +18,10 @@ def configure(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--json", type=Path, default=None, metavar="OUT", help="write the report as JSON")
     parser.add_argument("--no-model", dest="model", action="store_false",
                         help="skip the FEM model prediction")
-    parser.add_argument("--elements", type=int, default=4, metavar="N",
-                        help="beam elements of the FEM model (default 4)")
+    parser.add_argument("--model", dest="model_spec", default=None, metavar="NAME|FILE",
+                        help="the model: a built-in model's name (station/plant/models) or a model file (default tmm-fit)")
+    parser.add_argument("--elements", type=int, default=None, metavar="N",
+                        help="beam elements of the FEM model (default: the model's, 4)")
     viz = parser.add_mutually_exclusive_group()
     viz.add_argument("--rrd", type=Path, default=None, metavar="FILE",
                      help="record the log, the replayed v and the model to a rerun .rrd file")
@@ -53,14 +55,15 @@ def run(args: argparse.Namespace) -> int:
     Raises
     ------
     StationError
-        Unreadable log, bad controller spec, unwritable JSON or .rrd file.
+        Unreadable log or model file, bad controller spec, unwritable JSON or .rrd file.
     """
     from station.errors import StationError
     from station.replay import format_report, replay
 
-    if args.elements < 1:
+    if args.elements is not None and args.elements < 1:
         raise StationError(f"--elements {args.elements}: expected a positive number of beam elements")
-    report = replay(args.file, model=args.model, n_elements=args.elements)
+    model = (args.model_spec or True) if args.model else False
+    report = replay(args.file, model=model, n_elements=args.elements)
     print(format_report(report))
     if args.json is not None:
         try:
