@@ -26,6 +26,14 @@ from station.control import (
     lead_controller,
     p_controller,
 )
+from station.analysis.beam import (
+    HELD_MIN_V,
+    BeamTestReport,
+    HubHeld,
+    analyze_beam_test,
+    hub_held,
+    model_first_mode,
+)
 from station.errors import StationError
 from station.modelrun import ModelRun, command_quantization, simulate_log  # noqa: F401 (moved; re-exported)
 from station.runlog import RunLog, read_log
@@ -294,8 +302,9 @@ def identify_controller(log: RunLog) -> ControllerId:
     data = log.data
     u, theta, v, a = data["u"], data["theta"], data["v"], data["a"]
     if log.format == "rig" and abs(dt - RIG_DT) > 1e-9 and not isinstance(controller, OpenLoop):
-        notes.append(f"sampled at {dt:g} s, not the rig's {RIG_DT:g} s: its controller ran on rows this "
-                     f"log lacks, so the commands cannot be replayed; the model is driven by the logged v")
+        notes.append(f"sampled at {dt:g} s, not the rig's {RIG_DT:g} s: closed-loop commands cannot be "
+                     f"replayed or inferred (the rig's controllers ran at {RIG_DT:g} s, on rows this log "
+                     f"lacks); the model is driven by the logged v at {dt:g} s")
         return ControllerId(None, None, notes)
     if controller is not None:
         return ControllerId(controller, "header", notes)
@@ -449,9 +458,12 @@ def classify_reference(u) -> dict[str, Any]:
         ``{"kind": "step", "amplitude": float, "tick": int}`` when u is 0 up to one tick
         and a non-zero constant from it to the end (tick 0: constant throughout; the rig
         was at rest before the run, as ``station step --step-time 0`` runs it);
-        ``{"kind": "zero"}``; else ``{"kind": "other"}``.
+        ``{"kind": "zero"}``; ``{"kind": "missing"}`` when u is not logged (NaN); else
+        ``{"kind": "other"}``.
     """
     u = np.asarray(u, dtype=float)
+    if u.size and not np.all(np.isfinite(u)):
+        return {"kind": "missing"}
     if u.size == 0 or np.all(u == 0):
         return {"kind": "zero"}
     change = np.flatnonzero(np.diff(u) != 0)
@@ -510,18 +522,18 @@ def replay(path: str | Path, model=True, n_elements: int | None = None) -> Repla
     log = read_log(path)
     data = log.data
     n = len(log)
-    controller, notes = log_controller(log)
+    cid = identify_controller(log) if n else ControllerId(None, None, [])
+    controller = cid.controller
     reference = classify_reference(data["u"])
     report = ReplayReport(file=str(path), format=log.format, controller=None, controller_spec=None,
                           alignment=None, samples=n, max_abs_dv=None, metrics=None, reference=reference,
-                          notes=list(notes), log=log)
-    if controller is None:
-        report.notes.append("the log does not name its controller: commands not replayed, model only (logged v)")
-    elif n == 0:
-        report.notes.append("the log has no rows")
-    else:
+                          notes=list(log.notes) + list(cid.notes), log=log, layout=log.layout,
+                          sample_time=log.sample_time, outcome=log.outcome)
+    held = hub_held(data["theta"], data["v"], _dt_of(log)) if n else None
+    if controller is not None and n > 0:  # else identify_controller's notes say why
         report.controller = controller.name
         report.controller_spec = controller.spec
+        report.controller_source = cid.source
         d, report.max_abs_dv, report.v_replayed = detect_alignment(controller, data["u"], data["theta"],
                                                                   data["a"], data["v"])
         if isinstance(controller, OpenLoop):
@@ -537,11 +549,35 @@ def replay(path: str | Path, model=True, n_elements: int | None = None) -> Repla
                                     f"{report.max_abs_dv:.3g} counts)")
             if reference["kind"] == "step":
                 report.metrics = step_metrics(data["t"], data["theta"], data["u"][-1])
-    if model is not False and model is not None and n > 0:
+    if n == 0:
+        report.notes.append("the log has no rows")
+    want_model = model is not False and model is not None
+    if want_model or held is not None:
         from station.plant.model import as_model
 
-        _model(report, log, controller, as_model(None if model is True else model, n_elements))
+        the_model = as_model(None if model is True or not want_model else model, n_elements)
+    if held is not None:
+        _beam_test(report, log, held, the_model)
+    elif want_model and n > 0:
+        _model(report, log, controller, the_model)
     return report
+
+
+def _beam_test(report: ReplayReport, log: RunLog, held: HubHeld, model) -> None:
+    """A hub-held test: the beam's first mode instead of the motor model's fit."""
+    data = log.data
+    measured = analyze_beam_test(data["t"], data["a"], _dt_of(log))
+    try:
+        f_model, z_model = model_first_mode(model)
+    except (ValueError, StationError) as exc:
+        f_model = z_model = None
+        report.notes.append(f"the model's hub-held first mode could not be computed ({exc})")
+    report.beam_test = BeamTestReport(measured, held, f_model, z_model)
+    report.notes.append(f"hub-held beam test (theta within {held.theta_span:g} counts while |v| >= "
+                        f"{HELD_MIN_V:g} for {held.duration_s:.1f} s): the logged v was not applied, so the "
+                        f"motor model cannot represent this run and its fit is not computed; the beam's "
+                        f"free vibration after the release is analyzed instead")
+    report.notes.extend(f"beam test: {note}" for note in measured.notes)
 
 
 def format_report(report: ReplayReport) -> str:
@@ -554,14 +590,18 @@ def format_report(report: ReplayReport) -> str:
     Returns
     -------
     str
-        Several lines: file, format, controller, replay verdict with max |dv| (DAC
-        counts) and alignment, reference, overshoot / settling time, NRMSE fits, notes.
+        Several lines: file, format, sample time, controller and its source, replay
+        verdict with max |dv| (DAC counts) and alignment, reference, overshoot / settling
+        time, NRMSE fits or the beam test, outcome, notes.
     """
-    lines = [f"{report.file}", f"  format {report.format}, {report.samples} samples"]
+    layout = f" ({report.layout})" if report.layout and report.layout != report.format else ""
+    dt = "" if report.sample_time is None else f", sample time {report.sample_time:g} s"
+    lines = [f"{report.file}", f"  format {report.format}{layout}, {report.samples} samples{dt}"]
     if report.controller is None:
-        lines.append("  controller: not named in the log (model only)")
+        lines.append("  controller: none replayed (see the notes)")
     else:
-        lines.append(f"  controller: {report.controller}")
+        source = {"header": "named by the log", "inferred": "inferred from the data"}.get(report.controller_source, "")
+        lines.append(f"  controller: {report.controller}" + (f" ({source})" if source else ""))
     if report.max_abs_dv is not None:
         verdict = "reproduces" if report.reproduced else "does NOT reproduce"
         align = "" if report.alignment is None else f", alignment d = {report.alignment}"
@@ -577,6 +617,25 @@ def format_report(report: ReplayReport) -> str:
         f = report.fit_pct
         fmt = lambda x: "n/a" if x is None else f"{x:.1f} %"  # noqa: E731
         lines.append(f"  model fit (NRMSE): theta {fmt(f['theta'])}, accel {fmt(f['accel'])}")
+    if report.beam_test is not None:
+        lines.extend("  " + line for line in format_beam_test(report.beam_test))
+    if report.outcome is not None:
+        lines.append(f"  outcome: {report.outcome.get('reason', '?')}")
     for note in report.notes:
         lines.append(f"  note: {note}")
     return "\n".join(lines)
+
+
+def format_beam_test(bt: BeamTestReport) -> list[str]:
+    """Lines for a hub-held beam test: measured first mode (fit and log decrement, ± one
+    standard error) beside the model's."""
+    m = bt.measured
+    pm = lambda x, sd, f: "n/a" if x is None else f"{x:{f}}" + ("" if sd is None else f" ± {sd:.2g}")  # noqa: E731
+    out = [f"beam test (hub held): first mode {pm(m.f1_hz, m.f1_hz_std, '.3f')} Hz, "
+           f"zeta {pm(m.zeta1, m.zeta1_std, '.4f')} (damped-sine fit, 1-5 Hz band)"]
+    if m.f1_logdec_hz is not None:
+        out.append(f"  log decrement: {pm(m.f1_logdec_hz, m.f1_logdec_hz_std, '.3f')} Hz, "
+                   f"zeta {pm(m.zeta1_logdec, m.zeta1_logdec_std, '.4f')}")
+    if bt.f1_model_hz is not None:
+        out.append(f"  model (hub held): {bt.f1_model_hz:.3f} Hz, zeta {bt.zeta1_model:.4f}")
+    return out

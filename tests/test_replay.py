@@ -104,12 +104,26 @@ def test_our_logs_replay_and_alignment_is_detected(tmp_path, kind, alignment):
     assert r.fit_pct["accel"] == pytest.approx(100.0, abs=1e-9)
 
 
-def test_log_without_controller_is_model_only(tmp_path):
+def test_log_without_controller_gets_it_inferred(tmp_path):
     path = tmp_path / "anon.tsv"
     _simulated_log(path, "lead", 1, meta_controller=False)
     r = replay(path)
-    assert r.controller is None and r.max_abs_dv is None
-    assert any("does not name its controller" in n for n in r.notes)
+    assert r.controller_source == "inferred" and r.alignment == 1 and r.max_abs_dv <= 1e-6
+    lead = make_controller("lead")
+    np.testing.assert_allclose(r.controller_spec["gth"]["num_z"], lead.gth.num, rtol=1e-9)
+    np.testing.assert_allclose(r.controller_spec["gth"]["den_z"], lead.gth.den, rtol=1e-9)
+    assert any("inferred from the data" in n for n in r.notes)
+    # closed loop with the inferred law on the plant that made the log: a perfect fit
+    assert r.fit_pct["theta"] == pytest.approx(100.0, abs=1e-6)
+
+
+def test_log_without_an_inferable_controller_is_model_only(tmp_path):
+    path = tmp_path / "anon.tsv"
+    _simulated_log(path, "lead-accel", 1, meta_controller=False)  # v depends on a too: not e -> v
+    r = replay(path)
+    assert r.controller is None and r.max_abs_dv is None and r.controller_source is None
+    assert r.to_json()["controller_source"] is None
+    assert any("none could be inferred" in n for n in r.notes)
     # open loop on the logged v reproduces the closed-loop run of the same plant exactly
     assert r.fit_pct["theta"] == pytest.approx(100.0, abs=1e-9)
 

@@ -348,3 +348,36 @@ def model_first_mode(model=None, n_elements: int = 4) -> tuple[float, float]:
         params = with_beam_damping(params, float(zeta), n_elements)
     ms = modal_summary(params, n_elements)
     return float(ms.antiresonances_hz[0]), float(ms.antiresonance_damping[0])
+
+
+@dataclass(frozen=True)
+class BeamTestReport:
+    """A hub-held beam test next to the model's hub-held first mode (replay's ``beam_test``).
+
+    Attributes
+    ----------
+    measured : BeamTest
+    held : HubHeld
+        Why the run counts as hub-held.
+    f1_model_hz, zeta1_model : float or None
+        The model's first hub-held mode (:func:`model_first_mode`), Hz and 1.
+    """
+
+    measured: BeamTest
+    held: HubHeld
+    f1_model_hz: float | None
+    zeta1_model: float | None
+
+    def to_json(self) -> dict:
+        """``{"f1_hz", "f1_hz_std", "zeta1", "zeta1_std", "f1_model_hz", "zeta1_model"}``
+        (null where not measurable) plus the log-decrement cross-check, the release and
+        window times, and what made the run hub-held."""
+        m = self.measured
+        return {"f1_hz": m.f1_hz, "f1_hz_std": m.f1_hz_std, "zeta1": m.zeta1, "zeta1_std": m.zeta1_std,
+                "f1_model_hz": self.f1_model_hz, "zeta1_model": self.zeta1_model,
+                "logdec": {"f1_hz": m.f1_logdec_hz, "f1_hz_std": m.f1_logdec_hz_std,
+                           "zeta1": m.zeta1_logdec, "zeta1_std": m.zeta1_logdec_std},
+                "release_s": m.release_s, "fit_start_s": m.fit_start_s, "cycles": m.cycles,
+                "hub_held": {"duration_s": self.held.duration_s, "theta_span_counts": self.held.theta_span,
+                             "v_counts": self.held.v},
+                "notes": list(m.notes)}
