@@ -16,7 +16,7 @@ from station import __version__
 from station.errors import StationError
 from station.signals import StopSignal
 
-COMMANDS = ("step", "replay", "sim_device", "bode", "compare", "modes")
+COMMANDS = ("step", "replay", "sim_device", "bode", "compare", "modes", "survey")
 """Modules of :mod:`station.commands`, in the order ``--help`` lists them."""
 
 
