@@ -45,7 +45,7 @@ def test_url_finds_the_handler_and_answers_hello(query, rate_hz):
 
 @pytest.mark.parametrize("query, word", [
     ("bogus=1", "bogus"), ("protocol=v2", "protocol"), ("pacing=fast", "pacing"),
-    ("seed=-1", "seed"), ("elements=0", "elements"), ("seed=1&seed=2", "seed"),
+    ("seed=-1", "seed"), ("elements=0", "elements"), ("seed=1&seed=2", "seed"), ("model=no-such", "model"),
 ])
 def test_bad_option_is_an_error_naming_it(query, word):
     with pytest.raises(serial.SerialException, match=word):
@@ -54,7 +54,7 @@ def test_bad_option_is_an_error_naming_it(query, word):
 
 def test_defaults():
     assert protocol_sim.parse_url("sim://") == {
-        "protocol": "v1", "pacing": "lockstep", "seed": 0, "elements": 4, "noise": 0.3, "watchdog": 10,
+        "protocol": "v1", "pacing": "lockstep", "seed": 0, "model": "tmm-fit", "elements": 4, "noise": 0.3, "watchdog": 10,
         "silent_after": None, "garbage_every": None, "skip_tick": None}
 
 

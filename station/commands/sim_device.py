@@ -29,7 +29,7 @@ def run(args: argparse.Namespace) -> int:
     ------
     StationError
         Without ``--pty``: only the pty transport exists out of process; a bad
-        ``--elements`` or ``--seed``.
+        ``--model``, ``--elements`` or ``--seed``.
     """
     if not args.pty:
         raise StationError("sim-device: only --pty is supported for out-of-process use "
@@ -38,6 +38,6 @@ def run(args: argparse.Namespace) -> int:
 
     try:
         serve_from_args(args)
-    except ValueError as exc:  # a bad --elements / --seed, raised before the pty is opened
+    except (ValueError, StationError) as exc:  # a bad --model / --elements / --seed, before the pty is opened
         raise StationError(f"sim-device: {exc}") from None
     return 0

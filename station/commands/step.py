@@ -34,6 +34,12 @@ def configure(parser) -> None:
     parser.add_argument("--port", default=ex.DEFAULT_PORT, metavar="URL",
                         help="port path or pyserial URL (default sim://, the simulated rig)")
     parser.add_argument("--protocol", choices=("v1", "legacy"), default="v1", help="wire protocol (default v1)")
+    parser.add_argument("--model", default=None, metavar="NAME|FILE",
+                        help="simulated rig only: its model, a built-in name or a model file (sim://?model=...)")
+    parser.add_argument("--elements", type=int, default=None, metavar="N",
+                        help="simulated rig only: FEM element count (sim://?elements=N)")
+    parser.add_argument("--seed", type=int, default=None, metavar="N",
+                        help="simulated rig only: sensor noise seed (sim://?seed=N)")
     parser.add_argument("--baud", type=int, default=None, help="baud rate (default 921600 for v1, 115200 legacy)")
     parser.add_argument("--timeout", type=float, default=ex.DEFAULT_TIMEOUT, metavar="S",
                         help="longest wait for a sample before stopping safely (default 0.1 s)")
@@ -55,9 +61,29 @@ def configure(parser) -> None:
     viz.add_argument("--spawn", action="store_true", help="stream the run to a rerun viewer")
 
 
+def sim_port(port: str, model=None, elements=None, seed=None) -> str:
+    """``port`` with ``--model``/``--elements``/``--seed`` added as sim:// URL options.
+
+    Raises
+    ------
+    StationError
+        One of them given for a port that is not ``sim://``.
+    """
+    import urllib.parse
+
+    extra = {k: str(v) for k, v in (("model", model), ("elements", elements), ("seed", seed)) if v is not None}
+    if not extra:
+        return port
+    if not port.lower().startswith("sim://"):
+        raise StationError(f"--{next(iter(extra))}: only for the simulated rig (--port sim://...), not {port!r}")
+    query = urllib.parse.urlencode(extra)
+    return port + ("&" if "?" in port else "?") + query
+
+
 def run(args) -> int:
     """Run the test; exit code 0 when it completed, 1 when it was stopped by a fault."""
     limits = _limits(args)
+    args.port = sim_port(args.port, args.model, args.elements, args.seed)
     sinks = []
     if args.rrd is not None or args.spawn:
         from station.viz import RerunSink

@@ -253,6 +253,8 @@ def load_model(name_or_path: str | Path = "tmm-fit", n_elements: int | None = No
         raise bad("name", f"expected a string, got {name!r}")
     n = raw.get("n_elements", 4) if n_elements is None else n_elements
     if isinstance(n, bool) or not isinstance(n, int) or not 1 <= n <= 100:
+        if n_elements is not None:  # the caller's override, not the file's
+            raise StationError(f"n_elements: expected an integer in 1..100, got {n!r}")
         raise bad("n_elements", f"expected an integer in 1..100, got {n!r}")
     source = raw.get("params", "tmm-fit") if params is None else str(params)
     if isinstance(source, dict):

@@ -13,7 +13,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from station.plant import DiscretePlant, Sensors
+from station.plant import Sensors
 from station.protocol import legacy, v1
 from station.sim.hardware import ACCEL_OFFSET, Hardware
 
@@ -231,13 +231,16 @@ class SimDevice:
         Which firmware to run (``shared/spec/protocol.md``).
     plant : object, optional
         ``reset()``, ``outputs() -> (theta, a)`` (noise-free floats, encoder and ADC
-        counts), ``advance(v)`` (one 2 ms zero-order-hold step). Default:
-        ``station.plant.DiscretePlant(n_elements=n_elements)`` (the FEM model,
-        parameter set "tmm-fit"). Reset on construction.
+        counts), ``advance(v)`` (one 2 ms zero-order-hold step). Default: ``model``'s
+        tick-by-tick plant (:meth:`station.plant.model.Model.plant`, effects included).
+        Reset on construction.
     seed : int, default 0
         Seed of the default sensors' noise, so a run is reproducible.
-    n_elements : int, default 4
-        FEM element count of the default plant.
+    n_elements : int, optional
+        FEM element count of the default plant (default: the model's, 4 for tmm-fit).
+    model : Model, str or Path, optional
+        The model behind the default plant: a :class:`station.plant.model.Model`, a
+        built-in model's name or a model file (default "tmm-fit", the nominal FEM).
     accel_noise_std : float, default 0.3
         Accelerometer noise of the default sensors, ADC counts (std).
     sensors : object, optional
@@ -270,15 +273,17 @@ class SimDevice:
     during ticks: a transport calls :meth:`tick` while :attr:`running`.
     """
 
-    def __init__(self, protocol: str = "v1", plant=None, seed: int = 0, *, n_elements: int = 4,
-                 accel_noise_std: float = 0.3, sensors=None, accel_offset: float = ACCEL_OFFSET,
+    def __init__(self, protocol: str = "v1", plant=None, seed: int = 0, *, n_elements: int | None = None,
+                 model=None, accel_noise_std: float = 0.3, sensors=None, accel_offset: float = ACCEL_OFFSET,
                  v_limit: int = 255, watchdog_ticks: int = 10, name: str = "SFLR-SIM") -> None:
         if protocol not in ("v1", "legacy"):
             raise ValueError(f"unknown protocol {protocol!r}: expected 'v1' or 'legacy'")
         if not 1 <= watchdog_ticks <= 255:
             raise ValueError(f"watchdog_ticks must be 1..255 (a u8 in INFO), got {watchdog_ticks}")
         if plant is None:
-            plant = DiscretePlant(n_elements=n_elements)
+            from station.plant.model import as_model
+
+            plant = as_model(model, n_elements).plant()
         if sensors is None:
             sensors = Sensors(seed=seed, accel_noise_std=accel_noise_std)
         self.protocol = protocol
@@ -314,7 +319,7 @@ class SimDevice:
 
     @property
     def plant(self):
-        """The plant behind the device (a :class:`station.plant.DiscretePlant` by default)."""
+        """The plant behind the device (a :class:`station.plant.simulate.ModelPlant` by default)."""
         return self._fw.hw.plant
 
     @property

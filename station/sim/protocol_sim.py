@@ -16,7 +16,10 @@ options:
   ``realtime`` ticks every 2 ms on its own clock thread (absolute deadlines) and never
   waits for the station: missing commands give LATE / hold / WATCHDOG as on the rig.
 - ``seed=N``: seed of the sensor noise and of injected garbage (default 0).
-- ``elements=N``: FEM element count of the plant (default 4).
+- ``model=NAME|FILE``: the simulated rig's model: a built-in model's name
+  (``station/plant/models``) or a model file (DESIGN.md "Model file"), effects included
+  (default ``tmm-fit``, the nominal FEM).
+- ``elements=N``: FEM element count of the plant (default: the model's, 4).
 - ``noise=STD``: accelerometer noise std, ADC counts (default 0.3).
 - ``watchdog=N``: v1 watchdog_ticks, 1..255 (default 10).
 - ``silent_after=N``: fault: nothing is sent after tick N of a run; the device keeps
@@ -47,7 +50,7 @@ from serial.serialutil import PortNotOpenError, SerialBase, SerialException, to_
 from station.sim.device import RATE_HZ, SimDevice
 from station.sim.driver import DeviceDriver, Faults
 
-_FORMAT = ('expected "sim://[?protocol=v1|legacy&pacing=lockstep|realtime&seed=N&elements=N&noise=STD'
+_FORMAT = ('expected "sim://[?protocol=v1|legacy&pacing=lockstep|realtime&seed=N&model=NAME|FILE&elements=N&noise=STD'
            '&watchdog=N&silent_after=N&garbage_every=N&skip_tick=N]"')
 
 
@@ -68,6 +71,17 @@ def _count(minimum: int):
     return parse
 
 
+def _model(text: str) -> str:
+    from station.errors import StationError
+    from station.plant.model import load_model
+
+    try:
+        load_model(text)
+    except StationError as exc:
+        raise ValueError(str(exc)) from None
+    return text
+
+
 def _std(text: str) -> float:
     x = float(text)
     if not x >= 0:
@@ -79,6 +93,7 @@ _OPTIONS = {  # name: (parser, default)
     "protocol": (_choice("v1", "legacy"), "v1"),
     "pacing": (_choice("lockstep", "realtime"), "lockstep"),
     "seed": (_count(0), 0),
+    "model": (_model, "tmm-fit"),
     "elements": (_count(1), 4),
     "noise": (_std, 0.3),
     "watchdog": (_count(1), 10),
@@ -114,6 +129,10 @@ def parse_url(url: str) -> dict:
             opts[name] = _OPTIONS[name][0](value)
         except ValueError as e:
             raise SerialException(f"sim:// option {name}={value!r}: {e}") from None
+    if "model" in seen and "elements" not in seen:
+        from station.plant.model import load_model
+
+        opts["elements"] = load_model(opts["model"]).n_elements
     return opts
 
 
@@ -127,6 +146,7 @@ class Serial(SerialBase):
         self._clock: threading.Thread | None = None
         self._closing = threading.Event()
         self.options: dict = {}
+        self.model = None
         super().__init__(*args, **kwargs)
 
     # -- open / close ------------------------------------------------------------
@@ -139,7 +159,10 @@ class Serial(SerialBase):
             raise SerialException("Port must be configured before it can be used.")
         self.from_url(self.port)
         o = self.options
-        device = SimDevice(o["protocol"], seed=o["seed"], n_elements=o["elements"],
+        from station.plant.model import load_model
+
+        self.model = load_model(o["model"], n_elements=o["elements"])
+        device = SimDevice(o["protocol"], seed=o["seed"], model=self.model,
                            accel_noise_std=o["noise"], watchdog_ticks=o["watchdog"])
         faults = Faults(o["silent_after"], o["garbage_every"], o["skip_tick"], seed=o["seed"])
         self._driver = DeviceDriver(device, faults, lockstep=o["pacing"] == "lockstep")
@@ -179,10 +202,12 @@ class Serial(SerialBase):
     @property
     def plant_meta(self) -> dict:
         """What this simulated rig is, for run-log headers: the FEM plant's parameters
-        (SI, DESIGN.md names), element count, sample time and the URL's options."""
+        (SI, DESIGN.md names), element count, sample time, the model (name, params,
+        effects: :meth:`station.plant.model.Model.to_json`) and the URL's options."""
         plant = self.device.plant
         params = getattr(plant, "params", None)
-        return {"model": "FEM (station.plant)", "n_elements": getattr(plant, "n_elements", self.options["elements"]),
+        return {"model": None if self.model is None else self.model.to_json(),
+                "n_elements": getattr(plant, "n_elements", self.options["elements"]),
                 "dt": getattr(plant, "dt", None),
                 "params": None if params is None else dataclasses.asdict(params),
                 "options": dict(self.options)}

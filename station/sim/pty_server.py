@@ -45,9 +45,9 @@ def _send(fd: int, data: bytes) -> int:
     return 0
 
 
-def serve_pty(protocol: str = "v1", realtime: bool = False, seed: int = 0, n_elements: int = 4,
+def serve_pty(protocol: str = "v1", realtime: bool = False, seed: int = 0, n_elements: int | None = None,
               accel_noise_std: float = 0.3, watchdog_ticks: int = 10, faults: Faults | None = None,
-              out=None) -> dict:
+              out=None, model=None) -> dict:
     """Run the simulated device on a new pty until SIGTERM/SIGINT.
 
     Parameters
@@ -55,8 +55,9 @@ def serve_pty(protocol: str = "v1", realtime: bool = False, seed: int = 0, n_ele
     protocol : {"v1", "legacy"}, default "v1"
     realtime : bool, default False
         500 Hz own clock (True) or lockstep with the station (False).
-    seed, n_elements, accel_noise_std, watchdog_ticks
-        As for :class:`station.sim.device.SimDevice`.
+    seed, n_elements, accel_noise_std, watchdog_ticks, model
+        As for :class:`station.sim.device.SimDevice` (``model``: a Model, a built-in
+        model's name or a model file; default tmm-fit).
     faults : Faults, optional
         Faults to inject (:class:`station.sim.driver.Faults`).
     out : text file, default sys.stdout
@@ -72,7 +73,7 @@ def serve_pty(protocol: str = "v1", realtime: bool = False, seed: int = 0, n_ele
     from station.sim.driver import DeviceDriver
 
     out = out or sys.stdout
-    device = SimDevice(protocol, seed=seed, n_elements=n_elements, accel_noise_std=accel_noise_std,
+    device = SimDevice(protocol, seed=seed, n_elements=n_elements, model=model, accel_noise_std=accel_noise_std,
                        watchdog_ticks=watchdog_ticks)
     driver = DeviceDriver(device, faults, lockstep=not realtime)
     master, slave = os.openpty()
@@ -121,12 +122,15 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--realtime", action="store_true",
                         help="tick on the device's own 500 Hz clock (default: lockstep with the station)")
     parser.add_argument("--seed", type=int, default=0, help="sensor noise seed (default 0)")
-    parser.add_argument("--elements", type=int, default=4, help="FEM element count of the plant (default 4)")
+    parser.add_argument("--model", default=None, metavar="NAME|FILE",
+                        help="the simulated rig's model: a built-in model's name or a model file (default tmm-fit)")
+    parser.add_argument("--elements", type=int, default=None,
+                        help="FEM element count of the plant (default: the model's, 4)")
 
 
 def serve_from_args(args: argparse.Namespace) -> dict:
     """:func:`serve_pty` with the options of :func:`add_arguments`."""
-    return serve_pty(args.protocol, args.realtime, args.seed, args.elements)
+    return serve_pty(args.protocol, args.realtime, args.seed, args.elements, model=args.model)
 
 
 def main(argv: list[str] | None = None) -> int:
