@@ -660,7 +660,7 @@ def read_log(path: str | Path) -> RunLog:
     if ends_with_newline:
         lines.pop()
     lines = [ln.rstrip("\r") for ln in lines]
-    if not lines:
+    if not lines or not text.strip():
         raise RunLogError(f"{path}: empty file, expected a run log header")
 
     reader_notes: list[str] = []

@@ -1,0 +1,139 @@
+"""The reader takes every layout the rig's logs come in: columns by name with the field's
+synonyms, n derived from t, the sample time reported; off-rate logs say what cannot be
+replayed; a file with no usable columns is a one-line error listing found and expected."""
+
+import numpy as np
+import pytest
+
+from station.cli import main
+from station.replay import replay
+from station.runlog import RunLogError, read_log, standard_column
+
+T = np.arange(400) * 0.002
+U = np.where(T >= 0.1, 50.0, 0.0)
+
+
+def _p_run(kp=1.0, d=1, u=U):
+    """theta of a crude first-order plant under v = kp (u[k] - theta[k-d]), exact floats."""
+    n = u.size
+    theta = np.zeros(n)
+    v = np.zeros(n)
+    for k in range(n):
+        if k >= d:
+            v[k] = kp * (u[k] - theta[k - d])
+        if k + 1 < n:
+            theta[k + 1] = theta[k] + 0.01 * v[k]
+    return theta, v
+
+
+def test_synonyms():
+    assert [standard_column(c) for c in ("Time (sec.)", "θ", "$\\theta$", "accel", "a", " t ", "v", "foo")] == \
+        ["t", "theta", "theta", "a", "a", "t", "v", "foo"]
+
+
+def test_2014_layout_maps_columns_and_derives_n(tmp_path):
+    theta, v = _p_run()
+    a = np.round(np.sin(T) * 5) - 39
+    path = tmp_path / "without_accel.txt"
+    lines = ["Time (sec.)\tu\ttheta\taccel\tv"]
+    lines += [f"{t!r}\t{u!r}\t{th!r}\t{aa!r}\t{vv!r}" for t, u, th, aa, vv in zip(T.tolist(), U.tolist(), theta.tolist(), a.tolist(), v.tolist())]
+    path.write_text("\n".join(lines) + "\n")
+    log = read_log(path)
+    assert (log.format, log.layout, log.sample_time) == ("rig", "columns", 0.002)
+    np.testing.assert_array_equal(log.data["n"], np.arange(T.size))
+    np.testing.assert_array_equal(log.data["a"], a)
+    np.testing.assert_array_equal(log.data["theta"], theta)
+    assert np.all(np.isnan(log.data["theta_d_hat"]))
+    assert any("'Time (sec.)' -> t" in n for n in log.notes)
+
+
+def test_2014_log_replays_with_p_inferred(tmp_path):
+    theta, v = _p_run(kp=1.0, d=1)
+    path = tmp_path / "sweep.txt"
+    path.write_text("Time (sec.)\tu\ttheta\taccel\tv\n"
+                    + "".join(f"{t!r}\t{u!r}\t{th!r}\t0.0\t{vv!r}\n" for t, u, th, vv in zip(T.tolist(), U.tolist(), theta.tolist(), v.tolist())))
+    r = replay(path, model=False)
+    assert r.controller_source == "inferred" and r.controller_spec["kp"] == 1.0
+    assert r.alignment == 1 and r.max_abs_dv <= 1e-6
+
+
+def test_rig_2014_sweeps(rig_data):
+    r = replay(rig_data / "without_accel_01_28_14_test_2.txt", model=False)
+    assert r.layout == "columns" and r.sample_time == 0.002 and r.samples == 10500
+    assert r.controller_source == "inferred" and r.controller == "p" and r.controller_spec["kp"] == 1.0
+    assert r.alignment == 1 and r.max_abs_dv <= 1e-6
+
+
+def test_cut_down_copy_at_0004s_says_what_cannot_be_replayed(tmp_path):
+    """`t v theta a` with every second row (0.004 s): no u, no n. The open-loop pulse is
+    still simulated at its own dt; one note says the commands cannot be replayed."""
+    v = np.where((T >= 0.04) & (T < 0.14), 100.0, 0.0)[::2]
+    t = T[::2]
+    path = tmp_path / "pulse_downsampled.txt"
+    path.write_text("t\tv\ttheta\ta\n" + "".join(f"{x:g}\t{y:g}\t0\t0\n" for x, y in zip(t, v)))
+    log = read_log(path)
+    assert log.sample_time == 0.004 and np.array_equal(log.data["n"], np.arange(t.size))
+    assert np.all(np.isnan(log.data["u"]))
+    r = replay(path)
+    notes = [n for n in r.notes if "cannot be replayed" in n]
+    assert len(notes) == 1 and "0.004 s" in notes[0]
+    assert r.controller is None and r.controller_source is None
+    assert r.prediction is not None and r.prediction["theta"].size == t.size
+    # the model ran at 0.004 s: the pulse moves it (the plant's theta is not all zero)
+    assert np.ptp(r.prediction["theta"]) > 1
+    assert not any("names no controller" in n for n in r.notes)
+
+
+def test_header_with_spaces_and_2009_alignment(tmp_path):
+    theta, v = _p_run(kp=1.0, d=0)
+    path = tmp_path / "step_2009.txt"
+    path.write_text("#SLFR RTP P_control_Test\n#kp = 1.0\n#t\tn\tu\tv\t$\\theta$\ta\n"
+                    + "".join(f"{t!r}\t{k}\t{u!r}\t{vv!r}\t{th!r}\t-2\n"
+                              for k, (t, u, th, vv) in enumerate(zip(T.tolist(), U.tolist(), theta.tolist(), v.tolist()))))
+    r = replay(path, model=False)
+    assert r.controller_source == "header" and r.alignment == 0 and r.max_abs_dv == 0
+
+
+@pytest.mark.parametrize("text, found", [
+    ("name,age,city\nann,30,x\n", "'name', 'age', 'city'"),
+    ("#some tool output\n#alpha\tbeta\n1\t2\n", "'alpha', 'beta'"),
+])
+def test_no_usable_columns_is_one_line_listing_found_and_expected(tmp_path, text, found):
+    path = tmp_path / "foreign.csv"
+    path.write_text(text)
+    with pytest.raises(RunLogError) as err:
+        read_log(path)
+    msg = str(err.value)
+    assert "\n" not in msg and "no usable columns" in msg and found in msg
+    assert "expected a time column" in msg and "theta" in msg
+
+
+def test_comma_separated_with_synonyms(tmp_path):
+    path = tmp_path / "export.csv"
+    path.write_text("time,theta,v\n0,0,0\n0.002,1,5\n0.004,3,5\n")
+    log = read_log(path)
+    assert log.sample_time == 0.002 and list(log.data["theta"]) == [0, 1, 3]
+    assert list(log.data["n"]) == [0, 1, 2]
+
+
+def test_end_record_is_the_outcome(tmp_path):
+    path = tmp_path / "ours.tsv"
+    from station.runlog import RunLogWriter
+
+    with RunLogWriter(path, {"dt": 0.002}) as w:
+        w.append((0.0, 0, 0.0, 0.0, 0, 0, 0.0, 0, 0, float("nan")))
+    assert read_log(path).outcome is None
+    with open(path, "a") as fh:
+        fh.write('# end {"reason": "completed", "ticks": 1}\n')
+    assert read_log(path).outcome == {"reason": "completed", "ticks": 1}
+    assert replay(path, model=False).to_json()["outcome"] == {"reason": "completed", "ticks": 1}
+
+
+def test_every_rig_log_replays_with_the_new_keys(rig_data, tmp_path):
+    import json
+
+    for path in sorted(rig_data.glob("*.txt")):
+        out = tmp_path / (path.stem + ".json")
+        assert main(["replay", str(path), "--no-model", "--json", str(out)]) == 0, path.name
+        j = json.loads(out.read_text())
+        assert {"controller_source", "beam_test", "notes", "sample_time_s"} <= set(j), path.name

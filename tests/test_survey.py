@@ -1,0 +1,66 @@
+"""station survey: every file of a folder replayed into one table; bad files (binary,
+empty, foreign CSV) become rows with a reason and the survey still exits 0."""
+
+import csv
+import shutil
+
+import numpy as np
+
+from station.cli import main
+from station.survey import find_logs, survey
+
+
+def _folder(tmp_path, rig_data=None):
+    d = tmp_path / "logs"
+    (d / "sub").mkdir(parents=True)
+    (d / "binary.dat").write_bytes(bytes(range(256)) * 4)
+    (d / "empty.txt").write_text("")
+    (d / "foreign.csv").write_text("name,age\nann,30\n")
+    (d / ".hidden").write_text("ignored")
+    t = np.arange(300) * 0.002
+    v = np.where((t >= 0.04) & (t < 0.14), 100.0, 0.0)
+    (d / "sub" / "pulse.txt").write_text("t\tv\ttheta\ta\n" + "".join(f"{x:g}\t{y:g}\t0\t0\n" for x, y in zip(t, v)))
+    if rig_data is not None:
+        for name in ("SFLR_P_control_step_kp_2_SLFR_RTP_P_control_kp=2.0.txt",
+                     "log_dec_hold_and_release_1_SLFR_RTP_OL_Test_uend=77.txt"):
+            shutil.copy(rig_data / name, d / name)
+    return d
+
+
+def test_find_logs_recursive_skips_hidden(tmp_path):
+    d = _folder(tmp_path)
+    names = [p.name for p in find_logs([d])]
+    assert names == ["binary.dat", "empty.txt", "foreign.csv", "pulse.txt"]
+
+
+def test_bad_files_are_rows_with_reasons(tmp_path):
+    rows = {r.file.split("/")[-1]: r for r in survey([_folder(tmp_path)], model=False, workers=1)}
+    assert "not a text run log" in rows["binary.dat"].reason
+    assert "empty" in rows["empty.txt"].reason
+    assert "no usable columns" in rows["foreign.csv"].reason and "'name', 'age'" in rows["foreign.csv"].reason
+    pulse = rows["pulse.txt"]
+    assert pulse.usable and pulse.format == "columns" and pulse.rows == 300 and pulse.sample_time_s == 0.002
+    assert all("\n" not in r.reason for r in rows.values())
+
+
+def test_command_on_rig_logs_prints_table_and_writes_csv(tmp_path, rig_data, capsys):
+    d = _folder(tmp_path, rig_data)
+    out = tmp_path / "survey.csv"
+    rep = tmp_path / "reports"
+    assert main(["survey", str(d), "--csv", str(out), "--report", str(rep), "--jobs", "2"]) == 0
+    captured = capsys.readouterr()
+    assert "6 files: 3 replayed, 3 unusable" in captured.out
+    assert "UNUSABLE" in captured.out and "survey: 6/6" in captured.err
+    rows = {r["file"].split("/")[-1]: r for r in csv.DictReader(out.open())}
+    p = rows["SFLR_P_control_step_kp_2_SLFR_RTP_P_control_kp=2.0.txt"]
+    assert (p["controller"], p["controller_source"], p["alignment"]) == ("p", "header", "1")
+    assert float(p["overshoot_pct"]) == 24.0 and float(p["settling_time_s"]) == 1.25
+    assert p["fit_theta_pct"] != "" and p["reason"] == ""
+    beam = rows["log_dec_hold_and_release_1_SLFR_RTP_OL_Test_uend=77.txt"]
+    assert abs(float(beam["f1_hz"]) - 2.52) < 0.03 * 2.52 and beam["fit_theta_pct"] == ""
+    assert (rep / "survey.txt").exists() and len(list(rep.glob("*.json"))) == 6
+
+
+def test_missing_path_is_a_one_line_error(tmp_path, capsys):
+    assert main(["survey", str(tmp_path / "nope")]) == 2
+    assert "no such file or folder" in capsys.readouterr().err
