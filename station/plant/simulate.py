@@ -268,6 +268,11 @@ class _Stepper:
         self._fx = fx
         self._z0 = np.zeros(form.lam.size, complex) if z0 is None else np.asarray(z0, complex).copy()
         self.reset()
+        # compile (or load) the kernel's functions now, not on a real-time device's first tick
+        self.outputs()
+        _amplifier(0.0, fx.saturation, fx.deadzone)
+        _advance(self.z.copy(), 0.0, form.lam, form.bm, form.bp, form.co, form.gw_v, form.gw_p, form.substeps,
+                 fx.v_c, fx.half_gap, fx.k_d, fx.c_d)
 
     def reset(self) -> None:
         """Back to the initial state (at rest for a model), the amplifier's delay line empty."""
