@@ -9,14 +9,13 @@ from __future__ import annotations
 
 import argparse
 import importlib
-import signal
 import sys
 
 from station import __version__
 from station.errors import StationError
-from station.signals import StopSignal
+from station.signals import StopSignal, StopSignals
 
-COMMANDS = ("step", "replay", "sim_device", "bode", "compare", "modes", "survey")
+COMMANDS = ("step", "replay", "sim_device", "bode", "compare", "modes", "survey", "diagnose")
 """Modules of :mod:`station.commands`, in the order ``--help`` lists them."""
 
 
@@ -41,37 +40,48 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
-def _raise_on_sigterm(signum, frame):
-    raise StopSignal(signum)
-
-
 def main(argv: list[str] | None = None) -> int:
     """Entry point of the ``station`` console script; returns the exit code.
 
-    SIGINT or SIGTERM at any moment outside a run (start-up imports included) ends the
-    process with one line naming the signal and exit code 130 / 143; during a run the
-    loop handles them (command 0 and stop first, see :mod:`station.signals`).
+    SIGINT or SIGTERM at any moment - start-up imports included - ends the process with
+    one line naming the signal and exit code 130 / 143; during a run the loop handles
+    them (command 0 and stop first, see :mod:`station.signals`) and the run's outcome
+    gives the code. Called as the console script (``argv`` None), signals arriving once
+    the work is done are ignored until the process exits (the tail of a burst must not
+    kill it with a different code); called with ``argv`` (tests, notebooks), the old
+    handlers are put back.
     """
+    with StopSignals(ignore_after=argv is None) as signals:
+        try:
+            try:
+                parser = build_parser()
+                args = parser.parse_args(argv)
+                return int(args._run(args) or 0)
+            except StationError as exc:
+                print(f"station: error: {exc}", file=sys.stderr)
+                return 2
+            except BrokenPipeError:  # `station step | head`: the reader left; nothing to say
+                _silence_stdout()
+                return 0
+        except StopSignal as exc:
+            print(f"station: stopped by {exc} before the run started", file=sys.stderr)
+            return exc.exit_code
+        except KeyboardInterrupt:  # SIGINT before the guard was installed, or raised by code
+            print("station: stopped by SIGINT", file=sys.stderr)
+            return 130
+        finally:
+            signals.defer()
+
+
+def _silence_stdout() -> None:
+    """Point stdout at /dev/null so the interpreter's final flush cannot raise again."""
+    import os
+
     try:
-        old = signal.signal(signal.SIGTERM, _raise_on_sigterm)
-    except (ValueError, OSError):  # not the main thread: leave signals alone
-        old = None
-    try:
-        parser = build_parser()
-        args = parser.parse_args(argv)
-        return int(args._run(args) or 0)
-    except StationError as exc:
-        print(f"station: error: {exc}", file=sys.stderr)
-        return 2
-    except KeyboardInterrupt:
-        print("station: stopped by SIGINT", file=sys.stderr)
-        return 130
-    except StopSignal as exc:
-        print(f"station: stopped by {exc}", file=sys.stderr)
-        return exc.exit_code
-    finally:
-        if old is not None:
-            signal.signal(signal.SIGTERM, old)
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())
+    except (OSError, ValueError):
+        pass
 
 
 if __name__ == "__main__":

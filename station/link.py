@@ -310,7 +310,8 @@ class Session:
         if now - self._t_first < RATE_WINDOW_S:
             return
         count = len(arrivals)
-        if self._waited > RATE_SLOW * DT * count:
+        if self._waited > RATE_SLOW * DT * count and not self._samples_waiting():
+            # (with samples waiting it is the station that was held up, not the device: that is lag)
             raise RateError(f"device {self.url} ticks too slowly: {count} samples in the last {RATE_WINDOW_S:g} s, "
                             f"one every {1000 * self._waited / count:.1f} ms on average (nominal {1000 * DT:g} ms) "
                             f"at tick {self._n}")
@@ -318,12 +319,16 @@ class Session:
             raise RateError(f"device {self.url} ticks too fast: {count} samples in the last {RATE_WINDOW_S:g} s "
                             f"(nominal {RATE_WINDOW_S / DT:.0f}) at tick {self._n}")
 
-    def _before_command(self, n: int) -> None:
-        """Lag and station-seen lateness, measured just before the command for sample n goes out."""
+    def _samples_waiting(self) -> int:
+        """Samples received but not processed: decoded ones plus whole ones in the port's buffer."""
         try:
-            waiting = len(self._pending) + self.port.in_waiting // self.sample_bytes
+            return len(self._pending) + self.port.in_waiting // self.sample_bytes
         except (serial.SerialException, OSError) as exc:
             raise LinkFault(f"{self.url}: {exc}") from None
+
+    def _before_command(self, n: int) -> None:
+        """Lag and station-seen lateness, measured just before the command for sample n goes out."""
+        waiting = self._samples_waiting()
         if waiting:
             if not self.lockstep:
                 self.late_seen += 1  # the next sample is already here: this command is late

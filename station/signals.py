@@ -43,13 +43,23 @@ class StopSignals:
     that (and after the first raise) signals are only recorded: ``signum`` is the first
     one, ``count`` how many arrived. Elsewhere than in the main thread it installs
     nothing and only offers the same attributes (signals go to the main thread anyway).
+
+    Guards nest: entering one while another is active returns the active one, so a
+    run started by the CLI shares the CLI's guard and, once deferred, a late signal
+    (the tail of a burst) can never raise while the report is printed. ``ignore_after``
+    (the CLI's process-level guard): on exit, ignore the signals instead of restoring
+    the old handlers - the process is about to exit with the recorded code.
     """
 
-    def __init__(self) -> None:
+    _active: StopSignals | None = None
+
+    def __init__(self, ignore_after: bool = False) -> None:
         self.signum: int | None = None
         self.count = 0
+        self.ignore_after = ignore_after
         self._raise = True
         self._old: dict[int, object] = {}
+        self._depth = 0
 
     @property
     def reason(self) -> str | None:
@@ -74,18 +84,33 @@ class StopSignals:
             raise StopSignal(signum)
 
     def __enter__(self) -> StopSignals:
-        if threading.current_thread() is threading.main_thread():
+        active = StopSignals._active
+        if active is not None and active is not self:
+            active._depth += 1
+            return active
+        self._depth += 1
+        if self._depth == 1 and threading.current_thread() is threading.main_thread():
             for signum in SIGNAL_REASONS:
                 try:
                     self._old[signum] = signal.signal(signum, self._handler)
                 except (ValueError, OSError):
                     pass
+            StopSignals._active = self
         return self
 
     def __exit__(self, *exc) -> None:
+        active = StopSignals._active
+        if active is not None and active is not self:
+            active._depth -= 1  # a nested guard returned the active one
+            return
+        self._depth -= 1
+        if self._depth > 0:
+            return
         for signum, old in self._old.items():
             try:
-                signal.signal(signum, old)
+                signal.signal(signum, signal.SIG_IGN if self.ignore_after else old)
             except (ValueError, OSError, TypeError):
                 pass
         self._old.clear()
+        if StopSignals._active is self:
+            StopSignals._active = None

@@ -25,17 +25,26 @@ class ScriptedDevice:
     silent_after: stop sending after this tick; garbage_every: (v1) garbage + a corrupted
     frame after every N-th sample; skip_at: (legacy) n jumps by one at this tick;
     accel(k) -> accelerometer counts of tick k; after_start: (v1) bytes sent right after
-    START, before tick 0.
+    START, before tick 0; period: s per tick, or period(k) -> s before tick k+1 (a slow or
+    fast device); mutate(k, data) -> bytes: what tick k really sends instead of its
+    well-formed ``data`` (hostile behaviours: noise, repeats, swaps, byte slips; the wall
+    time of the first tick whose bytes it changed is kept in ``fault_time``);
+    status(k) -> v1 status bits of tick k; hello_reply(data) -> bytes: the answer to HELLO
+    (v1) or 'r' (legacy) instead of INFO / θ; rate_hz: INFO's rate (0 declares lockstep).
     """
 
     def __init__(self, protocol="v1", theta=lambda k: 0, silent_after=None, garbage_every=None,
-                 skip_at=None, period=0.002, accel=lambda k: 0, after_start=b""):
+                 skip_at=None, period=0.002, accel=lambda k: 0, after_start=b"", mutate=None,
+                 status=lambda k: 0, hello_reply=None, rate_hz=500):
         self.protocol = protocol
         self.theta = theta
         self.accel = accel
         self.after_start = after_start  # v1: bytes sent right after START (e.g. a stale sample)
         self.silent_after, self.garbage_every, self.skip_at = silent_after, garbage_every, skip_at
-        self.period = period
+        self.period = period if callable(period) else (lambda k, p=period: p)
+        self.mutate, self.status, self.hello_reply, self.rate_hz = mutate, status, hello_reply, rate_hz
+        self.fault_time: float | None = None         # wall time (time.time) of the first mutated tick
+        self.received_at: list[float] = []            # wall time each entry of ``received`` arrived
         self.master, self.slave = pty.openpty()
         tty.setraw(self.master)
         tty.setraw(self.slave)
@@ -92,9 +101,11 @@ class ScriptedDevice:
                     return
                 for msg in decoder.feed(data):
                     self.received.append(msg)
+                    self.received_at.append(time.time())
                     if self.protocol == "v1":
                         if isinstance(msg, v1.Hello):
-                            self._write(v1.encode(v1.Info(1, 0, 9, 0, 500, 255, 1024, 10, "SCRIPTED")))
+                            self._write(self.hello_reply(data) if self.hello_reply else
+                                        v1.encode(v1.Info(1, 0, 9, 0, self.rate_hz, 255, 1024, 10, "SCRIPTED")))
                         elif isinstance(msg, v1.Start):
                             running, k, next_tick, output, last_cmd = True, 0, time.perf_counter(), 0, None
                             if self.after_start:
@@ -107,7 +118,7 @@ class ScriptedDevice:
                             self._write(v1.encode(v1.Stopped(0, k, 0, 0, decoder.rx_errors)))
                     else:
                         if msg[0] == "r":
-                            self._write(legacy.encode_word(0))
+                            self._write(self.hello_reply(data) if self.hello_reply else legacy.encode_word(0))
                         elif msg[0] == "q":
                             self._write(legacy.encode_word(0))
                             running, k, next_tick, output = True, 0, time.perf_counter(), 0
@@ -122,11 +133,13 @@ class ScriptedDevice:
                 if self.silent_after is None or k <= self.silent_after:
                     self._send_tick(k, output)
                 k += 1
-                next_tick += self.period
+                # a stalled test thread (a loaded CI machine) ticks late rather than bursting
+                # the missed ticks at once: a real device's clock does not stall
+                next_tick = max(next_tick + self.period(k), time.perf_counter() + 0.2 * self.period(k))
 
     def _send_tick(self, k, output):
         if self.protocol == "v1":
-            data = v1.encode(v1.Sample(k & 0xFFFF, self.theta(k), self.accel(k), output, 0))
+            data = v1.encode(v1.Sample(k & 0xFFFF, self.theta(k), self.accel(k), output, self.status(k)))
             if self.garbage_every and k and k % self.garbage_every == 0:
                 bad = bytearray(v1.encode(v1.Sample(k & 0xFFFF, 99, 0, 0, 0)))
                 bad[3] ^= 0x40  # corrupt one byte: CRC fails
@@ -134,5 +147,24 @@ class ScriptedDevice:
         else:
             n = k + 1 if self.skip_at is not None and k >= self.skip_at else k
             data = legacy.tick_bytes(legacy.Tick(n, self.theta(k), self.accel(k)))
-        self._write(data)
+        if self.mutate is not None:
+            real = self.mutate(k, data)
+            if real != data and self.fault_time is None:
+                self.fault_time = time.time()
+            data = real
+        try:
+            self._write(data)
+        except OSError:  # the station closed its end
+            return
         self.sent.append((k, time.time()))
+
+    def stop_time(self) -> float | None:
+        """Wall time the station's stop (v1 STOP, legacy 's') arrived, or None."""
+        for msg, at in zip(self.received, self.received_at):
+            if (isinstance(msg, v1.Stop) if self.protocol == "v1" else msg == ("s",)):
+                return at
+        return None
+
+    def last_sent(self, count=2):
+        """The last ``count`` messages the station sent (v1 messages / legacy command tuples)."""
+        return self.received[-count:]

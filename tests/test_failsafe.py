@@ -1,0 +1,415 @@
+"""Fail safe under every device behaviour: the station against hostile scripted devices on a pty.
+
+Each case asserts what the station promises (README "Safety", DESIGN.md "Run outcome"):
+the run ends within --timeout + 0.1 s of the fault (or at the --max-lag / --max-miss /
+rate bound), command 0 then STOP (legacy: v = 0 then 's') are the last bytes it sent,
+the log holds every answered sample and ends with the outcome, and the reason and exit
+code are right. The devices are written from the spec (tests/scripted_device.py), not
+from the station's code.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import signal
+import subprocess
+import sys
+import time
+
+import numpy as np
+import pytest
+
+from station.errors import StationError
+from station.experiment import run_step
+from station.link import LinkLimits
+from station.protocol import legacy, v1
+from station.runlog import read_log
+from tests.scripted_device import ScriptedDevice
+
+TIMEOUT = 0.1
+SLACK = 0.1
+"""The station must end within --timeout + SLACK of a fault that silences valid samples."""
+RATE_BOUND = 0.5 + SLACK
+"""A rate fault is judged over 0.5 s of samples."""
+FAULT_TICK = 100
+
+
+@pytest.fixture
+def device():
+    made = []
+
+    def make(**kw):
+        dev = ScriptedDevice(**kw).start()
+        made.append(dev)
+        return dev
+
+    yield make
+    for dev in made:
+        dev.close()
+
+
+def _noise(k: int, size: int = 48, zeros: bool = True) -> bytes:
+    rng = np.random.default_rng(k)
+    data = rng.integers(0 if zeros else 1, 256, size=size, dtype=np.uint8).tobytes()
+    return data
+
+
+def from_tick(k0, replace):
+    """mutate hook: ticks >= k0 send ``replace(k, data)`` instead of their sample."""
+    return lambda k, data: replace(k, data) if k >= k0 else data
+
+
+def _bad_crc(k, data):
+    body = bytearray(data)
+    body[2] ^= 0x55  # inside the COBS-encoded payload: CRC (or COBS) fails
+    return bytes(body)
+
+
+INFO = v1.encode(v1.Info(1, 0, 9, 0, 500, 255, 1024, 10, "FLOOD"))
+
+
+LIMITS = LinkLimits(timeout=TIMEOUT, max_lag=50)
+"""The faults' limits: the lag bound is tested on its own (a loaded test machine can hold the
+station up for a few ms; on a quiet one the default of 2 never fires, see test_sim_pty)."""
+
+
+def _run(dev, tmp_path, protocol="v1", controller="p", duration=2.0, **kw):
+    path = tmp_path / "run.tsv"
+    limits = kw.pop("limits", LIMITS)
+    report = run_step(port=dev.path, protocol=protocol, controller=controller, amplitude=50, duration=duration,
+                      out=path, limits=limits, **kw)
+    return report, path
+
+
+def _check_stopped_safely(dev, report, path, reason, bound=None):
+    """The promises of every stop: on time, command 0 then STOP last, every answered row, outcome."""
+    o = report.result.outcome
+    assert o.reason == reason, o.message
+    assert o.exit_code == 1 and o.command_zero_sent
+    assert dev.wait_for(lambda d: d.stop_time() is not None, timeout=2.0), "no STOP / 's' arrived"
+    if bound is not None:
+        assert dev.fault_time is not None
+        took = dev.stop_time() - dev.fault_time
+        assert took <= bound, f"stopped {took:.3f} s after the fault (bound {bound} s)"
+    if dev.protocol == "v1":
+        cmd, stop = dev.last_sent(2)
+        assert isinstance(cmd, v1.Command) and cmd.v == 0 and isinstance(stop, v1.Stop)
+        answered = {seq for seq, _ in dev.commands()}
+    else:
+        assert dev.last_sent(2) == [("/", 0), ("s",)]
+        answered = set()
+    log = read_log(path)
+    n = log.data["n"].astype(int)
+    assert np.array_equal(n, np.sort(n)) and len(set(n)) == len(n)  # in order, no repeats
+    assert answered <= set(n.tolist()), sorted(answered - set(n.tolist()))[:5]
+    assert log.outcome is not None and log.outcome["reason"] == reason
+    assert log.outcome["ticks"] == len(n)
+    return o
+
+
+# --- v1: whatever arrives, one deadline per sample -----------------------------------------
+
+@pytest.mark.parametrize("name, mutate", [
+    ("random bytes", lambda k, data: _noise(k)),
+    ("frames with bad CRC", _bad_crc),
+    ("one endless frame", lambda k, data: _noise(k, 40, zeros=False)),
+    ("a flood of INFO", lambda k, data: INFO * 3),
+])
+def test_v1_a_stream_without_valid_samples_times_out(device, tmp_path, name, mutate):
+    dev = device(mutate=from_tick(FAULT_TICK, mutate))
+    report, path = _run(dev, tmp_path)
+    o = _check_stopped_safely(dev, report, path, "timeout", TIMEOUT + SLACK)
+    assert o.ticks == FAULT_TICK
+
+
+def test_v1_the_same_sample_over_and_over_stops(device, tmp_path):
+    repeat = v1.encode(v1.Sample(FAULT_TICK, 0, 0, 0, 0))
+    dev = device(mutate=from_tick(FAULT_TICK + 1, lambda k, data: repeat))
+    report, path = _run(dev, tmp_path)
+    o = _check_stopped_safely(dev, report, path, "sequence", TIMEOUT + SLACK)
+    assert o.duplicates == 11 and o.dropped == 0  # more than --max-miss 10 in 100 ticks
+
+
+def test_v1_repeats_with_a_large_miss_budget_still_time_out(device, tmp_path):
+    # the deadline is for the next *new* sample: repeats never extend it
+    repeat = v1.encode(v1.Sample(FAULT_TICK, 0, 0, 0, 0))
+    dev = device(mutate=from_tick(FAULT_TICK + 1, lambda k, data: repeat))
+    report, path = _run(dev, tmp_path, limits=LinkLimits(timeout=TIMEOUT, max_lag=50, max_miss=1000))
+    o = _check_stopped_safely(dev, report, path, "timeout", TIMEOUT + SLACK)
+    assert o.duplicates >= 40
+
+
+def test_v1_hello_answered_with_noise_is_a_one_line_error_within_a_second(device):
+    dev = device(hello_reply=lambda data: _noise(7, 200) * 20)
+    with pytest.raises(StationError, match="no INFO .* within 1.0 s"):
+        run_step(port=dev.path, duration=0.5, out=os.devnull)
+    hello_at = dev.received_at[0]
+    assert isinstance(dev.received[0], v1.Hello)
+    assert time.time() - hello_at < 1.0 + SLACK
+    assert not any(isinstance(m, v1.Start) for m in dev.received)  # nothing started
+
+
+@pytest.mark.parametrize("name, seqs, reason, counts", [
+    # (name, seq sent at each tick from 100 on as a function of k, outcome, expected counters)
+    ("swapped pair", lambda k: {100: 101, 101: 100}.get(k, k), "completed", {"dropped": 1, "stale": 1}),
+    ("jump back by 100", lambda k: k - 100 if k >= 200 else k, "sequence", {"stale": 11}),
+])
+def test_v1_sequence_numbers_use_modular_arithmetic(device, tmp_path, name, seqs, reason, counts):
+    def mutate(k, data):
+        return v1.encode(v1.Sample(seqs(k) & 0xFFFF, 0, 0, 0, 0)) if seqs(k) != k else data
+
+    dev = device(mutate=mutate)
+    report, path = _run(dev, tmp_path, duration=1.0)
+    o = report.result.outcome
+    assert o.reason == reason, o.message
+    for key, value in counts.items():
+        assert getattr(o, key) == value, (key, o)
+    if reason != "completed":
+        _check_stopped_safely(dev, report, path, reason)
+
+
+def test_v1_each_sample_twice_is_counted_as_duplicates_and_stops(device, tmp_path):
+    dev = device(mutate=from_tick(FAULT_TICK, lambda k, data: data + data))
+    report, path = _run(dev, tmp_path)
+    o = _check_stopped_safely(dev, report, path, "sequence", 11 * 0.002 + TIMEOUT + SLACK)
+    assert o.duplicates == 11 and o.dropped == 0 and o.ticks <= FAULT_TICK + 12
+
+
+def test_v1_sequence_arithmetic_is_modular_across_the_wrap():
+    from station.link import V1Session
+
+    class Port:
+        def __init__(self):
+            self.data = bytearray()
+
+        def write(self, data):
+            return len(data)
+
+        def reset_input_buffer(self):
+            pass
+
+        def read(self, size=1):
+            out = bytes(self.data[:size])
+            del self.data[:size]
+            return out
+
+        @property
+        def in_waiting(self):
+            return len(self.data)
+
+    port = Port()
+    session = V1Session(port, "fake://", LinkLimits(timeout=0.05, check_rate=False))
+    session.start(0)
+    port.data += v1.encode(v1.Sample(0, 0, 0, 0, 0))
+    assert session.read_sample()[0] == 0
+    session._last_seq, session._n = 65533, 65533  # as after 65533 ticks
+    for seq in (65534, 65535, 65535, 0, 65534, 1, 3):
+        port.data += v1.encode(v1.Sample(seq, 0, 0, 0, 0))
+    got = [session.read_sample()[0] for _ in range(5)]
+    assert got == [65534, 65535, 65536, 65537, 65539]
+    assert (session.duplicates, session.stale, session.dropped) == (1, 1, 1)
+
+
+# --- rate ----------------------------------------------------------------------------------
+
+@pytest.mark.parametrize("protocol", ["v1", "legacy"])
+def test_a_device_ten_times_too_slow_stops_on_rate(device, tmp_path, protocol):
+    dev = device(protocol=protocol, period=lambda k: 0.02 if k > 50 else 0.002)
+    report, path = _run(dev, tmp_path, protocol=protocol, duration=4.0,
+                        limits=LinkLimits(timeout=0.5, max_lag=50))
+    o = report.result.outcome
+    assert o.reason == "rate", o.message
+    assert "too slowly" in o.message
+    start = dev.sent[51][1]
+    assert dev.wait_for(lambda d: d.stop_time() is not None)
+    assert dev.stop_time() - start <= RATE_BOUND
+    _check_stopped_safely(dev, report, path, "rate")
+
+
+def test_a_self_paced_v1_device_too_fast_stops_on_rate(device, tmp_path):
+    dev = device(period=lambda k: 0.001 if k > 50 else 0.002)
+    report, path = _run(dev, tmp_path, duration=4.0)
+    o = _check_stopped_safely(dev, report, path, "rate")
+    assert "too fast" in o.message
+    assert dev.stop_time() - dev.sent[51][1] <= RATE_BOUND
+
+
+def test_a_lockstep_v1_device_is_never_too_fast(device, tmp_path):
+    # INFO rate_hz = 0: samples come as fast as the station answers (spec)
+    dev = device(period=lambda k: 0.0005, rate_hz=0)
+    report, _ = _run(dev, tmp_path, duration=1.0)
+    assert report.result.ok, report.result.message
+
+
+# --- legacy: stale samples, byte slips, late commands --------------------------------------
+
+class _SlowController:
+    """A P law that takes ``seconds`` per step (a heavy user controller)."""
+
+    spec = {"kind": "test", "name": "slow P"}
+
+    def __init__(self, seconds, every=1):
+        self.seconds, self.every, self.calls = seconds, every, 0
+
+    def reset(self):
+        self.calls = 0
+
+    def step(self, u, theta, a):
+        self.calls += 1
+        if self.calls % self.every == 0:
+            end = time.perf_counter() + self.seconds
+            while time.perf_counter() < end:
+                pass
+        return 2.0 * (u - theta), u
+
+
+@pytest.mark.parametrize("protocol", ["legacy", "v1"])
+def test_a_station_behind_the_device_stops_on_lag_before_using_stale_samples(device, tmp_path, protocol):
+    dev = device(protocol=protocol, theta=lambda k: k // 4)
+    report, path = _run(dev, tmp_path, protocol=protocol, controller=_SlowController(0.010),
+                        limits=LinkLimits(timeout=TIMEOUT))  # the default --max-lag 2
+    o = _check_stopped_safely(dev, report, path, "lag")
+    assert o.ticks <= 5  # 10 ms per step at 2 ms per tick: 3 samples waiting after the first slow step
+    theta = read_log(path).data["theta"]
+    assert np.all(np.abs(theta - np.arange(theta.size) // 4) <= 1)  # no sample from seconds ago
+
+
+def test_legacy_commands_written_after_the_next_sample_count_as_late(device, tmp_path):
+    dev = device(protocol="legacy")
+    report, _ = _run(dev, tmp_path, protocol="legacy", controller=_SlowController(0.0025, every=25), duration=1.0)
+    o = report.result.outcome
+    assert o.reason == "completed", o.message
+    # 20 steps of 2.5 ms (> the 2 ms period): most answer after the next sample is in; the
+    # device cannot report them, the station counts what it sees
+    assert 10 <= o.late <= 25 and o.late == o.late_seen
+
+
+def test_legacy_byte_slip_with_a_matching_tick_number_stops_on_plausibility(device, tmp_path):
+    # a slipped record whose n happens to match reads theta = 11264 (0x2C00)
+    slip = lambda k, data: legacy.tick_bytes(legacy.Tick(k, 11264, 0)) if k == FAULT_TICK else data  # noqa: E731
+    dev = device(protocol="legacy", mutate=slip)
+    report, path = _run(dev, tmp_path, protocol="legacy")
+    o = _check_stopped_safely(dev, report, path, "sequence", 0.05)
+    assert "implausible" in o.message and o.ticks == FAULT_TICK
+    assert np.all(read_log(path).data["theta"] == 0)  # the slipped sample drove nothing
+
+
+def test_legacy_tick_number_jump_stops(device, tmp_path):
+    dev = device(protocol="legacy", skip_at=120)
+    report, path = _run(dev, tmp_path, protocol="legacy")
+    o = _check_stopped_safely(dev, report, path, "sequence")
+    assert "jumped from 119 to 121" in o.message
+
+
+# --- honest outcomes ----------------------------------------------------------------------
+
+def test_a_watchdog_trip_exits_1_although_every_tick_ran(device, tmp_path):
+    dev = device(status=lambda k: v1.WATCHDOG if 100 <= k < 110 else 0)
+    report, _ = _run(dev, tmp_path, duration=0.5)
+    o = report.result.outcome
+    assert o.reason == "completed", o.message
+    assert o.watchdog_trips == 1 and o.exit_code == 1
+
+
+def test_a_port_that_vanishes_says_command_0_could_not_be_sent(device, tmp_path):
+    from station.experiment import format_report
+
+    dev = device()
+
+    def vanish(k, data):
+        if k == FAULT_TICK:
+            os.close(dev.master)
+        return data
+
+    dev.mutate = vanish
+    report, path = _run(dev, tmp_path)
+    o = report.result.outcome
+    assert o.reason == "link" and not o.command_zero_sent, o
+    text = format_report(report)
+    assert "command 0 sent" not in text and "could NOT be sent" in text
+    assert read_log(path).outcome["reason"] == "link"
+
+
+@pytest.mark.parametrize("value", [math.inf, -math.inf, 1e300])
+def test_any_controller_output_is_clamped_to_the_limit_before_the_wire(device, tmp_path, value):
+    class Wild:
+        spec = {"kind": "test"}
+
+        def reset(self):
+            pass
+
+        def step(self, u, theta, a):
+            return value, u
+
+    dev = device()
+    report, _ = _run(dev, tmp_path, controller=Wild(), duration=0.2, limit=120.0)
+    assert report.result.ok
+    assert {v for _, v in dev.commands()[:-1]} == {int(math.copysign(120, value))}
+
+
+@pytest.mark.parametrize("fault", [float("nan"), SystemExit(3)])
+def test_nan_or_system_exit_from_the_controller_is_a_controller_fault(device, tmp_path, fault):
+    class Faulty:
+        spec = {"kind": "test"}
+
+        def __init__(self):
+            self.calls = 0
+
+        def reset(self):
+            self.calls = 0
+
+        def step(self, u, theta, a):
+            self.calls += 1
+            if self.calls == 30:
+                if isinstance(fault, BaseException):
+                    raise fault
+                return fault, u
+            return 10.0, u
+
+    dev = device()
+    report, path = _run(dev, tmp_path, controller=Faulty())
+    o = _check_stopped_safely(dev, report, path, "controller-fault")
+    assert o.ticks == 30 and read_log(path).data["n"][-1] == 29  # the sample in hand is logged
+
+
+# --- signals (the CLI in another process) ---------------------------------------------------
+
+def _station(dev, tmp_path, *extra):
+    log = tmp_path / "sig.tsv"
+    proc = subprocess.Popen([sys.executable, "-m", "station", "step", "--port", dev.path, "--duration", "20",
+                             "--out", str(log), *extra], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    return proc, log
+
+
+@pytest.mark.parametrize("signum, code, count", [(signal.SIGINT, 130, 1), (signal.SIGINT, 130, 5),
+                                                  (signal.SIGTERM, 143, 1), (signal.SIGTERM, 143, 5)])
+def test_any_number_of_signals_stop_safely_with_one_line(device, tmp_path, signum, code, count):
+    dev = device(protocol="v1", theta=lambda k: k % 5)
+    proc, log = _station(dev, tmp_path)
+    assert dev.wait_for(lambda d: len(d.sent) > 300, timeout=30), proc.stderr.read() if proc.poll() else ""
+    for _ in range(count):  # a burst: later ones land in the stop sequence
+        proc.send_signal(signum)
+        time.sleep(0.0007)
+    out, err = proc.communicate(timeout=20)
+    assert proc.returncode == code, (out, err)
+    assert "Traceback" not in err
+    name = signal.Signals(signum).name
+    assert out.count(name) == 1 and f"({name.lower()})" in out, out
+    cmd, stop = dev.last_sent(2)
+    assert isinstance(cmd, v1.Command) and cmd.v == 0 and isinstance(stop, v1.Stop)
+    data = read_log(log)
+    answered = {seq for seq, _ in dev.commands()}
+    assert answered <= set(data.data["n"].astype(int).tolist())
+    assert data.outcome["reason"] == name.lower()
+
+
+@pytest.mark.parametrize("signum, code", [(signal.SIGINT, 130), (signal.SIGTERM, 143)])
+def test_a_signal_during_start_up_is_one_line_not_a_traceback(tmp_path, signum, code):
+    proc = subprocess.Popen([sys.executable, "-m", "station", "step", "--out", str(tmp_path / "x.tsv")],
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    time.sleep(0.15)  # inside the imports (numpy, scipy, control, numba take longer than this)
+    proc.send_signal(signum)
+    out, err = proc.communicate(timeout=30)
+    assert proc.returncode == code, (out, err)
+    assert "Traceback" not in err and signal.Signals(signum).name in err + out
