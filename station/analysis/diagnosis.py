@@ -27,7 +27,10 @@ grey-box estimation with physical parameters and bounds, honest validation data)
 from __future__ import annotations
 
 import math
+import os
+import threading
 import time
+from concurrent.futures import ThreadPoolExecutor
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -186,13 +189,15 @@ class Evaluator:
         self.simulate = simulate or simulate_case
         self.simulations = 0
         self._cache: dict[tuple, tuple[float, float]] = {}
+        self._lock = threading.Lock()
 
     def model_with(self, effects: Mapping[str, float]):
         return self.model.with_effects(effects) if effects else self.model
 
     def predict(self, effects: Mapping[str, float], i: int) -> tuple[np.ndarray, np.ndarray]:
         """Simulated θ and a of run i (not cached)."""
-        self.simulations += 1
+        with self._lock:
+            self.simulations += 1
         return self.simulate(self.cases[i], self.model_with(effects))
 
     def sse(self, effects: Mapping[str, float], i: int) -> tuple[float, float]:
@@ -361,6 +366,8 @@ class Diagnosis:
     elapsed_s : float
     cost_gain_pct : float
         Gain of the joint noise-normalised θ + a cost on the validation data, %.
+    folds : list of dict
+        Per fold: fit and validation run names and the accepted effects' values.
     """
 
     cause: str
@@ -376,6 +383,7 @@ class Diagnosis:
     simulations: int = 0
     elapsed_s: float = 0.0
     cost_gain_pct: float = 0.0
+    folds: list = field(default_factory=list)
 
     def to_json(self) -> dict:
         """DESIGN.md's JSON: cause, causes, baseline, extended, gain_pct, effects (+ extras:
@@ -392,6 +400,7 @@ class Diagnosis:
             "model": self.nominal_model.name,
             "extended_model": self.extended_model.to_json(),
             "runs": [r.to_json() for r in self.runs],
+            "folds": self.folds,
             "simulations": self.simulations,
             "elapsed_s": round(self.elapsed_s, 3),
         }
@@ -419,6 +428,19 @@ def _trial(ev: Evaluator, folds: Sequence[Fold], names: tuple, axes: dict, start
             val_sse[i] = ev.sse(values, i)
             total += ev.weighted(values, i)
     return _Trial(names, fold_values, val_sse, total)
+
+
+def _screen(ev: Evaluator, axes: dict, names: Sequence[str], fixed: Mapping[str, float],
+            runs: Sequence[int]) -> list[str]:
+    """The effects worth a joint trial beside the accepted ones: each scanned on its grid
+    with the accepted effects fixed (all fit runs); the best :data:`SECOND_STEP_CANDIDATES`
+    that lower the cost, best first. An effect that did not pay alone may pay beside another."""
+    c0 = ev.cost(fixed, runs)
+    best = {}
+    for n in names:
+        best[n] = min(ev.cost({**fixed, n: float(g)}, runs) for g in axes[n].grid())
+    keep = sorted((n for n in names if best[n] < c0), key=best.get)
+    return keep[:SECOND_STEP_CANDIDATES]
 
 
 def _pooled(ev: Evaluator, val_sse: Mapping[int, tuple]) -> dict:
@@ -482,7 +504,7 @@ def _signature_evidence(name: str, before: Mapping[str, RunResiduals]) -> str:
 
 def diagnose(runs: Sequence[str | Path], validate: Sequence[str | Path] = (), model=None,
              progress: Callable[[str], None] | None = None, candidates: Sequence[str] | None = None,
-             simulate: Simulator | None = None) -> Diagnosis:
+             simulate: Simulator | None = None, workers: int | None = None) -> Diagnosis:
     """Find what the model gets wrong on measured runs, name the cause and measure the gain.
 
     Parameters
@@ -500,6 +522,9 @@ def diagnose(runs: Sequence[str | Path], validate: Sequence[str | Path] = (), mo
     simulate : callable, optional
         ``simulate(case, model) -> (theta, a)`` (default: :func:`simulate_case`); tests
         plug in their own.
+    workers : int, optional
+        Threads fitting candidates at once (default: the machine's cores, at most 2;
+        the compiled simulation releases the GIL).
 
     Returns
     -------
@@ -527,6 +552,7 @@ def diagnose(runs: Sequence[str | Path], validate: Sequence[str | Path] = (), mo
     for n in names:
         if n not in EFFECTS:
             raise StationError(f"diagnose: unknown candidate effect '{n}' (known: {', '.join(EFFECTS)})")
+    workers = max(1, int(workers if workers is not None else min(2, os.cpu_count() or 1)))
     axes = _axes()
     cases = [load_case(p) for p in runs + validate]
     ev = Evaluator(cases, base, simulate)
@@ -557,29 +583,37 @@ def diagnose(runs: Sequence[str | Path], validate: Sequence[str | Path] = (), mo
     # step 1: every candidate alone
     single: dict[str, _Trial] = {}
     single_all: dict[str, dict] = {}
-    for k, name in enumerate(names, 1):
+    def alone(name):
         tr = _trial(ev, folds, (name,), axes, [{}] * len(folds))
-        single[name] = tr
-        single_all[name] = tr.fold_values[0] if validate else _fit_set(ev, [axes[name]], all_fold.fit, {})
-        g = _gain(_pooled(ev, tr.val_sse)["rms_theta"], pooled_nom["rms_theta"])
-        say(f"[{k}/{len(names)}] {name} = {_fmt(single_all[name][name], EFFECTS[name].unit)}: "
-            f"validation θ gain {g:.1f} %, cost gain {100 * (1 - tr.val_weighted / v_nom):.1f} % "
-            f"({ev.simulations} simulations)")
+        return tr, (tr.fold_values[0] if validate else _fit_set(ev, [axes[name]], all_fold.fit, {}))
+
+    with ThreadPoolExecutor(workers) as pool:
+        for k, (name, (tr, values)) in enumerate(zip(names, pool.map(alone, names)), 1):
+            single[name], single_all[name] = tr, values
+            g = _gain(_pooled(ev, tr.val_sse)["rms_theta"], pooled_nom["rms_theta"])
+            say(f"[{k}/{len(names)}] {name} = {_fmt(values[name], EFFECTS[name].unit)}: "
+                f"validation θ gain {g:.1f} %, cost gain {100 * (1 - tr.val_weighted / v_nom):.1f} % "
+                f"({ev.simulations} simulations)")
 
     # forward selection with joint refits
     accepted: list[str] = []
     current = _Trial((), [{} for _ in folds], nominal_sse, v_nom)
     order = sorted(names, key=lambda n: single[n].val_weighted)
+    final_values: dict[str, float] = {}
     for step in range(MAX_EFFECTS):
         if step == 0:
             trials = {n: single[n] for n in names}
         else:
-            pool = [n for n in order if n not in accepted and single[n].val_weighted < v_nom][:SECOND_STEP_CANDIDATES]
-            trials = {}
+            pool = _screen(ev, axes, [n for n in names if n not in accepted], final_values, fit_idx)
+            say(f"step {step + 1}: screening beside {' + '.join(accepted)} on all fit runs: {', '.join(pool)}")
+            with ThreadPoolExecutor(workers) as ex:
+                futures = {n: ex.submit(_trial, ev, folds, tuple(accepted) + (n,), axes, current.fold_values)
+                           for n in pool}
+            trials = {n: f.result() for n, f in futures.items()}
             for n in pool:
-                trials[n] = _trial(ev, folds, tuple(accepted) + (n,), axes, current.fold_values)
-                say(f"step {step + 1}: {' + '.join(accepted + [n])}: cost gain "
-                    f"{100 * (1 - trials[n].val_weighted / current.val_weighted):.1f} % over {' + '.join(accepted)}")
+                say(f"step {step + 1}: {' + '.join(accepted + [n])}: validation cost gain "
+                    f"{100 * (1 - trials[n].val_weighted / current.val_weighted):.1f} % over {' + '.join(accepted)} "
+                    f"({ev.simulations} simulations)")
         if not trials:
             break
         best = min(trials, key=lambda n: trials[n].val_weighted)
@@ -587,14 +621,13 @@ def diagnose(runs: Sequence[str | Path], validate: Sequence[str | Path] = (), mo
             break
         accepted.append(best)
         current = trials[best]
-        say(f"accepted {best} (step {step + 1})")
-
-    # final values: joint refit of the accepted effects on all fit runs
-    final_values: dict[str, float] = {}
-    if accepted:
-        final_values = single_all[accepted[0]]
-        for j in range(1, len(accepted)):
-            final_values = _fit_set(ev, [axes[n] for n in accepted[:j + 1]], fit_idx, final_values)
+        # the values refitted on all fit runs (jointly)
+        if step == 0:
+            final_values = dict(single_all[best])
+        else:
+            final_values = _fit_set(ev, [axes[n] for n in accepted], fit_idx, final_values)
+        say(f"accepted {best} (step {step + 1}): "
+            + ", ".join(f"{n} = {_fmt(v, EFFECTS[n].unit)}" for n, v in final_values.items()))
     extended = base.with_effects(final_values, name=f"{base.name} + {' + '.join(accepted)}" if accepted else None)
 
     pooled_ext = _pooled(ev, current.val_sse)
@@ -668,4 +701,6 @@ def diagnose(runs: Sequence[str | Path], validate: Sequence[str | Path] = (), mo
         extended_fit=({"theta": pooled_ext["theta"], "accel": pooled_ext["accel"]} if accepted
                       else {"theta": pooled_nom["theta"], "accel": pooled_nom["accel"]}),
         gain_pct=float(gain), effects=results, extended_model=extended, nominal_model=base, runs=reports,
-        validation=how, simulations=ev.simulations, elapsed_s=time.perf_counter() - t0, cost_gain_pct=float(cost_gain))
+        validation=how, simulations=ev.simulations,
+        folds=[{"fit": [cases[i].name for i in f.fit], "validate": [cases[i].name for i in f.val],
+                "values": dict(v)} for f, v in zip(folds, current.fold_values)], elapsed_s=time.perf_counter() - t0, cost_gain_pct=float(cost_gain))

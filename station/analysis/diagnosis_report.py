@@ -1,0 +1,192 @@
+"""The diagnosis report: ``report.html`` with its figures embedded, and the same figures as
+PNG files beside it (``station diagnose --report DIR``).
+
+Figures are :class:`matplotlib.figure.Figure` objects rendered with the Agg canvas (no
+pyplot, no global backend): per run, measured vs nominal vs extended θ and a; per run, the
+``resid`` tests of the θ residual before and after (autocorrelation and cross-correlation
+with the command, 99 % band).
+"""
+
+from __future__ import annotations
+
+import base64
+import html
+import io
+import math
+import re
+from pathlib import Path
+
+from matplotlib.backends.backend_agg import FigureCanvasAgg
+from matplotlib.figure import Figure
+
+from station.errors import StationError
+
+
+def _slug(name: str) -> str:
+    return re.sub(r"[^A-Za-z0-9_.-]+", "_", Path(name).stem)[:60]
+
+
+def run_figure(run) -> Figure:
+    """Measured vs nominal vs extended θ and a of one run (a :class:`RunReport`)."""
+    fig = Figure(figsize=(9, 5.2), constrained_layout=True)
+    FigureCanvasAgg(fig)
+    ax1, ax2 = fig.subplots(2, 1, sharex=True)
+    t = run.t
+    label = "extended (held out)" if run.role == "validation" else "extended"
+    ax1.plot(t, run.theta, color="k", lw=1.2, label="measured")
+    ax1.plot(t, run.nominal["theta"], color="tab:red", lw=1, label="nominal")
+    ax1.plot(t, run.extended["theta"], color="tab:blue", lw=1, ls="--", label=label)
+    if run.controller not in ("open-loop", "unknown"):
+        ax1.plot(t, run.u, color="0.6", lw=0.8, label="reference u")
+    ax1.set_ylabel("θ (encoder counts)")
+    ax1.legend(loc="best", fontsize=8)
+    ax1.set_title(f"{run.file} ({run.controller}; θ fit nominal {_pct(run.fit_nominal.get('theta'))}, "
+                  f"extended {_pct(run.fit_extended.get('theta'))})", fontsize=9)
+    ax2.plot(t, run.a, color="k", lw=0.8, label="measured")
+    ax2.plot(t, run.nominal["a"], color="tab:red", lw=0.8, label="nominal")
+    ax2.plot(t, run.extended["a"], color="tab:blue", lw=0.8, ls="--", label=label)
+    ax2.set_ylabel("a (accelerometer counts)")
+    ax2.set_xlabel("t (s)")
+    return fig
+
+
+def resid_figure(run) -> Figure:
+    """``resid`` tests of the θ residual of one run, before (nominal) and after (extended)."""
+    fig = Figure(figsize=(9, 3.4), constrained_layout=True)
+    FigureCanvasAgg(fig)
+    ax1, ax2 = fig.subplots(1, 2)
+    for res, color, name in ((run.residuals_before, "tab:red", "nominal"),
+                             (run.residuals_after, "tab:blue", "extended")):
+        if res is None:
+            continue
+        ax1.plot(res.theta.lags[1:], res.theta.autocorr[1:], "o-", ms=2.5, color=color, label=name)
+        ax2.plot(res.theta.cross_lags, res.theta.crosscorr, "o-", ms=2.5, color=color, label=name)
+        bound = res.theta.bound
+    for ax in (ax1, ax2):
+        ax.axhspan(-bound, bound, color="0.85", label="99 % band")
+        ax.axhline(0, color="0.5", lw=0.5)
+        ax.set_xlabel("lag (samples)")
+    ax1.set_title("autocorrelation of the θ residual", fontsize=9)
+    ax2.set_title("cross-correlation of the θ residual with v", fontsize=9)
+    ax1.legend(fontsize=8)
+    return fig
+
+
+def _png(fig: Figure) -> bytes:
+    buf = io.BytesIO()
+    fig.savefig(buf, format="png", dpi=100)
+    return buf.getvalue()
+
+
+def _pct(x) -> str:
+    return "n/a" if x is None or not math.isfinite(x) else f"{x:.1f} %"
+
+
+def summary_paragraph(diag) -> str:
+    """One paragraph naming the cause, its value and the gain."""
+    base = diag.nominal_model.name
+    if not diag.causes:
+        best = diag.effects[0] if diag.effects else None
+        extra = "" if best is None else (f" The best candidate, {best.name} = {_value(best)}, changes the θ RMS error "
+                                         f"on held-out data by {best.gain_pct:+.1f} %, below the significance threshold.")
+        return (f"No effect explains the differences between {base} and the runs beyond what sensor "
+                f"quantization and noise can: the cause is \"none\" ({diag.validation}).{extra}")
+    accepted = {e.name: e for e in diag.effects if e.accepted}
+    parts = [f"{n} = {_value(accepted[n])}" for n in diag.causes]
+    more = "" if len(parts) == 1 else f", together with {', '.join(parts[1:])}"
+    first = accepted[diag.causes[0]]
+    return (f"The model {base} is missing {diag.causes[0]}: fitted value {_value(first)}{more}. "
+            f"On data it was not fitted to ({diag.validation}) the extended model lowers the θ RMS error by "
+            f"{diag.gain_pct:.1f} % (NRMSE fit of θ {_pct(diag.baseline_fit.get('theta'))} → "
+            f"{_pct(diag.extended_fit.get('theta'))}, of a {_pct(diag.baseline_fit.get('accel'))} → "
+            f"{_pct(diag.extended_fit.get('accel'))}). Evidence: {first.evidence}.")
+
+
+def _value(e) -> str:
+    if not math.isfinite(e.value):
+        return "∞"
+    v = f"{e.value:.0f}" if e.unit == "samples" else f"{e.value:.3g}"
+    return v if e.unit == "1" else f"{v} {e.unit}"
+
+
+def write_report(diag, folder: str | Path) -> Path:
+    """Write ``report.html`` (figures embedded as base64 PNG) and the PNGs beside it.
+
+    Parameters
+    ----------
+    diag : Diagnosis
+    folder : str or Path
+        Created if needed.
+
+    Returns
+    -------
+    Path
+        The HTML file.
+
+    Raises
+    ------
+    StationError
+        The folder or a file cannot be written.
+    """
+    folder = Path(folder)
+    esc = html.escape
+    try:
+        folder.mkdir(parents=True, exist_ok=True)
+        body = [f"<h1>Model diagnosis: {esc(diag.nominal_model.name)}</h1>",
+                f"<p><b>{esc(summary_paragraph(diag))}</b></p>",
+                "<h2>Result</h2><table>",
+                f"<tr><th>cause</th><td>{esc(diag.cause)}</td></tr>",
+                f"<tr><th>causes</th><td>{esc(', '.join(diag.causes) or '[]')}</td></tr>",
+                f"<tr><th>validation</th><td>{esc(diag.validation)}</td></tr>",
+                f"<tr><th>θ fit nominal → extended</th><td>{_pct(diag.baseline_fit.get('theta'))} → "
+                f"{_pct(diag.extended_fit.get('theta'))}</td></tr>",
+                f"<tr><th>a fit nominal → extended</th><td>{_pct(diag.baseline_fit.get('accel'))} → "
+                f"{_pct(diag.extended_fit.get('accel'))}</td></tr>",
+                f"<tr><th>θ RMS gain (pooled)</th><td>{diag.gain_pct:.1f} %</td></tr>",
+                f"<tr><th>extended model</th><td>{esc(diag.extended_model.name)}: "
+                f"{esc(', '.join(f'{k} = {v:.4g}' for k, v in diag.extended_model.effect_dict().items()) or 'no effects')}"
+                "</td></tr>",
+                f"<tr><th>simulations</th><td>{diag.simulations} in {diag.elapsed_s:.1f} s</td></tr></table>",
+                "<h2>Candidates</h2><table><tr><th>effect</th><th>value</th><th>θ gain</th><th>θ+a cost gain</th>"
+                "<th>accepted</th><th>evidence</th></tr>"]
+        for e in diag.effects:
+            body.append(f"<tr><td>{esc(e.name)}</td><td>{esc(_value(e))}</td><td>{e.gain_pct:.1f} %</td>"
+                        f"<td>{e.cost_gain_pct:.1f} %</td><td>{'yes' if e.accepted else ''}</td>"
+                        f"<td class='ev'>{esc(e.evidence)}</td></tr>")
+        body.append("</table><h2>Runs</h2><table><tr><th>run</th><th>role</th><th>controller</th>"
+                    "<th>θ fit nominal</th><th>θ fit extended</th><th>θ RMS gain</th><th>overshoot rig / nominal / "
+                    "extended</th></tr>")
+        for r in diag.runs:
+            m = r.metrics
+            ov = "" if m is None else " / ".join(f"{m[k].overshoot_pct:.2f} %" for k in ("rig", "nominal", "extended"))
+            body.append(f"<tr><td>{esc(r.file)}</td><td>{r.role}</td><td>{esc(r.controller)}</td>"
+                        f"<td>{_pct(r.fit_nominal.get('theta'))}</td><td>{_pct(r.fit_extended.get('theta'))}</td>"
+                        f"<td>{r.gain_pct:.1f} %</td><td>{ov}</td></tr>")
+        body.append("</table>")
+        for r in diag.runs:
+            body.append(f"<h3>{esc(r.file)}</h3>")
+            sig_b = r.residuals_before.signatures() if r.residuals_before else []
+            sig_a = r.residuals_after.signatures() if r.residuals_after else []
+            body.append("<p>Nominal model: " + esc("; ".join(sig_b) or "no notable signature") + "</p>")
+            if diag.causes:
+                body.append("<p>Extended model: " + esc("; ".join(sig_a) or "no notable signature") + "</p>")
+            for kind, fig in (("run", run_figure(r)), ("resid", resid_figure(r))):
+                png = _png(fig)
+                name = f"{_slug(r.file)}_{kind}.png"
+                (folder / name).write_bytes(png)
+                body.append(f"<img alt='{esc(name)}' src='data:image/png;base64,{base64.b64encode(png).decode()}'>")
+            for note in r.notes:
+                body.append(f"<p class='note'>note: {esc(note)}</p>")
+        page = ("<!doctype html><html><head><meta charset='utf-8'><title>Model diagnosis</title><style>"
+                "body{font-family:sans-serif;max-width:1000px;margin:auto}table{border-collapse:collapse}"
+                "td,th{border:1px solid #ccc;padding:2px 6px;font-size:90%}td.ev{font-size:80%}"
+                "img{max-width:100%}.note{color:#666;font-size:85%}</style></head><body>"
+                + "\n".join(body) + "</body></html>")
+        out = folder / "report.html"
+        out.write_text(page, encoding="utf-8")
+    except OSError as exc:
+        raise StationError(f"--report {folder}: cannot write: {exc}") from None
+    return out
+
+
+__all__ = ["resid_figure", "run_figure", "summary_paragraph", "write_report"]
