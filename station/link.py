@@ -580,9 +580,9 @@ class LegacySession(Session):
             self._begin()
             total = 0
             for _ in range(ZERO_ACCEL_TICKS):
-                n, _theta, a, _, _ = self.read_sample()
+                _n, _theta, a, _, _ = self.read_sample()
                 total += a
-                self.send_command(n, 0.0)
+                self._port_write(legacy.command_bytes(0))  # v = 0 throughout: no lag to guard
         finally:
             self.stop()
             self._drain()

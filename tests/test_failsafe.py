@@ -413,3 +413,75 @@ def test_a_signal_during_start_up_is_one_line_not_a_traceback(tmp_path, signum, 
     out, err = proc.communicate(timeout=30)
     assert proc.returncode == code, (out, err)
     assert "Traceback" not in err and signal.Signals(signum).name in err + out
+
+
+# --- the class, not the instances: fuzzed streams and healthy devices ----------------------
+
+class _StreamPort:
+    """A port that delivers a fixed byte stream in random chunks, then nothing."""
+
+    def __init__(self, stream: bytes, rng):
+        self.data, self.rng = bytearray(stream), rng
+
+    def write(self, data):
+        return len(data)
+
+    def reset_input_buffer(self):
+        pass
+
+    def read(self, size=1):
+        size = max(size, int(self.rng.integers(1, 40)))
+        out = bytes(self.data[:size])
+        del self.data[:size]
+        return out
+
+    @property
+    def in_waiting(self):
+        return 0
+
+
+@pytest.mark.parametrize("seed", range(40))
+def test_v1_session_on_a_mutated_stream_returns_only_new_samples_or_stops(seed):
+    """Random corruption of a valid stream (bit flips, dropped, repeated and inserted bytes,
+    repeated and swapped frames): every sample returned is new (n strictly increases,
+    |Δθ| plausible), and whatever else happens ends in a LinkFault - never a hang, never
+    another exception."""
+    from station.link import LinkFault, V1Session
+
+    rng = np.random.default_rng(seed)
+    frames = [v1.encode(v1.Sample(k, k // 3, 0, 0, 0)) for k in range(400)]
+    out = bytearray()
+    for k, f in enumerate(frames):
+        r = rng.random()
+        if r < 0.03:
+            f = bytes(b ^ (1 << int(rng.integers(8))) if rng.random() < 0.2 else b for b in f)
+        elif r < 0.05:
+            f = f + f
+        elif r < 0.06 and k > 2:
+            f = frames[k - 2]
+        elif r < 0.07:
+            f = rng.integers(0, 256, int(rng.integers(1, 80)), dtype=np.uint8).tobytes()
+        elif r < 0.08:
+            f = f[1:]
+        out += f
+    session = V1Session(_StreamPort(bytes(out), rng), "fuzz://", LinkLimits(timeout=0.02, check_rate=False))
+    session.start(0)
+    last_n, last_theta = -1, 0
+    start = time.perf_counter()
+    with pytest.raises(LinkFault):
+        while True:
+            n, theta, *_ = session.read_sample()
+            assert n > last_n and abs(theta - last_theta) <= 40 * (n - last_n)
+            last_n, last_theta = n, theta
+    assert time.perf_counter() - start < 5.0
+
+
+@pytest.mark.parametrize("protocol", ["v1", "legacy"])
+@pytest.mark.parametrize("pacing", ["lockstep", "realtime"])
+def test_no_check_fires_on_the_healthy_simulated_rig(tmp_path, protocol, pacing):
+    report = run_step(port=f"sim://?pacing={pacing}", protocol=protocol, controller="lead-accel", amplitude=200,
+                      duration=1.0, out=tmp_path / "ok.tsv")
+    o = report.result.outcome
+    assert o.reason == "completed" and o.exit_code == 0, o.message
+    assert (o.dropped, o.stale, o.duplicates, o.watchdog_trips) == (0, 0, 0, 0)
+    assert read_log(tmp_path / "ok.tsv").outcome["reason"] == "completed"
