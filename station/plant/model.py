@@ -262,7 +262,7 @@ def load_model(name_or_path: str | Path = "tmm-fit", n_elements: int | None = No
         source = f"{path} [params]"
     elif isinstance(source, str):
         if params is None and _is_path(source) and not Path(source).is_absolute():
-            source = str(path.parent / source)  # relative to the model file
+            source = str((path.parent / source).resolve())  # relative to the model file
         elif not _is_path(source) and not (PARAMS_DIR / f"{source}.toml").exists():
             known = ", ".join(sorted(q.stem for q in PARAMS_DIR.glob("*.toml")))
             raise bad("params", f"unknown parameter set {source!r} (built-in sets: {known})")
