@@ -10,6 +10,7 @@ Example
 from __future__ import annotations
 
 import datetime as _dt
+import math
 import time
 from dataclasses import dataclass
 from pathlib import Path
@@ -241,7 +242,8 @@ def run_step(port: str = DEFAULT_PORT, protocol: str = "v1", controller: str = D
         writer = RunLogWriter(log_path, meta, sinks=sinks)
         result = None
         try:
-            result = run_loop(session, ctrl, u, writer, soft_limit=soft_limit, dt=dt, lean=lean, limit=limit,
+            result = run_loop(session, ctrl, u, writer, soft_limit=soft_limit, dt=dt, lean=lean,
+                              limit=wire_limit(ctrl, limit),
                               signals=signals)
         finally:
             # after the loop has sent command 0 and stop; signals are only recorded here
@@ -249,6 +251,23 @@ def run_step(port: str = DEFAULT_PORT, protocol: str = "v1", controller: str = D
     # step metrics compare θ with the step in encoder counts: closed-loop steps only
     closed_step = reference == "step" and ctrl.spec.get("kind") != "open-loop" and result.ok
     return StepReport(log_path, result, _metrics_of(log_path, amplitude) if closed_step else None)
+
+
+DAC_LIMIT = 255.0
+"""The DAC's range, ±counts (±2.5 V): the clamp of last resort before the wire."""
+
+
+def wire_limit(controller, limit: float | None) -> float:
+    """The clamp every command gets before it is written, ±DAC counts.
+
+    The controller's own clamp when it has a finite one (a compensator file's ``limit``
+    wins over ``--limit``), else ``limit``, else the DAC's range.
+    """
+    own = getattr(controller, "limit", None)
+    for value in (own, limit):
+        if isinstance(value, (int, float)) and math.isfinite(value) and value > 0:
+            return min(float(value), DAC_LIMIT)
+    return DAC_LIMIT
 
 
 def _metrics_of(log_path: Path, amplitude: float) -> StepMetrics | None:
