@@ -1,8 +1,32 @@
 """Errors meant for the user: the CLI prints them as one line, without a traceback."""
 
+from __future__ import annotations
+
+from pathlib import Path
+
 
 class StationError(Exception):
     """A failure the user can act on (bad file, missing port, bad option).
 
-    The message names the file, line, field or port and what was expected.
+    The message names the file, line, field or port and what was expected. Where the
+    error is about a place, it also carries it as attributes, so other code never parses
+    the message.
+
+    Parameters
+    ----------
+    message : str
+        One line for the user.
+    file : str or Path, optional
+        The file at fault.
+    line : int, optional
+        Its 1-based line number.
+    key : str, optional
+        The field, header key, column or option at fault.
     """
+
+    def __init__(self, message: str = "", *, file: str | Path | None = None, line: int | None = None,
+                 key: str | None = None):
+        super().__init__(message)
+        self.file = None if file is None else str(file)
+        self.line = line
+        self.key = key

@@ -181,7 +181,7 @@ def _header_number(meta: dict[str, Any], key: str) -> float:
     """A gain of a rig header (0 when absent); StationError naming the field when not a number."""
     value = meta.get(key, 0.0)
     if isinstance(value, bool) or not isinstance(value, (int, float)) or not np.isfinite(value):
-        raise StationError(f"{key}: expected a number, got {value!r}")
+        raise StationError(f"{key}: expected a number, got {value!r}", key=key)
     return float(value)
 
 
@@ -360,11 +360,11 @@ def _named_controller(log: RunLog) -> tuple[Compensator | OpenLoop | None, list[
     try:
         return rig_controller(log.meta, dt)
     except StationError as exc:  # a header field: name the file and its line
-        key = str(exc).split(":", 1)[0]
-        line = next((i for i, text in enumerate(log.header, 1)
-                     if text[1:].strip().startswith(key) and "=" in text), None)
+        key = exc.key
+        line = None if key is None else next((i for i, text in enumerate(log.header, 1)
+                                              if text[1:].strip().startswith(key) and "=" in text), None)
         where = f"{log.path}: line {line}" if line else str(log.path)
-        raise StationError(f"{where}: {exc}") from None
+        raise StationError(f"{where}: {exc}", file=log.path, line=line, key=key) from None
 
 
 def _dt_of(log: RunLog) -> float:
