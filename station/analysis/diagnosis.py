@@ -19,8 +19,10 @@ grey-box estimation with physical parameters and bounds, honest validation data)
 4. Acceptance (forward selection, at most three effects, joint refit of all accepted
    effects at each step): the pooled validation cost must fall by at least
    :data:`MIN_RELATIVE_GAIN` (parsimony: an effect must pay for itself) and by at least
-   :data:`MIN_NOISE_GAIN` noise variances per sample (more than sensor quantization and
-   noise can explain); otherwise the answer is "none".
+   :data:`MIN_NOISE_GAIN` noise variances per sample, both measured from the lower of the
+   current model's cost and the cost that tiny perturbations of it reach by luck
+   (:data:`NULL_PERTURBATIONS`: quantization and noise alone); otherwise the answer is
+   "none".
 5. The reported values are refitted on all fit runs.
 """
 
@@ -463,11 +465,40 @@ def _gain(rms_ext: float, rms_nom: float) -> float:
     return 100.0 * (1.0 - rms_ext / rms_nom)
 
 
-def _accept(v0: float, v1: float, terms: int) -> bool:
-    """Pays on validation data beyond parsimony and noise (module docstring, step 4)."""
+NULL_PERTURBATIONS = (("accel_gain", 0.996), ("accel_gain", 0.998), ("accel_gain", 1.002), ("accel_gain", 1.004),
+                      ("param:act_K", 0.998), ("param:act_K", 1.002), ("param:EI", 0.998), ("param:EI", 1.002))
+"""Perturbations of the current model far too small to be a cause (0.2-0.4 %): what they
+change in the validation cost is what quantization and noise alone do (e.g. the rounding
+of θ and a, and in an accelerometer-feedback loop the measured noise, send a closed loop
+along another path)."""
+
+
+def _null_floor(ev: Evaluator, folds: Sequence[Fold], fold_values: Sequence[Mapping[str, float]]) -> float:
+    """The validation cost reached by luck alone: per validation run the lowest weighted
+    error over :data:`NULL_PERTURBATIONS` of the current model (as fitted per fold), summed."""
+    from station.plant.effects import EFFECTS
+
+    total = 0.0
+    for fold, values in zip(folds, fold_values):
+        for i in fold.val:
+            best = ev.weighted(values, i)
+            for name, factor in NULL_PERTURBATIONS:
+                v = values.get(name, EFFECTS[name].neutral) * factor
+                best = min(best, ev.weighted({**values, name: v}, i))
+            total += best
+    return total
+
+
+def _accept(v0: float, v1: float, terms: int, floor: float | None = None) -> bool:
+    """Pays on validation data beyond parsimony and noise (module docstring, step 4).
+
+    v0, v1: validation cost of the current model and with the candidate; floor: what luck
+    alone reaches around the current model (:func:`_null_floor`), the reference when lower.
+    """
     if not math.isfinite(v1) or v0 <= 0:
         return False
-    return (1.0 - v1 / v0) >= MIN_RELATIVE_GAIN and (v0 - v1) / terms >= MIN_NOISE_GAIN
+    ref = v0 if floor is None else min(v0, floor)
+    return (1.0 - v1 / ref) >= MIN_RELATIVE_GAIN and (ref - v1) / terms >= MIN_NOISE_GAIN
 
 
 def _fmt(x: float, unit: str) -> str:
@@ -617,7 +648,10 @@ def diagnose(runs: Sequence[str | Path], validate: Sequence[str | Path] = (), mo
         if not trials:
             break
         best = min(trials, key=lambda n: trials[n].val_weighted)
-        if not _accept(current.val_weighted, trials[best].val_weighted, terms):
+        floor = _null_floor(ev, folds, current.fold_values)
+        say(f"step {step + 1}: best {best}, validation cost {trials[best].val_weighted / terms:.3g} per sample, "
+            f"current {current.val_weighted / terms:.3g}, reached by quantization and noise alone {floor / terms:.3g}")
+        if not _accept(current.val_weighted, trials[best].val_weighted, terms, floor):
             break
         accepted.append(best)
         current = trials[best]

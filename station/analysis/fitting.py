@@ -24,6 +24,10 @@ import scipy.optimize
 GRID_POINTS = 13
 """Grid values per continuous parameter (ratios 0.25..4: a factor 1.26 apart)."""
 
+LATTICE = 64
+"""Refined values lie on a lattice of 1/LATTICE grid step (well inside any tolerance), so
+the folds of a cross-validation, refining near the same grid point, share simulations."""
+
 REFINE_ITERATIONS = 12
 """Bounded scalar refinement: at most this many evaluations inside the bracket."""
 
@@ -59,6 +63,9 @@ class Axis:
         """Search coordinate -> value, clipped to [lower, upper]."""
         lo, hi = self.to_unit(self.lower), self.to_unit(self.upper)
         t = min(max(t, lo), hi)
+        if self.scale != "int":  # on a lattice of 1/64 grid step: refinements share simulations
+            q = self.step / LATTICE
+            t = lo + round((t - lo) / q) * q
         if self.scale == "log":
             x = math.exp(t)
         elif self.scale == "sqrt":
