@@ -32,6 +32,8 @@ try:  # compiled kernel when numba is installed; plain Python otherwise
 except ImportError:  # pragma: no cover - exercised only without numba
     numba = None
 
+from station.rounding import half_away, half_away_compiled
+
 
 def _commit(num, den, xs, ys, x, y):  # pragma: no cover - compiled by numba
     """Push input x and output y into a direct-form I history; return the next
@@ -188,7 +190,7 @@ def _loop(lam, bm, bp, cm, co, gw_v, gw_p, substeps, z0, u, v_open, use_v_open, 
         thd[k] = td
         # what the device applies: whole DAC counts (the controller keeps the unrounded v)
         if cmd_mode == 1:
-            vk = math.floor(vk + 0.5) if vk >= 0.0 else -math.floor(-vk + 0.5)
+            vk = _half_away(vk)
         elif cmd_mode == 2:
             vk = float(math.trunc(vk))
         vk = _amplifier(vk, saturation, deadzone)
@@ -201,7 +203,10 @@ def _loop(lam, bm, bp, cm, co, gw_v, gw_p, substeps, z0, u, v_open, use_v_open, 
     return theta, acc, v, thd
 
 
+_half_away = half_away  # the device's command rounding (station.rounding), compiled below
+
 if numba is not None:
+    _half_away = half_away_compiled
     _commit = numba.njit(cache=True, nogil=True)(_commit)
     _outputs = numba.njit(cache=True, nogil=True)(_outputs)
     _amplifier = numba.njit(cache=True, nogil=True)(_amplifier)
@@ -254,7 +259,7 @@ def _effects_of(model) -> _Effects:
 def _device_command(vk: float, cmd_mode: int) -> float:
     # the kernel's command quantization, for the Python loop (same float operations)
     if cmd_mode == 1:
-        return math.floor(vk + 0.5) if vk >= 0.0 else -math.floor(-vk + 0.5)
+        return half_away(vk)
     if cmd_mode == 2:
         return float(math.trunc(vk))
     return vk

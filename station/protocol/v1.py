@@ -13,11 +13,12 @@ frames without ever raising.
 from __future__ import annotations
 
 import binascii
-import math
 import struct
 from dataclasses import dataclass, fields
 
 from cobs import cobs
+
+from station.rounding import round_half_away
 
 PROTOCOL_VERSION = 1
 MAX_FRAME = 64
@@ -228,14 +229,22 @@ class Decoder:
 def round_command(v: float) -> int:
     """Round a command to whole DAC counts as the spec requires.
 
-    Nearest integer with halves away from zero, clamped to the int16 wire range.
-    NaN is rejected (ValueError): a controller that produced it must not drive the motor.
+    Parameters
+    ----------
+    v : float
+        The controller's output, DAC counts.
+
+    Returns
+    -------
+    int
+        Nearest integer, halves away from zero (:func:`station.rounding.round_half_away`),
+        clamped to the int16 wire range.
+
+    Raises
+    ------
+    ValueError
+        ``v`` is NaN: a controller that produced it must not drive the motor.
     """
     if v != v:
         raise ValueError("command is NaN")
-    v = max(-32768.0, min(32767.0, v))
-    mag = abs(v)
-    whole = math.floor(mag)
-    if mag - whole >= 0.5:  # exact (no v + 0.5: 0.49999999999999994 + 0.5 rounds to 1.0)
-        whole += 1
-    return int(whole) if v >= 0 else -int(whole)
+    return round_half_away(max(-32768.0, min(32767.0, v)))

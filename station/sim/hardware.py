@@ -10,6 +10,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+from station.rounding import round_half_away
+
 ACCEL_OFFSET = -2.0
 """Accelerometer reading at rest, ADC counts (DESIGN.md: "offset ≈ −2 counts at rest")."""
 
@@ -86,4 +88,4 @@ class Hardware:
         self.accel_zero = 0
         total = sum(self.tick(0).a for _ in range(ZERO_ACCEL_READINGS))
         mean = total / ZERO_ACCEL_READINGS
-        self.accel_zero = int(mean + 0.5) if mean >= 0 else -int(-mean + 0.5)
+        self.accel_zero = round_half_away(mean)
