@@ -27,7 +27,7 @@ def test_model_without_effects_is_todays_simulation_exactly(nominal, kind, comma
     u = step_reference(CASES.get(kind, 40.0), N, at_tick=10)
     old = simulate(DiscretePlant(), c, u, alignment=1, command=command)
     new = simulate(nominal, c, u, alignment=1, command=command)
-    for key in old:
+    for key in old.keys():
         np.testing.assert_array_equal(new[key], old[key], err_msg=key)
 
 
@@ -82,7 +82,7 @@ def test_param_ratio_is_the_parameter_set_with_that_parameter_scaled(nominal):
     doubled = simulate(nominal.with_effects({"param:drive_c": 2.0}), c, u)
     p2 = dataclasses.replace(load_params(), drive_c=2.0 * load_params().drive_c)
     direct = simulate(Model("drive_c x2", p2), c, u)
-    for key in base:
+    for key in base.keys():
         np.testing.assert_array_equal(same[key], base[key])
         np.testing.assert_array_equal(doubled[key], direct[key])
     assert not np.array_equal(doubled["theta"], base["theta"])

@@ -106,3 +106,16 @@ def test_bad_arguments():
         simulate(plant, make_controller("p"), np.zeros(10), alignment=-1)
     with pytest.raises(ValueError, match="v_open"):
         simulate(plant, make_controller("p"), np.zeros(10), v_open=np.zeros(9))
+
+
+def test_simulate_returns_a_named_result_that_unpacks_and_exports():
+    plant = DiscretePlant()
+    u = step_reference(50.0, 200, at_tick=10)
+    run = simulate(plant, make_controller("p"), u)
+    t, uu, v, theta, a, thd = run  # unpacks like a tuple, in this order
+    assert run.theta is theta and run["theta"] is theta and "theta" in run and "nope" not in run
+    assert np.array_equal(uu, u) and np.allclose(t, np.arange(200) * 0.002)
+    df = run.to_pandas()
+    assert list(df.columns) == ["t", "u", "v", "theta", "a", "theta_d_hat"] and len(df) == 200
+    with pytest.raises(KeyError):
+        run["nope"]

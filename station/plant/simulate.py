@@ -377,6 +377,62 @@ def _python_loop(stepper, controller, u, d, v_open, quantize, cmd_mode):
     return theta, acc, v, thd
 
 
+class SimResult(NamedTuple):
+    """A simulated run (:func:`simulate`), one array of shape (N,) per column.
+
+    Named fields, still unpackable as a tuple (``t, u, v, theta, a, theta_d_hat =
+    result``) and readable by column name like the dict it replaces
+    (``result["theta"]``), as python-control's ``TimeResponseData``.
+
+    Attributes
+    ----------
+    t : ndarray
+        Time, s (k·dt).
+    u : ndarray
+        Reference, encoder counts (DAC counts open loop).
+    v : ndarray
+        The controller's command after its clamp, DAC counts.
+    theta : ndarray
+        Base angle, encoder counts.
+    a : ndarray
+        Tip acceleration, accelerometer counts.
+    theta_d_hat : ndarray
+        Reference after accelerometer feedback, encoder counts.
+    """
+
+    t: np.ndarray
+    u: np.ndarray
+    v: np.ndarray
+    theta: np.ndarray
+    a: np.ndarray
+    theta_d_hat: np.ndarray
+
+    def __getitem__(self, key):
+        if isinstance(key, str):
+            try:
+                return getattr(self, key)
+            except AttributeError:
+                raise KeyError(key) from None
+        return tuple.__getitem__(self, key)
+
+    def __contains__(self, key) -> bool:
+        return key in self._fields
+
+    def keys(self) -> tuple[str, ...]:
+        """Column names, as a dict's keys."""
+        return self._fields
+
+    def items(self):
+        """(name, array) pairs, as a dict's items."""
+        return self._asdict().items()
+
+    def to_pandas(self):
+        """The run as a ``pandas.DataFrame``, one column per field (pandas imported here)."""
+        import pandas as pd
+
+        return pd.DataFrame(self._asdict())
+
+
 def simulate(plant, controller, u, alignment: int = 1, v_open=None, quantize: bool = True,
              command: str = "none", dt: float | None = None, substeps: int | None = None) -> dict:
     """Simulate a whole run of the plant with a compensator, as the rig runs it.
@@ -427,10 +483,10 @@ def simulate(plant, controller, u, alignment: int = 1, v_open=None, quantize: bo
 
     Returns
     -------
-    dict of ndarray, shape (N,)
+    SimResult
         ``t`` (s, k·dt), ``u``, ``v`` (DAC counts, the controller's, after its clamp),
         ``theta`` (encoder counts), ``a`` (accelerometer counts), ``theta_d_hat``
-        (encoder counts).
+        (encoder counts), each shape (N,).
 
     Raises
     ------
@@ -478,4 +534,4 @@ def simulate(plant, controller, u, alignment: int = 1, v_open=None, quantize: bo
             math.inf if limit is None else float(limit), d, bool(quantize), cmd_mode,
             fx.saturation, fx.deadzone, fx.delay, fx.accel_gain, fx.v_c, fx.half_gap, fx.k_d, fx.c_d,
         )
-    return {"t": np.arange(u.size) * dt, "u": u, "v": v, "theta": theta, "a": a, "theta_d_hat": thd}
+    return SimResult(np.arange(u.size) * dt, u, v, theta, a, thd)
