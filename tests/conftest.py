@@ -42,3 +42,7 @@ def v1_vectors(shared_dir: Path) -> dict:
     import json
 
     return json.loads(_require(shared_dir / "spec" / "protocol-v1-vectors.json", "protocol vectors").read_text())
+
+
+def pytest_configure(config):
+    config.addinivalue_line("markers", "slow: takes minutes (e.g. the blind diagnosis tests); still run in CI")

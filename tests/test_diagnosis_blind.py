@@ -1,0 +1,60 @@
+"""Blind hidden-effect tests of the model diagnosis (issue 8, item 6).
+
+An effect is hidden in the four rig-format logs of a case written by the independent
+generator (tests/blind: its own FEM, friction and backlash integrated on a sub-step grid,
+the rig's noise and quantization); :func:`station.analysis.diagnosis.diagnose` sees only
+the log files. For every effect of tests.blind.cases.MAGNITUDES, two seeds with values
+drawn in the issue's ranges: the cause must be named with its value within 25 %; a clean
+case must give "none"; a two-effect case must name both. The ten-seed table is
+scripts/validate_diagnosis.py's. Slow (about 25 s per case): marked ``slow``, run in CI.
+"""
+
+from __future__ import annotations
+
+import pytest
+
+from tests.blind.cases import MAGNITUDES, TOLERANCE, TWO_EFFECTS, case_effects, value_error
+from tests.blind.generator import write_case
+
+pytestmark = pytest.mark.slow
+
+SEEDS = (0, 1)
+
+
+def _diagnose(tmp_path, effects, seed):
+    from station.analysis.diagnosis import diagnose
+
+    paths = write_case(tmp_path / "logs", effects, seed)
+    return diagnose([str(p) for p in paths]).to_json()
+
+
+def _value(result: dict, name: str) -> float:
+    return next(e["value"] for e in result["effects"] if e["name"] == name)
+
+
+@pytest.mark.parametrize("seed", SEEDS)
+@pytest.mark.parametrize("effect", list(MAGNITUDES))
+def test_hidden_effect_is_named_with_its_value(tmp_path, effect, seed):
+    effects = case_effects(effect, seed)
+    result = _diagnose(tmp_path, effects, seed)
+    hidden = effects[effect]
+    assert result["cause"] == effect, f"hidden {effect} = {hidden:.4g}: found {result['causes']}"
+    found = _value(result, effect)
+    assert value_error(hidden, found) <= TOLERANCE, f"{effect}: hidden {hidden:.4g}, found {found:.4g}"
+    assert result["gain_pct"] > 0
+
+
+@pytest.mark.parametrize("seed", SEEDS)
+def test_clean_case_gives_none(tmp_path, seed):
+    result = _diagnose(tmp_path, {}, seed)
+    assert result["cause"] == "none", result["causes"]
+    assert result["causes"] == [] and result["gain_pct"] == 0
+
+
+def test_two_hidden_effects_are_both_named(tmp_path):
+    effects = case_effects("two", 0)
+    result = _diagnose(tmp_path, effects, 0)
+    assert set(TWO_EFFECTS) <= set(result["causes"]), f"hidden {effects}: found {result['causes']}"
+    for name in TWO_EFFECTS:
+        found = _value(result, name)
+        assert value_error(effects[name], found) <= TOLERANCE, f"{name}: hidden {effects[name]:.4g}, found {found:.4g}"
