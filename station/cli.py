@@ -10,8 +10,10 @@ from __future__ import annotations
 import argparse
 import importlib
 import sys
+import warnings
 
 from station import __version__
+from station.commands.options import StationParser, document_ranges
 from station.errors import StationError
 from station.signals import StopSignal, StopSignals
 
@@ -21,7 +23,7 @@ COMMANDS = ("step", "replay", "sim_device", "bode", "compare", "modes", "survey"
 
 def build_parser() -> argparse.ArgumentParser:
     """The full argument parser, one subparser per available command module."""
-    parser = argparse.ArgumentParser(
+    parser = StationParser(
         prog="station",
         description="Control station for the single flexible link robot: step tests on the rig or the "
                     "simulated rig, lossless run logs, replay and model checks.")
@@ -36,6 +38,7 @@ def build_parser() -> argparse.ArgumentParser:
             raise
         cmd = sub.add_parser(module.NAME, help=module.HELP, description=module.HELP)
         module.configure(cmd)
+        document_ranges(cmd)
         cmd.set_defaults(_run=module.run)
     return parser
 
@@ -51,11 +54,15 @@ def main(argv: list[str] | None = None) -> int:
     kill it with a different code); called with ``argv`` (tests, notebooks), the old
     handlers are put back.
     """
-    with StopSignals(ignore_after=argv is None) as signals:
+    with StopSignals(ignore_after=argv is None) as signals, warnings.catch_warnings():
+        warnings.showwarning = _one_line_warning
         try:
             try:
                 parser = build_parser()
-                args = parser.parse_args(argv)
+                try:
+                    args = parser.parse_args(argv)
+                except SystemExit as exc:  # --help, or a refused value: argparse said it in one line
+                    return exc.code if isinstance(exc.code, int) else 2
                 return int(args._run(args) or 0)
             except StationError as exc:
                 print(f"station: error: {exc}", file=sys.stderr)
@@ -71,6 +78,11 @@ def main(argv: list[str] | None = None) -> int:
             return 130
         finally:
             signals.defer()
+
+
+def _one_line_warning(message, category, filename, lineno, file=None, line=None) -> None:
+    """Warnings as one line for the user (``station: warning: ...``), not Python's two-line form."""
+    print(f"station: warning: {message}", file=sys.stderr if file is None else file)
 
 
 def _silence_stdout() -> None:

@@ -19,7 +19,7 @@ from pathlib import Path
 import numpy as np
 
 from station import DT, __version__
-from station.analysis.metrics import StepMetrics, step_metrics
+from station.analysis.metrics import NOT_SETTLED, StepInfo, StepMetrics, step_info, step_metrics
 from station.control import file_reference, make_controller, pulse_reference, step_reference, swept_sine_reference
 from station.errors import StationError
 from station.link import LinkLimits, open_session
@@ -115,6 +115,24 @@ class StepReport:
     log_path: Path
     result: RunResult
     metrics: StepMetrics | None
+    info: StepInfo | None = None
+    figure_path: Path | None = None
+
+    def to_pandas(self):
+        """The logged run as a :class:`pandas.DataFrame` (one row per tick, the log's columns;
+        pandas is imported here, not with the package)."""
+        import pandas as pd
+
+        log = read_log(self.log_path)
+        return pd.DataFrame({name: col for name, col in log.data.items()})
+
+    def plot(self):
+        """The run's figure (θ and u, v and v_applied, a; outcome and metrics in the title),
+        a :class:`matplotlib.figure.Figure` (no pyplot state: display it in a notebook or save it)."""
+        from station.plots import plot_runs, run_title
+
+        log = read_log(self.log_path)
+        return plot_runs([log], title=run_title(log, "" if self.metrics is None else self.metrics.summary()))
 
     def to_json(self) -> dict:
         """``{"log", "ok", "reason", "message", "outcome": {...}, "metrics": {...}, "timing": {...}}``
@@ -127,15 +145,23 @@ class StepReport:
             "message": self.result.message,
             "outcome": self.result.outcome.to_json(),
             "metrics": {"overshoot_pct": None if m is None else m.overshoot_pct,
-                        "settling_time_s": None if m is None else m.settling_time_s},
+                        "settling_time_s": None if m is None else m.settling_time_s,
+                        **(self.info.to_json() if self.info is not None else {})},
             "timing": self.result.timing().to_json(),
         }
 
 
-def default_log_path(tag: str, when: _dt.datetime | None = None) -> Path:
-    """``runs/step-<tag>-<UTC time>.tsv`` under the current directory (tag: controller name)."""
+def default_log_path(tag: str, when: _dt.datetime | None = None, folder: str | Path = "runs") -> Path:
+    """``runs/step-<tag>-<UTC time, ms>.tsv`` under the current directory (tag: controller
+    name), with ``-2``, ``-3``... added when that name exists: names never collide."""
     when = when or _dt.datetime.now(_dt.UTC)
-    return Path("runs") / f"step-{tag}-{when:%Y%m%d-%H%M%S}.tsv"
+    stem = f"step-{tag}-{when:%Y%m%d-%H%M%S}-{when.microsecond // 1000:03d}"
+    path = Path(folder) / f"{stem}.tsv"
+    counter = 1
+    while path.exists() or path.with_suffix(".png").exists():
+        counter += 1
+        path = Path(folder) / f"{stem}-{counter}.tsv"
+    return path
 
 
 def _plant_meta(port) -> dict | None:
@@ -148,7 +174,8 @@ def run_step(port: str = DEFAULT_PORT, protocol: str = "v1", controller: str = D
              out: str | Path | None = None, sinks=(),
              kp: float = 2.0, limit: float = 200.0, soft_limit: float = DEFAULT_SOFT_LIMIT,
              timeout: float = DEFAULT_TIMEOUT, baudrate: int | None = None, dt: float = DT,
-             lean: bool = True, limits: LinkLimits | None = None) -> StepReport:
+             lean: bool = True, limits: LinkLimits | None = None, force: bool = False,
+             figure: bool = True, progress: bool = False, out_dir: str | Path = "runs") -> StepReport:
     """Run a step test on a device and log it.
 
     Parameters
@@ -171,7 +198,8 @@ def run_step(port: str = DEFAULT_PORT, protocol: str = "v1", controller: str = D
         "step" (default), "pulse", "swept-sine" or ``FILE[:COLUMN]``
         (:func:`make_reference`). Step metrics are computed for steps only.
     out : path, optional
-        Log file; default :func:`default_log_path`.
+        Log file; default :func:`default_log_path` in ``out_dir``. An existing file is
+        an error unless ``force``.
     sinks : sequence
         Extra row sinks (e.g. :class:`station.viz.RerunSink`), fed off the hot path.
     kp, limit : float
@@ -185,6 +213,16 @@ def run_step(port: str = DEFAULT_PORT, protocol: str = "v1", controller: str = D
     limits : station.link.LinkLimits, optional
         The link's fail-safe bounds (max lag, misses, encoder step, rate check);
         default ``LinkLimits(timeout)``. Its timeout wins over ``timeout``.
+    force : bool
+        Overwrite an existing ``out``.
+    figure : bool
+        Write ``<log stem>.png`` beside the log once the run has ended and the log is
+        closed (:mod:`station.plots`); a figure that fails is a warning, never a lost run.
+    progress : bool
+        Show a live progress line on stderr (:class:`station.progress.ProgressSink`,
+        fed off the hot path by the log's sink thread).
+    out_dir : path
+        Folder of the default log name.
 
     Returns
     -------
@@ -200,6 +238,9 @@ def run_step(port: str = DEFAULT_PORT, protocol: str = "v1", controller: str = D
     station.signals.StopSignal
         SIGINT / SIGTERM before the run started (nothing was started then).
     """
+    amplitude = DEFAULT_AMPLITUDE if amplitude is None else amplitude
+    kp = 2.0 if kp is None else kp
+    limit = 200.0 if limit is None else limit
     u, reference_meta = make_reference(reference, amplitude, duration, step_tick, dt)
     if protocol == "legacy" and u.size > legacy.MAX_TICKS:  # a user error: nothing started, no log
         raise StationError(f"the legacy protocol counts ticks in int16: at most {legacy.MAX_TICKS} ticks "
@@ -211,7 +252,9 @@ def run_step(port: str = DEFAULT_PORT, protocol: str = "v1", controller: str = D
         ctrl = controller
         ctrl.reset()
         tag = str(ctrl.spec.get("kind", "custom"))
-    log_path = Path(out) if out is not None else default_log_path(tag)
+    if out is not None and Path(out).exists() and not force:
+        raise StationError(f"{out}: exists; use --force (force=True) to overwrite it, or another name")
+    log_path = Path(out) if out is not None else default_log_path(tag, folder=out_dir)
     try:
         log_path.parent.mkdir(parents=True, exist_ok=True)
     except OSError as exc:
@@ -239,6 +282,13 @@ def run_step(port: str = DEFAULT_PORT, protocol: str = "v1", controller: str = D
             "start_time": _dt.datetime.now(_dt.UTC).isoformat(),
             "start_unix": time.time(),
         }
+        sinks = list(sinks)
+        bar = None
+        if progress:
+            from station.progress import ProgressSink
+
+            bar = ProgressSink(u.size * dt)
+            sinks.append(bar)
         writer = RunLogWriter(log_path, meta, sinks=sinks)
         result = None
         try:
@@ -248,9 +298,31 @@ def run_step(port: str = DEFAULT_PORT, protocol: str = "v1", controller: str = D
         finally:
             # after the loop has sent command 0 and stop; signals are only recorded here
             writer.close(None if result is None else result.outcome.to_json())
+            if bar is not None:
+                bar.close()
     # step metrics compare θ with the step in encoder counts: closed-loop steps only
     closed_step = reference == "step" and ctrl.spec.get("kind") != "open-loop" and result.ok
-    return StepReport(log_path, result, _metrics_of(log_path, amplitude) if closed_step else None)
+    metrics, info = _metrics_of(log_path, amplitude, limit, step_tick * dt) if closed_step else (None, None)
+    report = StepReport(log_path, result, metrics, info=info)
+    if figure:  # after command 0, STOP and the log's close: a figure never delays a stop
+        report.figure_path = _write_figure(report)
+    return report
+
+
+def _write_figure(report: StepReport) -> Path | None:
+    """``<log stem>.png`` beside the log; a warning (not an error) when it cannot be drawn."""
+    import warnings
+
+    png = report.log_path.with_suffix(".png")
+    try:
+        from station.plots import save_figure
+
+        save_figure(report.plot(), png)
+    except (StationError, OSError, ValueError) as exc:
+        warnings.warn(f"{png}: the run's figure was not written ({exc}); the log is complete",
+                      RuntimeWarning, stacklevel=3)
+        return None
+    return png
 
 
 DAC_LIMIT = 255.0
@@ -270,12 +342,14 @@ def wire_limit(controller, limit: float | None) -> float:
     return DAC_LIMIT
 
 
-def _metrics_of(log_path: Path, amplitude: float) -> StepMetrics | None:
+def _metrics_of(log_path: Path, amplitude: float, limit: float | None,
+                step_time: float) -> tuple[StepMetrics | None, StepInfo | None]:
     log = read_log(log_path)
     t, theta = log.data["t"], log.data["theta"]
     if t.size == 0 or amplitude == 0:
-        return None
-    return step_metrics(t, theta, amplitude)
+        return None, None
+    return (step_metrics(t, theta, amplitude),
+            step_info(t, theta, amplitude, step_time, v=log.data["v"], limit=limit))
 
 
 def format_report(report: StepReport) -> str:
@@ -292,8 +366,10 @@ def format_report(report: StepReport) -> str:
     if not r.ok:
         lines.append("no step metrics: the run was cut short")
     if m is not None:
-        settle = "not settled" if m.settling_time_s is None else f"{m.settling_time_s:.3f} s"
-        lines.append(f"overshoot {m.overshoot_pct:.2f} %   settling time {settle}")
+        settle = NOT_SETTLED if m.settling_time_s is None else f"{m.settling_time_s:.3f} s"
+        lines.append(f"overshoot {m.overshoot_pct:.2f} %   settling time {settle}   (thesis definitions)")
+    if report.info is not None:
+        lines.append(report.info.summary())
     lines.append(f"latency p50 {tm.p50_us:.0f} us  p99 {tm.p99_us:.0f} us  max {tm.max_us:.0f} us   "
                  f"late {tm.late}  dropped {tm.dropped}  stale {o.stale}  duplicates {o.duplicates}  "
                  f"rx errors {o.rx_errors}")

@@ -21,4 +21,4 @@ def test_modes_converge_and_compare_with_the_rig(tmp_path, capsys):
 
 def test_modes_rejects_bad_element_count(capsys):
     assert main(["modes", "--elements", "0"]) == 2
-    assert "--elements 0: expected 1..100" in capsys.readouterr().err
+    assert "argument --elements: 0 is out of range (expected range 1..100" in capsys.readouterr().err

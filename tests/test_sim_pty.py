@@ -45,7 +45,7 @@ def test_v1_lockstep_round_trip_and_summary():
             dec = v1.Decoder()
             port.write(v1.encode(v1.Hello()))
             (info,) = read_until(port, dec, 1, v1.Info)
-            assert info.name == "SFLR-SIM"
+            assert info.name == "SIMRIG"
             port.write(v1.encode(v1.Start(3, 0)))
             for k in range(20):
                 (s,) = read_until(port, dec, 1)
@@ -99,8 +99,9 @@ def test_command_without_pty_is_a_one_line_station_error():
 
 
 @pytest.mark.parametrize("option", [["--elements", "0"], ["--seed", "-1"]])
-def test_sim_device_bad_option_is_a_station_error(option):
-    parser = argparse.ArgumentParser()
-    sim_device.configure(parser)
-    with pytest.raises(StationError, match="sim-device: "):
-        sim_device.run(parser.parse_args(["--pty", *option]))
+def test_sim_device_bad_option_is_refused_in_one_line(option, capsys):
+    from station.cli import main
+
+    assert main(["sim-device", "--pty", *option]) == 2  # refused while parsing: no pty opened
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and f"argument {option[0]}" in err[0]

@@ -9,6 +9,8 @@ from pathlib import Path
 
 import numpy as np
 
+from station.commands.options import check_writable, number
+
 NAME = "bode"
 HELP = "H1 frequency response (θ/v, a/v) of a swept-sine log against the FEM model; antiresonances"
 
@@ -19,12 +21,13 @@ def configure(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--model", default=None, metavar="NAME|FILE",
                         help="the model: a built-in model's name or a model file (default tmm-fit); its linear part "
                              "(param:NAME, beam_damping) gives the response")
-    parser.add_argument("--elements", type=int, default=None, metavar="N",
+    parser.add_argument("--elements", type=number(1, 100, integer=True), default=None, metavar="N",
                         help="beam elements of the model (default: the model's, 4)")
     parser.add_argument("--params", default=None, metavar="SET",
                         help="parameter set name or TOML file (default: the model's, tmm-fit)")
-    parser.add_argument("--nperseg", type=int, default=4096, metavar="N",
-                        help="Welch segment length, samples (default 4096: 0.12 Hz at 500 Hz)")
+    parser.add_argument("--nperseg", type=number(1024, 2**20, integer=True), default=4096, metavar="N",
+                        help="Welch segment length, samples (default 4096: 0.12 Hz at 500 Hz; at least 1024, "
+                             "0.5 Hz, to resolve the first antiresonance near 2.5 Hz)")
     parser.add_argument("--png", type=Path, default=None, metavar="OUT",
                         help="figure file (default FILE's stem + _bode.png in the current folder)")
     parser.add_argument("--json", type=Path, default=None, metavar="OUT", help="write the antiresonances as JSON")
@@ -93,6 +96,9 @@ def run(args: argparse.Namespace) -> int:
     from station.plant.model import as_model
     from station.runlog import read_log
 
+    png = args.png if args.png is not None else Path(f"{args.file.stem}_bode.png")
+    check_writable(png, "--png")
+    check_writable(args.json, "--json")
     log = read_log(args.file)
     t = log.data["t"]
     dt = float(np.median(np.diff(t))) if t.size > 1 else 0.002
@@ -109,7 +115,6 @@ def run(args: argparse.Namespace) -> int:
     for i, (m, z, e) in enumerate(zip(cmp.antiresonances_measured_hz, cmp.antiresonances_model_hz,
                                       cmp.antiresonance_error_pct), 1):
         print(f"{i:>13} {m:12.3f} {z:9.3f} {e:+8.1f}")
-    png = args.png if args.png is not None else Path(f"{args.file.stem}_bode.png")
     try:
         plot(cmp, png, f"{args.file.name}: measured vs FEM model (n = {args.elements})")
         if args.json is not None:

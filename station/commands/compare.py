@@ -7,6 +7,8 @@ import argparse
 import json
 from pathlib import Path
 
+from station.commands.options import check_writable, check_writable_dir, number
+
 NAME = "compare"
 HELP = "simulate logged runs on the FEM model as the rig ran them; step metrics and fits vs the thesis"
 
@@ -16,7 +18,7 @@ def configure(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("files", type=Path, nargs="+", metavar="FILE", help="run logs (station or rig format)")
     parser.add_argument("--model", default=None, metavar="NAME|FILE",
                         help="the model: a built-in model's name (station/plant/models) or a model file (default tmm-fit)")
-    parser.add_argument("--elements", type=int, default=None, metavar="N",
+    parser.add_argument("--elements", type=number(1, 100, integer=True), default=None, metavar="N",
                         help="beam elements of the model (default: the model's, 4)")
     parser.add_argument("--params", default=None, metavar="SET",
                         help="parameter set name or TOML file (default: the model's, tmm-fit)")
@@ -43,6 +45,8 @@ def run(args: argparse.Namespace) -> int:
     from station.errors import StationError
     from station.plant.model import as_model
 
+    check_writable(args.json, "--json")
+    check_writable_dir(args.out_dir, "--out-dir")
     model = as_model(args.model, args.elements, args.params)
     effects = ", ".join(f"{k} = {v:g}" for k, v in model.effects) or "no effects"
     print(f"model: {model.name} ({model.params.name}, {model.n_elements} elements, {effects})")

@@ -79,6 +79,11 @@ def run(args: argparse.Namespace) -> int:
     from station.analysis.diagnosis import diagnose
     from station.errors import StationError
 
+    from station.commands.options import check_writable, check_writable_dir
+
+    for option, path in (("--json", args.json), ("--save-model", args.save_model)):
+        check_writable(path, option)
+    check_writable_dir(args.report, "--report")
     progress = None if args.quiet else (lambda msg: print(f"diagnose: {msg}", file=sys.stderr, flush=True))
     diag = diagnose(args.runs, validate=args.validate, model=args.model, progress=progress)
     print(format_diagnosis(diag))

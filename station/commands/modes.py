@@ -6,7 +6,11 @@ import argparse
 import json
 from pathlib import Path
 
+from station.commands.options import check_writable, number
 from station.errors import StationError
+
+MAX_COUNT = 10
+"""Most modes ``--count`` shows (beyond them the table is unreadable and the FEM far off the beam's)."""
 
 NAME = "modes"
 HELP = ("natural frequencies, damping and θ/v antiresonances of the FEM model for several element "
@@ -19,14 +23,15 @@ RIG = {"hub_held_beam_modes_hz": [2.52, 18.0], "hub_held_first_mode_damping": 0.
 
 def configure(parser: argparse.ArgumentParser) -> None:
     """Add ``station modes``'s options to ``parser``."""
-    parser.add_argument("--elements", type=int, nargs="+", default=[1, 2, 4, 10, 20, 50, 100], metavar="N",
+    parser.add_argument("--elements", type=number(1, 100, integer=True), nargs="+", default=[1, 2, 4, 10, 20, 50, 100], metavar="N",
                         help="element counts (default 1 2 4 10 20 50 100)")
     parser.add_argument("--params", default=None, metavar="SET",
                         help="parameter set name or TOML file (default: the model's, tmm-fit)")
     parser.add_argument("--model", default=None, metavar="NAME|FILE",
                         help="a built-in model's name or a model file (default tmm-fit); its linear part "
                              "(param:NAME, beam_damping) is analysed")
-    parser.add_argument("--count", type=int, default=3, metavar="K", help="modes to show (default 3)")
+    parser.add_argument("--count", type=number(1, MAX_COUNT, integer=True), default=3, metavar="K",
+                        help="modes to show (default 3; the 1-element model has only a few)")
     parser.add_argument("--json", type=Path, default=None, metavar="OUT", help="write the numbers as JSON")
 
 
@@ -41,6 +46,7 @@ def run(args: argparse.Namespace) -> int:
     from station.plant import modal_summary
     from station.plant.model import as_model
 
+    check_writable(args.json, "--json")
     model = as_model(args.model, None, args.params)
     label = model.params.name if not model.effects else f"{model.name} ({model.params.name}, " + \
         ", ".join(f"{k} = {v:g}" for k, v in model.effects) + ")"

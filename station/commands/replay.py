@@ -7,6 +7,8 @@ import argparse
 import json
 from pathlib import Path
 
+from station.commands.options import check_writable, number
+
 NAME = "replay"
 HELP = ("replay a run log (ours or the rig's): reproduce the logged commands, detect the "
         "alignment, step metrics and the FEM model's fit")
@@ -20,7 +22,7 @@ def configure(parser: argparse.ArgumentParser) -> None:
                         help="skip the FEM model prediction")
     parser.add_argument("--model", dest="model_spec", default=None, metavar="NAME|FILE",
                         help="the model: a built-in model's name (station/plant/models) or a model file (default tmm-fit)")
-    parser.add_argument("--elements", type=int, default=None, metavar="N",
+    parser.add_argument("--elements", type=number(1, 100, integer=True), default=None, metavar="N",
                         help="beam elements of the FEM model (default: the model's, 4)")
     viz = parser.add_mutually_exclusive_group()
     viz.add_argument("--rrd", type=Path, default=None, metavar="FILE",
@@ -60,8 +62,8 @@ def run(args: argparse.Namespace) -> int:
     from station.errors import StationError
     from station.replay import format_report, replay
 
-    if args.elements is not None and args.elements < 1:
-        raise StationError(f"--elements {args.elements}: expected a positive number of beam elements")
+    check_writable(args.json, "--json")
+    check_writable(args.rrd, "--rrd")
     model = (args.model_spec or True) if args.model else False
     report = replay(args.file, model=model, n_elements=args.elements)
     print(format_report(report))

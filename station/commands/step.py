@@ -4,12 +4,20 @@ from __future__ import annotations
 
 import json
 import math
+import sys
 from pathlib import Path
 
 from station import DT
 from station import experiment as ex
 from station.errors import StationError
+from station.commands.options import check_writable, check_writable_dir, number, warn
 from station.link import LinkLimits
+from station.protocol import legacy
+
+MAX_DURATION_S = (2**32 - 1) * DT
+"""Longest run v1 can count (START's n_ticks is a u32), s."""
+MAX_AMPLITUDE = 32767.0
+"""Largest step height, counts (the legacy protocol's θ word is int16; the soft limit bounds it further)."""
 
 NAME = "step"
 HELP = ("run a step test (default: lead compensator, 100 counts, on the built-in simulated rig); "
@@ -20,41 +28,51 @@ def configure(parser) -> None:
     """Add ``station step``'s options to ``parser``."""
     parser.add_argument("--controller", default=ex.DEFAULT_CONTROLLER,
                         help="p, lead, lead-accel, open-loop or a compensator FILE.toml (default lead)")
-    parser.add_argument("--kp", type=float, default=2.0, help="P gain for --controller p (default 2)")
-    parser.add_argument("--limit", type=float, default=200.0, help="controller clamp, ±DAC counts (default 200)")
-    parser.add_argument("--amplitude", type=float, default=ex.DEFAULT_AMPLITUDE, metavar="COUNTS",
-                        help="step height in encoder counts (default 100)")
-    parser.add_argument("--duration", type=float, default=None, metavar="S",
-                        help="run length (default 2 s; swept sine 22 s; a file reference: its length)")
+    parser.add_argument("--kp", type=number(1e-3, 100.0), default=None,
+                        help="P gain for --controller p only, DAC counts per encoder count (default 2)")
+    parser.add_argument("--limit", type=number(1, 255, unit="DAC counts"), default=None,
+                        help="controller clamp, ±DAC counts (default 200; a compensator file's own limit wins)")
+    parser.add_argument("--amplitude", type=number(-MAX_AMPLITUDE, MAX_AMPLITUDE, nonzero=True), default=None,
+                        metavar="COUNTS", help="step height in encoder counts (open loop: DAC counts, at most "
+                        "255); not with a file reference (default 100)")
+    parser.add_argument("--duration", type=number(2 * DT, MAX_DURATION_S, unit="s"), default=None, metavar="S",
+                        help="run length (default 2 s; swept sine 22 s; a file reference: its length); at most "
+                             "what v1 can count (2^32-1 ticks), legacy 32767 ticks (65.5 s)")
     parser.add_argument("--reference", default="step", metavar="KIND",
                         help="step (default), pulse (open loop, 0.1 s), swept-sine, or FILE[:COLUMN] "
                              "of a run log (e.g. a rig log's u)")
-    parser.add_argument("--step-time", type=float, default=ex.DEFAULT_STEP_TICK * DT, metavar="S",
-                        help="when the step starts (default 0.02 s = tick 10)")
+    parser.add_argument("--step-time", type=number(0.0, MAX_DURATION_S, unit="s"), default=ex.DEFAULT_STEP_TICK * DT,
+                        metavar="S", help="when the step starts, before the run's end (default 0.02 s = tick 10)")
     parser.add_argument("--port", default=ex.DEFAULT_PORT, metavar="URL",
                         help="port path or pyserial URL (default sim://, the simulated rig)")
     parser.add_argument("--protocol", choices=("v1", "legacy"), default="v1", help="wire protocol (default v1)")
     parser.add_argument("--model", default=None, metavar="NAME|FILE",
                         help="simulated rig only: its model, a built-in name or a model file (sim://?model=...)")
-    parser.add_argument("--elements", type=int, default=None, metavar="N",
+    parser.add_argument("--elements", type=number(1, 100, integer=True), default=None, metavar="N",
                         help="simulated rig only: FEM element count (sim://?elements=N)")
-    parser.add_argument("--seed", type=int, default=None, metavar="N",
+    parser.add_argument("--seed", type=number(0, 2**32 - 1, integer=True), default=None, metavar="N",
                         help="simulated rig only: sensor noise seed (sim://?seed=N)")
-    parser.add_argument("--baud", type=int, default=None, help="baud rate (default 921600 for v1, 115200 legacy)")
-    parser.add_argument("--timeout", type=float, default=ex.DEFAULT_TIMEOUT, metavar="S",
+    parser.add_argument("--baud", type=number(300, 12_000_000, integer=True), default=None, help="baud rate (default 921600 for v1, 115200 legacy)")
+    parser.add_argument("--timeout", type=number(1e-3, 60.0, unit="s"), default=ex.DEFAULT_TIMEOUT, metavar="S",
                         help="longest wait for a sample before stopping safely (default 0.1 s)")
-    parser.add_argument("--soft-limit", type=float, default=ex.DEFAULT_SOFT_LIMIT, metavar="COUNTS",
+    parser.add_argument("--soft-limit", type=number(1, 32767, unit="encoder counts"), default=ex.DEFAULT_SOFT_LIMIT,
+                        metavar="COUNTS",
                         help="stop safely when |θ| exceeds this (default 2048 = two revolutions)")
-    parser.add_argument("--max-lag", type=int, default=LinkLimits.max_lag, metavar="TICKS",
+    parser.add_argument("--max-lag", type=number(0, 100, integer=True), default=LinkLimits.max_lag, metavar="TICKS",
                         help="stop (reason lag) when more samples than this are already waiting when a command "
-                             "is due: never drive the motor from stale samples (default 2, range 0..100)")
-    parser.add_argument("--max-miss", type=int, default=LinkLimits.max_miss, metavar="TICKS",
+                             "is due: never drive the motor from stale samples (default 2)")
+    parser.add_argument("--max-miss", type=number(0, 99, integer=True), default=LinkLimits.max_miss, metavar="TICKS",
                         help="stop (reason sequence) when more of the last 100 ticks than this were dropped, "
-                             "stale, duplicated or late (default 10, range 0..99)")
-    parser.add_argument("--max-step", type=float, default=LinkLimits.max_step, metavar="COUNTS",
+                             "stale, duplicated or late (default 10)")
+    parser.add_argument("--max-step", type=number(1.0, 10000.0), default=LinkLimits.max_step, metavar="COUNTS",
                         help="largest plausible encoder change per tick; more stops the run (reason sequence; "
-                             "default 40, range 1..10000)")
-    parser.add_argument("--out", type=Path, default=None, metavar="FILE", help="run log (default runs/step-*.tsv)")
+                             "default 40)")
+    parser.add_argument("--out", type=Path, default=None, metavar="FILE",
+                        help="run log (default runs/step-<controller>-<UTC time with ms>.tsv); never overwritten "
+                             "without --force. The run's figure goes beside it as <log stem>.png")
+    parser.add_argument("--force", action="store_true", help="overwrite an existing --out file")
+    parser.add_argument("--quiet", action="store_true",
+                        help="no live progress line on stderr (it is shown only when stderr is a terminal)")
     parser.add_argument("--json", type=Path, default=None, metavar="FILE", help="write metrics and timing as JSON")
     viz = parser.add_mutually_exclusive_group()
     viz.add_argument("--rrd", type=Path, default=None, metavar="FILE", help="record the run to a rerun .rrd file")
@@ -80,9 +98,63 @@ def sim_port(port: str, model=None, elements=None, seed=None) -> str:
     return port + ("&" if "?" in port else "?") + query
 
 
+def check_args(args) -> None:
+    """Refuse options that do not apply or do not fit together, before anything starts.
+
+    Ranges of single options are argparse's (:mod:`station.commands.options`); this
+    checks what depends on the controller and the reference, and the output paths.
+
+    Raises
+    ------
+    StationError
+        One line naming the option.
+    """
+    controller = str(args.controller)
+    builtin_ref = args.reference in ex.REFERENCES
+    if args.kp is not None and controller != "p":
+        raise StationError(f"--kp: the P gain applies to --controller p only, not {controller}")
+    if args.amplitude is not None and not builtin_ref:
+        raise StationError(f"--amplitude: not with a file reference ({args.reference}): the file's column is "
+                           f"the reference")
+    amplitude = ex.DEFAULT_AMPLITUDE if args.amplitude is None else args.amplitude
+    if controller == "open-loop" and builtin_ref and abs(amplitude) > 255:
+        raise StationError(f"--amplitude {amplitude:g}: open loop the reference is the command, at most 255 DAC counts")
+    if controller != "open-loop" and builtin_ref and abs(amplitude) >= args.soft_limit:
+        raise StationError(f"--amplitude {amplitude:g}: the step would pass --soft-limit {args.soft_limit:g} "
+                           f"encoder counts and stop the run")
+    if builtin_ref and args.reference != "swept-sine":
+        duration = ex.DEFAULT_DURATION if args.duration is None else args.duration
+        if args.step_time >= duration:
+            raise StationError(f"--step-time {args.step_time:g} s: the step must start before the run ends "
+                               f"({duration:g} s)")
+    if args.protocol == "legacy" and args.duration is not None and round(args.duration / DT) > legacy.MAX_TICKS:
+        raise StationError(f"--duration {args.duration:g} s: the legacy protocol counts at most "
+                           f"{legacy.MAX_TICKS} ticks ({legacy.MAX_TICKS * DT:g} s)")
+    if args.limit is not None and controller.endswith(".toml"):
+        file_limit = _file_limit(controller)
+        if file_limit is not None:
+            warn(f"--limit {args.limit:g} is not used: {controller} sets limit = {file_limit} (the file wins)")
+    check_writable(args.out, "--out", overwrite=args.force)
+    if args.out is None:
+        check_writable_dir(ex.default_log_path("x").parent, "the run log's folder")
+    check_writable(args.json, "--json")
+    check_writable(args.rrd, "--rrd")
+
+
+def _file_limit(path: str):
+    """The ``limit`` a compensator file sets, or None (unreadable files are the loader's to report)."""
+    import tomllib
+
+    try:
+        return tomllib.loads(Path(path).read_text(encoding="utf-8")).get("limit")
+    except (OSError, ValueError):
+        return None
+
+
 def run(args) -> int:
     """Run the test; exit code 0 when it completed, 1 when it was stopped by a fault."""
     limits = _limits(args)
+    check_args(args)
     args.port = sim_port(args.port, args.model, args.elements, args.seed)
     sinks = []
     if args.rrd is not None or args.spawn:
@@ -95,11 +167,14 @@ def run(args) -> int:
                              step_tick=int(round(args.step_time / DT)), reference=args.reference,
                              out=args.out, sinks=sinks,
                              kp=args.kp, limit=args.limit, soft_limit=args.soft_limit,
-                             timeout=args.timeout, baudrate=args.baud, limits=limits)
+                             timeout=args.timeout, baudrate=args.baud, limits=limits, force=args.force,
+                             progress=not args.quiet and sys.stderr.isatty())
     finally:
         for sink in sinks:
             sink.close()
     print(ex.format_report(report))
+    if report.figure_path is not None:
+        print(f"figure: {report.figure_path}")
     if args.rrd is not None:
         print(f"rerun recording: {args.rrd}")
     if args.json is not None:

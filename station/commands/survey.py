@@ -6,6 +6,8 @@ import argparse
 import sys
 from pathlib import Path
 
+from station.commands.options import check_writable, check_writable_dir, number
+
 NAME = "survey"
 HELP = ("replay every log of a folder (or the files given) on all cores and print one table: format, "
         "rows, sample time, controller (named / inferred / none), alignment, max |dv|, step metrics, "
@@ -21,8 +23,8 @@ def configure(parser: argparse.ArgumentParser) -> None:
                         help="write each file's replay JSON and the table into DIR")
     parser.add_argument("--no-model", dest="model", action="store_false",
                         help="skip the FEM model fits (beam tests are still analyzed)")
-    parser.add_argument("--jobs", type=int, default=None, metavar="N",
-                        help="worker processes (default: the machine's cores; 1..64)")
+    parser.add_argument("--jobs", type=number(1, 64, integer=True), default=None, metavar="N",
+                        help="worker processes (default: the machine's cores)")
 
 
 def run(args: argparse.Namespace) -> int:
@@ -46,6 +48,8 @@ def run(args: argparse.Namespace) -> int:
         raise StationError(f"--jobs {args.jobs}: expected 1..64 worker processes")
     if args.csv is not None and not (args.csv.parent.is_dir()):
         raise StationError(f"--csv {args.csv}: folder {args.csv.parent} does not exist")
+    check_writable(args.csv, "--csv")
+    check_writable_dir(args.report, "--report")
     tty = sys.stderr.isatty()
 
     def progress(done: int, total: int, row) -> None:

@@ -23,6 +23,7 @@ from __future__ import annotations
 
 import math
 import tomllib
+import warnings
 from pathlib import Path
 from typing import Any
 
@@ -204,6 +205,10 @@ def load_compensator_file(path: str | Path, dt: float = 0.002, limit: float | No
         text = path.read_text(encoding="utf-8")
     except OSError as exc:
         raise StationError(f"{path}: cannot read compensator file: {exc.strerror or exc}") from None
+    except UnicodeDecodeError as exc:
+        line = path.read_bytes()[:exc.start].count(b"\n") + 1
+        raise StationError(f"{path}: line {line}: not UTF-8 text ({exc.reason} at byte {exc.start}); "
+                           f"a compensator file is TOML, UTF-8") from None
     try:
         doc = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
@@ -227,9 +232,17 @@ def load_compensator_file(path: str | Path, dt: float = 0.002, limit: float | No
     if not isinstance(name, str) or not name:
         raise StationError(f"{path}: name: expected a non-empty string, got {name!r}")
     try:
-        return _build("file", name, gth, ga, limit, dt, {"file": str(path)})
+        comp = _build("file", name, gth, ga, limit, dt, {"file": str(path)})
     except ValueError as exc:
         raise StationError(f"{path}: {exc}") from None
+    for table, tf in (("gth", comp.gth), ("ga", comp.ga)):
+        poles = np.roots(tf.den) if tf is not None and tf.den.size > 1 else np.array([])
+        bad = poles[np.abs(poles) > 1.0 + 1e-9]
+        if bad.size:
+            warnings.warn(f"{path}: [{table}]: unstable pole at z = {bad[0]:.4g} (|z| = {abs(bad[0]):.4g} > 1 "
+                          f"after discretization at {dt:g} s): the compensator alone diverges",
+                          RuntimeWarning, stacklevel=2)
+    return comp
 
 
 def make_controller(kind: str, dt: float = 0.002, kp: float = 2.0,

@@ -118,13 +118,16 @@ def serve_pty(protocol: str = "v1", realtime: bool = False, seed: int = 0, n_ele
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """The server's options (shared by ``station sim-device`` and ``python -m station.sim.pty_server``)."""
+    from station.commands.options import number
+
     parser.add_argument("--protocol", choices=("v1", "legacy"), default="v1", help="device protocol (default v1)")
     parser.add_argument("--realtime", action="store_true",
                         help="tick on the device's own 500 Hz clock (default: lockstep with the station)")
-    parser.add_argument("--seed", type=int, default=0, help="sensor noise seed (default 0)")
+    parser.add_argument("--seed", type=number(0, 2**32 - 1, integer=True), default=0,
+                        help="sensor noise seed, the same for every run (default 0)")
     parser.add_argument("--model", default=None, metavar="NAME|FILE",
                         help="the simulated rig's model: a built-in model's name or a model file (default tmm-fit)")
-    parser.add_argument("--elements", type=int, default=None,
+    parser.add_argument("--elements", type=number(1, 100, integer=True), default=None,
                         help="FEM element count of the plant (default: the model's, 4)")
 
 
