@@ -93,7 +93,8 @@ def table(outcomes: list[Outcome], seeds: int, elapsed: float) -> str:
         "lead + accelerometer step 200, open-loop ±100 pulses) written by the independent generator "
         "`tests/blind` (its own FEM, stick-slip friction and backlash on a 100-sub-step grid, accelerometer "
         "noise 0.3 counts, the rig's truncation and rounding) with one effect hidden at a value drawn in "
-        "issue 8's range; `station diagnose` sees only the files (leave-one-run-out over the four).",
+        "issue 8's range; `station.analysis.diagnosis.diagnose` sees only the files (leave-one-run-out "
+        "over the four).",
         "",
         f"Bar (issue 8): the cause named in at least 9 of 10 seeds with its value within {TOLERANCE:.0%}; "
         "clean cases give \"none\" in at least 9 of 10; two-effect cases name both.",

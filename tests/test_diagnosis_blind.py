@@ -58,3 +58,21 @@ def test_two_hidden_effects_are_both_named(tmp_path):
     for name in TWO_EFFECTS:
         found = _value(result, name)
         assert value_error(effects[name], found) <= TOLERANCE, f"{name}: hidden {effects[name]:.4g}, found {found:.4g}"
+
+
+def test_validation_script_writes_the_table(tmp_path, monkeypatch):
+    import importlib.util
+    import sys
+    from pathlib import Path
+
+    script = Path(__file__).resolve().parents[1] / "scripts" / "validate_diagnosis.py"
+    spec = importlib.util.spec_from_file_location("validate_diagnosis", script)
+    module = importlib.util.module_from_spec(spec)
+    monkeypatch.setitem(sys.modules, spec.name, module)  # its dataclass looks itself up there
+    spec.loader.exec_module(module)
+    out = tmp_path / "table.md"
+    assert module.main(["--seeds", "1", "--effects", "clean", "--out", str(out)]) == 0
+    text = out.read_text()
+    assert "| effect | hidden range |" in text
+    assert 'Clean cases: "none" in 1 of 1' in text
+    assert "| clean | 0 | - | none |" in text
