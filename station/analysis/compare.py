@@ -25,6 +25,10 @@ THESIS_TABLE = {
     "lead-accel": ((21.50, 0.608), (20.74, 0.708)),
 }
 
+THESIS_STEPS = {"p": 50.0, "lead": 100.0, "lead-accel": 200.0}
+"""Step height of the thesis's run per controller, encoder counts (the rig's three step
+logs, ../shared/data/README.md); the thesis rows are shown for those logs only."""
+
 
 @dataclass
 class RunComparison:
@@ -38,9 +42,15 @@ class RunComparison:
     step : float or None
         Final reference (the step size), encoder counts; None when not a step.
     rig, model : StepMetrics or None
-        Metrics of the logged and the simulated θ (None when not a step).
+        Metrics of the logged θ (whatever the log's source) and of the simulated θ
+        (None when not a step).
     thesis_experiment, thesis_fem : StepMetrics or None
-        The thesis's table for this controller, when it has one.
+        The thesis's table, for the thesis's own logs only (a rig log of a thesis
+        controller with the thesis's step height).
+    source : str
+        Where the log comes from: "rig", "simulated" or "station" (:func:`station.plots.source_label`).
+    outcome : dict or None
+        The log's end record (None: a rig log, or a run killed before its end).
     fit_pct : dict
         NRMSE fit of the model's ``theta`` and ``accel`` to the log, percent.
     data, prediction : dict of ndarray
@@ -59,11 +69,15 @@ class RunComparison:
     data: dict = field(repr=False)
     prediction: dict = field(repr=False)
     notes: list = field(default_factory=list)
+    source: str = "rig"
+    outcome: dict | None = None
 
     def to_json(self) -> dict:
-        """JSON-able summary (metrics as {overshoot_pct, settling_time_s} or null)."""
+        """JSON-able summary (metrics as {overshoot_pct, settling_time_s} or null). ``rig``
+        holds the log's own metrics whatever its ``source`` (rig / simulated / station)."""
         j = lambda m: None if m is None else m.to_json()  # noqa: E731
-        return {"file": self.file, "controller": self.controller, "step": self.step, "rig": j(self.rig),
+        return {"file": self.file, "source": self.source, "outcome": self.outcome,
+                "controller": self.controller, "step": self.step, "rig": j(self.rig),
                 "model": j(self.model), "thesis_experiment": j(self.thesis_experiment),
                 "thesis_fem": j(self.thesis_fem), "fit_pct": dict(self.fit_pct), "notes": list(self.notes)}
 
@@ -93,8 +107,16 @@ def compare_run(path, plant) -> RunComparison:
     from station.replay import detect_alignment, log_controller
     from station.runlog import read_log
 
+    from station.plots import source_label
+
     log = read_log(path)
     data = log.data
+    for key in ("t", "theta"):
+        bad = np.flatnonzero(~np.isfinite(data[key]))
+        if bad.size:
+            raise StationError(f"{path}: row {int(bad[0]) + 1} of the data: {key} is not a finite number; "
+                               f"cannot compare a run with missing samples")
+    source = source_label(log)
     controller, notes = log_controller(log)
     if controller is None:
         raise StationError(f"{path}: the log does not name its controller; cannot simulate it")
@@ -115,10 +137,12 @@ def compare_run(path, plant) -> RunComparison:
     if step is not None:
         rig = step_metrics(data["t"], data["theta"], step)
         model = step_metrics(pred["t"], pred["theta"], step)
-        if controller.name in THESIS_TABLE:
+        thesis_kp = controller.name != "p" or getattr(controller, "spec", {}).get("kp") == 2.0
+        if source == "rig" and THESIS_STEPS.get(controller.name) == step and thesis_kp:
             (eo, es), (fo, fs) = THESIS_TABLE[controller.name]
             exp, fem = StepMetrics(eo, es), StepMetrics(fo, fs)
-    return RunComparison(str(path), controller.name, step, rig, model, exp, fem, fits, data, pred, notes)
+    return RunComparison(str(path), controller.name, step, rig, model, exp, fem, fits, data, pred, notes,
+                         source=source, outcome=log.outcome)
 
 
 def format_comparison(c: RunComparison) -> str:
@@ -137,19 +161,23 @@ def format_comparison(c: RunComparison) -> str:
     def fmt(m: StepMetrics | None) -> str:
         if m is None:
             return f"{'-':>12} {'-':>12}"
-        s = "not settled" if m.settling_time_s is None else f"{m.settling_time_s:.3f}"
+        s = "not settled" if m.settling_time_s is None else f"{m.settling_time_s:.3f}"  # within the run
         return f"{m.overshoot_pct:12.2f} {s:>12}"
 
     def pct(x):
         return "-" if x is None else f"{x:.1f}"
 
-    lines = [f"{Path(c.file).name}: controller {c.controller}"
-             + ("" if c.step is None else f", step {c.step:g} counts"),
-             f"  {'':<18} {'overshoot %':>12} {'settling s':>12} {'fit θ %':>8} {'fit a %':>8}",
-             f"  {'rig (this log)':<18} {fmt(c.rig)}",
-             f"  {'thesis experiment':<18} {fmt(c.thesis_experiment)}",
-             f"  {'thesis FEM':<18} {fmt(c.thesis_fem)}",
-             f"  {'model':<18} {fmt(c.model)} {pct(c.fit_pct['theta']):>8} {pct(c.fit_pct['accel']):>8}"]
+    outcome = "" if c.outcome is None else f", outcome {c.outcome.get('reason')}"
+    lines = [f"{Path(c.file).name} ({c.source} log): controller {c.controller}"
+             + ("" if c.step is None else f", step {c.step:g} counts") + outcome,
+             f"  {'':<20} {'overshoot %':>12} {'settling s':>12} {'fit θ %':>8} {'fit a %':>8}",
+             f"  {c.source + ' (this log)':<20} {fmt(c.rig)}"]
+    if c.thesis_experiment is not None:
+        lines += [f"  {'thesis experiment':<20} {fmt(c.thesis_experiment)}",
+                  f"  {'thesis FEM':<20} {fmt(c.thesis_fem)}"]
+    lines += [f"  {'model':<20} {fmt(c.model)} {pct(c.fit_pct['theta']):>8} {pct(c.fit_pct['accel']):>8}"]
+    if c.rig is not None and (c.rig.settling_time_s is None or (c.model and c.model.settling_time_s is None)):
+        lines.append("  not settled = still outside the 1 % band at the run's end (not settled within the run)")
     lines += [f"  note: {n}" for n in c.notes]
     return "\n".join(lines)
 
@@ -163,22 +191,25 @@ def plot_comparison(c: RunComparison, path: Path) -> None:
     path : Path
         PNG file.
     """
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    from station.plots import new_figure, save_figure
 
     t = c.data["t"]
-    fig, ax = plt.subplots(3, 1, figsize=(8, 8), sharex=True)
-    ax[0].plot(t, c.data["u"], "k:", lw=0.8, label="u")
-    for row, key, label in ((0, "theta", "θ (counts)"), (1, "a", "a (counts)"), (2, "v", "v (DAC counts)")):
-        ax[row].plot(t, c.data[key], lw=0.9, label="rig")
+    fig = new_figure(8, 8)
+    ax = fig.subplots(3, 1, sharex=True)
+    if c.step is None:  # open loop: u is a command in DAC counts, not an angle: its own axis
+        ax_u = ax[0].twinx()
+        ax_u.plot(t, c.data["u"], "k:", lw=0.8, label="u")
+        ax_u.set_ylabel("u (DAC counts)")
+        ax_u.legend(loc="lower right", fontsize=8)
+    else:
+        ax[0].plot(t, c.data["u"], "k:", lw=0.8, label="u")
+    for row, key, label in ((0, "theta", "θ (encoder counts)"), (1, "a", "a (counts)"), (2, "v", "v (DAC counts)")):
+        ax[row].plot(t, c.data[key], lw=0.9, label=c.source)
         ax[row].plot(c.prediction["t"], c.prediction[key], lw=0.9, label="model")
         ax[row].set_ylabel(label)
         ax[row].legend(loc="best", fontsize=8)
     ax[2].set_xlabel("t (s)")
     fits = ", ".join(f"{k} {v:.1f} %" for k, v in c.fit_pct.items() if v is not None)
-    fig.suptitle(f"{Path(c.file).name}\n{c.controller}: NRMSE fit {fits}", fontsize=9)
+    fig.suptitle(f"{Path(c.file).name} ({c.source})\n{c.controller}: NRMSE fit {fits}", fontsize=9)
     fig.tight_layout()
-    fig.savefig(path, dpi=100)
-    plt.close(fig)
+    save_figure(fig, path)
