@@ -38,6 +38,13 @@ def started(flags=0, n_ticks=0, **kw):
     return dev
 
 
+def zeroing(dev):
+    """START bit1's 16 ticks: no SAMPLE (spec), the device ready to run them at once."""
+    for _ in range(16):
+        assert dev.ready and dev.running
+        assert dev.tick() == b"" and dev.tick_index == 0
+
+
 def command(dev, seq, v):
     dev.receive(v1.encode(v1.Command(seq, v)))
 
@@ -46,7 +53,7 @@ def test_hello_is_answered_by_info_at_any_time():
     dev = make()
     dev.receive(v1.encode(v1.Hello()))
     info = frames(dev.take_output())
-    assert info == [v1.Info(1, 0, 1, 0, 500, 255, 1024, 10, "SFLR-SIM")]
+    assert info == [v1.Info(1, 0, 1, 0, 500, 255, 1024, 10, "SIMRIG")]
     dev.receive(v1.encode(v1.Start(0, 0)))
     sample(dev)
     dev.receive(v1.encode(v1.Hello()))
@@ -169,6 +176,7 @@ def test_start_zeroes_accelerometer_offset_and_encoder():
     raw = started(0)
     assert sample(raw).accel == OFFSET
     dev = started(v1.START_ZERO_ACCEL | v1.START_RESET_ENCODER)
+    zeroing(dev)
     assert sample(dev).accel == 0
     # the encoder: move, then restart with bit0
     command(dev, 0, 50)
@@ -182,6 +190,7 @@ def test_start_zeroes_accelerometer_offset_and_encoder():
 def test_zeroing_averages_sixteen_noisy_readings():
     dev = SimDevice(plant=StepRecorderPlant(), sensors=RoundingSensors(1, 0.3), accel_offset=-2.0)
     dev.receive(v1.encode(v1.Start(v1.START_ZERO_ACCEL, 0)))
+    zeroing(dev)
     mean = sum(sample(dev).accel for _ in range(200)) / 200
     assert abs(mean) < 0.2
 
@@ -271,6 +280,7 @@ def test_legacy_unknown_bytes_are_counted():
 def test_fem_plant_constant_positive_v_moves_theta_up_and_the_tip_first_lags():
     dev = SimDevice(seed=0, accel_noise_std=0.0)
     dev.receive(v1.encode(v1.Start(v1.START_ZERO_ACCEL | v1.START_RESET_ENCODER, 0)))
+    zeroing(dev)
     theta, accel = [], []
     for k in range(101):  # 0.2 s of v = +50
         s = sample(dev)

@@ -40,7 +40,7 @@ def test_url_finds_the_handler_and_answers_hello(query, rate_hz):
         port.write(v1.encode(v1.Hello()))
         (info,) = v1.Decoder().feed(port.read(64))
         assert (info.name, info.rate_hz, info.v_limit, info.counts_per_rev, info.watchdog_ticks) == \
-            ("SFLR-SIM", rate_hz, 255, 1024, 10)
+            ("SIMRIG", rate_hz, 255, 1024, 10)
 
 
 @pytest.mark.parametrize("query, word", [

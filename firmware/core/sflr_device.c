@@ -124,14 +124,14 @@ static void on_start(sflr_dev_t *d, uint8_t flags, uint32_t n_ticks)
 
 static void on_command(sflr_dev_t *d, uint16_t seq, int16_t v)
 {
-    if (d->state != SFLR_RUNNING) {
-        return; /* no run, nothing it could answer */
+    if (d->state == SFLR_IDLE) {
+        return; /* no run: START clears every flag anyway */
     }
-    if (d->expect_valid && seq == d->expect_seq) {
+    if (d->state == SFLR_RUNNING && d->expect_valid && seq == d->expect_seq) {
         d->cmd_ready = true;
         d->cmd_v = v;
     } else {
-        d->stale_flag = true; /* late or bogus: ignored, reported as STALE */
+        d->stale_flag = true; /* late, bogus or before SAMPLE 0: ignored, reported as STALE */
     }
 }
 
@@ -185,11 +185,6 @@ void sflr_tick(sflr_dev_t *d)
         zeroing_tick(d);
         return;
     }
-    if (d->n_ticks != 0u && d->k == d->n_ticks) {
-        finish(d, SFLR_REASON_DONE); /* tick n_ticks-1 held its output a full period */
-        return;
-    }
-
     uint8_t status = 0u;
     int16_t v;
 
@@ -254,4 +249,7 @@ void sflr_tick(sflr_dev_t *d)
     d->expect_valid = true;
     d->cmd_ready = false;
     d->k++;
+    if (d->n_ticks != 0u && d->k == d->n_ticks) {
+        finish(d, SFLR_REASON_DONE); /* right after SAMPLE n_ticks-1, in the same tick */
+    }
 }

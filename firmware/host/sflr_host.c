@@ -7,8 +7,9 @@
  *
  * First stdout line: the pty slave path. --trace FILE writes one line per timer
  * tick: "t tick output enable status" (t = CLOCK_MONOTONIC seconds, tick = the
- * device tick whose SAMPLE went out or -1, output = DAC counts applied after the
- * tick, enable = amplifier enable, status = that SAMPLE's status or -1).
+ * device tick whose SAMPLE went out or -1, output = DAC counts that tick applied (when
+ * its SAMPLE went out; else after the tick), enable = amplifier enable at the same moment,
+ * status = that SAMPLE's status or -1).
  * SIGTERM/SIGINT: output 0, amplifier off, trace flushed, exit 0.
  *
  * Threads mirror the target: the tick thread is the timer interrupt (absolute
@@ -69,6 +70,8 @@ static int master_fd = -1;
 static unsigned long tx_dropped;
 static bool sample_sent;
 static sflr_msg_t last_sample;
+static int16_t sample_dac; /* output and enable when the SAMPLE went out (n_ticks may end */
+static bool sample_amp;    /* the run, output 0, later in the same tick) */
 
 int32_t hal_encoder_read(void) { return (int32_t)lround((angle - encoder_zero) * H); }
 void hal_encoder_reset(void) { encoder_zero = angle; }
@@ -85,6 +88,8 @@ void hal_uart_write(const uint8_t *data, size_t n)
     if (n > 1 && sflr_frame_decode(data, n - 1, &m) == SFLR_OK && m.type == SFLR_SAMPLE) {
         sample_sent = true; /* for the trace */
         last_sample = m;
+        sample_dac = dac;
+        sample_amp = amp;
     }
     /* Non-blocking, like a UART FIFO: with nobody reading, frames are dropped. */
     ssize_t w = write(master_fd, data, n);
@@ -133,7 +138,8 @@ static void *tick_thread(void *arg)
         sample_sent = false;
         sflr_tick(&dev);
         len = snprintf(line, sizeof line, "%lld.%06ld %ld %d %d %d\n", (long long)now.tv_sec,
-                       now.tv_nsec / 1000L, sample_sent ? (long)(dev.k - 1u) : -1L, (int)dac, amp ? 1 : 0,
+                       now.tv_nsec / 1000L, sample_sent ? (long)(dev.k - 1u) : -1L,
+                       (int)(sample_sent ? sample_dac : dac), (sample_sent ? sample_amp : amp) ? 1 : 0,
                        sample_sent ? (int)last_sample.u.sample.status : -1);
         pthread_mutex_unlock(&lock);
         if (trace != NULL && len > 0) {

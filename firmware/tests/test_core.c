@@ -384,21 +384,22 @@ static void test_n_ticks(void)
 {
     fresh(&sflr_default_config);
     send_start(0, 5);
-    for (uint16_t k = 0; k < 5; k++) {
+    for (uint16_t k = 0; k < 4; k++) {
         sflr_msg_t s = tick_sample();
         CHECK(s.u.sample.seq == k);
         send_command(k, (int16_t)(10 * (k + 1)));
     }
-    CHECK(fake_dac == 40 && fake_amp); /* tick 4's output holds until tick 5's slot */
-    sflr_msg_t m[2];
+    /* tick 4 = n_ticks - 1: SAMPLE 4, then STOPPED reason 1 at once, in the same tick */
+    sflr_msg_t m[3];
     sflr_tick(&dev);
-    CHECK(fake_take(m, 2) == 1);
+    CHECK(fake_take(m, 3) == 2);
+    CHECK(m[0].type == SFLR_SAMPLE && m[0].u.sample.seq == 4 && m[0].u.sample.v_applied == 40);
     sflr_msg_t want = { .type = SFLR_STOPPED,
                         .u.stopped = { .reason = 1, .ticks = 5, .late = 0, .watchdog_trips = 0, .rx_errors = 0 } };
-    CHECK(msg_eq(&m[0], &want));
+    CHECK(msg_eq(&m[1], &want));
     CHECK(fake_dac == 0 && !fake_amp);
     sflr_tick(&dev);
-    CHECK(fake_take(m, 2) == 0);
+    CHECK(fake_take(m, 3) == 0);
 }
 
 static void test_zero_accel(void)
@@ -489,7 +490,7 @@ static void test_during_zeroing(void)
     CHECK(fake_take(m, 4) == 0 && fake_dac == 0 && !fake_amp); /* no late tick 0, no reset */
     CHECK(fake_encoder_resets == 0u);
 
-    /* a COMMAND while averaging does not leak into tick 0 or tick 1 */
+    /* a COMMAND while averaging does not leak into tick 0 or tick 1; it answers nothing: STALE */
     send_start(SFLR_START_ZERO_ACCEL, 0);
     for (int i = 0; i < 16; i++) {
         send_command(0, 77);
@@ -497,7 +498,7 @@ static void test_during_zeroing(void)
     }
     CHECK(fake_take(m, 4) == 0);
     sflr_msg_t s = tick_sample();
-    CHECK(s.u.sample.seq == 0 && s.u.sample.v_applied == 0 && s.u.sample.status == 0);
+    CHECK(s.u.sample.seq == 0 && s.u.sample.v_applied == 0 && s.u.sample.status == SFLR_ST_STALE);
     s = tick_sample();
     CHECK(s.u.sample.seq == 1 && s.u.sample.v_applied == 0 && s.u.sample.status == SFLR_ST_LATE);
 }
@@ -523,11 +524,10 @@ static void test_restart_after_watchdog(void)
     s = tick_sample();
     CHECK(s.u.sample.v_applied == 30 && s.u.sample.status == 0);
     send_command(1, 31);
-    tick_sample();
-    sflr_msg_t m[2];
-    sflr_tick(&dev); /* n_ticks = 3 reached */
-    CHECK(fake_take(m, 2) == 1 && m[0].type == SFLR_STOPPED && m[0].u.stopped.reason == SFLR_REASON_DONE);
-    CHECK(m[0].u.stopped.ticks == 3u && m[0].u.stopped.late == 0u && m[0].u.stopped.watchdog_trips == 0u);
+    sflr_msg_t m[3];
+    sflr_tick(&dev); /* tick 2 = n_ticks - 1: SAMPLE 2 and STOPPED */
+    CHECK(fake_take(m, 3) == 2 && m[1].type == SFLR_STOPPED && m[1].u.stopped.reason == SFLR_REASON_DONE);
+    CHECK(m[1].u.stopped.ticks == 3u && m[1].u.stopped.late == 0u && m[1].u.stopped.watchdog_trips == 0u);
     CHECK(!fake_amp && fake_dac == 0);
 }
 

@@ -198,7 +198,8 @@ int main(int argc, char **argv)
             }
             const int v = out[k].u.sample.v_applied;
             const uint8_t st = out[k].u.sample.status;
-            if (v > cfg.v_limit || v < -cfg.v_limit || v != fake_dac ||
+            /* the DAC still holds v unless n_ticks ended the run in this tick (output 0 since) */
+            if (v > cfg.v_limit || v < -cfg.v_limit || (dev.state != SFLR_IDLE && v != fake_dac) ||
                 ((st & SFLR_ST_WATCHDOG) && (v != 0 || fake_amp))) {
                 bad_sample++;
             }

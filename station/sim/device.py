@@ -15,11 +15,15 @@ from dataclasses import dataclass
 
 from station.plant import Sensors
 from station.protocol import legacy, v1
-from station.sim.hardware import ACCEL_OFFSET, Hardware
+from station.rounding import round_half_away
+from station.sim.hardware import ACCEL_OFFSET, ZERO_ACCEL_READINGS, Hardware
 
 RATE_HZ = 500
 COUNTS_PER_REV = 1024
 FW_VERSION = (0, 1, 0)
+"""INFO fw_major/minor/patch of the simulated device (the firmware in ``firmware/`` says 1.0.0)."""
+NAME = "SIMRIG"
+"""INFO name of the simulated device (spec: it names itself "SIMRIG")."""
 
 
 @dataclass(slots=True)
@@ -83,47 +87,77 @@ class _V1Firmware(_Firmware):
         self.misses = 0  # consecutive ticks without their command
         self.tripped = False
         self.stale = False
-        self._rx_seen = 0  # decoder.rx_errors at the last sample
-        self._rx_at_start = 0
+        self.rx_error = False  # a bad frame since the last sample (RX_ERROR)
+        self.zeroing = 0  # START bit1: accelerometer readings still to average (no SAMPLE meanwhile)
+        self._accel_sum = 0
+        self._reset_encoder = False
 
     @property
     def ready(self) -> bool:
-        return self.running and (self.k == 0 or self.command is not None)
+        return self.running and (self.zeroing > 0 or self.k == 0 or self.command is not None)
 
     def receive(self, data: bytes) -> None:
-        for msg in self.decoder.feed(data):
-            if isinstance(msg, v1.Command):
-                if self.running and self.k > 0 and msg.seq == (self.k - 1) & 0xFFFF:
-                    self.command = msg.v
-                else:
-                    self.stale = True
-            elif isinstance(msg, v1.Hello):
-                self._out += v1.encode(v1.Info(v1.PROTOCOL_VERSION, *FW_VERSION, self.rate_hz, self.hw.v_limit,
-                                               COUNTS_PER_REV, self.watchdog_ticks, self.name))
-            elif isinstance(msg, v1.Start):
-                self._start(msg)
-            elif isinstance(msg, v1.Stop):
-                self._out += self._stop(v1.STOPPED_BY_STOP)
-            # SAMPLE, INFO, STOPPED are device→station: a station never sends them; ignored.
-        self.counters.rx_errors = self.decoder.rx_errors - self._rx_at_start
+        # frame by frame, as the firmware handles each frame when its 0x00 arrives: a bad
+        # frame before a START is the old run's, one after it the new run's
+        start = 0
+        while start < len(data):
+            end = data.find(0, start)
+            end = len(data) if end < 0 else end + 1
+            errors = self.decoder.rx_errors
+            msgs = self.decoder.feed(data[start:end])
+            start = end
+            if self.decoder.rx_errors != errors:
+                self.counters.rx_errors += self.decoder.rx_errors - errors
+                self.rx_error = True
+            for msg in msgs:
+                self._handle(msg)
+
+    def _handle(self, msg: v1.Message) -> None:
+        if isinstance(msg, v1.Command):
+            if self.running and self.k > 0 and msg.seq == (self.k - 1) & 0xFFFF:
+                self.command = msg.v
+            elif self.running:  # (no run: nothing to flag, START clears the flags)
+                self.stale = True  # late, bogus, during zeroing or before SAMPLE 0: ignored
+        elif isinstance(msg, v1.Hello):
+            self._out += v1.encode(v1.Info(v1.PROTOCOL_VERSION, *FW_VERSION, self.rate_hz, self.hw.v_limit,
+                                           COUNTS_PER_REV, self.watchdog_ticks, self.name))
+        elif isinstance(msg, v1.Start):
+            self._start(msg)
+        elif isinstance(msg, v1.Stop):
+            self._out += self._stop(v1.STOPPED_BY_STOP)
+        # SAMPLE, INFO, STOPPED are device→station: a station never sends them; ignored.
 
     def _start(self, msg: v1.Start) -> None:
+        """Every counter and flag of the run restarts; bit1: 16 ticks of zeroing first; bit0: encoder zeroed before tick 0."""
         self.output = 0
-        if msg.flags & v1.START_ZERO_ACCEL:
-            self.hw.zero_accel()
-        if msg.flags & v1.START_RESET_ENCODER:
-            self.hw.zero_encoder()
         self._begin_run()
         self.n_ticks = msg.n_ticks
         self.command = None
         self.misses = 0
         self.tripped = False
         self.stale = False
-        self._rx_at_start = self._rx_seen = self.decoder.rx_errors
+        self.rx_error = False
+        self.hw.accel_zero = 0  # the offset is the run's: a START without bit1 subtracts none
+        self._reset_encoder = bool(msg.flags & v1.START_RESET_ENCODER)
+        self._accel_sum = 0
+        self.zeroing = ZERO_ACCEL_READINGS if msg.flags & v1.START_ZERO_ACCEL else 0
+        if not self.zeroing and self._reset_encoder:
+            self.hw.zero_encoder()
+
+    def _zeroing_tick(self) -> bytes:
+        """One of START bit1's ticks: output 0, one accelerometer reading, no SAMPLE."""
+        self._accel_sum += _int16(self.hw.tick(0).a)
+        self.zeroing -= 1
+        if not self.zeroing:
+            self.hw.accel_zero = round_half_away(self._accel_sum / ZERO_ACCEL_READINGS)
+            if self._reset_encoder:
+                self.hw.zero_encoder()  # just before tick 0
+        return b""
 
     def _stop(self, reason: int) -> bytes:
         """End the run (output 0 at once); the STOPPED frame that reports it."""
         self.running = False
+        self.zeroing = 0
         self.output = 0
         c = self.counters
         return v1.encode(v1.Stopped(reason, c.ticks, min(c.late, 0xFFFF), min(c.watchdog_trips, 0xFFFF),
@@ -131,6 +165,8 @@ class _V1Firmware(_Firmware):
 
     def tick(self) -> bytes:
         """Tick k in the spec's order: (1) choose the output, (2) apply it, (3) latch, (4) send SAMPLE k."""
+        if self.zeroing:
+            return self._zeroing_tick()
         c = self.counters
         status = 0
         # (1) choose the output
@@ -159,9 +195,9 @@ class _V1Firmware(_Firmware):
         self.output = v
         reading = self.hw.tick(v)
         # (4) send SAMPLE k
-        if self.decoder.rx_errors != self._rx_seen:
+        if self.rx_error:
             status |= v1.RX_ERROR
-            self._rx_seen = self.decoder.rx_errors
+            self.rx_error = False
         if self.stale:
             status |= v1.STALE
             self.stale = False
@@ -252,7 +288,7 @@ class SimDevice:
         The DAC's range, ±counts: v1 clamps and sets SATURATED; legacy clamps.
     watchdog_ticks : int, default 10
         v1: consecutive missed commands after which the output is 0 and WATCHDOG set.
-    name : str, default "SFLR-SIM"
+    name : str, default :data:`NAME` ("SIMRIG")
         v1 INFO name (at most 8 ASCII characters).
 
     Raises
@@ -266,7 +302,11 @@ class SimDevice:
     else hold + LATE, and from the ``watchdog_ticks``-th consecutive miss 0 + WATCHDOG),
     clamps it (SATURATED), (2) applies it, (3) latches the sensors, which see the plant
     before this output acts, (4) sends SAMPLE k; reaching START's n_ticks appends
-    STOPPED reason 1. Legacy: 'q' answers θ0 and starts the run; tick k applies the last
+    STOPPED reason 1 to SAMPLE n_ticks−1. START bit1: the next 16 ticks average the
+    accelerometer (output 0, no SAMPLE; lockstep runs them at once), then bit0 zeroes
+    the encoder and tick 0 follows. STOP: output 0 and STOPPED at once. The same
+    stimulus gives the same bytes as the firmware core in ``firmware/core`` but for
+    INFO's version and name (``tests/test_device_golden.py``). Legacy: 'q' answers θ0 and starts the run; tick k applies the last
     v received and sends n = k, θ, a; 's' stops sending, the last v stays (no watchdog).
     Counters (:attr:`ticks`, :attr:`late`, :attr:`watchdog_trips`, :attr:`rx_errors`)
     are those of the current run and reset when a run starts. The plant only evolves
@@ -275,7 +315,7 @@ class SimDevice:
 
     def __init__(self, protocol: str = "v1", plant=None, seed: int = 0, *, n_elements: int | None = None,
                  model=None, accel_noise_std: float = 0.3, sensors=None, accel_offset: float = ACCEL_OFFSET,
-                 v_limit: int = 255, watchdog_ticks: int = 10, name: str = "SFLR-SIM") -> None:
+                 v_limit: int = 255, watchdog_ticks: int = 10, name: str = NAME) -> None:
         if protocol not in ("v1", "legacy"):
             raise ValueError(f"unknown protocol {protocol!r}: expected 'v1' or 'legacy'")
         if not 1 <= watchdog_ticks <= 255:

@@ -102,7 +102,7 @@ class DeviceDriver:
             if f.skip_tick is not None and k >= f.skip_tick:
                 (t,) = legacy.TickDecoder().feed(data)
                 data = legacy.tick_bytes(t._replace(n=(t.n + 1 + 32768) % 65536 - 32768))
-        elif f.garbage_every and (k + 1) % f.garbage_every == 0:
+        elif f.garbage_every and data and (k + 1) % f.garbage_every == 0:  # (a zeroing tick sends nothing)
             end = data.index(0) + 1  # the SAMPLE frame; a STOPPED may follow
             data = data[:end] + self._garbage(data[:end]) + data[end:]
         return data

@@ -10,13 +10,11 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from station.rounding import round_half_away
-
 ACCEL_OFFSET = -2.0
 """Accelerometer reading at rest, ADC counts (DESIGN.md: "offset ≈ −2 counts at rest")."""
 
 ZERO_ACCEL_READINGS = 16
-"""Readings averaged by START bit1 (spec: "averages 16 accelerometer readings")."""
+"""Readings averaged by START bit1, one per tick (spec: "averages 16 accelerometer readings")."""
 
 
 @dataclass(frozen=True, slots=True)
@@ -41,6 +39,12 @@ class Hardware:
         ``station.plant.Sensors``.
     accel_offset : float, default :data:`ACCEL_OFFSET`
         Added to the plant's acceleration before the ADC reads it, counts.
+
+    Attributes
+    ----------
+    encoder_zero, accel_zero : int
+        Subtracted from every reading (the firmware's zeroing: :meth:`zero_encoder`;
+        the v1 firmware sets ``accel_zero`` after START bit1's averaging ticks).
     v_limit : int, default 255
         The DAC's range, ±counts; :meth:`clamp` limits every output to it.
     """
@@ -78,14 +82,3 @@ class Hardware:
     def zero_encoder(self) -> None:
         """Make the current encoder position read 0 (v1 START bit0, legacy '7')."""
         self.encoder_zero += self.read().theta
-
-    def zero_accel(self) -> None:
-        """Average :data:`ZERO_ACCEL_READINGS` readings at the tick rate (output 0) and subtract that from later ones.
-
-        The average is rounded to whole counts (half away from zero), as integer
-        firmware would subtract it.
-        """
-        self.accel_zero = 0
-        total = sum(self.tick(0).a for _ in range(ZERO_ACCEL_READINGS))
-        mean = total / ZERO_ACCEL_READINGS
-        self.accel_zero = round_half_away(mean)
