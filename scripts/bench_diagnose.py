@@ -1,0 +1,84 @@
+#!/usr/bin/env python3
+"""Benchmark: diagnose four 2 s runs over every candidate with leave-one-run-out.
+
+After a warm-up diagnosis (numba JIT compilation, parameter-set loading), times
+:func:`station.analysis.diagnosis.diagnose` on four runs: by default the four thesis logs
+of the rig (``../shared/data/rig``: open-loop pulses, P step, lead step, lead +
+accelerometer step; the real case, with forward selection of several effects), or with
+``--blind EFFECT=VALUE`` the four logs of a hidden-effect case written by the independent
+generator of tests/blind. Prints the seconds, the model simulations (counted inside
+diagnose, ``Diagnosis.simulations``) and simulations per second.
+
+Target (issue 8): under 60 s on a 2-core machine.
+
+Usage: ``python scripts/bench_diagnose.py [--rig DIR] [--blind coulomb_friction=10]
+[--workers N] [--json FILE]``; the JSON is ``{"seconds", "simulations",
+"simulations_per_s", "cause", "causes", "gain_pct", "runs", "workers"}``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+REPO = Path(__file__).resolve().parents[1]
+RIG_LOGS = (
+    "OL_pulse_test_sys_check_SLFR_RTP_OL_Test_uend=0.txt",
+    "SFLR_P_control_step_kp_2_SLFR_RTP_P_control_kp=2.0.txt",
+    "step_response_Gth_comp_no_accel_FB_amp_100_duration_1000_SLFR_RTP_Motor_Comp_Gth.txt",
+    "step_response_Gth_comp_Ga_opt_amp_200_duration_1000_opt_case43_SLFR_RTP_Motor_Comp_Gth.txt",
+)
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--rig", type=Path, default=REPO.parent / "shared" / "data" / "rig",
+                        help="folder of the rig's logs (default ../shared/data/rig)")
+    parser.add_argument("--blind", default=None, metavar="EFFECT=VALUE",
+                        help="diagnose a generated hidden-effect case instead ('none' for a clean one)")
+    parser.add_argument("--workers", type=int, default=None, help="threads (default: cores, at most 2)")
+    parser.add_argument("--json", type=Path, default=None, help="write the numbers as JSON")
+    args = parser.parse_args(argv)
+
+    from station.analysis.diagnosis import diagnose
+
+    tmp = Path(tempfile.mkdtemp(prefix="bench_diagnose_"))
+    if args.blind is not None or not args.rig.is_dir():
+        sys.path.insert(0, str(REPO))
+        from tests.blind.generator import write_case
+
+        effects = {}
+        if args.blind and args.blind != "none":
+            name, value = args.blind.split("=", 1)
+            effects = {name: float(value)}
+        runs = [str(p) for p in write_case(tmp, effects, 0)]
+        what = f"generated case {effects or 'clean'}"
+    else:
+        runs = [str(args.rig / name) for name in RIG_LOGS]
+        what = f"the rig's four thesis logs ({args.rig})"
+
+    t = time.perf_counter()
+    diagnose(runs[:2], candidates=["delay", "coulomb_friction", "param:drive_c"], workers=args.workers)
+    print(f"warm-up: {time.perf_counter() - t:.1f} s", file=sys.stderr)
+
+    t = time.perf_counter()
+    d = diagnose(runs, workers=args.workers)
+    seconds = time.perf_counter() - t
+    rate = d.simulations / seconds
+    print(f"diagnose {len(runs)} runs ({what}), every candidate, leave-one-run-out:")
+    print(f"  {seconds:.1f} s, {d.simulations} model simulations, {rate:.0f} simulations/s")
+    print(f"  cause {d.cause} (accepted: {', '.join(d.causes) or 'none'}), θ RMS gain {d.gain_pct:.1f} %")
+    print(f"  target < 60 s on 2 cores: {'met' if seconds < 60 else 'NOT met'}")
+    if args.json is not None:
+        args.json.write_text(json.dumps({"seconds": seconds, "simulations": d.simulations, "simulations_per_s": rate,
+                                         "cause": d.cause, "causes": d.causes, "gain_pct": d.gain_pct,
+                                         "runs": runs, "workers": args.workers}, indent=1))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
