@@ -17,7 +17,7 @@ from station.commands.options import StationParser, document_ranges
 from station.errors import StationError
 from station.signals import StopSignal, StopSignals
 
-COMMANDS = ("step", "replay", "sim_device", "bode", "compare", "modes", "survey", "diagnose")
+COMMANDS = ("step", "replay", "sim_device", "bode", "compare", "modes", "survey", "diagnose", "plot", "ports")
 """Modules of :mod:`station.commands`, in the order ``--help`` lists them."""
 
 

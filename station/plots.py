@@ -50,7 +50,7 @@ def source_label(log) -> str:
     port = str(meta.get("port", ""))
     device = meta.get("device") or {}
     name = str(device.get("name", "")) if isinstance(device, dict) else ""
-    if meta.get("plant") or port.lower().startswith("sim://") or name.startswith("SFLR-SIM"):
+    if meta.get("plant") or port.lower().startswith("sim://") or name.startswith(("SFLR-SIM", "SIMRIG")):
         return "simulated"
     return "station"
 
@@ -59,7 +59,7 @@ def outcome_text(log) -> str:
     """The end record in a few words: "completed", "stopped: timeout", or "no end record" (SIGKILL or a rig log)."""
     o = log.outcome
     if o is None:
-        return "no end record" if log.format == "station" else "rig log"
+        return "no end record (killed?)" if log.format == "station" else ""
     return "completed" if o.get("reason") == "completed" else f"stopped: {o.get('reason')}"
 
 
@@ -107,8 +107,13 @@ def plot_runs(logs: Sequence, title: str | None = None, titles: Sequence[str] | 
         ax.grid(True, lw=0.3)
         if ax.get_legend_handles_labels()[0]:
             ax.legend(loc="best", fontsize=7)
+    if len(logs) > 1:  # one legend is enough; the others would hide the curves
+        for ax in (ax_v, ax_a):
+            if ax.get_legend() is not None:
+                ax.get_legend().remove()
     if title is None:
-        title = "; ".join(f"{log.path.name} ({source_label(log)}, {outcome_text(log)})" for log in logs)
+        title = (run_title(logs[0]) if len(logs) == 1 else
+                 f"{len(logs)} run logs overlaid (" + ", ".join(sorted({source_label(g) for g in logs})) + ")")
     fig.suptitle(title, fontsize=9)
     fig.tight_layout()
     return fig
@@ -117,6 +122,7 @@ def plot_runs(logs: Sequence, title: str | None = None, titles: Sequence[str] | 
 def run_title(log, metrics_text: str = "") -> str:
     """Title of a run's figure: file, source, outcome, and the step metrics' text when given."""
     parts = [f"{log.path.name} ({source_label(log)})", outcome_text(log)]
+    parts = [p for p in parts if p]
     if metrics_text:
         parts.append(metrics_text)
     return " - ".join(parts)

@@ -44,22 +44,20 @@ def plot(cmp, path: Path, title: str) -> None:
     title : str
         Figure title.
     """
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    from station.plots import new_figure, save_figure
 
     f = cmp.theta.f
     band = (f >= 0.5) & (f <= 40.0)
-    fig, ax = plt.subplots(4, 1, figsize=(8, 10), sharex=True)
+    fig = new_figure(8, 10)
+    ax = fig.subplots(4, 1, sharex=True)
     for row, (est, model, label) in enumerate(((cmp.theta, cmp.model[0], "θ/v"), (cmp.accel, cmp.model[1], "a/v"))):
         ax[row].semilogx(f[band], 20 * np.log10(np.abs(est.H[band])), label=f"measured {label} (H1)")
         ax[row].semilogx(f[band], 20 * np.log10(np.abs(model[band])), label=f"model {label}, n = {cmp.n_elements}")
         ax[row].set_ylabel(f"|{label}| (dB, counts/count)")
         ax[row].legend(loc="lower left", fontsize=8)
-    ax[2].semilogx(f[band], np.degrees(np.angle(cmp.theta.H[band])), ".", ms=2, label="measured θ/v")
-    ax[2].semilogx(f[band], np.degrees(np.angle(cmp.model[0][band])), label="model θ/v")
-    ax[2].set_ylabel("phase θ/v (deg, wrapped)")
+    ax[2].semilogx(f[band], np.degrees(np.unwrap(np.angle(cmp.theta.H[band]))), ".", ms=2, label="measured θ/v")
+    ax[2].semilogx(f[band], np.degrees(np.unwrap(np.angle(cmp.model[0][band]))), label="model θ/v")
+    ax[2].set_ylabel("phase θ/v (deg, unwrapped)")
     ax[2].legend(loc="lower left", fontsize=8)
     ax[3].semilogx(f[band], cmp.theta.coherence[band], label="θ")
     ax[3].semilogx(f[band], cmp.accel.coherence[band], label="a")
@@ -67,13 +65,14 @@ def plot(cmp, path: Path, title: str) -> None:
     ax[3].set_xlabel("frequency (Hz)")
     ax[3].set_ylim(0, 1.05)
     ax[3].legend(loc="lower left", fontsize=8)
-    for fz in cmp.antiresonances_measured_hz:
+    for i, fz in enumerate(cmp.antiresonances_measured_hz, 1):
         for a in ax[:3]:
             a.axvline(fz, color="grey", lw=0.6, ls=":")
+        ax[0].annotate(f"antiresonance {i}: {fz:.2f} Hz", xy=(fz, 1.0), xycoords=("data", "axes fraction"),
+                       xytext=(2, -2), textcoords="offset points", rotation=90, va="top", fontsize=7, color="grey")
     fig.suptitle(title)
     fig.tight_layout()
-    fig.savefig(path, dpi=100)
-    plt.close(fig)
+    save_figure(fig, path)
 
 
 def run(args: argparse.Namespace) -> int:

@@ -1,0 +1,34 @@
+"""``station plot LOG... [--out PNG]``: a figure of run logs, ours or the rig's, several overlaid."""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+from station.commands.options import check_writable
+
+NAME = "plot"
+HELP = "draw run logs (ours or the rig's; several are overlaid): θ and u, v and v_applied, a"
+
+
+def configure(parser: argparse.ArgumentParser) -> None:
+    """Add the command's arguments to its subparser."""
+    parser.add_argument("files", type=Path, nargs="+", metavar="LOG", help="run logs (station or rig format)")
+    parser.add_argument("--out", type=Path, default=None, metavar="PNG",
+                        help="figure file (default: the first log's stem + .png in the current folder)")
+
+
+def run(args: argparse.Namespace) -> int:
+    """Read the logs, overlay them, write the PNG; 0.
+
+    Raises
+    ------
+    StationError
+        An unreadable log (file, line, field) or an unwritable --out.
+    """
+    from station.plots import plot_log_files
+
+    out = args.out if args.out is not None else Path(args.files[0].stem + ".png")
+    check_writable(out, "--out")
+    print(f"figure: {plot_log_files(args.files, out)}")
+    return 0
