@@ -36,6 +36,7 @@ from station.analysis.beam import (
 )
 from station.errors import StationError
 from station.modelrun import ModelRun, command_quantization, simulate_log  # noqa: F401 (moved; re-exported)
+from station.reference import classify_reference  # one definition of a step (also for compare, diagnosis)
 from station.runlog import RunLog, read_log
 
 ALIGNMENTS = (0, 1)
@@ -442,36 +443,6 @@ def detect_alignment(controller: Compensator | OpenLoop, u, theta, a, v) -> tupl
         if best is None or err < best[1]:
             best = (d, err, v_hat)
     return best
-
-
-def classify_reference(u) -> dict[str, Any]:
-    """What a logged reference is: a step from 0, all zeros, or something else.
-
-    Parameters
-    ----------
-    u : array_like, shape (N,)
-        Logged reference, encoder counts (DAC counts in open loop).
-
-    Returns
-    -------
-    dict
-        ``{"kind": "step", "amplitude": float, "tick": int}`` when u is 0 up to one tick
-        and a non-zero constant from it to the end (tick 0: constant throughout; the rig
-        was at rest before the run, as ``station step --step-time 0`` runs it);
-        ``{"kind": "zero"}``; ``{"kind": "missing"}`` when u is not logged (NaN); else
-        ``{"kind": "other"}``.
-    """
-    u = np.asarray(u, dtype=float)
-    if u.size and not np.all(np.isfinite(u)):
-        return {"kind": "missing"}
-    if u.size == 0 or np.all(u == 0):
-        return {"kind": "zero"}
-    change = np.flatnonzero(np.diff(u) != 0)
-    if change.size == 1 and u[0] == 0 and u[-1] != 0:
-        return {"kind": "step", "amplitude": float(u[-1]), "tick": int(change[0] + 1)}
-    if change.size == 0:  # non-zero constant: a step at tick 0
-        return {"kind": "step", "amplitude": float(u[-1]), "tick": 0}
-    return {"kind": "other"}
 
 
 # --- the model --------------------------------------------------------------------------

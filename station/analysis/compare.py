@@ -16,6 +16,7 @@ from pathlib import Path
 import numpy as np
 
 from station.analysis.metrics import StepMetrics, step_metrics
+from station.reference import step_amplitude
 
 THESIS_TABLE = {
     # controller: (experiment (overshoot %, settling s), thesis FEM (overshoot %, settling s));
@@ -132,7 +133,7 @@ def compare_run(path, plant) -> RunComparison:
     run = simulate_log(log, controller, d, plant)
     pred, fits = run.prediction, run.fit_pct
     notes.append(f"model: driven by {run.how}")
-    step = float(u[-1]) if closed and u.size and u[-1] != 0 and np.unique(u).size == 2 else None
+    step = step_amplitude(u) if closed else None  # station.reference: the one definition of a step
     rig = model = exp = fem = None
     if step is not None:
         rig = step_metrics(data["t"], data["theta"], step)
