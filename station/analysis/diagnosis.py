@@ -489,6 +489,11 @@ def _null_floor(ev: Evaluator, folds: Sequence[Fold], fold_values: Sequence[Mapp
     return total
 
 
+def _rel_gain(v1: float, v0: float) -> float:
+    """100 (1 − v1/v0), % (0 when v0 is 0: a model that is already exact)."""
+    return 100.0 * (1.0 - v1 / v0) if v0 > 0 else 0.0
+
+
 def _accept(v0: float, v1: float, terms: int, floor: float | None = None) -> bool:
     """Pays on validation data beyond parsimony and noise (module docstring, step 4).
 
@@ -623,7 +628,7 @@ def diagnose(runs: Sequence[str | Path], validate: Sequence[str | Path] = (), mo
             single[name], single_all[name] = tr, values
             g = _gain(_pooled(ev, tr.val_sse)["rms_theta"], pooled_nom["rms_theta"])
             say(f"[{k}/{len(names)}] {name} = {_fmt(values[name], EFFECTS[name].unit)}: "
-                f"validation θ gain {g:.1f} %, cost gain {100 * (1 - tr.val_weighted / v_nom):.1f} % "
+                f"validation θ gain {g:.1f} %, cost gain {_rel_gain(tr.val_weighted, v_nom):.1f} % "
                 f"({ev.simulations} simulations)")
 
     # forward selection with joint refits
@@ -643,7 +648,7 @@ def diagnose(runs: Sequence[str | Path], validate: Sequence[str | Path] = (), mo
             trials = {n: f.result() for n, f in futures.items()}
             for n in pool:
                 say(f"step {step + 1}: {' + '.join(accepted + [n])}: validation cost gain "
-                    f"{100 * (1 - trials[n].val_weighted / current.val_weighted):.1f} % over {' + '.join(accepted)} "
+                    f"{_rel_gain(trials[n].val_weighted, current.val_weighted):.1f} % over {' + '.join(accepted)} "
                     f"({ev.simulations} simulations)")
         if not trials:
             break
@@ -666,7 +671,7 @@ def diagnose(runs: Sequence[str | Path], validate: Sequence[str | Path] = (), mo
 
     pooled_ext = _pooled(ev, current.val_sse)
     gain = _gain(pooled_ext["rms_theta"], pooled_nom["rms_theta"]) if accepted else 0.0
-    cost_gain = 100.0 * (1 - current.val_weighted / v_nom) if accepted else 0.0
+    cost_gain = _rel_gain(current.val_weighted, v_nom) if accepted else 0.0
 
     # per-run reports (residual analysis before and after)
     reports, before = [], {}
@@ -709,7 +714,7 @@ def diagnose(runs: Sequence[str | Path], validate: Sequence[str | Path] = (), mo
         tr = single[name]
         unit = EFFECTS[name].unit
         g = _gain(_pooled(ev, tr.val_sse)["rms_theta"], pooled_nom["rms_theta"])
-        cg = 100.0 * (1 - tr.val_weighted / v_nom)
+        cg = _rel_gain(tr.val_weighted, v_nom)
         value = final_values[name] if name in accepted else single_all[name][name]
         folds_v = [fv[name] for fv in tr.fold_values]
         spread = f" (folds {_fmt(min(folds_v), unit)} to {_fmt(max(folds_v), unit)})" if len(folds_v) > 1 else ""
