@@ -14,7 +14,7 @@ ticks; a plausibility bound on the encoder change per tick; the lag (samples alr
 waiting when a command is due); the device's tick rate. Each ends the run by raising a
 :class:`LinkFault` whose ``reason`` is the outcome reason (DESIGN.md "Run outcome").
 
-Both sessions give the loop the same sample tuple ``(n, theta, accel, v_applied,
+Both sessions give the loop the same :class:`Sample` ``(n, theta, accel, v_applied,
 status)``: n is the tick number from 0 (v1 sequence numbers unwrapped), theta encoder
 counts, accel ADC counts, v_applied DAC counts (None for the legacy device, which does
 not report it), status the v1 status bits (0 for legacy).
@@ -28,6 +28,7 @@ import time
 from collections import deque
 from collections.abc import Callable
 from dataclasses import dataclass
+from typing import NamedTuple
 from urllib.parse import parse_qsl, urlencode, urlsplit
 
 import serial
@@ -46,6 +47,22 @@ ZERO_ACCEL_TICKS = 16
 """Readings averaged for the accelerometer's zero (protocol v1, START bit1)."""
 HANDSHAKE_TIMEOUT = 1.0
 """Seconds to wait for the device's answer to HELLO / θ0 / STOPPED."""
+
+
+class Sample(NamedTuple):
+    """One sample as both sessions give it to the loop (a tuple with names).
+
+    n: tick number from 0 (v1 sequence numbers unwrapped); theta: encoder counts;
+    accel: ADC counts (legacy: minus the station's zero offset); v_applied: DAC counts
+    the device applied during tick n (None for legacy, which does not report it);
+    status: v1 status bits (0 for legacy).
+    """
+
+    n: int
+    theta: int
+    accel: int
+    v_applied: int | None
+    status: int
 
 
 @dataclass(frozen=True)
@@ -428,7 +445,7 @@ class V1Session(Session):
     def read_sample(self) -> tuple:
         """Block for the next valid, new SAMPLE (hot path).
 
-        Returns ``(n, theta, accel, v_applied, status)``. Modular sequence arithmetic:
+        Returns a :class:`Sample` ``(n, theta, accel, v_applied, status)``. Modular sequence arithmetic:
         a repeated seq is a duplicate, a seq behind the last one is stale (both
         discarded and counted), a gap of g counts g − 1 dropped.
 
@@ -476,7 +493,7 @@ class V1Session(Session):
                     self._accept(n, msg.theta, msg.status, step)
                     self._last_seq = msg.seq
                     self.rx_errors = self._decoder.rx_errors
-                    return (n, msg.theta, msg.accel, msg.v_applied, msg.status)
+                    return Sample(n, msg.theta, msg.accel, msg.v_applied, msg.status)
                 if type(msg) is v1.Stopped:
                     self.rx_errors = self._decoder.rx_errors
                     raise DeviceStopped(f"device stopped (reason {msg.reason}) after {msg.ticks} ticks",
@@ -647,7 +664,7 @@ class LegacySession(Session):
             raise SequenceError(f"legacy device {self.url}: tick number jumped from {self._n} to {tick.n}; "
                                 "stream out of step")
         self._accept(tick.n, tick.theta, 0)
-        return (tick.n, tick.theta, tick.accel - self.accel_offset, None, 0)
+        return Sample(tick.n, tick.theta, tick.accel - self.accel_offset, None, 0)
 
     def send_command(self, n: int, v: float) -> None:
         """Send '/' + v (truncated toward zero); n is implicit in this protocol.

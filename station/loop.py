@@ -34,6 +34,7 @@ from station import DT
 from station.link import DeviceStopped, LinkFault, Session
 from station.outcome import Outcome
 from station.realtime import RealtimePriority
+from station.runlog import LogRow
 from station.signals import StopSignals
 
 NAN = math.nan
@@ -203,8 +204,8 @@ def run_loop(session: Session, controller, reference: np.ndarray, writer, soft_l
                     break
                 # sample n is in: its row is complete (v[n] was sent on sample n-1) and must be
                 # logged whatever happens next (a signal, a controller fault, a failed write)
-                pending = (n * dt, n, u[n], v_k, theta, accel, dhat_k,
-                           NAN if v_applied is None else v_applied, status, lat_k)
+                pending = LogRow(n * dt, n, u[n], v_k, theta, accel, dhat_k,
+                                 NAN if v_applied is None else v_applied, status, lat_k)
                 if signals.signum is not None:
                     raise _Signalled()
                 if abs(theta) > soft_limit:

@@ -35,14 +35,35 @@ import weakref
 from collections import deque
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import Any, NamedTuple
 from collections.abc import Iterable
 
 import numpy as np
 
 from station.errors import StationError
 
-COLUMNS = ("t", "n", "u", "v", "theta", "a", "theta_d_hat", "v_applied", "status", "latency_us")
+class LogRow(NamedTuple):
+    """One row of our run log: tick k (DESIGN.md "Timing and log rows"); a tuple with names.
+
+    t (s), n (tick), u (reference, counts), v (command acting during tick k, DAC counts),
+    theta (encoder counts), a (accelerometer counts), theta_d_hat (encoder counts),
+    v_applied (DAC counts the device reports, NaN when it does not), status (v1 status
+    bits), latency_us (compute latency of v[k], µs; NaN for tick 0).
+    """
+
+    t: float
+    n: int
+    u: float
+    v: float
+    theta: float
+    a: float
+    theta_d_hat: float
+    v_applied: float
+    status: int
+    latency_us: float
+
+
+COLUMNS = LogRow._fields
 """Columns of our run log, in row order (units: s, tick, counts, DAC counts, encoder
 counts, accelerometer counts, encoder counts, DAC counts, status bits, µs)."""
 

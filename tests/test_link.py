@@ -138,7 +138,8 @@ def test_legacy_start_zeroes_a_command_left_over_from_a_dead_station():
         session.hello()
         session.start(10)
         assert session.read_sample()[0] == 0
-        plant = session.port.device._fw.hw.plant
-        assert not plant.x.any()  # tick 0 applied 0: the plant is still at rest
+        plant = session.port.device.plant
+        state = getattr(plant, "z", getattr(plant, "x", None))  # ModelPlant (modal) or DiscretePlant
+        assert state is not None and not state.any()  # tick 0 applied 0: the plant is still at rest
     finally:
         session.close()
