@@ -26,6 +26,7 @@ import tempfile
 from pathlib import Path
 
 from station.experiment import run_step
+from station.protocol import PROTOCOLS
 
 
 def start_device(protocol: str) -> tuple[subprocess.Popen, str]:
@@ -71,7 +72,7 @@ def one_run(protocol: str, seconds: float, lean: bool, workdir: Path) -> dict:
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--seconds", type=float, default=60.0)
-    parser.add_argument("--protocols", nargs="+", default=["v1", "legacy"], choices=["v1", "legacy"])
+    parser.add_argument("--protocols", nargs="+", default=list(PROTOCOLS), choices=PROTOCOLS)
     parser.add_argument("--no-baseline", action="store_true", help="skip the plain-loop baseline runs")
     parser.add_argument("--json", type=Path, default=None)
     args = parser.parse_args(argv)

@@ -23,7 +23,7 @@ import pytest
 from station.errors import StationError
 from station.experiment import run_step
 from station.link import LinkLimits
-from station.protocol import legacy, v1
+from station.protocol import PROTOCOLS, legacy, v1
 from station.runlog import read_log
 from tests.scripted_device import ScriptedDevice
 
@@ -213,7 +213,7 @@ def test_v1_sequence_arithmetic_is_modular_across_the_wrap():
 
 # --- rate ----------------------------------------------------------------------------------
 
-@pytest.mark.parametrize("protocol", ["v1", "legacy"])
+@pytest.mark.parametrize("protocol", PROTOCOLS)
 def test_a_device_ten_times_too_slow_stops_on_rate(device, tmp_path, protocol):
     dev = device(protocol=protocol, period=lambda k: 0.02 if k > 50 else 0.002)
     report, path = _run(dev, tmp_path, protocol=protocol, duration=4.0,
@@ -476,7 +476,7 @@ def test_v1_session_on_a_mutated_stream_returns_only_new_samples_or_stops(seed):
     assert time.perf_counter() - start < 5.0
 
 
-@pytest.mark.parametrize("protocol", ["v1", "legacy"])
+@pytest.mark.parametrize("protocol", PROTOCOLS)
 @pytest.mark.parametrize("pacing", ["lockstep", "realtime"])
 def test_no_check_fires_on_the_healthy_simulated_rig(tmp_path, protocol, pacing):
     report = run_step(port=f"sim://?pacing={pacing}", protocol=protocol, controller="lead-accel", amplitude=200,

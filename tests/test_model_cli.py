@@ -8,6 +8,7 @@ import pytest
 
 from station.errors import StationError
 from station.plant.model import load_model
+from station.protocol import PROTOCOLS
 from station.replay import replay
 from station.runlog import read_log
 
@@ -22,7 +23,7 @@ def model_file(tmp_path_factory):
     return path
 
 
-@pytest.mark.parametrize("protocol", ["v1", "legacy"])
+@pytest.mark.parametrize("protocol", PROTOCOLS)
 @pytest.mark.parametrize("kind", ["p", "lead-accel", "open-loop"])
 def test_loop_and_simulated_device_equal_simulate_for_a_model_with_effects(tmp_path, model_file, kind, protocol):
     """Noise-free simulated rig with a model's effects: the logged run is the model's

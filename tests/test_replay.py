@@ -10,6 +10,7 @@ import pytest
 
 from station.control import Compensator, DiscreteTF, make_controller
 from station.errors import StationError
+from station.protocol import PROTOCOLS
 from station.replay import replay, replay_commands, rig_controller
 from station.runlog import RunLogWriter, read_log
 
@@ -185,7 +186,7 @@ def test_bad_element_count_is_a_station_error(rig_data):
         replay(rig_data / P_LOG, n_elements=500)
 
 
-@pytest.mark.parametrize("protocol", ["v1", "legacy"])
+@pytest.mark.parametrize("protocol", PROTOCOLS)
 @pytest.mark.parametrize("kind", ["p", "open-loop", "lead", "lead-accel"])
 def test_loop_log_with_step_at_tick_0_replays_with_d1_and_the_model_is_the_loop(tmp_path, kind, protocol):
     """Row 0 of a d = 1 run: v[0] = 0 (the device's tick 0) and the controller is first

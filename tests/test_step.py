@@ -9,6 +9,7 @@ import pytest
 
 from station.cli import main
 from station.experiment import run_step
+from station.protocol import PROTOCOLS
 from station.runlog import read_log
 
 
@@ -24,7 +25,7 @@ def test_p_step_shows_thesis_fem_overshoot_plus_one_sample_delay(tmp_path):
     assert set(result["timing"]) == {"p50_us", "p99_us", "max_us", "late", "dropped"}
 
 
-@pytest.mark.parametrize("protocol", ["v1", "legacy"])
+@pytest.mark.parametrize("protocol", PROTOCOLS)
 def test_default_step_logs_every_tick_with_alignment_1(tmp_path, protocol):
     report = run_step(protocol=protocol, out=tmp_path / "lead.tsv")
     assert report.result.ok, report.result.message

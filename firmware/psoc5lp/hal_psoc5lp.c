@@ -60,19 +60,17 @@ void hal_amp_enable(bool on) { AMP_EN_Write(on ? AMP_EN_ACTIVE : (uint8)(AMP_EN_
 #define TXQ_SIZE 512u /* power of two; > 2 ms of SAMPLEs plus an INFO and a STOPPED */
 static uint8 txq[TXQ_SIZE];
 static volatile uint16 txq_head, txq_tail; /* head: write index, tail: read index */
-static volatile uint16 txq_dropped;
 
 void hal_uart_write(const uint8_t *data, size_t n)
 {
     uint8 s = CyEnterCriticalSection();
     uint16 used = (uint16)((txq_head - txq_tail) & (TXQ_SIZE - 1u));
-    if (n <= (size_t)(TXQ_SIZE - 1u - used)) { /* whole frames only: drop rather than block */
+    /* whole frames only: drop rather than block (the station sees the gap in seq) */
+    if (n <= (size_t)(TXQ_SIZE - 1u - used)) {
         for (size_t i = 0; i < n; i++) {
             txq[txq_head] = data[i];
             txq_head = (uint16)((txq_head + 1u) & (TXQ_SIZE - 1u));
         }
-    } else {
-        txq_dropped++;
     }
     CyExitCriticalSection(s);
 }

@@ -12,7 +12,7 @@ from station import experiment as ex
 from station.errors import StationError
 from station.commands.options import check_writable, check_writable_dir, number, warn
 from station.link import LinkLimits
-from station.protocol import legacy
+from station.protocol import PROTOCOLS, legacy
 
 MAX_DURATION_S = (2**32 - 1) * DT
 """Longest run v1 can count (START's n_ticks is a u32), s."""
@@ -45,7 +45,7 @@ def configure(parser) -> None:
                         metavar="S", help="when the step starts, before the run's end (default 0.02 s = tick 10)")
     parser.add_argument("--port", default=ex.DEFAULT_PORT, metavar="URL",
                         help="port path or pyserial URL (default sim://, the simulated rig)")
-    parser.add_argument("--protocol", choices=("v1", "legacy"), default="v1", help="wire protocol (default v1)")
+    parser.add_argument("--protocol", choices=PROTOCOLS, default="v1", help="wire protocol (default v1)")
     parser.add_argument("--model", default=None, metavar="NAME|FILE",
                         help="simulated rig only: its model, a built-in name or a model file (sim://?model=...)")
     parser.add_argument("--elements", type=number(1, 100, integer=True), default=None, metavar="N",

@@ -173,8 +173,9 @@ class SecondOrderModel:
         Mass kg(·m²), damping and stiffness matrices; n_dof = 2 n + 3.
     b : ndarray, shape (n_dof,)
         Generalized force per DAC count: k_tau on the motor DOF, N·m/count.
-    base, tip_w : int
-        Indices of the base angle and of the tip's lateral displacement.
+    base, root, tip_w : int
+        Indices of the base angle, of the beam's root slope (the clamp spring joins
+        these two) and of the tip's lateral displacement.
     """
 
     def __init__(self, params: Params, n_elements: int = 4):
@@ -198,7 +199,7 @@ class SecondOrderModel:
         K[2:, 2:] = Kb
         C[2:, 2:] = p.beam_beta * Kb
         C[0, 0] += p.c_m
-        for i, j, k, c in ((0, 1, p.drive_k, p.drive_c), (1, 2, p.clamp_k, p.clamp_c)):
+        for i, j, k, c in ((0, self.base, p.drive_k, p.drive_c), (self.base, self.root, p.clamp_k, p.clamp_c)):
             spring = np.array([[1.0, -1.0], [-1.0, 1.0]])
             K[np.ix_([i, j], [i, j])] += k * spring
             C[np.ix_([i, j], [i, j])] += c * spring

@@ -215,10 +215,6 @@ if numba is not None:
 else:  # pragma: no cover
     _kernel = _loop
 
-COMPILED = numba is not None
-"""True when the sample loop runs compiled (numba installed)."""
-
-
 def _coeffs(tf) -> tuple[np.ndarray, np.ndarray]:
     if tf is None:
         return np.zeros(1), np.ones(1)

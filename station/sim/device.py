@@ -14,7 +14,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from station.plant import Sensors
-from station.protocol import legacy, v1
+from station.protocol import PROTOCOLS, legacy, v1
 from station.rounding import round_half_away
 from station.sim.hardware import ACCEL_OFFSET, ZERO_ACCEL_READINGS, Hardware
 
@@ -316,8 +316,8 @@ class SimDevice:
     def __init__(self, protocol: str = "v1", plant=None, seed: int = 0, *, n_elements: int | None = None,
                  model=None, accel_noise_std: float = 0.3, sensors=None, accel_offset: float = ACCEL_OFFSET,
                  v_limit: int = 255, watchdog_ticks: int = 10, name: str = NAME) -> None:
-        if protocol not in ("v1", "legacy"):
-            raise ValueError(f"unknown protocol {protocol!r}: expected 'v1' or 'legacy'")
+        if protocol not in PROTOCOLS:
+            raise ValueError(f"unknown protocol {protocol!r}: expected one of {', '.join(PROTOCOLS)}")
         if not 1 <= watchdog_ticks <= 255:
             raise ValueError(f"watchdog_ticks must be 1..255 (a u8 in INFO), got {watchdog_ticks}")
         if plant is None:

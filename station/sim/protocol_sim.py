@@ -47,6 +47,7 @@ import urllib.parse
 
 from serial.serialutil import PortNotOpenError, SerialBase, SerialException, to_bytes
 
+from station.protocol import PROTOCOLS
 from station.sim.device import RATE_HZ, SimDevice
 from station.sim.driver import DeviceDriver, Faults
 
@@ -90,7 +91,7 @@ def _std(text: str) -> float:
 
 
 _OPTIONS = {  # name: (parser, default)
-    "protocol": (_choice("v1", "legacy"), "v1"),
+    "protocol": (_choice(*PROTOCOLS), "v1"),
     "pacing": (_choice("lockstep", "realtime"), "lockstep"),
     "seed": (_count(0), 0),
     "model": (_model, "tmm-fit"),

@@ -24,6 +24,7 @@ import time
 import tty
 from typing import TYPE_CHECKING
 
+from station.protocol import PROTOCOLS
 from station.realtime import RealtimePriority
 
 if TYPE_CHECKING:
@@ -120,7 +121,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     """The server's options (shared by ``station sim-device`` and ``python -m station.sim.pty_server``)."""
     from station.commands.options import number
 
-    parser.add_argument("--protocol", choices=("v1", "legacy"), default="v1", help="device protocol (default v1)")
+    parser.add_argument("--protocol", choices=PROTOCOLS, default="v1", help="device protocol (default v1)")
     parser.add_argument("--realtime", action="store_true",
                         help="tick on the device's own 500 Hz clock (default: lockstep with the station)")
     parser.add_argument("--seed", type=number(0, 2**32 - 1, integer=True), default=0,
