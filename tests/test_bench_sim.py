@@ -28,7 +28,23 @@ def test_json_shape_and_stability(bench_sim, tmp_path):
     for c in cases:
         assert set(c) == keys and c["n_elements"] == 4 and c["stable"] is True
         assert c["seconds"] > 0 and c["baseline_seconds"] > 0
-        assert c["realtime_factor"] == pytest.approx(2.0 / c["seconds"])
+
+
+def test_rates_come_from_the_best_measured_time(bench_sim, monkeypatch):
+    """On a scripted clock the times are known: best of the repeats, 2 s of simulated time
+    (module docstring) over it, baseline over it."""
+    import types
+
+    # per case: two timed runs of simulate (6 ms, then 4 ms), then the baseline (0.4 s)
+    clock = iter([0.0, 0.006, 1.0, 1.004, 2.0, 2.4] * 2)
+    monkeypatch.setattr(bench_sim, "time", types.SimpleNamespace(perf_counter=lambda: next(clock)))
+    cases = bench_sim.bench(elements=(2,), controllers=("p", "open-loop"), baseline_max=2, repeats=2,
+                            out=None)["cases"]
+    for c in cases:
+        assert c["seconds"] == pytest.approx(0.004)
+        assert c["realtime_factor"] == pytest.approx(500.0)  # 2 s simulated in 4 ms
+        assert c["baseline_seconds"] == pytest.approx(0.4)
+        assert c["baseline_ratio"] == pytest.approx(100.0)  # the baseline is 100x slower
 
 
 def test_baseline_fields_null_when_not_run(bench_sim):
