@@ -28,6 +28,8 @@ def build_parser() -> argparse.ArgumentParser:
         description="Control station for the single flexible link robot: step tests on the rig or the "
                     "simulated rig, lossless run logs, replay and model checks.")
     parser.add_argument("--version", action="version", version=f"station {__version__}")
+    parser.add_argument("-v", "--verbose", action="count", default=0,
+                        help="log what the link, loop and simulated device do (-v: info, -vv: every byte)")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", required=True)
     for name in COMMANDS:
         try:
@@ -38,6 +40,8 @@ def build_parser() -> argparse.ArgumentParser:
             raise
         cmd = sub.add_parser(module.NAME, help=module.HELP, description=module.HELP)
         module.configure(cmd)
+        cmd.add_argument("-v", "--verbose", action="count", default=argparse.SUPPRESS,
+                         help="log what the link, loop and simulated device do (-v: info, -vv: every byte)")
         document_ranges(cmd)
         cmd.set_defaults(_run=module.run)
     return parser
@@ -63,6 +67,7 @@ def main(argv: list[str] | None = None) -> int:
                     args = parser.parse_args(argv)
                 except SystemExit as exc:  # --help, or a refused value: argparse said it in one line
                     return exc.code if isinstance(exc.code, int) else 2
+                _configure_logging(args.verbose)
                 return int(args._run(args) or 0)
             except StationError as exc:
                 print(f"station: error: {exc}", file=sys.stderr)
@@ -83,6 +88,19 @@ def main(argv: list[str] | None = None) -> int:
 def _one_line_warning(message, category, filename, lineno, file=None, line=None) -> None:
     """Warnings as one line for the user (``station: warning: ...``), not Python's two-line form."""
     print(f"station: warning: {message}", file=sys.stderr if file is None else file)
+
+
+def _configure_logging(verbose: int) -> None:
+    """``-v``: INFO of the station's loggers on stderr; ``-vv``: DEBUG (every byte on the wire)."""
+    if verbose <= 0:
+        return
+    import logging
+
+    handler = logging.StreamHandler(sys.stderr)
+    handler.setFormatter(logging.Formatter("%(relativeCreated)9.1f ms %(name)s: %(message)s"))
+    root = logging.getLogger("station")
+    root.addHandler(handler)
+    root.setLevel(logging.DEBUG if verbose >= 2 else logging.INFO)
 
 
 def _silence_stdout() -> None:

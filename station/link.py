@@ -24,6 +24,7 @@ from __future__ import annotations
 
 import dataclasses
 import errno
+import logging
 import time
 from collections import deque
 from collections.abc import Callable
@@ -37,6 +38,9 @@ from serial.serialutil import Timeout
 from station import DT
 from station.errors import StationError
 from station.protocol import legacy, v1
+
+logger = logging.getLogger("station.link")
+"""INFO: sessions opened, INFO received, runs started and stopped; DEBUG: every byte."""
 
 SIM_HANDLERS = "station.sim"
 DEFAULT_BAUD = {"v1": 921600, "legacy": legacy.BAUDRATE}
@@ -234,6 +238,7 @@ class Session:
         self.info: dict | None = None
         self.stop_requested: Callable[[], str | None] | None = None
         self.lockstep = False  # the device ticks on our commands (v1: INFO rate_hz = 0)
+        self._debug = logger.isEnabledFor(logging.DEBUG)  # checked once: the hot path pays one test
         self._pending: deque = deque()
         self._deadline = Timeout(limits.timeout)
         self._reset_run()
@@ -260,7 +265,11 @@ class Session:
             chunk = port.read(1)
             if chunk:
                 waiting = port.in_waiting
-                return chunk + port.read(waiting) if waiting else chunk
+                if waiting:
+                    chunk += port.read(waiting)
+                if self._debug:
+                    logger.debug("%s rx %s", self.url, chunk.hex(" "))
+                return chunk
         except (serial.SerialException, OSError) as exc:
             raise LinkFault(f"read from {self.url} failed: {exc}") from None
         return b""
@@ -389,6 +398,8 @@ class V1Session(Session):
         self._last_seq = -1
 
     def _write(self, msg) -> None:
+        if self._debug:
+            logger.debug("%s tx %s", self.url, msg)
         try:
             self.port.write(v1.encode(msg))
         except (serial.SerialException, OSError) as exc:
@@ -419,6 +430,7 @@ class V1Session(Session):
             if isinstance(msg, v1.Info):
                 self.info = {"protocol": "v1", **dataclasses.asdict(msg)}
                 self.lockstep = msg.rate_hz == 0
+                logger.info("%s: INFO %s", self.url, self.info)
                 return self.info
         raise StationError(f"no INFO from {self.url} within {HANDSHAKE_TIMEOUT} s: is it a protocol v1 device? "
                            "(try --protocol legacy)")
@@ -439,6 +451,8 @@ class V1Session(Session):
         self._decoder = v1.Decoder()
         self._last_seq = -1
         self._reset_run()
+        self._debug = logger.isEnabledFor(logging.DEBUG)
+        logger.info("%s: START, %d ticks", self.url, n_ticks)
         self._write(v1.Start(v1.START_RESET_ENCODER | v1.START_ZERO_ACCEL, n_ticks))
         self._deadline = Timeout(self.timeout + ZERO_ACCEL_TICKS * DT)
 
@@ -509,6 +523,8 @@ class V1Session(Session):
         Raises LagError first when more than ``max_lag`` samples are already waiting.
         """
         self._before_command(n)
+        if self._debug:
+            logger.debug("%s tx COMMAND seq %d v %r", self.url, n & 0xFFFF, v)
         try:
             self.port.write(v1.encode(v1.Command(n & 0xFFFF, v1.round_command(v))))
         except (serial.SerialException, OSError) as exc:
@@ -553,6 +569,8 @@ class LegacySession(Session):
         self.accel_offset = 0  # subtracted from every accel sample (zero_accel)
 
     def _port_write(self, data: bytes) -> None:
+        if self._debug:
+            logger.debug("%s tx %s", self.url, data.hex(" "))
         try:
             self.port.write(data)
         except (serial.SerialException, OSError) as exc:
@@ -618,13 +636,15 @@ class LegacySession(Session):
         self._pending.clear()
 
     def _begin(self) -> None:
-        """v = 0, reset the encoder ('7'), start ('q'), read θ0.
+        """v = 0, reset the encoder ('7'), start ('q'), read θ0 (legacy).
 
         The old firmware applies the last v it received from tick 0 on, whatever run it
         came from (a station that died leaves it set): v = 0 goes first, so tick 0
         outputs 0 as the log's row 0 says.
         """
         self._reset_run()
+        self._debug = logger.isEnabledFor(logging.DEBUG)
+        logger.info("%s: legacy start ('/' 0, '7', 'q')", self.url)
         self._port_write(legacy.command_bytes(0) + legacy.RESET + legacy.START)
         data = self._read_exact(2, HANDSHAKE_TIMEOUT)
         if data is None:
@@ -712,4 +732,5 @@ def open_session(url: str, protocol: str = "v1", timeout: float = 0.1, baudrate:
     limits = limits or LinkLimits(timeout=timeout)
     url = sim_url(url, protocol)
     port = open_port(url, protocol, min(limits.timeout, POLL_S), baudrate, write_timeout=limits.timeout)
+    logger.info("opened %s (%s, %s)", url, protocol, limits)
     return _SESSIONS[protocol](port, url, limits)

@@ -23,6 +23,7 @@ row, then the caller closes the log, then the outcome is reported (:class:`RunRe
 from __future__ import annotations
 
 import gc
+import logging
 import math
 import sys
 import time
@@ -38,6 +39,9 @@ from station.runlog import LogRow
 from station.signals import StopSignals
 
 NAN = math.nan
+
+logger = logging.getLogger("station.loop")
+"""INFO: each run's start and outcome; WARNING: runs that did not complete."""
 
 
 @dataclass
@@ -187,6 +191,7 @@ def run_loop(session: Session, controller, reference: np.ndarray, writer, soft_l
     read_sample, send_command, step, append = session.read_sample, session.send_command, controller.step, writer.append
     lim, neg = float(limit), -float(limit)
     stop_ok = True
+    logger.info("run: %d ticks, clamp ±%g, soft limit ±%g, lean %s", n_ticks, lim, soft_limit, lean)
     try:
         try:
             if lean:  # before START: once the device ticks, every ms counts
@@ -272,6 +277,7 @@ def run_loop(session: Session, controller, reference: np.ndarray, writer, soft_l
         counters["late"] = max(counters["late"], stopped.get("late", 0))
         counters["watchdog_trips"] = max(counters["watchdog_trips"], stopped.get("watchdog_trips", 0))
     outcome = Outcome(reason, message, ticks=ticks, command_zero_sent=stop_ok, **counters)
+    logger.log(logging.INFO if outcome.ok else logging.WARNING, "run ended: %s", outcome)
     return RunResult(outcome, latencies, stopped, {"priority": level, "max_lag": session.max_lag_seen})
 
 

@@ -55,7 +55,7 @@ def test_bad_option_is_an_error_naming_it(query, word):
 def test_defaults():
     assert protocol_sim.parse_url("sim://") == {
         "protocol": "v1", "pacing": "lockstep", "seed": 0, "model": "tmm-fit", "elements": 4, "noise": 0.3, "watchdog": 10,
-        "silent_after": None, "garbage_every": None, "skip_tick": None}
+        "silent_after": None, "garbage_every": None, "skip_tick": None, "logging": None}
 
 
 def test_lockstep_v1_run_answers_every_sample_in_order_and_stops_after_n_ticks():
@@ -167,3 +167,17 @@ def test_realtime_does_not_wait_for_the_station_watchdog_trips():
         assert all(s.status & v1.LATE for s in samples[1:])
         assert all(s.status & v1.WATCHDOG for s in samples[5:])
         assert not any(s.status & v1.WATCHDOG for s in samples[:5])
+
+
+def test_logging_option_shows_the_bytes(caplog):
+    import logging
+
+    with caplog.at_level(logging.DEBUG, logger="station.sim"):
+        with open_sim("logging=debug") as port:
+            port.write(v1.encode(v1.Hello()))
+            port.read(64)
+    lines = [r.getMessage() for r in caplog.records if r.name == "station.sim"]
+    assert lines[0] == "station -> device " + v1.encode(v1.Hello()).hex(" ")
+    assert lines[1].startswith("device -> station ")
+    with pytest.raises(serial.SerialException, match="logging"):
+        open_sim("logging=loud")

@@ -28,6 +28,8 @@ options:
   a bad CRC (two rx errors for the station). Ignored by legacy.
 - ``skip_tick=N``: fault, legacy: n jumps by one at tick N (a lost record). Ignored by
   v1.
+- ``logging=debug|info|warning|error``: level of the ``station.sim`` logger (as
+  pyserial's ``loop://?logging=debug``): debug shows every byte in and out.
 
 An unknown option, a repeated option or a bad value raises ``serial.SerialException``
 naming it. The baud rate and the line settings are accepted and ignored.
@@ -41,6 +43,7 @@ read returns at once what is buffered when it is not empty. ``in_waiting``,
 from __future__ import annotations
 
 import dataclasses
+import logging
 import threading
 import time
 import urllib.parse
@@ -51,8 +54,13 @@ from station.protocol import PROTOCOLS
 from station.sim.device import RATE_HZ, SimDevice
 from station.sim.driver import DeviceDriver, Faults
 
+LOGGER_LEVELS = {"debug": logging.DEBUG, "info": logging.INFO, "warning": logging.WARNING, "error": logging.ERROR}
+"""``logging=`` levels of the URL, as pyserial's own handlers (``loop://?logging=debug``)."""
+
+logger = logging.getLogger("station.sim")
+
 _FORMAT = ('expected "sim://[?protocol=v1|legacy&pacing=lockstep|realtime&seed=N&model=NAME|FILE&elements=N&noise=STD'
-           '&watchdog=N&silent_after=N&garbage_every=N&skip_tick=N]"')
+           '&watchdog=N&silent_after=N&garbage_every=N&skip_tick=N&logging=LEVEL]"')
 
 
 def _choice(*allowed: str):
@@ -101,6 +109,7 @@ _OPTIONS = {  # name: (parser, default)
     "silent_after": (_count(0), None),
     "garbage_every": (_count(1), None),
     "skip_tick": (_count(0), None),
+    "logging": (_choice(*LOGGER_LEVELS), None),
 }
 
 
@@ -141,6 +150,7 @@ class Serial(SerialBase):
     """The simulated rig behind a pyserial port (see the module docstring for the URL)."""
 
     def __init__(self, *args, **kwargs) -> None:
+        self._debug = False
         self._buf = bytearray()
         self._cond = threading.Condition()
         self._driver: DeviceDriver | None = None
@@ -160,6 +170,13 @@ class Serial(SerialBase):
             raise SerialException("Port must be configured before it can be used.")
         self.from_url(self.port)
         o = self.options
+        if o["logging"] is not None:
+            logger.setLevel(LOGGER_LEVELS[o["logging"]])
+            if not any(h for lg in (logger, logger.parent) for h in lg.handlers):  # nobody shows it yet
+                handler = logging.StreamHandler()
+                handler.setFormatter(logging.Formatter("%(name)s: %(message)s"))
+                logger.addHandler(handler)
+        self._debug = logger.isEnabledFor(logging.DEBUG)
         from station.plant.model import load_model
 
         self.model = load_model(o["model"], n_elements=o["elements"])
@@ -250,6 +267,8 @@ class Serial(SerialBase):
                 timeout=self._timeout)
             data = bytes(self._buf[:size])
             del self._buf[:size]
+        if self._debug and data:
+            logger.debug("device -> station %s", data.hex(" "))
         return data
 
     def write(self, data) -> int:
@@ -257,6 +276,8 @@ class Serial(SerialBase):
         if not self.is_open:
             raise PortNotOpenError()
         data = to_bytes(data)
+        if self._debug:
+            logger.debug("station -> device %s", data.hex(" "))
         with self._cond:
             out = self._driver.feed(data)
             if out:
