@@ -10,6 +10,7 @@ import signal
 import subprocess
 import sys
 import time
+import warnings
 
 import numpy as np
 import pytest
@@ -121,8 +122,21 @@ def test_sigkill_leaves_every_row_older_than_100ms(device_factory, tmp_path):
     proc.send_signal(signal.SIGKILL)
     proc.wait(timeout=10)
     assert len(dev.sent) >= 500, proc.stderr.read().decode()
-    with pytest.warns(UserWarning) if _torn(log) else _no_warning():
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
         data = read_log(log).data
+    # a row cut by the kill is skipped with one RuntimeWarning; a whole last row, no warning
+    assert [(w.category, "torn last line" in str(w.message)) for w in caught] == (
+        [(RuntimeWarning, True)] if _torn(log) else [])
+    # the same log cut in the middle of its last whole row: always torn, always the warning
+    whole = log.read_bytes()[: log.read_bytes().rfind(b"\n") + 1]
+    last = whole[:-1].rfind(b"\n") + 1
+    cut = tmp_path / "cut.tsv"
+    cut.write_bytes(whole[: last + (len(whole) - last) // 2])
+    with pytest.warns(RuntimeWarning, match="torn last line"):
+        rows = read_log(cut).data["n"]
+    n_whole = len(data["n"])  # the whole rows (a torn tail is not in data either)
+    assert len(rows) == n_whole - 1 and np.array_equal(rows, data["n"][: n_whole - 1])
     must_have = [k for k, sent_at in dev.sent if sent_at < kill_time - 0.1]
     assert len(must_have) > 400
     assert data["n"][: len(must_have)].tolist() == must_have
@@ -130,14 +144,6 @@ def test_sigkill_leaves_every_row_older_than_100ms(device_factory, tmp_path):
 
 def _torn(path) -> bool:
     return not path.read_bytes().endswith(b"\n")
-
-
-class _no_warning:
-    def __enter__(self):
-        return self
-
-    def __exit__(self, *exc):
-        return False
 
 
 def test_cli_reports_a_fault_with_exit_code_1_and_json(device_factory, tmp_path):
