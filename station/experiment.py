@@ -252,7 +252,7 @@ def run_step(port: str = DEFAULT_PORT, protocol: str = "v1", controller: str = D
         ctrl = controller
         ctrl.reset()
         tag = str(ctrl.spec.get("kind", "custom"))
-    if out is not None and Path(out).exists() and not force:
+    if out is not None and Path(out).is_file() and not force:  # (a device such as /dev/null is no file to keep)
         raise StationError(f"{out}: exists; use --force (force=True) to overwrite it, or another name")
     log_path = Path(out) if out is not None else default_log_path(tag, folder=out_dir)
     try:
@@ -261,6 +261,8 @@ def run_step(port: str = DEFAULT_PORT, protocol: str = "v1", controller: str = D
         raise StationError(f"{log_path}: cannot create the run log's folder: {exc.strerror or exc}") from None
     limits = limits or LinkLimits(timeout=timeout)
     with StopSignals() as signals, open_session(port, protocol, baudrate=baudrate, limits=limits) as session:
+        if protocol == "v1":  # end whatever a wrong-protocol attempt left in the device's frame buffer
+            session.port.write(b"\x00")  # (spec: an empty frame is ignored; belongs in link's hello)
         info = session.hello()
         accel_zero = session.zero_accel()
         meta = {

@@ -119,7 +119,7 @@ def check_writable(path: Path | None, option: str, overwrite: bool = True) -> No
     if path.is_dir():
         raise StationError(f"{option} {path}: is a folder, expected a file")
     if path.exists():
-        if not overwrite:
+        if not overwrite and path.is_file():
             raise StationError(f"{option} {path}: exists; use --force to overwrite it, or another name")
         if not os.access(path, os.W_OK):
             raise StationError(f"{option} {path}: exists and is not writable")

@@ -70,6 +70,7 @@ class _Firmware:
         self.counters = Counters()
         self.running = True
         self.k = 0
+        self.hw.restart()  # every run from rest with the same noise: identical runs, identical logs
 
 
 class _V1Firmware(_Firmware):

@@ -57,6 +57,15 @@ class Hardware:
         self.encoder_zero = 0
         self.accel_zero = 0
         plant.reset()
+        self._noise_state = _rng_state(sensors)
+
+    def restart(self) -> None:
+        """A run starts (v1 START, legacy 'q'): the plant at rest and the sensors' noise
+        restarted from its seed, so identical runs give identical readings whatever ran
+        before. The firmware's zero offsets are the firmware's (START's flags set them)."""
+        self.plant.reset()
+        if self._noise_state is not None:
+            self.sensors.rng.bit_generator.state = self._noise_state
 
     def clamp(self, v: int) -> tuple[int, bool]:
         """``v`` limited to ±v_limit, and whether it had to be (SATURATED)."""
@@ -82,3 +91,10 @@ class Hardware:
     def zero_encoder(self) -> None:
         """Make the current encoder position read 0 (v1 START bit0, legacy '7')."""
         self.encoder_zero += self.read().theta
+
+
+def _rng_state(sensors):
+    """The state of the sensors' numpy Generator (``sensors.rng``), or None when they have none."""
+    rng = getattr(sensors, "rng", None)
+    bitgen = getattr(rng, "bit_generator", None)
+    return None if bitgen is None else bitgen.state
