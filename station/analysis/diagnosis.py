@@ -51,6 +51,7 @@ from station.analysis.residuals import (
     run_residuals,
 )
 from station.errors import StationError
+from station.reference import classify_reference
 
 MIN_RELATIVE_GAIN = 0.05
 """An effect is accepted only when it lowers the pooled validation cost by this fraction."""
@@ -687,8 +688,6 @@ def diagnose(runs: Sequence[str | Path], validate: Sequence[str | Path] = (), mo
         ra = run_residuals(c.theta, c.a, ext["theta"], ext["a"], d["v"], d["u"], c.closed) if accepted else rb
         before[c.name] = rb
         metrics = None
-        from station.replay import classify_reference
-
         ref = classify_reference(d["u"])
         if c.closed and ref["kind"] == "step":
             uf = float(d["u"][-1])
