@@ -72,10 +72,20 @@ def test_spawn_without_a_display_fails_before_the_run(tmp_path, monkeypatch, cap
     assert not log.exists()  # nothing started
 
 
-def test_rrd_recording_is_written(tmp_path):
+def test_rrd_recording_holds_the_run(tmp_path):
+    """The .rrd that --rrd writes holds the logged run itself (read back through rerun), not just bytes."""
+    from tests.test_viz import _series
+
     rrd = tmp_path / "run.rrd"
     assert main(["step", "--duration", "0.3", "--rrd", str(rrd), "--out", str(tmp_path / "r.tsv")]) == 0
-    assert rrd.stat().st_size > 1000
+    d = read_log(tmp_path / "r.tsv").data
+    assert d["n"].size == 150
+    for entity, column in (("/theta/measured", "theta"), ("/a/measured", "a"), ("/v/command", "v"),
+                           ("/theta/reference", "u")):
+        samples, values = _series(rrd, entity)
+        np.testing.assert_array_equal(samples, d["n"], err_msg=entity)
+        np.testing.assert_array_equal(values, d[column], err_msg=entity)
+    assert np.abs(d["theta"]).max() > 0  # a run that moved: the comparison is not of zeros
 
 
 def test_swept_sine_reference_is_the_rig_law(tmp_path, rig_data):
