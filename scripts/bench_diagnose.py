@@ -41,7 +41,7 @@ def main(argv: list[str] | None = None) -> int:
                         help="folder of the rig's logs (default ../shared/data/rig)")
     parser.add_argument("--blind", default=None, metavar="EFFECT=VALUE",
                         help="diagnose a generated hidden-effect case instead ('none' for a clean one)")
-    parser.add_argument("--workers", type=int, default=None, help="threads (default: cores, at most 2)")
+    parser.add_argument("--workers", type=int, default=None, help="threads fitting candidates at once (default 1)")
     parser.add_argument("--json", type=Path, default=None, help="write the numbers as JSON")
     args = parser.parse_args(argv)
 
