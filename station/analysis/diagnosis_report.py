@@ -95,7 +95,9 @@ def summary_paragraph(diag) -> str:
     parts = [f"{n} = {_value(accepted[n])}" for n in diag.causes]
     more = "" if len(parts) == 1 else f", together with {', '.join(parts[1:])}"
     first = accepted[diag.causes[0]]
-    return (f"The model {base} is missing {diag.causes[0]}: fitted value {_value(first)}{more}. "
+    what = (f"has its {first.name[6:]} off: {_value(first)} times the nominal value" if first.name.startswith("param:")
+            else f"is missing {first.name}: fitted value {_value(first)}")
+    return (f"The model {base} {what}{more}. "
             f"On data it was not fitted to ({diag.validation}) the extended model lowers the θ RMS error by "
             f"{diag.gain_pct:.1f} % (NRMSE fit of θ {_pct(diag.baseline_fit.get('theta'))} → "
             f"{_pct(diag.extended_fit.get('theta'))}, of a {_pct(diag.baseline_fit.get('accel'))} → "
