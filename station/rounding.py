@@ -54,6 +54,11 @@ else:
 def round_half_away(x: float) -> int:
     """Nearest integer to ``x``, halves away from zero (:func:`half_away` as an int).
 
+    Parameters
+    ----------
+    x : float
+        Any finite float.
+
     Raises
     ------
     ValueError

@@ -31,7 +31,17 @@ _TICK = struct.Struct(">hhh")
 
 
 class Tick(NamedTuple):
-    """One tick record from the device: n (tick number), theta (encoder counts), accel (ADC counts)."""
+    """One tick record from the device.
+
+    Attributes
+    ----------
+    n : int
+        Tick number from 0 (signed 16-bit: a test lasts at most 32767 ticks).
+    theta : int
+        Encoder counts (int16).
+    accel : int
+        Accelerometer, ADC counts (int16).
+    """
 
     n: int
     theta: int
@@ -39,19 +49,59 @@ class Tick(NamedTuple):
 
 
 def encode_word(value: int) -> bytes:
-    """One big-endian int16 word. Raises struct.error outside −32768..32767."""
+    """One big-endian int16 word.
+
+    Parameters
+    ----------
+    value : int
+        −32768..32767.
+
+    Returns
+    -------
+    bytes
+        Two bytes, big-endian two's complement.
+
+    Raises
+    ------
+    struct.error
+        ``value`` outside −32768..32767.
+    """
     return _WORD.pack(value)
 
 
 def decode_word(data: bytes) -> int:
-    """Inverse of :func:`encode_word` for exactly two bytes."""
+    """Inverse of :func:`encode_word` for exactly two bytes.
+
+    Parameters
+    ----------
+    data : bytes
+        Exactly two bytes.
+
+    Returns
+    -------
+    int
+        The signed 16-bit value.
+    """
     return _WORD.unpack(data)[0]
 
 
 def command_bytes(v: float) -> bytes:
     """``/`` + v as the old firmware expects: truncated toward zero, clamped to int16.
 
-    NaN raises ValueError (a controller that produced it must not drive the motor).
+    Parameters
+    ----------
+    v : float
+        The command, DAC counts.
+
+    Returns
+    -------
+    bytes
+        ``/`` followed by one big-endian word.
+
+    Raises
+    ------
+    ValueError
+        ``v`` is NaN (a controller that produced it must not drive the motor).
     """
     if math.isnan(v):
         raise ValueError("command is NaN")
@@ -59,7 +109,13 @@ def command_bytes(v: float) -> bytes:
 
 
 def tick_bytes(tick: Tick) -> bytes:
-    """The six bytes the device sends for one tick (used by the simulated device)."""
+    """The six bytes the device sends for one tick (used by the simulated device).
+
+    Parameters
+    ----------
+    tick : Tick
+        The record; each field must fit a signed 16-bit word.
+    """
     return _TICK.pack(*tick)
 
 
@@ -76,7 +132,13 @@ class TickDecoder:
         self._buf = bytearray()
 
     def feed(self, data: bytes) -> list[Tick]:
-        """Consume ``data``; return the complete tick records it finished."""
+        """Consume ``data``; return the complete tick records it finished.
+
+        Parameters
+        ----------
+        data : bytes
+            The next bytes from the device.
+        """
         self._buf += data
         whole = len(self._buf) - len(self._buf) % 6
         out = [Tick(*t) for t in _TICK.iter_unpack(self._buf[:whole])]
@@ -103,7 +165,18 @@ class CommandDecoder:
         self.errors = 0
 
     def feed(self, data: bytes) -> list[tuple]:
-        """Consume ``data``; return the commands completed by it."""
+        """Consume ``data``; return the commands completed by it.
+
+        Parameters
+        ----------
+        data : bytes
+            The next bytes from the station.
+
+        Returns
+        -------
+        list of tuple
+            ``("q",)``, ``("7",)``, ``("r",)``, ``("s",)`` or ``("/", v)`` per command, in order.
+        """
         out: list[tuple] = []
         for byte in data:
             if self._pending:

@@ -44,8 +44,18 @@ STOPPED_N_TICKS = 1
 class Sample:
     """SAMPLE (device→station): one interrupt tick.
 
-    seq: tick number mod 2**16; theta: encoder counts since reset; accel: ADC counts;
-    v_applied: DAC counts applied during this tick; status: LATE|WATCHDOG|... bits.
+    Attributes
+    ----------
+    seq : int
+        Tick number mod 2**16.
+    theta : int
+        Encoder counts since the last reset (int32).
+    accel : int
+        Accelerometer, ADC counts (int16).
+    v_applied : int
+        DAC counts applied during this tick (int16).
+    status : int
+        LATE | WATCHDOG | SATURATED | RX_ERROR | STALE bits.
     """
 
     seq: int
@@ -57,7 +67,15 @@ class Sample:
 
 @dataclass(frozen=True, slots=True)
 class Command:
-    """COMMAND (station→device): v in DAC counts answering SAMPLE ``seq``."""
+    """COMMAND (station→device): v in DAC counts answering SAMPLE ``seq``.
+
+    Attributes
+    ----------
+    seq : int
+        The seq of the SAMPLE this command answers (u16).
+    v : int
+        Command, DAC counts (int16; the station rounds it, :func:`round_command`).
+    """
 
     seq: int
     v: int
@@ -65,14 +83,38 @@ class Command:
 
 @dataclass(frozen=True, slots=True)
 class Hello:
-    """HELLO (station→device): asks for INFO."""
+    """HELLO (station→device): asks for INFO.
+
+    Attributes
+    ----------
+    protocol_version : int, default PROTOCOL_VERSION
+        The protocol the station speaks (u8).
+    """
 
     protocol_version: int = PROTOCOL_VERSION
 
 
 @dataclass(frozen=True, slots=True)
 class Info:
-    """INFO (device→station): firmware identity and fixed settings."""
+    """INFO (device→station): firmware identity and fixed settings.
+
+    Attributes
+    ----------
+    protocol_version : int
+        Protocol version (u8).
+    fw_major, fw_minor, fw_patch : int
+        Firmware version; with ``name`` they identify the implementation (u8 each).
+    rate_hz : int
+        Tick rate, Hz; 0 declares a lockstep device (u16).
+    v_limit : int
+        Output clamp, ±DAC counts (int16).
+    counts_per_rev : int
+        Encoder counts per base revolution (u16).
+    watchdog_ticks : int
+        Consecutive missed commands that trip the watchdog (u8).
+    name : str
+        At most 8 ASCII characters (NUL-padded on the wire).
+    """
 
     protocol_version: int
     fw_major: int
@@ -87,7 +129,15 @@ class Info:
 
 @dataclass(frozen=True, slots=True)
 class Start:
-    """START (station→device): flags (START_RESET_ENCODER | START_ZERO_ACCEL), n_ticks (0 = until STOP)."""
+    """START (station→device): begin a run.
+
+    Attributes
+    ----------
+    flags : int
+        START_RESET_ENCODER | START_ZERO_ACCEL (u8).
+    n_ticks : int
+        Ticks to run; 0 = until STOP (u32).
+    """
 
     flags: int
     n_ticks: int
@@ -100,7 +150,18 @@ class Stop:
 
 @dataclass(frozen=True, slots=True)
 class Stopped:
-    """STOPPED (device→station): reason (0 STOP received, 1 n_ticks done) and the run's counters."""
+    """STOPPED (device→station): the run ended; its counters.
+
+    Attributes
+    ----------
+    reason : int
+        STOPPED_BY_STOP (0) or STOPPED_N_TICKS (1).
+    ticks : int
+        Samples sent in the run (u32).
+    late, watchdog_trips, rx_errors : int
+        The run's LATE ticks, ended watchdog trips and bad frames received (u16 each,
+        saturating).
+    """
 
     reason: int
     ticks: int
@@ -125,12 +186,33 @@ _TYPE_OF = {cls: (code, layout) for code, (cls, layout) in _LAYOUT.items()}
 
 
 def crc16(data: bytes) -> int:
-    """CRC-16/CCITT-FALSE of ``data`` (binascii.crc_hqx with init 0xFFFF)."""
+    """CRC-16/CCITT-FALSE of ``data`` (binascii.crc_hqx with init 0xFFFF).
+
+    Parameters
+    ----------
+    data : bytes
+        The payload.
+
+    Returns
+    -------
+    int
+        The CRC, 0..0xFFFF.
+    """
     return binascii.crc_hqx(data, 0xFFFF)
 
 
 def encode(msg: Message) -> bytes:
     """Encode one message as a whole frame, trailing 0x00 delimiter included.
+
+    Parameters
+    ----------
+    msg : Message
+        A v1 message (:class:`Sample`, :class:`Command`, ...).
+
+    Returns
+    -------
+    bytes
+        COBS(payload ‖ crc16_le) ‖ 0x00, at most :data:`MAX_FRAME` bytes.
 
     Raises
     ------
@@ -151,7 +233,13 @@ def encode(msg: Message) -> bytes:
 
 
 def decode_payload(payload: bytes) -> Message | None:
-    """Decode one COBS-decoded frame body (payload || crc16_le); None when invalid."""
+    """Decode one COBS-decoded frame body (payload || crc16_le); None when invalid.
+
+    Parameters
+    ----------
+    payload : bytes
+        COBS-decoded frame body: type byte, fields, crc16 little-endian.
+    """
     if len(payload) < 3:
         return None
     body, crc = payload[:-2], int.from_bytes(payload[-2:], "little")
@@ -186,7 +274,19 @@ class Decoder:
         self.rx_errors = 0
 
     def feed(self, data: bytes) -> list[Message]:
-        """Consume ``data`` (any length, any split); return the messages completed by it."""
+        """Consume ``data`` (any length, any split); return the messages completed by it.
+
+        Parameters
+        ----------
+        data : bytes
+            The next bytes of the stream.
+
+        Returns
+        -------
+        list of Message
+            The messages whose frames ``data`` completed, in order (bad frames counted in
+            ``rx_errors``, not returned).
+        """
         out: list[Message] = []
         start = 0
         while True:

@@ -30,10 +30,17 @@ NAME = "SIMRIG"
 class Counters:
     """A run's counters (reset by v1 START / legacy 'q'), as STOPPED reports them.
 
-    ticks: ticks sent; late: ticks whose command had not arrived (v1: LATE samples;
-    legacy: ticks with no '/' since the previous tick); watchdog_trips: v1 watchdog trips
-    ended by a command with the expected seq; rx_errors: bad frames (v1) or unknown
-    bytes (legacy) received.
+    Attributes
+    ----------
+    ticks : int
+        Samples sent.
+    late : int
+        Ticks whose command had not arrived (v1: LATE samples; legacy: ticks with no '/'
+        since the previous tick).
+    watchdog_trips : int
+        v1 watchdog trips ended by a command with the expected seq.
+    rx_errors : int
+        Bad frames (v1) or unknown bytes (legacy) received.
     """
 
     ticks: int = 0
@@ -332,7 +339,13 @@ class SimDevice:
         self._fw = _V1Firmware(hw, watchdog_ticks, name) if protocol == "v1" else _LegacyFirmware(hw)
 
     def receive(self, data: bytes) -> None:
-        """Feed bytes from the station (any split); commands take effect at once, replies go to :meth:`take_output`."""
+        """Feed bytes from the station (any split); commands take effect at once, replies go to :meth:`take_output`.
+
+        Parameters
+        ----------
+        data : bytes
+            Bytes from the station, split anywhere.
+        """
         self._fw.receive(data)
 
     def tick(self) -> bytes:
@@ -354,7 +367,13 @@ class SimDevice:
         return self._fw.ready
 
     def set_lockstep(self, lockstep: bool) -> None:
-        """Declare the pacing in v1 INFO: rate_hz = 0 for lockstep, 500 for its own clock (spec)."""
+        """Declare the pacing in v1 INFO: rate_hz = 0 for lockstep, 500 for its own clock (spec).
+
+        Parameters
+        ----------
+        lockstep : bool
+            True: the transport ticks the device on the station's commands (INFO rate_hz 0).
+        """
         if isinstance(self._fw, _V1Firmware):
             self._fw.rate_hz = 0 if lockstep else RATE_HZ
 

@@ -68,7 +68,13 @@ class DeviceDriver:
         self._rng = np.random.default_rng(self.faults.seed)
 
     def feed(self, data: bytes) -> bytes:
-        """The station sent ``data``: the bytes the device sends in reply (lockstep: with the ticks it triggered)."""
+        """The station sent ``data``: the bytes the device sends in reply (lockstep: with the ticks it triggered).
+
+        Parameters
+        ----------
+        data : bytes
+            Bytes the station wrote.
+        """
         dev = self.device
         dev.receive(data)
         out = self._filter_reply(dev.take_output())

@@ -19,7 +19,15 @@ ZERO_ACCEL_READINGS = 16
 
 @dataclass(frozen=True, slots=True)
 class Reading:
-    """One latch of the sensors: theta (encoder counts since zeroing), a (ADC counts, offset removed when zeroed)."""
+    """One latch of the sensors.
+
+    Attributes
+    ----------
+    theta : int
+        Encoder counts since the last zeroing.
+    a : int
+        Accelerometer, ADC counts, the firmware's offset removed once zeroed.
+    """
 
     theta: int
     a: int
@@ -39,14 +47,14 @@ class Hardware:
         ``station.plant.Sensors``.
     accel_offset : float, default :data:`ACCEL_OFFSET`
         Added to the plant's acceleration before the ADC reads it, counts.
+    v_limit : int, default 255
+        The DAC's range, ±counts; :meth:`clamp` limits every output to it.
 
     Attributes
     ----------
     encoder_zero, accel_zero : int
         Subtracted from every reading (the firmware's zeroing: :meth:`zero_encoder`;
         the v1 firmware sets ``accel_zero`` after START bit1's averaging ticks).
-    v_limit : int, default 255
-        The DAC's range, ±counts; :meth:`clamp` limits every output to it.
     """
 
     def __init__(self, plant, sensors, accel_offset: float = ACCEL_OFFSET, v_limit: int = 255) -> None:
@@ -68,7 +76,20 @@ class Hardware:
             self.sensors.rng.bit_generator.state = self._noise_state
 
     def clamp(self, v: int) -> tuple[int, bool]:
-        """``v`` limited to ±v_limit, and whether it had to be (SATURATED)."""
+        """``v`` limited to ±v_limit, and whether it had to be (SATURATED).
+
+        Parameters
+        ----------
+        v : int
+            The chosen output, DAC counts.
+
+        Returns
+        -------
+        clamped : int
+            ``v`` limited to ±v_limit.
+        saturated : bool
+            Whether it had to be limited.
+        """
         c = max(-self.v_limit, min(self.v_limit, int(v)))
         return c, c != v
 
@@ -83,6 +104,16 @@ class Hardware:
 
         The readings see the state x_k, before ``v`` has had any effect (DESIGN.md,
         "Timing and log rows"); the plant then advances to x_{k+1}.
+
+        Parameters
+        ----------
+        v : int
+            The output for this tick, DAC counts, already clamped.
+
+        Returns
+        -------
+        Reading
+            The sensors as latched at the start of the tick.
         """
         reading = self.read()
         self.plant.advance(v)

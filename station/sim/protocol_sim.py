@@ -116,6 +116,16 @@ _OPTIONS = {  # name: (parser, default)
 def parse_url(url: str) -> dict:
     """The options of a ``sim://`` URL, defaults filled in.
 
+    Parameters
+    ----------
+    url : str
+        ``sim://[?option=value&...]`` (options: the module docstring).
+
+    Returns
+    -------
+    dict
+        Every option by name, parsed, defaults filled in.
+
     Raises
     ------
     serial.SerialException
@@ -147,7 +157,14 @@ def parse_url(url: str) -> dict:
 
 
 class Serial(SerialBase):
-    """The simulated rig behind a pyserial port (see the module docstring for the URL)."""
+    """The simulated rig behind a pyserial port (see the module docstring for the URL).
+
+    Parameters
+    ----------
+    *args, **kwargs
+        As :class:`serial.SerialBase` (``port`` is the ``sim://`` URL); opened at once
+        when a port is given, as pyserial does.
+    """
 
     def __init__(self, *args, **kwargs) -> None:
         self._debug = False
@@ -192,7 +209,13 @@ class Serial(SerialBase):
             self._clock.start()
 
     def from_url(self, url: str) -> None:
-        """Parse ``url`` into :attr:`options` (the one place options are read); see :func:`parse_url`."""
+        """Parse ``url`` into :attr:`options` (the one place options are read); see :func:`parse_url`.
+
+        Parameters
+        ----------
+        url : str
+            The ``sim://`` URL.
+        """
         self.options = parse_url(url)
 
     def close(self) -> None:
@@ -257,7 +280,13 @@ class Serial(SerialBase):
         return len(self._buf)
 
     def read(self, size: int = 1) -> bytes:
-        """Up to ``size`` bytes: waits until there are ``size`` or ``timeout`` runs out (None: no limit)."""
+        """Up to ``size`` bytes: waits until there are ``size`` or ``timeout`` runs out (None: no limit).
+
+        Parameters
+        ----------
+        size : int, default 1
+            Most bytes to return.
+        """
         if not self.is_open:
             raise PortNotOpenError()
         lockstep = self._driver.lockstep
@@ -272,7 +301,18 @@ class Serial(SerialBase):
         return data
 
     def write(self, data) -> int:
-        """Send ``data`` to the device; in lockstep, the ticks it triggers are sent before this returns."""
+        """Send ``data`` to the device; in lockstep, the ticks it triggers are sent before this returns.
+
+        Parameters
+        ----------
+        data : bytes-like
+            Bytes from the station.
+
+        Returns
+        -------
+        int
+            ``len(data)``.
+        """
         if not self.is_open:
             raise PortNotOpenError()
         data = to_bytes(data)

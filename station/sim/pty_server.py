@@ -118,7 +118,13 @@ def serve_pty(protocol: str = "v1", realtime: bool = False, seed: int = 0, n_ele
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
-    """The server's options (shared by ``station sim-device`` and ``python -m station.sim.pty_server``)."""
+    """The server's options (shared by ``station sim-device`` and ``python -m station.sim.pty_server``).
+
+    Parameters
+    ----------
+    parser : argparse.ArgumentParser
+        Gets ``--protocol``, ``--realtime``, ``--seed``, ``--elements``, ``--model``.
+    """
     from station.commands.options import number
 
     parser.add_argument("--protocol", choices=PROTOCOLS, default="v1", help="device protocol (default v1)")
@@ -133,12 +139,29 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def serve_from_args(args: argparse.Namespace) -> dict:
-    """:func:`serve_pty` with the options of :func:`add_arguments`."""
+    """:func:`serve_pty` with the options of :func:`add_arguments`.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        Parsed options of :func:`add_arguments`.
+
+    Returns
+    -------
+    dict
+        The summary :func:`serve_pty` returns.
+    """
     return serve_pty(args.protocol, args.realtime, args.seed, args.elements, model=args.model)
 
 
 def main(argv: list[str] | None = None) -> int:
-    """``python -m station.sim.pty_server``: serve until SIGTERM/SIGINT."""
+    """``python -m station.sim.pty_server``: serve until SIGTERM/SIGINT.
+
+    Parameters
+    ----------
+    argv : list of str, optional
+        Command-line arguments (default ``sys.argv[1:]``).
+    """
     parser = argparse.ArgumentParser(prog="python -m station.sim.pty_server", description=__doc__.splitlines()[0])
     add_arguments(parser)
     serve_from_args(parser.parse_args(argv))

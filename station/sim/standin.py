@@ -32,7 +32,13 @@ class StepRecorderPlant:
         return self.theta, self.a
 
     def advance(self, v: float) -> None:
-        """One step with input ``v`` held (DAC counts)."""
+        """One step with input ``v`` held (DAC counts).
+
+        Parameters
+        ----------
+        v : float
+            The input, DAC counts.
+        """
         self.theta += v
         self.a = float(v)
         self.steps += 1
@@ -54,7 +60,13 @@ class RoundingSensors:
         self.accel_noise_std = accel_noise_std
 
     def read(self, theta: float, a: float) -> tuple[int, int]:
-        """Quantised readings (encoder counts, ADC counts) of the noise-free outputs."""
+        """Quantised readings (encoder counts, ADC counts) of the noise-free outputs.
+
+        Parameters
+        ----------
+        theta, a : float
+            Noise-free outputs, encoder counts and ADC counts.
+        """
         noise = self._rng.normal(0.0, self.accel_noise_std) if self.accel_noise_std else 0.0
         return int(np.round(theta)), int(np.round(a + noise))
 
