@@ -41,7 +41,7 @@ import numpy as np
 
 from station.analysis.fit import nrmse_fit
 from station.analysis.fitting import Axis, axis_for, fit
-from station.analysis.metrics import StepMetrics, step_metrics
+from station.analysis.metrics import step_metrics
 from station.analysis.residuals import (
     ACCEL_NOISE_STD,
     THETA_QUANTIZATION_STD,
@@ -601,7 +601,6 @@ def diagnose(runs: Sequence[str | Path], validate: Sequence[str | Path] = (), mo
     else:
         folds = [Fold(tuple(j for j in fit_idx if j != i), (i,)) for i in fit_idx]
         how = "leave-one-run-out"
-    all_fold = Fold(fit_idx, ())
 
     # noise levels from the nominal residual's high-frequency part
     nominal_pred = {}
@@ -623,7 +622,7 @@ def diagnose(runs: Sequence[str | Path], validate: Sequence[str | Path] = (), mo
     single_all: dict[str, dict] = {}
     def alone(name):
         tr = _trial(ev, folds, (name,), axes, [{}] * len(folds))
-        return tr, (tr.fold_values[0] if validate else _fit_set(ev, [axes[name]], all_fold.fit, {}))
+        return tr, (tr.fold_values[0] if validate else _fit_set(ev, [axes[name]], fit_idx, {}))
 
     with ThreadPoolExecutor(workers) as pool:
         for k, (name, (tr, values)) in enumerate(zip(names, pool.map(alone, names)), 1):
