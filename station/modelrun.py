@@ -24,6 +24,11 @@ def command_quantization(log: RunLog) -> str:
     a log of ours without a protocol did not come from a device (e.g. written from a
     simulation): "none". The rig's logs were recorded with its legacy firmware:
     truncation toward zero.
+
+    Parameters
+    ----------
+    log : RunLog
+        The log (its header's protocol and format decide).
     """
     if log.format != "station":
         return "trunc"
@@ -32,7 +37,13 @@ def command_quantization(log: RunLog) -> str:
 
 def log_dt(log: RunLog) -> float:
     """The log's sample time, s: the header's ``dt``, else the median step of t (0.002 s
-    when the log has fewer than two rows)."""
+    when the log has fewer than two rows).
+
+    Parameters
+    ----------
+    log : RunLog
+        The log.
+    """
     dt = log.meta.get("dt")
     if isinstance(dt, (int, float)) and not isinstance(dt, bool) and dt > 0:
         return float(dt)
@@ -45,11 +56,17 @@ def log_dt(log: RunLog) -> float:
 class ModelRun:
     """A logged run simulated on the plant (:func:`simulate_log`).
 
-    prediction: dict of arrays as :func:`station.plant.simulate` returns (t, u, v,
-    theta, a, theta_d_hat); theta_measured: the logged θ it is compared with (relative
-    to its first sample in open loop: the rig's encoder is not reset before an
-    open-loop test); fit_pct: NRMSE fit of θ and a, % ({"theta", "accel"}, None where
-    undefined); how: one line saying how the model was driven.
+    Attributes
+    ----------
+    prediction : dict of ndarray
+        As :func:`station.plant.simulate` returns (t, u, v, theta, a, theta_d_hat), shape (N,) each.
+    theta_measured : ndarray, shape (N,)
+        The logged θ it is compared with, encoder counts (relative to its first sample in
+        open loop: the rig's encoder is not reset before an open-loop test).
+    fit_pct : dict
+        NRMSE fit of θ and a, % (``{"theta", "accel"}``, None where undefined).
+    how : str
+        One line saying how the model was driven.
     """
 
     prediction: dict

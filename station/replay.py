@@ -81,6 +81,8 @@ class ReplayReport:
     fit_pct : dict or None
         NRMSE fit (percent) of the model's theta and a to the logged ones (None when no
         model ran, or the model cannot represent the test, e.g. a hub-held beam test).
+    n_elements : int or None
+        FEM element count of the model that ran (None when none did).
     notes : list of str
         What was assumed or could not be done.
     controller_source : {"header", "inferred"} or None
@@ -235,10 +237,16 @@ def rig_controller(meta: dict[str, Any], dt: float = 0.002) -> tuple[Compensator
 class ControllerId(NamedTuple):
     """Which controller ran a log and where that came from (:func:`identify_controller`).
 
-    controller: Compensator, OpenLoop or None (none known: commands not replayed, the
-    model driven by the logged v); source: "header" (named by the log, including a PID
-    header matched to a standard discretization), "inferred" (identified from the data)
-    or None; notes: one line each on what was assumed or could not be done.
+    Attributes
+    ----------
+    controller : Compensator, OpenLoop or None
+        None when no controller is known: commands not replayed, the model driven by the
+        logged v.
+    source : {"header", "inferred"} or None
+        "header": named by the log (including a PID header matched to a standard
+        discretization); "inferred": identified from the data.
+    notes : list of str
+        One line each on what was assumed or could not be done.
     """
 
     controller: Compensator | OpenLoop | None
@@ -599,7 +607,13 @@ def format_report(report: ReplayReport) -> str:
 
 def format_beam_test(bt: BeamTestReport) -> list[str]:
     """Lines for a hub-held beam test: measured first mode (fit and log decrement, ± one
-    standard error) beside the model's."""
+    standard error) beside the model's.
+
+    Parameters
+    ----------
+    bt : BeamTestReport
+        :attr:`ReplayReport.beam_test`.
+    """
     m = bt.measured
     pm = lambda x, sd, f: "n/a" if x is None else f"{x:{f}}" + ("" if sd is None else f" ± {sd:.2g}")  # noqa: E731
     out = [f"beam test (hub held): first mode {pm(m.f1_hz, m.f1_hz_std, '.3f')} Hz, "

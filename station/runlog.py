@@ -45,10 +45,28 @@ from station.errors import StationError
 class LogRow(NamedTuple):
     """One row of our run log: tick k (DESIGN.md "Timing and log rows"); a tuple with names.
 
-    t (s), n (tick), u (reference, counts), v (command acting during tick k, DAC counts),
-    theta (encoder counts), a (accelerometer counts), theta_d_hat (encoder counts),
-    v_applied (DAC counts the device reports, NaN when it does not), status (v1 status
-    bits), latency_us (compute latency of v[k], µs; NaN for tick 0).
+    Attributes
+    ----------
+    t : float
+        Time, s.
+    n : int
+        Tick number.
+    u : float
+        Reference, encoder counts (open loop: DAC counts).
+    v : float
+        Command acting during tick k, DAC counts.
+    theta : float
+        Encoder counts.
+    a : float
+        Accelerometer, ADC counts.
+    theta_d_hat : float
+        The controller's θ_d estimate, encoder counts.
+    v_applied : float
+        DAC counts the device reports, NaN when it does not.
+    status : int
+        v1 status bits.
+    latency_us : float
+        Compute latency of v[k], µs; NaN for tick 0.
     """
 
     t: float
@@ -154,7 +172,13 @@ def format_value(x: Any) -> str:
 
 
 def format_lines(rows: Iterable[tuple]) -> list[str]:
-    """Rows (tuples in :data:`COLUMNS` order) as tab-separated lines, each ending in a newline."""
+    """Rows (tuples in :data:`COLUMNS` order) as tab-separated lines, each ending in a newline.
+
+    Parameters
+    ----------
+    rows : iterable of tuple
+        Rows in :data:`COLUMNS` order.
+    """
     fmt = format_value
     return ["\t".join([fmt(x) for x in row]) + "\n" for row in rows]
 
@@ -393,6 +417,11 @@ class RunLogWriter:
 
     def append(self, row: tuple) -> None:
         """Queue one row (a tuple in :data:`COLUMNS` order). O(1); no formatting or I/O.
+
+        Parameters
+        ----------
+        row : tuple
+            One row in :data:`COLUMNS` order (a :class:`LogRow` or plain tuple).
 
         Raises
         ------

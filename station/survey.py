@@ -30,9 +30,36 @@ FIELDS = ("file", "format", "rows", "sample_time_s", "controller", "controller_s
 class SurveyRow:
     """One file of a survey (the CSV's columns, :data:`FIELDS`).
 
-    ``format`` is the layout ("station", "rig", "columns"); ``controller_source`` is
-    "header", "inferred" or "" (none); ``reason`` is empty for a usable file, else one
-    line saying why it could not be used. Numbers are None where not applicable.
+    Attributes
+    ----------
+    file : str
+        The log's path.
+    format : str
+        Its layout ("station", "rig", "columns", ...; :attr:`station.runlog.RunLog.layout`).
+    rows : int or None
+        Samples in the log.
+    sample_time_s : float or None
+        The log's sample time, s.
+    controller : str
+        The replayed controller's name ("" when none).
+    controller_source : str
+        "header", "inferred" or "" (none).
+    alignment : int or None
+        Computational delay detected by the replay, samples.
+    max_abs_dv : float or None
+        Largest |replayed v − logged v|, DAC counts.
+    overshoot_pct, settling_time_s : float or None
+        Step metrics of the logged θ (:class:`station.analysis.metrics.StepMetrics`).
+    fit_theta_pct, fit_accel_pct : float or None
+        NRMSE fit of the model to the logged θ and a, %.
+    f1_hz, zeta1 : float or None
+        Hub-held beam test: measured first mode, Hz, and its damping ratio.
+    f1_model_hz, zeta1_model : float or None
+        The model's hub-held first mode beside it.
+    reason : str
+        Empty for a usable file, else one line saying why it could not be used.
+    report : dict or None
+        The replay's JSON (:meth:`station.replay.ReplayReport.to_json`); not a CSV column.
     """
 
     file: str
@@ -63,6 +90,11 @@ class SurveyRow:
 def find_logs(paths: Iterable[str | Path]) -> list[Path]:
     """The files to survey: each FILE as given, every file under each DIR (recursive,
     hidden files and folders skipped), sorted, without duplicates.
+
+    Parameters
+    ----------
+    paths : iterable of str or Path
+        Files and folders.
 
     Raises
     ------
@@ -244,7 +276,13 @@ def format_table(rows: Sequence[SurveyRow], root: str | Path | None = None) -> s
 
 
 def to_csv(rows: Sequence[SurveyRow]) -> str:
-    """The survey as CSV text, columns :data:`FIELDS` (empty cells for None)."""
+    """The survey as CSV text, columns :data:`FIELDS` (empty cells for None).
+
+    Parameters
+    ----------
+    rows : sequence of SurveyRow
+        The survey's rows, in order.
+    """
     buf = io.StringIO()
     w = csv.writer(buf, lineterminator="\n")
     w.writerow(FIELDS)
@@ -257,6 +295,18 @@ def to_csv(rows: Sequence[SurveyRow]) -> str:
 def write_reports(rows: Sequence[SurveyRow], folder: str | Path) -> list[Path]:
     """Write each usable file's replay JSON (``<n>_<stem>.json``) and the table
     (``survey.txt``) into ``folder`` (created).
+
+    Parameters
+    ----------
+    rows : sequence of SurveyRow
+        The survey's rows (unusable files get no JSON).
+    folder : str or Path
+        Output folder.
+
+    Returns
+    -------
+    list of Path
+        The files written.
 
     Returns
     -------

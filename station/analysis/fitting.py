@@ -52,7 +52,13 @@ class Axis:
     scale: str
 
     def to_unit(self, x: float) -> float:
-        """Value -> search coordinate (grid points equally spaced in it)."""
+        """Value -> search coordinate (grid points equally spaced in it).
+
+        Parameters
+        ----------
+        x : float
+            A value in the effect's unit.
+        """
         if self.scale == "log":
             return math.log(x)
         if self.scale == "sqrt":
@@ -60,7 +66,13 @@ class Axis:
         return float(x)
 
     def from_unit(self, t: float) -> float:
-        """Search coordinate -> value, clipped to [lower, upper]."""
+        """Search coordinate -> value, clipped to [lower, upper].
+
+        Parameters
+        ----------
+        t : float
+            A search coordinate.
+        """
         lo, hi = self.to_unit(self.lower), self.to_unit(self.upper)
         t = min(max(t, lo), hi)
         if self.scale != "int":  # on a lattice of 1/64 grid step: refinements share simulations
@@ -77,7 +89,13 @@ class Axis:
         return float(min(max(x, self.lower), self.upper))
 
     def grid(self, points: int = GRID_POINTS) -> np.ndarray:
-        """The bracketing grid, shape (G,), in the effect's unit."""
+        """The bracketing grid, shape (G,), in the effect's unit.
+
+        Parameters
+        ----------
+        points : int, default GRID_POINTS
+            Grid points (whole-number axes ignore it: every integer in range).
+        """
         if self.scale == "int":
             return np.arange(math.ceil(self.lower), math.floor(self.upper) + 1, dtype=float)
         lo, hi = self.to_unit(self.lower), self.to_unit(self.upper)
@@ -100,6 +118,15 @@ def axis_for(name: str, lower: float, upper: float, neutral: float) -> Axis:
     Whole-number effects ("delay") are enumerated; ranges with lower > 0 spanning a factor
     of 4 or more are log-spaced (ratios, damping ratios); ranges from 0 are square-root
     spaced; the rest (saturation) linear.
+
+    Parameters
+    ----------
+    name : str
+        The effect's name.
+    lower, upper : float
+        Its search range, in its unit.
+    neutral : float
+        Its "no effect" value.
     """
     if name == "delay":
         return Axis(name, lower, upper, "int")

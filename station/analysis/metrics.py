@@ -16,7 +16,15 @@ import numpy as np
 
 @dataclass(frozen=True)
 class StepMetrics:
-    """Overshoot (percent of the step) and settling time (s from t = 0; None: not settled)."""
+    """Overshoot (percent of the step) and settling time (s from t = 0; None: not settled).
+
+    Attributes
+    ----------
+    overshoot_pct : float
+        Overshoot, percent of the step.
+    settling_time_s : float or None
+        Settling time, s from t = 0; None: not settled.
+    """
 
     overshoot_pct: float
     settling_time_s: float | None
@@ -39,12 +47,21 @@ NOT_SETTLED = "not settled within the run"
 class StepInfo:
     """The usual step-response figures beside the thesis's (python-control ``step_info`` on the logged θ).
 
-    Times are s after the step (not from t = 0 of the log). ``rise_time_s``: 10 % to 90 %
-    of the step (None when θ never reached 90 %); ``peak_time_s``: time of the largest
-    |θ|; ``settling_time_2pct_s``: python-control's 2 % settling time (None: not settled
-    within the run); ``steady_state_error``: step − mean θ over the run's last 0.1 s,
-    encoder counts; ``saturation_time_s``: time the command spent at the controller's
-    clamp (None when the limit or v is unknown).
+    Times are s after the step (not from t = 0 of the log).
+
+    Attributes
+    ----------
+    rise_time_s : float or None
+        10 % to 90 % of the step (None when θ never reached 90 %).
+    peak_time_s : float or None
+        Time of the largest |θ|.
+    settling_time_2pct_s : float or None
+        python-control's 2 % settling time (None: not settled within the run).
+    steady_state_error : float
+        Step − mean θ over the run's last 0.1 s, encoder counts.
+    saturation_time_s : float or None
+        Time the command spent at the controller's clamp (None when the limit or v is
+        unknown).
     """
 
     rise_time_s: float | None
@@ -132,7 +149,13 @@ def step_info(t, theta, u_final: float, step_time: float = 0.0, v=None, limit: f
 
 
 def settling_band(u_final: float) -> float:
-    """Half-width of the settling band, encoder counts: max(1 % of |u_final|, 1 count)."""
+    """Half-width of the settling band, encoder counts: max(1 % of |u_final|, 1 count).
+
+    Parameters
+    ----------
+    u_final : float
+        The step's final value, encoder counts.
+    """
     return max(0.01 * abs(u_final), 1.0)
 
 

@@ -229,7 +229,15 @@ def hub_sticking(theta, a, dt: float = 0.002, min_samples: int = 25, a_threshold
 
 
 def steady_state_error(theta, u, tail: float = 0.2) -> float:
-    """Mean of u − θ over the last ``tail`` fraction of a run, encoder counts."""
+    """Mean of u − θ over the last ``tail`` fraction of a run, encoder counts.
+
+    Parameters
+    ----------
+    theta, u : array_like, shape (N,)
+        Logged θ and reference, encoder counts.
+    tail : float, default 0.2
+        Fraction of the run at its end that is averaged.
+    """
     theta = np.asarray(theta, dtype=float).ravel()
     u = np.asarray(u, dtype=float).ravel()
     k = max(1, int(round(tail * theta.size)))

@@ -13,7 +13,15 @@ from station.control.tf import DiscreteTF
 
 
 def saturate(v: float, limit: float | None) -> float:
-    """Clamp ``v`` to ±limit (DAC counts); None means no clamp."""
+    """Clamp ``v`` to ±limit (DAC counts); None means no clamp.
+
+    Parameters
+    ----------
+    v : float
+        The command, DAC counts.
+    limit : float or None
+        The clamp, ±DAC counts; None: no clamp.
+    """
     if limit is None:
         return v
     return limit if v > limit else -limit if v < -limit else v
@@ -108,7 +116,15 @@ class OpenLoop:
         """Nothing to reset (no state)."""
 
     def step(self, u: float, theta: float, a: float) -> tuple[float, float]:
-        """Return ``(v, theta_d_hat) = (u, u)``, v clamped to +-limit; theta and a unused."""
+        """Return ``(v, theta_d_hat) = (u, u)``, v clamped to +-limit; theta and a unused.
+
+        Parameters
+        ----------
+        u : float
+            The reference: the command itself in open loop, DAC counts.
+        theta, a : float
+            Sensor readings (unused).
+        """
         return saturate(u, self.limit), u
 
     def __repr__(self) -> str:

@@ -78,7 +78,13 @@ class DiscretePlant:
         return float(y[0]), float(y[1])
 
     def advance(self, v: float) -> None:
-        """Advance one sample with v (DAC counts) held: x ← Ad x + Bd v."""
+        """Advance one sample with v (DAC counts) held: x ← Ad x + Bd v.
+
+        Parameters
+        ----------
+        v : float
+            The input held over the sample, DAC counts.
+        """
         self.x = self.Ad @ self.x + self.Bd * float(v)
 
     def simulate_open_loop(self, v) -> tuple[np.ndarray, np.ndarray]:
@@ -157,5 +163,11 @@ class Sensors:
 
 
 def quantize(x: float) -> int:
-    """Nearest whole count (halves rounded up), as the encoder and ADC report."""
+    """Nearest whole count (halves rounded up), as the encoder and ADC report.
+
+    Parameters
+    ----------
+    x : float
+        A noise-free output, counts.
+    """
     return int(np.floor(x + 0.5))

@@ -88,7 +88,15 @@ CANDIDATES: tuple[str, ...] = (
 
 
 def is_neutral(name: str, value: float) -> bool:
-    """True when ``value`` means "no effect" for the effect ``name`` (known name)."""
+    """True when ``value`` means "no effect" for the effect ``name`` (known name).
+
+    Parameters
+    ----------
+    name : str
+        An effect of :data:`EFFECTS`.
+    value : float
+        Its value, in the effect's unit.
+    """
     return float(value) == EFFECTS[name].neutral
 
 

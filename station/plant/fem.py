@@ -158,14 +158,30 @@ def beam_frequencies(
 ) -> np.ndarray:
     """Elastic natural frequencies (rad/s, ascending) of a uniform beam alone.
 
-    See `beam_modes` (same parameters); thesis Table 3.1 lists the pinned-free case
+    The first output of `beam_modes`; thesis Table 3.1 lists the pinned-free case
     with EI = mu = L = 1.
+
+    Parameters
+    ----------
+    n_elements : int
+        Element count, 1..100.
+    bc : {"pinned-free", "cantilever", "free-free"}, default "pinned-free"
+        Boundary condition at the root (x = 0); the tip is free.
+    EI, mu, L : float, default 1.0
+        Flexural rigidity N·m², mass per length kg/m, length m.
     """
     return beam_modes(n_elements, bc, EI, mu, L)[0]
 
 
 class SecondOrderModel:
     """M q'' + C q' + K q = b v of the SFLR, SI units (see module docstring for q).
+
+    Parameters
+    ----------
+    params : Params
+        The physical parameters (SI).
+    n_elements : int, default 4
+        Beam elements, 1..100.
 
     Attributes
     ----------
@@ -210,6 +226,13 @@ class SecondOrderModel:
 
 def modal_basis(params: Params, n_elements: int = 4) -> tuple[SecondOrderModel, np.ndarray, np.ndarray, np.ndarray]:
     """The undamped modes under `state_matrices`' state x = [S η, η'], q = Φ η.
+
+    Parameters
+    ----------
+    params : Params
+        The physical parameters (SI).
+    n_elements : int, default 4
+        Beam elements, 1..100.
 
     Returns
     -------

@@ -84,11 +84,24 @@ class Model:
         return dict(self.effects)
 
     def effect(self, name: str) -> float:
-        """The value of one effect, its neutral value when absent."""
+        """The value of one effect, its neutral value when absent.
+
+        Parameters
+        ----------
+        name : str
+            An effect of :data:`station.plant.effects.EFFECTS`.
+        """
         return self.effect_dict().get(name, EFFECTS[name].neutral)
 
     def with_effects(self, effects: Mapping[str, float], name: str | None = None) -> Model:
         """A copy with ``effects`` updated over this model's (a neutral value removes one).
+
+        Parameters
+        ----------
+        effects : mapping of str to float
+            Effect name -> value, in the effect's unit.
+        name : str, optional
+            The copy's name (default: this model's).
 
         Raises
         ------
@@ -135,6 +148,13 @@ class Model:
     def plant(self, dt: float = DT, substeps: int | None = None):
         """A plant stepped tick by tick with this model's effects (for the simulated device).
 
+        Parameters
+        ----------
+        dt : float, default 0.002
+            Sample time, s.
+        substeps : int, optional
+            Sub-steps per sample for friction and backlash (default: the kernel's choice).
+
         Returns
         -------
         station.plant.simulate.ModelPlant
@@ -168,7 +188,13 @@ class Model:
         return "\n".join(lines) + "\n"
 
     def save(self, path: str | Path) -> None:
-        """Write :meth:`to_toml` to ``path``."""
+        """Write :meth:`to_toml` to ``path``.
+
+        Parameters
+        ----------
+        path : str or Path
+            The TOML file to write (DESIGN.md "Model file").
+        """
         Path(path).write_text(self.to_toml())
 
 
@@ -282,7 +308,17 @@ def load_model(name_or_path: str | Path = "tmm-fit", n_elements: int | None = No
 
 def as_model(model: Model | str | Path | None, n_elements: int | None = None,
              params: str | Path | None = None) -> Model:
-    """A Model as given, or loaded by :func:`load_model` (None: "tmm-fit")."""
+    """A Model as given, or loaded by :func:`load_model` (None: "tmm-fit").
+
+    Parameters
+    ----------
+    model : Model, str, Path or None
+        A Model, a built-in model's name or a model file; None: "tmm-fit".
+    n_elements : int, optional
+        Overrides the model's element count.
+    params : str or Path, optional
+        A parameter set (name or file) replacing the model's.
+    """
     if isinstance(model, Model):
         if n_elements is not None:
             model = dataclasses.replace(model, n_elements=n_elements)

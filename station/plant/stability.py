@@ -57,7 +57,17 @@ def closed_loop(plant, controller, alignment: int = 1) -> control.StateSpace:
 
 def closed_loop_spectral_radius(plant, controller, alignment: int = 1) -> float:
     """Largest pole magnitude of `closed_loop` (< 1: stable; the loop removes the
-    plant's rigid-body integrator). For open loop (no Gth), that of Ad itself."""
+    plant's rigid-body integrator). For open loop (no Gth), that of Ad itself.
+
+    Parameters
+    ----------
+    plant : DiscretePlant
+        The sampled plant.
+    controller : station.control.Compensator or OpenLoop
+        As :func:`closed_loop`.
+    alignment : int, default 1
+        Computational delay d in samples.
+    """
     if getattr(controller, "gth", None) is None:
         return float(np.abs(np.linalg.eigvals(plant.Ad)).max())
     return float(np.abs(control.poles(closed_loop(plant, controller, alignment))).max())
