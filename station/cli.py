@@ -57,6 +57,11 @@ def main(argv: list[str] | None = None) -> int:
     the work is done are ignored until the process exits (the tail of a burst must not
     kill it with a different code); called with ``argv`` (tests, notebooks), the old
     handlers are put back.
+
+    Parameters
+    ----------
+    argv : list of str, optional
+        Command-line arguments; None: ``sys.argv[1:]`` (the console script).
     """
     with StopSignals(ignore_after=argv is None) as signals, warnings.catch_warnings():
         warnings.showwarning = _one_line_warning

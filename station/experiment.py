@@ -107,9 +107,20 @@ def make_reference(kind: str, amplitude: float, duration: float | None, step_tic
 class StepReport:
     """Outcome of one step test.
 
-    log_path: the run log; result: how the loop ended (``result.outcome``), with timing;
-    metrics: overshoot and settling time of the logged θ (None unless a closed-loop step
-    run completed: a run cut short has no meaningful step metrics).
+    Attributes
+    ----------
+    log_path : Path
+        The run log.
+    result : RunResult
+        How the loop ended (``result.outcome``), with timing.
+    metrics : StepMetrics or None
+        Overshoot and settling time of the logged θ (None unless a closed-loop step run
+        completed: a run cut short has no meaningful step metrics).
+    info : StepInfo or None
+        Rise, peak and 2 % settling times, steady-state error and time at the clamp
+        (None when ``metrics`` is).
+    figure_path : Path or None
+        The run's figure (None when none was drawn).
     """
 
     log_path: Path
@@ -153,7 +164,22 @@ class StepReport:
 
 def default_log_path(tag: str, when: _dt.datetime | None = None, folder: str | Path = "runs") -> Path:
     """``runs/step-<tag>-<UTC time, ms>.tsv`` under the current directory (tag: controller
-    name), with ``-2``, ``-3``... added when that name exists: names never collide."""
+    name), with ``-2``, ``-3``... added when that name exists: names never collide.
+
+    Parameters
+    ----------
+    tag : str
+        The controller's name.
+    when : datetime, optional
+        The time in the name (default now, UTC).
+    folder : str or Path, default "runs"
+        Folder of the log.
+
+    Returns
+    -------
+    Path
+        A name that neither a log nor its figure uses yet.
+    """
     when = when or _dt.datetime.now(_dt.UTC)
     stem = f"step-{tag}-{when:%Y%m%d-%H%M%S}-{when.microsecond // 1000:03d}"
     path = Path(folder) / f"{stem}.tsv"
@@ -183,6 +209,7 @@ def run_step(port: str = DEFAULT_PORT, protocol: str = "v1", controller: str = D
     port : str
         Port path or pyserial URL; ``sim://`` is the built-in simulated rig (lockstep).
     protocol : {"v1", "legacy"}
+        The device's wire protocol (``shared/spec/protocol.md``).
     controller : str or controller object
         "p", "lead", "lead-accel", "open-loop", a compensator TOML file, or any object
         with ``step(u, theta, a) -> (v, theta_d_hat)``, ``reset()`` and a JSON-able
@@ -208,6 +235,11 @@ def run_step(port: str = DEFAULT_PORT, protocol: str = "v1", controller: str = D
         Encoder soft limit, counts: passing it stops the run safely.
     timeout : float
         Longest wait for one sample, s.
+    baudrate : int, optional
+        Serial baud rate (default: the protocol's, :func:`station.link.open_port`).
+    dt : float
+        Sample time, s (0.002: the rig's 500 Hz); sizes the reference and the controller's
+        discretization.
     lean : bool
         The loop's real-time settings (see :func:`station.loop.run_loop`).
     limits : station.link.LinkLimits, optional
@@ -336,6 +368,13 @@ def wire_limit(controller, limit: float | None) -> float:
 
     The controller's own clamp when it has a finite one (a compensator file's ``limit``
     wins over ``--limit``), else ``limit``, else the DAC's range.
+
+    Parameters
+    ----------
+    controller : controller object
+        Its ``limit`` attribute, when finite and positive, wins (at most the DAC's range).
+    limit : float or None
+        The ``--limit`` option, ±DAC counts.
     """
     own = getattr(controller, "limit", None)
     for value in (own, limit):
@@ -355,7 +394,13 @@ def _metrics_of(log_path: Path, amplitude: float, limit: float | None,
 
 
 def format_report(report: StepReport) -> str:
-    """Human-readable summary: outcome, overshoot, settling time, timing, log path."""
+    """Human-readable summary: outcome, overshoot, settling time, timing, log path.
+
+    Parameters
+    ----------
+    report : StepReport
+        What :func:`run_step` returned.
+    """
     r, m, tm = report.result, report.metrics, report.result.timing()
     o = r.outcome
     if r.ok:

@@ -56,10 +56,19 @@ HANDSHAKE_TIMEOUT = 1.0
 class Sample(NamedTuple):
     """One sample as both sessions give it to the loop (a tuple with names).
 
-    n: tick number from 0 (v1 sequence numbers unwrapped); theta: encoder counts;
-    accel: ADC counts (legacy: minus the station's zero offset); v_applied: DAC counts
-    the device applied during tick n (None for legacy, which does not report it);
-    status: v1 status bits (0 for legacy).
+    Attributes
+    ----------
+    n : int
+        Tick number from 0 (v1 sequence numbers unwrapped).
+    theta : int
+        Encoder counts.
+    accel : int
+        ADC counts (legacy: minus the station's zero offset).
+    v_applied : int or None
+        DAC counts the device applied during tick n (None for legacy, which does not
+        report it).
+    status : int
+        v1 status bits (0 for legacy).
     """
 
     n: int
@@ -154,7 +163,15 @@ class Interrupted(LinkFault):
 
 
 class DeviceStopped(StationError):
-    """The device ended the run on its own (v1 STOPPED); ``stopped`` holds its counters."""
+    """The device ended the run on its own (v1 STOPPED); ``stopped`` holds its counters.
+
+    Parameters
+    ----------
+    message : str
+        One line for the user.
+    stopped : dict
+        The STOPPED message's fields (reason, ticks, late, watchdog_trips, rx_errors).
+    """
 
     def __init__(self, message: str, stopped: dict):
         super().__init__(message)
@@ -162,7 +179,15 @@ class DeviceStopped(StationError):
 
 
 def sim_url(url: str, protocol: str) -> str:
-    """Add ``protocol=`` to a ``sim://`` URL that does not name one; other URLs pass unchanged."""
+    """Add ``protocol=`` to a ``sim://`` URL that does not name one; other URLs pass unchanged.
+
+    Parameters
+    ----------
+    url : str
+        A port path or pyserial URL.
+    protocol : str
+        "v1" or "legacy".
+    """
     parts = urlsplit(url)
     if parts.scheme != "sim":
         return url
@@ -222,6 +247,15 @@ class Session:
 
     ``stop_requested``: a callable polled while waiting for a sample; when it returns
     a reason ("sigint" / "sigterm") the wait ends with :class:`Interrupted`.
+
+    Parameters
+    ----------
+    port : serial.SerialBase
+        The open port (:func:`open_port`).
+    url : str
+        What was opened, for messages.
+    limits : LinkLimits
+        The fail-safe bounds; ``limits.timeout`` is the sample timeout.
     """
 
     protocol = ""
@@ -387,7 +421,17 @@ class Session:
 
 
 class V1Session(Session):
-    """Protocol v1 session (``shared/spec/protocol.md``)."""
+    """Protocol v1 session (``shared/spec/protocol.md``).
+
+    Parameters
+    ----------
+    port : serial.SerialBase
+        The open port (:func:`open_port`).
+    url : str
+        What was opened, for messages.
+    limits : LinkLimits
+        The fail-safe bounds; ``limits.timeout`` is the sample timeout.
+    """
 
     protocol = "v1"
     sample_bytes = 16
@@ -445,6 +489,11 @@ class V1Session(Session):
         Whatever is still in the input (samples of an earlier run, e.g. after a USB
         replug) is discarded first. The first sample is due within the timeout plus the
         16 ticks of accelerometer zeroing.
+
+        Parameters
+        ----------
+        n_ticks : int
+            Ticks the run lasts.
         """
         self.port.reset_input_buffer()
         self._pending.clear()
@@ -521,6 +570,13 @@ class V1Session(Session):
         """Answer sample n with command v (DAC counts, rounded halves away from zero).
 
         Raises LagError first when more than ``max_lag`` samples are already waiting.
+
+        Parameters
+        ----------
+        n : int
+            The sample answered (its seq is n mod 2**16).
+        v : float
+            The command, DAC counts.
         """
         self._before_command(n)
         if self._debug:
@@ -558,6 +614,15 @@ class LegacySession(Session):
 
     The device cannot declare lockstep, so only the slow-rate check applies, and it
     cannot report late commands: ``late`` counts what the station sees (``late_seen``).
+
+    Parameters
+    ----------
+    port : serial.SerialBase
+        The open port (:func:`open_port`).
+    url : str
+        What was opened, for messages.
+    limits : LinkLimits
+        The fail-safe bounds; ``limits.timeout`` is the sample timeout.
     """
 
     protocol = "legacy"
@@ -655,7 +720,13 @@ class LegacySession(Session):
         self._deadline = Timeout(self.timeout)
 
     def start(self, n_ticks: int) -> None:
-        """Start the run (see :meth:`_begin`); n_ticks is checked, not sent (the device runs until 's')."""
+        """Start the run (see :meth:`_begin`); n_ticks is checked, not sent (the device runs until 's').
+
+        Parameters
+        ----------
+        n_ticks : int
+            Ticks the run lasts.
+        """
         if n_ticks > legacy.MAX_TICKS:
             raise StationError(f"the legacy protocol counts ticks in int16: at most {legacy.MAX_TICKS} ticks, asked {n_ticks}")
         self._begin()
@@ -690,6 +761,13 @@ class LegacySession(Session):
         """Send '/' + v (truncated toward zero); n is implicit in this protocol.
 
         Raises LagError first when more than ``max_lag`` samples are already waiting.
+
+        Parameters
+        ----------
+        n : int
+            The sample answered (implicit in this protocol: not sent).
+        v : float
+            The command, DAC counts.
         """
         self._before_command(n)
         self._port_write(legacy.command_bytes(v))
@@ -725,7 +803,16 @@ def open_session(url: str, protocol: str = "v1", timeout: float = 0.1, baudrate:
     limits : LinkLimits, optional
         The fail-safe bounds; default ``LinkLimits(timeout)``.
 
-    Raises StationError for an unknown protocol or a port that cannot be opened.
+    Returns
+    -------
+    Session
+        A :class:`V1Session` or :class:`LegacySession`; a context manager that closes
+        the port.
+
+    Raises
+    ------
+    StationError
+        An unknown protocol or a port that cannot be opened.
     """
     if protocol not in _SESSIONS:
         raise StationError(f"unknown protocol {protocol!r}: expected one of {', '.join(_SESSIONS)}")

@@ -48,9 +48,14 @@ logger = logging.getLogger("station.loop")
 class TimingSummary:
     """Compute latency (sample received → command written) and link health of a run.
 
-    p50_us, p99_us, max_us: latency percentiles in µs (NaN when no command was sent);
-    late: commands the device reports as late (v1 LATE status); dropped: samples
-    missing from the sequence numbers.
+    Attributes
+    ----------
+    p50_us, p99_us, max_us : float
+        Latency percentiles and maximum, µs (NaN when no command was sent).
+    late : int
+        Commands the device reports as late (v1 LATE status).
+    dropped : int
+        Samples missing from the sequence numbers.
     """
 
     p50_us: float

@@ -98,7 +98,13 @@ class Outcome:
     @classmethod
     def from_json(cls, obj: Any) -> Outcome | None:
         """Read an outcome written by :meth:`to_json`; None when ``obj`` is not one
-        (unknown keys are ignored, so newer logs still read)."""
+        (unknown keys are ignored, so newer logs still read).
+
+        Parameters
+        ----------
+        obj : object
+            What the log's ``# end`` record holds (a dict from JSON).
+        """
         if not isinstance(obj, dict) or obj.get("reason") not in REASONS:
             return None
         names = {f.name for f in dataclasses.fields(cls)}

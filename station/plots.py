@@ -16,7 +16,13 @@ from station.errors import StationError
 
 
 def new_figure(width: float = 9.0, height: float = 8.0):
-    """A Figure with its Agg canvas attached (no pyplot state)."""
+    """A Figure with its Agg canvas attached (no pyplot state).
+
+    Parameters
+    ----------
+    width, height : float
+        Size, inches.
+    """
     from matplotlib.backends.backend_agg import FigureCanvasAgg
     from matplotlib.figure import Figure
 
@@ -27,6 +33,15 @@ def new_figure(width: float = 9.0, height: float = 8.0):
 
 def save_figure(fig, path: str | Path, dpi: int = 100) -> Path:
     """Write ``fig`` as PNG to ``path``.
+
+    Parameters
+    ----------
+    fig : matplotlib.figure.Figure
+        The figure.
+    path : str or Path
+        The PNG file.
+    dpi : int, default 100
+        Resolution, dots per inch.
 
     Raises
     ------
@@ -43,7 +58,13 @@ def save_figure(fig, path: str | Path, dpi: int = 100) -> Path:
 
 def source_label(log) -> str:
     """Where a log comes from: "rig" (the rig's lab software), "simulated" (our log of the
-    simulated rig, sim:// or sim-device) or "station" (our log of a real device)."""
+    simulated rig, sim:// or sim-device) or "station" (our log of a real device).
+
+    Parameters
+    ----------
+    log : RunLog
+        A read log (its format, header port, device name and plant).
+    """
     if log.format != "station":
         return "rig"
     meta = log.meta
@@ -56,7 +77,13 @@ def source_label(log) -> str:
 
 
 def outcome_text(log) -> str:
-    """The end record in a few words: "completed", "stopped: timeout", or "no end record" (SIGKILL or a rig log)."""
+    """The end record in a few words: "completed", "stopped: timeout", or "no end record" (SIGKILL or a rig log).
+
+    Parameters
+    ----------
+    log : RunLog
+        A read log.
+    """
     o = log.outcome
     if o is None:
         return "no end record (killed?)" if log.format == "station" else ""
@@ -120,7 +147,15 @@ def plot_runs(logs: Sequence, title: str | None = None, titles: Sequence[str] | 
 
 
 def run_title(log, metrics_text: str = "") -> str:
-    """Title of a run's figure: file, source, outcome, and the step metrics' text when given."""
+    """Title of a run's figure: file, source, outcome, and the step metrics' text when given.
+
+    Parameters
+    ----------
+    log : RunLog
+        A read log.
+    metrics_text : str, optional
+        The step metrics in a few words.
+    """
     parts = [f"{log.path.name} ({source_label(log)})", outcome_text(log)]
     parts = [p for p in parts if p]
     if metrics_text:
@@ -130,6 +165,18 @@ def run_title(log, metrics_text: str = "") -> str:
 
 def plot_log_files(paths: Sequence[str | Path], out: str | Path) -> Path:
     """Read ``paths`` and write their overlay to ``out`` (``station plot``).
+
+    Parameters
+    ----------
+    paths : sequence of str or Path
+        Run logs, any format :func:`station.runlog.read_log` reads.
+    out : str or Path
+        The PNG to write.
+
+    Returns
+    -------
+    Path
+        ``out``.
 
     Raises
     ------

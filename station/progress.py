@@ -46,7 +46,13 @@ class ProgressSink:
         self.updates = 0
 
     def write_rows(self, columns) -> None:
-        """Take a batch of rows (column name -> array) and redraw the line if it is time."""
+        """Take a batch of rows (column name -> array) and redraw the line if it is time.
+
+        Parameters
+        ----------
+        columns : mapping of str to ndarray
+            One batch of log rows by column name (:data:`station.runlog.COLUMNS`), shape (B,) each.
+        """
         n, status = columns["n"], columns["status"]
         if n.size == 0:
             return

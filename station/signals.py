@@ -23,6 +23,11 @@ class StopSignal(BaseException):
 
     A ``BaseException`` like ``KeyboardInterrupt``, so ``except Exception`` blocks do
     not swallow it. ``signum``: the signal; ``reason``: "sigint" or "sigterm".
+
+    Parameters
+    ----------
+    signum : int
+        The signal (``signal.SIGINT`` or ``signal.SIGTERM``).
     """
 
     def __init__(self, signum: int):
@@ -46,9 +51,13 @@ class StopSignals:
 
     Guards nest: entering one while another is active returns the active one, so a
     run started by the CLI shares the CLI's guard and, once deferred, a late signal
-    (the tail of a burst) can never raise while the report is printed. ``ignore_after``
-    (the CLI's process-level guard): on exit, ignore the signals instead of restoring
-    the old handlers - the process is about to exit with the recorded code.
+    (the tail of a burst) can never raise while the report is printed.
+
+    Parameters
+    ----------
+    ignore_after : bool, default False
+        The CLI's process-level guard: on exit, ignore the signals instead of restoring
+        the old handlers (the process is about to exit with the recorded code).
     """
 
     _active: StopSignals | None = None

@@ -66,14 +66,16 @@ class RerunSink:
     name : str
         Application id shown in the viewer.
 
-    Without ``rrd_path`` or ``spawn`` the data stays in the stream's memory buffer
-    (useful in notebooks and tests only).
-
     Raises
     ------
     StationError
         Both ``rrd_path`` and ``spawn`` given, or the .rrd file cannot be created or the
         viewer cannot be spawned.
+
+    Notes
+    -----
+    Without ``rrd_path`` or ``spawn`` the data stays in the stream's memory buffer
+    (useful in notebooks and tests only).
     """
 
     def __init__(self, rrd_path: str | Path | None = None, spawn: bool = False, name: str = "station"):
