@@ -16,7 +16,13 @@ HELP = "H1 frequency response (θ/v, a/v) of a swept-sine log against the FEM mo
 
 
 def configure(parser: argparse.ArgumentParser) -> None:
-    """Add the command's arguments to its subparser."""
+    """Add the command's arguments to its subparser.
+
+    Parameters
+    ----------
+    parser : argparse.ArgumentParser
+        The command's subparser.
+    """
     parser.add_argument("file", type=Path, metavar="FILE", help="run log (station or rig format), e.g. a swept sine")
     parser.add_argument("--model", default=None, metavar="NAME|FILE",
                         help="the model: a built-in model's name or a model file (default tmm-fit); its linear part "
@@ -77,6 +83,11 @@ def plot(cmp, path: Path, title: str) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """Estimate, compare, print the antiresonances, write the figure (and JSON).
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The options parsed by the subparser :func:`configure` filled.
 
     Returns
     -------

@@ -14,7 +14,13 @@ HELP = "simulate logged runs on the FEM model as the rig ran them; step metrics 
 
 
 def configure(parser: argparse.ArgumentParser) -> None:
-    """Add the command's arguments to its subparser."""
+    """Add the command's arguments to its subparser.
+
+    Parameters
+    ----------
+    parser : argparse.ArgumentParser
+        The command's subparser.
+    """
     parser.add_argument("files", type=Path, nargs="+", metavar="FILE", help="run logs (station or rig format)")
     parser.add_argument("--model", default=None, metavar="NAME|FILE",
                         help="the model: a built-in model's name (station/plant/models) or a model file (default tmm-fit)")
@@ -29,6 +35,11 @@ def configure(parser: argparse.ArgumentParser) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """Compare each log; print the tables, write the figures (and JSON).
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The options parsed by the subparser :func:`configure` filled.
 
     Returns
     -------

@@ -16,7 +16,13 @@ HELP = ("diagnose the model on measured runs: residual tests, the missing effect
 
 
 def configure(parser: argparse.ArgumentParser) -> None:
-    """Add the command's arguments to its subparser."""
+    """Add the command's arguments to its subparser.
+
+    Parameters
+    ----------
+    parser : argparse.ArgumentParser
+        The command's subparser.
+    """
     parser.add_argument("runs", type=Path, nargs="+", metavar="RUN", help="run logs the candidates are fitted on")
     parser.add_argument("--validate", type=Path, nargs="+", default=[], metavar="RUN",
                         help="runs they are judged on (default: leave-one-run-out over the RUNs, at least two)")
@@ -41,7 +47,13 @@ def _json_safe(x):
 
 
 def format_diagnosis(diag) -> str:
-    """What ``station diagnose`` prints: the cause, the gain and the candidates table."""
+    """What ``station diagnose`` prints: the cause, the gain and the candidates table.
+
+    Parameters
+    ----------
+    diag : Diagnosis
+        What :func:`station.analysis.diagnosis.diagnose` returned.
+    """
     pct = lambda x: "n/a" if x is None else f"{x:.1f} %"  # noqa: E731
     lines = [f"model: {diag.nominal_model.name}; judged by {diag.validation}",
              f"cause: {diag.cause}" + (f"   (all accepted: {', '.join(diag.causes)})" if len(diag.causes) > 1 else ""),
@@ -65,6 +77,11 @@ def format_diagnosis(diag) -> str:
 
 def run(args: argparse.Namespace) -> int:
     """Diagnose; print the result; write the JSON, report and model file asked for.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The options parsed by the subparser :func:`configure` filled.
 
     Returns
     -------

@@ -22,7 +22,13 @@ RIG = {"hub_held_beam_modes_hz": [2.52, 18.0], "hub_held_first_mode_damping": 0.
 
 
 def configure(parser: argparse.ArgumentParser) -> None:
-    """Add ``station modes``'s options to ``parser``."""
+    """Add ``station modes``'s options to ``parser``.
+
+    Parameters
+    ----------
+    parser : argparse.ArgumentParser
+        The command's subparser.
+    """
     parser.add_argument("--elements", type=number(1, 100, integer=True), nargs="+", default=[1, 2, 4, 10, 20, 50, 100], metavar="N",
                         help="element counts (default 1 2 4 10 20 50 100)")
     parser.add_argument("--params", default=None, metavar="SET",
@@ -37,6 +43,11 @@ def configure(parser: argparse.ArgumentParser) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """Print one row per element count; 0.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The options parsed by the subparser :func:`configure` filled.
 
     Raises
     ------

@@ -66,7 +66,19 @@ class Number:
 
 
 def number(low: float, high: float, integer: bool = False, unit: str = "", nonzero: bool = False) -> Number:
-    """``type=`` for a numeric option: finite and within ``[low, high]`` (see :class:`Number`)."""
+    """``type=`` for a numeric option: finite and within ``[low, high]`` (see :class:`Number`).
+
+    Parameters
+    ----------
+    low, high : float
+        Inclusive bounds.
+    integer : bool, default False
+        Accept whole numbers only (returns ``int``).
+    unit : str, optional
+        Unit shown in the range and the error.
+    nonzero : bool, default False
+        Refuse 0 inside the range.
+    """
     return Number(low, high, integer=integer, unit=unit, nonzero=nonzero)
 
 
@@ -77,12 +89,25 @@ class StationParser(argparse.ArgumentParser):
     option, and ``--help`` is there for the usage.)
     """
 
-    def error(self, message: str):  # noqa: D102 - argparse's hook
+    def error(self, message: str):
+        """argparse's hook: print ``PROG: error: MESSAGE`` on one line and exit 2.
+
+        Parameters
+        ----------
+        message : str
+            argparse's message (names the option and what was expected).
+        """
         self.exit(2, f"{self.prog}: error: {message}\n")
 
 
 def document_ranges(parser: argparse.ArgumentParser) -> None:
-    """Append each :class:`Number` option's range to its help text (idempotent)."""
+    """Append each :class:`Number` option's range to its help text (idempotent).
+
+    Parameters
+    ----------
+    parser : argparse.ArgumentParser
+        A command's parser, its options added.
+    """
     for action in parser._actions:
         if isinstance(action.type, Number) and action.help not in (None, argparse.SUPPRESS):
             text = action.type.range_text()
@@ -91,7 +116,13 @@ def document_ranges(parser: argparse.ArgumentParser) -> None:
 
 
 def numeric_actions(parser: argparse.ArgumentParser) -> list[argparse.Action]:
-    """The parser's options that take numbers: those with a :class:`Number` type or int/float."""
+    """The parser's options that take numbers: those with a :class:`Number` type or int/float.
+
+    Parameters
+    ----------
+    parser : argparse.ArgumentParser
+        A command's parser, its options added.
+    """
     return [a for a in parser._actions if a.option_strings and (isinstance(a.type, Number) or a.type in (int, float))]
 
 
@@ -130,6 +161,15 @@ def check_writable(path: Path | None, option: str, overwrite: bool = True) -> No
 def check_writable_dir(folder: Path | None, option: str, what: str | None = None) -> None:
     """Refuse an output folder that does not exist and cannot be created, or is not writable.
 
+    Parameters
+    ----------
+    folder : Path or None
+        The output folder (None: nothing to check); created later if missing.
+    option : str
+        The option that named it, for the message.
+    what : str, optional
+        How the message names it (default ``"OPTION FOLDER"``).
+
     Raises
     ------
     StationError
@@ -154,5 +194,11 @@ def check_writable_dir(folder: Path | None, option: str, what: str | None = None
 
 
 def warn(message: str) -> None:
-    """One line on stderr that says which value wins (``station: note: ...``)."""
+    """One line on stderr that says which value wins (``station: note: ...``).
+
+    Parameters
+    ----------
+    message : str
+        The note, one line.
+    """
     print(f"station: note: {message}", file=sys.stderr)

@@ -12,7 +12,13 @@ HELP = "draw run logs (ours or the rig's; several are overlaid): θ and u, v and
 
 
 def configure(parser: argparse.ArgumentParser) -> None:
-    """Add the command's arguments to its subparser."""
+    """Add the command's arguments to its subparser.
+
+    Parameters
+    ----------
+    parser : argparse.ArgumentParser
+        The command's subparser.
+    """
     parser.add_argument("files", type=Path, nargs="+", metavar="LOG", help="run logs (station or rig format)")
     parser.add_argument("--out", type=Path, default=None, metavar="PNG",
                         help="figure file (default: the first log's stem + .png in the current folder)")
@@ -20,6 +26,11 @@ def configure(parser: argparse.ArgumentParser) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """Read the logs, overlay them, write the PNG; 0.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The options parsed by the subparser :func:`configure` filled.
 
     Raises
     ------

@@ -9,7 +9,13 @@ HELP = "list the serial ports of this machine with their description (the rig's 
 
 
 def configure(parser: argparse.ArgumentParser) -> None:
-    """No options."""
+    """No options.
+
+    Parameters
+    ----------
+    parser : argparse.ArgumentParser
+        The command's subparser.
+    """
 
 
 def list_ports() -> list[tuple[str, str]]:
@@ -20,7 +26,13 @@ def list_ports() -> list[tuple[str, str]]:
 
 
 def run(args: argparse.Namespace) -> int:
-    """Print one port per line (or say there is none); 0 in both cases."""
+    """Print one port per line (or say there is none); 0 in both cases.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The options parsed by the subparser :func:`configure` filled (none).
+    """
     ports = list_ports()
     if not ports:
         print("no serial ports found (is the rig's USB cable plugged in?); the simulated rig is --port sim://")

@@ -15,7 +15,13 @@ HELP = ("replay a run log (ours or the rig's): reproduce the logged commands, de
 
 
 def configure(parser: argparse.ArgumentParser) -> None:
-    """Add the command's arguments to its subparser."""
+    """Add the command's arguments to its subparser.
+
+    Parameters
+    ----------
+    parser : argparse.ArgumentParser
+        The command's subparser.
+    """
     parser.add_argument("file", type=Path, metavar="FILE", help="run log (station or rig format)")
     parser.add_argument("--json", type=Path, default=None, metavar="OUT", help="write the report as JSON")
     parser.add_argument("--no-model", dest="model", action="store_false",
@@ -47,6 +53,11 @@ def _record(report, rrd: Path | None, spawn: bool) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """Replay ``args.file``; print the summary, write JSON / rerun output when asked.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The options parsed by the subparser :func:`configure` filled.
 
     Returns
     -------

@@ -15,7 +15,13 @@ HELP = ("run the simulated rig on a pseudo-terminal: prints the pty path, serves
 
 
 def configure(parser: argparse.ArgumentParser) -> None:
-    """Add ``--pty`` and the server's options (protocol, realtime, seed, elements)."""
+    """Add ``--pty`` and the server's options (protocol, realtime, seed, elements).
+
+    Parameters
+    ----------
+    parser : argparse.ArgumentParser
+        The command's subparser.
+    """
     from station.sim.pty_server import add_arguments
 
     parser.add_argument("--pty", action="store_true", help="serve the device on a new pty (required)")
@@ -24,6 +30,11 @@ def configure(parser: argparse.ArgumentParser) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """Serve the device on a pty; exit code 0 after a clean SIGTERM/SIGINT.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The options parsed by the subparser :func:`configure` filled.
 
     Raises
     ------

@@ -25,7 +25,13 @@ HELP = ("run a step test (default: lead compensator, 100 counts, on the built-in
 
 
 def configure(parser) -> None:
-    """Add ``station step``'s options to ``parser``."""
+    """Add ``station step``'s options to ``parser``.
+
+    Parameters
+    ----------
+    parser : argparse.ArgumentParser
+        The command's subparser.
+    """
     parser.add_argument("--controller", default=ex.DEFAULT_CONTROLLER,
                         help="p, lead, lead-accel, open-loop or a compensator FILE.toml (default lead)")
     parser.add_argument("--kp", type=number(1e-3, 100.0), default=None,
@@ -82,6 +88,13 @@ def configure(parser) -> None:
 def sim_port(port: str, model=None, elements=None, seed=None) -> str:
     """``port`` with ``--model``/``--elements``/``--seed`` added as sim:// URL options.
 
+    Parameters
+    ----------
+    port : str
+        The ``--port`` value.
+    model, elements, seed : str or int, optional
+        ``--model``, ``--elements``, ``--seed`` (None: not given).
+
     Raises
     ------
     StationError
@@ -103,6 +116,11 @@ def check_args(args) -> None:
 
     Ranges of single options are argparse's (:mod:`station.commands.options`); this
     checks what depends on the controller and the reference, and the output paths.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The options parsed by the subparser :func:`configure` filled.
 
     Raises
     ------
@@ -152,7 +170,13 @@ def _file_limit(path: str):
 
 
 def run(args) -> int:
-    """Run the test; exit code 0 when it completed, 1 when it was stopped by a fault."""
+    """Run the test; exit code 0 when it completed, 1 when it was stopped by a fault.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The options parsed by the subparser :func:`configure` filled.
+    """
     limits = _limits(args)
     check_args(args)
     args.port = sim_port(args.port, args.model, args.elements, args.seed)

@@ -15,7 +15,13 @@ HELP = ("replay every log of a folder (or the files given) on all cores and prin
 
 
 def configure(parser: argparse.ArgumentParser) -> None:
-    """Add the command's arguments to its subparser."""
+    """Add the command's arguments to its subparser.
+
+    Parameters
+    ----------
+    parser : argparse.ArgumentParser
+        The command's subparser.
+    """
     parser.add_argument("paths", nargs="+", type=Path, metavar="DIR|FILE",
                         help="folders (searched recursively) and files to survey")
     parser.add_argument("--csv", type=Path, default=None, metavar="OUT", help="also write the table as CSV")
@@ -29,6 +35,11 @@ def configure(parser: argparse.ArgumentParser) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """Survey ``args.paths``; print the table, write CSV / reports when asked.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The options parsed by the subparser :func:`configure` filled.
 
     Returns
     -------
