@@ -8,5 +8,6 @@ here="$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)"
 make -C "$here" clean
 make -C "$here" test
 make -C "$here" host
+make -C "$here" harness
 make -C "$here" target-check
 echo "firmware ci: OK"

@@ -308,11 +308,6 @@ def write_reports(rows: Sequence[SurveyRow], folder: str | Path) -> list[Path]:
     list of Path
         The files written.
 
-    Returns
-    -------
-    list of Path
-        The files written.
-
     Raises
     ------
     StationError

@@ -120,6 +120,11 @@ class RunCase:
 def load_case(path: str | Path) -> RunCase:
     """Read a log and find how the rig ran it (controller, alignment).
 
+    Parameters
+    ----------
+    path : str or Path
+        A run log (any format :func:`station.runlog.read_log` reads).
+
     Raises
     ------
     StationError
@@ -157,7 +162,15 @@ def load_case(path: str | Path) -> RunCase:
 
 
 def simulate_case(case: RunCase, model) -> tuple[np.ndarray, np.ndarray]:
-    """θ and a of a run simulated on a model as the rig ran it (:func:`station.modelrun.simulate_log`)."""
+    """θ and a of a run simulated on a model as the rig ran it (:func:`station.modelrun.simulate_log`).
+
+    Parameters
+    ----------
+    case : RunCase
+        The run (:func:`load_case`).
+    model : Model
+        The model to simulate it on.
+    """
     from station.modelrun import simulate_log
 
     run = simulate_log(case.log, case.controller, case.alignment, model)
@@ -194,16 +207,39 @@ class Evaluator:
         self._lock = threading.Lock()
 
     def model_with(self, effects: Mapping[str, float]):
+        """The base model with ``effects`` applied (the base model itself for none).
+
+        Parameters
+        ----------
+        effects : mapping of str to float
+            Effect name -> value (:data:`station.plant.effects.EFFECTS`).
+        """
         return self.model.with_effects(effects) if effects else self.model
 
     def predict(self, effects: Mapping[str, float], i: int) -> tuple[np.ndarray, np.ndarray]:
-        """Simulated θ and a of run i (not cached)."""
+        """Simulated θ and a of run i (not cached).
+
+        Parameters
+        ----------
+        effects : mapping of str to float
+            Effect name -> value, applied to the base model.
+        i : int
+            Index of the run in ``cases``.
+        """
         with self._lock:
             self.simulations += 1
         return self.simulate(self.cases[i], self.model_with(effects))
 
     def sse(self, effects: Mapping[str, float], i: int) -> tuple[float, float]:
-        """Sum of squared θ and a errors of run i, counts² (inf when the simulation diverges)."""
+        """Sum of squared θ and a errors of run i, counts² (inf when the simulation diverges).
+
+        Parameters
+        ----------
+        effects : mapping of str to float
+            Effect name -> value, applied to the base model.
+        i : int
+            Index of the run in ``cases``.
+        """
         key = (_key(effects), i)
         hit = self._cache.get(key)
         if hit is None:
@@ -217,20 +253,44 @@ class Evaluator:
         return hit
 
     def weighted(self, effects: Mapping[str, float], i: int) -> float:
-        """‖e_θ‖²/σ_θ² + ‖e_a‖²/σ_a² of run i."""
+        """‖e_θ‖²/σ_θ² + ‖e_a‖²/σ_a² of run i.
+
+        Parameters
+        ----------
+        effects : mapping of str to float
+            Effect name -> value, applied to the base model.
+        i : int
+            Index of the run in ``cases``.
+        """
         st, sa = self.sse(effects, i)
         c = self.cases[i]
         return st / c.sigma_theta ** 2 + sa / c.sigma_a ** 2
 
     def cost(self, effects: Mapping[str, float], runs: Sequence[int]) -> float:
-        """Normalised cost J over runs (1 ≈ the noise floor)."""
+        """Normalised cost J over runs (1 ≈ the noise floor).
+
+        Parameters
+        ----------
+        effects : mapping of str to float
+            Effect name -> value, applied to the base model.
+        runs : sequence of int
+            Indices of the runs in ``cases``.
+        """
         total = sum(self.weighted(effects, i) for i in runs)
         return total / sum(2 * self.cases[i].n for i in runs)
 
 
 @dataclass(frozen=True)
 class Fold:
-    """Fit on ``fit``, judge on ``val`` (run indices)."""
+    """Fit on ``fit``, judge on ``val`` (run indices).
+
+    Attributes
+    ----------
+    fit : tuple of int
+        Runs the effects are fitted on.
+    val : tuple of int
+        Runs they are judged on.
+    """
 
     fit: tuple
     val: tuple

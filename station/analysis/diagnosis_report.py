@@ -27,7 +27,13 @@ def _slug(name: str) -> str:
 
 
 def run_figure(run) -> Figure:
-    """Measured vs nominal vs extended θ and a of one run (a :class:`RunReport`)."""
+    """Measured vs nominal vs extended θ and a of one run (a :class:`RunReport`).
+
+    Parameters
+    ----------
+    run : RunReport
+        One run of a :class:`station.analysis.diagnosis.Diagnosis`.
+    """
     fig = Figure(figsize=(9, 5.2), constrained_layout=True)
     FigureCanvasAgg(fig)
     ax1, ax2 = fig.subplots(2, 1, sharex=True)
@@ -51,7 +57,13 @@ def run_figure(run) -> Figure:
 
 
 def resid_figure(run) -> Figure:
-    """``resid`` tests of the θ residual of one run, before (nominal) and after (extended)."""
+    """``resid`` tests of the θ residual of one run, before (nominal) and after (extended).
+
+    Parameters
+    ----------
+    run : RunReport
+        One run of a :class:`station.analysis.diagnosis.Diagnosis`.
+    """
     fig = Figure(figsize=(9, 3.4), constrained_layout=True)
     FigureCanvasAgg(fig)
     ax1, ax2 = fig.subplots(1, 2)
@@ -83,7 +95,13 @@ def _pct(x) -> str:
 
 
 def summary_paragraph(diag) -> str:
-    """One paragraph naming the cause, its value and the gain."""
+    """One paragraph naming the cause, its value and the gain.
+
+    Parameters
+    ----------
+    diag : Diagnosis
+        What :func:`station.analysis.diagnosis.diagnose` returned.
+    """
     base = diag.nominal_model.name
     if not diag.causes:
         best = diag.effects[0] if diag.effects else None

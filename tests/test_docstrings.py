@@ -1,0 +1,91 @@
+"""Docstrings stay true: every public function's parameters are documented, and nothing else is.
+
+As python-control's ``control/tests/docstrings_test.py``: numpydoc's docscrape parses each
+public function, method and class of the ``station`` package; each parameter of the
+signature must appear in its Parameters (or Other Parameters) section, and every name there
+must be a parameter. A class documents its constructor's parameters in its own docstring;
+a dataclass or NamedTuple may list its fields as Attributes instead. ``self``/``cls`` are
+exempt; ``*args``/``**kwargs`` are documented as such.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import importlib
+import inspect
+import pkgutil
+import warnings
+
+import pytest
+from numpydoc import docscrape  # in the test extras (pyproject.toml)
+
+import station
+
+
+def _public_modules():
+    for info in pkgutil.walk_packages(station.__path__, "station."):
+        if not any(part.startswith("_") for part in info.name.split(".")[1:]):
+            yield importlib.import_module(info.name)
+
+
+def _is_record(cls) -> bool:
+    """A dataclass or NamedTuple: its fields are its constructor's parameters."""
+    return dataclasses.is_dataclass(cls) or (issubclass(cls, tuple) and hasattr(cls, "_fields"))
+
+
+def _callables():
+    """(qualified name, function, docstring, skip first parameter, is a record's constructor)."""
+    for mod in _public_modules():
+        for name, obj in vars(mod).items():
+            if name.startswith("_") or getattr(obj, "__module__", None) != mod.__name__:
+                continue
+            if inspect.isfunction(obj):
+                yield f"{mod.__name__}.{name}", obj, obj.__doc__, False, False
+            elif inspect.isclass(obj):
+                record = _is_record(obj)
+                init = obj.__new__ if record and issubclass(obj, tuple) else obj.__dict__.get("__init__")
+                if init is not None and inspect.isfunction(init):
+                    yield f"{mod.__name__}.{name}", init, obj.__doc__, True, record
+                for attr, member in obj.__dict__.items():
+                    if attr.startswith("_"):
+                        continue
+                    if isinstance(member, (staticmethod, classmethod)):
+                        yield (f"{mod.__name__}.{name}.{attr}", member.__func__, member.__func__.__doc__,
+                               isinstance(member, classmethod), False)
+                    elif inspect.isfunction(member):
+                        yield f"{mod.__name__}.{name}.{attr}", member, member.__doc__, True, False
+
+
+def _names(entries) -> list[str]:
+    names = []
+    for entry in entries:
+        names += [n.strip().lstrip("*") for n in entry.name.split(",") if n.strip()]
+    return names
+
+
+CALLABLES = sorted(_callables(), key=lambda c: c[0])
+
+
+def test_the_scan_finds_the_package():
+    names = {c[0] for c in CALLABLES}
+    assert {"station.plant.simulate.simulate", "station.link.open_session", "station.protocol.v1.Decoder.feed",
+            "station.sim.device.SimDevice"} <= names
+    assert len(CALLABLES) > 200
+
+
+@pytest.mark.parametrize("qualname, func, doc, skip_first, record", CALLABLES, ids=[c[0] for c in CALLABLES])
+def test_parameters_are_documented(qualname, func, doc, skip_first, record):
+    params = list(inspect.signature(func).parameters)[1 if skip_first else 0:]
+    if not params:
+        return
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # docscrape warns on sections it does not know
+        parsed = docscrape.NumpyDocString(doc or "")
+    documented = _names(parsed["Parameters"]) + _names(parsed["Other Parameters"])
+    if record:
+        documented += _names(parsed["Attributes"])
+    missing = [p for p in params if p not in documented]
+    assert not missing, f"{qualname}: parameters not documented: {', '.join(missing)}"
+    if not record:
+        stale = [d for d in _names(parsed["Parameters"]) + _names(parsed["Other Parameters"]) if d not in params]
+        assert not stale, f"{qualname}: documented but not parameters: {', '.join(stale)}"
