@@ -425,12 +425,8 @@ class V1Session(Session):
 
     Parameters
     ----------
-    port : serial.SerialBase
-        The open port (:func:`open_port`).
-    url : str
-        What was opened, for messages.
-    limits : LinkLimits
-        The fail-safe bounds; ``limits.timeout`` is the sample timeout.
+    port, url, limits
+        As :class:`Session`.
     """
 
     protocol = "v1"
@@ -617,12 +613,8 @@ class LegacySession(Session):
 
     Parameters
     ----------
-    port : serial.SerialBase
-        The open port (:func:`open_port`).
-    url : str
-        What was opened, for messages.
-    limits : LinkLimits
-        The fail-safe bounds; ``limits.timeout`` is the sample timeout.
+    port, url, limits
+        As :class:`Session`.
     """
 
     protocol = "legacy"
