@@ -243,7 +243,11 @@ class Evaluator:
         key = (_key(effects), i)
         hit = self._cache.get(key)
         if hit is None:
-            theta, a = self.predict(effects, i)
+            try:
+                theta, a = self.predict(effects, i)
+            except (ArithmeticError, ValueError, np.linalg.LinAlgError):  # a model that cannot be built or run
+                self._cache[key] = hit = (math.inf, math.inf)
+                return hit
             c = self.cases[i]
             with np.errstate(all="ignore"):
                 st = float(np.sum((c.theta - theta) ** 2))
