@@ -11,7 +11,7 @@ REPO = Path(__file__).resolve().parents[1]
 def test_bench_loop_runs_both_protocols_and_writes_json(tmp_path):
     out = tmp_path / "bench.json"
     proc = subprocess.run([sys.executable, str(REPO / "scripts" / "bench_loop.py"), "--seconds", "1",
-                           "--no-baseline", "--json", str(out)], capture_output=True, text=True, timeout=120)
+                           "--no-baseline", "--max-lag", "100", "--json", str(out)], capture_output=True, text=True, timeout=120)
     assert proc.returncode == 0, proc.stderr
     cases = json.loads(out.read_text())["cases"]
     assert [(c["protocol"], c["loop"]) for c in cases] == [("v1", "lean"), ("legacy", "lean")]
