@@ -638,6 +638,15 @@ def diagnose(runs: Sequence[str | Path], validate: Sequence[str | Path] = (), mo
         One run without ``validate``, an unreadable or empty log, a bad model, or an
         unknown candidate.
     """
+    from threadpoolctl import threadpool_limits
+
+    # the matrices are tiny (22 x 22): BLAS threads only contend with each other and the
+    # compiled sample loop (measured 3x slower on a loaded 2-core machine)
+    with threadpool_limits(limits=1, user_api="blas"):
+        return _diagnose(runs, validate, model, progress, candidates, simulate, workers)
+
+
+def _diagnose(runs, validate, model, progress, candidates, simulate, workers) -> Diagnosis:
     from station.plant.effects import CANDIDATES, EFFECTS
     from station.plant.model import as_model
 
