@@ -93,7 +93,10 @@ class ScriptedDevice:
         running, k, next_tick, output, last_cmd = False, 0, 0.0, 0, None
         while not self._stop.is_set():
             timeout = max(0.0, next_tick - time.perf_counter()) if running else 0.01
-            ready, _, _ = select.select([self.master], [], [], timeout)
+            try:
+                ready, _, _ = select.select([self.master], [], [], timeout)
+            except (OSError, ValueError):  # the master end was closed (a vanishing-port test)
+                return
             if ready:
                 try:
                     data = os.read(self.master, 4096)
