@@ -485,3 +485,17 @@ def test_no_check_fires_on_the_healthy_simulated_rig(tmp_path, protocol, pacing)
     assert o.reason == "completed" and o.exit_code == 0, o.message
     assert (o.dropped, o.stale, o.duplicates, o.watchdog_trips) == (0, 0, 0, 0)
     assert read_log(tmp_path / "ok.tsv").outcome["reason"] == "completed"
+
+
+@pytest.mark.parametrize("name, mutate, reason", [
+    ("silence", lambda k, data: b"", "timeout"),
+    ("random bytes", lambda k, data: _noise(k, 6), "sequence"),
+    ("the same record over and over", lambda k, data: legacy.tick_bytes(legacy.Tick(FAULT_TICK - 1, 0, 0)),
+     "sequence"),
+    ("half a record, then silence", lambda k, data: data[:3] if k == FAULT_TICK else b"", "timeout"),
+])
+def test_legacy_without_framing_still_stops_on_time(device, tmp_path, name, mutate, reason):
+    dev = device(protocol="legacy", mutate=from_tick(FAULT_TICK, mutate))
+    report, path = _run(dev, tmp_path, protocol="legacy")
+    o = _check_stopped_safely(dev, report, path, reason, TIMEOUT + SLACK)
+    assert o.ticks == FAULT_TICK
