@@ -590,6 +590,7 @@ def _parse_rig_header(path: Path, comment_lines: list[str]) -> tuple[dict[str, A
     std = _map_columns(path, len(comment_lines), names)
     meta["columns"] = names
     other = []
+    coef_lines: dict[str, int] = {}
     for i, line in enumerate(info):
         body = line[1:].strip()
         coef = _COEF.match(body)
@@ -604,7 +605,12 @@ def _parse_rig_header(path: Path, comment_lines: list[str]) -> tuple[dict[str, A
             except ValueError:
                 raise RunLogError(f"{path}: line {i + 1}: expected numbers in {coef.group(1)} "
                                   f"{coef.group(2)}=[...], got {line!r}") from None
+            if not all(math.isfinite(x) for x in values) or (coef.group(2) == "den" and values and values[0] == 0):
+                raise RunLogError(f"{path}: line {i + 1}: {coef.group(1)} {coef.group(2)}={values}: expected finite "
+                                  f"coefficients" + (", den[0] not 0 (the filter would be non-causal)"
+                                                     if coef.group(2) == "den" else ""))
             meta.setdefault(coef.group(1), {})[coef.group(2)] = values
+            coef_lines[coef.group(1)] = i + 1
         elif kv:
             key, val = kv.groups()
             try:
@@ -613,6 +619,10 @@ def _parse_rig_header(path: Path, comment_lines: list[str]) -> tuple[dict[str, A
                 meta[key] = val
         else:
             other.append(body)
+    for key, lineno in coef_lines.items():  # a filter printed with a numerator needs its denominator
+        if meta[key].get("num") and not meta[key].get("den"):
+            raise RunLogError(f"{path}: line {lineno}: {key} num={meta[key]['num']} has no den=[...] "
+                              f"(expected both, as the rig's software prints them)")
     if other:
         meta["notes"] = other
     return meta, std, sep
@@ -700,76 +710,238 @@ def read_log(path: str | Path) -> RunLog:
     """
     path = Path(path)
     try:
-        text = path.read_text(encoding="utf-8")
+        with open(path, "rb") as fb:
+            size = fb.seek(0, os.SEEK_END)
+            ends_with_newline = size > 0 and (fb.seek(-1, os.SEEK_END) or True) and fb.read(1) == b"\n"
+        fh = open(path, encoding="utf-8", newline="")
     except OSError as exc:
         raise RunLogError(f"{path}: cannot read run log: {exc.strerror or exc}") from None
-    except UnicodeDecodeError as exc:
-        raise RunLogError(f"{path}: not a text run log ({exc.reason} at byte {exc.start})") from None
-    ends_with_newline = text.endswith("\n")
-    lines = text.split("\n")
-    if ends_with_newline:
-        lines.pop()
-    lines = [ln.rstrip("\r") for ln in lines]
-    if not lines or not text.strip():
+    with fh:
+        try:
+            return _read_stream(path, fh, ends_with_newline)
+        except UnicodeDecodeError as exc:
+            raise RunLogError(f"{path}: not a text run log ({exc.reason} at byte {exc.start} of a block)") from None
+        except OSError as exc:
+            raise RunLogError(f"{path}: cannot read run log: {exc.strerror or exc}") from None
+
+
+class _Lines:
+    """The file's lines, numbered from 1, without their newline (and a trailing CR), with
+    a push-back for the header parser; ``terminated`` is False for a last line with no
+    newline."""
+
+    def __init__(self, fh) -> None:
+        self.fh = fh
+        self.lineno = 0
+        self._back: list[tuple[int, str, bool]] = []
+
+    def next(self) -> tuple[int, str, bool] | None:
+        if self._back:
+            return self._back.pop()
+        raw = self.fh.readline()
+        if not raw:
+            return None
+        self.lineno += 1
+        terminated = raw.endswith("\n")
+        return self.lineno, raw.rstrip("\n").rstrip("\r"), terminated
+
+    def push(self, item: tuple[int, str, bool]) -> None:
+        self._back.append(item)
+
+
+class _DataLines:
+    """Iterates the data lines for numpy's parser: blank and ``#`` lines left out (the
+    last non-blank line is kept for the end record), the first data line number kept, an
+    unterminated last data line held back (a torn row)."""
+
+    def __init__(self, path: Path, lines: _Lines, fmt: str, ncol: int, sep: str | None) -> None:
+        self.path, self.lines, self.fmt, self.ncol, self.sep = path, lines, fmt, ncol, sep
+        self.last: tuple[int, str, bool] | None = None  # last non-blank line
+        self.first_lineno: int | None = None
+        self.torn = 0
+        self.rows = 0
+
+    def __iter__(self):
+        while (item := self.lines.next()) is not None:
+            lineno, line, terminated = item
+            if not line.strip():
+                continue
+            self.last = item
+            if line.startswith("#"):
+                continue
+            if self.first_lineno is None:
+                self.first_lineno = lineno
+            if not terminated and not self._keep_unterminated(line):
+                self.torn += 1
+                warnings.warn(f"{self.path}: line {lineno}: torn last line (no newline; the writer was "
+                              f"interrupted mid-row) skipped", RuntimeWarning, stacklevel=4)
+                continue
+            self.rows += 1
+            yield line
+
+    def _keep_unterminated(self, line: str) -> bool:
+        """Ours: never (our writer ends every row); the rig's: when it is a whole row."""
+        if self.fmt == "station":
+            return False
+        parts = line.split(self.sep)
+        return len(parts) == self.ncol and all(_is_number(p) for p in parts)
+
+
+def _read_stream(path: Path, fh, ends_with_newline: bool) -> RunLog:
+    """:func:`read_log` on an open text file: header line by line, rows by numpy's parser."""
+    lines = _Lines(fh)
+    head: list[tuple[int, str, bool]] = []
+    while len(head) < 3 and (item := lines.next()) is not None:
+        head.append(item)
+    while head and not head[-1][1].strip() and (item := lines.next()) is not None:
+        head.append(item)  # (leading blank lines: keep looking for a header)
+    if not head or not any(h[1].strip() for h in head):
         raise RunLogError(f"{path}: empty file, expected a run log header")
+    texts = [h[1] for h in head]
 
     reader_notes: list[str] = []
     sep: str | None = "\t"
-    if MAGIC in lines[:2]:
+    if MAGIC in texts[:2]:
         fmt = layout = "station"
-        header = lines[:3]
+        header = texts[:3]
         if len(header) < 3:
             raise RunLogError(f"{path}: line {len(header) + 1}: expected the header to go on "
                               f"(column names, '{MAGIC}', '# ' and the JSON metadata)")
         # Ours: column line, magic, JSON (what we write); or magic, JSON, column line.
-        if lines[0] == MAGIC:
-            (json_no, json_line), (col_no, col_line) = (2, lines[1]), (3, lines[2])
+        if texts[0] == MAGIC:
+            (json_no, json_line), (col_no, col_line) = (2, texts[1]), (3, texts[2])
         else:
-            (json_no, json_line), (col_no, col_line) = (3, lines[2]), (1, lines[0])
-        first = 3
+            (json_no, json_line), (col_no, col_line) = (3, texts[2]), (1, texts[0])
+        for extra in reversed(head[3:]):
+            lines.push(extra)
         if not json_line.startswith("# "):
             raise RunLogError(f"{path}: line {json_no}: expected '# ' and the JSON metadata, got {json_line[:60]!r}")
         try:
             meta = json.loads(json_line[2:])
         except json.JSONDecodeError as exc:
             raise RunLogError(f"{path}: line {json_no}: metadata is not valid JSON ({exc.msg})") from None
+        except RecursionError:
+            raise RunLogError(f"{path}: line {json_no}: metadata JSON is nested too deeply") from None
         if not isinstance(meta, dict):
             raise RunLogError(f"{path}: line {json_no}: expected a JSON object of metadata")
+        _check_meta(path, json_no, meta)
         names = col_line.split("\t")
         if tuple(names[:len(COLUMNS)]) != COLUMNS:
             raise RunLogError(f"{path}: line {col_no}: expected the column names {_COLUMN_LINE!r}, got {col_line!r}")
-    elif lines[0].startswith("#"):
+    elif texts[0].startswith("#"):
         fmt = layout = "rig"
-        n_head = 0
-        while n_head < len(lines) and lines[n_head].startswith("#"):
-            n_head += 1
-        header = lines[:n_head]
+        for extra in reversed(head):
+            lines.push(extra)
+        header = []
+        while (item := lines.next()) is not None:
+            if not item[1].startswith("#"):
+                lines.push(item)
+                break
+            header.append(item[1])
         meta, names, sep = _parse_rig_header(path, header)
-        first = n_head
     else:
         # No '#' header: a first line of column names (the rig's 2014 logs, cut-down copies).
-        printed, sep = _split_names(lines[0])
+        for extra in reversed(head[1:]):
+            lines.push(extra)
+        printed, sep = _split_names(texts[0])
         if printed and all(_is_number(c) for c in printed):
             raise RunLogError(f"{path}: line 1: expected '{MAGIC}' (station run log), the rig's '#' "
-                              f"header or a line of column names, got numbers {lines[0][:60]!r}")
+                              f"header or a line of column names, got numbers {texts[0][:60]!r}")
         fmt, layout = "rig", "columns"
         names = _map_columns(path, 1, printed)
         meta = {"columns": printed}
-        header = lines[:1]
-        first = 1
+        header = texts[:1]
         renamed = [f"{p!r} -> {s}" for p, s in zip(printed, names) if p != s]
         if renamed:
             reader_notes.append("columns named by synonyms: " + ", ".join(renamed))
 
-    arr, _ = _parse_rows(path, lines[first:], first + 1, names, ends_with_newline, fmt, sep)
+    first_data_line = lines.lineno - len(lines._back) + 1
+    data_lines = _DataLines(path, lines, fmt, len(names), sep)
+    arr = _load_rows(path, data_lines, names, fmt, sep, first_data_line, ends_with_newline)
     n = arr.shape[0]
     data = {name: np.full(n, np.nan) for name in COLUMNS}
     for j, name in enumerate(names):
-        data[name] = arr[:, j].copy()
+        data[name] = arr[:, j]
+    del arr
+    _check_finite(path, data, names, fmt, data_lines.first_lineno)
     sample_time = _complete_time_base(data, names, reader_notes)
+    outcome = None if data_lines.last is None else _end_record(path, *data_lines.last)
     return RunLog(path=path, format=fmt, meta=meta, data=data, header=header, layout=layout,
-                  sample_time=sample_time, outcome=_end_record(path, lines, ends_with_newline),
-                  notes=reader_notes)
+                  sample_time=sample_time, outcome=outcome, notes=reader_notes)
+
+
+def _load_rows(path: Path, data_lines: _DataLines, names: list[str], fmt: str, sep: str | None,
+               first_line: int, ends_with_newline: bool) -> np.ndarray:
+    """The rows as an array (rows, len(names)), parsed by numpy without a Python list per
+    row (a 100 MB log stays within a few times its size). On any parse error the file is
+    read again line by line to name the line and the field (:func:`_parse_rows`)."""
+    ncol = len(names)
+    try:
+        with warnings.catch_warnings():
+            warnings.filterwarnings("ignore", message=".*input contained no data", category=UserWarning)
+            arr = np.loadtxt(iter(data_lines), dtype=float, delimiter=sep, comments=None, ndmin=2, encoding=None)
+        if arr.size == 0:
+            arr = np.empty((0, ncol))
+        if arr.shape[1] != ncol:
+            raise ValueError("column count")
+        return arr
+    except UnicodeDecodeError:
+        raise
+    except ValueError:
+        pass
+    # the exact (slow) path, only for a file with a bad row: it names the line and the field
+    text = path.read_text(encoding="utf-8")
+    all_lines = [ln.rstrip("\r") for ln in text.split("\n")]
+    if ends_with_newline:
+        all_lines.pop()
+    del text
+    arr, _ = _parse_rows(path, all_lines[first_line - 1:], first_line, names, ends_with_newline, fmt, sep)
+    return arr
+
+
+FINITE_COLUMNS = ("t", "n", "u", "theta", "a")
+"""Columns that must hold finite numbers in every log (time base, reference, sensors);
+the rig's logs must also have a finite v and theta_d_hat. Ours may log v = nan (the row
+of a controller fault) and nan latency or theta_d_hat."""
+
+
+def _check_finite(path: Path, data: dict[str, np.ndarray], names: list[str], fmt: str,
+                  first_lineno: int | None) -> None:
+    """RunLogError naming the line and the field of the first non-finite value where a number belongs."""
+    must = FINITE_COLUMNS + (("v", "theta_d_hat") if fmt == "rig" else ())
+    for name in names:
+        if name not in must:
+            continue
+        col = data[name]
+        bad = np.flatnonzero(~np.isfinite(col))
+        if bad.size:
+            line = _line_of_row(path, first_lineno, int(bad[0]))
+            raise RunLogError(f"{path}: line {line}: {name} is {float(col[bad[0]])!r}, expected a finite number "
+                              f"(a log with missing samples cannot be used as it is)")
+
+
+def _line_of_row(path: Path, first_lineno: int | None, row: int) -> int:
+    """The line number of data row ``row`` (0-based), counting blank and ``#`` lines."""
+    if first_lineno is None:
+        return 0
+    seen = -1
+    with open(path, encoding="utf-8", errors="replace") as fh:
+        for lineno, line in enumerate(fh, 1):
+            if lineno < first_lineno or not line.strip() or line.startswith("#"):
+                continue
+            seen += 1
+            if seen == row:
+                return lineno
+    return first_lineno + row
+
+
+def _check_meta(path: Path, lineno: int, meta: dict[str, Any]) -> None:
+    """RunLogError for header fields the readers rely on that make no sense (dt)."""
+    if "dt" in meta:
+        dt = meta["dt"]
+        if isinstance(dt, bool) or not isinstance(dt, (int, float)) or not (math.isfinite(dt) and 0 < dt <= 1):
+            raise RunLogError(f"{path}: line {lineno}: header field dt is {dt!r}, expected the sample time "
+                              f"in s, a number in (0, 1]")
 
 
 def _complete_time_base(data: dict[str, np.ndarray], names: list[str], notes: list[str]) -> float | None:
@@ -794,22 +966,19 @@ def _complete_time_base(data: dict[str, np.ndarray], names: list[str], notes: li
     return dt
 
 
-def _end_record(path: Path, lines: list[str], ends_with_newline: bool) -> dict[str, Any] | None:
-    """The run's outcome from a last ``# end {json}`` line (DESIGN.md "Run outcome"), or None."""
-    last = len(lines) - 1
-    while last >= 0 and not lines[last].strip():
-        last -= 1
-    if last < 0 or not lines[last].startswith(END_PREFIX):
+def _end_record(path: Path, lineno: int, line: str, terminated: bool) -> dict[str, Any] | None:
+    """The run's outcome from the last non-blank line when it is ``# end {json}`` (DESIGN.md "Run outcome"), or None."""
+    if not line.startswith(END_PREFIX):
         return None
     try:
-        outcome = json.loads(lines[last][len(END_PREFIX):])
+        outcome = json.loads(line[len(END_PREFIX):])
     except (json.JSONDecodeError, RecursionError) as exc:
-        if last == len(lines) - 1 and not ends_with_newline:  # torn while being written
-            warnings.warn(f"{path}: line {last + 1}: torn end record skipped (outcome unknown)",
+        if not terminated:  # torn while being written
+            warnings.warn(f"{path}: line {lineno}: torn end record skipped (outcome unknown)",
                           RuntimeWarning, stacklevel=3)
             return None
         msg = exc.msg if isinstance(exc, json.JSONDecodeError) else "nested too deeply"
-        raise RunLogError(f"{path}: line {last + 1}: end record is not valid JSON ({msg})") from None
+        raise RunLogError(f"{path}: line {lineno}: end record is not valid JSON ({msg})") from None
     if not isinstance(outcome, dict):
-        raise RunLogError(f"{path}: line {last + 1}: expected a JSON object after '{END_PREFIX.strip()}'")
+        raise RunLogError(f"{path}: line {lineno}: expected a JSON object after '{END_PREFIX.strip()}'")
     return outcome
