@@ -309,6 +309,10 @@ def identify_controller(log: RunLog) -> ControllerId:
     """
     from station.analysis.identify import infer_controller, match_pid
 
+    custom = _custom_controller(log)
+    if custom is not None:  # a Python controller of the user's: its law is not in the log
+        return ControllerId(None, None, [f"the log's controller is a custom Python controller ({custom}): its "
+                                         f"commands cannot be replayed; the model is driven by the logged v"])
     controller, notes = _named_controller(log)
     dt = _dt_of(log)
     data = log.data
@@ -359,6 +363,15 @@ def _header_pid(log: RunLog) -> tuple[float, float, float] | None:
     except StationError:
         return None
     return (kp, ki, kd) if (ki != 0.0 or kd != 0.0) else None
+
+
+def _custom_controller(log: RunLog) -> str | None:
+    """The name of a custom Python controller our log's header records (a spec with
+    neither coefficients nor open loop, e.g. ``{"kind": "custom"}``), else None."""
+    spec = log.meta.get("controller") if log.format == "station" else None
+    if not isinstance(spec, dict) or spec.get("kind") == "open-loop" or "gth" in spec:
+        return None
+    return str(spec.get("name") or spec.get("kind") or "unnamed")
 
 
 def _named_controller(log: RunLog) -> tuple[Compensator | OpenLoop | None, list[str]]:

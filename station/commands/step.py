@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import argparse
 import json
 import math
 import sys
@@ -80,9 +81,40 @@ def configure(parser) -> None:
     parser.add_argument("--quiet", action="store_true",
                         help="no live progress line on stderr (it is shown only when stderr is a terminal)")
     parser.add_argument("--json", type=Path, default=None, metavar="FILE", help="write metrics and timing as JSON")
+    parser.add_argument("--out-dir", type=Path, default=Path("runs"), metavar="DIR",
+                        help="folder of the default run log names (default runs)")
     viz = parser.add_mutually_exclusive_group()
     viz.add_argument("--rrd", type=Path, default=None, metavar="FILE", help="record the run to a rerun .rrd file")
     viz.add_argument("--spawn", action="store_true", help="stream the run to a rerun viewer")
+    _apply_config(parser)
+
+
+def _apply_config(parser) -> None:
+    """Defaults from ``station.toml`` (:mod:`station.config`), each checked by its option's
+    own type; command-line options win. A bad file is reported when the command runs."""
+    from station.config import config_path, load_config
+
+    path = None
+    try:
+        path = config_path()
+        settings = load_config(path)
+        actions = {a.dest: a for a in parser._actions}
+        defaults = {}
+        for key, value in settings.items():
+            action = actions[key]
+            if isinstance(value, bool) or not isinstance(value, (str, int, float)):
+                raise StationError(f"{path}: {key}: expected a string or a number, got {value!r}")
+            text = str(value)
+            try:
+                converted = action.type(text) if action.type is not None else text
+            except (argparse.ArgumentTypeError, ValueError, TypeError) as exc:
+                raise StationError(f"{path}: {key} = {value!r}: {exc}") from None
+            if action.choices is not None and converted not in action.choices:
+                raise StationError(f"{path}: {key} = {value!r}: expected one of {', '.join(action.choices)}")
+            defaults[key] = converted
+        parser.set_defaults(**defaults, _config=str(path) if path else None, _config_error=None)
+    except StationError as exc:
+        parser.set_defaults(_config=str(path) if path else None, _config_error=str(exc))
 
 
 def sim_port(port: str, model=None, elements=None, seed=None) -> str:
@@ -127,8 +159,14 @@ def check_args(args) -> None:
     StationError
         One line naming the option.
     """
+    if getattr(args, "_config_error", None):
+        raise StationError(args._config_error)
     controller = str(args.controller)
     builtin_ref = args.reference in ex.REFERENCES
+    port = str(args.port)
+    if "://" not in port and not Path(port).exists():
+        raise StationError(f"--port {port}: no such device; `station ports` lists this machine's serial ports "
+                           f"(the simulated rig is sim://)")
     if args.kp is not None and controller != "p":
         raise StationError(f"--kp: the P gain applies to --controller p only, not {controller}")
     if args.amplitude is not None and not builtin_ref:
@@ -154,7 +192,7 @@ def check_args(args) -> None:
             warn(f"--limit {args.limit:g} is not used: {controller} sets limit = {file_limit} (the file wins)")
     check_writable(args.out, "--out", overwrite=args.force)
     if args.out is None:
-        check_writable_dir(ex.default_log_path("x").parent, "the run log's folder")
+        check_writable_dir(args.out_dir, "--out-dir")
     check_writable(args.json, "--json")
     check_writable(args.rrd, "--rrd")
 
@@ -179,6 +217,8 @@ def run(args) -> int:
     """
     limits = _limits(args)
     check_args(args)
+    if getattr(args, "_config", None):
+        warn(f"settings from {args._config} (options given on the command line win)")
     args.port = sim_port(args.port, args.model, args.elements, args.seed)
     sinks = []
     if args.rrd is not None or args.spawn:
@@ -192,6 +232,7 @@ def run(args) -> int:
                              out=args.out, sinks=sinks,
                              kp=args.kp, limit=args.limit, soft_limit=args.soft_limit,
                              timeout=args.timeout, baudrate=args.baud, limits=limits, force=args.force,
+                             out_dir=args.out_dir,
                              progress=not args.quiet and sys.stderr.isatty())
     finally:
         for sink in sinks:
