@@ -21,8 +21,8 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.optimize
 
-GRID_POINTS = 13
-"""Grid values per continuous parameter (ratios 0.25..4: a factor 1.26 apart)."""
+GRID_POINTS = 17
+"""Grid values per continuous parameter (ratios 0.1..10: a factor 1.33 apart)."""
 
 LATTICE = 64
 """Refined values lie on a lattice of 1/LATTICE grid step (well inside any tolerance), so
