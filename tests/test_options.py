@@ -109,6 +109,9 @@ def test_value_outside_the_range_is_refused_in_one_line(command, option, value, 
     (["step", "--amplitude", "3000"], "--soft-limit"),
     (["step", "--protocol", "legacy", "--duration", "70"], "--duration 70 s"),
     (["step", "--out", "exists.tsv"], "--force"),
+    (["step", "--reference", "swept-sine", "--step-time", "0.5"], "--step-time"),
+    (["step", "--reference", "ref.tsv", "--step-time", "0.5"], "--step-time"),
+    (["replay", "ref.tsv", "--no-model", "--elements", "10"], "--elements: not with --no-model"),
     (["step", "--json", "nodir/sub"], None),
 ])
 def test_issue_cases_are_refused_before_anything_starts(argv, words, tmp_path, monkeypatch, capsys, no_port):

@@ -73,6 +73,8 @@ def run(args: argparse.Namespace) -> int:
     from station.errors import StationError
     from station.replay import format_report, replay
 
+    if not args.model and (args.model_spec is not None or args.elements is not None):
+        raise StationError(f"{'--model' if args.model_spec is not None else '--elements'}: not with --no-model")
     check_writable(args.json, "--json")
     check_writable(args.rrd, "--rrd")
     model = (args.model_spec or True) if args.model else False

@@ -48,7 +48,7 @@ def configure(parser) -> None:
     parser.add_argument("--reference", default="step", metavar="KIND",
                         help="step (default), pulse (open loop, 0.1 s), swept-sine, or FILE[:COLUMN] "
                              "of a run log (e.g. a rig log's u)")
-    parser.add_argument("--step-time", type=number(0.0, MAX_DURATION_S, unit="s"), default=ex.DEFAULT_STEP_TICK * DT,
+    parser.add_argument("--step-time", type=number(0.0, MAX_DURATION_S, unit="s"), default=None,
                         metavar="S", help="when the step starts, before the run's end (default 0.02 s = tick 10)")
     parser.add_argument("--port", default=ex.DEFAULT_PORT, metavar="URL",
                         help="port path or pyserial URL (default sim://, the simulated rig)")
@@ -178,6 +178,11 @@ def check_args(args) -> None:
     if controller != "open-loop" and builtin_ref and abs(amplitude) >= args.soft_limit:
         raise StationError(f"--amplitude {amplitude:g}: the step would pass --soft-limit {args.soft_limit:g} "
                            f"encoder counts and stop the run")
+    if args.step_time is not None and (not builtin_ref or args.reference == "swept-sine"):
+        raise StationError(f"--step-time: not with the {args.reference} reference "
+                           f"({'its law starts at t = 1 s' if builtin_ref else 'the file gives the reference'})")
+    if args.step_time is None:
+        args.step_time = ex.DEFAULT_STEP_TICK * DT
     if builtin_ref and args.reference != "swept-sine":
         duration = ex.DEFAULT_DURATION if args.duration is None else args.duration
         if args.step_time >= duration:
