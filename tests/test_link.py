@@ -51,7 +51,8 @@ def test_cli_error_is_one_line_without_traceback():
                           capture_output=True, text=True, timeout=60)
     assert proc.returncode == 2
     assert proc.stderr.strip().count("\n") == 0, proc.stderr
-    assert proc.stderr.startswith("station: error: cannot open port /dev/does-not-exist-42")
+    assert proc.stderr.startswith("station: error: --port /dev/does-not-exist-42: no such device")
+    assert "`station ports`" in proc.stderr
 
 
 def test_unknown_sim_option_is_not_reported_as_busy():
