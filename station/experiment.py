@@ -352,7 +352,7 @@ def _write_figure(report: StepReport) -> Path | None:
         from station.plots import save_figure
 
         save_figure(report.plot(), png)
-    except (StationError, OSError, ValueError) as exc:
+    except Exception as exc:  # noqa: BLE001 - a figure must never cost the run's report
         warnings.warn(f"{png}: the run's figure was not written ({exc}); the log is complete",
                       RuntimeWarning, stacklevel=3)
         return None
