@@ -183,7 +183,7 @@ def format_comparison(c: RunComparison) -> str:
     return "\n".join(lines)
 
 
-def plot_comparison(c: RunComparison, path: Path) -> None:
+def plot_comparison(c: RunComparison, path: Path):
     """Write θ, a and v of the log and the model over time as a PNG.
 
     Parameters
@@ -191,6 +191,12 @@ def plot_comparison(c: RunComparison, path: Path) -> None:
     c : RunComparison
     path : Path
         PNG file.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        θ (with u; open loop u in DAC counts on its own right-hand axis), a, v; the log
+        labelled by its source.
     """
     from station.plots import new_figure, save_figure
 
@@ -214,3 +220,4 @@ def plot_comparison(c: RunComparison, path: Path) -> None:
     fig.suptitle(f"{Path(c.file).name} ({c.source})\n{c.controller}: NRMSE fit {fits}", fontsize=9)
     fig.tight_layout()
     save_figure(fig, path)
+    return fig
