@@ -44,5 +44,12 @@ def v1_vectors(shared_dir: Path) -> dict:
     return json.loads(_require(shared_dir / "spec" / "protocol-v1-vectors.json", "protocol vectors").read_text())
 
 
+@pytest.fixture(autouse=True)
+def _no_user_station_config(monkeypatch, tmp_path_factory):
+    """A developer's ~/.config/station/station.toml must not change what the tests run
+    (station.config reads $XDG_CONFIG_HOME/station/station.toml)."""
+    monkeypatch.setenv("XDG_CONFIG_HOME", str(tmp_path_factory.getbasetemp() / "no-user-config"))
+
+
 def pytest_configure(config):
     config.addinivalue_line("markers", "slow: takes minutes (e.g. the blind diagnosis tests); still run in CI")
