@@ -624,9 +624,9 @@ def diagnose(runs: Sequence[str | Path], validate: Sequence[str | Path] = (), mo
         plug in their own.
     workers : int, optional
         Threads fitting candidates at once (default 1). The compiled sample loop releases
-        the GIL but building models and scoring runs hold it: two threads measured no
-        clear gain on 2 cores (a 4-run case: 19.2 / 11.0 s with one thread, 17.6 / 13.3 s
-        with two, on a shared machine).
+        the GIL but building models and scoring runs hold it: on 2 shared cores two
+        threads were slower (the rig's four logs: 10.7 s with one, 17.0 s with two,
+        scripts/bench_diagnose.py at load average 3).
 
     Returns
     -------
