@@ -131,6 +131,17 @@ def test_issue_cases_are_refused_before_anything_starts(argv, words, tmp_path, m
     assert (tmp_path / "exists.tsv").read_text() == "keep me\n"
 
 
+def test_a_run_the_machine_cannot_hold_is_refused_before_it_starts(tmp_path, monkeypatch, capsys, no_port):
+    from station.commands import step
+
+    monkeypatch.chdir(tmp_path)
+    monkeypatch.setattr(step, "_available_memory", lambda: 10**9)  # 1 GB
+    assert main(["step", "--duration", "20000"]) == 2  # 10 million ticks: within what v1 counts
+    err = capsys.readouterr().err
+    assert "--duration 20000 s: 10000000 ticks need about 2.0 GB of memory; this machine has 1.0 GB" in err
+    assert os.listdir(tmp_path) == []
+
+
 def test_limit_overridden_by_a_compensator_file_says_which_wins(tmp_path, monkeypatch, capsys):
     monkeypatch.chdir(tmp_path)
     (tmp_path / "c.toml").write_text('limit = 150\n[gth]\nnum = [2.0]\nden = [1.0]\ndomain = "z"\n')

@@ -188,6 +188,8 @@ def check_args(args) -> None:
         if args.step_time >= duration:
             raise StationError(f"--step-time {args.step_time:g} s: the step must start before the run ends "
                                f"({duration:g} s)")
+    if args.duration is not None:
+        _check_resources(args.duration, args.out.parent if args.out is not None else args.out_dir)
     if args.protocol == "legacy" and args.duration is not None and round(args.duration / DT) > legacy.MAX_TICKS:
         raise StationError(f"--duration {args.duration:g} s: the legacy protocol counts at most "
                            f"{legacy.MAX_TICKS} ticks ({legacy.MAX_TICKS * DT:g} s)")
@@ -200,6 +202,50 @@ def check_args(args) -> None:
         check_writable_dir(args.out_dir, "--out-dir")
     check_writable(args.json, "--json")
     check_writable(args.rrd, "--rrd")
+
+
+BYTES_PER_TICK_MEMORY = 200
+"""Memory a run needs per tick, bytes, at its peak (the reference as floats for the loop,
+latencies, the log read back for metrics and the figure), rounded up."""
+BYTES_PER_TICK_DISK = 80
+"""Disk a run log takes per tick, bytes (a row of our format is ~60)."""
+
+
+def _check_resources(duration: float, folder: Path) -> None:
+    """Refuse a run this machine cannot hold in memory or its log on disk (before it starts).
+
+    Raises
+    ------
+    StationError
+        Naming --duration, what the run needs and what there is.
+    """
+    import shutil
+
+    ticks = round(duration / DT)
+    need_mem, need_disk = ticks * BYTES_PER_TICK_MEMORY, ticks * BYTES_PER_TICK_DISK
+    available = _available_memory()
+    if available is not None and need_mem > available:
+        raise StationError(f"--duration {duration:g} s: {ticks} ticks need about {need_mem / 1e9:.1f} GB of memory; "
+                           f"this machine has {available / 1e9:.1f} GB available")
+    existing = Path(folder)
+    while not existing.exists() and existing.parent != existing:
+        existing = existing.parent
+    free = shutil.disk_usage(existing).free
+    if need_disk > free:
+        raise StationError(f"--duration {duration:g} s: the run log would take about {need_disk / 1e9:.1f} GB; "
+                           f"{existing} has {free / 1e9:.1f} GB free")
+
+
+def _available_memory() -> int | None:
+    """MemAvailable of /proc/meminfo, bytes (None where there is none)."""
+    try:
+        with open("/proc/meminfo") as fh:
+            for line in fh:
+                if line.startswith("MemAvailable:"):
+                    return int(line.split()[1]) * 1024
+    except OSError:
+        return None
+    return None
 
 
 def _file_limit(path: str):
