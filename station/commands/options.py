@@ -44,7 +44,8 @@ class Number:
         unit = f" {self.unit}" if self.unit else ""
         kind = ", whole number" if self.integer else ""
         nz = ", not 0" if self.nonzero else ""
-        return f"range {self.low:g}..{self.high:g}{unit}{kind}{nz}"
+        fmt = (lambda x: str(int(x))) if self.integer else (lambda x: f"{x:.10g}")
+        return f"range {fmt(self.low)}..{fmt(self.high)}{unit}{kind}{nz}"
 
     def __call__(self, text: str):
         try:
