@@ -293,8 +293,6 @@ def run_step(port: str = DEFAULT_PORT, protocol: str = "v1", controller: str = D
         raise StationError(f"{log_path}: cannot create the run log's folder: {exc.strerror or exc}") from None
     limits = limits or LinkLimits(timeout=timeout)
     with StopSignals() as signals, open_session(port, protocol, baudrate=baudrate, limits=limits) as session:
-        if protocol == "v1":  # end whatever a wrong-protocol attempt left in the device's frame buffer
-            session.port.write(b"\x00")  # (spec: an empty frame is ignored; belongs in link's hello)
         info = session.hello()
         accel_zero = session.zero_accel()
         meta = {

@@ -25,6 +25,8 @@ from __future__ import annotations
 import dataclasses
 import errno
 import logging
+import os
+import re
 import time
 from collections import deque
 from collections.abc import Callable
@@ -231,10 +233,18 @@ def open_port(url: str, protocol: str = "v1", timeout: float = 0.1, baudrate: in
     try:
         return serial.serial_for_url(url, **kwargs)
     except (serial.SerialException, ValueError, OSError) as exc:
-        reason = str(exc).replace("\n", " ")
         # pyserial: "Could not exclusively lock port ..." (flock) or EBUSY from open()
-        busy = "exclusively lock" in reason or getattr(exc, "errno", None) == errno.EBUSY
-        raise StationError(f"cannot open port {url}: {'port is busy: ' if busy else ''}{reason}") from None
+        text = str(exc).replace("\n", " ")
+        busy = "exclusively lock" in text or getattr(exc, "errno", None) == errno.EBUSY
+        code = getattr(exc, "errno", None)
+        if busy:
+            reason = "port is busy (another program has it open)"
+        elif isinstance(code, int) and code in errno.errorcode:
+            reason = os.strerror(code)  # pyserial repeats the port in its text; say it once
+        else:
+            reason = re.sub(rf"(?i)^could not open port {re.escape(url)}:?\s*", "", text) or text
+        hint = "; `station ports` lists the serial ports" if "://" not in url else ""
+        raise StationError(f"cannot open port {url}: {reason}{hint}", key="port") from None
 
 
 class Session:
@@ -464,6 +474,10 @@ class V1Session(Session):
         (not a v1 device?).
         """
         self.port.reset_input_buffer()
+        try:  # an empty frame first (spec: ignored) ends whatever a wrong-protocol attempt left in
+            self.port.write(b"\x00")  # the device's frame buffer, so it cannot swallow HELLO
+        except (serial.SerialException, OSError) as exc:
+            raise LinkFault(f"write to {self.url} failed: {exc}") from None
         self._write(v1.Hello())
         deadline = Timeout(HANDSHAKE_TIMEOUT)
         while (msg := self._next_message(deadline)) is not None:
