@@ -139,7 +139,30 @@ def standard_column(name: str) -> str:
 
 
 class RunLogError(StationError):
-    """A run log that cannot be read or written; names the file, line and what was expected."""
+    """A run log that cannot be read or written; names the file, line and what was expected
+    (also as the attributes ``file``, ``line`` and ``key``, see :class:`StationError`)."""
+
+
+def _log_error(path: str | Path, line: int | None, what: str, key: str | None = None) -> RunLogError:
+    """The one form of a run log error: ``"{path}: line {line}: {what}"`` with its place as attributes.
+
+    Parameters
+    ----------
+    path : str or Path
+        The log.
+    line : int or None
+        1-based line number, None when the error is about the whole file.
+    what : str
+        What is wrong and what was expected.
+    key : str, optional
+        The column or header field at fault.
+
+    Returns
+    -------
+    RunLogError
+    """
+    where = f"{path}: line {line}: " if line is not None else f"{path}: "
+    return RunLogError(where + what, file=path, line=None if line is None else int(line), key=key)
 
 
 # --- writing ----------------------------------------------------------------------------
@@ -401,7 +424,7 @@ class RunLogWriter:
         try:
             fh = open(self.path, "wb", buffering=0)  # raw: each write reaches the OS at once
         except OSError as exc:
-            raise RunLogError(f"{self.path}: cannot create run log: {exc.strerror or exc}") from None
+            raise _log_error(self.path, None, f"cannot create run log: {exc.strerror or exc}") from None
         try:
             header = ("\n".join(lines) + "\n").encode("utf-8")
             done = 0
@@ -409,7 +432,7 @@ class RunLogWriter:
                 done += fh.write(header[done:])
         except OSError as exc:
             fh.close()
-            raise RunLogError(f"{self.path}: cannot write run log header: {exc.strerror or exc}") from None
+            raise _log_error(self.path, None, f"cannot write run log header: {exc.strerror or exc}") from None
         self._pump = _Pump(self.path, fh, sinks)
         self._queue_append = self._pump.queue.append
         self._finalizer = weakref.finalize(self, self._pump.shutdown)
@@ -431,7 +454,7 @@ class RunLogWriter:
             If the row does not have ``len(COLUMNS)`` values.
         """
         if self._pump.closed:
-            raise RunLogError(f"{self.path}: append after close")
+            raise _log_error(self.path, None, "append after close")
         if len(row) != 10:
             raise ValueError(f"run log row needs {len(COLUMNS)} values ({', '.join(COLUMNS)}), got {len(row)}")
         self._queue_append(row)
@@ -472,7 +495,7 @@ class RunLogWriter:
             rescued = self._rescue()
             where = (f"; they were saved to {rescued}" if rescued is not None
                      else "; saving them to the temporary folder failed too" if missing else "")
-            raise RunLogError(f"{self.path}: writing the run log failed ({err.strerror or err}); "
+            raise _log_error(self.path, None, f"writing the run log failed ({err.strerror or err}); "
                               f"{missing} rows are not in the file{where}")
 
     def _rescue(self) -> Path | None:
@@ -569,12 +592,12 @@ def _map_columns(path: Path, lineno: int, printed: list[str]) -> list[str]:
     std = [standard_column(c) for c in printed]
     if not ({"t", "n"} & set(std) and set(SIGNAL_COLUMNS) & set(std)):
         found = ", ".join(repr(c[:30]) for c in printed[:10]) + (", ..." if len(printed) > 10 else "") or "none"
-        raise RunLogError(f"{path}: line {lineno}: no usable columns: found {found}; expected a time "
+        raise _log_error(path, lineno, f"no usable columns: found {found}; expected a time "
                           f"column (t, time, 'Time (sec.)' or n) and at least one of u, v, "
                           f"theta ($\\theta$), a (accel)")
     dup = next((c for c in std if std.count(c) > 1), None)
     if dup is not None:
-        raise RunLogError(f"{path}: line {lineno}: column {dup!r} appears twice "
+        raise _log_error(path, lineno, f"column {dup!r} appears twice "
                           f"(as {', '.join(repr(p) for p, s in zip(printed, std) if s == dup)})")
     return std
 
@@ -583,7 +606,7 @@ def _parse_rig_header(path: Path, comment_lines: list[str]) -> tuple[dict[str, A
     """meta, standard column names and delimiter from the rig's ``#`` lines (the last
     names the columns)."""
     if not comment_lines:
-        raise RunLogError(f"{path}: line 1: expected '#' header lines naming the columns")
+        raise _log_error(path, 1, f"expected '#' header lines naming the columns")
     meta: dict[str, Any] = {}
     *info, col_line = comment_lines
     names, sep = _split_names(col_line[1:])
@@ -603,12 +626,12 @@ def _parse_rig_header(path: Path, comment_lines: list[str]) -> tuple[dict[str, A
             try:
                 values = [float(x) for x in coef.group(3).split()]
             except ValueError:
-                raise RunLogError(f"{path}: line {i + 1}: expected numbers in {coef.group(1)} "
-                                  f"{coef.group(2)}=[...], got {line!r}") from None
+                raise _log_error(path, i + 1, f"expected numbers in {coef.group(1)} "
+                                  f"{coef.group(2)}=[...], got {line!r}", key=coef.group(1)) from None
             if not all(math.isfinite(x) for x in values) or (coef.group(2) == "den" and values and values[0] == 0):
-                raise RunLogError(f"{path}: line {i + 1}: {coef.group(1)} {coef.group(2)}={values}: expected finite "
+                raise _log_error(path, i + 1, f"{coef.group(1)} {coef.group(2)}={values}: expected finite "
                                   f"coefficients" + (", den[0] not 0 (the filter would be non-causal)"
-                                                     if coef.group(2) == "den" else ""))
+                                                     if coef.group(2) == "den" else ""), key=coef.group(1))
             meta.setdefault(coef.group(1), {})[coef.group(2)] = values
             coef_lines[coef.group(1)] = i + 1
         elif kv:
@@ -621,8 +644,8 @@ def _parse_rig_header(path: Path, comment_lines: list[str]) -> tuple[dict[str, A
             other.append(body)
     for key, lineno in coef_lines.items():  # a filter printed with a numerator needs its denominator
         if meta[key].get("num") and not meta[key].get("den"):
-            raise RunLogError(f"{path}: line {lineno}: {key} num={meta[key]['num']} has no den=[...] "
-                              f"(expected both, as the rig's software prints them)")
+            raise _log_error(path, lineno, f"{key} num={meta[key]['num']} has no den=[...] "
+                              f"(expected both, as the rig's software prints them)", key=key)
     if other:
         meta["notes"] = other
     return meta, std, sep
@@ -661,7 +684,7 @@ def _parse_rows(path: Path, lines: list[str], first_lineno: int, names: list[str
                           f"interrupted mid-row) skipped", RuntimeWarning, stacklevel=3)
             continue
         if problem is not None:
-            raise RunLogError(f"{path}: line {lineno}: {problem}")
+            raise _log_error(path, lineno, problem)
         rows.append(values)
     arr = np.array(rows, dtype=float).reshape(len(rows), ncol)
     return arr, torn
@@ -715,14 +738,14 @@ def read_log(path: str | Path) -> RunLog:
             ends_with_newline = size > 0 and (fb.seek(-1, os.SEEK_END) or True) and fb.read(1) == b"\n"
         fh = open(path, encoding="utf-8", newline="")
     except OSError as exc:
-        raise RunLogError(f"{path}: cannot read run log: {exc.strerror or exc}") from None
+        raise _log_error(path, None, f"cannot read run log: {exc.strerror or exc}") from None
     with fh:
         try:
             return _read_stream(path, fh, ends_with_newline)
         except UnicodeDecodeError as exc:
-            raise RunLogError(f"{path}: not a text run log ({exc.reason} at byte {exc.start} of a block)") from None
+            raise _log_error(path, None, f"not a text run log ({exc.reason} at byte {exc.start} of a block)") from None
         except OSError as exc:
-            raise RunLogError(f"{path}: cannot read run log: {exc.strerror or exc}") from None
+            raise _log_error(path, None, f"cannot read run log: {exc.strerror or exc}") from None
 
 
 class _Lines:
@@ -796,7 +819,7 @@ def _read_stream(path: Path, fh, ends_with_newline: bool) -> RunLog:
     while head and not head[-1][1].strip() and (item := lines.next()) is not None:
         head.append(item)  # (leading blank lines: keep looking for a header)
     if not head or not any(h[1].strip() for h in head):
-        raise RunLogError(f"{path}: empty file, expected a run log header")
+        raise _log_error(path, None, "empty file, expected a run log header")
     texts = [h[1] for h in head]
 
     reader_notes: list[str] = []
@@ -805,7 +828,7 @@ def _read_stream(path: Path, fh, ends_with_newline: bool) -> RunLog:
         fmt = layout = "station"
         header = texts[:3]
         if len(header) < 3:
-            raise RunLogError(f"{path}: line {len(header) + 1}: expected the header to go on "
+            raise _log_error(path, len(header) + 1, f"expected the header to go on "
                               f"(column names, '{MAGIC}', '# ' and the JSON metadata)")
         # Ours: column line, magic, JSON (what we write); or magic, JSON, column line.
         if texts[0] == MAGIC:
@@ -815,19 +838,19 @@ def _read_stream(path: Path, fh, ends_with_newline: bool) -> RunLog:
         for extra in reversed(head[3:]):
             lines.push(extra)
         if not json_line.startswith("# "):
-            raise RunLogError(f"{path}: line {json_no}: expected '# ' and the JSON metadata, got {json_line[:60]!r}")
+            raise _log_error(path, json_no, f"expected '# ' and the JSON metadata, got {json_line[:60]!r}")
         try:
             meta = json.loads(json_line[2:])
         except json.JSONDecodeError as exc:
-            raise RunLogError(f"{path}: line {json_no}: metadata is not valid JSON ({exc.msg})") from None
+            raise _log_error(path, json_no, f"metadata is not valid JSON ({exc.msg})") from None
         except RecursionError:
-            raise RunLogError(f"{path}: line {json_no}: metadata JSON is nested too deeply") from None
+            raise _log_error(path, json_no, "metadata JSON is nested too deeply") from None
         if not isinstance(meta, dict):
-            raise RunLogError(f"{path}: line {json_no}: expected a JSON object of metadata")
+            raise _log_error(path, json_no, "expected a JSON object of metadata")
         _check_meta(path, json_no, meta)
         names = col_line.split("\t")
         if tuple(names[:len(COLUMNS)]) != COLUMNS:
-            raise RunLogError(f"{path}: line {col_no}: expected the column names {_COLUMN_LINE!r}, got {col_line!r}")
+            raise _log_error(path, col_no, f"expected the column names {_COLUMN_LINE!r}, got {col_line!r}")
     elif texts[0].startswith("#"):
         fmt = layout = "rig"
         for extra in reversed(head):
@@ -845,7 +868,7 @@ def _read_stream(path: Path, fh, ends_with_newline: bool) -> RunLog:
             lines.push(extra)
         printed, sep = _split_names(texts[0])
         if printed and all(_is_number(c) for c in printed):
-            raise RunLogError(f"{path}: line 1: expected '{MAGIC}' (station run log), the rig's '#' "
+            raise _log_error(path, 1, f"expected '{MAGIC}' (station run log), the rig's '#' "
                               f"header or a line of column names, got numbers {texts[0][:60]!r}")
         fmt, layout = "rig", "columns"
         names = _map_columns(path, 1, printed)
@@ -916,8 +939,8 @@ def _check_finite(path: Path, data: dict[str, np.ndarray], names: list[str], fmt
         bad = np.flatnonzero(~np.isfinite(col))
         if bad.size:
             line = _line_of_row(path, first_lineno, int(bad[0]))
-            raise RunLogError(f"{path}: line {line}: {name} is {float(col[bad[0]])!r}, expected a finite number "
-                              f"(a log with missing samples cannot be used as it is)")
+            raise _log_error(path, line, f"{name} is {float(col[bad[0]])!r}, expected a finite number "
+                              f"(a log with missing samples cannot be used as it is)", key=name)
 
 
 def _line_of_row(path: Path, first_lineno: int | None, row: int) -> int:
@@ -940,8 +963,8 @@ def _check_meta(path: Path, lineno: int, meta: dict[str, Any]) -> None:
     if "dt" in meta:
         dt = meta["dt"]
         if isinstance(dt, bool) or not isinstance(dt, (int, float)) or not (math.isfinite(dt) and 0 < dt <= 1):
-            raise RunLogError(f"{path}: line {lineno}: header field dt is {dt!r}, expected the sample time "
-                              f"in s, a number in (0, 1]")
+            raise _log_error(path, lineno, f"header field dt is {dt!r}, expected the sample time "
+                              f"in s, a number in (0, 1]", key="dt")
 
 
 def _complete_time_base(data: dict[str, np.ndarray], names: list[str], notes: list[str]) -> float | None:
@@ -978,7 +1001,7 @@ def _end_record(path: Path, lineno: int, line: str, terminated: bool) -> dict[st
                           RuntimeWarning, stacklevel=3)
             return None
         msg = exc.msg if isinstance(exc, json.JSONDecodeError) else "nested too deeply"
-        raise RunLogError(f"{path}: line {lineno}: end record is not valid JSON ({msg})") from None
+        raise _log_error(path, lineno, f"end record is not valid JSON ({msg})") from None
     if not isinstance(outcome, dict):
-        raise RunLogError(f"{path}: line {lineno}: expected a JSON object after '{END_PREFIX.strip()}'")
+        raise _log_error(path, lineno, f"expected a JSON object after '{END_PREFIX.strip()}'")
     return outcome

@@ -388,3 +388,22 @@ def test_a_writer_bug_keeps_the_rows_for_the_rescue_file(tmp_path, monkeypatch):
         w.close()
     saved = read_log(next(tmp_path.glob("bug.rescued-*.tsv")))
     assert saved.data["n"].astype(int).tolist() == list(range(20))
+
+
+def test_read_errors_carry_their_place_as_attributes(tmp_path):
+    """Other code reads exc.file / exc.line / exc.key, never the message (issue: one truth)."""
+    from station.runlog import RunLogError
+
+    bad = tmp_path / "nan.txt"
+    bad.write_text("#SLFR RTP P_control_Test\n#kp=2.0\n#t\tn\tu\tv\t$\\theta$\ta\n"
+                   "0\t0\t0\t0\t0\t0\n0.002\t1\t0\t0\tnan\t0\n")
+    with pytest.raises(RunLogError) as info:
+        read_log(bad)
+    exc = info.value
+    assert (exc.file, exc.line, exc.key) == (str(bad), 5, "theta")
+    assert str(exc).startswith(f"{bad}: line 5: theta")
+    empty = tmp_path / "empty.tsv"
+    empty.write_text("")
+    with pytest.raises(RunLogError) as info:
+        read_log(empty)
+    assert (info.value.file, info.value.line) == (str(empty), None)
