@@ -1,8 +1,13 @@
-"""Figures of run logs: one run (``<log stem>.png`` after ``station step``) or several overlaid (``station plot``).
+"""Every figure the station draws, in one module.
+
+Run logs: one run (``<log stem>.png`` after ``station step``) or several overlaid
+(``station plot``): θ and u (encoder counts), v and v_applied (DAC counts), a
+(accelerometer counts). Model against measurement: ``station compare`` (:func:`plot_comparison`),
+``station bode`` (:func:`plot_bode`), ``station diagnose`` (:func:`diagnosis_run_figure`,
+:func:`diagnosis_resid_figure`).
 
 matplotlib :class:`~matplotlib.figure.Figure` objects with the Agg canvas only - no
 pyplot, no global backend - so library users' own matplotlib set-up is never touched.
-Panels: θ and u (encoder counts), v and v_applied (DAC counts), a (accelerometer counts).
 """
 
 from __future__ import annotations
@@ -187,3 +192,153 @@ def plot_log_files(paths: Sequence[str | Path], out: str | Path) -> Path:
 
     logs = [read_log(p) for p in paths]
     return save_figure(plot_runs(logs), out)
+
+
+# --- model comparisons: station compare, station bode, station diagnose --------------------
+
+def plot_comparison(c, path: Path):
+    """Write θ, a and v of the log and the model over time as a PNG.
+
+    Parameters
+    ----------
+    c : station.analysis.compare.RunComparison
+    path : Path
+        PNG file.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        θ (with u; open loop u in DAC counts on its own right-hand axis), a, v; the log
+        labelled by its source.
+    """
+    t = c.data["t"]
+    fig = new_figure(8, 8)
+    ax = fig.subplots(3, 1, sharex=True)
+    if c.step is None:  # open loop: u is a command in DAC counts, not an angle: its own axis
+        ax_u = ax[0].twinx()
+        ax_u.plot(t, c.data["u"], "k:", lw=0.8, label="u")
+        ax_u.set_ylabel("u (DAC counts)")
+        ax_u.legend(loc="lower right", fontsize=8)
+    else:
+        ax[0].plot(t, c.data["u"], "k:", lw=0.8, label="u")
+    for row, key, label in ((0, "theta", "θ (encoder counts)"), (1, "a", "a (counts)"), (2, "v", "v (DAC counts)")):
+        ax[row].plot(t, c.data[key], lw=0.9, label=c.source)
+        ax[row].plot(c.prediction["t"], c.prediction[key], lw=0.9, label="model")
+        ax[row].set_ylabel(label)
+        ax[row].legend(loc="best", fontsize=8)
+    ax[2].set_xlabel("t (s)")
+    fits = ", ".join(f"{k} {v:.1f} %" for k, v in c.fit_pct.items() if v is not None)
+    fig.suptitle(f"{Path(c.file).name} ({c.source})\n{c.controller}: NRMSE fit {fits}", fontsize=9)
+    fig.tight_layout()
+    save_figure(fig, path)
+    return fig
+
+
+def plot_bode(cmp, path: Path, title: str) -> None:
+    """Write the Bode magnitude/phase of θ/v, a/v (measured and model) and the coherence.
+
+    Parameters
+    ----------
+    cmp : station.analysis.frequency.BodeComparison
+    path : Path
+        PNG file to write.
+    title : str
+        Figure title.
+    """
+    f = cmp.theta.f
+    band = (f >= 0.5) & (f <= 40.0)
+    fig = new_figure(8, 10)
+    ax = fig.subplots(4, 1, sharex=True)
+    for row, (est, model, label) in enumerate(((cmp.theta, cmp.model[0], "θ/v"), (cmp.accel, cmp.model[1], "a/v"))):
+        ax[row].semilogx(f[band], 20 * np.log10(np.abs(est.H[band])), label=f"measured {label} (H1)")
+        ax[row].semilogx(f[band], 20 * np.log10(np.abs(model[band])), label=f"model {label}, n = {cmp.n_elements}")
+        ax[row].set_ylabel(f"|{label}| (dB, counts/count)")
+        ax[row].legend(loc="lower left", fontsize=8)
+    ax[2].semilogx(f[band], np.degrees(np.unwrap(np.angle(cmp.theta.H[band]))), ".", ms=2, label="measured θ/v")
+    ax[2].semilogx(f[band], np.degrees(np.unwrap(np.angle(cmp.model[0][band]))), label="model θ/v")
+    ax[2].set_ylabel("phase θ/v (deg, unwrapped)")
+    ax[2].legend(loc="lower left", fontsize=8)
+    ax[3].semilogx(f[band], cmp.theta.coherence[band], label="θ")
+    ax[3].semilogx(f[band], cmp.accel.coherence[band], label="a")
+    ax[3].set_ylabel("coherence γ²")
+    ax[3].set_xlabel("frequency (Hz)")
+    ax[3].set_ylim(0, 1.05)
+    ax[3].legend(loc="lower left", fontsize=8)
+    for i, fz in enumerate(cmp.antiresonances_measured_hz, 1):
+        for a in ax[:3]:
+            a.axvline(fz, color="grey", lw=0.6, ls=":")
+        ax[0].annotate(f"antiresonance {i}: {fz:.2f} Hz", xy=(fz, 1.0), xycoords=("data", "axes fraction"),
+                       xytext=(2, -2), textcoords="offset points", rotation=90, va="top", fontsize=7, color="grey")
+    fig.suptitle(title)
+    fig.tight_layout()
+    save_figure(fig, path)
+
+
+def diagnosis_run_figure(run):
+    """Measured vs nominal vs extended θ and a of one run (a :class:`RunReport`).
+
+    Parameters
+    ----------
+    run : RunReport
+        One run of a :class:`station.analysis.diagnosis.Diagnosis`.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
+    fig = new_figure(9, 5.2)
+    fig.set_layout_engine("constrained")
+    ax1, ax2 = fig.subplots(2, 1, sharex=True)
+    t = run.t
+    label = "extended (held out)" if run.role == "validation" else "extended"
+    ax1.plot(t, run.theta, color="k", lw=1.2, label="measured")
+    ax1.plot(t, run.nominal["theta"], color="tab:red", lw=1, label="nominal")
+    ax1.plot(t, run.extended["theta"], color="tab:blue", lw=1, ls="--", label=label)
+    if run.controller not in ("open-loop", "unknown"):
+        ax1.plot(t, run.u, color="0.6", lw=0.8, label="reference u")
+    ax1.set_ylabel("θ (encoder counts)")
+    ax1.legend(loc="best", fontsize=8)
+    ax1.set_title(f"{run.file} ({run.controller}; θ fit nominal {_fit_text(run.fit_nominal.get('theta'))}, "
+                  f"extended {_fit_text(run.fit_extended.get('theta'))})", fontsize=9)
+    ax2.plot(t, run.a, color="k", lw=0.8, label="measured")
+    ax2.plot(t, run.nominal["a"], color="tab:red", lw=0.8, label="nominal")
+    ax2.plot(t, run.extended["a"], color="tab:blue", lw=0.8, ls="--", label=label)
+    ax2.set_ylabel("a (accelerometer counts)")
+    ax2.set_xlabel("t (s)")
+    return fig
+
+
+def diagnosis_resid_figure(run):
+    """``resid`` tests of the θ residual of one run, before (nominal) and after (extended).
+
+    Parameters
+    ----------
+    run : RunReport
+        One run of a :class:`station.analysis.diagnosis.Diagnosis`.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
+    fig = new_figure(9, 3.4)
+    fig.set_layout_engine("constrained")
+    ax1, ax2 = fig.subplots(1, 2)
+    for res, color, name in ((run.residuals_before, "tab:red", "nominal"),
+                             (run.residuals_after, "tab:blue", "extended")):
+        if res is None:
+            continue
+        ax1.plot(res.theta.lags[1:], res.theta.autocorr[1:], "o-", ms=2.5, color=color, label=name)
+        ax2.plot(res.theta.cross_lags, res.theta.crosscorr, "o-", ms=2.5, color=color, label=name)
+        bound = res.theta.bound
+    for ax in (ax1, ax2):
+        ax.axhspan(-bound, bound, color="0.85", label="99 % band")
+        ax.axhline(0, color="0.5", lw=0.5)
+        ax.set_xlabel("lag (samples)")
+    ax1.set_title("autocorrelation of the θ residual", fontsize=9)
+    ax2.set_title("cross-correlation of the θ residual with v", fontsize=9)
+    ax1.legend(fontsize=8)
+    return fig
+
+
+def _fit_text(x) -> str:
+    return "n/a" if x is None or not np.isfinite(x) else f"{x:.1f} %"

@@ -16,72 +16,14 @@ import math
 import re
 from pathlib import Path
 
-from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 
 from station.errors import StationError
+from station.plots import diagnosis_resid_figure, diagnosis_run_figure
 
 
 def _slug(name: str) -> str:
     return re.sub(r"[^A-Za-z0-9_.-]+", "_", Path(name).stem)[:60]
-
-
-def run_figure(run) -> Figure:
-    """Measured vs nominal vs extended θ and a of one run (a :class:`RunReport`).
-
-    Parameters
-    ----------
-    run : RunReport
-        One run of a :class:`station.analysis.diagnosis.Diagnosis`.
-    """
-    fig = Figure(figsize=(9, 5.2), constrained_layout=True)
-    FigureCanvasAgg(fig)
-    ax1, ax2 = fig.subplots(2, 1, sharex=True)
-    t = run.t
-    label = "extended (held out)" if run.role == "validation" else "extended"
-    ax1.plot(t, run.theta, color="k", lw=1.2, label="measured")
-    ax1.plot(t, run.nominal["theta"], color="tab:red", lw=1, label="nominal")
-    ax1.plot(t, run.extended["theta"], color="tab:blue", lw=1, ls="--", label=label)
-    if run.controller not in ("open-loop", "unknown"):
-        ax1.plot(t, run.u, color="0.6", lw=0.8, label="reference u")
-    ax1.set_ylabel("θ (encoder counts)")
-    ax1.legend(loc="best", fontsize=8)
-    ax1.set_title(f"{run.file} ({run.controller}; θ fit nominal {_pct(run.fit_nominal.get('theta'))}, "
-                  f"extended {_pct(run.fit_extended.get('theta'))})", fontsize=9)
-    ax2.plot(t, run.a, color="k", lw=0.8, label="measured")
-    ax2.plot(t, run.nominal["a"], color="tab:red", lw=0.8, label="nominal")
-    ax2.plot(t, run.extended["a"], color="tab:blue", lw=0.8, ls="--", label=label)
-    ax2.set_ylabel("a (accelerometer counts)")
-    ax2.set_xlabel("t (s)")
-    return fig
-
-
-def resid_figure(run) -> Figure:
-    """``resid`` tests of the θ residual of one run, before (nominal) and after (extended).
-
-    Parameters
-    ----------
-    run : RunReport
-        One run of a :class:`station.analysis.diagnosis.Diagnosis`.
-    """
-    fig = Figure(figsize=(9, 3.4), constrained_layout=True)
-    FigureCanvasAgg(fig)
-    ax1, ax2 = fig.subplots(1, 2)
-    for res, color, name in ((run.residuals_before, "tab:red", "nominal"),
-                             (run.residuals_after, "tab:blue", "extended")):
-        if res is None:
-            continue
-        ax1.plot(res.theta.lags[1:], res.theta.autocorr[1:], "o-", ms=2.5, color=color, label=name)
-        ax2.plot(res.theta.cross_lags, res.theta.crosscorr, "o-", ms=2.5, color=color, label=name)
-        bound = res.theta.bound
-    for ax in (ax1, ax2):
-        ax.axhspan(-bound, bound, color="0.85", label="99 % band")
-        ax.axhline(0, color="0.5", lw=0.5)
-        ax.set_xlabel("lag (samples)")
-    ax1.set_title("autocorrelation of the θ residual", fontsize=9)
-    ax2.set_title("cross-correlation of the θ residual with v", fontsize=9)
-    ax1.legend(fontsize=8)
-    return fig
 
 
 def _png(fig: Figure) -> bytes:
@@ -190,7 +132,7 @@ def write_report(diag, folder: str | Path) -> Path:
             body.append("<p>Nominal model: " + esc("; ".join(sig_b) or "no notable signature") + "</p>")
             if diag.causes:
                 body.append("<p>Extended model: " + esc("; ".join(sig_a) or "no notable signature") + "</p>")
-            for kind, fig in (("run", run_figure(r)), ("resid", resid_figure(r))):
+            for kind, fig in (("run", diagnosis_run_figure(r)), ("resid", diagnosis_resid_figure(r))):
                 png = _png(fig)
                 name = f"{_slug(r.file)}_{kind}.png"
                 (folder / name).write_bytes(png)
@@ -209,4 +151,4 @@ def write_report(diag, folder: str | Path) -> Path:
     return out
 
 
-__all__ = ["resid_figure", "run_figure", "summary_paragraph", "write_report"]
+__all__ = ["summary_paragraph", "write_report"]

@@ -39,48 +39,6 @@ def configure(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--json", type=Path, default=None, metavar="OUT", help="write the antiresonances as JSON")
 
 
-def plot(cmp, path: Path, title: str) -> None:
-    """Write the Bode magnitude/phase of θ/v, a/v (measured and model) and the coherence.
-
-    Parameters
-    ----------
-    cmp : station.analysis.frequency.BodeComparison
-    path : Path
-        PNG file to write.
-    title : str
-        Figure title.
-    """
-    from station.plots import new_figure, save_figure
-
-    f = cmp.theta.f
-    band = (f >= 0.5) & (f <= 40.0)
-    fig = new_figure(8, 10)
-    ax = fig.subplots(4, 1, sharex=True)
-    for row, (est, model, label) in enumerate(((cmp.theta, cmp.model[0], "θ/v"), (cmp.accel, cmp.model[1], "a/v"))):
-        ax[row].semilogx(f[band], 20 * np.log10(np.abs(est.H[band])), label=f"measured {label} (H1)")
-        ax[row].semilogx(f[band], 20 * np.log10(np.abs(model[band])), label=f"model {label}, n = {cmp.n_elements}")
-        ax[row].set_ylabel(f"|{label}| (dB, counts/count)")
-        ax[row].legend(loc="lower left", fontsize=8)
-    ax[2].semilogx(f[band], np.degrees(np.unwrap(np.angle(cmp.theta.H[band]))), ".", ms=2, label="measured θ/v")
-    ax[2].semilogx(f[band], np.degrees(np.unwrap(np.angle(cmp.model[0][band]))), label="model θ/v")
-    ax[2].set_ylabel("phase θ/v (deg, unwrapped)")
-    ax[2].legend(loc="lower left", fontsize=8)
-    ax[3].semilogx(f[band], cmp.theta.coherence[band], label="θ")
-    ax[3].semilogx(f[band], cmp.accel.coherence[band], label="a")
-    ax[3].set_ylabel("coherence γ²")
-    ax[3].set_xlabel("frequency (Hz)")
-    ax[3].set_ylim(0, 1.05)
-    ax[3].legend(loc="lower left", fontsize=8)
-    for i, fz in enumerate(cmp.antiresonances_measured_hz, 1):
-        for a in ax[:3]:
-            a.axvline(fz, color="grey", lw=0.6, ls=":")
-        ax[0].annotate(f"antiresonance {i}: {fz:.2f} Hz", xy=(fz, 1.0), xycoords=("data", "axes fraction"),
-                       xytext=(2, -2), textcoords="offset points", rotation=90, va="top", fontsize=7, color="grey")
-    fig.suptitle(title)
-    fig.tight_layout()
-    save_figure(fig, path)
-
-
 def run(args: argparse.Namespace) -> int:
     """Estimate, compare, print the antiresonances, write the figure (and JSON).
 
@@ -104,6 +62,7 @@ def run(args: argparse.Namespace) -> int:
     from station.errors import StationError
     from station.plant import DiscretePlant
     from station.plant.model import as_model
+    from station.plots import plot_bode
     from station.runlog import read_log
 
     png = args.png if args.png is not None else Path(f"{args.file.stem}_bode.png")
@@ -126,7 +85,7 @@ def run(args: argparse.Namespace) -> int:
                                       cmp.antiresonance_error_pct), 1):
         print(f"{i:>13} {m:12.3f} {z:9.3f} {e:+8.1f}")
     try:
-        plot(cmp, png, f"{args.file.name}: measured vs FEM model (n = {args.elements})")
+        plot_bode(cmp, png, f"{args.file.name}: measured vs FEM model (n = {args.elements})")
         if args.json is not None:
             args.json.write_text(json.dumps({
                 "file": str(args.file), "n_elements": args.elements,
