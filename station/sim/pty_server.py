@@ -15,6 +15,7 @@ Run it as ``python -m station.sim.pty_server [--realtime] [--protocol legacy] [-
 from __future__ import annotations
 
 import argparse
+import gc
 import json
 import os
 import select
@@ -84,6 +85,8 @@ def serve_pty(protocol: str = "v1", realtime: bool = False, seed: int = 0, n_ele
     stop = []
     previous = {sig: signal.signal(sig, lambda *_: stop.append(True)) for sig in (signal.SIGTERM, signal.SIGINT)}
     RealtimePriority().raise_()  # for the life of this process: no restore needed
+    gc.collect()
+    gc.freeze()  # the plant, numba and scipy never get scanned again: no full collection stalls a tick
     print(os.ttyname(slave), file=out, flush=True)
     period = 1.0 / RATE_HZ
     deadline = time.perf_counter() + period
