@@ -249,15 +249,17 @@ class _SlowController:
 
     spec = {"kind": "test", "name": "slow P"}
 
-    def __init__(self, seconds, every=1):
-        self.seconds, self.every, self.calls = seconds, every, 0
+    def __init__(self, seconds, every=1, sleep=False):
+        self.seconds, self.every, self.calls, self.sleep = seconds, every, 0, sleep
 
     def reset(self):
         self.calls = 0
 
     def step(self, u, theta, a):
         self.calls += 1
-        if self.calls % self.every == 0:
+        if self.calls % self.every == 0 and self.sleep:
+            time.sleep(self.seconds)  # waiting (on I/O, say): the CPU is free meanwhile
+        elif self.calls % self.every == 0:
             end = time.perf_counter() + self.seconds
             while time.perf_counter() < end:
                 pass
@@ -277,12 +279,15 @@ def test_a_station_behind_the_device_stops_on_lag_before_using_stale_samples(dev
 
 def test_legacy_commands_written_after_the_next_sample_count_as_late(device, tmp_path):
     dev = device(protocol="legacy")
-    report, _ = _run(dev, tmp_path, protocol="legacy", controller=_SlowController(0.0025, every=25), duration=1.0)
+    report, _ = _run(dev, tmp_path, protocol="legacy", controller=_SlowController(0.0035, every=25, sleep=True), duration=1.0)
     o = report.result.outcome
     assert o.reason == "completed", o.message
-    # 20 steps of 2.5 ms (> the 2 ms period): most answer after the next sample is in; the
-    # device cannot report them, the station counts what it sees
-    assert 10 <= o.late <= 25 and o.late == o.late_seen
+    # 20 steps of 3.5 ms (1.75 periods; the next sample is due 2 ms after the one in hand):
+    # each answer is written after the next sample is in. The device cannot report them; the
+    # station counts what it sees. (The controller sleeps: a controller spinning at the
+    # station's real-time priority holds up the pty's own delivery, and then the station
+    # sees the late sample only at its next read - a limit of what it can see, README Safety.)
+    assert 15 <= o.late <= 25 and o.late == o.late_seen
 
 
 def test_legacy_byte_slip_with_a_matching_tick_number_stops_on_plausibility(device, tmp_path):
