@@ -606,7 +606,7 @@ def _parse_rig_header(path: Path, comment_lines: list[str]) -> tuple[dict[str, A
     """meta, standard column names and delimiter from the rig's ``#`` lines (the last
     names the columns)."""
     if not comment_lines:
-        raise _log_error(path, 1, f"expected '#' header lines naming the columns")
+        raise _log_error(path, 1, "expected '#' header lines naming the columns")
     meta: dict[str, Any] = {}
     *info, col_line = comment_lines
     names, sep = _split_names(col_line[1:])

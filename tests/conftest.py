@@ -53,3 +53,21 @@ def _no_user_station_config(monkeypatch, tmp_path_factory):
 
 def pytest_configure(config):
     config.addinivalue_line("markers", "slow: takes minutes (e.g. the blind diagnosis tests); still run in CI")
+
+
+@pytest.fixture
+def device_factory():
+    """Start scripted devices on ptys (tests/scripted_device.py): ``make(**options)``; all are
+    closed after the test."""
+    from tests.scripted_device import ScriptedDevice
+
+    made = []
+
+    def make(**kw):
+        dev = ScriptedDevice(**kw).start()
+        made.append(dev)
+        return dev
+
+    yield make
+    for dev in made:
+        dev.close()

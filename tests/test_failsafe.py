@@ -25,7 +25,6 @@ from station.experiment import run_step
 from station.link import LinkLimits
 from station.protocol import PROTOCOLS, legacy, v1
 from station.runlog import read_log
-from tests.scripted_device import ScriptedDevice
 
 TIMEOUT = 0.1
 SLACK = 0.1
@@ -36,17 +35,9 @@ FAULT_TICK = 100
 
 
 @pytest.fixture
-def device():
-    made = []
-
-    def make(**kw):
-        dev = ScriptedDevice(**kw).start()
-        made.append(dev)
-        return dev
-
-    yield make
-    for dev in made:
-        dev.close()
+def device(device_factory):
+    """Scripted devices on ptys, closed after the test (tests/conftest.py)."""
+    return device_factory
 
 
 def _noise(k: int, size: int = 48, zeros: bool = True) -> bytes:

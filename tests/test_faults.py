@@ -18,26 +18,11 @@ import pytest
 from station.experiment import run_step
 from station.link import LinkLimits
 from station.runlog import read_log
-from tests.scripted_device import ScriptedDevice
 
 
 LIMITS = LinkLimits(timeout=0.1, max_lag=50)
 """These faults are not about lag: a loaded test machine that holds the station up for a
 few ms must not turn them into "lag" stops (test_failsafe.py tests the lag bound)."""
-
-
-@pytest.fixture
-def device_factory():
-    made = []
-
-    def make(**kw):
-        dev = ScriptedDevice(**kw).start()
-        made.append(dev)
-        return dev
-
-    yield make
-    for dev in made:
-        dev.close()
 
 
 def test_device_going_silent_stops_with_command_zero(device_factory, tmp_path):

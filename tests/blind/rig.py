@@ -192,7 +192,7 @@ class Plant:
         kd, cd, g2, fc = self.kd, self.cd, self.g2, self.fc
         tau_v = K_TAU * v
         for _ in range(self.steps):
-            delta, ddelta = x[MOTOR] - x[BASE], x[nd + MOTOR] - x[nd + BASE]
+            delta = x[MOTOR] - x[BASE]
             coupled, offset = True, 0.0
             if g2 > 0.0:
                 if abs(delta) <= g2:
