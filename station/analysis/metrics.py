@@ -77,7 +77,8 @@ class StepInfo:
     def summary(self) -> str:
         """One line: rise, peak, 2 % settling, steady-state error, saturation."""
         f = lambda x: "n/a" if x is None else f"{x:.3f} s"  # noqa: E731
-        settle = NOT_SETTLED if self.settling_time_2pct_s is None else f"2 % settling {f(self.settling_time_2pct_s)}"
+        settle = (f"2 % band: {NOT_SETTLED}" if self.settling_time_2pct_s is None
+                  else f"2 % settling {f(self.settling_time_2pct_s)}")
         sat = "" if self.saturation_time_s is None else f"   saturated {self.saturation_time_s:.3f} s"
         return (f"rise {f(self.rise_time_s)}   peak {f(self.peak_time_s)}   {settle}   "
                 f"steady-state error {self.steady_state_error:.1f} counts{sat}")
