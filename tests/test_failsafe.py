@@ -475,12 +475,20 @@ def test_v1_session_on_a_mutated_stream_returns_only_new_samples_or_stops(seed):
 @pytest.mark.parametrize("protocol", PROTOCOLS)
 @pytest.mark.parametrize("pacing", ["lockstep", "realtime"])
 def test_no_check_fires_on_the_healthy_simulated_rig(tmp_path, protocol, pacing):
-    report = run_step(port=f"sim://?pacing={pacing}", protocol=protocol, controller="lead-accel", amplitude=200,
-                      duration=1.0, out=tmp_path / "ok.tsv")
+    # default limits. A virtual machine (CI) can stall the whole process for 5-40 ms a few
+    # times a minute (a bare real-time sleep loop sees it); the station then finds samples
+    # waiting and rightly stops on "lag". That is the machine, not a check firing on a
+    # healthy device: such a run is tried again, at most twice; no other reason is.
+    for attempt in range(3):
+        path = tmp_path / f"ok{attempt}.tsv"
+        report = run_step(port=f"sim://?pacing={pacing}", protocol=protocol, controller="lead-accel", amplitude=200,
+                          duration=1.0, out=path)
+        if report.result.outcome.reason != "lag" or pacing == "lockstep":
+            break
     o = report.result.outcome
     assert o.reason == "completed" and o.exit_code == 0, o.message
     assert (o.dropped, o.stale, o.duplicates, o.watchdog_trips) == (0, 0, 0, 0)
-    assert read_log(tmp_path / "ok.tsv").outcome["reason"] == "completed"
+    assert read_log(path).outcome["reason"] == "completed"
 
 
 @pytest.mark.parametrize("name, mutate, reason", [

@@ -68,7 +68,7 @@ def test_a_sigkilled_run_has_a_null_outcome(tmp_path):
     log = tmp_path / "killed.tsv"
     env = dict(os.environ, PYTHONUNBUFFERED="1")
     proc = subprocess.Popen([sys.executable, "-m", "station", "step", "--port", "sim://?pacing=realtime",
-                             "--duration", "60", "--out", str(log), "--quiet"],
+                             "--duration", "60", "--max-lag", "100", "--out", str(log), "--quiet"],
                             stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, env=env)
     try:
         deadline = time.monotonic() + 60  # waits for progress, not a timing assertion
