@@ -9,7 +9,7 @@ from pathlib import Path
 
 import numpy as np
 
-from station.commands.options import check_writable, number
+from station.commands.options import add_model_options, check_writable, number
 
 NAME = "bode"
 HELP = "H1 frequency response (θ/v, a/v) of a swept-sine log against the FEM model; antiresonances"
@@ -24,13 +24,7 @@ def configure(parser: argparse.ArgumentParser) -> None:
         The command's subparser.
     """
     parser.add_argument("file", type=Path, metavar="FILE", help="run log (station or rig format), e.g. a swept sine")
-    parser.add_argument("--model", default=None, metavar="NAME|FILE",
-                        help="the model: a built-in model's name or a model file (default tmm-fit); its linear part "
-                             "(param:NAME, beam_damping) gives the response")
-    parser.add_argument("--elements", type=number(1, 100, integer=True), default=None, metavar="N",
-                        help="beam elements of the model (default: the model's, 4)")
-    parser.add_argument("--params", default=None, metavar="SET",
-                        help="parameter set name or TOML file (default: the model's, tmm-fit)")
+    add_model_options(parser, "its linear part (param:NAME, beam_damping) gives the response")
     parser.add_argument("--nperseg", type=number(1024, 2**20, integer=True), default=4096, metavar="N",
                         help="Welch segment length, samples (default 4096: 0.12 Hz at 500 Hz; at least 1024, "
                              "0.5 Hz, to resolve the first antiresonance near 2.5 Hz)")

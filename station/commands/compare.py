@@ -7,7 +7,7 @@ import argparse
 import json
 from pathlib import Path
 
-from station.commands.options import check_writable, check_writable_dir, number
+from station.commands.options import add_model_options, check_writable, check_writable_dir
 
 NAME = "compare"
 HELP = "simulate logged runs on the FEM model as the rig ran them; step metrics and fits vs the thesis"
@@ -22,12 +22,7 @@ def configure(parser: argparse.ArgumentParser) -> None:
         The command's subparser.
     """
     parser.add_argument("files", type=Path, nargs="+", metavar="FILE", help="run logs (station or rig format)")
-    parser.add_argument("--model", default=None, metavar="NAME|FILE",
-                        help="the model: a built-in model's name (station/plant/models) or a model file (default tmm-fit)")
-    parser.add_argument("--elements", type=number(1, 100, integer=True), default=None, metavar="N",
-                        help="beam elements of the model (default: the model's, 4)")
-    parser.add_argument("--params", default=None, metavar="SET",
-                        help="parameter set name or TOML file (default: the model's, tmm-fit)")
+    add_model_options(parser)
     parser.add_argument("--out-dir", type=Path, default=Path("."), metavar="DIR",
                         help="folder for the figures, <log stem>_compare.png (default: current folder)")
     parser.add_argument("--json", type=Path, default=None, metavar="OUT", help="write the comparisons as JSON")

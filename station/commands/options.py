@@ -203,3 +203,23 @@ def warn(message: str) -> None:
         The note, one line.
     """
     print(f"station: note: {message}", file=sys.stderr)
+
+
+def add_model_options(parser: argparse.ArgumentParser, model_help: str = "") -> None:
+    """``--model NAME|FILE``, ``--elements N`` and ``--params SET`` (DESIGN.md "Model file"),
+    the same for every command that simulates the model against logs.
+
+    Parameters
+    ----------
+    parser : argparse.ArgumentParser
+        The command's subparser.
+    model_help : str
+        What the command does with the model, appended to ``--model``'s help.
+    """
+    parser.add_argument("--model", default=None, metavar="NAME|FILE",
+                        help="the model: a built-in model's name (station/plant/models) or a model file "
+                             "(default tmm-fit)" + (f"; {model_help}" if model_help else ""))
+    parser.add_argument("--elements", type=number(1, 100, integer=True), default=None, metavar="N",
+                        help="beam elements of the model (default: the model's, 4)")
+    parser.add_argument("--params", default=None, metavar="SET",
+                        help="parameter set name or TOML file (default: the model's, tmm-fit)")
