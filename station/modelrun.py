@@ -35,23 +35,6 @@ def command_quantization(log: RunLog) -> str:
     return {"v1": "round", "legacy": "trunc"}.get(log.meta.get("protocol"), "none")
 
 
-def log_dt(log: RunLog) -> float:
-    """The log's sample time, s: the header's ``dt``, else the median step of t (0.002 s
-    when the log has fewer than two rows).
-
-    Parameters
-    ----------
-    log : RunLog
-        The log.
-    """
-    dt = log.meta.get("dt")
-    if isinstance(dt, (int, float)) and not isinstance(dt, bool) and dt > 0:
-        return float(dt)
-    t = log.data["t"]
-    dt = float(np.median(np.diff(t))) if t.size > 1 else 0.002
-    return float(round(dt, 9) or 0.002)
-
-
 @dataclass
 class ModelRun:
     """A logged run simulated on the plant (:func:`simulate_log`).
@@ -105,7 +88,7 @@ def simulate_log(log: RunLog, controller, alignment: int | None, model) -> Model
     if isinstance(model, DiscretePlant):
         model.reset()
     else:  # a Model: simulated at the log's sample time
-        kw["dt"] = log_dt(log)
+        kw["dt"] = log.dt
     command = command_quantization(log)
     if controller is None or isinstance(controller, OpenLoop):
         applied = data["v_applied"]

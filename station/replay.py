@@ -37,13 +37,10 @@ from station.analysis.beam import (
 from station.errors import StationError
 from station.modelrun import ModelRun, command_quantization, simulate_log  # noqa: F401 (moved; re-exported)
 from station.reference import classify_reference  # one definition of a step (also for compare, diagnosis)
-from station.runlog import RunLog, read_log
+from station.runlog import RIG_DT, RunLog, read_log
 
 ALIGNMENTS = (0, 1)
 """Computational delays replay tries, samples."""
-
-RIG_DT = 0.002
-"""The rig's sample time, s: its compensators ran at it (DESIGN.md)."""
 
 RIG_LIMIT = 200.0
 """The rig software's clamp of v, DAC counts (DESIGN.md)."""
@@ -314,7 +311,7 @@ def identify_controller(log: RunLog) -> ControllerId:
         return ControllerId(None, None, [f"the log's controller is a custom Python controller ({custom}): its "
                                          f"commands cannot be replayed; the model is driven by the logged v"])
     controller, notes = _named_controller(log)
-    dt = _dt_of(log)
+    dt = log.dt
     data = log.data
     u, theta, v, a = data["u"], data["theta"], data["v"], data["a"]
     if log.format == "rig" and abs(dt - RIG_DT) > 1e-9 and not isinstance(controller, OpenLoop):
@@ -381,7 +378,7 @@ def _named_controller(log: RunLog) -> tuple[Compensator | OpenLoop | None, list[
         if not isinstance(spec, dict):
             return None, []
         return controller_from_spec(spec), []
-    dt = _dt_of(log)
+    dt = log.dt
     try:
         return rig_controller(log.meta, dt)
     except StationError as exc:  # a header field: name the file and its line
@@ -390,15 +387,6 @@ def _named_controller(log: RunLog) -> tuple[Compensator | OpenLoop | None, list[
                                               if text[1:].strip().startswith(key) and "=" in text), None)
         where = f"{log.path}: line {line}" if line else str(log.path)
         raise StationError(f"{where}: {exc}", file=log.path, line=line, key=key) from None
-
-
-def _dt_of(log: RunLog) -> float:
-    dt = log.meta.get("dt") if isinstance(log.meta.get("dt"), (int, float)) else None
-    if dt is None:
-        t = log.data["t"]
-        dt = float(np.median(np.diff(t))) if t.size > 1 else 0.002
-        dt = round(dt, 9) or 0.002
-    return float(dt)
 
 
 # --- replaying the commands -------------------------------------------------------------
@@ -534,7 +522,7 @@ def replay(path: str | Path, model=True, n_elements: int | None = None) -> Repla
                           alignment=None, samples=n, max_abs_dv=None, metrics=None, reference=reference,
                           notes=list(log.notes) + list(cid.notes), log=log, layout=log.layout,
                           sample_time=log.sample_time, outcome=log.outcome)
-    held = hub_held(data["theta"], data["v"], _dt_of(log)) if n else None
+    held = hub_held(data["theta"], data["v"], log.dt) if n else None
     if controller is not None and n > 0:  # else identify_controller's notes say why
         report.controller = controller.name
         report.controller_spec = controller.spec
@@ -571,7 +559,7 @@ def replay(path: str | Path, model=True, n_elements: int | None = None) -> Repla
 def _beam_test(report: ReplayReport, log: RunLog, held: HubHeld, model) -> None:
     """A hub-held test: the beam's first mode instead of the motor model's fit."""
     data = log.data
-    measured = analyze_beam_test(data["t"], data["a"], _dt_of(log))
+    measured = analyze_beam_test(data["t"], data["a"], log.dt)
     try:
         f_model, z_model = model_first_mode(model)
     except (ValueError, StationError) as exc:

@@ -367,7 +367,7 @@ def test_write_error_counts_exactly_the_rows_in_the_file(tmp_path):
 
 
 def test_a_writer_bug_keeps_the_rows_for_the_rescue_file(tmp_path, monkeypatch):
-    import station.runlog as runlog
+    import station.runlog.writer as runlog
 
     monkeypatch.setattr(tempfile, "tempdir", str(tmp_path))
 

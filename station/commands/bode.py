@@ -7,8 +7,6 @@ import argparse
 import json
 from pathlib import Path
 
-import numpy as np
-
 from station.commands.options import add_model_options, check_writable, number
 
 NAME = "bode"
@@ -64,7 +62,7 @@ def run(args: argparse.Namespace) -> int:
     check_writable(args.json, "--json")
     log = read_log(args.file)
     t = log.data["t"]
-    dt = float(np.median(np.diff(t))) if t.size > 1 else 0.002
+    dt = log.dt
     model = as_model(args.model, args.elements, args.params)
     args.elements = model.n_elements
     try:

@@ -1,0 +1,205 @@
+"""The reader: one function, :func:`read_log`, for ours and the rig's layouts.
+
+The header is read line by line and decides the layout (ours, :mod:`station.runlog.rig`'s
+two); the rows go through :func:`station.runlog.rows.load_rows`; then the checks that need
+whole columns (finite numbers where they belong), the time base and the end record.
+
+Imports :mod:`station.runlog.schema`, ``.rows``, ``.rig``, ``.timebase`` and ``.log``.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import warnings
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from station.runlog.log import RunLog
+from station.runlog.rig import Header, parse_column_line, parse_rig_header
+from station.runlog.rows import Lines, load_rows
+from station.runlog.schema import COLUMN_LINE, COLUMNS, END_PREFIX, FINITE_COLUMNS, MAGIC, log_error
+from station.runlog.timebase import complete_time_base
+
+
+def read_log(path: str | Path) -> RunLog:
+    """Read a run log, ours or the rig's (format detected from the header).
+
+    Layouts: ours; the rig's ``#`` header whose last line names the columns; or, without
+    a ``#`` header, a first line of column names (tab, comma, semicolon or whitespace
+    separated; the rig's 2014 logs and cut-down copies). Columns are mapped to the
+    standard names by :data:`COLUMN_SYNONYMS`; n is derived from t when missing (t from
+    n at 0.002 s when t is missing). A last line ``# end {json}`` is the run's outcome.
+
+    Parameters
+    ----------
+    path : str or Path
+
+    Returns
+    -------
+    RunLog
+        ``data`` holds every name of :data:`COLUMNS` (NaN-filled where the format lacks
+        the column; the rig's logs have no v_applied, status, latency_us, and no
+        theta_d_hat without accelerometer feedback; cut-down copies may lack u, n, a),
+        ``sample_time`` the sample time found in t (``dt`` the one to use), ``notes``
+        what was derived.
+
+    Raises
+    ------
+    RunLogError
+        File missing or unreadable, unknown format, bad header, no usable columns (lists
+        the columns found and expected), or a malformed row other than a torn last line
+        (names the file, line number and what was expected).
+
+    Warns
+    -----
+    RuntimeWarning
+        When a torn last line (interrupted write) is skipped.
+    """
+    path = Path(path)
+    try:
+        fh = open(path, encoding="utf-8", newline="")
+    except OSError as exc:
+        raise log_error(path, None, f"cannot read run log: {exc.strerror or exc}") from None
+    with fh:
+        try:
+            return _read_stream(path, Lines(fh))
+        except UnicodeDecodeError as exc:
+            raise log_error(path, None, f"not a text run log ({exc.reason} at byte {exc.start} of a block)") from None
+        except OSError as exc:
+            raise log_error(path, None, f"cannot read run log: {exc.strerror or exc}") from None
+
+
+def _read_stream(path: Path, lines: Lines) -> RunLog:
+    """:func:`read_log` on an open text file: header line by line, rows by numpy's parser."""
+    head: list[tuple[int, str, bool]] = []
+    while len(head) < 3 and (item := lines.next()) is not None:
+        head.append(item)
+    while head and not head[-1][1].strip() and (item := lines.next()) is not None:
+        head.append(item)  # (leading blank lines: keep looking for a header)
+    if not head or not any(h[1].strip() for h in head):
+        raise log_error(path, None, "empty file, expected a run log header")
+    texts = [h[1] for h in head]
+
+    if MAGIC in texts[:2]:
+        fmt = layout = "station"
+        for extra in reversed(head[3:]):
+            lines.push(extra)
+        found = _station_header(path, texts)
+        header = texts[:3]
+    elif texts[0].startswith("#"):
+        fmt = layout = "rig"
+        for extra in reversed(head):
+            lines.push(extra)
+        header = []
+        while (item := lines.next()) is not None:
+            if not item[1].startswith("#"):
+                lines.push(item)
+                break
+            header.append(item[1])
+        found = parse_rig_header(path, header)
+    else:
+        fmt, layout = "rig", "columns"
+        for extra in reversed(head[1:]):
+            lines.push(extra)
+        found = parse_column_line(path, texts[0])
+        header = texts[:1]
+
+    names, notes = found.names, list(found.notes)
+    arr, data_lines = load_rows(path, lines, fmt, names, found.sep)
+    n = arr.shape[0]
+    data = {name: np.full(n, np.nan) for name in COLUMNS}
+    for j, name in enumerate(names):
+        data[name] = arr[:, j]
+    del arr
+    _check_finite(path, data, names, fmt, data_lines.first_lineno)
+    sample_time = complete_time_base(data, names, notes)
+    outcome = None if data_lines.last is None else _end_record(path, *data_lines.last)
+    return RunLog(path=path, format=fmt, meta=found.meta, data=data, header=header, layout=layout,
+                  sample_time=sample_time, outcome=outcome, notes=notes)
+
+
+def _station_header(path: Path, texts: list[str]) -> Header:
+    """Our header from the file's first lines: column line, magic, JSON (what we write);
+    or magic, JSON, column line."""
+    if len(texts) < 3:
+        raise log_error(path, len(texts) + 1, f"expected the header to go on "
+                        f"(column names, '{MAGIC}', '# ' and the JSON metadata)")
+    if texts[0] == MAGIC:
+        (json_no, json_line), (col_no, col_line) = (2, texts[1]), (3, texts[2])
+    else:
+        (json_no, json_line), (col_no, col_line) = (3, texts[2]), (1, texts[0])
+    if not json_line.startswith("# "):
+        raise log_error(path, json_no, f"expected '# ' and the JSON metadata, got {json_line[:60]!r}")
+    try:
+        meta = json.loads(json_line[2:])
+    except json.JSONDecodeError as exc:
+        raise log_error(path, json_no, f"metadata is not valid JSON ({exc.msg})") from None
+    except RecursionError:
+        raise log_error(path, json_no, "metadata JSON is nested too deeply") from None
+    if not isinstance(meta, dict):
+        raise log_error(path, json_no, "expected a JSON object of metadata")
+    _check_meta(path, json_no, meta)
+    names = col_line.split("\t")
+    if tuple(names[:len(COLUMNS)]) != COLUMNS:
+        raise log_error(path, col_no, f"expected the column names {COLUMN_LINE!r}, got {col_line!r}")
+    return Header(meta, names, "\t", [])
+
+
+def _check_finite(path: Path, data: dict[str, np.ndarray], names: list[str], fmt: str,
+                  first_lineno: int | None) -> None:
+    """RunLogError naming the line and the field of the first non-finite value where a number belongs."""
+    must = FINITE_COLUMNS + (("v", "theta_d_hat") if fmt == "rig" else ())
+    for name in names:
+        if name not in must:
+            continue
+        col = data[name]
+        bad = np.flatnonzero(~np.isfinite(col))
+        if bad.size:
+            line = _line_of_row(path, first_lineno, int(bad[0]))
+            raise log_error(path, line, f"{name} is {float(col[bad[0]])!r}, expected a finite number "
+                            f"(a log with missing samples cannot be used as it is)", key=name)
+
+
+def _line_of_row(path: Path, first_lineno: int | None, row: int) -> int:
+    """The line number of data row ``row`` (0-based), counting blank and ``#`` lines."""
+    if first_lineno is None:
+        return 0
+    seen = -1
+    with open(path, encoding="utf-8", errors="replace") as fh:
+        for lineno, line in enumerate(fh, 1):
+            if lineno < first_lineno or not line.strip() or line.startswith("#"):
+                continue
+            seen += 1
+            if seen == row:
+                return lineno
+    return first_lineno + row
+
+
+def _check_meta(path: Path, lineno: int, meta: dict[str, Any]) -> None:
+    """RunLogError for header fields the readers rely on that make no sense (dt)."""
+    if "dt" in meta:
+        dt = meta["dt"]
+        if isinstance(dt, bool) or not isinstance(dt, (int, float)) or not (math.isfinite(dt) and 0 < dt <= 1):
+            raise log_error(path, lineno, f"header field dt is {dt!r}, expected the sample time "
+                            f"in s, a number in (0, 1]", key="dt")
+
+
+def _end_record(path: Path, lineno: int, line: str, terminated: bool) -> dict[str, Any] | None:
+    """The run's outcome from the last non-blank line when it is ``# end {json}`` (DESIGN.md "Run outcome"), or None."""
+    if not line.startswith(END_PREFIX):
+        return None
+    try:
+        outcome = json.loads(line[len(END_PREFIX):])
+    except (json.JSONDecodeError, RecursionError) as exc:
+        if not terminated:  # torn while being written
+            warnings.warn(f"{path}: line {lineno}: torn end record skipped (outcome unknown)",
+                          RuntimeWarning, stacklevel=3)
+            return None
+        msg = exc.msg if isinstance(exc, json.JSONDecodeError) else "nested too deeply"
+        raise log_error(path, lineno, f"end record is not valid JSON ({msg})") from None
+    if not isinstance(outcome, dict):
+        raise log_error(path, lineno, f"expected a JSON object after '{END_PREFIX.strip()}'")
+    return outcome

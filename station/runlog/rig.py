@@ -1,0 +1,166 @@
+"""The rig's layouts: its ``#`` header (test name, gains, filter coefficients, the last line
+naming the columns) and a bare first line of column names (its 2014 logs, cut-down copies).
+
+Imports :mod:`station.runlog.schema` and :mod:`station.runlog.rows`.
+"""
+
+from __future__ import annotations
+
+import math
+import re
+from pathlib import Path
+from typing import Any, NamedTuple
+
+from station.runlog.rows import is_number
+from station.runlog.schema import MAGIC, SIGNAL_COLUMNS, log_error, standard_column
+
+
+class Header(NamedTuple):
+    """A log's header understood.
+
+    Attributes
+    ----------
+    meta : dict
+        What the header says (see :class:`station.runlog.RunLog`).
+    names : list of str
+        The columns' standard names, in file order.
+    sep : str or None
+        The rows' delimiter; None: any whitespace.
+    notes : list of str
+        What the reader assumed (columns named by synonyms).
+    """
+
+    meta: dict[str, Any]
+    names: list[str]
+    sep: str | None
+    notes: list[str]
+
+
+_KV = re.compile(r"^\s*([A-Za-z_]\w*)\s*=\s*(.*?)\s*$")
+_COEF = re.compile(r"^\s*(\w+)\s+(num|den)\s*=\s*\[(.*)\]\s*$")
+
+
+def _split_names(line: str) -> tuple[list[str], str | None]:
+    """The names of a column-name line and its delimiter (tab, comma, semicolon; None:
+    whitespace)."""
+    for sep in ("\t", ",", ";"):
+        if sep in line:
+            return [c.strip() for c in line.split(sep)], sep
+    return line.split(), None
+
+
+def _map_columns(path: Path, lineno: int, printed: list[str]) -> list[str]:
+    """Standard names of the printed column names; RunLogError when none is usable."""
+    std = [standard_column(c) for c in printed]
+    if not ({"t", "n"} & set(std) and set(SIGNAL_COLUMNS) & set(std)):
+        found = ", ".join(repr(c[:30]) for c in printed[:10]) + (", ..." if len(printed) > 10 else "") or "none"
+        raise log_error(path, lineno, f"no usable columns: found {found}; expected a time "
+                        f"column (t, time, 'Time (sec.)' or n) and at least one of u, v, "
+                        f"theta ($\\theta$), a (accel)")
+    dup = next((c for c in std if std.count(c) > 1), None)
+    if dup is not None:
+        raise log_error(path, lineno, f"column {dup!r} appears twice "
+                        f"(as {', '.join(repr(p) for p, s in zip(printed, std) if s == dup)})")
+    return std
+
+
+def parse_rig_header(path: Path, comment_lines: list[str]) -> Header:
+    """The rig's ``#`` header lines (the last names the columns) understood.
+
+    Parameters
+    ----------
+    path : Path
+        The log (for errors).
+    comment_lines : list of str
+        The header lines from line 1 on, each starting with ``#``.
+
+    Returns
+    -------
+    Header
+        meta: ``title`` (whole first line), ``test`` (its last word), gains as floats
+        (other ``key=value`` fields as text), ``Gth`` / ``Ga`` as
+        ``{"num": [...], "den": [...]}``, ``columns`` (the names as printed), ``notes``
+        (other lines).
+
+    Raises
+    ------
+    RunLogError
+        No header, no usable columns, coefficients that are not finite numbers, den[0]
+        = 0 or a num without den (names the line and the field).
+    """
+    if not comment_lines:
+        raise log_error(path, 1, "expected '#' header lines naming the columns")
+    meta: dict[str, Any] = {}
+    *info, col_line = comment_lines
+    names, sep = _split_names(col_line[1:])
+    std = _map_columns(path, len(comment_lines), names)
+    meta["columns"] = names
+    other = []
+    coef_lines: dict[str, int] = {}
+    for i, line in enumerate(info):
+        body = line[1:].strip()
+        coef = _COEF.match(body)
+        kv = _KV.match(body)
+        if i == 0 and not kv and not coef:
+            meta["title"] = body
+            parts = body.split()
+            meta["test"] = parts[-1] if parts else ""
+        elif coef:
+            try:
+                values = [float(x) for x in coef.group(3).split()]
+            except ValueError:
+                raise log_error(path, i + 1, f"expected numbers in {coef.group(1)} "
+                                f"{coef.group(2)}=[...], got {line!r}", key=coef.group(1)) from None
+            if not all(math.isfinite(x) for x in values) or (coef.group(2) == "den" and values and values[0] == 0):
+                raise log_error(path, i + 1, f"{coef.group(1)} {coef.group(2)}={values}: expected finite "
+                                f"coefficients" + (", den[0] not 0 (the filter would be non-causal)"
+                                                   if coef.group(2) == "den" else ""), key=coef.group(1))
+            meta.setdefault(coef.group(1), {})[coef.group(2)] = values
+            coef_lines[coef.group(1)] = i + 1
+        elif kv:
+            key, val = kv.groups()
+            try:
+                meta[key] = float(val)
+            except ValueError:
+                meta[key] = val
+        else:
+            other.append(body)
+    for key, lineno in coef_lines.items():  # a filter printed with a numerator needs its denominator
+        if meta[key].get("num") and not meta[key].get("den"):
+            raise log_error(path, lineno, f"{key} num={meta[key]['num']} has no den=[...] "
+                            f"(expected both, as the rig's software prints them)", key=key)
+    if other:
+        meta["notes"] = other
+    return Header(meta, std, sep, [])
+
+
+
+
+def parse_column_line(path: Path, line: str) -> Header:
+    """A first line of column names, without a ``#`` header, understood.
+
+    Parameters
+    ----------
+    path : Path
+        The log (for errors).
+    line : str
+        Line 1 of the file: names separated by tabs, commas, semicolons or whitespace.
+
+    Returns
+    -------
+    Header
+        meta ``{"columns": [names as printed]}``; a note lists the names taken as synonyms.
+
+    Raises
+    ------
+    RunLogError
+        A line of numbers (no header at all), no usable columns, or a column twice.
+    """
+    printed, sep = _split_names(line)
+    if printed and all(is_number(c) for c in printed):
+        raise log_error(path, 1, f"expected '{MAGIC}' (station run log), the rig's '#' "
+                        f"header or a line of column names, got numbers {line[:60]!r}")
+    names = _map_columns(path, 1, printed)
+    renamed = [f"{p!r} -> {s}" for p, s in zip(printed, names) if p != s]
+    notes = ["columns named by synonyms: " + ", ".join(renamed)] if renamed else []
+    return Header({"columns": printed}, names, sep, notes)

@@ -1,0 +1,232 @@
+"""A log's rows: its lines numbered, the data lines (the torn last line decided here, once),
+and the rows as an array.
+
+The rows are parsed by ``numpy.loadtxt`` from a stream of lines, without a Python list per
+row (a 100 MB log reads within a few times its size, ``scripts/bench_read.py``). Only a
+file that numpy refuses is read again, through the same :class:`DataLines`, row by row, to
+name the bad row's line and field.
+
+Imports :mod:`station.runlog.schema`.
+"""
+
+from __future__ import annotations
+
+import warnings
+from pathlib import Path
+
+import numpy as np
+
+from station.runlog.schema import log_error
+
+SEPARATOR_NAMES = {"\t": "tab", ",": "comma", ";": "semicolon", None: "whitespace"}
+"""How an error names a delimiter (None: any whitespace)."""
+
+
+def is_number(text: str) -> bool:
+    """Whether Python reads ``text`` as a float.
+
+    Parameters
+    ----------
+    text : str
+        One field.
+    """
+    try:
+        float(text)
+    except ValueError:
+        return False
+    return True
+
+
+def parse_row(line: str, names: list[str], sep: str | None) -> tuple[list[float] | None, str | None]:
+    """One data line as numbers, or what is wrong with it.
+
+    Parameters
+    ----------
+    line : str
+        The line without its newline.
+    names : list of str
+        The columns' standard names (the row needs one number for each).
+    sep : str or None
+        The delimiter; None: any whitespace.
+
+    Returns
+    -------
+    values : list of float or None
+        The row's numbers, None when it is malformed.
+    problem : str or None
+        What was expected and found (names the column), None for a good row.
+    """
+    parts = line.split(sep)
+    if len(parts) != len(names):
+        return None, f"expected {len(names)} {SEPARATOR_NAMES[sep]}-separated numbers, got {len(parts)}"
+    try:
+        return [float(p) for p in parts], None
+    except ValueError:
+        bad = next(j for j, p in enumerate(parts) if not is_number(p))
+        return None, f"expected a number in column {names[bad]!r}, got {parts[bad]!r}"
+
+
+class Lines:
+    """A text file's lines, numbered from 1, without their newline (and a trailing CR),
+    with a push-back for the header parsers.
+
+    Parameters
+    ----------
+    fh : text file
+        Opened with ``newline=""`` (line ends kept, so a last line without one shows).
+    """
+
+    def __init__(self, fh) -> None:
+        self.fh = fh
+        self.lineno = 0
+        self._back: list[tuple[int, str, bool]] = []
+
+    def next(self) -> tuple[int, str, bool] | None:
+        """The next line as (line number, text, terminated), None at the end of the file;
+        ``terminated`` is False for a last line with no newline."""
+        if self._back:
+            return self._back.pop()
+        raw = self.fh.readline()
+        if not raw:
+            return None
+        self.lineno += 1
+        terminated = raw.endswith("\n")
+        return self.lineno, raw.rstrip("\n").rstrip("\r"), terminated
+
+    def push(self, item: tuple[int, str, bool]) -> None:
+        """Put a line back; :meth:`next` returns it again (last pushed, first returned).
+
+        Parameters
+        ----------
+        item : tuple
+            As :meth:`next` returned it.
+        """
+        self._back.append(item)
+
+    @property
+    def next_lineno(self) -> int:
+        """The number of the line :meth:`next` returns next."""
+        return self._back[-1][0] if self._back else self.lineno + 1
+
+
+class DataLines:
+    """The data lines of a log, for numpy's parser or a row-by-row pass: blank and ``#``
+    lines left out (the last non-blank line is kept for the end record) and a torn last
+    line skipped with a warning.
+
+    A last line without a newline is torn (the writer was interrupted mid-row) in our
+    format, whose writer ends every row; in the rig's formats only when it is not a whole
+    row (:func:`parse_row`).
+
+    Parameters
+    ----------
+    path : Path
+        The log (for the warning).
+    lines : Lines
+        Positioned at the first line after the header.
+    fmt : {"station", "rig"}
+        The log's format.
+    names : list of str
+        The columns' standard names.
+    sep : str or None
+        The delimiter; None: any whitespace.
+
+    Attributes
+    ----------
+    lineno : int or None
+        Line number of the line last yielded.
+    first_lineno : int or None
+        Line number of the first data line.
+    last : tuple or None
+        The last non-blank line seen, as :meth:`Lines.next` returns it.
+    torn : int
+        Torn lines skipped (0 or 1).
+    """
+
+    def __init__(self, path: Path, lines: Lines, fmt: str, names: list[str], sep: str | None) -> None:
+        self.path, self.lines, self.fmt, self.names, self.sep = path, lines, fmt, names, sep
+        self.lineno: int | None = None
+        self.first_lineno: int | None = None
+        self.last: tuple[int, str, bool] | None = None
+        self.torn = 0
+
+    def __iter__(self):
+        while (item := self.lines.next()) is not None:
+            lineno, line, terminated = item
+            if not line.strip():
+                continue
+            self.last = item
+            if line.startswith("#"):
+                continue
+            if self.first_lineno is None:
+                self.first_lineno = lineno
+            if not terminated and (self.fmt == "station" or parse_row(line, self.names, self.sep)[1] is not None):
+                self.torn += 1
+                warnings.warn(f"{self.path}: line {lineno}: torn last line (no newline; the writer was "
+                              f"interrupted mid-row) skipped", RuntimeWarning, stacklevel=4)
+                continue
+            self.lineno = lineno
+            yield line
+
+
+def load_rows(path: Path, lines: Lines, fmt: str, names: list[str], sep: str | None) -> tuple[np.ndarray, DataLines]:
+    """The rows after the header as an array, by numpy's parser from a line stream.
+
+    Parameters
+    ----------
+    path : Path
+        The log; read again, line by line, only when numpy refuses a row.
+    lines : Lines
+        The open file, positioned after the header.
+    fmt : {"station", "rig"}
+        The log's format (decides a torn last line, see :class:`DataLines`).
+    names : list of str
+        The columns' standard names.
+    sep : str or None
+        The delimiter; None: any whitespace.
+
+    Returns
+    -------
+    rows : numpy.ndarray
+        Shape (rows, len(names)), float64.
+    data_lines : DataLines
+        The pass that read them (first data line, last non-blank line, torn lines).
+
+    Raises
+    ------
+    RunLogError
+        A malformed row other than a torn last line: names the line and the field.
+    """
+    first = lines.next_lineno
+    data_lines = DataLines(path, lines, fmt, names, sep)
+    try:
+        with warnings.catch_warnings():
+            warnings.filterwarnings("ignore", message=".*input contained no data", category=UserWarning)
+            arr = np.loadtxt(iter(data_lines), dtype=float, delimiter=sep, comments=None, ndmin=2, encoding=None)
+        if arr.size == 0:
+            arr = np.empty((0, len(names)))
+        if arr.shape[1] == len(names):
+            return arr, data_lines
+    except UnicodeDecodeError:
+        raise
+    except ValueError:
+        pass
+    return _rows_one_by_one(path, first, fmt, names, sep)
+
+
+def _rows_one_by_one(path: Path, first: int, fmt: str, names: list[str],
+                     sep: str | None) -> tuple[np.ndarray, DataLines]:
+    """:func:`load_rows`'s exact (slow) pass from line ``first`` on, only for a file numpy
+    refused: the same data lines, each parsed by :func:`parse_row` to name the bad one."""
+    with open(path, encoding="utf-8", newline="") as fh:
+        lines = Lines(fh)
+        while lines.lineno < first - 1 and lines.next() is not None:
+            pass
+        data_lines = DataLines(path, lines, fmt, names, sep)
+        rows: list[list[float]] = []
+        for line in data_lines:
+            values, problem = parse_row(line, names, sep)
+            if problem is not None:
+                raise log_error(path, data_lines.lineno, problem)
+            rows.append(values)
+    return np.array(rows, dtype=float).reshape(len(rows), len(names)), data_lines
