@@ -22,6 +22,7 @@ not pass them off as a vocabulary cause; see :data:`OOV`.
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass, field
 
@@ -30,7 +31,7 @@ from scipy.linalg import expm
 from scipy.signal import bilinear
 
 from tests.blind import substep
-from tests.blind.fem import BASE, H, K_TAU, MOTOR, Params, assemble, beta_for_damping, tip_w
+from tests.blind.fem import BASE, H, K_TAU, MOTOR, Params, assemble, beta_for_damping, motor_inertia, tip_w
 
 DT = 0.002
 """Sample time, s."""
@@ -216,12 +217,15 @@ class Amplifier:
 
     def __init__(self, saturation: float = math.inf, deadzone: float = 0.0, delay: int = 0, offset: float = 0.0):
         self.sat, self.w, self.offset = saturation, deadzone, offset
-        self.buf = [0.0] * int(delay)
+        self.buf = [self._shape(0.0)] * int(delay)  # before the run the PC sent 0
 
-    def __call__(self, v: float) -> float:
+    def _shape(self, v: float) -> float:
         v = float(math.trunc(v)) + self.offset
         v = min(max(v, -self.sat), self.sat)
-        v = 0.0 if abs(v) <= self.w else v - math.copysign(self.w, v)
+        return 0.0 if abs(v) <= self.w else v - math.copysign(self.w, v)
+
+    def __call__(self, v: float) -> float:
+        v = self._shape(v)
         if not self.buf:
             return v
         self.buf.append(v)
@@ -246,6 +250,59 @@ def _zoh(A: np.ndarray, B: np.ndarray, h: float) -> tuple[np.ndarray, np.ndarray
     big[:n, :n], big[:n, n:] = A, B
     e = expm(big * h)
     return e[:n, :n], e[:n, n:]
+
+
+@functools.lru_cache(maxsize=16)
+def _matrices(params: Params, n_elements: int, beta: float, viscous: float, ground_spring: float, dt: float,
+              steps: int, micro: int):
+    """(n_dof, tip acceleration row, phi, gam, micro phi, micro gam) of a plant, cached: the
+    runs of a case share them. ``steps`` = 0: one exact ZOH step of the linear plant per
+    sample (phi (2n, 2n), gam (2n,)); else the four sub-step variants (index 2*coupled +
+    stuck) with inputs (v, motor torque, base torque), and those of a micro-step."""
+    m = assemble(params, n_elements, beta)
+    nd = m.M.shape[0]
+    K, C = m.K.copy(), m.C.copy()
+    C[MOTOR, MOTOR] += K_TAU * viscous  # linear: exact in the ZOH matrices
+    K[BASE, BASE] += K_TAU * ground_spring * H
+    minv = np.linalg.inv(m.M)
+    inputs = np.zeros((nd, 3))
+    inputs[:, 0] = m.f_v
+    inputs[MOTOR, 1] = 1.0
+    inputs[BASE, 2] = 1.0
+
+    def state_space(K, C):
+        A = np.block([[np.zeros((nd, nd)), np.eye(nd)], [-minv @ K, -minv @ C]])
+        return A, np.vstack([np.zeros((nd, 3)), minv @ inputs])
+
+    A, B = state_space(K, C)
+    accel_row = A[nd + tip_w(n_elements)].copy()  # tip acceleration (D = 0: torque is on the motor)
+    if not steps:
+        phi, gam = _zoh(A, B[:, :1], dt)
+        out = (accel_row, phi, gam[:, 0], None, None)
+    else:
+        models = {coupled: state_space(K, C) if coupled else state_space(K - m.k_drive, C - m.c_drive)
+                  for coupled in (False, True)}
+
+        def variants(h):
+            phis, gams = [], []
+            for coupled in (False, True):
+                for stuck in (False, True):
+                    As, Bs = (a.copy() for a in models[coupled])
+                    if stuck:  # motor held: its angle and (zero) speed do not change
+                        As[[MOTOR, nd + MOTOR]] = 0.0
+                        Bs[[MOTOR, nd + MOTOR]] = 0.0
+                    phi, gam = _zoh(As, Bs, h)
+                    phis.append(phi)
+                    gams.append(gam)
+            return np.ascontiguousarray(phis), np.ascontiguousarray(gams)
+
+        phi, gam = variants(dt / steps)
+        fphi, fgam = variants(dt / steps / micro) if micro > 1 else (phi, gam)
+        out = (accel_row, phi, gam, fphi, fgam)
+    for a in out:
+        if a is not None:
+            a.flags.writeable = False
+    return (nd, *out)
 
 
 class Plant:
@@ -283,58 +340,20 @@ class Plant:
                  backlash: float = 0.0, substeps: int = 100, dt: float = DT, *, static_friction: float = 0.0,
                  stribeck_speed: float = STRIBECK_SPEED, viscous: float = 0.0, cogging: float = 0.0,
                  cogging_cycles: float = 16.0, ground_spring: float = 0.0):
-        m = assemble(params, n_elements, beta)
-        self.nd = nd = m.M.shape[0]
-        K, C = m.K.copy(), m.C.copy()
-        C[MOTOR, MOTOR] += K_TAU * viscous  # linear: exact in the ZOH matrices
-        K[BASE, BASE] += K_TAU * ground_spring * H
         v_s = max(static_friction, friction)
         self.cfg = substep.config(params.drive_k, params.drive_c, 0.5 * backlash / H, K_TAU * friction,
                                   K_TAU * v_s, stribeck_speed, K_TAU * cogging, cogging_cycles, K_TAU)
         self.nonlinear = v_s > 0 or backlash > 0 or cogging != 0
-        minv = np.linalg.inv(m.M)
-        inputs = np.zeros((nd, 3))
-        inputs[:, 0] = m.f_v
-        inputs[MOTOR, 1] = 1.0
-        inputs[BASE, 2] = 1.0
-
-        def state_space(K, C):
-            A = np.block([[np.zeros((nd, nd)), np.eye(nd)], [-minv @ K, -minv @ C]])
-            return A, np.vstack([np.zeros((nd, 3)), minv @ inputs])
-
-        A, B = state_space(K, C)
-        self.accel_row = A[nd + tip_w(n_elements)].copy()  # tip acceleration (D = 0: torque is on the motor)
-        if not self.nonlinear:
-            self.steps, self.micro = 1, 1
-            self.phi, self.gam = _zoh(A, B[:, :1], dt)
-            self.gam = self.gam[:, 0]
-        else:
-            self.steps = int(substeps)
-            h = dt / self.steps
-            models = {coupled: state_space(K, C) if coupled else state_space(K - m.k_drive, C - m.c_drive)
-                      for coupled in (False, True)}
-
-            def variants(h):
-                """ZOH matrices of a step h, index 2*coupled + stuck."""
-                phis, gams = [], []
-                for coupled in (False, True):
-                    for stuck in (False, True):
-                        As, Bs = (a.copy() for a in models[coupled])
-                        if stuck:  # motor held: its angle and (zero) speed do not change
-                            As[[MOTOR, nd + MOTOR]] = 0.0
-                            Bs[[MOTOR, nd + MOTOR]] = 0.0
-                        phi, gam = _zoh(As, Bs, h)
-                        phis.append(phi)
-                        gams.append(gam)
-                return np.ascontiguousarray(phis), np.ascontiguousarray(gams)
-
-            self.phi, self.gam = variants(h)
-            self.micro = 1
-            if v_s > friction:  # the Stribeck curve's steepest slope: k_tau (v_s - v_c) sqrt(2) e^-1/2 / w_s
-                rate = K_TAU * (v_s - friction) * math.sqrt(2) * math.exp(-0.5) / stribeck_speed / m.M[MOTOR, MOTOR]
-                self.micro = max(2, math.ceil(rate * h / STRIBECK_RESOLUTION))
-            self.fphi, self.fgam = variants(h / self.micro) if self.micro > 1 else (self.phi, self.gam)
-            self.band = substep.BAND * stribeck_speed
+        self.steps = int(substeps) if self.nonlinear else 1
+        self.micro = 1
+        if self.nonlinear and v_s > friction:
+            # the Stribeck curve's steepest slope, k_tau (v_s - v_c) sqrt(2) e^-1/2 / w_s, over J_m
+            rate = K_TAU * (v_s - friction) * math.sqrt(2) * math.exp(-0.5) / stribeck_speed
+            rate /= motor_inertia(params)[0]
+            self.micro = max(2, math.ceil(rate * dt / self.steps / STRIBECK_RESOLUTION))
+        self.band = substep.BAND * stribeck_speed
+        self.nd, self.accel_row, self.phi, self.gam, self.fphi, self.fgam = _matrices(
+            params, n_elements, beta, viscous, ground_spring, dt, self.steps if self.nonlinear else 0, self.micro)
         self.reset()
 
     def reset(self) -> None:

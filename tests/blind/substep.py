@@ -88,9 +88,9 @@ def _net_on_still_motor(x, v, cfg, nd, coupled, offset, cog):
 
 
 @njit(cache=True)
-def _step(x, v, st, phi, gam, cfg, nd):
-    """One step with the nonlinear torques held; ``phi``/``gam`` hold the four variants
-    (index 2*coupled + stuck). Returns the new state; updates ``st``."""
+def _step(x, y, v, st, phi, gam, cfg, nd):
+    """One step from ``x`` into ``y`` with the nonlinear torques held; ``phi``/``gam`` hold
+    the four variants (index 2*coupled + stuck). Updates ``st``."""
     coupled, offset, cog = _drive(x, cfg)
     f_m, f_b = offset + cog, -offset
     fs = cfg[FS]
@@ -108,17 +108,15 @@ def _step(x, v, st, phi, gam, cfg, nd):
                 level = fc + (fs - fc) * math.exp(-r * r)
             f_m -= st[1] * level
     k = (2 if coupled else 0) + (1 if st[0] != 0.0 else 0)
-    n2 = x.shape[0]
-    y = np.empty(n2)
-    for i in range(n2):
-        acc = gam[k, i, 0] * v + gam[k, i, 1] * f_m + gam[k, i, 2] * f_b
-        for j in range(n2):
-            acc += phi[k, i, j] * x[j]
+    P, G = phi[k], gam[k]
+    for i in range(x.shape[0]):
+        acc = G[i, 0] * v + G[i, 1] * f_m + G[i, 2] * f_b
+        for j in range(x.shape[0]):
+            acc += P[i, j] * x[j]
         y[i] = acc
     if fs > 0.0 and st[0] == 0.0 and y[nd] * st[1] <= 0.0:
         y[nd] = 0.0  # the motor stopped within the step: it sticks
         st[0] = 1.0
-    return y
 
 
 @njit(cache=True)
@@ -152,17 +150,20 @@ def advance(x, v, st, phi, gam, fphi, fgam, cfg, nd, steps, micro, band):
     array, shape (2*nd,)
         The state at the end of the sample.
     """
+    a, b = x.copy(), np.empty_like(x)
     for _ in range(steps):
         fine = False
         if micro > 1:
             if st[0] == 0.0:
-                fine = abs(x[nd]) < band
+                fine = abs(a[nd]) < band
             else:  # still: refine the sub-step in which it breaks away
-                coupled, offset, cog = _drive(x, cfg)
-                fine = abs(_net_on_still_motor(x, v, cfg, nd, coupled, offset, cog)) > cfg[FS]
+                coupled, offset, cog = _drive(a, cfg)
+                fine = abs(_net_on_still_motor(a, v, cfg, nd, coupled, offset, cog)) > cfg[FS]
         if fine:
             for _ in range(micro):
-                x = _step(x, v, st, fphi, fgam, cfg, nd)
+                _step(a, b, v, st, fphi, fgam, cfg, nd)
+                a, b = b, a
         else:
-            x = _step(x, v, st, phi, gam, cfg, nd)
-    return x
+            _step(a, b, v, st, phi, gam, cfg, nd)
+            a, b = b, a
+    return a
