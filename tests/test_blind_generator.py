@@ -3,7 +3,10 @@
 (a) With no effect its logs match the station's nominal model within 1 count (the only
 place the generator meets station code). (b) The station's replay reproduces the logged
 commands and detects alignment 1: the logs look like the rig's. (c) Each hidden effect
-changes the logs the way its physics says, measured against a clean case of the same seed.
+changes the logs the way its physics says, measured against a clean case of the same seed;
+(d) so do static friction (breakaway, Stribeck; converged in the sub-steps), viscous
+friction and the amplifier's offset, and (e) the effects in no vocabulary leave their own
+signature. (f) The cases draw their values deterministically, the old ones unchanged.
 """
 
 from __future__ import annotations
@@ -13,8 +16,9 @@ import pytest
 
 from station.replay import replay
 from station.runlog import read_log
-from tests.blind import fem
-from tests.blind.generator import RUNS, simulate_case, write_case
+from tests.blind import cases, fem
+from tests.blind.generator import RUNS, reference, simulate_case, write_case
+from tests.blind.rig import Effects, simulate
 
 SEED = 3
 CONTROLLERS = {"p_step": "p", "lead_step": "lead", "lead_accel_step": "lead-accel", "open_loop_pulses": "open-loop"}
@@ -194,3 +198,233 @@ def test_two_effects_at_once(clean):
 def test_unknown_effect_is_refused(tmp_path):
     with pytest.raises(ValueError, match="friction"):
         write_case(tmp_path, {"friction": 3.0}, seed=0)
+
+
+# --- (d) the later effects: static and viscous friction, amplifier offset -------------------
+
+def _motor_still(run, k):
+    """The motor did not move during tick k (true motor angle, not logged)."""
+    return abs(run.motor[k + 1] - run.motor[k]) < 1e-9
+
+
+def _ramp(effects):
+    return simulate("open-loop", reference("open_loop_ramp"), effects, np.random.default_rng(0))
+
+
+@pytest.mark.parametrize("v_c, v_s", [(10.0, 20.5), (0.0, 12.3), (10.0, None)])
+def test_a_still_motor_breaks_away_at_v_s_not_v_c(v_c, v_s):
+    # a slow ramp of v (one more count every 20 samples): the motor starts in the first tick
+    # whose truncated command exceeds the breakaway level v_s (v_c for Coulomb friction alone)
+    effects = {"coulomb_friction": v_c} if v_s is None else {"coulomb_friction": v_c, "static_friction": v_s}
+    if not v_c:
+        del effects["coulomb_friction"]
+    run = _ramp(effects)
+    level = v_c if v_s is None else v_s
+    start = int(np.argmax(np.trunc(run.u) > level))
+    assert all(_motor_still(run, k) for k in range(start))
+    assert not _motor_still(run, start)
+    assert np.all(run.theta[:start + 1] == 0)
+    lag = int(np.argmax(run.theta >= 1)) - start
+    if v_s is None:  # Coulomb: it creeps, pushed by the one count above v_c
+        assert lag > 20
+    else:  # it lurches: once sliding, the friction falls from v_s to v_c
+        assert 0 < lag <= 15
+        # Coulomb friction alone would have let go 100s of ticks earlier
+        assert start - int(np.argmax(np.trunc(run.u) > v_c)) >= 200
+
+
+def test_static_friction_stops_the_open_loop_motor_earlier_and_shorter():
+    coulomb = simulate_case({"coulomb_friction": 10.0}, SEED)["open_loop_pulses"]
+    static = simulate_case({"coulomb_friction": 10.0, "static_friction": 25.0}, SEED)["open_loop_pulses"]
+
+    def last_motion(run):  # the motor's last moving tick between the two pulses
+        return max(k for k in range(70, 690) if not _motor_still(run, k))
+
+    # Coulomb alone: the creeping base drags the stuck motor on once the drive train pulls
+    # harder than v_c; held up to v_s the motor stays where it first stops
+    assert last_motion(static) < 100 < 150 < last_motion(coulomb)
+    assert _travel({"open_loop_pulses": static}) <= _travel({"open_loop_pulses": coulomb}) - 5
+    assert _first_motion({"open_loop_pulses": static}) == _first_motion({"open_loop_pulses": coulomb})
+
+
+def test_static_friction_holds_a_p_step_with_more_than_v_c():
+    # at rest the drive train carries no torque: the still motor holds the amplifier's k_tau v,
+    # |v| <= v_s; Coulomb friction alone could hold no more than v_c
+    for effects, lo, hi in (({"coulomb_friction": 10.0}, 0.0, 10.0),
+                            ({"coulomb_friction": 10.0, "static_friction": 25.0}, 10.0, 25.0)):
+        p = simulate_case(effects, SEED)["p_step"]
+        assert np.ptp(p.theta[-250:]) == 0 and np.ptp(p.v[-250:]) == 0, effects
+        assert lo < abs(p.v[-1]) <= hi or (lo == 0 and abs(p.v[-1]) <= hi), (effects, p.v[-1])
+        assert abs(50 - p.theta[-1]) <= hi / 2 + 0.5  # |e| <= v_s / kp (kp = 2)
+
+
+def test_static_friction_converges_with_substeps():
+    # results change by at most a rounding flip of theta (the true angle by < 0.5 count) as the
+    # sub-steps are doubled, also with a steep Stribeck curve (w_s = 0.02 rad/s)
+    for effects in ({"coulomb_friction": 10.0, "static_friction": 25.0},
+                    {"coulomb_friction": 3.0, "static_friction": 12.0, "stribeck_speed": 0.02}):
+        runs = {s: simulate_case(effects, 1, substeps=s) for s in (50, 100, 200)}
+        for coarse, fine in ((50, 100), (100, 200)):
+            for run in RUNS:
+                a, b = runs[coarse][run], runs[fine][run]
+                assert np.max(np.abs(a.theta - b.theta)) <= 1.0, (effects, run, coarse)
+                assert np.max(np.abs(a.theta_true - b.theta_true)) < 0.5, (effects, run, coarse)
+
+
+def _damping_counts():
+    """The actuator's own damping c_m / k_tau, DAC counts per rad/s: act_p / (act_K |2 pi j + act_p|)."""
+    p = fem.Params()
+    return p.act_p / (p.act_K * abs(complex(p.act_p, 2 * np.pi)))
+
+
+def test_viscous_friction_scales_the_travel_and_the_peak_speed(clean):
+    b = 3.0
+    case = simulate_case({"viscous_friction": b}, SEED)
+    c_m = _damping_counts()  # 14.8
+    ratio = c_m / (c_m + b)
+    # the travel after a pulse is its torque impulse / all damping to the ground
+    ol, ol0 = case["open_loop_pulses"], clean["open_loop_pulses"]
+    assert ol.theta_true[690] / ol0.theta_true[690] == pytest.approx(ratio, rel=0.002)
+    assert _travel(case) == pytest.approx(ratio * _travel(clean), abs=1)
+    # the 0.1 s pulse's peak speed: the whole arm as one rigid body of inertia J under
+    # k_tau*100 with damping c reaches (k_tau*100/c)(1 - exp(-c T / J))
+    p = fem.Params()
+    j_m = fem.motor_inertia(p)[0]
+    J = j_m + p.J_base + p.mu * p.L ** 3 / 3 + p.m_accel * p.L ** 2 + p.J_accel
+    c0 = c_m * fem.K_TAU
+    c1 = c0 / ratio
+    rigid = ratio * (1 - np.exp(-c1 * 0.1 / J)) / (1 - np.exp(-c0 * 0.1 / J))
+    peak = lambda run: np.max(np.diff(run.theta_true[:200]))  # noqa: E731
+    assert peak(ol) / peak(ol0) == pytest.approx(rigid, abs=0.015)
+    assert abs(rigid - ratio) > 0.03  # (the plain damping ratio would fail)
+
+
+@pytest.mark.parametrize("offset", [6.0, -4.0])
+def test_amp_offset_drifts_the_open_loop_hub(clean, offset):
+    case = simulate_case({"amp_offset": offset}, SEED)
+    ol, ol0 = case["open_loop_pulses"], clean["open_loop_pulses"]
+    np.testing.assert_array_equal(ol.v, ol0.v)  # the log holds the computed command
+    np.testing.assert_array_equal(ol.applied, np.trunc(ol0.v) + offset)
+    # a constant torque k_tau*o drives every body at w = k_tau o / c_m = o num / act_p rad/s
+    # once the drive train's slow transient (~1 s) is gone: 3 % faster still between the pulses
+    p = fem.Params()
+    num = p.act_K * abs(complex(p.act_p, 2 * np.pi))
+    drift = fem.H * offset * num / p.act_p  # encoder counts per s (11 per DAC count)
+    t = np.arange(3000) * 0.002
+    slope = np.polyfit(t[200:690], ol.theta[200:690] - ol0.theta[200:690], 1)[0]
+    assert slope == pytest.approx(1.03 * drift, rel=0.01)
+    quiet = simulate("open-loop", np.zeros(3000), {"amp_offset": offset}, np.random.default_rng(0))
+    assert np.polyfit(t[2000:], quiet.theta[2000:], 1)[0] == pytest.approx(drift, rel=0.002)
+
+
+@pytest.mark.parametrize("offset", [6.0, -6.0])
+def test_amp_offset_moves_where_a_p_loop_rests(offset):
+    # no friction, no spring to ground: at rest the torque is zero, trunc(kp e) + o = 0, so the
+    # hub rests o/kp past the target (an even o: a whole count, reached exactly)
+    u = np.zeros(4000)
+    u[50:] = 50.0
+    run = simulate("p", u, {"amp_offset": offset}, np.random.default_rng(0))
+    np.testing.assert_array_equal(run.theta[-1000:], 50.0 + offset / 2)
+    np.testing.assert_array_equal(run.applied[-1000:], 0.0)
+
+
+def test_amp_offset_acts_after_truncation_and_before_saturation_and_deadzone():
+    rng = np.random.default_rng(0)
+    u = reference("open_loop_pulses")
+    sat = simulate("open-loop", u, {"amp_offset": 8.0, "saturation": 80.0}, rng)
+    assert (sat.applied[0], sat.applied[30], sat.applied[720]) == (8.0, 80.0, -80.0)  # 108 -> 80, -92 -> -80
+    dz = simulate("open-loop", u, {"amp_offset": 8.0, "deadzone": 10.0}, rng)
+    assert (dz.applied[0], dz.applied[30], dz.applied[720]) == (0.0, 98.0, -82.0)
+    assert np.all(dz.theta_true[:20] == 0.0)  # the offset stays inside the dead-zone: no drift
+    late = simulate("open-loop", u, {"amp_offset": -3.0, "delay": 2}, rng)
+    assert (late.applied[0], late.applied[21], late.applied[22]) == (-3.0, -3.0, 97.0)
+    frac = simulate("open-loop", 0.7 + u, {"amp_offset": 0.5}, rng)
+    assert (frac.applied[0], frac.applied[30]) == (0.5, 100.5)  # 0.7 and 100.7 truncated first
+
+
+# --- (e) effects in no vocabulary -------------------------------------------------------------
+
+def test_cyclic_encoder_error_follows_the_base_angle(clean):
+    amp, period = 3.0, 96.0
+    case = simulate_case({"oov:encoder_cyclic": amp, "oov:encoder_cyclic_period": period}, SEED)
+    ol, ol0 = case["open_loop_pulses"], clean["open_loop_pulses"]
+    np.testing.assert_array_equal(ol.theta_true, ol0.theta_true)  # open loop: the same motion
+    error = ol.theta - ol0.theta
+
+    def fit(p):  # least squares of the reading's error on sin, cos of 2 pi theta / p
+        X = np.column_stack([np.sin(2 * np.pi * ol0.theta_true / p), np.cos(2 * np.pi * ol0.theta_true / p)])
+        coef = np.linalg.lstsq(X, error, rcond=None)[0]
+        return coef, np.sqrt(np.mean((error - X @ coef) ** 2))
+
+    (s, c), rms = fit(period)
+    assert s == pytest.approx(amp, abs=0.15) and abs(c) < 0.15
+    assert rms < 0.5  # what is left is two roundings
+    assert min(fit(period / 2)[1], fit(2 * period)[1]) > 1.0
+    # the controller sees the error too: the closed loops move
+    assert all(np.max(np.abs(case[r].theta - clean[r].theta)) >= 2 for r in ("p_step", "lead_step"))
+
+
+def test_cogging_parks_the_motor_in_a_detent(clean):
+    cycles = 16  # a detent every 1024 / 16 = 64 counts
+    case = simulate_case({"oov:cogging": 10.0, "oov:cogging_cycles": cycles}, SEED)
+    spacing = 1024 / cycles
+    off = lambda m: abs(m - spacing * round(m / spacing))  # noqa: E731
+    assert off(case["open_loop_pulses"].motor[690]) < 0.5
+    assert off(clean["open_loop_pulses"].motor[690]) > 10  # the clean pulse stops elsewhere
+    assert _travel(case) < _travel(clean) - 30
+
+
+def test_position_spring_pulls_the_hub_back(clean):
+    s = 0.1
+    case = simulate_case({"oov:position_spring": s}, SEED)
+    ol = case["open_loop_pulses"]
+    assert ol.theta_true[690] < 0.25 * ol.theta_true[:690].max()  # crept back after the pulse
+    assert ol.theta_true[690] < 0.35 * ol.motor[690]  # the spring stretches the drive train
+    # a P loop rests where kp (u - theta) = s theta (the spring's torque): theta = kp u / (kp + s)
+    u = np.zeros(4000)
+    u[50:] = 50.0
+    run = simulate("p", u, {"oov:position_spring": s}, np.random.default_rng(0))
+    assert np.mean(run.theta[-2000:]) == pytest.approx(2 * 50 / (2 + s), abs=0.1)
+
+
+def test_effects_outside_the_vocabulary_and_bad_values_are_refused():
+    for bad in ({"oov:wobble": 1.0}, {"coulomb_friction": 10.0, "static_friction": 5.0},
+                {"static_friction": 5.0, "stribeck_speed": 0.0}):
+        with pytest.raises(ValueError):
+            simulate("open-loop", np.zeros(3), bad, np.random.default_rng(0))
+
+
+# --- (f) the cases ---------------------------------------------------------------------------
+
+def test_cases_are_deterministic_and_keep_their_values():
+    # the issue-8 cases' values (as first written) do not move
+    assert cases.case_effects("coulomb_friction", 0) == {"coulomb_friction": pytest.approx(28.3805, abs=1e-4)}
+    assert cases.case_effects("two", 1) == {"coulomb_friction": pytest.approx(9.1663, abs=1e-4),
+                                            "beam_damping": pytest.approx(0.0471, abs=1e-4)}
+    assert cases.case_effects("param:drive_c", 0) == {"param:drive_c": pytest.approx(0.4856, abs=1e-4)}
+    offsets = []
+    for seed in range(10):
+        for case in cases.CASES:
+            effects = cases.case_effects(case, seed)
+            assert effects == cases.case_effects(case, seed)
+            Effects.parse(effects)  # the generator takes every case
+            for part in case.split("+"):  # a combination draws each part as it is drawn alone
+                if part in cases.SETTING_MAGNITUDES:
+                    assert effects[part] == cases.draw(part, seed)
+                elif part not in ("clean", "two"):
+                    single = cases.case_effects(part, seed)
+                    assert {k: effects[k] for k in single} == single
+        sf = cases.case_effects("static_friction", seed)
+        assert 5 <= sf["static_friction"] <= 30
+        assert 0.3 <= sf["coulomb_friction"] / sf["static_friction"] <= 0.7
+        assert 1 <= cases.case_effects("viscous_friction", seed)["viscous_friction"] <= 5
+        offsets.append(cases.case_effects("amp_offset", seed)["amp_offset"])
+        cog = cases.case_effects("oov:cogging", seed)
+        assert 5 <= cog["oov:cogging"] <= 15 and cog["oov:cogging_cycles"] in range(8, 25)
+        enc = cases.case_effects("oov:encoder_cyclic", seed)
+        assert 2 <= enc["oov:encoder_cyclic"] <= 4 and 64 <= enc["oov:encoder_cyclic_period"] <= 256
+    assert all(1 <= abs(o) <= 8 for o in offsets) and min(offsets) < 0 < max(offsets)
+    with pytest.raises(ValueError):
+        cases.case_effects("static_friction+coulomb_friction", 0)
+    with pytest.raises(ValueError):
+        cases.case_effects("friction", 0)

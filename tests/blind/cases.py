@@ -5,6 +5,37 @@ Magnitudes from issue 8: Coulomb friction and dead-zone 3-30 DAC counts, saturat
 accel_gain 0.5-2, param ratios 0.4-2.5. Ratios (accel_gain, param:NAME) are drawn
 log-uniformly at least 1.3x away from 1 on either side (a parameter "off" by 5 % is no
 cause to name); beam_damping log-uniformly. A case's value depends only on (effect, seed).
+
+The effects added to the vocabulary later (:data:`NEW_MAGNITUDES`; kept apart from
+:data:`MAGNITUDES`, which the blind diagnosis tests walk, until the station models them):
+
+- static_friction v_s 5-30 DAC counts, always hidden with coulomb_friction
+  v_c = (0.3-0.7) * v_s (:data:`STATIC_TO_COULOMB`) and the default Stribeck speed 0.05 rad/s
+  unless the case also names "stribeck_speed" (0.02-0.2 rad/s, log-uniform);
+- viscous_friction 1-5 DAC counts per rad/s: the motor's own damping is 14.8 DAC counts per
+  rad/s (act_p / (act_K |2 pi j + act_p|)) and the +-100 pulses drive it at up to 6.7 rad/s,
+  so b = 1 shortens the open-loop travel by 6 % (7 counts) and b = 5 by 25 %;
+- amp_offset 1-8 DAC counts in size, either sign (an open-loop drift of 11 encoder counts/s
+  per DAC count of offset; a P loop settles o/kp counts past its target).
+
+Combinations ("A+B", "A+B+C": each effect drawn as it is alone, so the values of a
+combination equal its single cases' for the same seed): :data:`PAIRS`, :data:`TRIPLES`.
+
+Out-of-vocabulary cases (:data:`OOV_CASES`, :data:`OOV_MAGNITUDES`; semantics in
+``tests.blind.rig.OOV``), which no vocabulary effect explains, for the diagnosis's
+"unexplained" flag:
+
+- oov:encoder_cyclic: a cyclic encoder error of 2-4 counts amplitude and a period of 64-256
+  counts (log-uniform): the measured theta (which the controller also sees) ripples by up to
+  +-4 counts with the base angle, 0.4-1.7 periods over the open-loop pulse's ~110 counts;
+- oov:cogging: a detent torque of 5-15 DAC counts, 8-24 cycles per motor revolution: the
+  open-loop pulse's motor rests in a detent (every 43-128 counts) and the closed loops
+  settle off target by up to c/kp;
+- oov:position_spring: a spring from the hub to the ground of 0.03-0.1 DAC counts per encoder
+  count (a cable): the open-loop hub creeps back towards where it started (1.3 s after the
+  +100 pulse the base is at 0.68 (s = 0.03) to 0.29 (s = 0.1) of the motor's angle, against
+  1.02 without it) and a P loop settles at kp*u/(kp + s), 0.7-2.4 counts short of its
+  50-count target.
 """
 
 from __future__ import annotations
@@ -27,7 +58,37 @@ MAGNITUDES: dict[str, tuple[float, float]] = {
     "param:J_base": (0.4, 2.5),
     "param:act_K": (0.4, 2.5),
 }
-"""Effect -> (lowest, highest) hidden value; every effect the blind tests hide."""
+"""Effect -> (lowest, highest) hidden value: issue 8's effects, one at a time."""
+
+NEW_MAGNITUDES: dict[str, tuple[float, float]] = {
+    "static_friction": (5.0, 30.0),
+    "viscous_friction": (1.0, 5.0),
+    "amp_offset": (1.0, 8.0),
+}
+"""The vocabulary's later effects -> (lowest, highest); amp_offset's range is its size
+(either sign)."""
+
+STATIC_TO_COULOMB = (0.3, 0.7)
+"""v_c / v_s of a static_friction case (drawn uniformly)."""
+
+SETTING_MAGNITUDES: dict[str, tuple[float, float]] = {"stribeck_speed": (0.02, 0.2)}
+"""Shape settings a case may also name (log-uniform)."""
+
+OOV_MAGNITUDES: dict[str, tuple[float, float]] = {
+    "oov:encoder_cyclic": (2.0, 4.0),
+    "oov:encoder_cyclic_period": (64.0, 256.0),
+    "oov:cogging": (5.0, 15.0),
+    "oov:cogging_cycles": (8, 24),
+    "oov:position_spring": (0.03, 0.1),
+}
+"""Out-of-vocabulary effects and their settings -> (lowest, highest)."""
+
+OOV_CASES: dict[str, tuple[str, ...]] = {
+    "oov:encoder_cyclic": ("oov:encoder_cyclic", "oov:encoder_cyclic_period"),
+    "oov:cogging": ("oov:cogging", "oov:cogging_cycles"),
+    "oov:position_spring": ("oov:position_spring",),
+}
+"""Out-of-vocabulary case -> the keys it hides."""
 
 MIN_RATIO = 1.3
 """Ratios are drawn at least this far from 1 (either way)."""
@@ -35,33 +96,107 @@ MIN_RATIO = 1.3
 TWO_EFFECTS = ("coulomb_friction", "beam_damping")
 """The pair the two-effect case hides."""
 
+PAIRS = (
+    "coulomb_friction+amp_offset",
+    "static_friction+param:drive_c",
+    "viscous_friction+backlash",
+    "amp_offset+deadzone",
+    "static_friction+stribeck_speed",
+)
+"""Two-effect cases (the last: static friction with a Stribeck speed away from the default)."""
+
+TRIPLES = (
+    "amp_offset+coulomb_friction+param:drive_c",
+    "static_friction+amp_offset+delay",
+)
+"""Three-effect cases; the first is the real rig's suspected structure."""
+
+CASES = ("clean", *MAGNITUDES, "two", *NEW_MAGNITUDES, *PAIRS, *TRIPLES, *OOV_CASES)
+"""Every case :func:`case_effects` knows."""
+
 TOLERANCE = 0.25
 """A named cause's value must be within this fraction of the hidden one."""
 
 
+def _rng(name: str, seed: int) -> np.random.Generator:
+    return np.random.default_rng([zlib.crc32(name.encode()), seed])
+
+
 def draw(name: str, seed: int) -> float:
-    """The hidden value of ``name`` for ``seed`` (deterministic)."""
-    lo, hi = MAGNITUDES[name]
-    rng = np.random.default_rng([zlib.crc32(name.encode()), seed])
-    if name == "delay":
+    """The hidden value of ``name`` for ``seed`` (deterministic).
+
+    Parameters
+    ----------
+    name : str
+        A key of :data:`MAGNITUDES`, :data:`NEW_MAGNITUDES`, :data:`SETTING_MAGNITUDES` or
+        :data:`OOV_MAGNITUDES`.
+    seed : int
+    """
+    lo, hi = {**MAGNITUDES, **NEW_MAGNITUDES, **SETTING_MAGNITUDES, **OOV_MAGNITUDES}[name]
+    rng = _rng(name, seed)
+    if name in ("delay", "oov:cogging_cycles"):
         return int(rng.integers(lo, hi + 1))
     if name == "accel_gain" or name.startswith("param:"):
         top = math.log(max(hi, 1.0 / lo))
         mag = math.exp(rng.uniform(math.log(MIN_RATIO), top))
         ratio = mag if rng.random() < 0.5 else 1.0 / mag
         return float(min(max(ratio, lo), hi))
-    if name == "beam_damping":
+    if name in ("beam_damping", "stribeck_speed", "oov:encoder_cyclic_period"):
         return float(math.exp(rng.uniform(math.log(lo), math.log(hi))))
-    return float(rng.uniform(lo, hi))
+    value = float(rng.uniform(lo, hi))
+    if name == "amp_offset":
+        return value if rng.random() < 0.5 else -value
+    return value
+
+
+def _single(name: str, seed: int) -> dict[str, float]:
+    if name == "static_friction":
+        v_s = draw(name, seed)
+        ratio = float(_rng("static_friction/coulomb_friction", seed).uniform(*STATIC_TO_COULOMB))
+        return {"static_friction": v_s, "coulomb_friction": ratio * v_s}
+    if name in OOV_CASES:
+        return {key: draw(key, seed) for key in OOV_CASES[name]}
+    if name in MAGNITUDES or name in NEW_MAGNITUDES or name in SETTING_MAGNITUDES:
+        return {name: draw(name, seed)}
+    raise ValueError(f"unknown case {name!r}; known: {', '.join(CASES)} (or effects joined by '+')")
 
 
 def case_effects(case: str, seed: int) -> dict[str, float]:
-    """The hidden effects of a case: an effect name, "clean" ({}) or "two" (:data:`TWO_EFFECTS`)."""
+    """The hidden effects of a case (deterministic per (effect, seed)).
+
+    Parameters
+    ----------
+    case : str
+        "clean" ({}), "two" (:data:`TWO_EFFECTS`), an effect of :data:`MAGNITUDES` or
+        :data:`NEW_MAGNITUDES` (static_friction brings its coulomb_friction), an
+        out-of-vocabulary case of :data:`OOV_CASES`, or such names joined by "+"
+        (:data:`PAIRS`, :data:`TRIPLES`; "stribeck_speed" may join static_friction).
+    seed : int
+
+    Returns
+    -------
+    dict
+        Effect name -> value, as :func:`tests.blind.generator.write_case` takes them.
+
+    Raises
+    ------
+    ValueError
+        An unknown name, or two parts that hide the same effect (e.g. static_friction
+        with coulomb_friction).
+    """
     if case == "clean":
         return {}
     if case == "two":
         return {name: draw(name, seed) for name in TWO_EFFECTS}
-    return {case: draw(case, seed)}
+    effects: dict[str, float] = {}
+    for part in case.split("+"):
+        hidden = _single(part, seed)
+        if set(hidden) & set(effects):
+            raise ValueError(f"case {case!r} hides {sorted(set(hidden) & set(effects))} twice")
+        effects.update(hidden)
+    if "stribeck_speed" in effects and "static_friction" not in effects:
+        raise ValueError(f"case {case!r}: stribeck_speed without static_friction")
+    return effects
 
 
 def value_error(hidden: float, found: float) -> float:

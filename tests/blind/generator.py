@@ -32,8 +32,17 @@ FILES = {
 }
 
 
+RAMP_RATE = 0.05
+"""DAC counts per sample of the "open_loop_ramp" reference (0 to 50 in 2 s)."""
+
+
 def reference(run: str, n: int = N) -> np.ndarray:
-    """u[k] of a run, shape (n,): encoder counts (DAC counts in open loop)."""
+    """u[k] of a run, shape (n,): encoder counts (DAC counts in open loop).
+
+    Besides the :data:`RUNS` of a case, "open_loop_ramp" (v = :data:`RAMP_RATE` * k, truncated
+    by the PC to whole counts: one more count every 20 samples) finds a still motor's
+    breakaway level; it is not a rig run and not part of a case.
+    """
     u = np.zeros(n)
     if run == "p_step":
         u[50:] = 50.0
@@ -44,6 +53,8 @@ def reference(run: str, n: int = N) -> np.ndarray:
     elif run == "open_loop_pulses":
         u[20:70] = 100.0
         u[700:750] = -100.0
+    elif run == "open_loop_ramp":
+        u[:] = RAMP_RATE * np.arange(n)
     else:
         raise ValueError(f"unknown run {run!r}; expected one of {RUNS}")
     return u
@@ -84,7 +95,9 @@ def format_run(run: str, sim: Run) -> str:
     return "\n".join(lines) + "\n"
 
 
-KIND = {"p_step": "p", "lead_step": "lead", "lead_accel_step": "lead-accel", "open_loop_pulses": "open-loop"}
+KIND = {"p_step": "p", "lead_step": "lead", "lead_accel_step": "lead-accel", "open_loop_pulses": "open-loop",
+        "open_loop_ramp": "open-loop"}
+"""Controller kind of each run (see :func:`tests.blind.rig.simulate`)."""
 
 
 def simulate_case(effects: dict[str, float], seed: int, n_elements: int = 4, substeps: int = 100,
@@ -106,13 +119,15 @@ def write_case(folder: Path, effects: dict[str, float], seed: int, n_elements: i
         Created if missing; the files are named like the rig's (:data:`FILES`).
     effects : dict
         Hidden effects, DESIGN.md "Model diagnosis contract" names and units, e.g.
-        ``{"coulomb_friction": 8.0, "param:drive_c": 1.6}``; ``{}`` for the nominal plant.
+        ``{"coulomb_friction": 8.0, "param:drive_c": 1.6}``; ``{}`` for the nominal plant;
+        also "stribeck_speed" (rad/s, static_friction's) and the out-of-vocabulary effects of
+        :data:`tests.blind.rig.OOV`.
     seed : int
         Seed of the accelerometer noise.
     n_elements : int
         Beam elements of the generator's FEM.
     substeps : int
-        Integration sub-steps per sample for friction and backlash.
+        Integration sub-steps per sample for friction, backlash and cogging.
     accel_noise : float
         Accelerometer noise std, counts.
 
@@ -125,7 +140,7 @@ def write_case(folder: Path, effects: dict[str, float], seed: int, n_elements: i
     Raises
     ------
     ValueError
-        An unknown effect name.
+        An unknown effect name, static_friction below coulomb_friction.
     """
     folder = Path(folder)
     folder.mkdir(parents=True, exist_ok=True)

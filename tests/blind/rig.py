@@ -2,19 +2,27 @@
 
 From DESIGN.md alone ("Compensators", "Timing and log rows", "Model diagnosis contract"):
 
-- alignment 1: v[k] = C(u[k], theta[k-1], a[k-1]), v[0] = 0 (open loop: v[k] = u[k]);
-- the PC truncates v toward zero, then the amplifier: saturation, dead-zone, extra delay
-  (that order); the torque on the motor is k_tau times the result;
-- the plant is integrated on a sub-step grid (``substeps`` per sample, exact ZOH of its
-  linear part per sub-step) when Coulomb friction (stick-slip) or backlash act, with the
-  friction torque and the backlash's spring offset held over each sub-step and the motor
-  held (exact) while it sticks; without them one exact ZOH step per sample is the same;
-- theta = H * base angle rounded to whole counts; a = a_gain * tip lateral acceleration
-  + Gaussian noise (0.3 counts std), rounded.
+- alignment 1: v[k] = C(u[k], theta[k-1], a[k-1]), v[0] = 0 (open loop: v[k] = u[k]); the
+  log holds this computed v, whatever the amplifier then makes of it;
+- the PC truncates v toward zero, then the amplifier: offset (amp_offset), saturation,
+  dead-zone, extra delay (that order); the torque on the motor is k_tau times the result;
+- the plant: the FEM with the motor's viscous friction (viscous_friction) added to the
+  actuator's own damping and any spring to ground (oov:position_spring) in its linear part;
+  when dry friction (coulomb_friction, static_friction with its Stribeck curve), backlash
+  or cogging act it is integrated on a sub-step grid (``substeps`` per sample, exact ZOH of
+  the linear part per sub-step, the nonlinear torques held over each sub-step, the motor
+  held exactly while it sticks, micro-steps where the Stribeck curve is steep: see
+  :mod:`tests.blind.substep`); without them one exact ZOH step per sample is the same;
+- theta = H * base angle (+ the cyclic error of oov:encoder_cyclic) rounded to whole
+  counts; a = a_gain * tip lateral acceleration + Gaussian noise (0.3 counts std), rounded.
+
+Effects beyond DESIGN.md's vocabulary ("oov:" names) let tests check that a diagnosis does
+not pass them off as a vocabulary cause; see :data:`OOV`.
 """
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass, field
 
@@ -22,7 +30,8 @@ import numpy as np
 from scipy.linalg import expm
 from scipy.signal import bilinear
 
-from tests.blind.fem import BASE, H, K_TAU, MOTOR, Params, assemble, beta_for_damping, tip_w
+from tests.blind import substep
+from tests.blind.fem import BASE, H, K_TAU, MOTOR, Params, assemble, beta_for_damping, motor_inertia, tip_w
 
 DT = 0.002
 """Sample time, s."""
@@ -33,9 +42,32 @@ LIMIT = 200.0
 ACCEL_NOISE = 0.3
 """Accelerometer noise std, counts."""
 
-NAMED = ("coulomb_friction", "deadzone", "saturation", "delay", "backlash", "beam_damping", "accel_gain")
+STRIBECK_SPEED = 0.05
+"""Default Stribeck speed w_s of static_friction, rad/s of the motor (DESIGN.md)."""
+
+STRIBECK_RESOLUTION = 0.01
+"""Micro-steps are short enough that the Stribeck curve's steepest negative damping,
+divided by the motor inertia, times the micro-step is at most this."""
+
+NAMED = ("coulomb_friction", "deadzone", "saturation", "delay", "backlash", "beam_damping", "accel_gain",
+         "static_friction", "viscous_friction", "amp_offset")
 """The named effects of the vocabulary (besides param:NAME)."""
 
+SETTINGS = ("stribeck_speed",)
+"""Keys that set an effect's shape, not an effect: stribeck_speed (rad/s, default
+:data:`STRIBECK_SPEED`) of static_friction."""
+
+OOV = {
+    "oov:encoder_cyclic": "encoder counts: amplitude A of a cyclic encoder error, "
+                          "theta = round(H*base + A*sin(2*pi*H*base/P)) (the controller sees it too)",
+    "oov:encoder_cyclic_period": "encoder counts: its period P (default 128)",
+    "oov:cogging": "DAC counts: c, a torque -k_tau*c*sin(N*motor angle) on the motor (detents every 2*pi/N)",
+    "oov:cogging_cycles": "1: N, cogging cycles per revolution of the motor angle (default 16)",
+    "oov:position_spring": "DAC counts per encoder count: s, a torque -k_tau*s*H*base angle on the base "
+                           "(a cable pulling the hub back to where the run started)",
+}
+"""Effects in no vocabulary (name -> unit: meaning); the ``_period``/``_cycles`` keys are
+their settings."""
 
 # --- compensators ------------------------------------------------------------------------
 
@@ -88,23 +120,126 @@ class Controller:
         return self.gth.step(th_d - theta), th_d
 
 
+# --- effects -----------------------------------------------------------------------------
+
+@dataclass(frozen=True)
+class Effects:
+    """A run's effects, parsed and checked; the defaults are the nominal rig.
+
+    Attributes
+    ----------
+    coulomb_friction, static_friction : float
+        v_c and v_s, DAC counts; static_friction 0 means v_s = v_c (plain Coulomb friction).
+    stribeck_speed : float
+        w_s, rad/s of the motor.
+    viscous_friction : float
+        b, DAC counts per rad/s of the motor.
+    amp_offset, saturation, deadzone : float
+        DAC counts.
+    delay : int
+        Samples.
+    backlash : float
+        Encoder counts (total free play).
+    beam_damping : float
+        First held mode's total damping ratio (0: the set's own).
+    accel_gain : float
+        Measured / modelled accelerometer sensitivity.
+    ratios : dict
+        param:NAME ratios by parameter name.
+    encoder_cyclic, encoder_cyclic_period : float
+        oov:encoder_cyclic amplitude and period, encoder counts.
+    cogging, cogging_cycles : float
+        oov:cogging amplitude (DAC counts) and cycles per motor revolution.
+    position_spring : float
+        oov:position_spring, DAC counts per encoder count.
+    """
+
+    coulomb_friction: float = 0.0
+    static_friction: float = 0.0
+    stribeck_speed: float = STRIBECK_SPEED
+    viscous_friction: float = 0.0
+    amp_offset: float = 0.0
+    saturation: float = math.inf
+    deadzone: float = 0.0
+    delay: int = 0
+    backlash: float = 0.0
+    beam_damping: float = 0.0
+    accel_gain: float = 1.0
+    ratios: dict = field(default_factory=dict)
+    encoder_cyclic: float = 0.0
+    encoder_cyclic_period: float = 128.0
+    cogging: float = 0.0
+    cogging_cycles: float = 16.0
+    position_spring: float = 0.0
+
+    @classmethod
+    def parse(cls, effects: dict[str, float]) -> Effects:
+        """From effect names (DESIGN.md vocabulary, :data:`SETTINGS`, :data:`OOV`) to values.
+
+        Raises
+        ------
+        ValueError
+            An unknown name, static_friction below coulomb_friction, a stribeck_speed,
+            period or cycle count that is not positive.
+        """
+        fields, ratios = {}, {}
+        for name, value in effects.items():
+            if name.startswith("param:"):
+                pname = name.split(":", 1)[1]
+                if pname not in Params.__dataclass_fields__ or pname in ("L", "a_gain"):
+                    raise ValueError(f"unknown parameter effect {name!r}")
+                ratios[pname] = float(value)
+            elif name in NAMED or name in SETTINGS:
+                fields[name] = int(value) if name == "delay" else float(value)
+            elif name in OOV:
+                fields[name.split(":", 1)[1]] = float(value)
+            else:
+                raise ValueError(f"unknown effect {name!r}")
+        eff = cls(ratios=ratios, **fields)
+        if eff.static_friction and eff.static_friction < eff.coulomb_friction:
+            raise ValueError(f"static_friction {eff.static_friction:g} below coulomb_friction "
+                             f"{eff.coulomb_friction:g} (the breakaway level is v_s >= v_c)")
+        if min(eff.stribeck_speed, eff.encoder_cyclic_period, eff.cogging_cycles) <= 0:
+            raise ValueError("stribeck_speed, oov:encoder_cyclic_period and oov:cogging_cycles must be positive")
+        return eff
+
+    @property
+    def breakaway(self) -> float:
+        """v_s, DAC counts: static_friction, or coulomb_friction when that is not given."""
+        return max(self.static_friction, self.coulomb_friction)
+
+
 # --- amplifier ---------------------------------------------------------------------------
 
 class Amplifier:
-    """The PC's truncation toward zero, then saturation, dead-zone and extra delay."""
+    """The PC's truncation toward zero, then the amplifier's offset, saturation, dead-zone
+    and extra delay (DESIGN.md's order)."""
 
-    def __init__(self, saturation: float = math.inf, deadzone: float = 0.0, delay: int = 0):
-        self.sat, self.w = saturation, deadzone
-        self.buf = [0.0] * int(delay)
+    def __init__(self, saturation: float = math.inf, deadzone: float = 0.0, delay: int = 0, offset: float = 0.0):
+        self.sat, self.w, self.offset = saturation, deadzone, offset
+        self.buf = [self._shape(0.0)] * int(delay)  # before the run the PC sent 0
+
+    def _shape(self, v: float) -> float:
+        v = float(math.trunc(v)) + self.offset
+        v = min(max(v, -self.sat), self.sat)
+        return 0.0 if abs(v) <= self.w else v - math.copysign(self.w, v)
 
     def __call__(self, v: float) -> float:
-        v = float(math.trunc(v))
-        v = min(max(v, -self.sat), self.sat)
-        v = 0.0 if abs(v) <= self.w else v - math.copysign(self.w, v)
+        v = self._shape(v)
         if not self.buf:
             return v
         self.buf.append(v)
         return self.buf.pop(0)
+
+
+# --- sensors -----------------------------------------------------------------------------
+
+def encoder(counts: float, cyclic: float = 0.0, period: float = 128.0) -> float:
+    """The encoder's reading of a base angle of ``counts`` (H * rad): with a cyclic error of
+    amplitude ``cyclic`` and ``period`` (encoder counts), rounded to the nearest count."""
+    if cyclic:
+        counts += cyclic * math.sin(2 * math.pi * counts / period)
+    return float(math.floor(counts + 0.5))
 
 
 # --- plant -------------------------------------------------------------------------------
@@ -117,9 +252,62 @@ def _zoh(A: np.ndarray, B: np.ndarray, h: float) -> tuple[np.ndarray, np.ndarray
     return e[:n, :n], e[:n, n:]
 
 
+@functools.lru_cache(maxsize=16)
+def _matrices(params: Params, n_elements: int, beta: float, viscous: float, ground_spring: float, dt: float,
+              steps: int, micro: int):
+    """(n_dof, tip acceleration row, phi, gam, micro phi, micro gam) of a plant, cached: the
+    runs of a case share them. ``steps`` = 0: one exact ZOH step of the linear plant per
+    sample (phi (2n, 2n), gam (2n,)); else the four sub-step variants (index 2*coupled +
+    stuck) with inputs (v, motor torque, base torque), and those of a micro-step."""
+    m = assemble(params, n_elements, beta)
+    nd = m.M.shape[0]
+    K, C = m.K.copy(), m.C.copy()
+    C[MOTOR, MOTOR] += K_TAU * viscous  # linear: exact in the ZOH matrices
+    K[BASE, BASE] += K_TAU * ground_spring * H
+    minv = np.linalg.inv(m.M)
+    inputs = np.zeros((nd, 3))
+    inputs[:, 0] = m.f_v
+    inputs[MOTOR, 1] = 1.0
+    inputs[BASE, 2] = 1.0
+
+    def state_space(K, C):
+        A = np.block([[np.zeros((nd, nd)), np.eye(nd)], [-minv @ K, -minv @ C]])
+        return A, np.vstack([np.zeros((nd, 3)), minv @ inputs])
+
+    A, B = state_space(K, C)
+    accel_row = A[nd + tip_w(n_elements)].copy()  # tip acceleration (D = 0: torque is on the motor)
+    if not steps:
+        phi, gam = _zoh(A, B[:, :1], dt)
+        out = (accel_row, phi, gam[:, 0], None, None)
+    else:
+        models = {coupled: state_space(K, C) if coupled else state_space(K - m.k_drive, C - m.c_drive)
+                  for coupled in (False, True)}
+
+        def variants(h):
+            phis, gams = [], []
+            for coupled in (False, True):
+                for stuck in (False, True):
+                    As, Bs = (a.copy() for a in models[coupled])
+                    if stuck:  # motor held: its angle and (zero) speed do not change
+                        As[[MOTOR, nd + MOTOR]] = 0.0
+                        Bs[[MOTOR, nd + MOTOR]] = 0.0
+                    phi, gam = _zoh(As, Bs, h)
+                    phis.append(phi)
+                    gams.append(gam)
+            return np.ascontiguousarray(phis), np.ascontiguousarray(gams)
+
+        phi, gam = variants(dt / steps)
+        fphi, fgam = variants(dt / steps / micro) if micro > 1 else (phi, gam)
+        out = (accel_row, phi, gam, fphi, fgam)
+    for a in out:
+        if a is not None:
+            a.flags.writeable = False
+    return (nd, *out)
+
+
 class Plant:
-    """The FEM plant with Coulomb friction (stick-slip) on the motor and backlash in the
-    drive train, stepped one sample at a time with the torque command held (ZOH).
+    """The FEM plant with the motor's friction and cogging and the drive train's backlash,
+    stepped one sample at a time with the torque command held (ZOH).
 
     Parameters
     ----------
@@ -128,101 +316,83 @@ class Plant:
     beta : float
         Stiffness-proportional beam damping, s.
     friction : float
-        Coulomb friction level v_c, DAC counts (torque k_tau*v_c; static = kinetic).
+        Coulomb (sliding) friction level v_c, DAC counts.
     backlash : float
         Total free play of the drive train, encoder counts.
     substeps : int
-        Sub-steps per sample when friction or backlash act.
+        Sub-steps per sample when friction, backlash or cogging act.
+    dt : float
+        Sample time, s.
+    static_friction : float
+        Breakaway level v_s >= v_c, DAC counts (0: v_s = v_c).
+    stribeck_speed : float
+        w_s of the Stribeck curve, rad/s of the motor.
+    viscous : float
+        Viscous friction b, DAC counts per rad/s of the motor (torque k_tau*b*w).
+    cogging, cogging_cycles : float
+        Cogging torque -k_tau*cogging*sin(cogging_cycles*motor angle).
+    ground_spring : float
+        A spring from the base to the ground, DAC counts per encoder count
+        (torque -k_tau*ground_spring*H*base angle).
     """
 
     def __init__(self, params: Params, n_elements: int = 4, beta: float = 0.0, friction: float = 0.0,
-                 backlash: float = 0.0, substeps: int = 100, dt: float = DT):
-        m = assemble(params, n_elements, beta)
-        self.nd = nd = m.M.shape[0]
-        self.kd, self.cd = params.drive_k, params.drive_c
-        self.fc = K_TAU * friction
-        self.g2 = 0.5 * backlash / H
-        self.nonlinear = friction > 0 or backlash > 0
-        minv = np.linalg.inv(m.M)
-        inputs = np.zeros((nd, 3))
-        inputs[:, 0] = m.f_v
-        inputs[MOTOR, 1] = 1.0
-        inputs[BASE, 2] = 1.0
-
-        def state_space(K, C):
-            A = np.block([[np.zeros((nd, nd)), np.eye(nd)], [-minv @ K, -minv @ C]])
-            return A, np.vstack([np.zeros((nd, 3)), minv @ inputs])
-
-        A, B = state_space(m.K, m.C)
-        self.accel_row = A[nd + tip_w(n_elements)].copy()  # tip acceleration (D = 0: torque is on the motor)
-        if not self.nonlinear:
-            self.steps = 1
-            self.phi, self.gam = _zoh(A, B[:, :1], dt)
-            self.gam = self.gam[:, 0]
-        else:
-            self.steps = int(substeps)
-            h = dt / self.steps
-            variants = {}
-            for coupled in (True, False):
-                Av, Bv = state_space(m.K, m.C) if coupled else state_space(m.K - m.k_drive, m.C - m.c_drive)
-                for stuck in (False, True):
-                    As, Bs = Av.copy(), Bv.copy()
-                    if stuck:  # motor held: its angle and (zero) speed do not change
-                        As[[MOTOR, nd + MOTOR]] = 0.0
-                        Bs[[MOTOR, nd + MOTOR]] = 0.0
-                    variants[coupled, stuck] = _zoh(As, Bs, h)
-            self.variants = variants
+                 backlash: float = 0.0, substeps: int = 100, dt: float = DT, *, static_friction: float = 0.0,
+                 stribeck_speed: float = STRIBECK_SPEED, viscous: float = 0.0, cogging: float = 0.0,
+                 cogging_cycles: float = 16.0, ground_spring: float = 0.0):
+        v_s = max(static_friction, friction)
+        self.cfg = substep.config(params.drive_k, params.drive_c, 0.5 * backlash / H, K_TAU * friction,
+                                  K_TAU * v_s, stribeck_speed, K_TAU * cogging, cogging_cycles, K_TAU)
+        self.nonlinear = v_s > 0 or backlash > 0 or cogging != 0
+        self.steps = int(substeps) if self.nonlinear else 1
+        self.micro = 1
+        if self.nonlinear and v_s > friction:
+            # the Stribeck curve's steepest slope, k_tau (v_s - v_c) sqrt(2) e^-1/2 / w_s, over J_m
+            rate = K_TAU * (v_s - friction) * math.sqrt(2) * math.exp(-0.5) / stribeck_speed
+            rate /= motor_inertia(params)[0]
+            self.micro = max(2, math.ceil(rate * dt / self.steps / STRIBECK_RESOLUTION))
+        self.band = substep.BAND * stribeck_speed
+        self.nd, self.accel_row, self.phi, self.gam, self.fphi, self.fgam = _matrices(
+            params, n_elements, beta, viscous, ground_spring, dt, self.steps if self.nonlinear else 0, self.micro)
         self.reset()
 
     def reset(self) -> None:
+        """At rest at the origin; the motor stuck when there is dry friction."""
         self.x = np.zeros(2 * self.nd)
-        self.stuck = self.fc > 0
-        self.direction = 0.0
+        self.st = np.array([1.0 if self.cfg[substep.FS] > 0 else 0.0, 0.0])
+
+    @property
+    def stuck(self) -> bool:
+        """The motor is held by dry friction."""
+        return bool(self.st[0])
 
     def outputs(self) -> tuple[float, float]:
         """(base angle * H in counts, tip lateral acceleration m/s^2) at the current state."""
         return H * self.x[BASE], float(self.accel_row @ self.x)
+
+    def motor(self) -> float:
+        """Motor angle * H, counts."""
+        return H * self.x[MOTOR]
 
     def advance(self, v: float) -> None:
         """One sample with the torque command v (DAC counts after the amplifier) held."""
         if not self.nonlinear:
             self.x = self.phi @ self.x + self.gam * v
             return
-        nd, x = self.nd, self.x
-        kd, cd, g2, fc = self.kd, self.cd, self.g2, self.fc
-        tau_v = K_TAU * v
-        for _ in range(self.steps):
-            delta = x[MOTOR] - x[BASE]
-            coupled, offset = True, 0.0
-            if g2 > 0.0:
-                if abs(delta) <= g2:
-                    coupled = False
-                else:  # engaged: spring acts on (delta -+ gap/2); the linear part has kd*delta
-                    offset = kd * math.copysign(g2, delta)
-            f_m, f_b = offset, -offset
-            if fc > 0.0:
-                if self.stuck:
-                    # torque on the still motor from the amplifier and the drive train
-                    drive = (kd * delta - offset + cd * (0.0 - x[nd + BASE])) if coupled else 0.0
-                    net = tau_v - drive
-                    if abs(net) > fc:
-                        self.stuck = False
-                        self.direction = math.copysign(1.0, net)
-                if not self.stuck:
-                    f_m -= self.direction * fc
-            phi, gam = self.variants[coupled, self.stuck]
-            x = phi @ x + gam @ np.array((v, f_m, f_b))
-            if fc > 0.0 and not self.stuck and x[nd + MOTOR] * self.direction <= 0.0:
-                x[nd + MOTOR] = 0.0  # the motor stopped within the sub-step: it sticks
-                self.stuck = True
-        self.x = x
+        self.x = substep.advance(self.x, float(v), self.st, self.phi, self.gam, self.fphi, self.fgam, self.cfg,
+                                 self.nd, self.steps, self.micro, self.band)
 
 
 # --- one run -----------------------------------------------------------------------------
 
 @dataclass
 class Run:
-    """One simulated run as the rig logs it (arrays of shape (N,))."""
+    """One simulated run as the rig logs it (arrays of shape (N,)), and what it hides.
+
+    ``applied`` is the amplifier's output (DAC counts) during tick k; ``theta_true`` the
+    base angle and ``motor`` the motor angle at tick k, in encoder counts before the
+    encoder's error and rounding.
+    """
 
     u: np.ndarray
     v: np.ndarray
@@ -230,33 +400,20 @@ class Run:
     a: np.ndarray
     theta_d_hat: np.ndarray
     applied: np.ndarray = field(repr=False)
+    theta_true: np.ndarray = field(repr=False)
+    motor: np.ndarray = field(repr=False)
 
 
-def split_effects(effects: dict[str, float]) -> tuple[dict[str, float], dict[str, float]]:
-    """(named effects, param ratios); ValueError for an unknown name."""
-    named, ratios = {}, {}
-    for name, value in effects.items():
-        if name.startswith("param:"):
-            pname = name.split(":", 1)[1]
-            if pname not in Params.__dataclass_fields__ or pname in ("L", "a_gain"):
-                raise ValueError(f"unknown parameter effect {name!r}")
-            ratios[pname] = float(value)
-        elif name in NAMED:
-            named[name] = float(value)
-        else:
-            raise ValueError(f"unknown effect {name!r}")
-    return named, ratios
-
-
-def make_plant(effects: dict[str, float], n_elements: int = 4, substeps: int = 100) -> tuple[Plant, float]:
+def make_plant(effects: dict[str, float] | Effects, n_elements: int = 4, substeps: int = 100) -> tuple[Plant, float]:
     """The plant with the effects that act inside it, and the accelerometer gain (counts per m/s^2)."""
-    named, ratios = split_effects(effects)
-    params = Params().scaled(ratios)
-    zeta = named.get("beam_damping")
-    beta = beta_for_damping(params, zeta, n_elements) if zeta else 0.0
-    plant = Plant(params, n_elements, beta, friction=named.get("coulomb_friction", 0.0),
-                  backlash=named.get("backlash", 0.0), substeps=substeps)
-    return plant, params.a_gain * named.get("accel_gain", 1.0)
+    eff = effects if isinstance(effects, Effects) else Effects.parse(effects)
+    params = Params().scaled(eff.ratios)
+    beta = beta_for_damping(params, eff.beam_damping, n_elements) if eff.beam_damping else 0.0
+    plant = Plant(params, n_elements, beta, friction=eff.coulomb_friction, backlash=eff.backlash,
+                  substeps=substeps, static_friction=eff.static_friction, stribeck_speed=eff.stribeck_speed,
+                  viscous=eff.viscous_friction, cogging=eff.cogging, cogging_cycles=eff.cogging_cycles,
+                  ground_spring=eff.position_spring)
+    return plant, params.a_gain * eff.accel_gain
 
 
 def simulate(kind: str, u: np.ndarray, effects: dict[str, float], rng: np.random.Generator,
@@ -270,20 +427,28 @@ def simulate(kind: str, u: np.ndarray, effects: dict[str, float], rng: np.random
     u : array, shape (N,)
         Reference, encoder counts (DAC counts in open loop, v = u).
     effects : dict
-        Effect name -> value (DESIGN.md vocabulary and units).
+        Effect name -> value (DESIGN.md vocabulary and units, :data:`SETTINGS`, :data:`OOV`).
     rng : numpy.random.Generator
         Accelerometer noise.
+    n_elements : int
+        Beam elements.
+    substeps : int
+        Sub-steps per sample for friction, backlash and cogging.
+    accel_noise : float
+        Accelerometer noise std, counts.
+    kp : float
+        Gain of the P controller.
     """
-    named, _ = split_effects(effects)
-    plant, a_gain = make_plant(effects, n_elements, substeps)
-    amp = Amplifier(named.get("saturation", math.inf), named.get("deadzone", 0.0), int(named.get("delay", 0)))
+    eff = Effects.parse(effects)
+    plant, a_gain = make_plant(eff, n_elements, substeps)
+    amp = Amplifier(eff.saturation, eff.deadzone, eff.delay, eff.amp_offset)
     ctrl = None if kind == "open-loop" else Controller(kind, kp)
     n = len(u)
-    out = np.zeros((6, n))
+    out = np.zeros((8, n))
     noise = rng.normal(0.0, accel_noise, n) if accel_noise > 0 else np.zeros(n)
     for k in range(n):
         th, acc = plant.outputs()
-        theta = math.floor(th + 0.5)
+        theta = encoder(th, eff.encoder_cyclic, eff.encoder_cyclic_period)
         a = math.floor(a_gain * acc + noise[k] + 0.5)
         if ctrl is None:
             v, th_d = float(u[k]), float(u[k])
@@ -292,6 +457,6 @@ def simulate(kind: str, u: np.ndarray, effects: dict[str, float], rng: np.random
         else:  # alignment 1: the previous row's samples
             v, th_d = ctrl.step(float(u[k]), out[2, k - 1], out[3, k - 1])
         applied = amp(v)
-        out[:, k] = (u[k], v, theta, a, th_d, applied)
+        out[:, k] = (u[k], v, theta, a, th_d, applied, th, plant.motor())
         plant.advance(applied)
     return Run(*out)
