@@ -12,12 +12,12 @@ from __future__ import annotations
 import base64
 import html
 import io
-import math
 import re
 from pathlib import Path
 
 from matplotlib.figure import Figure
 
+from station.diagnosis.prose import format_pct, format_value, summary_paragraph
 from station.errors import StationError
 from station.plots import diagnosis_resid_figure, diagnosis_run_figure
 
@@ -32,51 +32,13 @@ def _png(fig: Figure) -> bytes:
     return buf.getvalue()
 
 
-def _pct(x) -> str:
-    return "n/a" if x is None or not math.isfinite(x) else f"{x:.1f} %"
-
-
-def summary_paragraph(diag) -> str:
-    """One paragraph naming the cause, its value and the gain.
-
-    Parameters
-    ----------
-    diag : Diagnosis
-        What :func:`station.analysis.diagnosis.diagnose` returned.
-    """
-    base = diag.nominal_model.name
-    if not diag.causes:
-        best = diag.effects[0] if diag.effects else None
-        extra = "" if best is None else (f" The best candidate, {best.name} = {_value(best)}, changes the θ RMS error "
-                                         f"on held-out data by {best.gain_pct:+.1f} %, below the significance threshold.")
-        return (f"No effect explains the differences between {base} and the runs beyond what sensor "
-                f"quantization and noise can: the cause is \"none\" ({diag.validation}).{extra}")
-    accepted = {e.name: e for e in diag.effects if e.accepted}
-    parts = [f"{n} = {_value(accepted[n])}" for n in diag.causes]
-    more = "" if len(parts) == 1 else f", together with {', '.join(parts[1:])}"
-    first = accepted[diag.causes[0]]
-    what = (f"has its {first.name[6:]} off: {_value(first)} times the nominal value" if first.name.startswith("param:")
-            else f"is missing {first.name}: fitted value {_value(first)}")
-    return (f"The model {base} {what}{more}. "
-            f"On data it was not fitted to ({diag.validation}) the extended model lowers the θ RMS error by "
-            f"{diag.gain_pct:.1f} % (NRMSE fit of θ {_pct(diag.baseline_fit.get('theta'))} → "
-            f"{_pct(diag.extended_fit.get('theta'))}, of a {_pct(diag.baseline_fit.get('accel'))} → "
-            f"{_pct(diag.extended_fit.get('accel'))}). Evidence: {first.evidence}.")
-
-
-def _value(e) -> str:
-    if not math.isfinite(e.value):
-        return "∞"
-    v = f"{e.value:.0f}" if e.unit == "samples" else f"{e.value:.3g}"
-    return v if e.unit == "1" else f"{v} {e.unit}"
-
-
 def write_report(diag, folder: str | Path) -> Path:
     """Write ``report.html`` (figures embedded as base64 PNG) and the PNGs beside it.
 
     Parameters
     ----------
     diag : Diagnosis
+        What :func:`station.diagnosis.diagnose` returned.
     folder : str or Path
         Created if needed.
 
@@ -100,10 +62,10 @@ def write_report(diag, folder: str | Path) -> Path:
                 f"<tr><th>cause</th><td>{esc(diag.cause)}</td></tr>",
                 f"<tr><th>causes</th><td>{esc(', '.join(diag.causes) or '[]')}</td></tr>",
                 f"<tr><th>validation</th><td>{esc(diag.validation)}</td></tr>",
-                f"<tr><th>θ fit nominal → extended</th><td>{_pct(diag.baseline_fit.get('theta'))} → "
-                f"{_pct(diag.extended_fit.get('theta'))}</td></tr>",
-                f"<tr><th>a fit nominal → extended</th><td>{_pct(diag.baseline_fit.get('accel'))} → "
-                f"{_pct(diag.extended_fit.get('accel'))}</td></tr>",
+                f"<tr><th>θ fit nominal → extended</th><td>{format_pct(diag.baseline_fit.get('theta'))} → "
+                f"{format_pct(diag.extended_fit.get('theta'))}</td></tr>",
+                f"<tr><th>a fit nominal → extended</th><td>{format_pct(diag.baseline_fit.get('accel'))} → "
+                f"{format_pct(diag.extended_fit.get('accel'))}</td></tr>",
                 f"<tr><th>θ RMS gain (pooled)</th><td>{diag.gain_pct:.1f} %</td></tr>",
                 f"<tr><th>extended model</th><td>{esc(diag.extended_model.name)}: "
                 f"{esc(', '.join(f'{k} = {v:.4g}' for k, v in diag.extended_model.effect_dict().items()) or 'no effects')}"
@@ -112,8 +74,8 @@ def write_report(diag, folder: str | Path) -> Path:
                 "<h2>Candidates</h2><table><tr><th>effect</th><th>value</th><th>θ gain</th><th>θ+a cost gain</th>"
                 "<th>accepted</th><th>evidence</th></tr>"]
         for e in diag.effects:
-            body.append(f"<tr><td>{esc(e.name)}</td><td>{esc(_value(e))}</td><td>{e.gain_pct:.1f} %</td>"
-                        f"<td>{e.cost_gain_pct:.1f} %</td><td>{'yes' if e.accepted else ''}</td>"
+            body.append(f"<tr><td>{esc(e.name)}</td><td>{esc(format_value(e.value, e.unit))}</td>"
+                        f"<td>{e.gain_pct:.1f} %</td><td>{e.cost_gain_pct:.1f} %</td><td>{'yes' if e.accepted else ''}</td>"
                         f"<td class='ev'>{esc(e.evidence)}</td></tr>")
         body.append("</table><h2>Runs</h2><table><tr><th>run</th><th>role</th><th>controller</th>"
                     "<th>θ fit nominal</th><th>θ fit extended</th><th>θ RMS gain</th><th>overshoot rig / nominal / "
@@ -122,7 +84,7 @@ def write_report(diag, folder: str | Path) -> Path:
             m = r.metrics
             ov = "" if m is None else " / ".join(f"{m[k].overshoot_pct:.2f} %" for k in ("rig", "nominal", "extended"))
             body.append(f"<tr><td>{esc(r.file)}</td><td>{r.role}</td><td>{esc(r.controller)}</td>"
-                        f"<td>{_pct(r.fit_nominal.get('theta'))}</td><td>{_pct(r.fit_extended.get('theta'))}</td>"
+                        f"<td>{format_pct(r.fit_nominal.get('theta'))}</td><td>{format_pct(r.fit_extended.get('theta'))}</td>"
                         f"<td>{r.gain_pct:.1f} %</td><td>{ov}</td></tr>")
         body.append("</table>")
         for r in diag.runs:
@@ -151,4 +113,4 @@ def write_report(diag, folder: str | Path) -> Path:
     return out
 
 
-__all__ = ["summary_paragraph", "write_report"]
+__all__ = ["write_report"]
