@@ -266,9 +266,9 @@ def fit_each_alone(search: Search, names: Sequence[str], nominal: Trial) -> Sing
         for k, (name, (tr, vals)) in enumerate(zip(names, pool.map(alone, names)), 1):
             trials[name], values[name] = tr, vals
             g = rms_gain(pooled(ev, tr.val_sse).rms_theta, rms_nom)
+            cg = relative_gain(tr.val_weighted, nominal.val_weighted)
             search.say(f"[{k}/{len(names)}] {name} = {format_value(vals[name], EFFECTS[name].unit)}: "
-                       f"validation θ gain {g:.1f} %, cost gain {relative_gain(tr.val_weighted, nominal.val_weighted):.1f} % "
-                       f"({ev.simulations} simulations)")
+                       f"validation θ gain {g:.1f} %, cost gain {cg:.1f} % ({ev.simulations} simulations)")
     return Singles(trials, values)
 
 
