@@ -2,7 +2,7 @@
 """Benchmark: diagnose four 2 s runs over every candidate with leave-one-run-out.
 
 After a warm-up diagnosis (numba JIT compilation, parameter-set loading), times
-:func:`station.analysis.diagnosis.diagnose` on four runs: by default the four thesis logs
+:func:`station.diagnosis.diagnose` on four runs: by default the four thesis logs
 of the rig (``../shared/data/rig``: open-loop pulses, P step, lead step, lead +
 accelerometer step; the real case, with forward selection of several effects), or with
 ``--blind EFFECT=VALUE`` the four logs of a hidden-effect case written by the independent
@@ -45,7 +45,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--json", type=Path, default=None, help="write the numbers as JSON")
     args = parser.parse_args(argv)
 
-    from station.analysis.diagnosis import diagnose
+    from station.diagnosis import diagnose
 
     tmp = Path(tempfile.mkdtemp(prefix="bench_diagnose_"))
     if args.blind is not None or not args.rig.is_dir():

@@ -4,7 +4,7 @@
 For every effect of ``tests.blind.cases.MAGNITUDES`` (the vocabulary's named effects and
 param:drive_c, drive_k, J_base, act_K), for seeds 0..N-1, the independent generator
 (tests/blind) writes the four rig-format logs of a case with the effect hidden at a value
-drawn in the issue's range; ``station.analysis.diagnosis.diagnose`` sees only those files.
+drawn in the issue's range; ``station.diagnosis.diagnose`` sees only those files.
 Also N clean cases (must give "none") and N two-effect cases (``TWO_EFFECTS``, both must be
 named). Issue 8's bar: named in >= 9 of 10 seeds with the value within 25 %, clean "none"
 in >= 9 of 10.
@@ -63,7 +63,7 @@ class Outcome:
 
 def run_case(case: str, seed: int) -> Outcome:
     """Generate one case's logs in a temporary folder and diagnose them."""
-    from station.analysis.diagnosis import diagnose
+    from station.diagnosis import diagnose
     from tests.blind.generator import write_case
 
     hidden = case_effects(case, seed)
@@ -93,7 +93,7 @@ def table(outcomes: list[Outcome], seeds: int, elapsed: float) -> str:
         "lead + accelerometer step 200, open-loop ±100 pulses) written by the independent generator "
         "`tests/blind` (its own FEM, stick-slip friction and backlash on a 100-sub-step grid, accelerometer "
         "noise 0.3 counts, the rig's truncation and rounding) with one effect hidden at a value drawn in "
-        "issue 8's range; `station.analysis.diagnosis.diagnose` sees only the files (leave-one-run-out "
+        "issue 8's range; `station.diagnosis.diagnose` sees only the files (leave-one-run-out "
         "over the four).",
         "",
         f"Bar (issue 8): the cause named in at least 9 of 10 seeds with its value within {TOLERANCE:.0%}; "

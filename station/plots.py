@@ -280,7 +280,7 @@ def diagnosis_run_figure(run):
     Parameters
     ----------
     run : RunReport
-        One run of a :class:`station.analysis.diagnosis.Diagnosis`.
+        One run of a :class:`station.diagnosis.Diagnosis`.
 
     Returns
     -------
@@ -314,7 +314,7 @@ def diagnosis_resid_figure(run):
     Parameters
     ----------
     run : RunReport
-        One run of a :class:`station.analysis.diagnosis.Diagnosis`.
+        One run of a :class:`station.diagnosis.Diagnosis`.
 
     Returns
     -------

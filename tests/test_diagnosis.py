@@ -18,7 +18,7 @@ import scipy.optimize
 import scipy.signal
 
 from station import cli
-from station.analysis import diagnosis
+from station import diagnosis
 from station.analysis.fitting import Axis, axis_for, fit
 from station.analysis.residuals import band_response, hub_sticking, noise_std, resid_test, ringing_mode
 

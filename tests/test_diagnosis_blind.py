@@ -2,7 +2,7 @@
 
 An effect is hidden in the four rig-format logs of a case written by the independent
 generator (tests/blind: its own FEM, friction and backlash integrated on a sub-step grid,
-the rig's noise and quantization); :func:`station.analysis.diagnosis.diagnose` sees only
+the rig's noise and quantization); :func:`station.diagnosis.diagnose` sees only
 the log files. For every effect of tests.blind.cases.MAGNITUDES, two seeds with values
 drawn in the issue's ranges: the cause must be named with its value within 25 %; a clean
 case must give "none"; a two-effect case must name both. The ten-seed table is
@@ -22,7 +22,7 @@ SEEDS = (0, 1)
 
 
 def _diagnose(tmp_path, effects, seed):
-    from station.analysis.diagnosis import diagnose
+    from station.diagnosis import diagnose
 
     paths = write_case(tmp_path / "logs", effects, seed)
     return diagnose([str(p) for p in paths]).to_json()

@@ -52,7 +52,7 @@ def format_diagnosis(diag) -> str:
     Parameters
     ----------
     diag : Diagnosis
-        What :func:`station.analysis.diagnosis.diagnose` returned.
+        What :func:`station.diagnosis.diagnose` returned.
     """
     pct = lambda x: "n/a" if x is None else f"{x:.1f} %"  # noqa: E731
     lines = [f"model: {diag.nominal_model.name}; judged by {diag.validation}",
@@ -93,7 +93,7 @@ def run(args: argparse.Namespace) -> int:
     StationError
         One run without --validate, an unreadable log, a bad --model, unwritable output.
     """
-    from station.analysis.diagnosis import diagnose
+    from station.diagnosis import diagnose
     from station.errors import StationError
 
     from station.commands.options import check_writable, check_writable_dir
@@ -105,7 +105,7 @@ def run(args: argparse.Namespace) -> int:
     diag = diagnose(args.runs, validate=args.validate, model=args.model, progress=progress)
     print(format_diagnosis(diag))
     if args.report is not None:
-        from station.analysis.diagnosis_report import write_report
+        from station.diagnosis.report import write_report
 
         print(f"report: {write_report(diag, args.report)}")
     try:

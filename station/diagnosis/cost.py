@@ -1,0 +1,227 @@
+"""The cost of a model on measured runs: per-run squared θ and a errors, cached per set of
+effects and counted as simulations; the noise levels that normalise them; pooled fits and
+gains over validation runs.
+
+J = Σ_runs (‖e_θ‖²/σ_θ² + ‖e_a‖²/σ_a²) / Σ 2N, with σ_θ the encoder's quantization
+(1/√12 counts) or more and σ_a ≥ 0.3 counts, both estimated from the high-frequency part of
+the nominal model's residual (:func:`calibrate_noise`). A perfect model has J ≈ 1.
+"""
+
+from __future__ import annotations
+
+import math
+import threading
+from collections.abc import Mapping, Sequence
+from typing import NamedTuple
+
+import numpy as np
+
+from station.analysis.residuals import ACCEL_NOISE_STD, THETA_QUANTIZATION_STD, noise_std
+from station.diagnosis.cases import RunCase, Simulator, simulate_case
+
+
+def _key(effects: Mapping[str, float]) -> tuple:
+    return tuple(sorted((k, float(f"{v:.10g}")) for k, v in effects.items()))
+
+
+class Evaluator:
+    """Simulates runs on the base model with effects and caches their squared errors.
+
+    Parameters
+    ----------
+    cases : list of RunCase
+    model : station.plant.model.Model
+        The nominal model; effects are applied with ``model.with_effects``.
+    simulate : callable, optional
+        ``simulate(case, model) -> (theta, a)``, default :func:`simulate_case`.
+
+    Attributes
+    ----------
+    simulations : int
+        Runs simulated so far (cache misses).
+    """
+
+    def __init__(self, cases: Sequence[RunCase], model, simulate: Simulator | None = None):
+        self.cases = list(cases)
+        self.model = model
+        self.simulate = simulate or simulate_case
+        self.simulations = 0
+        self._cache: dict[tuple, tuple[float, float]] = {}
+        self._lock = threading.Lock()
+
+    def model_with(self, effects: Mapping[str, float]):
+        """The base model with ``effects`` applied (the base model itself for none).
+
+        Parameters
+        ----------
+        effects : mapping of str to float
+            Effect name -> value (:data:`station.plant.effects.EFFECTS`).
+        """
+        return self.model.with_effects(effects) if effects else self.model
+
+    def predict(self, effects: Mapping[str, float], i: int) -> tuple[np.ndarray, np.ndarray]:
+        """Simulated θ and a of run i (not cached).
+
+        Parameters
+        ----------
+        effects : mapping of str to float
+            Effect name -> value, applied to the base model.
+        i : int
+            Index of the run in ``cases``.
+        """
+        with self._lock:
+            self.simulations += 1
+        return self.simulate(self.cases[i], self.model_with(effects))
+
+    def sse(self, effects: Mapping[str, float], i: int) -> tuple[float, float]:
+        """Sum of squared θ and a errors of run i, counts² (inf when the simulation diverges).
+
+        Parameters
+        ----------
+        effects : mapping of str to float
+            Effect name -> value, applied to the base model.
+        i : int
+            Index of the run in ``cases``.
+        """
+        key = (_key(effects), i)
+        hit = self._cache.get(key)
+        if hit is None:
+            try:
+                theta, a = self.predict(effects, i)
+            except (ArithmeticError, ValueError, np.linalg.LinAlgError):  # a model that cannot be built or run
+                self._cache[key] = hit = (math.inf, math.inf)
+                return hit
+            c = self.cases[i]
+            with np.errstate(all="ignore"):
+                st = float(np.sum((c.theta - theta) ** 2))
+                sa = float(np.sum((c.a - a) ** 2))
+            hit = (st if math.isfinite(st) else math.inf, sa if math.isfinite(sa) else math.inf)
+            self._cache[key] = hit
+        return hit
+
+    def weighted(self, effects: Mapping[str, float], i: int) -> float:
+        """‖e_θ‖²/σ_θ² + ‖e_a‖²/σ_a² of run i.
+
+        Parameters
+        ----------
+        effects : mapping of str to float
+            Effect name -> value, applied to the base model.
+        i : int
+            Index of the run in ``cases``.
+        """
+        st, sa = self.sse(effects, i)
+        c = self.cases[i]
+        return st / c.sigma_theta ** 2 + sa / c.sigma_a ** 2
+
+    def terms(self, runs: Sequence[int]) -> int:
+        """Error terms over runs: 2N per run (θ and a counted separately).
+
+        Parameters
+        ----------
+        runs : sequence of int
+            Indices of the runs in ``cases``.
+        """
+        return sum(2 * self.cases[i].n for i in runs)
+
+    def cost(self, effects: Mapping[str, float], runs: Sequence[int]) -> float:
+        """Normalised cost J over runs (1 ≈ the noise floor).
+
+        Parameters
+        ----------
+        effects : mapping of str to float
+            Effect name -> value, applied to the base model.
+        runs : sequence of int
+            Indices of the runs in ``cases``.
+        """
+        total = sum(self.weighted(effects, i) for i in runs)
+        return total / self.terms(runs)
+
+
+def calibrate_noise(ev: Evaluator) -> dict[int, tuple[np.ndarray, np.ndarray]]:
+    """Simulate every run on the nominal model and set each run's noise levels from the
+    high-frequency part of its residual (:func:`station.analysis.residuals.noise_std`).
+
+    Parameters
+    ----------
+    ev : Evaluator
+        Its cases' ``sigma_theta`` and ``sigma_a`` are set (counts).
+
+    Returns
+    -------
+    dict of int to (ndarray, ndarray)
+        Run index -> the nominal model's θ and a, shape (N,) each.
+    """
+    nominal = {}
+    for i, c in enumerate(ev.cases):
+        theta, a = ev.predict({}, i)
+        nominal[i] = (theta, a)
+        c.sigma_theta = noise_std(c.theta - theta, THETA_QUANTIZATION_STD)
+        c.sigma_a = noise_std(c.a - a, ACCEL_NOISE_STD)
+    return nominal
+
+
+class PooledFit(NamedTuple):
+    """θ RMS error and NRMSE fits over validation runs pooled.
+
+    Attributes
+    ----------
+    rms_theta : float
+        θ RMS error over all their samples, counts.
+    theta, accel : float or None
+        NRMSE fits of θ and a, % (None when undefined or the model diverged).
+    """
+
+    rms_theta: float
+    theta: float | None
+    accel: float | None
+
+    def fit_pct(self) -> dict:
+        """``{"theta": F, "accel": F}``: the contract's fit_pct."""
+        return {"theta": self.theta, "accel": self.accel}
+
+
+def pooled(ev: Evaluator, val_sse: Mapping[int, tuple]) -> PooledFit:
+    """Pooled θ RMS and NRMSE fits over validation runs, from their cached squared errors.
+
+    Parameters
+    ----------
+    ev : Evaluator
+        Holds the measured runs.
+    val_sse : mapping of int to (float, float)
+        Run index -> squared θ and a errors of its held-out prediction, counts².
+    """
+    idx = sorted(val_sse)
+    n = sum(ev.cases[i].n for i in idx)
+    st = sum(val_sse[i][0] for i in idx)
+    sa = sum(val_sse[i][1] for i in idx)
+    th = np.concatenate([ev.cases[i].theta for i in idx])
+    ac = np.concatenate([ev.cases[i].a for i in idx])
+    dt_, da_ = np.sum((th - th.mean()) ** 2), np.sum((ac - ac.mean()) ** 2)
+    fit_t = 100.0 * (1 - math.sqrt(st / dt_)) if dt_ > 0 and math.isfinite(st) else None
+    fit_a = 100.0 * (1 - math.sqrt(sa / da_)) if da_ > 0 and math.isfinite(sa) else None
+    return PooledFit(math.sqrt(st / n) if n else math.nan, fit_t, fit_a)
+
+
+def rms_gain(rms_ext: float, rms_nom: float) -> float:
+    """100 (1 − RMS_ext/RMS_nom), % (−inf when the extended model diverged, 0 when the
+    nominal one is exact).
+
+    Parameters
+    ----------
+    rms_ext, rms_nom : float
+        RMS errors of the extended and the nominal model, counts.
+    """
+    if not (math.isfinite(rms_ext) and rms_nom > 0):
+        return -math.inf if not math.isfinite(rms_ext) else 0.0
+    return 100.0 * (1.0 - rms_ext / rms_nom)
+
+
+def relative_gain(v1: float, v0: float) -> float:
+    """100 (1 − v1/v0), % (0 when v0 is 0: a model that is already exact).
+
+    Parameters
+    ----------
+    v1, v0 : float
+        Cost with and without the change.
+    """
+    return 100.0 * (1.0 - v1 / v0) if v0 > 0 else 0.0

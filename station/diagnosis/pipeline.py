@@ -1,0 +1,132 @@
+""":func:`diagnose`: the diagnosis's steps in order (read the runs, the nominal model and the
+noise levels, every candidate alone, forward selection, the result)."""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable, Sequence
+from pathlib import Path
+from typing import NamedTuple
+
+from station.diagnosis.cases import Simulator, load_case
+from station.diagnosis.cost import Evaluator, calibrate_noise, pooled, relative_gain, rms_gain
+from station.diagnosis.folds import fold_records, make_folds, validation_runs
+from station.diagnosis.records import effect_results, run_reports
+from station.diagnosis.result import Diagnosis
+from station.diagnosis.selection import Search, Trial, effect_axes, fit_each_alone, forward_select
+from station.errors import StationError
+from station.plant.effects import CANDIDATES, EFFECTS
+from station.plant.model import as_model
+
+
+def diagnose(runs: Sequence[str | Path], validate: Sequence[str | Path] = (), model=None,
+             progress: Callable[[str], None] | None = None, candidates: Sequence[str] | None = None,
+             simulate: Simulator | None = None, workers: int | None = None) -> Diagnosis:
+    """Find what the model gets wrong on measured runs, name the cause and measure the gain.
+
+    Parameters
+    ----------
+    runs : sequence of path
+        Run logs (ours or the rig's) the candidates are fitted on.
+    validate : sequence of path, optional
+        Runs they are judged on. Without them: leave-one-run-out over ``runs`` (at least two).
+    model : Model, str, Path or None
+        The nominal model (:func:`station.plant.model.as_model`; None: "tmm-fit").
+    progress : callable, optional
+        Called with one line of text per step of a long fit (the CLI prints it to stderr).
+    candidates : sequence of str, optional
+        Effect names to try (default :data:`station.plant.effects.CANDIDATES`).
+    simulate : callable, optional
+        ``simulate(case, model) -> (theta, a)`` (default:
+        :func:`station.diagnosis.cases.simulate_case`); tests plug in their own.
+    workers : int, optional
+        Threads fitting candidates at once (default 1). The compiled sample loop releases
+        the GIL but building models and scoring runs hold it: on 2 shared cores two
+        threads were slower (the rig's four logs: 10.7 s with one, 17.0 s with two,
+        scripts/bench_diagnose.py at load average 3).
+
+    Returns
+    -------
+    Diagnosis
+
+    Raises
+    ------
+    StationError
+        One run without ``validate``, an unreadable or empty log, a bad model, or an
+        unknown candidate.
+    """
+    from threadpoolctl import threadpool_limits
+
+    # the matrices are tiny (22 x 22): BLAS threads only contend with each other and the
+    # compiled sample loop (measured 3x slower on a loaded 2-core machine)
+    with threadpool_limits(limits=1, user_api="blas"):
+        return _diagnose(runs, validate, model, progress, candidates, simulate, workers)
+
+
+def _check_runs(runs: list, validate: list) -> None:
+    if not runs:
+        raise StationError("diagnose: no runs given")
+    if not validate and len(runs) < 2:
+        raise StationError(f"diagnose: leave-one-run-out needs at least two runs, got one ({runs[0]}); "
+                           "give more runs or --validate RUN")
+
+
+def _candidates(candidates: Sequence[str] | None) -> list[str]:
+    names = list(CANDIDATES if candidates is None else candidates)
+    for n in names:
+        if n not in EFFECTS:
+            raise StationError(f"diagnose: unknown candidate effect '{n}' (known: {', '.join(EFFECTS)})")
+    return names
+
+
+class _Nominal(NamedTuple):
+    predictions: dict  # run index -> the nominal model's (θ, a)
+    trial: Trial       # its validation errors: where forward selection starts
+
+
+def _nominal(search: Search, how: str) -> _Nominal:
+    """The nominal model on every run (which also sets the runs' noise levels) and its
+    validation errors."""
+    ev, folds = search.ev, search.folds
+    predictions = calibrate_noise(ev)
+    val_idx = validation_runs(folds)
+    sse = {i: ev.sse({}, i) for i in val_idx}
+    trial = Trial((), [{} for _ in folds], sse, sum(ev.weighted({}, i) for i in val_idx))
+    fit = pooled(ev, sse)
+    search.say(f"nominal model {ev.model.name}: θ fit {fit.theta:.1f} %, θ RMS {fit.rms_theta:.2f} counts "
+               f"on {len(val_idx)} validation run(s) ({how})")
+    return _Nominal(predictions, trial)
+
+
+def _diagnose(runs, validate, model, progress, candidates, simulate, workers) -> Diagnosis:
+    t0 = time.perf_counter()
+    runs, validate = list(runs), list(validate)
+    _check_runs(runs, validate)
+    base = as_model(model)
+    names = _candidates(candidates)
+    workers, axes = max(1, int(workers or 1)), effect_axes()
+    cases = [load_case(p) for p in runs + validate]
+    folds, how = make_folds(len(runs), len(validate))
+    ev = Evaluator(cases, base, simulate)
+    search = Search(ev, folds, tuple(range(len(runs))), axes, workers, progress or (lambda msg: None))
+
+    nominal = _nominal(search, how)
+    singles = fit_each_alone(search, names, nominal.trial)
+    sel = forward_select(search, names, singles, nominal.trial)
+    accepted = sel.accepted
+    extended = base.with_effects(sel.values, name=f"{base.name} + {' + '.join(accepted)}" if accepted else None)
+    fit_nom, fit_ext = pooled(ev, nominal.trial.val_sse), pooled(ev, sel.current.val_sse)
+    gain = rms_gain(fit_ext.rms_theta, fit_nom.rms_theta) if accepted else 0.0
+    cost_gain = relative_gain(sel.current.val_weighted, nominal.trial.val_weighted) if accepted else 0.0
+    reports, before = run_reports(ev, folds, nominal.predictions, sel)
+    effects = effect_results(ev, how, names, singles, sel, nominal.trial, before)
+
+    search.say(f"done: cause {accepted[0] if accepted else 'none'}, θ gain {gain:.1f} %, {ev.simulations} "
+               f"simulations in {time.perf_counter() - t0:.1f} s")
+    return Diagnosis(
+        cause=accepted[0] if accepted else "none", causes=accepted,
+        baseline_fit=fit_nom.fit_pct(), extended_fit=(fit_ext if accepted else fit_nom).fit_pct(),
+        gain_pct=float(gain), effects=effects, extended_model=extended, nominal_model=base, runs=reports,
+        validation=how, simulations=ev.simulations,
+        folds=fold_records(folds, [c.name for c in cases], sel.current.fold_values),
+        elapsed_s=time.perf_counter() - t0, cost_gain_pct=float(cost_gain))

@@ -1,0 +1,175 @@
+"""The result of a diagnosis as typed records: each candidate effect (:class:`EffectResult`),
+each run side by side with the models (:class:`RunReport`) and the whole
+(:class:`Diagnosis`), with their JSON (DESIGN.md "Model diagnosis contract")."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from station.analysis.residuals import RunResiduals
+
+
+@dataclass(frozen=True)
+class EffectResult:
+    """One candidate effect in a diagnosis.
+
+    Attributes
+    ----------
+    name, unit : str
+        As in the vocabulary (station.plant.effects.EFFECTS).
+    value : float
+        In the extended (joint) model when accepted, else fitted alone on all fit runs.
+    gain_pct : float
+        θ RMS gain on the validation data of the nominal model plus this effect alone, %.
+    cost_gain_pct : float
+        Gain of the joint θ + a cost (noise-normalised) of that model, %.
+    accepted : bool
+    evidence : str
+        In words: the fit, the gains and the signatures that point to it.
+    fold_values : list of float
+        The value fitted alone in each fold.
+    """
+
+    name: str
+    value: float
+    unit: str
+    gain_pct: float
+    cost_gain_pct: float
+    accepted: bool
+    evidence: str
+    fold_values: list = field(default_factory=list)
+
+    def to_json(self) -> dict:
+        value = self.value if math.isfinite(self.value) else None
+        return {"name": self.name, "value": value, "unit": self.unit, "gain_pct": round(self.gain_pct, 3),
+                "evidence": self.evidence, "accepted": self.accepted,
+                "cost_gain_pct": round(self.cost_gain_pct, 3),
+                "fold_values": [v if math.isfinite(v) else None for v in self.fold_values]}
+
+
+@dataclass
+class RunReport:
+    """One run in a diagnosis: measured, nominal and extended side by side.
+
+    Attributes
+    ----------
+    file : str
+    role : {"validation", "fit"}
+        Judged on ("validation": held out in leave-one-run-out, or a --validate run).
+    controller : str
+    alignment : int or None
+    t, u, v, theta, a : ndarray
+        Measured (θ relative in open loop; a without its at-rest offset).
+    nominal, extended, final : dict of ndarray
+        θ and a of the nominal model, of the extended model as fitted without this run
+        (validation runs; the final model for fit runs) and of the final extended model.
+    fit_nominal, fit_extended : dict
+        NRMSE fits {"theta", "accel"}, %.
+    gain_pct : float
+        θ RMS gain of ``extended`` over ``nominal``, %.
+    residuals_before, residuals_after : RunResiduals
+    metrics : dict of StepMetrics or None
+        "rig", "nominal", "extended" (final model), for closed-loop step runs.
+    notes : list of str
+    """
+
+    file: str
+    role: str
+    controller: str
+    alignment: int | None
+    t: np.ndarray = field(repr=False)
+    u: np.ndarray = field(repr=False)
+    v: np.ndarray = field(repr=False)
+    theta: np.ndarray = field(repr=False)
+    a: np.ndarray = field(repr=False)
+    nominal: dict = field(repr=False)
+    extended: dict = field(repr=False)
+    final: dict = field(repr=False)
+    fit_nominal: dict = field(default_factory=dict)
+    fit_extended: dict = field(default_factory=dict)
+    gain_pct: float = 0.0
+    residuals_before: RunResiduals | None = field(default=None, repr=False)
+    residuals_after: RunResiduals | None = field(default=None, repr=False)
+    metrics: dict | None = None
+    notes: list = field(default_factory=list)
+
+    def to_json(self) -> dict:
+        m = None if self.metrics is None else {k: (None if v is None else v.to_json()) for k, v in self.metrics.items()}
+        return {"file": self.file, "role": self.role, "controller": self.controller, "alignment": self.alignment,
+                "baseline": {"fit_pct": self.fit_nominal}, "extended": {"fit_pct": self.fit_extended},
+                "gain_pct": round(self.gain_pct, 3), "metrics": m,
+                "signatures_before": self.residuals_before.signatures() if self.residuals_before else [],
+                "signatures_after": self.residuals_after.signatures() if self.residuals_after else [],
+                "notes": list(self.notes)}
+
+
+@dataclass
+class Diagnosis:
+    """The result of :func:`station.diagnosis.diagnose` (DESIGN.md "Model diagnosis contract").
+
+    Attributes
+    ----------
+    cause : str
+        The best accepted effect, or "none".
+    causes : list of str
+        Accepted effects in the order forward selection added them.
+    baseline_fit, extended_fit : dict
+        NRMSE fit {"theta", "accel"} (%) over all validation samples pooled, of the
+        nominal and the extended model.
+    gain_pct : float
+        100 (1 − RMS_ext/RMS_nom) of the θ error over all validation samples pooled.
+    effects : list of EffectResult
+        Every candidate evaluated, once, best first (accepted ones first).
+    extended_model : station.plant.model.Model
+        The nominal model plus the accepted effects, refitted on all fit runs.
+    nominal_model : station.plant.model.Model
+    runs : list of RunReport
+    validation : str
+        "leave-one-run-out" or "validation runs".
+    simulations : int
+        Runs simulated (the cost of the diagnosis).
+    elapsed_s : float
+    cost_gain_pct : float
+        Gain of the joint noise-normalised θ + a cost on the validation data, %.
+    folds : list of dict
+        Per fold: fit and validation run names and the accepted effects' values.
+    """
+
+    cause: str
+    causes: list
+    baseline_fit: dict
+    extended_fit: dict
+    gain_pct: float
+    effects: list
+    extended_model: Any
+    nominal_model: Any
+    runs: list
+    validation: str
+    simulations: int = 0
+    elapsed_s: float = 0.0
+    cost_gain_pct: float = 0.0
+    folds: list = field(default_factory=list)
+
+    def to_json(self) -> dict:
+        """DESIGN.md's JSON: cause, causes, baseline, extended, gain_pct, effects (+ extras:
+        validation, model, extended_model, runs, simulations, elapsed_s)."""
+        return {
+            "cause": self.cause,
+            "causes": list(self.causes),
+            "baseline": {"fit_pct": dict(self.baseline_fit)},
+            "extended": {"fit_pct": dict(self.extended_fit)},
+            "gain_pct": round(self.gain_pct, 3),
+            "effects": [e.to_json() for e in self.effects],
+            "validation": self.validation,
+            "cost_gain_pct": round(self.cost_gain_pct, 3),
+            "model": self.nominal_model.name,
+            "extended_model": self.extended_model.to_json(),
+            "runs": [r.to_json() for r in self.runs],
+            "folds": self.folds,
+            "simulations": self.simulations,
+            "elapsed_s": round(self.elapsed_s, 3),
+        }
