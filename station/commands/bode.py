@@ -9,7 +9,7 @@ from pathlib import Path
 
 import numpy as np
 
-from station.commands.options import add_model_options, check_writable, number
+from station.commands.options import add_json_option, add_model_options, check_writable, number
 
 NAME = "bode"
 HELP = "H1 frequency response (θ/v, a/v) of a swept-sine log against the FEM model; antiresonances"
@@ -30,7 +30,7 @@ def configure(parser: argparse.ArgumentParser) -> None:
                              "0.5 Hz, to resolve the first antiresonance near 2.5 Hz)")
     parser.add_argument("--png", type=Path, default=None, metavar="OUT",
                         help="figure file (default FILE's stem + _bode.png in the current folder)")
-    parser.add_argument("--json", type=Path, default=None, metavar="OUT", help="write the antiresonances as JSON")
+    add_json_option(parser, "the antiresonances")
 
 
 def run(args: argparse.Namespace) -> int:

@@ -7,7 +7,7 @@ import argparse
 import json
 from pathlib import Path
 
-from station.commands.options import add_model_options, check_writable, check_writable_dir
+from station.commands.options import add_json_option, add_model_options, check_writable, check_writable_dir
 
 NAME = "compare"
 HELP = "simulate logged runs on the FEM model as the rig ran them; step metrics and fits vs the thesis"
@@ -25,7 +25,7 @@ def configure(parser: argparse.ArgumentParser) -> None:
     add_model_options(parser)
     parser.add_argument("--out-dir", type=Path, default=Path("."), metavar="DIR",
                         help="folder for the figures, <log stem>_compare.png (default: current folder)")
-    parser.add_argument("--json", type=Path, default=None, metavar="OUT", help="write the comparisons as JSON")
+    add_json_option(parser, "the comparisons")
 
 
 def run(args: argparse.Namespace) -> int:
