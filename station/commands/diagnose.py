@@ -10,7 +10,7 @@ import math
 import sys
 from pathlib import Path
 
-from station.commands.options import add_json_option, add_model_options, check_writable, check_writable_dir
+from station.commands.options import add_model_options, add_report_options, check_writable, check_writable_dir
 
 NAME = "diagnose"
 HELP = ("diagnose the model on measured runs: residual tests, the missing effect (fitted and judged on "
@@ -18,17 +18,18 @@ HELP = ("diagnose the model on measured runs: residual tests, the missing effect
 
 
 def configure(parser: argparse.ArgumentParser) -> None:
-    """Add the command's arguments to its subparser.
+    """Add ``station diagnose``'s arguments to ``parser``.
 
     Parameters
     ----------
     parser : argparse.ArgumentParser
-        The command's subparser.
+        Gets RUN..., ``--validate``, ``--json``, ``--report``, ``--model``, ``--save-model``,
+        ``--quiet``.
     """
     parser.add_argument("runs", type=Path, nargs="+", metavar="RUN", help="run logs the candidates are fitted on")
     parser.add_argument("--validate", type=Path, nargs="+", default=[], metavar="RUN",
                         help="runs they are judged on (default: leave-one-run-out over the RUNs, at least two)")
-    add_json_option(parser, "the diagnosis")
+    add_report_options(parser, json="the diagnosis")
     parser.add_argument("--report", type=Path, default=None, metavar="DIR",
                         help="write DIR/report.html with its figures (also as PNG beside it)")
     add_model_options(parser, subject="the nominal model", elements=None, params=False)
@@ -82,7 +83,8 @@ def run(args: argparse.Namespace) -> int:
     Parameters
     ----------
     args : argparse.Namespace
-        The options parsed by the subparser :func:`configure` filled.
+        The runs (``runs``, ``--validate``), the nominal ``--model``, the outputs (``--json``,
+        ``--report``, ``--save-model``) and ``--quiet``.
 
     Returns
     -------

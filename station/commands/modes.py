@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import argparse
 
-from station.commands.options import add_json_option, add_model_options, check_writable, number, write_json
+from station.commands.options import add_model_options, add_report_options, check_writable, number, write_json
 from station.errors import StationError
 
 MAX_COUNT = 10
@@ -25,12 +25,12 @@ def configure(parser: argparse.ArgumentParser) -> None:
     Parameters
     ----------
     parser : argparse.ArgumentParser
-        The command's subparser.
+        Gets the model options (``--elements`` takes several counts), ``--count`` and ``--json``.
     """
     add_model_options(parser, "its linear part (param:NAME, beam_damping) is analysed", elements="many")
     parser.add_argument("--count", type=number(1, MAX_COUNT, integer=True), default=3, metavar="K",
                         help="modes to show (default 3; the 1-element model has only a few)")
-    add_json_option(parser, "the numbers")
+    add_report_options(parser, json="the numbers")
 
 
 def run(args: argparse.Namespace) -> int:
@@ -39,7 +39,8 @@ def run(args: argparse.Namespace) -> int:
     Parameters
     ----------
     args : argparse.Namespace
-        The options parsed by the subparser :func:`configure` filled.
+        The model (``--model``, ``--params``), the element counts (``--elements``), ``--count``,
+        ``--json``.
 
     Raises
     ------

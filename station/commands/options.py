@@ -316,19 +316,6 @@ def add_protocol_option(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--protocol", choices=PROTOCOLS, default="v1", help="wire protocol (default v1)")
 
 
-def add_json_option(parser: argparse.ArgumentParser, what: str) -> None:
-    """``--json OUT``: write the command's result as JSON.
-
-    Parameters
-    ----------
-    parser : argparse.ArgumentParser
-        The command's subparser.
-    what : str
-        What the JSON holds, for the help (e.g. "the report").
-    """
-    parser.add_argument("--json", type=Path, default=None, metavar="OUT", help=f"write {what} as JSON")
-
-
 def write_json(path: Path, doc: Any, indent: int = 1) -> None:
     """Write ``doc`` as JSON to ``path`` (its folder created), one line of error on failure.
 
@@ -353,16 +340,21 @@ def write_json(path: Path, doc: Any, indent: int = 1) -> None:
         raise StationError(f"{path}: cannot write the JSON report: {exc.strerror or exc}") from None
 
 
-def add_rerun_options(parser: argparse.ArgumentParser, what: str) -> None:
-    """``--rrd FILE`` or ``--spawn`` (one of them): ``what`` to a rerun recording or viewer.
+def add_report_options(parser: argparse.ArgumentParser, json: str | None = None, rerun: str | None = None) -> None:
+    """``--json OUT`` and ``--rrd FILE`` or ``--spawn`` (one of them), as the command has them.
 
     Parameters
     ----------
     parser : argparse.ArgumentParser
         The command's subparser.
-    what : str
-        What goes to rerun, for the help (e.g. "the run").
+    json : str, optional
+        What the JSON holds (e.g. "the report"); None: no ``--json``.
+    rerun : str, optional
+        What goes to a rerun recording or viewer (e.g. "the run"); None: neither option.
     """
-    viz = parser.add_mutually_exclusive_group()
-    viz.add_argument("--rrd", type=Path, default=None, metavar="FILE", help=f"record {what} to a rerun .rrd file")
-    viz.add_argument("--spawn", action="store_true", help=f"stream {what} to a rerun viewer")
+    if json is not None:
+        parser.add_argument("--json", type=Path, default=None, metavar="OUT", help=f"write {json} as JSON")
+    if rerun is not None:
+        viz = parser.add_mutually_exclusive_group()
+        viz.add_argument("--rrd", type=Path, default=None, metavar="FILE", help=f"record {rerun} to a rerun .rrd file")
+        viz.add_argument("--spawn", action="store_true", help=f"stream {rerun} to a rerun viewer")

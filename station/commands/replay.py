@@ -6,7 +6,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from station.commands.options import (add_json_option, add_model_options, add_rerun_options, check_writable,
+from station.commands.options import (add_model_options, add_report_options, check_writable,
                                       chosen_model, write_json)
 
 NAME = "replay"
@@ -15,17 +15,16 @@ HELP = ("replay a run log (ours or the rig's): reproduce the logged commands, de
 
 
 def configure(parser: argparse.ArgumentParser) -> None:
-    """Add the command's arguments to its subparser.
+    """Add ``station replay``'s arguments to ``parser``.
 
     Parameters
     ----------
     parser : argparse.ArgumentParser
-        The command's subparser.
+        Gets FILE, the model options (with ``--no-model``), ``--json``, ``--rrd``/``--spawn``.
     """
     parser.add_argument("file", type=Path, metavar="FILE", help="run log (station or rig format)")
-    add_json_option(parser, "the report")
     add_model_options(parser, params=False, no_model="skip the FEM model prediction")
-    add_rerun_options(parser, "the log, the replayed v and the model")
+    add_report_options(parser, json="the report", rerun="the log, the replayed v and the model")
 
 
 def _record(report, rrd: Path | None, spawn: bool) -> None:
@@ -49,7 +48,8 @@ def run(args: argparse.Namespace) -> int:
     Parameters
     ----------
     args : argparse.Namespace
-        The options parsed by the subparser :func:`configure` filled.
+        FILE, the model (``--no-model``, ``--model``, ``--elements``), ``--json``,
+        ``--rrd``/``--spawn``.
 
     Returns
     -------

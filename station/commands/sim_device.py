@@ -22,7 +22,7 @@ def configure(parser: argparse.ArgumentParser) -> None:
     Parameters
     ----------
     parser : argparse.ArgumentParser
-        The command's subparser.
+        Gets ``--pty``, ``--protocol``, ``--realtime``, ``--seed`` and the model options.
     """
     parser.add_argument("--pty", action="store_true", help="serve the device on a new pty (required)")
     add_protocol_option(parser)
@@ -38,7 +38,7 @@ def run(args: argparse.Namespace) -> int:
     Parameters
     ----------
     args : argparse.Namespace
-        The options parsed by the subparser :func:`configure` filled.
+        ``--pty``, ``--protocol``, ``--realtime``, ``--seed``, ``--model``, ``--elements``.
 
     Raises
     ------

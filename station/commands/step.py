@@ -9,8 +9,8 @@ from pathlib import Path
 from station import DT
 from station import experiment as ex
 from station.errors import StationError
-from station.commands.options import (add_json_option, add_model_options, add_protocol_option, add_rerun_options,
-                                      add_seed_option, check_writable, check_writable_dir, number, warn, write_json)
+from station.commands.options import (add_model_options, add_protocol_option, add_report_options, add_seed_option,
+                                      check_writable, check_writable_dir, number, warn, write_json)
 from station.config import apply_config
 from station.link import LinkLimits
 from station.protocol import legacy
@@ -34,7 +34,8 @@ def configure(parser) -> None:
     Parameters
     ----------
     parser : argparse.ArgumentParser
-        The command's subparser.
+        Gets the controller, reference, port, link bounds and output options; defaults from
+        ``station.toml`` (:func:`station.config.apply_config`).
     """
     parser.add_argument("--controller", default=ex.DEFAULT_CONTROLLER,
                         help="p, lead, lead-accel, open-loop or a compensator FILE.toml (default lead)")
@@ -79,10 +80,9 @@ def configure(parser) -> None:
     parser.add_argument("--force", action="store_true", help="overwrite an existing --out file")
     parser.add_argument("--quiet", action="store_true",
                         help="no live progress line on stderr (it is shown only when stderr is a terminal)")
-    add_json_option(parser, "metrics and timing")
     parser.add_argument("--out-dir", type=Path, default=Path("runs"), metavar="DIR",
                         help="folder of the default run log names (default runs)")
-    add_rerun_options(parser, "the run")
+    add_report_options(parser, json="metrics and timing", rerun="the run")
     apply_config(parser)
 
 
@@ -95,7 +95,8 @@ def check_args(args) -> None:
     Parameters
     ----------
     args : argparse.Namespace
-        The options parsed by the subparser :func:`configure` filled.
+        The controller, reference, port, simulated rig, link bounds and outputs; checked by
+        :func:`check_args`.
 
     Raises
     ------
@@ -193,7 +194,8 @@ def run(args) -> int:
     Parameters
     ----------
     args : argparse.Namespace
-        The options parsed by the subparser :func:`configure` filled.
+        The controller, reference, port, simulated rig, link bounds and outputs; checked by
+        :func:`check_args`.
     """
     limits = _limits(args)
     check_args(args)

@@ -15,12 +15,12 @@ HELP = ("replay every log of a folder (or the files given) on all cores and prin
 
 
 def configure(parser: argparse.ArgumentParser) -> None:
-    """Add the command's arguments to its subparser.
+    """Add ``station survey``'s arguments to ``parser``.
 
     Parameters
     ----------
     parser : argparse.ArgumentParser
-        The command's subparser.
+        Gets DIR|FILE..., ``--csv``, ``--report``, the model options (with ``--no-model``), ``--jobs``.
     """
     parser.add_argument("paths", nargs="+", type=Path, metavar="DIR|FILE",
                         help="folders (searched recursively) and files to survey")
@@ -39,7 +39,8 @@ def run(args: argparse.Namespace) -> int:
     Parameters
     ----------
     args : argparse.Namespace
-        The options parsed by the subparser :func:`configure` filled.
+        The paths, ``--csv``, ``--report``, the model (``--no-model``, ``--model``, ``--elements``),
+        ``--jobs``.
 
     Returns
     -------

@@ -9,8 +9,8 @@ nobody read them; the device never blocks on them). Pacing as for ``sim://`` (:m
 (500 Hz on absolute deadlines, ``select`` with a timeout up to the next deadline).
 
 Run it as ``station sim-device --pty [--realtime] [--protocol legacy] [--seed N] [--model NAME|FILE]
-[--elements N]`` (:mod:`station.commands.sim_device`), or ``python -m station.sim.pty_server`` with
-the same options.
+[--elements N]`` (:mod:`station.commands.sim_device`); ``python -m station.sim.pty_server`` with
+the same options is an alias that execs it (this module never imports the command line).
 """
 
 from __future__ import annotations
@@ -119,7 +119,5 @@ def serve_pty(protocol: str = "v1", realtime: bool = False, seed: int = 0, n_ele
     return summary
 
 
-if __name__ == "__main__":  # the command line is station.commands.sim_device's: one definition
-    from station.cli import main
-
-    sys.exit(main(["sim-device", "--pty", *sys.argv[1:]]))
+if __name__ == "__main__":  # an alias: the command line is station.commands.sim_device's (one definition)
+    os.execv(sys.executable, [sys.executable, "-m", "station", "sim-device", "--pty", *sys.argv[1:]])
