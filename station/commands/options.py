@@ -1,4 +1,6 @@
-"""Checked command-line values: one mechanism for every command's numeric options and output paths.
+"""What the commands share: checked command-line values, output-path probes, and the option
+groups declared once (the model options of every command that simulates, the simulated rig's
+seed, the wire protocol, ``--json`` and rerun output).
 
 A numeric option is declared with ``type=number(low, high, ...)``: argparse calls it on
 the text, so a value that is not finite or outside the range is refused while the
@@ -251,13 +253,13 @@ def add_model_options(parser: argparse.ArgumentParser, model_help: str = "", *, 
     parser.add_argument("--model", dest="model_spec" if no_model is not None else "model", default=None,
                         metavar="NAME|FILE",
                         help=more(f"{subject}: {MODEL_HELP}" + (f"; {model_help}" if model_help else ""), "model"))
+    count = number(1, 100, integer=True)
     if elements == "one":
-        parser.add_argument("--elements", type=number(1, 100, integer=True), default=None, metavar="N",
+        parser.add_argument("--elements", type=count, default=None, metavar="N",
                             help=more("beam elements of the model (default: the model's, 4)", "elements"))
     elif elements == "many":
-        parser.add_argument("--elements", type=number(1, 100, integer=True), nargs="+", default=list(MANY_ELEMENTS),
-                            metavar="N", help=more(f"element counts (default {' '.join(map(str, MANY_ELEMENTS))})",
-                                                   "elements"))
+        parser.add_argument("--elements", type=count, nargs="+", default=list(MANY_ELEMENTS), metavar="N",
+                            help=more(f"element counts (default {' '.join(map(str, MANY_ELEMENTS))})", "elements"))
     if params:
         parser.add_argument("--params", default=None, metavar="SET",
                             help=more("parameter set name or TOML file (default: the model's, tmm-fit)", "params"))
@@ -299,10 +301,10 @@ def add_seed_option(parser: argparse.ArgumentParser, default: int | None = None,
     default : int, optional
         The default seed (None: the simulated rig's, 0).
     note : str
-        Appended to the help (e.g. "simulated rig only (sim://?seed=N)").
+        Appended to the help; ``{key}`` becomes "seed" (as in :func:`add_model_options`).
     """
     parser.add_argument("--seed", type=number(0, 2**32 - 1, integer=True), default=default, metavar="N",
-                        help="sensor noise seed, the same for every run (default 0)" + (f"; {note}" if note else ""))
+                        help="sensor noise seed, the same for every run (default 0)" + (f"; {note.format(key='seed')}" if note else ""))
 
 
 def add_protocol_option(parser: argparse.ArgumentParser) -> None:
