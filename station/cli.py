@@ -19,6 +19,8 @@ from station.signals import StopSignal, StopSignals
 
 COMMANDS = ("step", "replay", "sim_device", "bode", "compare", "modes", "survey", "diagnose", "plot", "ports")
 """Modules of :mod:`station.commands`, in the order ``--help`` lists them."""
+VERBOSE_HELP = "log what the link, loop and simulated device do (-v: info, -vv: every byte)"
+"""``-v``/``--verbose``, before or after the command (``station -v step`` or ``station step -v``)."""
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -28,8 +30,7 @@ def build_parser() -> argparse.ArgumentParser:
         description="Control station for the single flexible link robot: step tests on the rig or the "
                     "simulated rig, lossless run logs, replay and model checks.")
     parser.add_argument("--version", action="version", version=f"station {__version__}")
-    parser.add_argument("-v", "--verbose", action="count", default=0,
-                        help="log what the link, loop and simulated device do (-v: info, -vv: every byte)")
+    parser.add_argument("-v", "--verbose", action="count", default=0, help=VERBOSE_HELP)
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", required=True)
     for name in COMMANDS:
         try:
@@ -40,8 +41,7 @@ def build_parser() -> argparse.ArgumentParser:
             raise
         cmd = sub.add_parser(module.NAME, help=module.HELP, description=module.HELP)
         module.configure(cmd)
-        cmd.add_argument("-v", "--verbose", action="count", default=argparse.SUPPRESS,
-                         help="log what the link, loop and simulated device do (-v: info, -vv: every byte)")
+        cmd.add_argument("-v", "--verbose", action="count", default=argparse.SUPPRESS, help=VERBOSE_HELP)
         document_ranges(cmd)
         cmd.set_defaults(_run=module.run)
     return parser

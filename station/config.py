@@ -12,11 +12,12 @@ Example::
 
 Keys are ``station step``'s option names with ``_`` for ``-`` (:data:`KEYS`); each value
 is checked by the option's own type, so the ranges are the options' ranges. Options given
-on the command line win over the file.
+on the command line win over the file (:func:`apply_config`).
 """
 
 from __future__ import annotations
 
+import argparse
 import os
 import tomllib
 from pathlib import Path
@@ -74,3 +75,41 @@ def load_config(path: str | Path | None) -> dict[str, Any]:
     if unknown:
         raise StationError(f"{path}: {unknown[0]}: unknown setting (expected {', '.join(KEYS)})")
     return doc
+
+
+def apply_config(parser: argparse.ArgumentParser, cwd: str | Path | None = None) -> None:
+    """Make the config file's settings ``parser``'s defaults, each checked by its option's own
+    type (so the ranges are the options'); options given on the command line still win.
+
+    A bad file does not stop the parser from being built (``station --help`` works): its
+    error is kept as the default ``_config_error`` for the command to raise when it runs;
+    ``_config`` names the file in use (None without one).
+
+    Parameters
+    ----------
+    parser : argparse.ArgumentParser
+        ``station step``'s parser, its options added (one per :data:`KEYS` entry).
+    cwd : path, optional
+        The working folder (default: the process's).
+    """
+    path = None
+    try:
+        path = config_path(cwd)
+        settings = load_config(path)
+        actions = {a.dest: a for a in parser._actions}
+        defaults = {}
+        for key, value in settings.items():
+            action = actions[key]
+            if isinstance(value, bool) or not isinstance(value, (str, int, float)):
+                raise StationError(f"{path}: {key}: expected a string or a number, got {value!r}")
+            text = str(value)
+            try:
+                converted = action.type(text) if action.type is not None else text
+            except (argparse.ArgumentTypeError, ValueError, TypeError) as exc:
+                raise StationError(f"{path}: {key} = {value!r}: {exc}") from None
+            if action.choices is not None and converted not in action.choices:
+                raise StationError(f"{path}: {key} = {value!r}: expected one of {', '.join(action.choices)}")
+            defaults[key] = converted
+        parser.set_defaults(**defaults, _config=str(path) if path else None, _config_error=None)
+    except StationError as exc:
+        parser.set_defaults(_config=str(path) if path else None, _config_error=str(exc))

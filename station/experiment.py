@@ -11,16 +11,22 @@ from __future__ import annotations
 
 import datetime as _dt
 import math
+import tempfile
 import time
+import urllib.parse
+import warnings
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any, NamedTuple
 
 
 import numpy as np
 
 from station import DT, __version__
 from station.analysis.metrics import NOT_SETTLED, StepInfo, StepMetrics, step_info, step_metrics
-from station.control import file_reference, make_controller, pulse_reference, step_reference, swept_sine_reference
+from station.control import (KINDS, file_reference, make_controller, pulse_reference, step_reference,
+                             swept_sine_reference)
+from station.control.designs import read_compensator_file
 from station.errors import StationError
 from station.link import LinkLimits, open_session
 from station.protocol import legacy
@@ -35,6 +41,8 @@ DEFAULT_STEP_TICK = 10
 DEFAULT_DURATION = 2.0
 DEFAULT_SOFT_LIMIT = 2048.0
 DEFAULT_TIMEOUT = 0.1
+DEFAULT_LIMIT = 200.0
+"""The controller's clamp, ±DAC counts (the rig's software clamps at ±200)."""
 REFERENCES = ("step", "pulse", "swept-sine")
 """Built-in reference laws; a run log's column (``FILE[:COLUMN]``) is the other kind."""
 PULSE_WIDTH = 0.1
@@ -194,14 +202,124 @@ def _plant_meta(port) -> dict | None:
     return getattr(port, "plant_meta", None)
 
 
+class ChosenController(NamedTuple):
+    """The controller a run uses (:func:`choose_controller`).
+
+    Attributes
+    ----------
+    controller : controller object
+        ``step(u, theta, a) -> (v, theta_d_hat)``, ``reset()``, a JSON-able ``spec``.
+    note : str or None
+        Which clamp won when a compensator file's own ``limit`` overrides the one asked
+        for (``--limit 100 is not used: c.toml sets limit = 150 (the file wins)``).
+    """
+
+    controller: Any
+    note: str | None
+
+
+def choose_controller(controller, kp: float | None = None, limit: float | None = None,
+                      dt: float = DT) -> ChosenController:
+    """Build the run's controller; the one place where its clamp is settled.
+
+    A compensator file's own ``limit`` wins over ``limit`` (the note says so); otherwise
+    the controller clamps at ``limit`` (default 200). A controller object is used as
+    given (reset).
+
+    Parameters
+    ----------
+    controller : str, Path or controller object
+        "p", "lead", "lead-accel", "open-loop", a compensator file, or an object as
+        :func:`run_step` takes.
+    kp : float, optional
+        P gain (kind "p"; default 2).
+    limit : float, optional
+        The clamp asked for, ±DAC counts (None: 200, and no note).
+    dt : float
+        Sample time, s.
+
+    Raises
+    ------
+    StationError
+        An unknown kind, a bad compensator file, a bad kp or limit.
+    """
+    if not isinstance(controller, (str, Path)):
+        controller.reset()
+        return ChosenController(controller, None)
+    kind = str(controller)
+    clamp = DEFAULT_LIMIT if limit is None else limit
+    if kind in KINDS or not Path(kind).is_file():  # make_controller names what a kind may be
+        return ChosenController(make_controller(kind, dt=dt, kp=2.0 if kp is None else kp, limit=clamp), None)
+    found = read_compensator_file(kind)
+    note = None
+    if limit is not None and found.sets_limit:
+        note = f"--limit {limit:g} is not used: {kind} sets limit = {found.limit_text()} (the file wins)"
+    return ChosenController(found.compensator(dt, clamp), note)
+
+
+def log_tag(controller) -> str:
+    """The controller's name in default log names: its kind, or a compensator file's stem.
+
+    Parameters
+    ----------
+    controller : controller object
+        Its ``spec`` names the kind (and the file).
+    """
+    spec = controller.spec
+    if spec.get("kind") == "file" and spec.get("file"):
+        return Path(spec["file"]).stem
+    return str(spec.get("kind", "custom"))
+
+
+def sim_port(port: str, model=None, elements=None, seed=None) -> str:
+    """``port`` with the simulated rig's model, element count and seed as sim:// URL options.
+
+    Parameters
+    ----------
+    port : str
+        The port URL.
+    model : str or Path, optional
+        A built-in model's name or a model file (``sim://?model=``).
+    elements, seed : int, optional
+        ``sim://?elements=``, ``sim://?seed=``.
+
+    Raises
+    ------
+    StationError
+        One of them given for a port that is not ``sim://`` (named as its option, e.g. ``--model``).
+    """
+    extra = {k: str(v) for k, v in (("model", model), ("elements", elements), ("seed", seed)) if v is not None}
+    if not extra:
+        return port
+    if not port.lower().startswith("sim://"):
+        raise StationError(f"--{next(iter(extra))}: only for the simulated rig (--port sim://...), not {port!r}")
+    query = urllib.parse.urlencode(extra)
+    return port + ("&" if "?" in port else "?") + query
+
+
+def _sim_url(port: str, model, n_elements: int | None,
+             seed: int | None) -> tuple[str, tempfile.TemporaryDirectory | None]:
+    """:func:`sim_port` for :func:`run_step`; a Model object goes to the simulated rig as a model
+    file in a temporary folder (returned: remove it once the port is open, the rig has read it)."""
+    folder = None
+    if model is not None and not isinstance(model, (str, Path)):
+        folder = tempfile.TemporaryDirectory(prefix="station-model-")
+        path = Path(folder.name) / "model.toml"
+        model.save(path)
+        model = path
+    return sim_port(port, model, n_elements, seed), folder
+
+
 def run_step(port: str = DEFAULT_PORT, protocol: str = "v1", controller: str = DEFAULT_CONTROLLER,
              amplitude: float = DEFAULT_AMPLITUDE, duration: float | None = None,
-             step_tick: int = DEFAULT_STEP_TICK, reference: str = "step",
+             step_time: float | None = None, reference: str = "step",
              out: str | Path | None = None, sinks=(),
-             kp: float = 2.0, limit: float = 200.0, soft_limit: float = DEFAULT_SOFT_LIMIT,
+             kp: float | None = None, limit: float | None = None, soft_limit: float = DEFAULT_SOFT_LIMIT,
              timeout: float = DEFAULT_TIMEOUT, baudrate: int | None = None, dt: float = DT,
              lean: bool = True, limits: LinkLimits | None = None, force: bool = False,
-             figure: bool = True, progress: bool = False, out_dir: str | Path = "runs") -> StepReport:
+             figure: bool = True, progress: bool = False, out_dir: str | Path = "runs",
+             model=None, n_elements: int | None = None, seed: int | None = None,
+             step_tick: int | None = None) -> StepReport:
     """Run a step test on a device and log it.
 
     Parameters
@@ -213,14 +331,16 @@ def run_step(port: str = DEFAULT_PORT, protocol: str = "v1", controller: str = D
     controller : str or controller object
         "p", "lead", "lead-accel", "open-loop", a compensator TOML file, or any object
         with ``step(u, theta, a) -> (v, theta_d_hat)``, ``reset()`` and a JSON-able
-        ``spec`` dict (e.g. a :class:`station.control.Compensator` built in Python).
+        ``spec`` dict (e.g. a :class:`station.control.Compensator` built in Python);
+        see :func:`choose_controller`.
     amplitude : float
         Step height, encoder counts (open loop: DAC counts).
     duration : float or None
         Run length, s; the run has round(duration/dt) ticks. None: the reference's
         default (:func:`make_reference`; 2 s for a step).
-    step_tick : int
-        Tick at which the step starts (default 10, t = 0.02 s).
+    step_time : float, optional
+        When the step (or pulse) starts, s, on the tick grid: tick round(step_time/dt)
+        (default 0.02 s, tick 10). As ``station step --step-time``.
     reference : str
         "step" (default), "pulse", "swept-sine" or ``FILE[:COLUMN]``
         (:func:`make_reference`). Step metrics are computed for steps only.
@@ -229,8 +349,12 @@ def run_step(port: str = DEFAULT_PORT, protocol: str = "v1", controller: str = D
         an error unless ``force``.
     sinks : sequence
         Extra row sinks (e.g. :class:`station.viz.RerunSink`), fed off the hot path.
-    kp, limit : float
-        P gain and the controller's clamp (±DAC counts).
+    kp : float, optional
+        P gain of kind "p", DAC counts per encoder count (default 2).
+    limit : float, optional
+        The controller's clamp, ±DAC counts (default 200); a compensator file's own
+        ``limit`` wins, with a warning when ``limit`` was given (:func:`choose_controller`).
+        Every command is clamped to :func:`wire_limit` before the wire.
     soft_limit : float
         Encoder soft limit, counts: passing it stops the run safely.
     timeout : float
@@ -255,6 +379,17 @@ def run_step(port: str = DEFAULT_PORT, protocol: str = "v1", controller: str = D
         fed off the hot path by the log's sink thread).
     out_dir : path
         Folder of the default log name.
+    model : Model, str or Path, optional
+        The simulated rig's model (``sim://`` ports only): a :class:`station.plant.model.Model`,
+        a built-in model's name or a model file (default: the port's, tmm-fit). A name or
+        file goes into the URL (``sim://?model=``, as ``station step --model``); a Model is
+        handed over as a model file in a temporary folder. The log header's
+        ``plant.model`` records it either way.
+    n_elements, seed : int, optional
+        The simulated rig's element count and sensor noise seed (``sim://?elements=``,
+        ``sim://?seed=``; ``station step --elements``, ``--seed``).
+    step_tick : int, optional
+        The step's tick instead of ``step_time`` (older scripts; not both).
 
     Returns
     -------
@@ -271,28 +406,30 @@ def run_step(port: str = DEFAULT_PORT, protocol: str = "v1", controller: str = D
         SIGINT / SIGTERM before the run started (nothing was started then).
     """
     amplitude = DEFAULT_AMPLITUDE if amplitude is None else amplitude
-    kp = 2.0 if kp is None else kp
-    limit = 200.0 if limit is None else limit
+    if step_tick is not None and step_time is not None:
+        raise StationError("step_time and step_tick: give one of them")
+    if step_tick is None:
+        step_tick = DEFAULT_STEP_TICK if step_time is None else int(round(step_time / dt))
+    url, model_folder = _sim_url(port, model, n_elements, seed)  # a real port refuses the rig's options
+    ctrl, note = choose_controller(controller, kp, limit, dt)
+    if note is not None:
+        warnings.warn(note, UserWarning, stacklevel=2)
+    limit = DEFAULT_LIMIT if limit is None else limit
     u, reference_meta = make_reference(reference, amplitude, duration, step_tick, dt)
     if protocol == "legacy" and u.size > legacy.MAX_TICKS:  # a user error: nothing started, no log
         raise StationError(f"the legacy protocol counts ticks in int16: at most {legacy.MAX_TICKS} ticks "
                            f"({legacy.MAX_TICKS * dt:g} s), asked {u.size}")
-    if isinstance(controller, (str, Path)):
-        ctrl = make_controller(str(controller), dt=dt, kp=kp, limit=limit)
-        tag = Path(controller).stem if str(controller).endswith(".toml") else str(controller)
-    else:
-        ctrl = controller
-        ctrl.reset()
-        tag = str(ctrl.spec.get("kind", "custom"))
     if out is not None and Path(out).is_file() and not force:  # (a device such as /dev/null is no file to keep)
         raise StationError(f"{out}: exists; use --force (force=True) to overwrite it, or another name")
-    log_path = Path(out) if out is not None else default_log_path(tag, folder=out_dir)
+    log_path = Path(out) if out is not None else default_log_path(log_tag(ctrl), folder=out_dir)
     try:
         log_path.parent.mkdir(parents=True, exist_ok=True)
     except OSError as exc:
         raise StationError(f"{log_path}: cannot create the run log's folder: {exc.strerror or exc}") from None
     limits = limits or LinkLimits(timeout=timeout)
-    with StopSignals() as signals, open_session(port, protocol, baudrate=baudrate, limits=limits) as session:
+    with StopSignals() as signals, open_session(url, protocol, baudrate=baudrate, limits=limits) as session:
+        if model_folder is not None:
+            model_folder.cleanup()
         info = session.hello()
         accel_zero = session.zero_accel()
         meta = {
@@ -343,8 +480,6 @@ def run_step(port: str = DEFAULT_PORT, protocol: str = "v1", controller: str = D
 
 def _write_figure(report: StepReport) -> Path | None:
     """``<log stem>.png`` beside the log; a warning (not an error) when it cannot be drawn."""
-    import warnings
-
     png = report.log_path.with_suffix(".png")
     try:
         from station.plots import save_figure
@@ -364,8 +499,8 @@ DAC_LIMIT = 255.0
 def wire_limit(controller, limit: float | None) -> float:
     """The clamp every command gets before it is written, ±DAC counts.
 
-    The controller's own clamp when it has a finite one (a compensator file's ``limit``
-    wins over ``--limit``), else ``limit``, else the DAC's range.
+    The controller's own clamp when it has a finite one (:func:`choose_controller` settled
+    it), else ``limit``, else the DAC's range.
 
     Parameters
     ----------

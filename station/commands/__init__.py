@@ -1,0 +1,14 @@
+"""The ``station`` command line: one module per command, each option declared once.
+
+Every command module defines ``NAME`` (the subcommand), ``HELP`` (one line),
+``configure(parser)`` (adds its arguments) and ``run(args) -> int`` (the exit code);
+:mod:`station.cli` builds the parser from them. :mod:`station.commands.options` holds what
+commands share: checked numbers (``number``), output-path probes, and the option groups
+declared once (``add_model_options``: ``--model``/``--elements``/``--params``/``--no-model``
+for every command that simulates; ``add_seed_option``, ``add_protocol_option``,
+``add_report_options``: ``--json``, ``--rrd``/``--spawn``).
+
+A command parses, checks and prints; the work is a function of the package a notebook can
+call too. Commands may import any ``station`` module; nothing in ``station`` imports them
+except :mod:`station.cli`.
+"""

@@ -7,19 +7,19 @@ import argparse
 import json
 from pathlib import Path
 
-from station.commands.options import add_model_options, check_writable, number
+from station.commands.options import add_model_options, add_report_options, check_writable, number
 
 NAME = "bode"
 HELP = "H1 frequency response (θ/v, a/v) of a swept-sine log against the FEM model; antiresonances"
 
 
 def configure(parser: argparse.ArgumentParser) -> None:
-    """Add the command's arguments to its subparser.
+    """Add ``station bode``'s arguments to ``parser``.
 
     Parameters
     ----------
     parser : argparse.ArgumentParser
-        The command's subparser.
+        Gets FILE, the model options, ``--nperseg``, ``--png`` and ``--json``.
     """
     parser.add_argument("file", type=Path, metavar="FILE", help="run log (station or rig format), e.g. a swept sine")
     add_model_options(parser, "its linear part (param:NAME, beam_damping) gives the response")
@@ -28,7 +28,7 @@ def configure(parser: argparse.ArgumentParser) -> None:
                              "0.5 Hz, to resolve the first antiresonance near 2.5 Hz)")
     parser.add_argument("--png", type=Path, default=None, metavar="OUT",
                         help="figure file (default FILE's stem + _bode.png in the current folder)")
-    parser.add_argument("--json", type=Path, default=None, metavar="OUT", help="write the antiresonances as JSON")
+    add_report_options(parser, json="the antiresonances")
 
 
 def run(args: argparse.Namespace) -> int:
@@ -37,12 +37,13 @@ def run(args: argparse.Namespace) -> int:
     Parameters
     ----------
     args : argparse.Namespace
-        The options parsed by the subparser :func:`configure` filled.
+        FILE, the model (``--model``, ``--elements``, ``--params``), ``--nperseg``, ``--png``,
+        ``--json``.
 
     Returns
     -------
     int
-        0.
+        0 once the figure (and the JSON) is written.
 
     Raises
     ------

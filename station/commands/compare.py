@@ -7,25 +7,25 @@ import argparse
 import json
 from pathlib import Path
 
-from station.commands.options import add_model_options, check_writable, check_writable_dir
+from station.commands.options import add_model_options, add_report_options, check_writable, check_writable_dir
 
 NAME = "compare"
 HELP = "simulate logged runs on the FEM model as the rig ran them; step metrics and fits vs the thesis"
 
 
 def configure(parser: argparse.ArgumentParser) -> None:
-    """Add the command's arguments to its subparser.
+    """Add ``station compare``'s arguments to ``parser``.
 
     Parameters
     ----------
     parser : argparse.ArgumentParser
-        The command's subparser.
+        Gets FILE..., the model options, ``--out-dir`` and ``--json``.
     """
     parser.add_argument("files", type=Path, nargs="+", metavar="FILE", help="run logs (station or rig format)")
     add_model_options(parser)
     parser.add_argument("--out-dir", type=Path, default=Path("."), metavar="DIR",
                         help="folder for the figures, <log stem>_compare.png (default: current folder)")
-    parser.add_argument("--json", type=Path, default=None, metavar="OUT", help="write the comparisons as JSON")
+    add_report_options(parser, json="the comparisons")
 
 
 def run(args: argparse.Namespace) -> int:
@@ -34,12 +34,13 @@ def run(args: argparse.Namespace) -> int:
     Parameters
     ----------
     args : argparse.Namespace
-        The options parsed by the subparser :func:`configure` filled.
+        The logs (``files``), the model (``--model``, ``--elements``, ``--params``), ``--out-dir``,
+        ``--json``.
 
     Returns
     -------
     int
-        0.
+        0 once every log is compared.
 
     Raises
     ------

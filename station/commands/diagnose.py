@@ -10,27 +10,29 @@ import math
 import sys
 from pathlib import Path
 
+from station.commands.options import add_model_options, add_report_options, check_writable, check_writable_dir
+
 NAME = "diagnose"
 HELP = ("diagnose the model on measured runs: residual tests, the missing effect (fitted and judged on "
         "runs it was not fitted to), the extended model and its gain")
 
 
 def configure(parser: argparse.ArgumentParser) -> None:
-    """Add the command's arguments to its subparser.
+    """Add ``station diagnose``'s arguments to ``parser``.
 
     Parameters
     ----------
     parser : argparse.ArgumentParser
-        The command's subparser.
+        Gets RUN..., ``--validate``, ``--json``, ``--report``, ``--model``, ``--save-model``,
+        ``--quiet``.
     """
     parser.add_argument("runs", type=Path, nargs="+", metavar="RUN", help="run logs the candidates are fitted on")
     parser.add_argument("--validate", type=Path, nargs="+", default=[], metavar="RUN",
                         help="runs they are judged on (default: leave-one-run-out over the RUNs, at least two)")
-    parser.add_argument("--json", type=Path, default=None, metavar="OUT", help="write the diagnosis as JSON")
+    add_report_options(parser, json="the diagnosis")
     parser.add_argument("--report", type=Path, default=None, metavar="DIR",
                         help="write DIR/report.html with its figures (also as PNG beside it)")
-    parser.add_argument("--model", default=None, metavar="NAME|FILE",
-                        help="the nominal model: a built-in model's name or a model file (default tmm-fit)")
+    add_model_options(parser, subject="the nominal model", elements=None, params=False)
     parser.add_argument("--save-model", type=Path, default=None, metavar="FILE",
                         help="write the extended model (nominal + accepted effects) as a model file")
     parser.add_argument("--quiet", action="store_true", help="no progress lines on stderr")
@@ -81,7 +83,8 @@ def run(args: argparse.Namespace) -> int:
     Parameters
     ----------
     args : argparse.Namespace
-        The options parsed by the subparser :func:`configure` filled.
+        The runs (``runs``, ``--validate``), the nominal ``--model``, the outputs (``--json``,
+        ``--report``, ``--save-model``) and ``--quiet``.
 
     Returns
     -------
@@ -95,8 +98,6 @@ def run(args: argparse.Namespace) -> int:
     """
     from station.diagnosis import diagnose
     from station.errors import StationError
-
-    from station.commands.options import check_writable, check_writable_dir
 
     for option, path in (("--json", args.json), ("--save-model", args.save_model)):
         check_writable(path, option)

@@ -3,10 +3,8 @@
 from __future__ import annotations
 
 import argparse
-import json
-from pathlib import Path
 
-from station.commands.options import check_writable, number
+from station.commands.options import add_model_options, add_report_options, check_writable, number, write_json
 from station.errors import StationError
 
 MAX_COUNT = 10
@@ -27,18 +25,12 @@ def configure(parser: argparse.ArgumentParser) -> None:
     Parameters
     ----------
     parser : argparse.ArgumentParser
-        The command's subparser.
+        Gets the model options (``--elements`` takes several counts), ``--count`` and ``--json``.
     """
-    parser.add_argument("--elements", type=number(1, 100, integer=True), nargs="+", default=[1, 2, 4, 10, 20, 50, 100], metavar="N",
-                        help="element counts (default 1 2 4 10 20 50 100)")
-    parser.add_argument("--params", default=None, metavar="SET",
-                        help="parameter set name or TOML file (default: the model's, tmm-fit)")
-    parser.add_argument("--model", default=None, metavar="NAME|FILE",
-                        help="a built-in model's name or a model file (default tmm-fit); its linear part "
-                             "(param:NAME, beam_damping) is analysed")
+    add_model_options(parser, "its linear part (param:NAME, beam_damping) is analysed", elements="many")
     parser.add_argument("--count", type=number(1, MAX_COUNT, integer=True), default=3, metavar="K",
                         help="modes to show (default 3; the 1-element model has only a few)")
-    parser.add_argument("--json", type=Path, default=None, metavar="OUT", help="write the numbers as JSON")
+    add_report_options(parser, json="the numbers")
 
 
 def run(args: argparse.Namespace) -> int:
@@ -47,7 +39,8 @@ def run(args: argparse.Namespace) -> int:
     Parameters
     ----------
     args : argparse.Namespace
-        The options parsed by the subparser :func:`configure` filled.
+        The model (``--model``, ``--params``), the element counts (``--elements``), ``--count``,
+        ``--json``.
 
     Raises
     ------
@@ -88,8 +81,5 @@ def run(args: argparse.Namespace) -> int:
     print(f"model (n = {last['n_elements']}) vs rig antiresonances: " +
           ", ".join(f"{m:.3f} vs {r} Hz ({e:+.1f} %)" for m, r, e in zip(ar, RIG["antiresonances_hz"], errs)))
     if args.json is not None:
-        try:
-            args.json.write_text(json.dumps({"params": model.params.name, "model": model.to_json(), "models": rows, "rig": RIG}, indent=1) + "\n")
-        except OSError as exc:
-            raise StationError(f"{args.json}: cannot write: {exc.strerror or exc}") from None
+        write_json(args.json, {"params": model.params.name, "model": model.to_json(), "models": rows, "rig": RIG})
     return 0

@@ -1,4 +1,6 @@
-"""Checked command-line values: one mechanism for every command's numeric options and output paths.
+"""What the commands share: checked command-line values, output-path probes, and the option
+groups declared once (the model options of every command that simulates, the simulated rig's
+seed, the wire protocol, ``--json`` and rerun output).
 
 A numeric option is declared with ``type=number(low, high, ...)``: argparse calls it on
 the text, so a value that is not finite or outside the range is refused while the
@@ -11,13 +13,16 @@ argparse's own one-line ``argument --x: ...`` error and exit code 2
 from __future__ import annotations
 
 import argparse
+import json
 import math
 import os
 import sys
 import tempfile
 from pathlib import Path
+from typing import Any
 
 from station.errors import StationError
+from station.protocol import PROTOCOLS
 
 
 class Number:
@@ -205,9 +210,19 @@ def warn(message: str) -> None:
     print(f"station: note: {message}", file=sys.stderr)
 
 
-def add_model_options(parser: argparse.ArgumentParser, model_help: str = "") -> None:
-    """``--model NAME|FILE``, ``--elements N`` and ``--params SET`` (DESIGN.md "Model file"),
-    the same for every command that simulates the model against logs.
+MANY_ELEMENTS = (1, 2, 4, 10, 20, 50, 100)
+"""Default element counts of ``--elements N [N ...]`` (a convergence study)."""
+
+
+MODEL_HELP = "a built-in model's name (station/plant/models) or a model file (default tmm-fit)"
+"""What ``--model NAME|FILE`` takes, in every command's help (DESIGN.md "Model file")."""
+
+
+def add_model_options(parser: argparse.ArgumentParser, model_help: str = "", *, subject: str = "the model",
+                      elements: str | None = "one", params: bool = True, no_model: str | None = None,
+                      note: str = "") -> None:
+    """``--model NAME|FILE`` and, as the command has them, ``--elements``, ``--params`` and
+    ``--no-model``: the one declaration of the model options of every command that simulates.
 
     Parameters
     ----------
@@ -215,11 +230,133 @@ def add_model_options(parser: argparse.ArgumentParser, model_help: str = "") -> 
         The command's subparser.
     model_help : str
         What the command does with the model, appended to ``--model``'s help.
+    subject : str
+        How ``--model``'s help names the model (e.g. "the nominal model").
+    elements : {"one", "many"} or None
+        ``--elements N`` (overrides the model's element count), ``--elements N [N ...]``
+        (``MANY_ELEMENTS``: the element counts to go through) or no ``--elements``.
+    params : bool
+        Add ``--params SET`` (a parameter set replacing the model's).
+    no_model : str, optional
+        Help of ``--no-model`` (skip the model); the option is added when given, and then
+        ``args.model`` is False with ``--no-model`` (True otherwise) and ``--model``'s value
+        is ``args.model_spec`` (see :func:`chosen_model`).
+    note : str
+        Appended to each option's help; ``{key}`` is replaced by the option's name without
+        dashes (e.g. "simulated rig only (sim://?{key}=...)").
     """
-    parser.add_argument("--model", default=None, metavar="NAME|FILE",
-                        help="the model: a built-in model's name (station/plant/models) or a model file "
-                             "(default tmm-fit)" + (f"; {model_help}" if model_help else ""))
-    parser.add_argument("--elements", type=number(1, 100, integer=True), default=None, metavar="N",
-                        help="beam elements of the model (default: the model's, 4)")
-    parser.add_argument("--params", default=None, metavar="SET",
-                        help="parameter set name or TOML file (default: the model's, tmm-fit)")
+    def more(text: str, key: str) -> str:
+        return text + (f"; {note.format(key=key)}" if note else "")
+
+    if no_model is not None:
+        parser.add_argument("--no-model", dest="model", action="store_false", help=no_model)
+    parser.add_argument("--model", dest="model_spec" if no_model is not None else "model", default=None,
+                        metavar="NAME|FILE",
+                        help=more(f"{subject}: {MODEL_HELP}" + (f"; {model_help}" if model_help else ""), "model"))
+    count = number(1, 100, integer=True)
+    if elements == "one":
+        parser.add_argument("--elements", type=count, default=None, metavar="N",
+                            help=more("beam elements of the model (default: the model's, 4)", "elements"))
+    elif elements == "many":
+        parser.add_argument("--elements", type=count, nargs="+", default=list(MANY_ELEMENTS), metavar="N",
+                            help=more(f"element counts (default {' '.join(map(str, MANY_ELEMENTS))})", "elements"))
+    if params:
+        parser.add_argument("--params", default=None, metavar="SET",
+                            help=more("parameter set name or TOML file (default: the model's, tmm-fit)", "params"))
+
+
+def chosen_model(args: argparse.Namespace) -> bool | str:
+    """What ``--no-model``, ``--model`` and ``--elements`` ask for (:func:`add_model_options` with ``no_model``).
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        Parsed options with ``model`` (False after ``--no-model``), ``model_spec`` and
+        ``elements``.
+
+    Returns
+    -------
+    bool or str
+        False: no model; True: the default model (tmm-fit); else the ``--model`` value.
+
+    Raises
+    ------
+    StationError
+        ``--model`` or ``--elements`` with ``--no-model``.
+    """
+    if not args.model:
+        if args.model_spec is not None or args.elements is not None:
+            raise StationError(f"{'--model' if args.model_spec is not None else '--elements'}: not with --no-model")
+        return False
+    return args.model_spec or True
+
+
+def add_seed_option(parser: argparse.ArgumentParser, default: int | None = None, note: str = "") -> None:
+    """``--seed N``: the simulated rig's sensor noise seed, the same for every run.
+
+    Parameters
+    ----------
+    parser : argparse.ArgumentParser
+        The command's subparser.
+    default : int, optional
+        The default seed (None: the simulated rig's, 0).
+    note : str
+        Appended to the help; ``{key}`` becomes "seed" (as in :func:`add_model_options`).
+    """
+    parser.add_argument("--seed", type=number(0, 2**32 - 1, integer=True), default=default, metavar="N",
+                        help="sensor noise seed, the same for every run (default 0)" + (f"; {note.format(key='seed')}" if note else ""))
+
+
+def add_protocol_option(parser: argparse.ArgumentParser) -> None:
+    """``--protocol v1|legacy``: the wire protocol of the device (default v1).
+
+    Parameters
+    ----------
+    parser : argparse.ArgumentParser
+        The command's subparser.
+    """
+    parser.add_argument("--protocol", choices=PROTOCOLS, default="v1", help="wire protocol (default v1)")
+
+
+def write_json(path: Path, doc: Any, indent: int = 1) -> None:
+    """Write ``doc`` as JSON to ``path`` (its folder created), one line of error on failure.
+
+    Parameters
+    ----------
+    path : Path
+        The ``--json`` file.
+    doc : JSON-able
+        What to write.
+    indent : int
+        JSON indentation.
+
+    Raises
+    ------
+    StationError
+        ``PATH: cannot write the JSON report: REASON``.
+    """
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        path.write_text(json.dumps(doc, indent=indent) + "\n")
+    except OSError as exc:
+        raise StationError(f"{path}: cannot write the JSON report: {exc.strerror or exc}") from None
+
+
+def add_report_options(parser: argparse.ArgumentParser, json: str | None = None, rerun: str | None = None) -> None:
+    """``--json OUT`` and ``--rrd FILE`` or ``--spawn`` (one of them), as the command has them.
+
+    Parameters
+    ----------
+    parser : argparse.ArgumentParser
+        The command's subparser.
+    json : str, optional
+        What the JSON holds (e.g. "the report"); None: no ``--json``.
+    rerun : str, optional
+        What goes to a rerun recording or viewer (e.g. "the run"); None: neither option.
+    """
+    if json is not None:
+        parser.add_argument("--json", type=Path, default=None, metavar="OUT", help=f"write {json} as JSON")
+    if rerun is not None:
+        viz = parser.add_mutually_exclusive_group()
+        viz.add_argument("--rrd", type=Path, default=None, metavar="FILE", help=f"record {rerun} to a rerun .rrd file")
+        viz.add_argument("--spawn", action="store_true", help=f"stream {rerun} to a rerun viewer")

@@ -12,12 +12,12 @@ HELP = "draw run logs (ours or the rig's; several are overlaid): θ and u, v and
 
 
 def configure(parser: argparse.ArgumentParser) -> None:
-    """Add the command's arguments to its subparser.
+    """Add ``station plot``'s arguments to ``parser``.
 
     Parameters
     ----------
     parser : argparse.ArgumentParser
-        The command's subparser.
+        Gets LOG... and ``--out``.
     """
     parser.add_argument("files", type=Path, nargs="+", metavar="LOG", help="run logs (station or rig format)")
     parser.add_argument("--out", type=Path, default=None, metavar="PNG",
@@ -30,7 +30,7 @@ def run(args: argparse.Namespace) -> int:
     Parameters
     ----------
     args : argparse.Namespace
-        The options parsed by the subparser :func:`configure` filled.
+        The logs (``files``) and ``--out``.
 
     Raises
     ------

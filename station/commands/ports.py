@@ -14,7 +14,7 @@ def configure(parser: argparse.ArgumentParser) -> None:
     Parameters
     ----------
     parser : argparse.ArgumentParser
-        The command's subparser.
+        Gets nothing.
     """
 
 
@@ -31,7 +31,7 @@ def run(args: argparse.Namespace) -> int:
     Parameters
     ----------
     args : argparse.Namespace
-        The options parsed by the subparser :func:`configure` filled (none).
+        Nothing is read from it.
     """
     ports = list_ports()
     if not ports:

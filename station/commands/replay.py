@@ -4,10 +4,10 @@ logged commands, report step metrics and the model's fit."""
 from __future__ import annotations
 
 import argparse
-import json
 from pathlib import Path
 
-from station.commands.options import check_writable, number
+from station.commands.options import (add_model_options, add_report_options, check_writable,
+                                      chosen_model, write_json)
 
 NAME = "replay"
 HELP = ("replay a run log (ours or the rig's): reproduce the logged commands, detect the "
@@ -15,25 +15,16 @@ HELP = ("replay a run log (ours or the rig's): reproduce the logged commands, de
 
 
 def configure(parser: argparse.ArgumentParser) -> None:
-    """Add the command's arguments to its subparser.
+    """Add ``station replay``'s arguments to ``parser``.
 
     Parameters
     ----------
     parser : argparse.ArgumentParser
-        The command's subparser.
+        Gets FILE, the model options (with ``--no-model``), ``--json``, ``--rrd``/``--spawn``.
     """
     parser.add_argument("file", type=Path, metavar="FILE", help="run log (station or rig format)")
-    parser.add_argument("--json", type=Path, default=None, metavar="OUT", help="write the report as JSON")
-    parser.add_argument("--no-model", dest="model", action="store_false",
-                        help="skip the FEM model prediction")
-    parser.add_argument("--model", dest="model_spec", default=None, metavar="NAME|FILE",
-                        help="the model: a built-in model's name (station/plant/models) or a model file (default tmm-fit)")
-    parser.add_argument("--elements", type=number(1, 100, integer=True), default=None, metavar="N",
-                        help="beam elements of the FEM model (default: the model's, 4)")
-    viz = parser.add_mutually_exclusive_group()
-    viz.add_argument("--rrd", type=Path, default=None, metavar="FILE",
-                     help="record the log, the replayed v and the model to a rerun .rrd file")
-    viz.add_argument("--spawn", action="store_true", help="show them in a rerun viewer")
+    add_model_options(parser, params=False, no_model="skip the FEM model prediction")
+    add_report_options(parser, json="the report", rerun="the log, the replayed v and the model")
 
 
 def _record(report, rrd: Path | None, spawn: bool) -> None:
@@ -57,7 +48,8 @@ def run(args: argparse.Namespace) -> int:
     Parameters
     ----------
     args : argparse.Namespace
-        The options parsed by the subparser :func:`configure` filled.
+        FILE, the model (``--no-model``, ``--model``, ``--elements``), ``--json``,
+        ``--rrd``/``--spawn``.
 
     Returns
     -------
@@ -70,21 +62,15 @@ def run(args: argparse.Namespace) -> int:
     StationError
         Unreadable log or model file, bad controller spec, unwritable JSON or .rrd file.
     """
-    from station.errors import StationError
     from station.replay import format_report, replay
 
-    if not args.model and (args.model_spec is not None or args.elements is not None):
-        raise StationError(f"{'--model' if args.model_spec is not None else '--elements'}: not with --no-model")
+    model = chosen_model(args)
     check_writable(args.json, "--json")
     check_writable(args.rrd, "--rrd")
-    model = (args.model_spec or True) if args.model else False
     report = replay(args.file, model=model, n_elements=args.elements)
     print(format_report(report))
     if args.json is not None:
-        try:
-            args.json.write_text(json.dumps(report.to_json(), indent=2) + "\n")
-        except OSError as exc:
-            raise StationError(f"{args.json}: cannot write the JSON report: {exc.strerror or exc}") from None
+        write_json(args.json, report.to_json(), indent=2)
         print(f"report: {args.json}")
     if args.rrd is not None or args.spawn:
         _record(report, args.rrd, args.spawn)

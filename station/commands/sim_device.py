@@ -1,12 +1,14 @@
 """``station sim-device``: the simulated rig on a pty, for programs in another process.
 
 In-process users open ``sim://`` instead (:mod:`station.sim.protocol_sim`).
+``python -m station.sim.pty_server [OPTIONS]`` is the same as ``station sim-device --pty [OPTIONS]``.
 """
 
 from __future__ import annotations
 
 import argparse
 
+from station.commands.options import add_model_options, add_protocol_option, add_seed_option
 from station.errors import StationError
 
 NAME = "sim-device"
@@ -15,17 +17,19 @@ HELP = ("run the simulated rig on a pseudo-terminal: prints the pty path, serves
 
 
 def configure(parser: argparse.ArgumentParser) -> None:
-    """Add ``--pty`` and the server's options (protocol, realtime, seed, elements).
+    """Add ``--pty`` and the server's options (protocol, realtime, seed, model, elements).
 
     Parameters
     ----------
     parser : argparse.ArgumentParser
-        The command's subparser.
+        Gets ``--pty``, ``--protocol``, ``--realtime``, ``--seed`` and the model options.
     """
-    from station.sim.pty_server import add_arguments
-
     parser.add_argument("--pty", action="store_true", help="serve the device on a new pty (required)")
-    add_arguments(parser)
+    add_protocol_option(parser)
+    parser.add_argument("--realtime", action="store_true",
+                        help="tick on the device's own 500 Hz clock (default: lockstep with the station)")
+    add_seed_option(parser, default=0)
+    add_model_options(parser, subject="the simulated rig's model", params=False)
 
 
 def run(args: argparse.Namespace) -> int:
@@ -34,7 +38,7 @@ def run(args: argparse.Namespace) -> int:
     Parameters
     ----------
     args : argparse.Namespace
-        The options parsed by the subparser :func:`configure` filled.
+        ``--pty``, ``--protocol``, ``--realtime``, ``--seed``, ``--model``, ``--elements``.
 
     Raises
     ------
@@ -45,10 +49,10 @@ def run(args: argparse.Namespace) -> int:
     if not args.pty:
         raise StationError("sim-device: only --pty is supported for out-of-process use "
                            "(in-process, open the port URL sim:// instead)")
-    from station.sim.pty_server import serve_from_args
+    from station.sim.pty_server import serve_pty
 
     try:
-        serve_from_args(args)
+        serve_pty(args.protocol, args.realtime, args.seed, args.elements, model=args.model)
     except (ValueError, StationError) as exc:  # a bad --model / --elements / --seed, before the pty is opened
         raise StationError(f"sim-device: {exc}") from None
     return 0

@@ -2,23 +2,25 @@
 
 from __future__ import annotations
 
-import argparse
-import json
-import math
 import sys
 from pathlib import Path
 
 from station import DT
 from station import experiment as ex
 from station.errors import StationError
-from station.commands.options import check_writable, check_writable_dir, number, warn
+from station.commands.options import (add_model_options, add_protocol_option, add_report_options, add_seed_option,
+                                      check_writable, check_writable_dir, number, warn, write_json)
+from station.config import apply_config
 from station.link import LinkLimits
-from station.protocol import PROTOCOLS, legacy
+from station.protocol import legacy
 
 MAX_DURATION_S = (2**32 - 1) * DT
 """Longest run v1 can count (START's n_ticks is a u32), s."""
 MAX_AMPLITUDE = 32767.0
 """Largest step height, counts (the legacy protocol's θ word is int16; the soft limit bounds it further)."""
+
+SIM_ONLY = "simulated rig only (sim://?{key}=...)"
+"""What the simulated rig's options say in ``--help``: a real port refuses them."""
 
 NAME = "step"
 HELP = ("run a step test (default: lead compensator, 100 counts, on the built-in simulated rig); "
@@ -31,7 +33,8 @@ def configure(parser) -> None:
     Parameters
     ----------
     parser : argparse.ArgumentParser
-        The command's subparser.
+        Gets the controller, reference, port, link bounds and output options; defaults from
+        ``station.toml`` (:func:`station.config.apply_config`).
     """
     parser.add_argument("--controller", default=ex.DEFAULT_CONTROLLER,
                         help="p, lead, lead-accel, open-loop or a compensator FILE.toml (default lead)")
@@ -52,13 +55,9 @@ def configure(parser) -> None:
                         metavar="S", help="when the step starts, before the run's end (default 0.02 s = tick 10)")
     parser.add_argument("--port", default=ex.DEFAULT_PORT, metavar="URL",
                         help="port path or pyserial URL (default sim://, the simulated rig)")
-    parser.add_argument("--protocol", choices=PROTOCOLS, default="v1", help="wire protocol (default v1)")
-    parser.add_argument("--model", default=None, metavar="NAME|FILE",
-                        help="simulated rig only: its model, a built-in name or a model file (sim://?model=...)")
-    parser.add_argument("--elements", type=number(1, 100, integer=True), default=None, metavar="N",
-                        help="simulated rig only: FEM element count (sim://?elements=N)")
-    parser.add_argument("--seed", type=number(0, 2**32 - 1, integer=True), default=None, metavar="N",
-                        help="simulated rig only: sensor noise seed (sim://?seed=N)")
+    add_protocol_option(parser)
+    add_model_options(parser, subject="the simulated rig's model", params=False, note=SIM_ONLY)
+    add_seed_option(parser, note=SIM_ONLY)
     parser.add_argument("--baud", type=number(300, 12_000_000, integer=True), default=None, help="baud rate (default 921600 for v1, 115200 legacy)")
     parser.add_argument("--timeout", type=number(1e-3, 60.0, unit="s"), default=ex.DEFAULT_TIMEOUT, metavar="S",
                         help="longest wait for a sample before stopping safely (default 0.1 s)")
@@ -80,67 +79,10 @@ def configure(parser) -> None:
     parser.add_argument("--force", action="store_true", help="overwrite an existing --out file")
     parser.add_argument("--quiet", action="store_true",
                         help="no live progress line on stderr (it is shown only when stderr is a terminal)")
-    parser.add_argument("--json", type=Path, default=None, metavar="FILE", help="write metrics and timing as JSON")
     parser.add_argument("--out-dir", type=Path, default=Path("runs"), metavar="DIR",
                         help="folder of the default run log names (default runs)")
-    viz = parser.add_mutually_exclusive_group()
-    viz.add_argument("--rrd", type=Path, default=None, metavar="FILE", help="record the run to a rerun .rrd file")
-    viz.add_argument("--spawn", action="store_true", help="stream the run to a rerun viewer")
-    _apply_config(parser)
-
-
-def _apply_config(parser) -> None:
-    """Defaults from ``station.toml`` (:mod:`station.config`), each checked by its option's
-    own type; command-line options win. A bad file is reported when the command runs."""
-    from station.config import config_path, load_config
-
-    path = None
-    try:
-        path = config_path()
-        settings = load_config(path)
-        actions = {a.dest: a for a in parser._actions}
-        defaults = {}
-        for key, value in settings.items():
-            action = actions[key]
-            if isinstance(value, bool) or not isinstance(value, (str, int, float)):
-                raise StationError(f"{path}: {key}: expected a string or a number, got {value!r}")
-            text = str(value)
-            try:
-                converted = action.type(text) if action.type is not None else text
-            except (argparse.ArgumentTypeError, ValueError, TypeError) as exc:
-                raise StationError(f"{path}: {key} = {value!r}: {exc}") from None
-            if action.choices is not None and converted not in action.choices:
-                raise StationError(f"{path}: {key} = {value!r}: expected one of {', '.join(action.choices)}")
-            defaults[key] = converted
-        parser.set_defaults(**defaults, _config=str(path) if path else None, _config_error=None)
-    except StationError as exc:
-        parser.set_defaults(_config=str(path) if path else None, _config_error=str(exc))
-
-
-def sim_port(port: str, model=None, elements=None, seed=None) -> str:
-    """``port`` with ``--model``/``--elements``/``--seed`` added as sim:// URL options.
-
-    Parameters
-    ----------
-    port : str
-        The ``--port`` value.
-    model, elements, seed : str or int, optional
-        ``--model``, ``--elements``, ``--seed`` (None: not given).
-
-    Raises
-    ------
-    StationError
-        One of them given for a port that is not ``sim://``.
-    """
-    import urllib.parse
-
-    extra = {k: str(v) for k, v in (("model", model), ("elements", elements), ("seed", seed)) if v is not None}
-    if not extra:
-        return port
-    if not port.lower().startswith("sim://"):
-        raise StationError(f"--{next(iter(extra))}: only for the simulated rig (--port sim://...), not {port!r}")
-    query = urllib.parse.urlencode(extra)
-    return port + ("&" if "?" in port else "?") + query
+    add_report_options(parser, json="metrics and timing", rerun="the run")
+    apply_config(parser)
 
 
 def check_args(args) -> None:
@@ -152,7 +94,7 @@ def check_args(args) -> None:
     Parameters
     ----------
     args : argparse.Namespace
-        The options parsed by the subparser :func:`configure` filled.
+        What :func:`configure` added; ``step_time`` gets its default here.
 
     Raises
     ------
@@ -193,10 +135,6 @@ def check_args(args) -> None:
     if args.protocol == "legacy" and args.duration is not None and round(args.duration / DT) > legacy.MAX_TICKS:
         raise StationError(f"--duration {args.duration:g} s: the legacy protocol counts at most "
                            f"{legacy.MAX_TICKS} ticks ({legacy.MAX_TICKS * DT:g} s)")
-    if args.limit is not None and controller.endswith(".toml"):
-        file_limit = _file_limit(controller)
-        if file_limit is not None:
-            warn(f"--limit {args.limit:g} is not used: {controller} sets limit = {file_limit} (the file wins)")
     check_writable(args.out, "--out", overwrite=args.force)
     if args.out is None:
         check_writable_dir(args.out_dir, "--out-dir")
@@ -248,42 +186,36 @@ def _available_memory() -> int | None:
     return None
 
 
-def _file_limit(path: str):
-    """The ``limit`` a compensator file sets, or None (unreadable files are the loader's to report)."""
-    import tomllib
-
-    try:
-        return tomllib.loads(Path(path).read_text(encoding="utf-8")).get("limit")
-    except (OSError, ValueError):
-        return None
-
-
 def run(args) -> int:
     """Run the test; exit code 0 when it completed, 1 when it was stopped by a fault.
 
     Parameters
     ----------
     args : argparse.Namespace
-        The options parsed by the subparser :func:`configure` filled.
+        The controller, reference, port, simulated rig, link bounds and outputs; checked by
+        :func:`check_args`.
     """
-    limits = _limits(args)
     check_args(args)
+    chosen = ex.choose_controller(args.controller, args.kp, args.limit)  # before anything starts, once
+    if chosen.note is not None:
+        warn(chosen.note)
     if getattr(args, "_config", None):
         warn(f"settings from {args._config} (options given on the command line win)")
-    args.port = sim_port(args.port, args.model, args.elements, args.seed)
     sinks = []
     if args.rrd is not None or args.spawn:
         from station.viz import RerunSink
 
         sinks.append(RerunSink(rrd_path=args.rrd, spawn=args.spawn, name="station step"))
     try:
-        report = ex.run_step(port=args.port, protocol=args.protocol, controller=args.controller,
+        report = ex.run_step(port=args.port, protocol=args.protocol, controller=chosen.controller,
                              amplitude=args.amplitude, duration=args.duration,
-                             step_tick=int(round(args.step_time / DT)), reference=args.reference,
+                             step_time=args.step_time, reference=args.reference,
                              out=args.out, sinks=sinks,
                              kp=args.kp, limit=args.limit, soft_limit=args.soft_limit,
-                             timeout=args.timeout, baudrate=args.baud, limits=limits, force=args.force,
-                             out_dir=args.out_dir,
+                             timeout=args.timeout, baudrate=args.baud, force=args.force,
+                             limits=LinkLimits(timeout=args.timeout, max_lag=args.max_lag, max_miss=args.max_miss,
+                                               max_step=args.max_step),
+                             out_dir=args.out_dir, model=args.model, n_elements=args.elements, seed=args.seed,
                              progress=not args.quiet and sys.stderr.isatty())
     finally:
         for sink in sinks:
@@ -294,19 +226,5 @@ def run(args) -> int:
     if args.rrd is not None:
         print(f"rerun recording: {args.rrd}")
     if args.json is not None:
-        try:
-            args.json.parent.mkdir(parents=True, exist_ok=True)
-            args.json.write_text(json.dumps(report.to_json(), indent=1) + "\n")
-        except OSError as exc:
-            raise StationError(f"{args.json}: cannot write the JSON report: {exc.strerror or exc}") from None
+        write_json(args.json, report.to_json())
     return report.result.outcome.exit_code
-
-
-def _limits(args) -> LinkLimits:
-    """The link's fail-safe bounds from the options, each checked before anything starts."""
-    checks = (("--timeout", args.timeout, 1e-3, 60.0), ("--max-lag", args.max_lag, 0, 100),
-              ("--max-miss", args.max_miss, 0, 99), ("--max-step", args.max_step, 1.0, 10000.0))
-    for option, value, low, high in checks:
-        if not (math.isfinite(value) and low <= value <= high):
-            raise StationError(f"{option} {value}: expected a number in [{low:g}, {high:g}]")
-    return LinkLimits(timeout=args.timeout, max_lag=args.max_lag, max_miss=args.max_miss, max_step=args.max_step)

@@ -25,7 +25,7 @@ import math
 import tomllib
 import warnings
 from pathlib import Path
-from typing import Any
+from typing import Any, NamedTuple
 
 import numpy as np
 
@@ -177,22 +177,89 @@ def _read_stage(path: Path, table: str, doc: dict[str, Any]) -> tuple[list[float
     return num, den, domain
 
 
-def load_compensator_file(path: str | Path, dt: float = 0.002, limit: float | None = 200.0) -> Compensator:
-    """Read a compensator file (TOML, see the module docstring).
+Stage = tuple[list[float], list[float], str]
+"""One filter of a compensator file: (num, den, domain), coefficients as written."""
+
+
+class CompensatorFile(NamedTuple):
+    """A compensator file as read and checked, not yet discretized (:func:`read_compensator_file`).
+
+    Attributes
+    ----------
+    path : Path
+        The file.
+    name : str
+        Its ``name`` (default: the file's stem).
+    gth, ga : Stage, Stage or None
+        ``(num, den, domain)`` of [gth] and [ga] (None without [ga]).
+    limit : float or None
+        The clamp the file sets, ±DAC counts (None: ``limit = false``, no clamp).
+    sets_limit : bool
+        The file has a ``limit``: then it wins over any other (:meth:`clamp`).
+    """
+
+    path: Path
+    name: str
+    gth: Stage
+    ga: Stage | None
+    limit: float | None
+    sets_limit: bool
+
+    def clamp(self, limit: float | None) -> float | None:
+        """The clamp the compensator runs with: the file's own ``limit`` wins over ``limit``.
+
+        Parameters
+        ----------
+        limit : float or None
+            The clamp asked for elsewhere (e.g. ``--limit``), ±DAC counts.
+        """
+        return self.limit if self.sets_limit else limit
+
+    def limit_text(self) -> str:
+        """The file's ``limit`` as written in TOML (``150``, ``false``), for messages."""
+        return "false" if self.limit is None else f"{self.limit:g}"
+
+    def compensator(self, dt: float = 0.002, limit: float | None = 200.0) -> Compensator:
+        """The compensator, ``domain = "s"`` stages discretized by Tustin at ``dt``.
+
+        Parameters
+        ----------
+        dt : float
+            Sample time, s.
+        limit : float or None
+            Clamp used when the file has no ``limit``, DAC counts.
+
+        Raises
+        ------
+        StationError
+            A design that cannot be discretized (naming the file).
+        """
+        try:
+            comp = _build("file", self.name, self.gth, self.ga, self.clamp(limit), dt, {"file": str(self.path)})
+        except ValueError as exc:
+            raise StationError(f"{self.path}: {exc}") from None
+        for table, tf in (("gth", comp.gth), ("ga", comp.ga)):
+            poles = np.roots(tf.den) if tf is not None and tf.den.size > 1 else np.array([])
+            bad = poles[np.abs(poles) > 1.0 + 1e-9]
+            if bad.size:
+                warnings.warn(f"{self.path}: [{table}]: unstable pole at z = {bad[0]:.4g} (|z| = {abs(bad[0]):.4g} "
+                              f"> 1 after discretization at {dt:g} s): the compensator alone diverges",
+                              RuntimeWarning, stacklevel=3)
+        return comp
+
+
+def read_compensator_file(path: str | Path) -> CompensatorFile:
+    """Read and check a compensator file (TOML, see the module docstring): the one reading.
 
     Parameters
     ----------
     path : str or Path
         The TOML file.
-    dt : float
-        Sample time for Tustin discretization of ``domain = "s"`` stages, s.
-    limit : float or None
-        Clamp used when the file has no ``limit``, DAC counts.
 
     Returns
     -------
-    Compensator
-        With ``spec["kind"] == "file"`` and ``spec["file"]`` the path.
+    CompensatorFile
+        Its stages, name and limit.
 
     Raises
     ------
@@ -220,29 +287,42 @@ def load_compensator_file(path: str | Path, dt: float = 0.002, limit: float | No
         raise StationError(f"{path}: [gth]: missing (the compensator from e to v)")
     gth = _read_stage(path, "gth", doc)
     ga = _read_stage(path, "ga", doc) if "ga" in doc else None
+    limit = None
     if "limit" in doc:
         lim = doc["limit"]
-        if lim is False:
-            limit = None
-        elif isinstance(lim, bool) or not isinstance(lim, (int, float)) or not (math.isfinite(lim) and lim > 0):
-            raise StationError(f"{path}: limit: expected a positive number of DAC counts or false, got {lim!r}")
-        else:
+        if lim is not False:
+            if isinstance(lim, bool) or not isinstance(lim, (int, float)) or not (math.isfinite(lim) and lim > 0):
+                raise StationError(f"{path}: limit: expected a positive number of DAC counts or false, got {lim!r}")
             limit = float(lim)
     name = doc.get("name", path.stem)
     if not isinstance(name, str) or not name:
         raise StationError(f"{path}: name: expected a non-empty string, got {name!r}")
-    try:
-        comp = _build("file", name, gth, ga, limit, dt, {"file": str(path)})
-    except ValueError as exc:
-        raise StationError(f"{path}: {exc}") from None
-    for table, tf in (("gth", comp.gth), ("ga", comp.ga)):
-        poles = np.roots(tf.den) if tf is not None and tf.den.size > 1 else np.array([])
-        bad = poles[np.abs(poles) > 1.0 + 1e-9]
-        if bad.size:
-            warnings.warn(f"{path}: [{table}]: unstable pole at z = {bad[0]:.4g} (|z| = {abs(bad[0]):.4g} > 1 "
-                          f"after discretization at {dt:g} s): the compensator alone diverges",
-                          RuntimeWarning, stacklevel=2)
-    return comp
+    return CompensatorFile(path, name, gth, ga, limit, "limit" in doc)
+
+
+def load_compensator_file(path: str | Path, dt: float = 0.002, limit: float | None = 200.0) -> Compensator:
+    """Read a compensator file (TOML, see the module docstring) into a compensator.
+
+    Parameters
+    ----------
+    path : str or Path
+        The TOML file.
+    dt : float
+        Sample time for Tustin discretization of ``domain = "s"`` stages, s.
+    limit : float or None
+        Clamp used when the file has no ``limit``, DAC counts.
+
+    Returns
+    -------
+    Compensator
+        With ``spec["kind"] == "file"`` and ``spec["file"]`` the path.
+
+    Raises
+    ------
+    StationError
+        As :func:`read_compensator_file`, and a design that cannot be discretized.
+    """
+    return read_compensator_file(path).compensator(dt, limit)
 
 
 def make_controller(kind: str, dt: float = 0.002, kp: float = 2.0,

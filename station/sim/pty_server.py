@@ -8,13 +8,13 @@ benchmarks parse (tx_lost: bytes the device sent that did not fit into the pty b
 nobody read them; the device never blocks on them). Pacing as for ``sim://`` (:mod:`station.sim.driver`): lockstep, or realtime
 (500 Hz on absolute deadlines, ``select`` with a timeout up to the next deadline).
 
-Run it as ``python -m station.sim.pty_server [--realtime] [--protocol legacy] [--seed N]
-[--elements N]``.
+Run it as ``station sim-device --pty [--realtime] [--protocol legacy] [--seed N] [--model NAME|FILE]
+[--elements N]`` (:mod:`station.commands.sim_device`); ``python -m station.sim.pty_server`` with
+the same options is an alias that execs it (this module never imports the command line).
 """
 
 from __future__ import annotations
 
-import argparse
 import gc
 import json
 import os
@@ -25,7 +25,6 @@ import time
 import tty
 from typing import TYPE_CHECKING
 
-from station.protocol import PROTOCOLS
 from station.realtime import RealtimePriority
 
 if TYPE_CHECKING:
@@ -120,56 +119,5 @@ def serve_pty(protocol: str = "v1", realtime: bool = False, seed: int = 0, n_ele
     return summary
 
 
-def add_arguments(parser: argparse.ArgumentParser) -> None:
-    """The server's options (shared by ``station sim-device`` and ``python -m station.sim.pty_server``).
-
-    Parameters
-    ----------
-    parser : argparse.ArgumentParser
-        Gets ``--protocol``, ``--realtime``, ``--seed``, ``--elements``, ``--model``.
-    """
-    from station.commands.options import number
-
-    parser.add_argument("--protocol", choices=PROTOCOLS, default="v1", help="device protocol (default v1)")
-    parser.add_argument("--realtime", action="store_true",
-                        help="tick on the device's own 500 Hz clock (default: lockstep with the station)")
-    parser.add_argument("--seed", type=number(0, 2**32 - 1, integer=True), default=0,
-                        help="sensor noise seed, the same for every run (default 0)")
-    parser.add_argument("--model", default=None, metavar="NAME|FILE",
-                        help="the simulated rig's model: a built-in model's name or a model file (default tmm-fit)")
-    parser.add_argument("--elements", type=number(1, 100, integer=True), default=None,
-                        help="FEM element count of the plant (default: the model's, 4)")
-
-
-def serve_from_args(args: argparse.Namespace) -> dict:
-    """:func:`serve_pty` with the options of :func:`add_arguments`.
-
-    Parameters
-    ----------
-    args : argparse.Namespace
-        Parsed options of :func:`add_arguments`.
-
-    Returns
-    -------
-    dict
-        The summary :func:`serve_pty` returns.
-    """
-    return serve_pty(args.protocol, args.realtime, args.seed, args.elements, model=args.model)
-
-
-def main(argv: list[str] | None = None) -> int:
-    """``python -m station.sim.pty_server``: serve until SIGTERM/SIGINT.
-
-    Parameters
-    ----------
-    argv : list of str, optional
-        Command-line arguments (default ``sys.argv[1:]``).
-    """
-    parser = argparse.ArgumentParser(prog="python -m station.sim.pty_server", description=__doc__.splitlines()[0])
-    add_arguments(parser)
-    serve_from_args(parser.parse_args(argv))
-    return 0
-
-
-if __name__ == "__main__":
-    sys.exit(main())
+if __name__ == "__main__":  # an alias: the command line is station.commands.sim_device's (one definition)
+    os.execv(sys.executable, [sys.executable, "-m", "station", "sim-device", "--pty", *sys.argv[1:]])
