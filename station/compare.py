@@ -18,7 +18,7 @@ from pathlib import Path
 
 import numpy as np
 
-from station.analysis.metrics import StepMetrics
+from station.analysis.metrics import SETTLE_HOLD_S, StepMetrics
 from station.errors import StationError
 from station.logged import LoggedRun
 from station.plots import source_label
@@ -179,6 +179,7 @@ def format_comparison(c: RunComparison) -> str:
                   f"  {'thesis FEM':<20} {fmt(c.thesis_fem)}"]
     lines += [f"  {'model':<20} {fmt(c.model)} {pct(c.fit_pct['theta']):>8} {pct(c.fit_pct['accel']):>8}"]
     if c.rig is not None and (c.rig.settling_time_s is None or (c.model and c.model.settling_time_s is None)):
-        lines.append("  not settled = still outside the 1 % band at the run's end (not settled within the run)")
+        lines.append(f"  not settled = outside the 1 % band at the run's end, or inside it for less than "
+                     f"{SETTLE_HOLD_S:g} s (not settled within the run)")
     lines += [f"  note: {n}" for n in c.notes]
     return "\n".join(lines)

@@ -14,6 +14,7 @@ import csv
 import io
 import json
 import os
+import warnings
 from collections.abc import Callable, Iterable, Sequence
 from concurrent.futures import ProcessPoolExecutor, as_completed
 from dataclasses import asdict, dataclass, field
@@ -21,6 +22,7 @@ from pathlib import Path
 from typing import Any
 
 from station.errors import StationError
+from station.replay import replay
 
 FIELDS = ("file", "format", "rows", "sample_time_s", "controller", "controller_source", "alignment",
           "max_abs_dv", "overshoot_pct", "settling_time_s", "fit_theta_pct", "fit_accel_pct",
@@ -131,10 +133,6 @@ def survey_one(path: str | Path, model: bool = True) -> SurveyRow:
     SurveyRow
         ``reason`` holds the one-line error when the file could not be used.
     """
-    import warnings
-
-    from station.replay import replay
-
     row = SurveyRow(file=str(path))
     try:
         with warnings.catch_warnings():

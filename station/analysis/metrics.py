@@ -49,7 +49,8 @@ class StepMetrics:
 
 
 NOT_SETTLED = "not settled within the run"
-"""What a report says when θ is still outside the settling band at the run's end."""
+"""What a report says when θ has not settled (:func:`settled_index`): outside the band at the
+run's end, or back inside it for less than :data:`SETTLE_HOLD_S`."""
 
 SETTLE_HOLD_S = 0.1
 """Least time inside the band, from the settling sample to the run's end, that counts as
@@ -132,6 +133,20 @@ class StepInfo:
                 f"steady-state error {self.steady_state_error:.1f} counts{sat}")
 
 
+def _step_response(t, theta, u_final) -> tuple[np.ndarray, np.ndarray, float]:
+    """t and θ as float arrays and the step as a float; ValueError when they cannot be a step response."""
+    t = np.asarray(t, dtype=float)
+    theta = np.asarray(theta, dtype=float)
+    if t.ndim != 1 or t.shape != theta.shape or t.size == 0:
+        raise ValueError(f"t and theta must be 1-D arrays of the same non-zero length, got {t.shape} and {theta.shape}")
+    if np.any(np.isnan(theta)):
+        raise ValueError("theta holds NaN samples")
+    u_final = float(u_final)
+    if u_final == 0.0 or not np.isfinite(u_final):
+        raise ValueError(f"u_final must be a non-zero step size, got {u_final}")
+    return t, theta, u_final
+
+
 def step_info(t, theta, u_final: float, step_time: float = 0.0, v=None, limit: float | None = None) -> StepInfo:
     """Rise time, peak time, 2 % settling time, steady-state error and time in saturation.
 
@@ -160,20 +175,14 @@ def step_info(t, theta, u_final: float, step_time: float = 0.0, v=None, limit: f
     Notes
     -----
     Rise time: ``control.step_info`` (python-control) with ``RiseTimeLimits=(0.1, 0.9)``
-    and ``yfinal = u_final``; peak time: the largest |θ|. The 2 % settling time is :func:`settled_index` (the same
-    definition as the thesis's settling time) with a band of 2 % of ``|u_final|``:
-    python-control counts a sample exactly on the band's edge as outside and has no hold.
+    and ``yfinal = u_final``; peak time: the largest |θ|. The 2 % settling time is
+    :func:`settled_index` (the same definition as the thesis's settling time) with a band
+    of 2 % of ``|u_final|``: python-control counts a sample exactly on the band's edge as
+    outside and has no hold.
     """
     import control
 
-    t = np.asarray(t, dtype=float)
-    theta = np.asarray(theta, dtype=float)
-    if t.ndim != 1 or t.shape != theta.shape or t.size == 0:
-        raise ValueError(f"t and theta must be 1-D arrays of the same non-zero length, got {t.shape} and {theta.shape}")
-    if np.any(np.isnan(theta)):
-        raise ValueError("theta holds NaN samples")
-    if u_final == 0.0 or not np.isfinite(u_final):
-        raise ValueError(f"u_final must be a non-zero step size, got {u_final}")
+    t, theta, u_final = _step_response(t, theta, u_final)
     after = t >= step_time - 1e-12
     ts, ys = t[after] - step_time, theta[after]
     if ts.size < 2:
@@ -242,15 +251,7 @@ def step_metrics(t, theta, u_final: float) -> StepMetrics:
     -----
     Source: DESIGN.md "Step metrics as the thesis reports them".
     """
-    t = np.asarray(t, dtype=float)
-    theta = np.asarray(theta, dtype=float)
-    if t.ndim != 1 or t.shape != theta.shape or t.size == 0:
-        raise ValueError(f"t and theta must be 1-D arrays of the same non-zero length, got {t.shape} and {theta.shape}")
-    if np.any(np.isnan(theta)):
-        raise ValueError("theta holds NaN samples")
-    u_final = float(u_final)
-    if u_final == 0.0 or not np.isfinite(u_final):
-        raise ValueError(f"u_final must be a non-zero step size, got {u_final}")
+    t, theta, u_final = _step_response(t, theta, u_final)
     peak = theta.max() if u_final > 0 else theta.min()
     overshoot = 100.0 * float((peak - u_final) / u_final)
     settled = settled_index(t, theta, u_final, settling_band(u_final))
