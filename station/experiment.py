@@ -27,6 +27,7 @@ from station.analysis.metrics import NOT_SETTLED, StepInfo, StepMetrics, step_in
 from station.control import (KINDS, file_reference, make_controller, pulse_reference, step_reference,
                              swept_sine_reference)
 from station.control.designs import read_compensator_file
+from station.control.rerun import is_closed_loop
 from station.errors import StationError
 from station.link import LinkLimits, open_session
 from station.protocol import legacy
@@ -470,7 +471,7 @@ def run_step(port: str = DEFAULT_PORT, protocol: str = "v1", controller: str = D
             if bar is not None:
                 bar.close()
     # step metrics compare θ with the step in encoder counts: closed-loop steps only
-    closed_step = reference == "step" and ctrl.spec.get("kind") != "open-loop" and result.ok
+    closed_step = reference == "step" and is_closed_loop(ctrl) and result.ok
     metrics, info = _metrics_of(log_path, amplitude, limit, step_tick * dt) if closed_step else (None, None)
     report = StepReport(log_path, result, metrics, info=info)
     if figure:  # after command 0, STOP and the log's close: a figure never delays a stop

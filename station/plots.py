@@ -201,7 +201,7 @@ def plot_comparison(c, path: Path):
 
     Parameters
     ----------
-    c : station.analysis.compare.RunComparison
+    c : station.compare.RunComparison
     path : Path
         PNG file.
 
@@ -209,7 +209,7 @@ def plot_comparison(c, path: Path):
     -------
     matplotlib.figure.Figure
         θ (with u; open loop u in DAC counts on its own right-hand axis), a, v; the log
-        labelled by its source.
+        labelled by its source, the model beside it (none for a hub-held beam test).
     """
     t = c.data["t"]
     fig = new_figure(8, 8)
@@ -223,12 +223,14 @@ def plot_comparison(c, path: Path):
         ax[0].plot(t, c.data["u"], "k:", lw=0.8, label="u")
     for row, key, label in ((0, "theta", "θ (encoder counts)"), (1, "a", "a (counts)"), (2, "v", "v (DAC counts)")):
         ax[row].plot(t, c.data[key], lw=0.9, label=c.source)
-        ax[row].plot(c.prediction["t"], c.prediction[key], lw=0.9, label="model")
+        if c.prediction is not None:  # None: a hub-held beam test, which the model cannot represent
+            ax[row].plot(c.prediction["t"], c.prediction[key], lw=0.9, label="model")
         ax[row].set_ylabel(label)
         ax[row].legend(loc="best", fontsize=8)
     ax[2].set_xlabel("t (s)")
     fits = ", ".join(f"{k} {v:.1f} %" for k, v in c.fit_pct.items() if v is not None)
-    fig.suptitle(f"{Path(c.file).name} ({c.source})\n{c.controller}: NRMSE fit {fits}", fontsize=9)
+    fits = f"NRMSE fit {fits}" if c.prediction is not None else "hub-held beam test, no model fit"
+    fig.suptitle(f"{Path(c.file).name} ({c.source})\n{c.controller}: {fits}", fontsize=9)
     fig.tight_layout()
     save_figure(fig, path)
     return fig

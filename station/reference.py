@@ -8,12 +8,61 @@ any other order) is not a step, so step metrics are never computed for it.
 
 from __future__ import annotations
 
+from collections.abc import Iterator, Mapping
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
 
-def classify_reference(u) -> dict[str, Any]:
+@dataclass(frozen=True, eq=False)
+class Reference(Mapping):
+    """What a logged reference is (:func:`classify_reference`).
+
+    It also reads as its JSON dict (``ref["kind"]``, ``ref == {"kind": "zero"}``), the form
+    older callers and the reports use.
+
+    Attributes
+    ----------
+    kind : {"step", "zero", "missing", "other"}
+        "step": 0 up to ``step_tick`` and a non-zero constant from it to the end; "zero":
+        all zeros (or no rows); "missing": u is not logged (NaN); "other": anything else.
+    amplitude : float or None
+        The step's height, encoder counts (DAC counts in open loop); None unless a step.
+    step_tick : int or None
+        The first tick at the step's level (0: constant throughout), the log header's
+        ``step_tick``; None unless a step.
+    """
+
+    kind: str
+    amplitude: float | None = None
+    step_tick: int | None = None
+
+    @property
+    def is_step(self) -> bool:
+        """True for a step."""
+        return self.kind == "step"
+
+    def to_json(self) -> dict[str, Any]:
+        """``{"kind": "step", "amplitude": F, "tick": N}`` for a step, else ``{"kind": K}``."""
+        if self.is_step:
+            return {"kind": self.kind, "amplitude": self.amplitude, "tick": self.step_tick}
+        return {"kind": self.kind}
+
+    def __getitem__(self, key: str) -> Any:
+        return self.to_json()[key]
+
+    def __iter__(self) -> Iterator[str]:
+        return iter(self.to_json())
+
+    def __len__(self) -> int:
+        return len(self.to_json())
+
+    def __repr__(self) -> str:
+        return f"Reference({self.to_json()!r})"
+
+
+def classify_reference(u) -> Reference:
     """What a logged reference is: a step from 0, all zeros, or something else.
 
     Parameters
@@ -23,23 +72,22 @@ def classify_reference(u) -> dict[str, Any]:
 
     Returns
     -------
-    dict
-        ``{"kind": "step", "amplitude": float, "tick": int}`` when u is 0 up to one tick
-        and a non-zero constant from it to the end (tick 0: constant throughout);
-        ``{"kind": "zero"}``; ``{"kind": "missing"}`` when u is not logged (NaN); else
-        ``{"kind": "other"}``.
+    Reference
+        kind "step" with its amplitude and step tick when u is 0 up to one tick and a
+        non-zero constant from it to the end (tick 0: constant throughout); "zero";
+        "missing" when u is not logged (NaN); else "other".
     """
     u = np.asarray(u, dtype=float)
     if u.size and not np.all(np.isfinite(u)):
-        return {"kind": "missing"}
+        return Reference("missing")
     if u.size == 0 or np.all(u == 0):
-        return {"kind": "zero"}
+        return Reference("zero")
     change = np.flatnonzero(np.diff(u) != 0)
     if change.size == 1 and u[0] == 0 and u[-1] != 0:
-        return {"kind": "step", "amplitude": float(u[-1]), "tick": int(change[0] + 1)}
+        return Reference("step", float(u[-1]), int(change[0] + 1))
     if change.size == 0:  # non-zero constant: a step at tick 0
-        return {"kind": "step", "amplitude": float(u[-1]), "tick": 0}
-    return {"kind": "other"}
+        return Reference("step", float(u[-1]), 0)
+    return Reference("other")
 
 
 def step_amplitude(u) -> float | None:
@@ -55,5 +103,4 @@ def step_amplitude(u) -> float | None:
     float or None
         The step height, encoder counts.
     """
-    ref = classify_reference(u)
-    return ref["amplitude"] if ref["kind"] == "step" else None
+    return classify_reference(u).amplitude

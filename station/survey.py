@@ -1,6 +1,8 @@
 """Survey a lab's logs: replay every file of a folder and tabulate what each one is.
 
-Each file is replayed (:func:`station.replay.replay`) in a worker process
+Each file is replayed (:func:`station.replay.replay`; what the log was, its controller,
+alignment and sample time, comes from the report's :class:`station.logged.LoggedRun`) in a
+worker process
 (concurrent.futures.ProcessPoolExecutor, one per core); a file that cannot be used
 (binary, empty, a foreign CSV, a broken row) becomes a row with the one-line reason,
 never an abort.
@@ -12,6 +14,7 @@ import csv
 import io
 import json
 import os
+import warnings
 from collections.abc import Callable, Iterable, Sequence
 from concurrent.futures import ProcessPoolExecutor, as_completed
 from dataclasses import asdict, dataclass, field
@@ -19,6 +22,7 @@ from pathlib import Path
 from typing import Any
 
 from station.errors import StationError
+from station.replay import replay
 
 FIELDS = ("file", "format", "rows", "sample_time_s", "controller", "controller_source", "alignment",
           "max_abs_dv", "overshoot_pct", "settling_time_s", "fit_theta_pct", "fit_accel_pct",
@@ -129,10 +133,6 @@ def survey_one(path: str | Path, model: bool = True) -> SurveyRow:
     SurveyRow
         ``reason`` holds the one-line error when the file could not be used.
     """
-    import warnings
-
-    from station.replay import replay
-
     row = SurveyRow(file=str(path))
     try:
         with warnings.catch_warnings():
@@ -144,24 +144,23 @@ def survey_one(path: str | Path, model: bool = True) -> SurveyRow:
     except Exception as exc:  # noqa: BLE001 - a survey never stops at a file
         row.reason = f"replay failed: {type(exc).__name__}: {exc}".splitlines()[0]
         return row
-    j = rep.to_json()
-    row.report = j
-    row.format = rep.layout or rep.format
-    row.rows = rep.samples
-    row.sample_time_s = rep.sample_time
-    row.controller = rep.controller or ""
-    row.controller_source = rep.controller_source or ""
-    row.alignment = rep.alignment
-    row.max_abs_dv = rep.max_abs_dv
-    row.overshoot_pct = j["metrics"]["overshoot_pct"]
-    row.settling_time_s = j["metrics"]["settling_time_s"]
+    run = rep.run
+    row.report = rep.to_json()
+    row.format = run.log.layout or run.log.format
+    row.rows = len(run)
+    row.sample_time_s = run.log.sample_time
+    if run.replayed is not None:  # a controller was replayed
+        row.controller, row.controller_source = run.controller.name, run.source or ""
+        row.alignment, row.max_abs_dv = run.alignment, run.max_abs_dv
+    if rep.metrics is not None:
+        row.overshoot_pct, row.settling_time_s = rep.metrics.overshoot_pct, rep.metrics.settling_time_s
     if rep.fit_pct is not None:
-        row.fit_theta_pct, row.fit_accel_pct = rep.fit_pct.get("theta"), rep.fit_pct.get("accel")
-    if j["beam_test"] is not None:
-        bt = j["beam_test"]
-        row.f1_hz, row.zeta1, row.f1_model_hz, row.zeta1_model = (bt["f1_hz"], bt["zeta1"],
-                                                                 bt["f1_model_hz"], bt["zeta1_model"])
-    if rep.samples == 0:
+        row.fit_theta_pct, row.fit_accel_pct = rep.fit_pct["theta"], rep.fit_pct["accel"]
+    if rep.beam_test is not None:  # run.held: a hub-held beam test
+        bt = rep.beam_test
+        row.f1_hz, row.zeta1 = bt.measured.f1_hz, bt.measured.zeta1
+        row.f1_model_hz, row.zeta1_model = bt.f1_model_hz, bt.zeta1_model
+    if not len(run):
         row.reason = "the log has no rows"
     return row
 

@@ -7,7 +7,7 @@ import json
 
 import pytest
 
-from station.analysis.compare import compare_run
+from station.compare import compare_run
 from station.commands import compare
 from station.plant import DiscretePlant
 

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import json
 
-from station.analysis.compare import compare_run, format_comparison
+from station.compare import compare_run, format_comparison
 from station.plots import plot_comparison
 from station.cli import main
 from station.experiment import run_step

@@ -7,7 +7,8 @@ import pytest
 
 from station.analysis.identify import TOLERANCE, infer_controller, match_pid, pid_controllers
 from station.control import make_controller
-from station.replay import replay, replay_commands
+from station.control.rerun import replay_commands
+from station.replay import replay
 
 
 def _closed_loop(controller, d, n=1500, seed=0):

@@ -71,3 +71,40 @@ def test_nrmse_fit_by_hand():
     assert math.isnan(nrmse_fit(np.ones(3), np.zeros(3)))
     with pytest.raises(ValueError, match="shape"):
         nrmse_fit(y, y[:3])
+
+
+def test_a_run_still_swinging_at_its_end_has_not_settled():
+    """±7 counts at 2.5 Hz around the step to the run's end: its last few samples cross the
+    1-count band, which is not settling (it was "settled at 1.99 s" when only the last
+    sample outside counted)."""
+    from station.analysis.metrics import step_info
+
+    t = np.arange(1000) * 0.002
+    theta = np.round(100 + 7 * np.sin(2 * np.pi * 2.5 * (t - t[-1])))
+    assert abs(theta[-1] - 100) <= 1 and np.max(np.abs(theta[-100:] - 100)) >= 6  # crossing, still swinging
+    assert step_metrics(t, theta, 100.0).settling_time_s is None
+    assert step_info(t, theta, 100.0).settling_time_2pct_s is None
+
+
+def test_exactly_on_the_band_edge_is_inside_for_both_bands():
+    """θ settling 1 count off a 50-count step: 1 count is the edge of both the thesis's band
+    (max(1 %, 1 count)) and the 2 % band; strictly greater is outside in both, so both
+    report the same settling sample (python-control alone counted the edge as outside)."""
+    from station.analysis.metrics import step_info
+
+    t = np.arange(1000) * 0.002
+    theta = np.r_[np.zeros(10), [30, 45, 60, 55, 48], np.full(985, 51.0)]
+    m = step_metrics(t, theta, 50.0)
+    info = step_info(t, theta, 50.0, step_time=0.02)
+    assert m.settling_time_s == pytest.approx(0.030)
+    assert info.settling_time_2pct_s == pytest.approx(m.settling_time_s - 0.02)
+
+
+def test_settled_needs_the_minimum_hold():
+    from station.analysis.metrics import SETTLE_HOLD_S, settled_index
+
+    t = np.arange(200) * 0.002
+    need = round(SETTLE_HOLD_S / 0.002)  # 50 samples
+    for inside, settled in ((need, True), (need - 1, False)):
+        y = np.r_[np.full(200 - inside, 10.0), np.zeros(inside)]
+        assert (settled_index(t, y, 0.0, 1.0) == 200 - inside) if settled else settled_index(t, y, 0.0, 1.0) is None

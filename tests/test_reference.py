@@ -42,7 +42,7 @@ def _write_log(path, u):
     (np.r_[np.zeros(10), np.full(100, 100.0), np.zeros(290)], None),  # a pulse: a step in neither (compare said yes)
 ])
 def test_replay_and_compare_agree_on_what_a_step_is(tmp_path, u, step):
-    from station.analysis.compare import compare_run
+    from station.compare import compare_run
     from station.plant import DiscretePlant
     from station.replay import replay
 

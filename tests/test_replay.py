@@ -11,7 +11,9 @@ import pytest
 from station.control import Compensator, DiscreteTF, make_controller
 from station.errors import StationError
 from station.protocol import PROTOCOLS
-from station.replay import replay, replay_commands, rig_controller
+from station.control.rerun import replay_commands
+from station.logged import rig_controller
+from station.replay import replay
 from station.runlog import RunLogWriter, read_log
 
 P_LOG = "SFLR_P_control_step_kp_2_SLFR_RTP_P_control_kp=2.0.txt"

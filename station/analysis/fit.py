@@ -44,3 +44,34 @@ def nrmse_fit(y, yhat) -> float:
     if denom == 0.0:
         return float("nan")
     return float(100.0 * (1.0 - np.linalg.norm(y - yhat) / denom))
+
+
+def fit_pct(theta, theta_hat, a, a_hat, digits: int | None = None) -> dict[str, float | None]:
+    """The NRMSE fits of a simulated run, as every report carries them (DESIGN.md ``fit_pct``).
+
+    Parameters
+    ----------
+    theta, theta_hat : array_like, shape (N,)
+        Measured and simulated θ, encoder counts.
+    a, a_hat : array_like, shape (N,)
+        Measured and simulated accelerometer counts.
+    digits : int, optional
+        Round each fit to this many decimals (default: not rounded).
+
+    Returns
+    -------
+    dict
+        ``{"theta": F, "accel": F}``, percent (:func:`nrmse_fit`); None where the fit is
+        undefined (a constant measured signal), ``-inf`` where the simulation is not finite
+        (it diverged).
+
+    Raises
+    ------
+    ValueError
+        As :func:`nrmse_fit`: shapes differ, arrays are empty, or a measured signal holds NaN.
+    """
+    out: dict[str, float | None] = {}
+    for key, y, yhat in (("theta", theta, theta_hat), ("accel", a, a_hat)):
+        fit = nrmse_fit(y, yhat) if np.all(np.isfinite(yhat)) else float("-inf")
+        out[key] = None if np.isnan(fit) else fit if digits is None else round(fit, digits)
+    return out

@@ -11,9 +11,9 @@ v[k] = C(u[k], θ[k-d])):
 
 Their coefficients come from linear least squares on the logged e and v over the rows
 where v is not clamped (the recursion runs on the clamped v, so the regression is exact
-there). A law is accepted only when, run as the rig runs it (:func:`station.replay.
-replay_commands`), it reproduces every logged v to ``tolerance`` (1e-6 DAC counts): the
-identification claims nothing the data do not prove.
+there). A law is accepted only when, run as the rig runs it
+(:func:`station.control.rerun.replay_commands`), it reproduces every logged v to ``tolerance``
+(1e-6 DAC counts): the identification claims nothing the data do not prove.
 
 A PID header with ki or kd != 0 does not say how the rig discretized it;
 :func:`pid_controllers` gives the standard choices (integral by backward Euler, forward
@@ -28,6 +28,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from station.control import Compensator, DiscreteTF, OpenLoop
+from station.control.rerun import detect_alignment
 
 TOLERANCE = 1e-6
 """max |v_replayed - v_logged| (DAC counts) a law must meet to be accepted."""
@@ -82,16 +83,9 @@ def _compensator(num, den, limit: float, dt: float, kind: str, extra: dict | Non
 
 
 def _check(controller, u, theta, a, v, law: str, alignments) -> IdentifiedController | None:
-    """The best alignment for ``controller``; None unless it reproduces v to TOLERANCE."""
-    from station.replay import replay_commands
-
-    best = None
-    for d in alignments:
-        v_hat, _ = replay_commands(controller, u, theta, a, d)
-        err = float(np.max(np.abs(v_hat - v)))
-        if best is None or err < best.max_abs_dv:
-            best = IdentifiedController(controller, d, err, v_hat, law)
-    return best
+    """``controller`` at its best alignment (:func:`station.control.rerun.detect_alignment`)."""
+    fit = detect_alignment(controller, u, theta, a, v, alignments)
+    return None if fit is None else IdentifiedController(controller, *fit, law)  # None: no alignment tried
 
 
 def _regression(u, theta, v, d: int, order: int, limit: float):

@@ -2,13 +2,22 @@
 
 overshoot = (max theta - u_final)/u_final, in percent; settling time = the time, from
 t = 0 of the log, of the first sample after the last sample outside the band
-|theta - u_final| <= max(1 % of |u_final|, 1 count); None when the last sample is outside.
-With these definitions the rig logs give the thesis's experimental table exactly
-(P 24.00 % / 1.250 s, lead 10.00 % / not settled, lead + accel 21.50 % / 0.608 s).
+|theta - u_final| <= max(1 % of |u_final|, 1 count). With these definitions the rig logs
+give the thesis's experimental table exactly (P 24.00 % / 1.250 s, lead 10.00 % / not
+settled, lead + accel 21.50 % / 0.608 s).
+
+"Settled" has one definition here (:func:`settled_index`), for the thesis's 1 % band and
+for :func:`step_info`'s 2 % band alike: a sample is outside the band when its distance to
+the final value is strictly greater than the band's half-width; the response is settled
+from the first sample after the last one outside, provided it then stays inside for at
+least :data:`SETTLE_HOLD_S` (counted in whole samples, N·dt). Otherwise it is "not settled
+within the run": a run still swinging at its end, whose last few samples happen to cross
+the band, has not settled.
 """
 
 from __future__ import annotations
 
+import math
 from dataclasses import asdict, dataclass
 
 import numpy as np
@@ -40,7 +49,46 @@ class StepMetrics:
 
 
 NOT_SETTLED = "not settled within the run"
-"""What a report says when θ is still outside the settling band at the run's end."""
+"""What a report says when θ has not settled (:func:`settled_index`): outside the band at the
+run's end, or back inside it for less than :data:`SETTLE_HOLD_S`."""
+
+SETTLE_HOLD_S = 0.1
+"""Least time inside the band, from the settling sample to the run's end, that counts as
+settled, s (50 samples at 500 Hz: well over one period of the 18 Hz second mode, and short
+against the thesis's settling times, 0.6-1.3 s into 2 s runs)."""
+
+
+def settled_index(t, y, final: float, band: float, hold_s: float = SETTLE_HOLD_S) -> int | None:
+    """Where a response has settled: the one definition of "settled".
+
+    Parameters
+    ----------
+    t : array_like, shape (N,)
+        Sample times, s (evenly spaced; their median step is the sample time).
+    y : array_like, shape (N,)
+        The response, e.g. θ in encoder counts.
+    final : float
+        The value it settles to, same units.
+    band : float
+        Half-width of the band, same units; a sample with ``|y - final| > band`` (strictly)
+        is outside.
+    hold_s : float
+        Least time inside the band to the run's end, s, counted as whole samples (N·dt).
+
+    Returns
+    -------
+    int or None
+        Index of the first sample after the last sample outside the band (0 when none is
+        outside); None when the last sample is outside or the response stays inside for
+        less than ``hold_s`` (not settled within the run).
+    """
+    t = np.asarray(t, dtype=float)
+    y = np.asarray(y, dtype=float)
+    outside = np.flatnonzero(np.abs(y - final) > band)
+    first = 0 if outside.size == 0 else int(outside[-1]) + 1
+    dt = float(np.median(np.diff(t))) if t.size > 1 else 0.0
+    need = max(1, math.ceil(hold_s / dt - 1e-9)) if dt > 0 else 1
+    return first if y.size - first >= need else None
 
 
 @dataclass(frozen=True)
@@ -56,7 +104,8 @@ class StepInfo:
     peak_time_s : float or None
         Time of the largest |θ|.
     settling_time_2pct_s : float or None
-        python-control's 2 % settling time (None: not settled within the run).
+        The 2 % settling time (:func:`settled_index` with a band of 2 % of the step;
+        None: not settled within the run).
     steady_state_error : float
         Step − mean θ over the run's last 0.1 s, encoder counts.
     saturation_time_s : float or None
@@ -82,6 +131,20 @@ class StepInfo:
         sat = "" if self.saturation_time_s is None else f"   saturated {self.saturation_time_s:.3f} s"
         return (f"rise {f(self.rise_time_s)}   peak {f(self.peak_time_s)}   {settle}   "
                 f"steady-state error {self.steady_state_error:.1f} counts{sat}")
+
+
+def _step_response(t, theta, u_final) -> tuple[np.ndarray, np.ndarray, float]:
+    """t and θ as float arrays and the step as a float; ValueError when they cannot be a step response."""
+    t = np.asarray(t, dtype=float)
+    theta = np.asarray(theta, dtype=float)
+    if t.ndim != 1 or t.shape != theta.shape or t.size == 0:
+        raise ValueError(f"t and theta must be 1-D arrays of the same non-zero length, got {t.shape} and {theta.shape}")
+    if np.any(np.isnan(theta)):
+        raise ValueError("theta holds NaN samples")
+    u_final = float(u_final)
+    if u_final == 0.0 or not np.isfinite(u_final):
+        raise ValueError(f"u_final must be a non-zero step size, got {u_final}")
+    return t, theta, u_final
 
 
 def step_info(t, theta, u_final: float, step_time: float = 0.0, v=None, limit: float | None = None) -> StepInfo:
@@ -111,19 +174,15 @@ def step_info(t, theta, u_final: float, step_time: float = 0.0, v=None, limit: f
 
     Notes
     -----
-    Source: ``control.step_info`` (python-control) with ``SettlingTimeThreshold=0.02``,
-    ``RiseTimeLimits=(0.1, 0.9)`` and ``yfinal = u_final``.
+    Rise time: ``control.step_info`` (python-control) with ``RiseTimeLimits=(0.1, 0.9)``
+    and ``yfinal = u_final``; peak time: the largest |θ|. The 2 % settling time is
+    :func:`settled_index` (the same definition as the thesis's settling time) with a band
+    of 2 % of ``|u_final|``: python-control counts a sample exactly on the band's edge as
+    outside and has no hold.
     """
     import control
 
-    t = np.asarray(t, dtype=float)
-    theta = np.asarray(theta, dtype=float)
-    if t.ndim != 1 or t.shape != theta.shape or t.size == 0:
-        raise ValueError(f"t and theta must be 1-D arrays of the same non-zero length, got {t.shape} and {theta.shape}")
-    if np.any(np.isnan(theta)):
-        raise ValueError("theta holds NaN samples")
-    if u_final == 0.0 or not np.isfinite(u_final):
-        raise ValueError(f"u_final must be a non-zero step size, got {u_final}")
+    t, theta, u_final = _step_response(t, theta, u_final)
     after = t >= step_time - 1e-12
     ts, ys = t[after] - step_time, theta[after]
     if ts.size < 2:
@@ -138,6 +197,7 @@ def step_info(t, theta, u_final: float, step_time: float = 0.0, v=None, limit: f
         x = info[key]
         return None if not np.isfinite(x) else float(x)
 
+    settled = settled_index(ts, ys, u_final, 0.02 * abs(u_final))
     sat = None
     if v is not None and limit is not None and np.isfinite(limit):
         v = np.asarray(v, dtype=float)
@@ -145,7 +205,7 @@ def step_info(t, theta, u_final: float, step_time: float = 0.0, v=None, limit: f
         sat = float(np.count_nonzero(np.abs(v) >= limit) * dt)
     peak = float(ts[np.argmax(np.abs(ys))])
     return StepInfo(rise_time_s=value("RiseTime"), peak_time_s=peak,
-                    settling_time_2pct_s=value("SettlingTime"),
+                    settling_time_2pct_s=None if settled is None else float(ts[settled]),
                     steady_state_error=float(u_final - tail.mean()), saturation_time_s=sat)
 
 
@@ -179,7 +239,8 @@ def step_metrics(t, theta, u_final: float) -> StepMetrics:
         ``overshoot_pct = 100 (peak - u_final)/u_final`` (peak = max theta for a positive
         step); ``settling_time_s`` = t of the first sample after the last sample with
         ``|theta - u_final| > settling_band(u_final)`` (t[0] if none is outside), None when
-        the last sample is outside the band.
+        not settled within the run (:func:`settled_index`: the last sample outside the
+        band, or inside for less than :data:`SETTLE_HOLD_S`).
 
     Raises
     ------
@@ -190,22 +251,8 @@ def step_metrics(t, theta, u_final: float) -> StepMetrics:
     -----
     Source: DESIGN.md "Step metrics as the thesis reports them".
     """
-    t = np.asarray(t, dtype=float)
-    theta = np.asarray(theta, dtype=float)
-    if t.ndim != 1 or t.shape != theta.shape or t.size == 0:
-        raise ValueError(f"t and theta must be 1-D arrays of the same non-zero length, got {t.shape} and {theta.shape}")
-    if np.any(np.isnan(theta)):
-        raise ValueError("theta holds NaN samples")
-    u_final = float(u_final)
-    if u_final == 0.0 or not np.isfinite(u_final):
-        raise ValueError(f"u_final must be a non-zero step size, got {u_final}")
+    t, theta, u_final = _step_response(t, theta, u_final)
     peak = theta.max() if u_final > 0 else theta.min()
     overshoot = 100.0 * float((peak - u_final) / u_final)
-    outside = np.flatnonzero(np.abs(theta - u_final) > settling_band(u_final))
-    if outside.size == 0:
-        settling = float(t[0])
-    elif outside[-1] == theta.size - 1:
-        settling = None
-    else:
-        settling = float(t[outside[-1] + 1])
-    return StepMetrics(overshoot_pct=overshoot, settling_time_s=settling)
+    settled = settled_index(t, theta, u_final, settling_band(u_final))
+    return StepMetrics(overshoot_pct=overshoot, settling_time_s=None if settled is None else float(t[settled]))

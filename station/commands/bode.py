@@ -53,17 +53,16 @@ def run(args: argparse.Namespace) -> int:
     """
     from station.analysis.frequency import compare_bode
     from station.errors import StationError
+    from station.logged import LoggedRun
     from station.plant import DiscretePlant
     from station.plant.model import as_model
     from station.plots import plot_bode
-    from station.runlog import read_log
 
     png = args.png if args.png is not None else Path(f"{args.file.stem}_bode.png")
     check_writable(png, "--png")
     check_writable(args.json, "--json")
-    log = read_log(args.file)
-    t = log.data["t"]
-    dt = log.dt
+    run = LoggedRun.from_path(args.file)
+    log, t, dt = run.log, run.data["t"], run.dt
     model = as_model(args.model, args.elements, args.params)
     args.elements = model.n_elements
     try:

@@ -48,7 +48,7 @@ def run(args: argparse.Namespace) -> int:
         Unreadable log, model file or parameter set, a log without a named controller, bad element
         count, unwritable output.
     """
-    from station.analysis.compare import compare_run, format_comparison
+    from station.compare import compare_run, format_comparison
     from station.plots import plot_comparison
     from station.errors import StationError
     from station.plant.model import as_model

@@ -1,10 +1,13 @@
-"""Model vs rig for logged runs: step metrics and NRMSE fits next to the thesis's table.
+"""Model vs rig for logged runs: step metrics and NRMSE fits next to the thesis's table
+(``station compare``).
 
-Each log is simulated as the rig ran it: the log's controller (station.replay reads it
-from the header, with the rig's ±200 clamp), the log's reference and the log's own
-alignment d, detected from the data as replay does (the rig's later logs and protocol v1
-have d = 1, its 2009 logs d = 0); an open-loop log is driven by its logged v. Step metrics
-use the thesis's definitions (station.analysis.metrics), fits the NRMSE fit
+Each log is simulated as the rig ran it (:meth:`station.logged.LoggedRun.simulate`): the
+log's controller (named by its header, with the rig's ±200 clamp, or inferred), the log's
+reference and the log's own alignment d, detected from the data as replay does (the rig's
+later logs and protocol v1 have d = 1, its 2009 logs d = 0); an open-loop log is driven by
+its logged v. A hub-held beam test is not simulated: the logged v was not applied, so the
+motor model cannot represent it (``station replay`` analyzes the beam's first mode). Step
+metrics use the thesis's definitions (station.analysis.metrics), fits the NRMSE fit
 (station.analysis.fit).
 """
 
@@ -15,8 +18,10 @@ from pathlib import Path
 
 import numpy as np
 
-from station.analysis.metrics import StepMetrics, step_metrics
-from station.reference import step_amplitude
+from station.analysis.metrics import SETTLE_HOLD_S, StepMetrics
+from station.errors import StationError
+from station.logged import LoggedRun
+from station.plots import source_label
 
 THESIS_TABLE = {
     # controller: (experiment (overshoot %, settling s), thesis FEM (overshoot %, settling s));
@@ -53,9 +58,11 @@ class RunComparison:
     outcome : dict or None
         The log's end record (None: a rig log, or a run killed before its end).
     fit_pct : dict
-        NRMSE fit of the model's ``theta`` and ``accel`` to the log, percent.
+        NRMSE fit of the model's ``theta`` and ``accel`` to the log, percent (None each
+        for a hub-held beam test: not simulated).
     data, prediction : dict of ndarray
-        The log's columns and the simulation's output (t, u, v, theta, a, theta_d_hat).
+        The log's columns and the simulation's output (t, u, v, theta, a, theta_d_hat);
+        ``prediction`` is None for a hub-held beam test.
     notes : list of str
     """
 
@@ -68,7 +75,7 @@ class RunComparison:
     thesis_fem: StepMetrics | None
     fit_pct: dict
     data: dict = field(repr=False)
-    prediction: dict = field(repr=False)
+    prediction: dict | None = field(repr=False)
     notes: list = field(default_factory=list)
     source: str = "rig"
     outcome: dict | None = None
@@ -103,41 +110,35 @@ def compare_run(path, plant) -> RunComparison:
     StationError
         Unreadable log, a log that does not name its controller or has no rows.
     """
-    from station.errors import StationError
-    from station.modelrun import simulate_log
-    from station.replay import detect_alignment, log_controller
-    from station.runlog import read_log
-
-    from station.plots import source_label
-
-    log = read_log(path)
-    data = log.data
+    run = LoggedRun.from_path(path)
+    log, data = run.log, run.data
     for key in ("t", "theta"):
         bad = np.flatnonzero(~np.isfinite(data[key]))
         if bad.size:
             raise StationError(f"{path}: row {int(bad[0]) + 1} of the data: {key} is not a finite number; "
                                f"cannot compare a run with missing samples")
     source = source_label(log)
-    controller, notes = log_controller(log)
+    if len(log) == 0:  # the log's own notes say why: no controller to ask for
+        raise StationError(f"{path}: the log has no rows; nothing to compare")
+    controller, notes = run.controller, run.notes
     if controller is None:
         raise StationError(f"{path}: the log does not name its controller; cannot simulate it")
-    if len(log) == 0:
-        raise StationError(f"{path}: the log has no rows; nothing to compare")
-    u = data["u"]
-    closed = getattr(controller, "gth", None) is not None
-    d = None
-    if closed:
-        d, max_dv, _ = detect_alignment(controller, u, data["theta"], data["a"], data["v"])
+    if run.closed:
         clamp = "no clamp" if controller.limit is None else f"clamp ±{controller.limit:g}"
-        notes.append(f"alignment {d} detected: the replay reproduces the logged v to {max_dv:.3g} counts; {clamp}")
-    run = simulate_log(log, controller, d, plant)
-    pred, fits = run.prediction, run.fit_pct
-    notes.append(f"model: driven by {run.how}")
-    step = step_amplitude(u) if closed else None  # station.reference: the one definition of a step
+        notes.append(f"alignment {run.alignment} detected: the replay reproduces the logged v to "
+                     f"{run.max_abs_dv:.3g} counts; {clamp}")
+    step = run.reference.amplitude if run.closed else None  # station.reference: the one definition of a step
+    if run.held is not None:
+        notes.append(f"{run.held_note}; `station replay` analyzes the beam's free vibration after the release")
+        return RunComparison(str(path), controller.name, step, run.step_metrics(), None, None, None,
+                             {"theta": None, "accel": None}, data, None, notes, source=source, outcome=log.outcome)
+    sim = run.simulate(plant)
+    pred, fits = sim.prediction, sim.fit_pct
+    notes.append(f"model: driven by {sim.how}")
     rig = model = exp = fem = None
     if step is not None:
-        rig = step_metrics(data["t"], data["theta"], step)
-        model = step_metrics(pred["t"], pred["theta"], step)
+        rig = run.step_metrics()
+        model = run.step_metrics(pred["theta"], pred["t"])
         thesis_kp = controller.name != "p" or getattr(controller, "spec", {}).get("kp") == 2.0
         if source == "rig" and THESIS_STEPS.get(controller.name) == step and thesis_kp:
             (eo, es), (fo, fs) = THESIS_TABLE[controller.name]
@@ -178,6 +179,7 @@ def format_comparison(c: RunComparison) -> str:
                   f"  {'thesis FEM':<20} {fmt(c.thesis_fem)}"]
     lines += [f"  {'model':<20} {fmt(c.model)} {pct(c.fit_pct['theta']):>8} {pct(c.fit_pct['accel']):>8}"]
     if c.rig is not None and (c.rig.settling_time_s is None or (c.model and c.model.settling_time_s is None)):
-        lines.append("  not settled = still outside the 1 % band at the run's end (not settled within the run)")
+        lines.append(f"  not settled = outside the 1 % band at the run's end, or inside it for less than "
+                     f"{SETTLE_HOLD_S:g} s (not settled within the run)")
     lines += [f"  note: {n}" for n in c.notes]
     return "\n".join(lines)

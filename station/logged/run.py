@@ -1,0 +1,218 @@
+"""A logged run understood: :class:`LoggedRun`, the one place that knows what a log was."""
+
+from __future__ import annotations
+
+from functools import cached_property
+from pathlib import Path
+
+import numpy as np
+
+from station.analysis.beam import HELD_MIN_V, HubHeld, hub_held
+from station.analysis.metrics import StepMetrics, step_metrics
+from station.control.rerun import AlignmentFit, detect_alignment, is_closed_loop
+from station.logged.controller import ControllerId, identify_controller
+from station.logged.simulate import ModelRun, compared_theta, simulate_log
+from station.reference import Reference, classify_reference
+from station.runlog import RunLog, read_log
+
+REPRODUCED_TOLERANCE = 1e-6
+"""max |v_replayed - v_logged| (DAC counts) under which a replay counts as reproducing the log."""
+
+REST_MIN_SAMPLES = 5
+"""Fewest samples before the first command that give the accelerometer's rest offset."""
+
+
+class LoggedRun:
+    """A run log and what it was: which controller ran it, with which alignment, closed or
+    open loop, at which sample time, on which reference, whether it held the hub.
+
+    Each question is answered once, when first asked (the controller identification and
+    the alignment search replay the whole log), from the definitions of DESIGN.md "Timing
+    and log rows" and "Compensators".
+
+    Parameters
+    ----------
+    log : RunLog
+        A log read by :func:`station.runlog.read_log`.
+
+    Attributes
+    ----------
+    log : RunLog
+        The log.
+    """
+
+    def __init__(self, log: RunLog):
+        self.log = log
+
+    @classmethod
+    def from_path(cls, path: str | Path) -> LoggedRun:
+        """Read a log (:func:`station.runlog.read_log`) and understand it.
+
+        Parameters
+        ----------
+        path : str or Path
+            A run log, ours or the rig's.
+
+        Raises
+        ------
+        station.runlog.RunLogError
+            The log cannot be read.
+        """
+        return cls(read_log(path))
+
+    def __repr__(self) -> str:
+        return f"LoggedRun({str(self.log.path)!r})"
+
+    def __len__(self) -> int:
+        return len(self.log)
+
+    @property
+    def data(self) -> dict[str, np.ndarray]:
+        """The log's columns (:attr:`station.runlog.RunLog.data`), shape (N,) each."""
+        return self.log.data
+
+    @cached_property
+    def dt(self) -> float:
+        """The sample time, s (:attr:`station.runlog.RunLog.dt`)."""
+        return self.log.dt
+
+    # --- which controller ran, and how ------------------------------------------------
+
+    @cached_property
+    def identified(self) -> ControllerId:
+        """Which controller ran the log and where that came from
+        (:func:`station.logged.controller.identify_controller`; none for a log without rows).
+
+        Raises
+        ------
+        StationError
+            Our header's controller spec is malformed, or a rig header's gain is not a number.
+        """
+        return identify_controller(self.log) if len(self) else ControllerId(None, None, [])
+
+    @property
+    def controller(self):
+        """The controller that ran the log (Compensator or OpenLoop), None when unknown."""
+        return self.identified.controller
+
+    @property
+    def source(self) -> str | None:
+        """Where the controller came from: "header", "inferred" or None."""
+        return self.identified.source
+
+    @property
+    def notes(self) -> list[str]:
+        """What the identification assumed or could not do, one line each (a new list)."""
+        return list(self.identified.notes)
+
+    @property
+    def closed(self) -> bool:
+        """Whether the run was closed loop (:func:`station.control.rerun.is_closed_loop`)."""
+        return is_closed_loop(self.controller)
+
+    @cached_property
+    def replayed(self) -> AlignmentFit | None:
+        """The controller run over the logged samples at its best alignment
+        (:func:`station.control.rerun.detect_alignment`); None without a controller or rows."""
+        if self.controller is None or not len(self):
+            return None
+        d = self.data
+        return detect_alignment(self.controller, d["u"], d["theta"], d["a"], d["v"])
+
+    @property
+    def alignment(self) -> int | None:
+        """The computational delay d, samples, detected from the data; None unless closed
+        loop (in open loop, v = u, d only decides whether v[0] is u[0] or 0)."""
+        return self.replayed.alignment if self.closed and self.replayed is not None else None
+
+    @property
+    def max_abs_dv(self) -> float | None:
+        """max |v_replayed - v_logged|, DAC counts (None when nothing was replayed)."""
+        return None if self.replayed is None else self.replayed.max_abs_dv
+
+    @property
+    def reproduced(self) -> bool:
+        """True when the replay reproduces the logged v within :data:`REPRODUCED_TOLERANCE`."""
+        return self.max_abs_dv is not None and self.max_abs_dv <= REPRODUCED_TOLERANCE
+
+    @property
+    def header_alignment(self) -> int | None:
+        """The alignment our log's header states (None: a rig log, or not stated)."""
+        d = self.log.meta.get("alignment") if self.log.format == "station" else None
+        return d if isinstance(d, int) and not isinstance(d, bool) else None
+
+    # --- what the run was ----------------------------------------------------------------
+
+    @cached_property
+    def reference(self) -> Reference:
+        """What the logged u is (:func:`station.reference.classify_reference`)."""
+        return classify_reference(self.data["u"])
+
+    @cached_property
+    def held(self) -> HubHeld | None:
+        """Why the run is a hub-held beam test (:func:`station.analysis.beam.hub_held`), None
+        when it is not: then the logged v was not applied and the motor model cannot
+        represent the run."""
+        return hub_held(self.data["theta"], self.data["v"], self.dt) if len(self) else None
+
+    @property
+    def held_note(self) -> str:
+        """One line on why the run is a hub-held beam test and what that rules out ("" when not)."""
+        h = self.held
+        if h is None:
+            return ""
+        return (f"hub-held beam test (theta within {h.theta_span:g} counts while |v| >= {HELD_MIN_V:g} for "
+                f"{h.duration_s:.1f} s): the logged v was not applied, so the motor model cannot represent "
+                f"this run and its fit is not computed")
+
+    @property
+    def theta(self) -> np.ndarray:
+        """θ as a model is compared with it, encoder counts, shape (N,): relative to its
+        first sample in open loop (:func:`station.logged.simulate.compared_theta`)."""
+        return compared_theta(self.data["theta"], self.closed)
+
+    @cached_property
+    def accel_rest_offset(self) -> float:
+        """The accelerometer's mean before the first non-zero command, counts (0.0 with
+        fewer than :data:`REST_MIN_SAMPLES` samples at rest)."""
+        a = np.asarray(self.data["a"], dtype=float)
+        moving = np.flatnonzero(np.asarray(self.data["v"], dtype=float) != 0)
+        rest = int(moving[0]) if moving.size else a.size
+        return float(np.mean(a[:rest])) if rest >= REST_MIN_SAMPLES else 0.0
+
+    def step_metrics(self, theta=None, t=None) -> StepMetrics | None:
+        """The thesis's step metrics of a closed-loop step run, against the step's
+        classified amplitude (:attr:`reference`).
+
+        Parameters
+        ----------
+        theta : array_like, shape (N,), optional
+            The response, encoder counts (default: the logged θ; e.g. a simulation's).
+        t : array_like, shape (N,), optional
+            Its sample times, s (default: the logged t).
+
+        Returns
+        -------
+        StepMetrics or None
+            None unless the run is closed loop on a step reference.
+        """
+        if not (self.closed and self.reference.is_step and len(self)):
+            return None
+        return step_metrics(self.data["t"] if t is None else t, self.data["theta"] if theta is None else theta,
+                            self.reference.amplitude)
+
+    def simulate(self, model) -> ModelRun:
+        """The run simulated on a model as the rig ran it (:func:`station.logged.simulate.simulate_log`
+        with this run's controller and alignment), with its NRMSE fits.
+
+        Parameters
+        ----------
+        model : station.plant.model.Model or station.plant.DiscretePlant
+            A Model is simulated at the log's sample time with its effects; a
+            DiscretePlant (reset first) should have the log's dt.
+
+        Returns
+        -------
+        ModelRun
+        """
+        return simulate_log(self.log, self.controller, self.alignment, model)
