@@ -1,11 +1,16 @@
-"""Rounding to whole counts, halves away from zero: the one definition, and its compiled twin.
+"""Rounding to whole counts, halves away from zero: the one definition, and its compiled twins.
 
 The spec (``shared/spec/protocol.md``) has the station round v to the nearest integer,
 halves away from zero, before sending it; the v1 firmware rounds its accelerometer
-offset the same way. The simulated device, the protocol codec and the numba kernel of
+offset the same way. The simulated sensors read by the same rule (:func:`sensor_count`:
+θ to the nearest encoder count, a to whole ADC counts). The simulated device, the
+protocol codec, the plant's `Sensors` and the numba kernel of
 :func:`station.plant.simulate.simulate` all use this module, so the model equals loop +
 device to the last count. ``floor(x + 0.5)`` is not this rule: ``0.49999999999999994 + 0.5``
-rounds to 1.0 in floating point, so that form sends 1 where the rule gives 0.
+rounds to 1.0 in floating point, so that form sends 1 where the rule gives 0 (and it
+rounds −2.5 to −2).
+
+Imports nothing from the station (the bottom layer); numba when installed.
 """
 
 from __future__ import annotations
@@ -45,10 +50,46 @@ def half_away(x: float) -> float:
 try:
     import numba
 except ImportError:  # pragma: no cover - numba is a dependency; plain Python without it
+    numba = None
     half_away_compiled = half_away
 else:
     half_away_compiled = numba.njit(cache=True, nogil=True)(half_away)
 """:func:`half_away` compiled by numba, for compiled kernels (same float operations)."""
+
+
+def _sensor_count_with(rounding):
+    # one body for the Python function and its compiled twin (numba compiles the closure
+    # over the compiled rounding)
+    def sensor_count(x: float) -> float:
+        """A sensor's reading of a noise-free value: the nearest whole count, as a float.
+
+        The encoder reports θ to the nearest count and the accelerometer's ADC a in
+        whole counts (DESIGN.md "FEM plant"); both round halves away from zero, the
+        station's one rule (:func:`half_away`).
+
+        Parameters
+        ----------
+        x : float
+            Noise-free (or noisy) output, counts.
+
+        Returns
+        -------
+        float
+            The whole count; a zero reading is +0.0 (a count has no sign, so −0.3 reads
+            0.0, not −0.0); ±inf and NaN come back unchanged.
+        """
+        return rounding(x) + 0.0  # -0.0 + 0.0 is +0.0
+
+    return sensor_count
+
+
+sensor_count = _sensor_count_with(half_away)
+
+if numba is None:  # pragma: no cover
+    sensor_count_compiled = sensor_count
+else:
+    sensor_count_compiled = numba.njit(cache=True, nogil=True)(_sensor_count_with(half_away_compiled))
+""":func:`sensor_count` compiled by numba, for the simulate kernel (same float operations)."""
 
 
 def round_half_away(x: float) -> int:
