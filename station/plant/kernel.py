@@ -376,7 +376,8 @@ class ModelPlant(Stepper):
     its own quantization and clamp) and passes it through the amplifier's saturation,
     dead-zone and delay; friction and backlash act inside the plant on the sub-step
     grid; ``outputs`` applies accel_gain. Sample for sample equal to
-    :func:`station.plant.simulate.simulate` with the same model (the same compiled functions do the arithmetic).
+    :func:`station.plant.simulate.simulate` with the same model (the same compiled
+    functions do the arithmetic).
 
     Parameters
     ----------

@@ -32,7 +32,8 @@ from station.plant.modal import sampled_form
 from station.plant.model import Model
 from station.rounding import sensor_count
 
-__all__ = ["COMMAND_QUANTIZATION", "ModelPlant", "SimResult", "simulate"]  # ModelPlant, COMMAND_QUANTIZATION: re-exported
+# ModelPlant and COMMAND_QUANTIZATION live in kernel; re-exported where they were
+__all__ = ["COMMAND_QUANTIZATION", "ModelPlant", "SimResult", "simulate"]
 
 
 def _plant_parts(model, dt, substeps):
