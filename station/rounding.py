@@ -10,56 +10,57 @@ device to the last count. ``floor(x + 0.5)`` is not this rule: ``0.4999999999999
 rounds to 1.0 in floating point, so that form sends 1 where the rule gives 0 (and it
 rounds −2.5 to −2).
 
-Imports nothing from the station (the bottom layer); numba when installed.
+Imports nothing from the station (the bottom layer); numpy, and numba when installed.
 """
 
 from __future__ import annotations
 
 import math
 
-_WHOLE = 4503599627370496.0  # 2**52: every float at or beyond it is already whole
-
-
-def half_away(x: float) -> float:
-    """Nearest whole number to ``x``, halves away from zero, as a float.
-
-    Parameters
-    ----------
-    x : float
-        Any float; ±inf and NaN come back unchanged.
-
-    Returns
-    -------
-    float
-        The rounded value (−0.0 for small negatives, which equals 0.0).
-
-    Notes
-    -----
-    The fraction ``|x| - floor(|x|)`` is exact and compared with 0.5, so no sum is
-    rounded on the way (unlike ``floor(x + 0.5)``).
-    """
-    mag = abs(x)
-    if not mag < _WHOLE:
-        return x
-    whole = float(math.floor(mag))  # exact below 2**52
-    if mag - whole >= 0.5:  # exact too: no sum is rounded on the way
-        whole += 1.0
-    return whole if x >= 0.0 else -whole
-
+import numpy as np
 
 try:
     import numba
 except ImportError:  # pragma: no cover - numba is a dependency; plain Python without it
     numba = None
-    half_away_compiled = half_away
-else:
-    half_away_compiled = numba.njit(cache=True, nogil=True)(half_away)
-""":func:`half_away` compiled by numba, for compiled kernels (same float operations)."""
+
+_WHOLE = 4503599627370496.0  # 2**52: every float at or beyond it is already whole
+
+
+# Each rule has one body, made twice: for Python with math.floor and compiled with np.floor
+# (both exact; np.floor keeps a float where math.floor passes through an int, which costs
+# the simulate kernel a few per cent per sample).
+
+def _half_away_with(floor):
+    def half_away(x: float) -> float:
+        """Nearest whole number to ``x``, halves away from zero, as a float.
+
+        Parameters
+        ----------
+        x : float
+            Any float; ±inf and NaN come back unchanged.
+
+        Returns
+        -------
+        float
+            The rounded value (−0.0 for small negatives, which equals 0.0).
+
+        Notes
+        -----
+        The fraction ``|x| - floor(|x|)`` is exact and compared with 0.5, so no sum is
+        rounded on the way (unlike ``floor(x + 0.5)``).
+        """
+        mag = abs(x)
+        if not mag < _WHOLE:
+            return x
+        whole = float(floor(mag))  # exact below 2**52
+        whole = whole + 1.0 if mag - whole >= 0.5 else whole  # exact too: no sum is rounded on the way
+        return whole if x >= 0.0 else -whole
+
+    return half_away
 
 
 def _sensor_count_with(rounding):
-    # one body for the Python function and its compiled twin (numba compiles the closure
-    # over the compiled rounding)
     def sensor_count(x: float) -> float:
         """A sensor's reading of a noise-free value: the nearest whole count, as a float.
 
@@ -83,13 +84,17 @@ def _sensor_count_with(rounding):
     return sensor_count
 
 
+half_away = _half_away_with(math.floor)
 sensor_count = _sensor_count_with(half_away)
 
 if numba is None:  # pragma: no cover
+    half_away_compiled = half_away
     sensor_count_compiled = sensor_count
 else:
+    half_away_compiled = numba.njit(cache=True, nogil=True)(_half_away_with(np.floor))
     sensor_count_compiled = numba.njit(cache=True, nogil=True)(_sensor_count_with(half_away_compiled))
-""":func:`sensor_count` compiled by numba, for the simulate kernel (same float operations)."""
+""":func:`half_away` and :func:`sensor_count` compiled by numba, for compiled kernels (the
+same float operations: np.floor and math.floor agree below 2**52)."""
 
 
 def round_half_away(x: float) -> int:
