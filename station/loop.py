@@ -32,6 +32,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from station import DT
+from station.control.contract import ControllerFault, guard_command
 from station.link import DeviceStopped, LinkFault, Session
 from station.outcome import Outcome
 from station.realtime import RealtimePriority
@@ -120,10 +121,6 @@ class SoftLimitError(Exception):
     """The encoder passed the soft limit."""
 
 
-class _ControllerFault(Exception):
-    pass
-
-
 class _Signalled(Exception):
     pass
 
@@ -155,7 +152,7 @@ def run_loop(session: Session, controller, reference: np.ndarray, writer, soft_l
     limit : float
         Every command is clamped to ±limit DAC counts before it reaches the wire,
         whatever the controller returns (±inf, 1e300); NaN stops the run
-        ("controller-fault").
+        ("controller-fault"): :func:`station.control.contract.guard_command`.
     signals : station.signals.StopSignals, optional
         The caller's signal guard (it stays installed while the caller closes the log);
         default: one installed for the loop's duration. SIGINT / SIGTERM end the run
@@ -224,11 +221,9 @@ def run_loop(session: Session, controller, reference: np.ndarray, writer, soft_l
                     try:
                         v_next, dhat_next = step(u[n + 1], theta, accel)
                     except BaseException as exc:  # noqa: BLE001 - any controller fault (SystemExit too) stops the motor
-                        raise _ControllerFault(f"controller raised {type(exc).__name__}: {exc} at tick {n}") from exc
-                    if not neg <= v_next <= lim:  # also False for NaN
-                        if v_next != v_next:
-                            raise _ControllerFault(f"controller returned NaN at tick {n}")
-                        v_next = lim if v_next > 0 else neg  # ±inf, 1e300: clamped before the wire
+                        raise ControllerFault(f"controller raised {type(exc).__name__}: {exc} at tick {n}") from exc
+                    if not neg <= v_next <= lim:  # also for NaN; inside ±limit the guard is the identity
+                        v_next = guard_command(v_next, lim, n)  # ±inf, 1e300 clamped; NaN a ControllerFault
                     send_command(n, v_next)
                     lat_next = (perf_ns() - t_recv) / 1000.0
                     latencies[n + 1] = lat_next
@@ -254,7 +249,7 @@ def run_loop(session: Session, controller, reference: np.ndarray, writer, soft_l
         reason, message = "sigint", f"KeyboardInterrupt at tick {ticks}"
     except SoftLimitError as exc:
         reason, message = "soft-limit", str(exc)
-    except _ControllerFault as exc:
+    except ControllerFault as exc:
         reason, message = "controller-fault", str(exc)
     except Exception as exc:  # noqa: BLE001 - whatever broke, the motor went to 0 first
         reason, message = "link", f"{type(exc).__name__}: {exc}"

@@ -14,6 +14,9 @@ import control
 import numpy as np
 import scipy.signal
 
+from station.plant.discrete import DiscretePlant
+from station.plant.modes import modal_summary
+
 
 @dataclass(frozen=True)
 class FrequencyEstimate:
@@ -169,7 +172,7 @@ class BodeComparison:
         return 100.0 * (self.antiresonances_model_hz - self.antiresonances_measured_hz) / self.antiresonances_measured_hz
 
 
-def compare_bode(v, theta, a, dt: float, plant, nperseg: int = 4096, max_hz: float = 40.0) -> BodeComparison:
+def compare_bode(v, theta, a, dt: float, model, nperseg: int = 4096, max_hz: float = 40.0) -> BodeComparison:
     """H1 estimates of θ/v and a/v from a run, the model's response, antiresonances.
 
     Parameters
@@ -179,8 +182,10 @@ def compare_bode(v, theta, a, dt: float, plant, nperseg: int = 4096, max_hz: flo
         swept-sine run excites the band (DESIGN.md: 0–40 Hz in 20 s).
     dt : float
         Sample time, s.
-    plant : station.plant.DiscretePlant
-        The model (its params and element count give the antiresonances).
+    model : station.plant.model.Model or station.plant.DiscretePlant
+        The model: a Model's linear part (its param:NAME and beam_damping effects
+        included) is sampled at ``dt``; a DiscretePlant is used as it is. Its parameters
+        and element count give the antiresonances.
     nperseg : int, default 4096
         Welch segment length.
     max_hz : float, default 40
@@ -190,8 +195,7 @@ def compare_bode(v, theta, a, dt: float, plant, nperseg: int = 4096, max_hz: flo
     -------
     BodeComparison
     """
-    from station.plant import modal_summary
-
+    plant = model if isinstance(model, DiscretePlant) else model.linear_plant(dt)
     est_theta = h1_estimate(v, theta, 1.0 / dt, nperseg)
     est_accel = h1_estimate(v, a, 1.0 / dt, nperseg)
     keep = est_theta.f > 0

@@ -1,9 +1,17 @@
 """Discrete compensators (P, lead Gth, accelerometer feedback Ga) and references.
 
-No I/O. See docs/ARCHITECTURE.md "station.control" and DESIGN.md "Compensators".
+- `contract`: the controller contract (`Controller`), the one command guard
+  (`guard_command`, `ControllerFault`) and the clamp before the wire (`wire_limit`).
+- `tf`, `compensator`, `designs`: filters, the rig's compensator structure, its designs
+  and compensator files; `reference`: u[k] arrays.
+
+No I/O (a file reference reads a run log through :mod:`station.runlog`). Imports
+:mod:`station.errors` and :mod:`station.runlog` only. See docs/ARCHITECTURE.md
+"station.control" and DESIGN.md "Compensators".
 """
 
 from station.control.compensator import Compensator, OpenLoop
+from station.control.contract import DAC_LIMIT, Controller, ControllerFault, guard_command, wire_limit
 from station.control.designs import (
     ACCEL_DEN_S,
     ACCEL_NUM_S,
@@ -20,9 +28,9 @@ from station.control.reference import file_reference, pulse_reference, step_refe
 from station.control.tf import DiscreteTF, tustin
 
 __all__ = [
-    "ACCEL_DEN_S", "ACCEL_NUM_S", "KINDS", "LEAD_DEN_S", "LEAD_NUM_S",
-    "Compensator", "DiscreteTF", "OpenLoop",
-    "controller_from_spec", "file_reference", "lead_controller", "load_compensator_file",
+    "ACCEL_DEN_S", "ACCEL_NUM_S", "DAC_LIMIT", "KINDS", "LEAD_DEN_S", "LEAD_NUM_S",
+    "Compensator", "Controller", "ControllerFault", "DiscreteTF", "OpenLoop",
+    "controller_from_spec", "file_reference", "guard_command", "lead_controller", "load_compensator_file",
     "make_controller", "p_controller", "pulse_reference", "step_reference",
-    "swept_sine_reference", "tustin",
+    "swept_sine_reference", "tustin", "wire_limit",
 ]

@@ -14,6 +14,7 @@ import scipy.signal
 from station import DT
 from station.plant.fem import state_matrices
 from station.plant.parameters import Params, load_params
+from station.rounding import sensor_count
 
 
 class DiscretePlant:
@@ -156,18 +157,27 @@ class Sensors:
         Returns
         -------
         theta, a : int
-            theta rounded to the nearest count; a plus Gaussian noise, rounded.
+            theta rounded to the nearest count; a plus Gaussian noise, rounded
+            (:func:`quantize`).
         """
         noisy = a + self.accel_noise_std * self.rng.standard_normal()
         return quantize(theta), quantize(noisy)
 
 
 def quantize(x: float) -> int:
-    """Nearest whole count (halves rounded up), as the encoder and ADC report.
+    """Nearest whole count, as the encoder and ADC report (:func:`station.rounding.sensor_count`:
+    halves away from zero).
 
     Parameters
     ----------
     x : float
         A noise-free output, counts.
+
+    Raises
+    ------
+    ValueError
+        ``x`` is NaN.
+    OverflowError
+        ``x`` is infinite.
     """
-    return int(np.floor(x + 0.5))
+    return int(sensor_count(x))

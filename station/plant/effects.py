@@ -18,6 +18,8 @@ from collections.abc import Mapping
 from typing import NamedTuple
 
 from station.errors import StationError
+from station.plant.modes import modal_summary
+from station.plant.parameters import load_params
 
 
 class EffectSpec(NamedTuple):
@@ -55,9 +57,6 @@ AMPLIFIER_ORDER = ("saturation", "deadzone", "delay")
 
 def _nominal_beam_damping() -> float:
     # tmm-fit's own first hub-held mode damping ratio (from the clamp damper alone)
-    from station.plant.modes import modal_summary
-    from station.plant.parameters import load_params
-
     return float(modal_summary(load_params("tmm-fit"), 4).antiresonance_damping[0])
 
 

@@ -17,7 +17,7 @@ import control
 import numpy as np
 import scipy.linalg
 
-from station.plant.parameters import Params
+from station.plant.parameters import Params, load_params
 
 N_ELEMENTS_MAX = 100
 """Largest supported element count."""
@@ -318,8 +318,6 @@ def build_continuous(params: Params | None = None, n_elements: int = 4) -> contr
         Element count out of range.
     """
     if params is None:
-        from station.plant.parameters import load_params
-
         params = load_params()
     A, B, C = state_matrices(params, n_elements)
     return control.ss(A, B, C, np.zeros((2, 1)), inputs=["v"], outputs=["theta", "a"])

@@ -26,13 +26,15 @@ import tomllib
 from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, NamedTuple
-
-import numpy as np
+from typing import Any
 
 from station import DT
 from station.errors import StationError
+from station.plant.discrete import DiscretePlant
 from station.plant.effects import EFFECTS, check_effects
+from station.plant.kernel import ModelPlant
+from station.plant.modal import LinearForm, linear_form  # noqa: F401 (LinearForm re-exported: it lived here)
+from station.plant.modes import with_beam_damping
 from station.plant.parameters import PARAMS_DIR, Params, load_params, params_from_dict
 
 MODELS_DIR = Path(__file__).resolve().parent / "models"
@@ -145,7 +147,24 @@ class Model:
         m = (SUBSTEPS if substeps is None else int(substeps)) if self.has_plant_effects else 0
         return linear_form(self.linear_params(), self.n_elements, float(dt), m)
 
-    def plant(self, dt: float = DT, substeps: int | None = None):
+    def linear_plant(self, dt: float = DT) -> DiscretePlant:
+        """The linear part sampled by exact ZOH (what a frequency response or the
+        small-signal closed loop can show; friction, backlash and the amplifier's
+        effects are left out).
+
+        Parameters
+        ----------
+        dt : float, default 0.002
+            Sample time, s.
+
+        Returns
+        -------
+        DiscretePlant
+            On :meth:`linear_params` and this model's element count, at rest.
+        """
+        return DiscretePlant(self.linear_params(), n_elements=self.n_elements, dt=dt)
+
+    def plant(self, dt: float = DT, substeps: int | None = None) -> ModelPlant:
         """A plant stepped tick by tick with this model's effects (for the simulated device).
 
         Parameters
@@ -157,12 +176,10 @@ class Model:
 
         Returns
         -------
-        station.plant.simulate.ModelPlant
+        station.plant.kernel.ModelPlant
             ``reset()``, ``outputs() -> (theta, a)``, ``advance(v)``; equal to
             :func:`station.plant.simulate` sample for sample.
         """
-        from station.plant.simulate import ModelPlant
-
         return ModelPlant(self, dt, substeps)
 
     def to_json(self) -> dict[str, Any]:
@@ -332,8 +349,6 @@ def as_model(model: Model | str | Path | None, n_elements: int | None = None,
 
 @functools.lru_cache(maxsize=512)
 def _linear_params(params: Params, n_elements: int, linear: tuple[tuple[str, float], ...]) -> Params:
-    from station.plant.modes import with_beam_damping
-
     values = dict(linear)
     ratios = {k.split(":", 1)[1]: v for k, v in values.items() if k.startswith("param:")}
     p = dataclasses.replace(params, **{k: getattr(params, k) * r for k, r in ratios.items()}) if ratios else params
@@ -344,96 +359,6 @@ def _linear_params(params: Params, n_elements: int, linear: tuple[tuple[str, flo
         except ValueError:  # at or below the set's own first-mode damping: no beam damping
             p = dataclasses.replace(p, beam_beta=0.0)
     return p
-
-
-class LinearForm(NamedTuple):
-    """Diagonal (modal) form of the exact-ZOH linear plant on a (sub-)step grid.
-
-    The state in modal coordinates z (complex, shape (n,)) evolves per step of
-    h = dt / substeps as z ← lam·z + bm·v + bp·T, v in DAC counts (torque k_tau·v on the
-    motor), T an extra torque pair, N·m, +T on the motor and −T on the base.
-
-    Attributes
-    ----------
-    lam, bm, bp : ndarray of complex, shape (n,)
-    cm : ndarray of complex, shape (2, n)
-        Sample outputs Re(cm @ z): theta (encoder counts), a (accelerometer counts).
-    co : ndarray of complex, shape (4, n)
-        Re(co @ z): δ = θ_motor − θ_base (rad), δ' (rad/s), ω_motor (rad/s), and
-        ω_motor after one free step (rows of co[2]·lam). Zero when ``substeps`` is 0.
-    vinv : ndarray of complex, shape (n, n)
-        Maps a state of `fem.state_matrices` into z. With sub-steps only one mode of
-        each complex-conjugate pair is kept (the state is real), its outputs counted
-        twice in cm and co, so n is about half the state count.
-    gw_v, gw_p : float
-        Change of ω_motor over one step per DAC count and per N·m of T.
-    substeps : int
-        Steps per sample; 0: sampled at dt by `DiscretePlant.modal_form` (no friction
-        or backlash: exactly today's plant), with bp and co zero.
-    """
-
-    lam: np.ndarray
-    bm: np.ndarray
-    bp: np.ndarray
-    cm: np.ndarray
-    co: np.ndarray
-    vinv: np.ndarray
-    gw_v: float
-    gw_p: float
-    substeps: int
-
-
-@functools.lru_cache(maxsize=256)
-def linear_form(params: Params, n_elements: int, dt: float, substeps: int) -> LinearForm:
-    """The (cached) :class:`LinearForm` of a parameter set.
-
-    Parameters
-    ----------
-    params : Params
-    n_elements : int
-    dt : float
-        Sample time, s.
-    substeps : int
-        0: sampled at dt exactly as `DiscretePlant` (bp, co zero); M >= 1: sub-step
-        grid dt / M with the outputs friction and backlash need.
-    """
-    import scipy.linalg
-    import scipy.signal
-
-    from station.plant.discrete import DiscretePlant
-    from station.plant.fem import modal_basis, state_matrices
-
-    if substeps == 0:
-        lam, bm, cm, vinv = DiscretePlant(params, n_elements, dt).modal_form()
-        n = lam.size
-        zeros = np.zeros(n, complex)
-        return LinearForm(lam, bm, zeros, np.ascontiguousarray(cm), np.zeros((4, n), complex), vinv, 0.0, 0.0, 0)
-    A, B, C = state_matrices(params, n_elements)
-    m, Phi, _, scale = modal_basis(params, n_elements)
-    n_dof = Phi.shape[0]
-    pair = np.zeros(n_dof)
-    pair[0], pair[m.base] = 1.0, -1.0
-    Bp = np.concatenate([np.zeros(n_dof), Phi.T @ pair])
-    rows = np.zeros((3, 2 * n_dof))
-    rows[0, :n_dof] = (Phi[0] - Phi[m.base]) / scale  # δ = θ_m − θ_b
-    rows[1, n_dof:] = Phi[0] - Phi[m.base]             # δ'
-    rows[2, n_dof:] = Phi[0]                            # ω_m
-    h = dt / substeps
-    Ad, Bd, _, _, _ = scipy.signal.cont2discrete((A, np.column_stack([B[:, 0], Bp]), C, np.zeros((2, 2))),
-                                                 h, method="zoh")
-    lam, V = scipy.linalg.eig(Ad)
-    vinv = scipy.linalg.lu_solve(scipy.linalg.lu_factor(V), np.eye(V.shape[0]))
-    # the state is real: keep one of each conjugate pair (LAPACK returns exact conjugates)
-    # and count its output twice, which halves the work per sub-step
-    keep = lam.imag >= 0.0
-    weight = np.where(lam.imag > 0.0, 2.0, 1.0)[keep]
-    lam, vinv = lam[keep], vinv[keep]
-    cm, rows_v = (C @ V)[:, keep] * weight, (rows @ V)[:, keep] * weight
-    bm, bp = vinv @ Bd[:, 0], vinv @ Bd[:, 1]
-    co = np.vstack([rows_v, rows_v[2] * lam])
-    gw_v, gw_p = float((rows_v[2] @ bm).real), float((rows_v[2] @ bp).real)
-    return LinearForm(lam, bm, bp, np.ascontiguousarray(cm), np.ascontiguousarray(co), vinv, gw_v, gw_p,
-                      int(substeps))
 
 
 __all__ = ["MODELS_DIR", "SUBSTEPS", "LinearForm", "Model", "as_model", "builtin_models", "linear_form",

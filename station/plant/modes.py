@@ -7,10 +7,12 @@ dynamics": first beam mode 2.52 Hz with ζ ≈ 0.005 with the hub held, second �
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass
 
 import numpy as np
 import scipy.linalg
+import scipy.optimize
 
 from station.plant.fem import SecondOrderModel, state_matrices
 from station.plant.parameters import Params
@@ -126,10 +128,6 @@ def with_beam_damping(params: Params, zeta: float, n_elements: int = 4) -> Param
     ValueError
         zeta below the clamp damper's own contribution or above 0.5.
     """
-    import dataclasses
-
-    import scipy.optimize
-
     def first_zeta(beta: float) -> float:
         p = dataclasses.replace(params, beam_beta=beta)
         return float(modal_summary(p, n_elements).antiresonance_damping[0])

@@ -9,6 +9,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from station.rounding import sensor_count
+
 
 class StepRecorderPlant:
     """A plant whose outputs reveal the commands that acted on it.
@@ -45,7 +47,8 @@ class StepRecorderPlant:
 
 
 class RoundingSensors:
-    """Sensors like ``station.plant.Sensors``: theta rounded, a + seeded Gaussian noise rounded.
+    """Sensors like ``station.plant.Sensors``: theta rounded, a + seeded Gaussian noise rounded
+    (:func:`station.rounding.sensor_count`, halves away from zero).
 
     Parameters
     ----------
@@ -68,5 +71,5 @@ class RoundingSensors:
             Noise-free outputs, encoder counts and ADC counts.
         """
         noise = self._rng.normal(0.0, self.accel_noise_std) if self.accel_noise_std else 0.0
-        return int(np.round(theta)), int(np.round(a + noise))
+        return int(sensor_count(theta)), int(sensor_count(a + noise))  # the rig's sensors' rule
 

@@ -1,0 +1,404 @@
+"""The compiled sample loop of the SFLR simulation and the per-sample functions it shares.
+
+The plant is stepped in its modal form (:mod:`station.plant.modal`): z_{k+1} = Λ z_k +
+b_m v[k], y_k = Re(C_m z_k). :func:`run_kernel` is a whole run's sample loop, with the
+compensator's recursions, clamp, sensor and command quantization (:mod:`station.rounding`)
+and a model's effects, compiled by numba (without numba the same code runs as plain
+Python, same results, about 1000x slower). :class:`Stepper` / :class:`ModelPlant` step
+the same compiled functions one sample at a time (the simulated device's plant, and
+:func:`station.plant.simulate.simulate`'s loop for a Python controller), so every path
+does the same float operations.
+
+Effects of a :class:`station.plant.model.Model` (DESIGN.md "Model diagnosis contract"):
+the command goes through the device's quantization, the amplifier's saturation,
+dead-zone and extra delay; Coulomb friction (Karnopp stick-slip) and backlash act inside
+the plant on a sub-step grid dt/M of the same exact ZOH (friction through the command's
+channel, backlash as a torque pair on motor and base); accel_gain scales a before its
+quantization.
+
+Imports the modal form and the rounding rule only; a Model is used through its methods
+(``linear_form``, ``linear_params``, ``effect_dict``), so :mod:`station.plant.model` can
+build a `ModelPlant` without a circle.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import NamedTuple
+
+import numpy as np
+
+from station import DT
+from station.plant.modal import LinearForm
+from station.rounding import half_away, half_away_compiled, sensor_count, sensor_count_compiled
+
+try:  # compiled kernel when numba is installed; plain Python otherwise
+    import numba
+except ImportError:  # pragma: no cover - exercised only without numba
+    numba = None
+
+
+def _commit(num, den, xs, ys, x, y):  # pragma: no cover - compiled by numba
+    """Push input x and output y into a direct-form I history; return the next
+    output's history term sum(num[i] x[k+1-i]) - sum(den[i] y[k+1-i]) (i >= 1),
+    summed in the order of station.control.DiscreteTF."""
+    for i in range(xs.shape[0] - 1, 0, -1):
+        xs[i] = xs[i - 1]
+    if xs.shape[0] > 0:
+        xs[0] = x
+    for i in range(ys.shape[0] - 1, 0, -1):
+        ys[i] = ys[i - 1]
+    if ys.shape[0] > 0:
+        ys[0] = y
+    acc = 0.0
+    for i in range(xs.shape[0]):
+        acc += num[i + 1] * xs[i]
+    for i in range(ys.shape[0]):
+        acc -= den[i + 1] * ys[i]
+    return acc
+
+
+def _outputs(z, cm, accel_gain):  # pragma: no cover - compiled by numba
+    """Noise-free (theta, a) at modal state z: Re(cm @ z), a scaled by accel_gain."""
+    y0 = 0.0
+    y1 = 0.0
+    for i in range(z.shape[0]):
+        y0 += (cm[0, i] * z[i]).real
+        y1 += (cm[1, i] * z[i]).real
+    return y0, y1 * accel_gain
+
+
+def _amplifier(vk, saturation, deadzone):  # pragma: no cover - compiled by numba
+    """The amplifier's saturation then dead-zone (DESIGN.md order), DAC counts."""
+    if vk > saturation:
+        vk = saturation
+    elif vk < -saturation:
+        vk = -saturation
+    if deadzone > 0.0:
+        if vk > deadzone:
+            vk = vk - deadzone
+        elif vk < -deadzone:
+            vk = vk + deadzone
+        else:
+            vk = 0.0
+    return vk
+
+
+def _advance(z, vk, lam, bm, bp, co, gw_v, gw_p, substeps, v_c, half_gap, k_d, c_d):  # pragma: no cover
+    """One sample with the torque command vk (DAC counts) held: z in place.
+
+    substeps == 0: the linear ZOH step z <- lam z + bm vk. Else ``substeps`` steps of the
+    sub-step grid, each with the backlash torque pair T and the Coulomb friction f
+    (counts, through the command's channel) held over the step: T = k_d·(δ − dz(δ)) +
+    c_d·δ'·[|δ| <= half_gap] cancels what the drive spring/damper would transmit inside
+    the gap; friction slides at v_c·sign(ω_m) while ω_m keeps its sign over the step, else
+    (Karnopp) takes the value that stops the motor at the step's end when that is within
+    ±v_c (stick), else ±v_c against the motion (break-away).
+    """
+    n = z.shape[0]
+    if substeps == 0:
+        for i in range(n):
+            z[i] = lam[i] * z[i] + bm[i] * vk
+        return
+    for _ in range(substeps):
+        dl = 0.0
+        ddl = 0.0
+        wm = 0.0
+        wf = 0.0
+        if half_gap > 0.0:
+            for i in range(n):
+                dl += (co[0, i] * z[i]).real
+                ddl += (co[1, i] * z[i]).real
+        if v_c > 0.0:
+            for i in range(n):
+                wm += (co[2, i] * z[i]).real
+                wf += (co[3, i] * z[i]).real
+        t = 0.0
+        if half_gap > 0.0:
+            if dl > half_gap:
+                t = k_d * half_gap
+            elif dl < -half_gap:
+                t = -k_d * half_gap
+            else:
+                t = k_d * dl + c_d * ddl
+        f = 0.0
+        if v_c > 0.0:
+            w_free = wf + gw_v * vk + gw_p * t  # ω_m at the step's end without friction
+            sliding = False
+            if wm != 0.0:
+                sg = 1.0 if wm > 0.0 else -1.0
+                if (w_free - gw_v * v_c * sg) * sg > 0.0:
+                    f = v_c * sg
+                    sliding = True
+            if not sliding:
+                f = w_free / gw_v
+                if f > v_c:
+                    f = v_c
+                elif f < -v_c:
+                    f = -v_c
+        ue = vk - f
+        for i in range(n):
+            z[i] = lam[i] * z[i] + bm[i] * ue + bp[i] * t
+
+
+def _loop(lam, bm, bp, cm, co, gw_v, gw_p, substeps, z0, u, v_open, use_v_open, closed, gnum, gden, anum, aden,
+          use_ga, limit, d, quantize, cmd_mode, saturation, deadzone, delay, accel_gain, v_c, half_gap, k_d,
+          c_d):  # pragma: no cover - compiled by numba
+    n = u.shape[0]
+    theta = np.zeros(n)
+    acc = np.zeros(n)
+    v = np.zeros(n)
+    thd = np.zeros(n)
+    z = z0.copy()
+    gx = np.zeros(gnum.shape[0] - 1)  # Gth input history (newest first)
+    gy = np.zeros(gden.shape[0] - 1)  # Gth output history: the saturated v
+    ax = np.zeros(anum.shape[0] - 1)  # Ga input history
+    ay = np.zeros(aden.shape[0] - 1)  # Ga output history
+    fifo = np.zeros(max(delay, 1))  # the amplifier's extra delay, samples
+    head = 0
+    g_acc = 0.0
+    a_acc = 0.0
+    for k in range(n):
+        y0, y1 = _outputs(z, cm, accel_gain)
+        if quantize:  # the sensors' reading (station.rounding.sensor_count)
+            y0 = _sensor_count(y0)
+            y1 = _sensor_count(y1)
+        theta[k] = y0
+        acc[k] = y1
+        j = k - d
+        uk = u[k]
+        td = uk
+        e = 0.0
+        if use_v_open:
+            vk = v_open[k]
+        elif k < d:
+            vk = 0.0  # no sample yet: the device outputs 0 (v1 tick 0), the filters stay at rest
+        else:
+            if closed:
+                if use_ga:
+                    g = anum[0] * acc[j] + a_acc
+                    a_acc = _commit(anum, aden, ax, ay, acc[j], g)
+                    td = uk - g
+                e = td - theta[j]
+                vk = gnum[0] * e + g_acc
+            else:
+                vk = uk
+            if vk > limit:
+                vk = limit
+            elif vk < -limit:
+                vk = -limit
+            if closed:
+                g_acc = _commit(gnum, gden, gx, gy, e, vk)
+        v[k] = vk
+        thd[k] = td
+        # what the device applies: whole DAC counts (the controller keeps the unrounded v)
+        if cmd_mode == 1:
+            vk = _half_away(vk)
+        elif cmd_mode == 2:
+            vk = float(math.trunc(vk))
+        vk = _amplifier(vk, saturation, deadzone)
+        if delay > 0:
+            out = fifo[head]
+            fifo[head] = vk
+            head = (head + 1) % delay
+            vk = out
+        _advance(z, vk, lam, bm, bp, co, gw_v, gw_p, substeps, v_c, half_gap, k_d, c_d)
+    return theta, acc, v, thd
+
+
+_half_away = half_away  # the device's command rounding (station.rounding), compiled below
+_sensor_count = sensor_count  # the sensors' quantization (station.rounding), compiled below
+
+if numba is not None:
+    _half_away = half_away_compiled
+    _sensor_count = sensor_count_compiled
+    _commit = numba.njit(cache=True, nogil=True)(_commit)
+    _outputs = numba.njit(cache=True, nogil=True)(_outputs)
+    _amplifier = numba.njit(cache=True, nogil=True)(_amplifier)
+    _advance = numba.njit(cache=True, nogil=True)(_advance)
+    run_kernel = numba.njit(cache=True, nogil=True)(_loop)
+    """The whole run's sample loop (:func:`station.plant.simulate.simulate` gives its arguments)."""
+else:  # pragma: no cover
+    run_kernel = _loop
+
+
+def coefficients(tf) -> tuple[np.ndarray, np.ndarray]:
+    """A filter's (num, den) as the kernel takes them: contiguous floats, den[0] = 1.
+
+    Parameters
+    ----------
+    tf : station.control.DiscreteTF or None
+        Coefficients in z⁻¹; None gives (num [0], den [1]), a filter that is never used.
+    """
+    if tf is None:
+        return np.zeros(1), np.ones(1)
+    num = np.asarray(tf.num, dtype=float)
+    den = np.asarray(tf.den, dtype=float)
+    if den[0] != 1.0:
+        num, den = num / den[0], den / den[0]
+    return np.ascontiguousarray(num), np.ascontiguousarray(den)
+
+
+COMMAND_QUANTIZATION = {"none": 0, "round": 1, "trunc": 2}
+"""How a device turns the station's v into DAC counts: v1 rounds (halves away from zero),
+the rig's legacy firmware truncates toward zero (spec/protocol.md)."""
+
+
+class KernelEffects(NamedTuple):
+    """A model's amplifier, output and in-plant effects as the kernel takes them.
+
+    The defaults are no effects (a `DiscretePlant`).
+
+    Attributes
+    ----------
+    saturation : float
+        The amplifier's clamp, DAC counts (inf: none).
+    deadzone : float
+        DAC counts.
+    delay : int
+        Extra samples between the command and the torque.
+    accel_gain : float
+        Scale of a before its quantization.
+    v_c : float
+        Coulomb friction, DAC counts.
+    half_gap : float
+        Backlash / 2, rad.
+    k_d, c_d : float
+        Drive spring N·m/rad and damper N·m·s/rad of the linear part (backlash).
+    """
+
+    saturation: float = math.inf
+    deadzone: float = 0.0
+    delay: int = 0
+    accel_gain: float = 1.0
+    v_c: float = 0.0
+    half_gap: float = 0.0
+    k_d: float = 0.0
+    c_d: float = 0.0
+
+
+def effects_of(model) -> KernelEffects:
+    """A Model's effects as the kernel takes them.
+
+    Parameters
+    ----------
+    model : station.plant.model.Model
+        Read through ``effect_dict()`` and ``linear_params()`` (drive spring, damper, H).
+    """
+    fx = model.effect_dict()
+    p = model.linear_params()
+    return KernelEffects(saturation=float(fx.get("saturation", math.inf)), deadzone=float(fx.get("deadzone", 0.0)),
+                         delay=int(fx.get("delay", 0)), accel_gain=float(fx.get("accel_gain", 1.0)),
+                         v_c=float(fx.get("coulomb_friction", 0.0)),
+                         half_gap=float(fx.get("backlash", 0.0)) / 2.0 / p.H, k_d=p.drive_k, c_d=p.drive_c)
+
+
+def device_command(vk: float, cmd_mode: int) -> float:
+    """The kernel's command quantization, for a Python loop (the same float operations).
+
+    Parameters
+    ----------
+    vk : float
+        The controller's command, DAC counts.
+    cmd_mode : int
+        A value of :data:`COMMAND_QUANTIZATION`: 0 none, 1 round (halves away from
+        zero), 2 truncate toward zero.
+    """
+    if cmd_mode == 1:
+        return half_away(vk)
+    if cmd_mode == 2:
+        return float(math.trunc(vk))
+    return vk
+
+
+class Stepper:
+    """A linear form plus effects, stepped one sample at a time with the kernel's own functions.
+
+    Parameters
+    ----------
+    form : LinearForm
+        The linear part.
+    fx : KernelEffects
+        The amplifier, output and in-plant effects.
+    z0 : array_like of complex, shape (n,), optional
+        Initial modal state (default: at rest).
+
+    Attributes
+    ----------
+    z : ndarray of complex, shape (n,)
+        The current modal state.
+    """
+
+    def __init__(self, form: LinearForm, fx: KernelEffects, z0=None) -> None:
+        self._form = form
+        self._fx = fx
+        self._z0 = np.zeros(form.lam.size, complex) if z0 is None else np.asarray(z0, complex).copy()
+        self.reset()
+        # compile (or load) the kernel's functions now, not on a real-time device's first tick
+        self.outputs()
+        _amplifier(0.0, fx.saturation, fx.deadzone)
+        _advance(self.z.copy(), 0.0, form.lam, form.bm, form.bp, form.co, form.gw_v, form.gw_p, form.substeps,
+                 fx.v_c, fx.half_gap, fx.k_d, fx.c_d)
+
+    def reset(self) -> None:
+        """Back to the initial state (at rest for a model), the amplifier's delay line empty."""
+        self.z = self._z0.copy()
+        self._fifo = [0.0] * self._fx.delay
+        self._head = 0
+
+    def outputs(self) -> tuple[float, float]:
+        """Noise-free (theta, a): encoder counts, accelerometer counts (accel_gain applied)."""
+        y0, y1 = _outputs(self.z, self._form.cm, self._fx.accel_gain)
+        return float(y0), float(y1)
+
+    def advance(self, v: float) -> None:
+        """One sample with the device's command v (DAC counts, already quantized by the
+        device) through the amplifier's saturation, dead-zone and delay into the plant.
+
+        Parameters
+        ----------
+        v : float
+            The command the device applies during the sample, DAC counts.
+        """
+        fx, f = self._fx, self._form
+        vk = _amplifier(float(v), fx.saturation, fx.deadzone)
+        if fx.delay > 0:
+            vk, self._fifo[self._head] = self._fifo[self._head], vk
+            self._head = (self._head + 1) % fx.delay
+        _advance(self.z, vk, f.lam, f.bm, f.bp, f.co, f.gw_v, f.gw_p, f.substeps, fx.v_c, fx.half_gap, fx.k_d, fx.c_d)
+
+
+class ModelPlant(Stepper):
+    """A :class:`station.plant.model.Model` stepped tick by tick, effects included.
+
+    The interface of `DiscretePlant` that the simulated device uses (``reset``,
+    ``outputs``, ``advance``); ``advance`` takes the command the device applies (after
+    its own quantization and clamp) and passes it through the amplifier's saturation,
+    dead-zone and delay; friction and backlash act inside the plant on the sub-step
+    grid; ``outputs`` applies accel_gain. Sample for sample equal to
+    :func:`station.plant.simulate.simulate` with the same model (the same compiled
+    functions do the arithmetic).
+
+    Parameters
+    ----------
+    model : Model
+    dt : float, default 0.002
+        Sample time, s.
+    substeps : int, optional
+        Sub-steps per sample with friction or backlash (default :data:`station.plant.model.SUBSTEPS`).
+
+    Attributes
+    ----------
+    model, dt, n_elements
+        As given.
+    params : Params
+        The model's nominal parameter set.
+    """
+
+    def __init__(self, model, dt: float = DT, substeps: int | None = None) -> None:
+        self.model = model
+        self.dt = float(dt)
+        self.n_elements = model.n_elements
+        self.params = model.params
+        super().__init__(model.linear_form(self.dt, substeps), effects_of(model))
+
