@@ -10,7 +10,6 @@ Example
 from __future__ import annotations
 
 import datetime as _dt
-import math
 import tempfile
 import time
 import urllib.parse
@@ -27,6 +26,7 @@ from station.analysis.metrics import NOT_SETTLED, StepInfo, StepMetrics, step_in
 from station.control import (KINDS, file_reference, make_controller, pulse_reference, step_reference,
                              swept_sine_reference)
 from station.control.designs import read_compensator_file
+from station.control.contract import wire_limit
 from station.control.rerun import is_closed_loop
 from station.errors import StationError
 from station.link import LinkLimits, open_session
@@ -491,30 +491,6 @@ def _write_figure(report: StepReport) -> Path | None:
                       RuntimeWarning, stacklevel=3)
         return None
     return png
-
-
-DAC_LIMIT = 255.0
-"""The DAC's range, ±counts (±2.5 V): the clamp of last resort before the wire."""
-
-
-def wire_limit(controller, limit: float | None) -> float:
-    """The clamp every command gets before it is written, ±DAC counts.
-
-    The controller's own clamp when it has a finite one (:func:`choose_controller` settled
-    it), else ``limit``, else the DAC's range.
-
-    Parameters
-    ----------
-    controller : controller object
-        Its ``limit`` attribute, when finite and positive, wins (at most the DAC's range).
-    limit : float or None
-        The ``--limit`` option, ±DAC counts.
-    """
-    own = getattr(controller, "limit", None)
-    for value in (own, limit):
-        if isinstance(value, (int, float)) and math.isfinite(value) and value > 0:
-            return min(float(value), DAC_LIMIT)
-    return DAC_LIMIT
 
 
 def _metrics_of(log_path: Path, amplitude: float, limit: float | None,

@@ -23,20 +23,6 @@ from station.logged import REPRODUCED_TOLERANCE, LoggedRun
 from station.reference import Reference
 from station.runlog import RunLog
 
-# moved to station.control.rerun and station.logged; importable from here for old callers
-from station.control.rerun import ALIGNMENTS, detect_alignment, replay_commands
-from station.logged import (
-    PRINTED_TOLERANCE, RIG_DT, RIG_LIMIT, ControllerId, ModelRun, command_quantization, identify_controller,
-    log_controller, rig_controller, simulate_log,
-)
-
-__all__ = [
-    "ReplayReport", "format_beam_test", "format_report", "replay",
-    # old homes of names that moved
-    "ALIGNMENTS", "PRINTED_TOLERANCE", "REPRODUCED_TOLERANCE", "RIG_DT", "RIG_LIMIT", "ControllerId", "ModelRun",
-    "command_quantization", "detect_alignment", "identify_controller", "log_controller", "replay_commands",
-    "rig_controller", "simulate_log",
-]
 
 
 @dataclass

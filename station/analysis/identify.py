@@ -27,7 +27,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from station.control import Compensator, DiscreteTF, OpenLoop
+from station.control import DAC_LIMIT, Compensator, DiscreteTF, OpenLoop  # DAC_LIMIT: the clamp assumed when v exceeds the rig's ±200
 from station.control.rerun import detect_alignment
 
 TOLERANCE = 1e-6
@@ -36,8 +36,6 @@ TOLERANCE = 1e-6
 MAX_ORDER = 3
 """Highest order of the linear compensators tried."""
 
-DAC_LIMIT = 255.0
-"""The DAC's full scale, DAC counts: the clamp assumed when v exceeds the rig's ±200."""
 
 
 @dataclass(frozen=True)

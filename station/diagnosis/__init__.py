@@ -5,7 +5,7 @@ contract", issue 8). The entry is :func:`diagnose`; ``station diagnose`` is its 
 Method (the vocabulary of MATLAB's System Identification Toolbox: ``compare``, ``resid``,
 grey-box estimation with physical parameters and bounds, honest validation data):
 
-1. Every run is simulated as the rig ran it (:func:`station.modelrun.simulate_log`: the
+1. Every run is simulated as the rig ran it (:meth:`station.logged.LoggedRun.simulate`: the
    log's controller, reference, clamp, detected alignment and command quantization; the
    logged v in open loop).
 2. The cost of a model on a set of runs judges θ and a together, each error normalised by
@@ -43,11 +43,9 @@ Modules, in the order a diagnosis uses them:
 
 May import: :mod:`station.analysis` (fits, residual tests, metrics), :mod:`station.plant`,
 :mod:`station.control`, :mod:`station.runlog`, :mod:`station.reference`,
-:mod:`station.plots`, :mod:`station.modelrun` (a log simulated on a model) and
-``station.logged`` (a logged run understood). Not :mod:`station.replay` (``load_case``
-still borrows its ``log_controller`` and ``detect_alignment`` until it switches to
-``station.logged``), never :mod:`station.commands`; and nothing below (analysis, plant,
-...) imports the diagnosis.
+:mod:`station.plots` and :mod:`station.logged` (a logged run understood and simulated on a
+model as the rig ran it). Never :mod:`station.replay` or :mod:`station.commands`; and nothing
+below (analysis, plant, ...) imports the diagnosis.
 """
 
 from station.diagnosis.cases import RunCase, Simulator, load_case, simulate_case

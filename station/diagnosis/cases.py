@@ -13,6 +13,7 @@ import numpy as np
 
 from station.analysis.residuals import ACCEL_NOISE_STD, THETA_QUANTIZATION_STD
 from station.errors import StationError
+from station.logged import LoggedRun
 
 Simulator = Callable[["RunCase", Any], tuple[np.ndarray, np.ndarray]]
 """``simulate(case, model) -> (theta, a)``: a run's simulated θ and a on a model."""
@@ -38,6 +39,8 @@ class RunCase:
     sigma_theta, sigma_a : float
         Noise levels the errors are normalised by, counts.
     notes : list of str
+    run : station.logged.LoggedRun
+        The log understood (controller, alignment, reference, model glue).
     """
 
     path: str
@@ -50,6 +53,7 @@ class RunCase:
     sigma_theta: float = THETA_QUANTIZATION_STD
     sigma_a: float = ACCEL_NOISE_STD
     notes: list = field(default_factory=list)
+    run: Any = field(default=None, repr=False)
 
     @property
     def n(self) -> int:
@@ -66,7 +70,9 @@ class RunCase:
 
 
 def load_case(path: str | Path) -> RunCase:
-    """Read a log and find how the rig ran it (controller, alignment).
+    """Read a log and find how the rig ran it (:class:`station.logged.LoggedRun`: controller,
+    alignment, open or closed loop), with θ relative to its first sample in open loop and
+    the accelerometer's at-rest offset removed.
 
     Parameters
     ----------
@@ -76,41 +82,34 @@ def load_case(path: str | Path) -> RunCase:
     Raises
     ------
     StationError
-        Unreadable log (:class:`station.runlog.RunLogError`), a log without rows, or a
-        malformed controller in its header.
+        Unreadable log (:class:`station.runlog.RunLogError`), a log of fewer than 50 rows,
+        or a malformed controller in its header.
     """
-    from station.control import OpenLoop
-    from station.replay import detect_alignment, log_controller
-    from station.runlog import read_log
-
-    log = read_log(path)
-    if len(log) < 50:
-        raise StationError(f"{path}: {len(log)} rows; a diagnosis needs a run of at least 50 samples")
-    controller, notes = log_controller(log)
-    data = log.data
-    closed = controller is not None and not isinstance(controller, OpenLoop)
-    alignment = None
-    if closed:
-        alignment, dv, _ = detect_alignment(controller, data["u"], data["theta"], data["a"], data["v"])
-        if dv > 1e-3:
-            notes.append(f"the log's controller does not reproduce its v (max |dv| = {dv:.3g} counts)")
-    elif controller is None:
+    run = LoggedRun.from_path(path)
+    if len(run) < 50:
+        raise StationError(f"{path}: {len(run)} rows; a diagnosis needs a run of at least 50 samples")
+    notes = list(run.notes)
+    if run.closed:
+        if run.max_abs_dv > REPRODUCED_DV:
+            notes.append(f"the log's controller does not reproduce its v (max |dv| = {run.max_abs_dv:.3g} counts)")
+    elif run.controller is None:
         notes.append("the log does not name its controller: the model is driven by the logged v")
-    theta = np.asarray(data["theta"], float)
-    if not closed:
-        theta = theta - theta[0]
-    a = np.asarray(data["a"], float)
-    moving = np.flatnonzero(np.asarray(data["v"], float) != 0)
-    rest = int(moving[0]) if moving.size else a.size
-    offset = float(np.mean(a[:rest])) if rest >= 5 else 0.0
+    a = np.asarray(run.data["a"], float)
+    offset = run.accel_rest_offset
     if abs(offset) >= 0.5:
         notes.append(f"accelerometer offset {offset:.2f} counts at rest (before the first command) removed")
         a = a - offset
-    return RunCase(str(path), log, controller, alignment, closed, theta, a, notes=notes)
+    return RunCase(str(path), run.log, run.controller, run.alignment, run.closed, np.asarray(run.theta, float), a,
+                   notes=notes, run=run)
+
+
+REPRODUCED_DV = 1e-3
+"""max |dv| (DAC counts) above which a diagnosis notes that the log's controller does not
+reproduce its commands (looser than replay's 1e-6: the model, not the replay, is judged)."""
 
 
 def simulate_case(case: RunCase, model) -> tuple[np.ndarray, np.ndarray]:
-    """θ and a of a run simulated on a model as the rig ran it (:func:`station.modelrun.simulate_log`).
+    """θ and a of a run simulated on a model as the rig ran it (:meth:`station.logged.LoggedRun.simulate`).
 
     Parameters
     ----------
@@ -119,7 +118,5 @@ def simulate_case(case: RunCase, model) -> tuple[np.ndarray, np.ndarray]:
     model : Model
         The model to simulate it on.
     """
-    from station.modelrun import simulate_log
-
-    run = simulate_log(case.log, case.controller, case.alignment, model)
-    return run.prediction["theta"], run.prediction["a"]
+    pred = case.run.simulate(model).prediction
+    return pred["theta"], pred["a"]

@@ -8,8 +8,7 @@ from collections.abc import Mapping, Sequence
 
 import numpy as np
 
-from station.analysis.fit import nrmse_fit
-from station.analysis.metrics import step_metrics
+from station.analysis.fit import fit_pct
 from station.analysis.residuals import RunResiduals, run_residuals
 from station.diagnosis.cases import RunCase
 from station.diagnosis.cost import Evaluator, pooled, relative_gain, rms_gain
@@ -18,28 +17,20 @@ from station.diagnosis.prose import effect_evidence
 from station.diagnosis.result import EffectResult, RunReport
 from station.diagnosis.selection import Selection, Singles, Trial
 from station.plant.effects import EFFECTS
-from station.reference import classify_reference
 
 
 def _fit_pct(theta: np.ndarray, a: np.ndarray, pred: Mapping[str, np.ndarray]) -> dict:
-    """NRMSE fits {"theta", "accel"} of one run, % to 3 decimals (None when undefined, −inf
-    when the simulation diverged): the one place a run's fit_pct is computed."""
-    out = {}
-    for key, meas, sim in (("theta", theta, pred["theta"]), ("accel", a, pred["a"])):
-        f = nrmse_fit(meas, sim) if np.all(np.isfinite(sim)) else float("-inf")
-        out[key] = None if np.isnan(f) else round(float(f), 3)
-    return out
+    """NRMSE fits {"theta", "accel"} of one run, % to 3 decimals (:func:`station.analysis.fit.fit_pct`)."""
+    return fit_pct(theta, pred["theta"], a, pred["a"], digits=3)
 
 
 def _step_metrics(case: RunCase, nominal: Mapping, final: Mapping) -> dict | None:
     """Step metrics of the rig, the nominal and the final extended model (closed-loop steps)."""
-    d = case.log.data
-    ref = classify_reference(d["u"])
-    if not (case.closed and ref["kind"] == "step"):
+    rig = case.run.step_metrics()
+    if rig is None:
         return None
-    uf = float(d["u"][-1])
-    return {"rig": step_metrics(d["t"], d["theta"], uf), "nominal": step_metrics(d["t"], nominal["theta"], uf),
-            "extended": step_metrics(d["t"], final["theta"], uf)}
+    return {"rig": rig, "nominal": case.run.step_metrics(nominal["theta"]),
+            "extended": case.run.step_metrics(final["theta"])}
 
 
 def _run_report(ev: Evaluator, i: int, role: str, nominal: tuple, extended_values: Mapping[str, float],
