@@ -23,7 +23,7 @@ from station.analysis.metrics import NOT_SETTLED, StepInfo, StepMetrics, step_in
 from station.control import file_reference, make_controller, pulse_reference, step_reference, swept_sine_reference
 from station.errors import StationError
 from station.link import LinkLimits, open_session
-from station.protocol import legacy
+from station.protocol import check_ticks
 from station.loop import RunResult, run_loop
 from station.runlog import RunLogWriter, read_log
 from station.signals import StopSignals
@@ -274,9 +274,7 @@ def run_step(port: str = DEFAULT_PORT, protocol: str = "v1", controller: str = D
     kp = 2.0 if kp is None else kp
     limit = 200.0 if limit is None else limit
     u, reference_meta = make_reference(reference, amplitude, duration, step_tick, dt)
-    if protocol == "legacy" and u.size > legacy.MAX_TICKS:  # a user error: nothing started, no log
-        raise StationError(f"the legacy protocol counts ticks in int16: at most {legacy.MAX_TICKS} ticks "
-                           f"({legacy.MAX_TICKS * dt:g} s), asked {u.size}")
+    check_ticks(protocol, u.size, dt)  # a user error: nothing started, no log
     if isinstance(controller, (str, Path)):
         ctrl = make_controller(str(controller), dt=dt, kp=kp, limit=limit)
         tag = Path(controller).stem if str(controller).endswith(".toml") else str(controller)

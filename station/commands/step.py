@@ -13,7 +13,7 @@ from station import experiment as ex
 from station.errors import StationError
 from station.commands.options import check_writable, check_writable_dir, number, warn
 from station.link import LinkLimits
-from station.protocol import PROTOCOLS, legacy
+from station.protocol import PROTOCOLS, check_ticks
 
 MAX_DURATION_S = (2**32 - 1) * DT
 """Longest run v1 can count (START's n_ticks is a u32), s."""
@@ -190,9 +190,8 @@ def check_args(args) -> None:
                                f"({duration:g} s)")
     if args.duration is not None:
         _check_resources(args.duration, args.out.parent if args.out is not None else args.out_dir)
-    if args.protocol == "legacy" and args.duration is not None and round(args.duration / DT) > legacy.MAX_TICKS:
-        raise StationError(f"--duration {args.duration:g} s: the legacy protocol counts at most "
-                           f"{legacy.MAX_TICKS} ticks ({legacy.MAX_TICKS * DT:g} s)")
+    if args.duration is not None:
+        check_ticks(args.protocol, round(args.duration / DT))
     if args.limit is not None and controller.endswith(".toml"):
         file_limit = _file_limit(controller)
         if file_limit is not None:

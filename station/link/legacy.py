@@ -11,7 +11,7 @@ from serial.serialutil import Timeout
 from station.errors import StationError
 from station.link.faults import SequenceError
 from station.link.session import HANDSHAKE_TIMEOUT, ZERO_ACCEL_TICKS, Sample, Session, logger
-from station.protocol import legacy, v1
+from station.protocol import check_ticks, legacy, v1
 
 
 class LegacySession(Session):
@@ -119,9 +119,13 @@ class LegacySession(Session):
         ----------
         n_ticks : int
             Ticks the run lasts.
+
+        Raises
+        ------
+        StationError
+            More ticks than the protocol counts (:func:`station.protocol.check_ticks`).
         """
-        if n_ticks > legacy.MAX_TICKS:
-            raise StationError(f"the legacy protocol counts ticks in int16: at most {legacy.MAX_TICKS} ticks, asked {n_ticks}")
+        check_ticks(self.protocol, n_ticks)
         self._begin()
 
     def read_sample(self) -> tuple:
