@@ -191,7 +191,10 @@ def check_args(args) -> None:
     if args.duration is not None:
         _check_resources(args.duration, args.out.parent if args.out is not None else args.out_dir)
     if args.duration is not None:
-        check_ticks(args.protocol, round(args.duration / DT))
+        try:
+            check_ticks(args.protocol, round(args.duration / DT))
+        except StationError as exc:  # the same refusal as run_step's, naming the option
+            raise StationError(f"--duration {args.duration:g} s: {exc}") from None
     if args.limit is not None and controller.endswith(".toml"):
         file_limit = _file_limit(controller)
         if file_limit is not None:
