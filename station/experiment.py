@@ -30,7 +30,7 @@ from station.control.contract import wire_limit
 from station.control.rerun import is_closed_loop
 from station.errors import StationError
 from station.link import LinkLimits, open_session
-from station.protocol import legacy
+from station.protocol import check_ticks
 from station.loop import RunResult, run_loop
 from station.runlog import RunLogWriter, read_log
 from station.signals import StopSignals
@@ -417,9 +417,7 @@ def run_step(port: str = DEFAULT_PORT, protocol: str = "v1", controller: str = D
         warnings.warn(note, UserWarning, stacklevel=2)
     limit = DEFAULT_LIMIT if limit is None else limit
     u, reference_meta = make_reference(reference, amplitude, duration, step_tick, dt)
-    if protocol == "legacy" and u.size > legacy.MAX_TICKS:  # a user error: nothing started, no log
-        raise StationError(f"the legacy protocol counts ticks in int16: at most {legacy.MAX_TICKS} ticks "
-                           f"({legacy.MAX_TICKS * dt:g} s), asked {u.size}")
+    check_ticks(protocol, u.size, dt)  # a user error: nothing started, no log
     if out is not None and Path(out).is_file() and not force:  # (a device such as /dev/null is no file to keep)
         raise StationError(f"{out}: exists; use --force (force=True) to overwrite it, or another name")
     log_path = Path(out) if out is not None else default_log_path(log_tag(ctrl), folder=out_dir)

@@ -12,7 +12,7 @@ from station.commands.options import (add_model_options, add_protocol_option, ad
                                       check_writable, check_writable_dir, number, warn, write_json)
 from station.config import apply_config
 from station.link import LinkLimits
-from station.protocol import legacy
+from station.protocol import check_ticks
 
 MAX_DURATION_S = (2**32 - 1) * DT
 """Longest run v1 can count (START's n_ticks is a u32), s."""
@@ -132,9 +132,11 @@ def check_args(args) -> None:
                                f"({duration:g} s)")
     if args.duration is not None:
         _check_resources(args.duration, args.out.parent if args.out is not None else args.out_dir)
-    if args.protocol == "legacy" and args.duration is not None and round(args.duration / DT) > legacy.MAX_TICKS:
-        raise StationError(f"--duration {args.duration:g} s: the legacy protocol counts at most "
-                           f"{legacy.MAX_TICKS} ticks ({legacy.MAX_TICKS * DT:g} s)")
+    if args.duration is not None:
+        try:
+            check_ticks(args.protocol, round(args.duration / DT))
+        except StationError as exc:  # the same refusal as run_step's, naming the option
+            raise StationError(f"--duration {args.duration:g} s: {exc}") from None
     check_writable(args.out, "--out", overwrite=args.force)
     if args.out is None:
         check_writable_dir(args.out_dir, "--out-dir")
