@@ -127,7 +127,7 @@ def compare_run(path, plant) -> RunComparison:
         clamp = "no clamp" if controller.limit is None else f"clamp ±{controller.limit:g}"
         notes.append(f"alignment {run.alignment} detected: the replay reproduces the logged v to "
                      f"{run.max_abs_dv:.3g} counts; {clamp}")
-    step = run.reference.amplitude if run.closed else None  # station.reference: the one definition of a step
+    step = run.reference.amplitude if run.closed else None  # station.logged.reference: the one definition of a step
     if run.held is not None:
         notes.append(f"{run.held_note}; `station replay` analyzes the beam's free vibration after the release")
         return RunComparison(str(path), controller.name, step, run.step_metrics(), None, None, None,

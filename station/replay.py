@@ -20,7 +20,7 @@ from station.analysis.beam import BeamTestReport, analyze_beam_test, model_first
 from station.analysis.metrics import StepMetrics
 from station.errors import StationError
 from station.logged import REPRODUCED_TOLERANCE, LoggedRun
-from station.reference import Reference
+from station.logged.reference import Reference
 from station.runlog import RunLog
 
 
@@ -45,7 +45,7 @@ class ReplayReport:
         max |v_replayed - v_logged|, DAC counts.
     metrics : StepMetrics or None
         Of the logged theta against the step's amplitude, for closed-loop step logs.
-    reference : station.reference.Reference
+    reference : station.logged.reference.Reference
         What the logged u is (reads as its JSON dict too: ``{"kind": "step", "amplitude",
         "tick"}``, ``{"kind": "zero"}``, ``{"kind": "missing"}`` or ``{"kind": "other"}``).
     fit_pct : dict or None

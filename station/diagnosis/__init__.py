@@ -42,7 +42,7 @@ Modules, in the order a diagnosis uses them:
   (it loads matplotlib): ``from station.diagnosis.report import write_report``.
 
 May import: :mod:`station.analysis` (fits, residual tests, metrics), :mod:`station.plant`,
-:mod:`station.control`, :mod:`station.runlog`, :mod:`station.reference`,
+:mod:`station.control`, :mod:`station.runlog`,
 :mod:`station.plots` and :mod:`station.logged` (a logged run understood and simulated on a
 model as the rig ran it). Never :mod:`station.replay` or :mod:`station.commands`; and nothing
 below (analysis, plant, ...) imports the diagnosis.

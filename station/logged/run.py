@@ -12,7 +12,7 @@ from station.analysis.metrics import StepMetrics, step_metrics
 from station.control.rerun import AlignmentFit, detect_alignment, is_closed_loop
 from station.logged.controller import ControllerId, identify_controller
 from station.logged.simulate import ModelRun, compared_theta, simulate_log
-from station.reference import Reference, classify_reference
+from station.logged.reference import Reference, classify_reference
 from station.runlog import RunLog, read_log
 
 REPRODUCED_TOLERANCE = 1e-6
@@ -145,7 +145,7 @@ class LoggedRun:
 
     @cached_property
     def reference(self) -> Reference:
-        """What the logged u is (:func:`station.reference.classify_reference`)."""
+        """What the logged u is (:func:`station.logged.reference.classify_reference`)."""
         return classify_reference(self.data["u"])
 
     @cached_property
