@@ -83,7 +83,7 @@ def main(argv: list[str] | None = None) -> int:
                 _silence_stdout()
                 return 0
         except StopSignal as exc:  # outside a run's loop: the work stopped, saying what it had
-            print(f"station: stopped by {exc}; {exc.note or 'nothing was started, nothing written'}",
+            print(f"station: stopped by {exc}; {exc.note or 'nothing written'}",
                   file=sys.stderr)
             return exc.exit_code
         except KeyboardInterrupt:  # SIGINT before the guard was installed, or raised by code

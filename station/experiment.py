@@ -33,7 +33,7 @@ from station.link import LinkLimits, open_session
 from station.protocol import legacy
 from station.loop import RunResult, run_loop
 from station.outputs import Input, Output, check_outputs, is_device
-from station.runlog import RunLogWriter, read_log
+from station.runlog import RunLogError, RunLogWriter, read_log
 from station.signals import StopSignals
 
 DEFAULT_PORT = "sim://"
@@ -497,7 +497,12 @@ def run_step(port: str = DEFAULT_PORT, protocol: str = "v1", controller: str = D
 
             bar = ProgressSink(u.size * dt)
             sinks.append(bar)
-        writer = RunLogWriter(log_path, meta, sinks=sinks)
+        try:
+            writer = RunLogWriter(log_path, meta, sinks=sinks)
+        except RunLogError:  # not even the header fits (a full disk): leave no part of a log
+            if log_path.is_file():
+                log_path.unlink()
+            raise
         result = None
         try:
             result = run_loop(session, ctrl, u, writer, soft_limit=soft_limit, dt=dt, lean=lean,

@@ -283,12 +283,12 @@ def _worker_signals() -> None:
 
 def _terminate(pool: ProcessPoolExecutor) -> None:
     """Cancel what has not started and end the worker processes at once (not after their file)."""
-    pool.shutdown(wait=False, cancel_futures=True)
     terminate = getattr(pool, "terminate_workers", None)  # Python 3.14+
     if terminate is not None:
         terminate()
         return
     processes = list((getattr(pool, "_processes", None) or {}).values())  # before 3.14: no public way
+    pool.shutdown(wait=False, cancel_futures=True)  # (forgets the processes: taken above)
     for p in processes:
         p.terminate()
     for p in processes:

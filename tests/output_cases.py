@@ -14,6 +14,7 @@ control with one sample of computational delay, the rig's header and columns), n
 from __future__ import annotations
 
 import hashlib
+import os
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -124,3 +125,44 @@ def snapshot(root: Path) -> dict[str, str]:
 def parts(root: Path) -> list[Path]:
     """Temporary files a failed write would have left (station.outputs names them .NAME.XXXX.part)."""
     return [p for p in root.rglob("*.part")]
+
+
+def run_on_file_systems(root: Path, full: Path, ro: Path) -> list[dict]:
+    """Every file and folder option of every command set to a real full file system (``full``,
+    filled up first) and to a real read-only one (``ro``), run in this process; one record per
+    case: command, option, where, exit code, stderr, the files left in ``full``."""
+    import contextlib
+    import io
+
+    import station.diagnosis.pipeline as pipeline
+    from station.cli import main
+
+    pipeline.CANDIDATES = ("coulomb_friction",)  # the writing is tested, not the search
+    with open(full / "filler", "wb", buffering=0) as fh:  # take every page of the tmpfs
+        try:
+            while fh.write(b"\0" * 4096):
+                pass
+        except OSError:
+            pass
+    inputs = make_inputs(root)
+    os.chdir(root)
+    cases = [(name, cmd.argv(name, inputs), option, where, folder / default_outputs(name, cmd, root)[option].name)
+             for name, cmd in COMMANDS.items() if cmd is not None
+             for option in list(cmd.files) + list(cmd.folders) for where, folder in (("full", full), ("ro", ro))]
+    # without --duration, step does not estimate the log's size: its writer meets the full disk
+    cases.append(("step", ["step", "--quiet"], "--out", "full", full / "default.tsv"))
+    records = []
+    for name, argv, option, where, target in cases:
+        err = io.StringIO()
+        with contextlib.redirect_stderr(err), contextlib.redirect_stdout(io.StringIO()):
+            code = main(argv + [option, str(target), "--force"])
+        records.append({"command": name, "option": option, "where": where, "code": code, "stderr": err.getvalue(),
+                        "left": sorted(str(p.relative_to(full)) for p in full.rglob("*") if p.name != "filler")})
+    return records
+
+
+if __name__ == "__main__":  # python -m tests.output_cases ROOT FULL RO (in a mount namespace: test_outputs_os.py)
+    import json
+    import sys
+
+    print(json.dumps(run_on_file_systems(*map(Path, sys.argv[1:4]))))
