@@ -282,7 +282,7 @@ class Transaction:
     Examples
     --------
     >>> with Transaction() as tx:                                   # doctest: +SKIP
-    ...     tx.write_text("result.json", text, "the JSON")
+    ...     tx.write("result.json", text, "the JSON")
     ...     with tx.open("figure.png", "the figure") as fh:
     ...         fig.savefig(fh, format="png")
     """
@@ -348,15 +348,15 @@ class Transaction:
             self._discard(tmp)
             raise
 
-    def write_bytes(self, path: str | Path, data: bytes, what: str = "") -> None:
+    def write(self, path: str | Path, data: bytes | str, what: str = "") -> None:
         """Write ``data`` to ``path`` (renamed into place at commit).
 
         Parameters
         ----------
         path : str or Path
             The target file.
-        data : bytes
-            Its whole content.
+        data : bytes or str
+            Its whole content (text is written as UTF-8).
         what : str, optional
             What the file is, for the message.
 
@@ -366,26 +366,7 @@ class Transaction:
             The file cannot be written (see :meth:`open`).
         """
         with self.open(path, what) as fh:
-            fh.write(data)
-
-    def write_text(self, path: str | Path, text: str, what: str = "") -> None:
-        """Write ``text`` as UTF-8 to ``path`` (renamed into place at commit).
-
-        Parameters
-        ----------
-        path : str or Path
-            The target file.
-        text : str
-            Its whole content.
-        what : str, optional
-            What the file is, for the message.
-
-        Raises
-        ------
-        StationError
-            The file cannot be written (see :meth:`open`).
-        """
-        self.write_bytes(path, text.encode("utf-8"), what)
+            fh.write(data.encode("utf-8") if isinstance(data, str) else data)
 
     def write_json(self, path: str | Path, doc: Any, what: str = "the JSON", indent: int = 1) -> None:
         """Write ``doc`` as JSON (one trailing newline) to ``path``.
@@ -406,7 +387,7 @@ class Transaction:
         StationError
             The file cannot be written (see :meth:`open`).
         """
-        self.write_text(path, json.dumps(doc, indent=indent) + "\n", what)
+        self.write(path, json.dumps(doc, indent=indent) + "\n", what)
 
     def _discard(self, tmp: Path | None) -> None:
         if tmp is None:
@@ -485,33 +466,8 @@ def write_bytes(path: str | Path, data: bytes, what: str = "") -> Path:
         ``PATH: cannot write WHAT: REASON``; the old file (if any) is unchanged.
     """
     with Transaction() as tx:
-        tx.write_bytes(path, data, what)
+        tx.write(path, data, what)
     return Path(path)
-
-
-def write_text(path: str | Path, text: str, what: str = "") -> Path:
-    """Write one text file (UTF-8) whole or not at all.
-
-    Parameters
-    ----------
-    path : str or Path
-        The target file.
-    text : str
-        Its whole content.
-    what : str, optional
-        What the file is, for the message.
-
-    Returns
-    -------
-    Path
-        ``path``.
-
-    Raises
-    ------
-    StationError
-        ``PATH: cannot write WHAT: REASON``; the old file (if any) is unchanged.
-    """
-    return write_bytes(path, text.encode("utf-8"), what)
 
 
 def write_json(path: str | Path, doc: Any, indent: int = 1) -> Path:

@@ -438,6 +438,6 @@ def write_reports(rows: Sequence[SurveyRow], folder: str | Path, transaction: Tr
         transaction.write_json(p, body, "the survey report")
         written.append(p)
     p = folder / TABLE
-    transaction.write_text(p, format_table(rows) + "\n", "the survey table")
+    transaction.write(p, format_table(rows) + "\n", "the survey table")
     written.append(p)
     return written

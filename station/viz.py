@@ -203,6 +203,6 @@ class RerunSink:
             return
         if keep and data is not None:
             if transaction is not None:
-                transaction.write_bytes(self.rrd_path, data, "the rerun recording")
+                transaction.write(self.rrd_path, data, "the rerun recording")
             else:
                 write_bytes(self.rrd_path, data, "the rerun recording")

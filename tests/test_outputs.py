@@ -146,7 +146,7 @@ def test_a_replaced_file_keeps_its_mode_a_new_one_follows_the_umask(tmp_path):
 
 
 def test_a_device_is_written_in_place_and_its_failure_is_one_line():
-    outputs.write_text("/dev/null", "x" * 10)
+    outputs.write_bytes("/dev/null", b"x" * 10)
     with pytest.raises(StationError, match=r"^/dev/full: cannot write the JSON: No space left on device$"):
         outputs.write_json("/dev/full", {"x": 1})
 

@@ -226,7 +226,7 @@ def run(args: argparse.Namespace) -> int:
         if args.json is not None:
             tx.write_json(args.json, _json_safe(diag.to_json()))
         if args.save_model is not None:
-            tx.write_text(args.save_model, diag.extended_model.to_toml(), "the model")
+            tx.write(args.save_model, diag.extended_model.to_toml(), "the model")
     if args.report is not None:
         print(f"report: {page}")
     if args.save_model is not None:

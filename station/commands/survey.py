@@ -86,7 +86,7 @@ def run(args: argparse.Namespace) -> int:
     print(format_table(rows, root))
     with Transaction() as tx:
         if args.csv is not None:
-            tx.write_text(args.csv, to_csv(rows), "the survey CSV")
+            tx.write(args.csv, to_csv(rows), "the survey CSV")
         if args.report is not None:
             write_reports(rows, args.report, tx)
     if args.csv is not None:

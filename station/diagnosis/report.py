@@ -120,7 +120,7 @@ def _run_section(run, slug: str, folder: Path, extended: bool, tx: Transaction) 
     for kind, fig in zip(FIGURES, (diagnosis_run_figure(run), diagnosis_resid_figure(run))):
         png = _png(fig)
         name = f"{slug}_{kind}.png"
-        tx.write_bytes(folder / name, png, "the report's figure")
+        tx.write(folder / name, png, "the report's figure")
         out.append(f"<img alt='{esc(name)}' src='data:image/png;base64,{base64.b64encode(png).decode()}'>")
     for note in run.notes:
         out.append(f"<p class='note'>note: {esc(note)}</p>")
@@ -161,7 +161,7 @@ def write_report(diag, folder: str | Path, transaction: Transaction | None = Non
     page = ("<!doctype html><html><head><meta charset='utf-8'><title>Model diagnosis</title><style>"
             + _STYLE + "</style></head><body>" + "\n".join(body) + "</body></html>")
     out = folder / PAGE
-    transaction.write_text(out, page, "the report")
+    transaction.write(out, page, "the report")
     return out
 
 
