@@ -122,8 +122,8 @@ def plan(runs, validate, max_samples: int) -> str:
         raise StationError(f"--max-samples {max_samples}: {longest} holds about {counts[longest]} samples "
                            f"({total} in all {len(counts)} runs), refused before reading them; the diagnosis would "
                            f"take about {_human(seconds)} of computing here: give --max-samples {total} to run it anyway")
-    return (f"{len(counts)} runs, {total} samples (--max-samples {max_samples}): about {simulations} simulations, "
-            f"{_human(seconds)} of computing here")
+    return (f"{len(counts)} run{'s' if len(counts) > 1 else ''}, {total} samples (--max-samples {max_samples}): "
+            f"about {simulations} simulations, {_human(seconds)} of computing here")
 
 
 def _json_safe(x):
@@ -206,15 +206,15 @@ def run(args: argparse.Namespace) -> int:
 
     check_outputs(outputs(args), [Input("RUN", p) for p in args.runs] +
                   [Input("--validate", p) for p in args.validate] + model_inputs(args), force=args.force)
-    cost = plan(args.runs, args.validate, args.max_samples)
+    cost = [plan(args.runs, args.validate, args.max_samples)]  # said with the first step: the runs are readable
     last = ["reading the runs"]
 
     def progress(msg: str) -> None:
         last[0] = msg
         if not args.quiet:
-            print(f"diagnose: {msg}", file=sys.stderr, flush=True)
-
-    progress(cost)
+            for line in cost + [msg]:
+                print(f"diagnose: {line}", file=sys.stderr, flush=True)
+            cost.clear()
     with noting(lambda: f"the diagnosis was at: {last[0]}; nothing written"):
         diag = diagnose(args.runs, validate=args.validate, model=args.model, progress=progress)
     print(format_diagnosis(diag))
