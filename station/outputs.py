@@ -31,7 +31,6 @@ from __future__ import annotations
 import json
 import os
 import stat
-import tempfile
 from collections.abc import Iterable, Iterator, Sequence
 from contextlib import contextmanager
 from pathlib import Path
@@ -106,6 +105,8 @@ def _probe_folder(folder: Path, what: str, probed: dict[Path, None]) -> None:
         return
     if _kind(existing) != "folder":
         raise StationError(f"{what}: {existing} is a file, not a folder")
+    import tempfile  # here: the CLI imports this module before it can answer a signal
+
     try:
         with tempfile.TemporaryFile(dir=existing):
             pass
@@ -261,6 +262,8 @@ def part_file(target: Path) -> tuple[int, Path]:
     OSError
         It cannot be created.
     """
+    import tempfile
+
     mode = stat.S_IMODE(os.stat(target).st_mode) if _kind(target) == "file" else _NEW_FILE_MODE
     fd, name = tempfile.mkstemp(prefix=f".{target.name}.", suffix=PART_SUFFIX, dir=target.parent)
     try:
