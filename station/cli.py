@@ -51,7 +51,9 @@ def main(argv: list[str] | None = None) -> int:
     """Entry point of the ``station`` console script; returns the exit code.
 
     SIGINT or SIGTERM at any moment - start-up imports included - ends the process with
-    one line naming the signal and exit code 130 / 143; during a run the loop handles
+    one line naming the signal and what the stopped work had (``StopSignal.note``), exit
+    code 130 / 143, within a second (long work calls :func:`station.signals.check_stop`);
+    during a run the loop handles
     them (command 0 and stop first, see :mod:`station.signals`) and the run's outcome
     gives the code. Called as the console script (``argv`` None), signals arriving once
     the work is done are ignored until the process exits (the tail of a burst must not
@@ -80,8 +82,9 @@ def main(argv: list[str] | None = None) -> int:
             except BrokenPipeError:  # `station step | head`: the reader left; nothing to say
                 _silence_stdout()
                 return 0
-        except StopSignal as exc:
-            print(f"station: stopped by {exc} before the run started", file=sys.stderr)
+        except StopSignal as exc:  # outside a run's loop: the work stopped, saying what it had
+            print(f"station: stopped by {exc}; {exc.note or 'nothing written'}",
+                  file=sys.stderr)
             return exc.exit_code
         except KeyboardInterrupt:  # SIGINT before the guard was installed, or raised by code
             print("station: stopped by SIGINT", file=sys.stderr)

@@ -32,7 +32,8 @@ from station.errors import StationError
 from station.link import LinkLimits, open_session
 from station.protocol import check_ticks
 from station.loop import RunResult, run_loop
-from station.runlog import RunLogWriter, read_log
+from station.outputs import Input, Output, check_outputs, is_device
+from station.runlog import RunLogError, RunLogWriter, read_log
 from station.signals import StopSignals
 
 DEFAULT_PORT = "sim://"
@@ -99,8 +100,8 @@ def make_reference(kind: str, amplitude: float, duration: float | None, step_tic
         else:
             u = swept_sine_reference(n_ticks, amplitude, dt)
         return u, {"kind": kind, "amplitude": amplitude, "step_tick": step_tick, "n_ticks": n_ticks}
-    path, _, column = kind.partition(":") if not Path(kind).exists() else (kind, "", "")
-    if not Path(path).exists():
+    path, column = _reference_file(kind)
+    if not path.exists():
         raise StationError(f"reference {kind!r}: expected one of {', '.join(REFERENCES)} or FILE[:COLUMN] "
                            f"of a run log; no file {path}")
     u = file_reference(path, column or "u")
@@ -110,6 +111,36 @@ def make_reference(kind: str, amplitude: float, duration: float | None, step_tic
     if u.size < 2:
         raise StationError(f"reference {kind!r}: fewer than two samples")
     return u, {"kind": "file", "file": str(path), "column": column or "u", "n_ticks": int(u.size)}
+
+
+def _reference_file(kind: str) -> tuple[Path, str]:
+    """``FILE[:COLUMN]`` split: the file and the column ("" for the default)."""
+    if Path(kind).exists() or ":" not in kind:
+        return Path(kind), ""
+    path, _, column = kind.rpartition(":")
+    return Path(path), column
+
+
+def reference_path(kind: str) -> Path | None:
+    """The run log a ``FILE[:COLUMN]`` reference reads (None for a built-in law).
+
+    Parameters
+    ----------
+    kind : str
+        The ``--reference`` value (:func:`make_reference`).
+    """
+    return None if kind in REFERENCES else _reference_file(kind)[0]
+
+
+def figure_path(log_path: str | Path) -> Path:
+    """The figure :func:`run_step` draws beside a run log: ``<log stem>.png``.
+
+    Parameters
+    ----------
+    log_path : str or Path
+        The run log.
+    """
+    return Path(log_path).with_suffix(".png")
 
 
 @dataclass
@@ -193,7 +224,7 @@ def default_log_path(tag: str, when: _dt.datetime | None = None, folder: str | P
     stem = f"step-{tag}-{when:%Y%m%d-%H%M%S}-{when.microsecond // 1000:03d}"
     path = Path(folder) / f"{stem}.tsv"
     counter = 1
-    while path.exists() or path.with_suffix(".png").exists():
+    while path.exists() or figure_path(path).exists():
         counter += 1
         path = Path(folder) / f"{stem}-{counter}.tsv"
     return path
@@ -346,8 +377,11 @@ def run_step(port: str = DEFAULT_PORT, protocol: str = "v1", controller: str = D
         "step" (default), "pulse", "swept-sine" or ``FILE[:COLUMN]``
         (:func:`make_reference`). Step metrics are computed for steps only.
     out : path, optional
-        Log file; default :func:`default_log_path` in ``out_dir``. An existing file is
-        an error unless ``force``.
+        Log file; default :func:`default_log_path` in ``out_dir``. An existing file (or
+        an existing figure beside it) is an error unless ``force``; an input (the
+        reference's or controller's file) always is (:func:`station.outputs.check_outputs`).
+        The log is streamed during the run; with ``force`` an existing one is replaced
+        from the run's first row.
     sinks : sequence
         Extra row sinks (e.g. :class:`station.viz.RerunSink`), fed off the hot path.
     kp : float, optional
@@ -371,10 +405,12 @@ def run_step(port: str = DEFAULT_PORT, protocol: str = "v1", controller: str = D
         The link's fail-safe bounds (max lag, misses, encoder step, rate check);
         default ``LinkLimits(timeout)``. Its timeout wins over ``timeout``.
     force : bool
-        Overwrite an existing ``out``.
+        Replace an existing ``out`` and its figure.
     figure : bool
-        Write ``<log stem>.png`` beside the log once the run has ended and the log is
-        closed (:mod:`station.plots`); a figure that fails is a warning, never a lost run.
+        Write ``<log stem>.png`` beside the log (:func:`figure_path`; none beside a device
+        such as /dev/null) once the run has ended and the log is closed
+        (:mod:`station.plots`, whole or not at all); a figure that fails is a warning,
+        never a lost run.
     progress : bool
         Show a live progress line on stderr (:class:`station.progress.ProgressSink`,
         fed off the hot path by the log's sink thread).
@@ -418,9 +454,11 @@ def run_step(port: str = DEFAULT_PORT, protocol: str = "v1", controller: str = D
     limit = DEFAULT_LIMIT if limit is None else limit
     u, reference_meta = make_reference(reference, amplitude, duration, step_tick, dt)
     check_ticks(protocol, u.size, dt)  # a user error: nothing started, no log
-    if out is not None and Path(out).is_file() and not force:  # (a device such as /dev/null is no file to keep)
-        raise StationError(f"{out}: exists; use --force (force=True) to overwrite it, or another name")
     log_path = Path(out) if out is not None else default_log_path(log_tag(ctrl), folder=out_dir)
+    figure = figure and not is_device(log_path)  # (no figure beside /dev/null)
+    check_outputs([Output("out", log_path), Output("out's figure", figure_path(log_path) if figure else None)],
+                  [Input("reference", reference_path(reference)),
+                   Input("controller", controller if isinstance(controller, (str, Path)) else None)], force=force)
     try:
         log_path.parent.mkdir(parents=True, exist_ok=True)
     except OSError as exc:
@@ -457,7 +495,12 @@ def run_step(port: str = DEFAULT_PORT, protocol: str = "v1", controller: str = D
 
             bar = ProgressSink(u.size * dt)
             sinks.append(bar)
-        writer = RunLogWriter(log_path, meta, sinks=sinks)
+        try:
+            writer = RunLogWriter(log_path, meta, sinks=sinks)
+        except RunLogError:  # not even the header fits (a full disk): leave no part of a log
+            if log_path.is_file():
+                log_path.unlink()
+            raise
         result = None
         try:
             result = run_loop(session, ctrl, u, writer, soft_limit=soft_limit, dt=dt, lean=lean,
@@ -479,7 +522,7 @@ def run_step(port: str = DEFAULT_PORT, protocol: str = "v1", controller: str = D
 
 def _write_figure(report: StepReport) -> Path | None:
     """``<log stem>.png`` beside the log; a warning (not an error) when it cannot be drawn."""
-    png = report.log_path.with_suffix(".png")
+    png = figure_path(report.log_path)
     try:
         from station.plots import save_figure
 

@@ -36,29 +36,34 @@ def new_figure(width: float = 9.0, height: float = 8.0):
     return fig
 
 
-def save_figure(fig, path: str | Path, dpi: int = 100) -> Path:
-    """Write ``fig`` as PNG to ``path``.
+def save_figure(fig, path: str | Path, dpi: int = 100, transaction=None) -> Path:
+    """Write ``fig`` as PNG to ``path``, whole or not at all (:mod:`station.outputs`).
 
     Parameters
     ----------
     fig : matplotlib.figure.Figure
         The figure.
     path : str or Path
-        The PNG file.
+        The PNG file (written as PNG whatever its suffix).
     dpi : int, default 100
         Resolution, dots per inch.
+    transaction : station.outputs.Transaction, optional
+        Write through it (renamed into place when it commits, with the command's other
+        files); default: at once.
 
     Raises
     ------
     StationError
-        The file cannot be written (names it).
+        The file cannot be written (names it); an existing file is unchanged then.
     """
-    path = Path(path)
-    try:
-        fig.savefig(path, dpi=dpi)
-    except OSError as exc:
-        raise StationError(f"{path}: cannot write the figure: {exc.strerror or exc}") from None
-    return path
+    from station.outputs import Transaction
+
+    if transaction is None:
+        with Transaction() as tx:
+            return save_figure(fig, path, dpi, tx)
+    with transaction.open(path, "the figure") as fh:
+        fig.savefig(fh, format="png", dpi=dpi)
+    return Path(path)
 
 
 def source_label(log) -> str:
@@ -168,7 +173,7 @@ def run_title(log, metrics_text: str = "") -> str:
     return " - ".join(parts)
 
 
-def plot_log_files(paths: Sequence[str | Path], out: str | Path) -> Path:
+def plot_log_files(paths: Sequence[str | Path], out: str | Path, transaction=None) -> Path:
     """Read ``paths`` and write their overlay to ``out`` (``station plot``).
 
     Parameters
@@ -177,6 +182,8 @@ def plot_log_files(paths: Sequence[str | Path], out: str | Path) -> Path:
         Run logs, any format :func:`station.runlog.read_log` reads.
     out : str or Path
         The PNG to write.
+    transaction : station.outputs.Transaction, optional
+        Write through it (see :func:`save_figure`).
 
     Returns
     -------
@@ -191,12 +198,12 @@ def plot_log_files(paths: Sequence[str | Path], out: str | Path) -> Path:
     from station.runlog import read_log
 
     logs = [read_log(p) for p in paths]
-    return save_figure(plot_runs(logs), out)
+    return save_figure(plot_runs(logs), out, transaction=transaction)
 
 
 # --- model comparisons: station compare, station bode, station diagnose --------------------
 
-def plot_comparison(c, path: Path):
+def plot_comparison(c, path: Path, transaction=None):
     """Write θ, a and v of the log and the model over time as a PNG.
 
     Parameters
@@ -204,6 +211,8 @@ def plot_comparison(c, path: Path):
     c : station.compare.RunComparison
     path : Path
         PNG file.
+    transaction : station.outputs.Transaction, optional
+        Write through it (see :func:`save_figure`).
 
     Returns
     -------
@@ -232,11 +241,11 @@ def plot_comparison(c, path: Path):
     fits = f"NRMSE fit {fits}" if c.prediction is not None else "hub-held beam test, no model fit"
     fig.suptitle(f"{Path(c.file).name} ({c.source})\n{c.controller}: {fits}", fontsize=9)
     fig.tight_layout()
-    save_figure(fig, path)
+    save_figure(fig, path, transaction=transaction)
     return fig
 
 
-def plot_bode(cmp, path: Path, title: str) -> None:
+def plot_bode(cmp, path: Path, title: str, transaction=None) -> None:
     """Write the Bode magnitude/phase of θ/v, a/v (measured and model) and the coherence.
 
     Parameters
@@ -246,6 +255,8 @@ def plot_bode(cmp, path: Path, title: str) -> None:
         PNG file to write.
     title : str
         Figure title.
+    transaction : station.outputs.Transaction, optional
+        Write through it (see :func:`save_figure`).
     """
     f = cmp.theta.f
     band = (f >= 0.5) & (f <= 40.0)
@@ -273,7 +284,7 @@ def plot_bode(cmp, path: Path, title: str) -> None:
                        xytext=(2, -2), textcoords="offset points", rotation=90, va="top", fontsize=7, color="grey")
     fig.suptitle(title)
     fig.tight_layout()
-    save_figure(fig, path)
+    save_figure(fig, path, transaction=transaction)
 
 
 def diagnosis_run_figure(run):

@@ -79,7 +79,7 @@ def test_compare_and_replay_commands_take_a_model(rig_data, model_file, tmp_path
     assert _run(replay_cmd, [str(log), "--model", str(model_file)]) == 0
     assert "model: with-effects" in capsys.readouterr().out
     with pytest.raises(StationError, match="model file not found"):
-        _run(compare, [str(log), "--model", str(tmp_path / "none.toml"), "--out-dir", str(tmp_path)])
+        _run(compare, [str(log), "--model", str(tmp_path / "none.toml"), "--out-dir", str(tmp_path), "--force"])
 
 
 def test_modes_command_uses_the_model_linear_part(tmp_path, capsys):

@@ -1,6 +1,7 @@
-"""What the commands share: checked command-line values, output-path probes, and the option
-groups declared once (the model options of every command that simulates, the simulated rig's
-seed, the wire protocol, ``--json`` and rerun output).
+"""What the commands share: checked command-line values and the option groups declared once
+(the model options of every command that simulates, the simulated rig's seed, the wire
+protocol, ``--json`` and rerun output, ``--force``). Output files follow one rule, checked
+before anything starts: :mod:`station.outputs`.
 
 A numeric option is declared with ``type=number(low, high, ...)``: argparse calls it on
 the text, so a value that is not finite or outside the range is refused while the
@@ -13,15 +14,12 @@ argparse's own one-line ``argument --x: ...`` error and exit code 2
 from __future__ import annotations
 
 import argparse
-import json
 import math
-import os
 import sys
-import tempfile
 from pathlib import Path
-from typing import Any
 
 from station.errors import StationError
+from station.outputs import FORCE_HELP, Input
 from station.protocol import PROTOCOLS
 
 
@@ -130,73 +128,6 @@ def numeric_actions(parser: argparse.ArgumentParser) -> list[argparse.Action]:
         A command's parser, its options added.
     """
     return [a for a in parser._actions if a.option_strings and (isinstance(a.type, Number) or a.type in (int, float))]
-
-
-def check_writable(path: Path | None, option: str, overwrite: bool = True) -> None:
-    """Refuse, before a run, an output file that could not be written afterwards.
-
-    Parameters
-    ----------
-    path : Path or None
-        The output file (None: nothing to check).
-    option : str
-        The option's name, for the message (e.g. "--json").
-    overwrite : bool
-        False: an existing file is an error (``--out`` without ``--force``).
-
-    Raises
-    ------
-    StationError
-        The file exists and ``overwrite`` is False, it is a folder, it exists read-only,
-        or its folder cannot be created or written.
-    """
-    if path is None:
-        return
-    path = Path(path)
-    if path.is_dir():
-        raise StationError(f"{option} {path}: is a folder, expected a file")
-    if path.exists():
-        if not overwrite and path.is_file():
-            raise StationError(f"{option} {path}: exists; use --force to overwrite it, or another name")
-        if not os.access(path, os.W_OK):
-            raise StationError(f"{option} {path}: exists and is not writable")
-        return
-    check_writable_dir(path.parent, option, what=f"{option} {path}: its folder")
-
-
-def check_writable_dir(folder: Path | None, option: str, what: str | None = None) -> None:
-    """Refuse an output folder that does not exist and cannot be created, or is not writable.
-
-    Parameters
-    ----------
-    folder : Path or None
-        The output folder (None: nothing to check); created later if missing.
-    option : str
-        The option that named it, for the message.
-    what : str, optional
-        How the message names it (default ``"OPTION FOLDER"``).
-
-    Raises
-    ------
-    StationError
-        Naming ``option`` and the folder.
-    """
-    if folder is None:
-        return
-    folder = Path(folder)
-    what = what or f"{option} {folder}"
-    existing = folder
-    while not existing.exists():  # the nearest existing ancestor decides whether it can be created
-        if existing.parent == existing:
-            break
-        existing = existing.parent
-    if existing.exists() and not existing.is_dir():
-        raise StationError(f"{what}: {existing} is a file, not a folder")
-    try:  # a real probe: permission bits say nothing for root or on /proc-like file systems
-        with tempfile.TemporaryFile(dir=existing):
-            pass
-    except OSError as exc:
-        raise StationError(f"{what}: {existing} is not writable ({exc.strerror or exc})") from None
 
 
 def warn(message: str) -> None:
@@ -318,30 +249,6 @@ def add_protocol_option(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--protocol", choices=PROTOCOLS, default="v1", help="wire protocol (default v1)")
 
 
-def write_json(path: Path, doc: Any, indent: int = 1) -> None:
-    """Write ``doc`` as JSON to ``path`` (its folder created), one line of error on failure.
-
-    Parameters
-    ----------
-    path : Path
-        The ``--json`` file.
-    doc : JSON-able
-        What to write.
-    indent : int
-        JSON indentation.
-
-    Raises
-    ------
-    StationError
-        ``PATH: cannot write the JSON report: REASON``.
-    """
-    try:
-        path.parent.mkdir(parents=True, exist_ok=True)
-        path.write_text(json.dumps(doc, indent=indent) + "\n")
-    except OSError as exc:
-        raise StationError(f"{path}: cannot write the JSON report: {exc.strerror or exc}") from None
-
-
 def add_report_options(parser: argparse.ArgumentParser, json: str | None = None, rerun: str | None = None) -> None:
     """``--json OUT`` and ``--rrd FILE`` or ``--spawn`` (one of them), as the command has them.
 
@@ -360,3 +267,27 @@ def add_report_options(parser: argparse.ArgumentParser, json: str | None = None,
         viz = parser.add_mutually_exclusive_group()
         viz.add_argument("--rrd", type=Path, default=None, metavar="FILE", help=f"record {rerun} to a rerun .rrd file")
         viz.add_argument("--spawn", action="store_true", help=f"stream {rerun} to a rerun viewer")
+
+
+def add_force_option(parser: argparse.ArgumentParser) -> None:
+    """``--force``: replace output files that exist (the one rule, :mod:`station.outputs`).
+
+    Parameters
+    ----------
+    parser : argparse.ArgumentParser
+        The subparser of a command that writes files.
+    """
+    parser.add_argument("--force", action="store_true", help=FORCE_HELP)
+
+
+def model_inputs(args: argparse.Namespace) -> list[Input]:
+    """The files the model options name (``--model``, ``--params``): inputs no output may replace.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        Parsed options of :func:`add_model_options` (``model`` or ``model_spec``, ``params``).
+    """
+    model = getattr(args, "model_spec", None) or getattr(args, "model", None)
+    return [Input("--model", model if isinstance(model, (str, Path)) else None),
+            Input("--params", getattr(args, "params", None))]

@@ -8,11 +8,14 @@ from pathlib import Path
 from station import DT
 from station import experiment as ex
 from station.errors import StationError
-from station.commands.options import (add_model_options, add_protocol_option, add_report_options, add_seed_option,
-                                      check_writable, check_writable_dir, number, warn, write_json)
+from station.commands.options import (add_force_option, add_model_options, add_protocol_option, add_report_options,
+                                      add_seed_option, model_inputs, number, warn)
 from station.config import apply_config
 from station.link import LinkLimits
+from station.outputs import Input, Output, check_folder, check_outputs, is_device, write_json
 from station.protocol import check_ticks
+from station.signals import noting
+from station.viz import RRD_BYTES_PER_TICK
 
 MAX_DURATION_S = (2**32 - 1) * DT
 """Longest run v1 can count (START's n_ticks is a u32), s."""
@@ -74,9 +77,9 @@ def configure(parser) -> None:
                         help="largest plausible encoder change per tick; more stops the run (reason sequence; "
                              "default 40)")
     parser.add_argument("--out", type=Path, default=None, metavar="FILE",
-                        help="run log (default runs/step-<controller>-<UTC time with ms>.tsv); never overwritten "
-                             "without --force. The run's figure goes beside it as <log stem>.png")
-    parser.add_argument("--force", action="store_true", help="overwrite an existing --out file")
+                        help="run log (default runs/step-<controller>-<UTC time with ms>.tsv), streamed during the "
+                             "run. The run's figure goes beside it as <log stem>.png")
+    add_force_option(parser)
     parser.add_argument("--quiet", action="store_true",
                         help="no live progress line on stderr (it is shown only when stderr is a terminal)")
     parser.add_argument("--out-dir", type=Path, default=Path("runs"), metavar="DIR",
@@ -130,18 +133,43 @@ def check_args(args) -> None:
         if args.step_time >= duration:
             raise StationError(f"--step-time {args.step_time:g} s: the step must start before the run ends "
                                f"({duration:g} s)")
+    check_outputs(outputs(args), inputs(args), force=args.force)
+    if args.out is None:
+        check_folder(args.out_dir, "--out-dir")
     if args.duration is not None:
-        _check_resources(args.duration, args.out.parent if args.out is not None else args.out_dir)
+        _check_resources(args.duration, args.out.parent if args.out is not None else args.out_dir,
+                         rrd=args.rrd is not None)
     if args.duration is not None:
         try:
             check_ticks(args.protocol, round(args.duration / DT))
         except StationError as exc:  # the same refusal as run_step's, naming the option
             raise StationError(f"--duration {args.duration:g} s: {exc}") from None
-    check_writable(args.out, "--out", overwrite=args.force)
-    if args.out is None:
-        check_writable_dir(args.out_dir, "--out-dir")
-    check_writable(args.json, "--json")
-    check_writable(args.rrd, "--rrd")
+
+
+def outputs(args) -> list[Output]:
+    """The files ``station step`` writes: the log (--out), its figure beside it, --json, --rrd.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        ``--out`` (None: a new default name, see :func:`station.experiment.default_log_path`),
+        ``--json``, ``--rrd``.
+    """
+    figure = None if args.out is None or is_device(args.out) else ex.figure_path(args.out)
+    return [Output("--out", args.out), Output("--out's figure", figure),
+            Output("--json", args.json), Output("--rrd", args.rrd)]
+
+
+def inputs(args) -> list[Input]:
+    """The files ``station step`` reads: a compensator file, a reference log, a model file, station.toml.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        ``--controller``, ``--reference``, ``--model`` and the settings file in use.
+    """
+    return [Input("--controller", args.controller), Input("--reference", ex.reference_path(args.reference)),
+            *model_inputs(args), Input("station.toml", getattr(args, "_config", None))]
 
 
 BYTES_PER_TICK_MEMORY = 200
@@ -151,8 +179,9 @@ BYTES_PER_TICK_DISK = 80
 """Disk a run log takes per tick, bytes (a row of our format is ~60)."""
 
 
-def _check_resources(duration: float, folder: Path) -> None:
-    """Refuse a run this machine cannot hold in memory or its log on disk (before it starts).
+def _check_resources(duration: float, folder: Path, rrd: bool = False) -> None:
+    """Refuse a run this machine cannot hold in memory (with an .rrd recording: that too) or
+    its log on disk (before it starts).
 
     Raises
     ------
@@ -162,7 +191,7 @@ def _check_resources(duration: float, folder: Path) -> None:
     import shutil
 
     ticks = round(duration / DT)
-    need_mem, need_disk = ticks * BYTES_PER_TICK_MEMORY, ticks * BYTES_PER_TICK_DISK
+    need_mem, need_disk = ticks * (BYTES_PER_TICK_MEMORY + RRD_BYTES_PER_TICK * rrd), ticks * BYTES_PER_TICK_DISK
     available = _available_memory()
     if available is not None and need_mem > available:
         raise StationError(f"--duration {duration:g} s: {ticks} ticks need about {need_mem / 1e9:.1f} GB of memory; "
@@ -208,25 +237,39 @@ def run(args) -> int:
         from station.viz import RerunSink
 
         sinks.append(RerunSink(rrd_path=args.rrd, spawn=args.spawn, name="station step"))
+    report = None
     try:
-        report = ex.run_step(port=args.port, protocol=args.protocol, controller=chosen.controller,
-                             amplitude=args.amplitude, duration=args.duration,
-                             step_time=args.step_time, reference=args.reference,
-                             out=args.out, sinks=sinks,
-                             kp=args.kp, limit=args.limit, soft_limit=args.soft_limit,
-                             timeout=args.timeout, baudrate=args.baud, force=args.force,
-                             limits=LinkLimits(timeout=args.timeout, max_lag=args.max_lag, max_miss=args.max_miss,
-                                               max_step=args.max_step),
-                             out_dir=args.out_dir, model=args.model, n_elements=args.elements, seed=args.seed,
-                             progress=not args.quiet and sys.stderr.isatty())
+        with noting(lambda: "before the run started; nothing written"):  # in the loop, the run's outcome says it
+            report = ex.run_step(port=args.port, protocol=args.protocol, controller=chosen.controller,
+                                 amplitude=args.amplitude, duration=args.duration,
+                                 step_time=args.step_time, reference=args.reference,
+                                 out=args.out, sinks=sinks,
+                                 kp=args.kp, limit=args.limit, soft_limit=args.soft_limit,
+                                 timeout=args.timeout, baudrate=args.baud, force=args.force,
+                                 limits=LinkLimits(timeout=args.timeout, max_lag=args.max_lag,
+                                                   max_miss=args.max_miss, max_step=args.max_step),
+                                 out_dir=args.out_dir, model=args.model, n_elements=args.elements, seed=args.seed,
+                                 progress=not args.quiet and sys.stderr.isatty())
     finally:
-        for sink in sinks:
-            sink.close()
+        failed = _close(sinks, keep=report is not None)  # no recording of a run that never started
     print(ex.format_report(report))
     if report.figure_path is not None:
         print(f"figure: {report.figure_path}")
+    if failed is not None:  # after the run's report: the log is complete, an output is not
+        raise failed
     if args.rrd is not None:
         print(f"rerun recording: {args.rrd}")
     if args.json is not None:
         write_json(args.json, report.to_json())
     return report.result.outcome.exit_code
+
+
+def _close(sinks, keep: bool) -> StationError | None:
+    """Close every sink; the first one's error (an .rrd that could not be written), if any."""
+    failed = None
+    for sink in sinks:
+        try:
+            sink.close(keep=keep)
+        except StationError as exc:
+            failed = failed or exc
+    return failed

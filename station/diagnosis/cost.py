@@ -18,6 +18,7 @@ import numpy as np
 
 from station.analysis.residuals import ACCEL_NOISE_STD, THETA_QUANTIZATION_STD, noise_std
 from station.diagnosis.cases import RunCase, Simulator, simulate_case
+from station.signals import check_stop
 
 
 def _key(effects: Mapping[str, float]) -> tuple:
@@ -69,6 +70,7 @@ class Evaluator:
         i : int
             Index of the run in ``cases``.
         """
+        check_stop()  # SIGINT / SIGTERM: every thread stops before its next simulation
         with self._lock:
             self.simulations += 1
         return self.simulate(self.cases[i], self.model_with(effects))

@@ -4,7 +4,9 @@ PNG files beside it (``station diagnose --report DIR``).
 Figures are :class:`matplotlib.figure.Figure` objects rendered with the Agg canvas (no
 pyplot, no global backend): per run, measured vs nominal vs extended θ and a; per run, the
 ``resid`` tests of the θ residual before and after (autocorrelation and cross-correlation
-with the command, 99 % band).
+with the command, 99 % band). The files' names are known before the diagnosis starts
+(:func:`report_files`: the command checks them, :mod:`station.outputs`), unique even for
+runs of the same name, and written whole or not at all (:class:`station.outputs.Transaction`).
 """
 
 from __future__ import annotations
@@ -13,17 +15,42 @@ import base64
 import html
 import io
 import re
+from collections.abc import Sequence
 from pathlib import Path
 
 from matplotlib.figure import Figure
 
 from station.diagnosis.prose import format_pct, format_value, summary_paragraph
-from station.errors import StationError
+from station.outputs import Transaction, unique_names
 from station.plots import diagnosis_resid_figure, diagnosis_run_figure
 
 
-def _slug(name: str) -> str:
-    return re.sub(r"[^A-Za-z0-9_.-]+", "_", Path(name).stem)[:60]
+PAGE = "report.html"
+"""The report's page in its folder."""
+FIGURES = ("run", "resid")
+"""Each run's figures, ``<run>_run.png`` and ``<run>_resid.png``."""
+
+
+def _slugs(names: Sequence[str]) -> list[str]:
+    """File-name stems of the runs' figures: their names made safe, unique within the report."""
+    return unique_names([re.sub(r"[^A-Za-z0-9_.-]+", "_", Path(n).stem)[:60] for n in names])
+
+
+def report_files(run_names: Sequence[str]) -> list[str]:
+    """The files :func:`write_report` writes for runs of these names, the page first.
+
+    Parameters
+    ----------
+    run_names : sequence of str
+        The runs' file names (``RunReport.file``), in the diagnosis's order (RUNs then
+        ``--validate`` runs).
+
+    Returns
+    -------
+    list of str
+        Names inside the report folder: ``report.html``, then per run its figures.
+    """
+    return [PAGE] + [f"{slug}_{kind}.png" for slug in _slugs(run_names) for kind in FIGURES]
 
 
 def _png(fig: Figure) -> bytes:
@@ -81,8 +108,8 @@ def _runs_table(diag) -> list[str]:
     return rows
 
 
-def _run_section(run, folder: Path, extended: bool) -> list[str]:
-    """One run's signatures and figures; writes its PNGs into ``folder`` (OSError)."""
+def _run_section(run, slug: str, folder: Path, extended: bool, tx: Transaction) -> list[str]:
+    """One run's signatures and figures; writes its PNGs into ``folder`` through ``tx``."""
     esc = html.escape
     out = [f"<h3>{esc(run.file)}</h3>"]
     sig_b = run.residuals_before.signatures() if run.residuals_before else []
@@ -90,18 +117,19 @@ def _run_section(run, folder: Path, extended: bool) -> list[str]:
     out.append("<p>Nominal model: " + esc("; ".join(sig_b) or "no notable signature") + "</p>")
     if extended:
         out.append("<p>Extended model: " + esc("; ".join(sig_a) or "no notable signature") + "</p>")
-    for kind, fig in (("run", diagnosis_run_figure(run)), ("resid", diagnosis_resid_figure(run))):
+    for kind, fig in zip(FIGURES, (diagnosis_run_figure(run), diagnosis_resid_figure(run))):
         png = _png(fig)
-        name = f"{_slug(run.file)}_{kind}.png"
-        (folder / name).write_bytes(png)
+        name = f"{slug}_{kind}.png"
+        tx.write(folder / name, png, "the report's figure")
         out.append(f"<img alt='{esc(name)}' src='data:image/png;base64,{base64.b64encode(png).decode()}'>")
     for note in run.notes:
         out.append(f"<p class='note'>note: {esc(note)}</p>")
     return out
 
 
-def write_report(diag, folder: str | Path) -> Path:
-    """Write ``report.html`` (figures embedded as base64 PNG) and the PNGs beside it.
+def write_report(diag, folder: str | Path, transaction: Transaction | None = None) -> Path:
+    """Write ``report.html`` (figures embedded as base64 PNG) and the PNGs beside it
+    (:func:`report_files`), whole or not at all.
 
     Parameters
     ----------
@@ -109,6 +137,9 @@ def write_report(diag, folder: str | Path) -> Path:
         What :func:`station.diagnosis.diagnose` returned.
     folder : str or Path
         Created if needed.
+    transaction : station.outputs.Transaction, optional
+        Write through it (renamed into place with the command's other files when it
+        commits); default: a transaction of the report's own files.
 
     Returns
     -------
@@ -118,21 +149,20 @@ def write_report(diag, folder: str | Path) -> Path:
     Raises
     ------
     StationError
-        The folder or a file cannot be written.
+        A file cannot be written (nothing of the report is left then).
     """
+    if transaction is None:
+        with Transaction() as tx:
+            return write_report(diag, folder, tx)
     folder = Path(folder)
-    try:
-        folder.mkdir(parents=True, exist_ok=True)
-        body = _result_table(diag) + _candidates_table(diag) + _runs_table(diag)
-        for r in diag.runs:
-            body += _run_section(r, folder, bool(diag.causes))
-        page = ("<!doctype html><html><head><meta charset='utf-8'><title>Model diagnosis</title><style>"
-                + _STYLE + "</style></head><body>" + "\n".join(body) + "</body></html>")
-        out = folder / "report.html"
-        out.write_text(page, encoding="utf-8")
-    except OSError as exc:
-        raise StationError(f"--report {folder}: cannot write: {exc}") from None
+    body = _result_table(diag) + _candidates_table(diag) + _runs_table(diag)
+    for r, slug in zip(diag.runs, _slugs([r.file for r in diag.runs])):
+        body += _run_section(r, slug, folder, bool(diag.causes), transaction)
+    page = ("<!doctype html><html><head><meta charset='utf-8'><title>Model diagnosis</title><style>"
+            + _STYLE + "</style></head><body>" + "\n".join(body) + "</body></html>")
+    out = folder / PAGE
+    transaction.write(out, page, "the report")
     return out
 
 
-__all__ = ["write_report"]
+__all__ = ["report_files", "write_report"]
