@@ -236,6 +236,29 @@ def test_budget_bounds_the_designed_experiments(tmp_path, monkeypatch):
     assert two.diagnoses == 3 and set(two.timings) == {"experiments", "diagnosis", "design", "total"}
 
 
+def test_prefer_keeps_the_explanation_that_fits_every_run(tmp_path):
+    """A greedy re-diagnosis that fits worse is set aside for the earlier explanation, refitted."""
+    model = _hidden_model(tmp_path, {"deadzone": 8.0, "param:act_K": 0.8})
+    run = step_runner(f"sim://?model={model}")
+    logs = [run(exp, tmp_path / f"{k}.tsv").log for k, exp in enumerate(THESIS_EXPERIMENTS)]
+    old = _diag([_effect("deadzone", 7.0), _effect("param:act_K", 0.78)])
+    new = _diag([_effect("coulomb_friction", 13.0)])
+    pref = identify_mod.prefer(old, new, logs, NOMINAL)
+    assert pref.keep_old and pref.old_cost < pref.new_cost
+    assert pref.values["deadzone"] == pytest.approx(8.0, rel=0.1) and pref.values["param:act_K"] == pytest.approx(0.8, rel=0.05)
+    assert "fits them better" in pref.note
+    assert not identify_mod.prefer(new, old, logs, NOMINAL).keep_old  # the worse one never wins
+    assert identify_mod.prefer(old, old, logs, NOMINAL).note == ""  # same structure: nothing to compare
+
+
+def test_recheck_candidates_keep_the_causes_the_rivals_and_the_best_others():
+    d = _diag([_effect("coulomb_friction", 10.0, cost_gain=60.0), _effect("delay", 1.0, False, cost_gain=-5.0),
+               _effect("param:act_K", 0.9, False, cost_gain=30.0), _effect("backlash", 2.0, False, cost_gain=40.0)])
+    names = identify_mod.recheck_candidates(d, ["deadzone"], ["coulomb_friction", "delay", "deadzone", "param:act_K",
+                                                                  "backlash"])
+    assert names == ["coulomb_friction", "deadzone", "backlash", "param:act_K"]
+
+
 def test_a_signal_ends_the_identification(tmp_path):
     calls = []
 

@@ -44,7 +44,13 @@ MIN_SEPARATION = 10.0
 
 
 class Prediction(NamedTuple):
-    """θ and a of an experiment on one model, counts, shape (N,) each."""
+    """An experiment's outputs predicted on one model.
+
+    Attributes
+    ----------
+    theta, a : ndarray, shape (N,)
+        Encoder and accelerometer counts.
+    """
 
     theta: np.ndarray
     a: np.ndarray

@@ -31,6 +31,7 @@ from station.diagnosis.pipeline import diagnose
 from station.diagnosis.rivals import describe, rivals
 from station.diagnosis.selection import accept, effect_axes, fit_set
 from station.errors import StationError
+from station.experiment import run_step
 from station.logged.device import command_quantization
 from station.plant.effects import CANDIDATES
 from station.plant.model import as_model
@@ -89,8 +90,6 @@ def step_runner(port: str, protocol: str = "v1", soft_limit: float = 2048.0, lim
     force : bool
         Overwrite an existing log (and reference file) of the same name.
     """
-    from station.experiment import run_step  # the real-time loop and the link: loaded when a device is used
-
     def run(experiment: Experiment, log: Path) -> ExperimentRun:
         if experiment.reference == "step":
             ref = {"reference": "step", "amplitude": experiment.amplitude, "step_time": experiment.step_time}
