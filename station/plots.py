@@ -369,7 +369,7 @@ def identify_design_figure(t, predicted, measured=None, title: str = ""):
     fig.set_layout_engine("constrained")
     ax1, ax2 = fig.subplots(2, 1, sharex=True)
     for k, (label, (theta, a)) in enumerate(predicted.items()):
-        style = {"lw": 1.2, "color": "tab:blue"} if k == 0 else {"lw": 0.9, "ls": "--"}
+        style = {"lw": 1.2, "color": "C0"} if k == 0 else {"lw": 0.9, "ls": "--", "color": f"C{k % 10}"}
         ax1.plot(t[:len(theta)], theta, label=label, **style)
         ax2.plot(t[:len(a)], a, **style)
     if measured is not None:
