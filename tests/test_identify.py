@@ -286,6 +286,20 @@ def test_bad_input_is_one_line_before_any_run(tmp_path, capsys, args, words):
     assert not out.exists()
 
 
+def test_budget_help_names_the_loops_default():
+    import subprocess
+    import sys
+
+    from station.diagnosis.identify import DEFAULT_BUDGET
+
+    sub = next(a for a in cli.build_parser()._actions if hasattr(a, "choices") and a.choices and "identify" in a.choices)
+    budget = next(a for a in sub.choices["identify"]._actions if "--budget" in a.option_strings)
+    assert f"default {DEFAULT_BUDGET};" in budget.help
+    # building the parser (every command's start-up) does not load the diagnosis
+    code = "import sys, station.cli; station.cli.build_parser(); print('station.diagnosis' in sys.modules)"
+    assert subprocess.run([sys.executable, "-c", code], capture_output=True, text=True).stdout.strip() == "False"
+
+
 def test_outputs_are_never_overwritten_without_force(tmp_path, capsys):
     existing = tmp_path / "d.json"
     existing.write_text("{}")

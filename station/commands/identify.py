@@ -25,16 +25,15 @@ def configure(parser: argparse.ArgumentParser) -> None:
         Gets ``--port``, ``--protocol``, ``--model``, ``--budget``, the limits, the outputs
         (``--out-dir``, ``--json``, ``--report``, ``--save-model``, ``--force``) and ``--quiet``.
     """
-    from station.diagnosis.identify import DEFAULT_BUDGET
-
     parser.add_argument("--port", default="sim://", metavar="URL",
                         help="the device: port path or pyserial URL (default sim://, the simulated rig; "
                              "sim://?model=FILE serves a model file)")
     add_protocol_option(parser)
     add_model_options(parser, subject="the nominal model the diagnoses extend", elements=None, params=False)
-    parser.add_argument("--budget", type=number(0, 100, integer=True), default=DEFAULT_BUDGET, metavar="N",
-                        help=f"designed experiments after the thesis's four, at most (default {DEFAULT_BUDGET}; "
-                             "0: the four only)")
+    # the default is station.diagnosis.identify.DEFAULT_BUDGET, not imported here: the diagnosis
+    # loads scipy and numba, and every command's start-up builds this parser
+    parser.add_argument("--budget", type=number(0, 100, integer=True), default=None, metavar="N",
+                        help="designed experiments after the thesis's four, at most (default 8; 0: the four only)")
     parser.add_argument("--limit", type=number(1, 255, unit="DAC counts"), default=200.0, metavar="COUNTS",
                         help="the controllers' clamp, ±DAC counts (default 200, the rig's)")
     parser.add_argument("--soft-limit", type=number(1, 32767, unit="encoder counts"), default=2048.0,
@@ -141,14 +140,15 @@ def run(args: argparse.Namespace) -> int:
         Bad input (an unknown port, an unreadable model, an output that exists or cannot be
         written), before any run.
     """
-    from station.diagnosis.identify import identify
+    from station.diagnosis.identify import DEFAULT_BUDGET, identify
     from station.plant.model import as_model
 
     check_port(args.port)
     model = as_model(args.model)  # an unreadable model is refused before any run
     folder = check_outputs(args)
     progress = None if args.quiet else (lambda msg: print(f"identify: {msg}", file=sys.stderr, flush=True))
-    ident = identify(port=args.port, model=model, budget=args.budget, out_dir=folder, protocol=args.protocol,
+    budget = DEFAULT_BUDGET if args.budget is None else args.budget
+    ident = identify(port=args.port, model=model, budget=budget, out_dir=folder, protocol=args.protocol,
                      soft_limit=args.soft_limit, limit=args.limit, timeout=args.timeout, force=args.force,
                      progress=progress)
     print(format_identification(ident))
