@@ -164,27 +164,6 @@ def check_writable(path: Path | None, option: str, overwrite: bool = True) -> No
     check_writable_dir(path.parent, option, what=f"{option} {path}: its folder")
 
 
-def check_port(port: str, option: str = "--port") -> None:
-    """Refuse a port that is neither a URL nor an existing device, before anything starts.
-
-    Parameters
-    ----------
-    port : str
-        A port path or pyserial URL (``sim://``, ``socket://``, ...).
-    option : str
-        The option's name, for the message.
-
-    Raises
-    ------
-    StationError
-        ``--port PATH: no such device`` with the hint to ``station ports``.
-    """
-    port = str(port)
-    if "://" not in port and not Path(port).exists():
-        raise StationError(f"{option} {port}: no such device; `station ports` lists this machine's serial ports "
-                           f"(the simulated rig is sim://)")
-
-
 def check_writable_dir(folder: Path | None, option: str, what: str | None = None) -> None:
     """Refuse an output folder that does not exist and cannot be created, or is not writable.
 
@@ -381,3 +360,24 @@ def add_report_options(parser: argparse.ArgumentParser, json: str | None = None,
         viz = parser.add_mutually_exclusive_group()
         viz.add_argument("--rrd", type=Path, default=None, metavar="FILE", help=f"record {rerun} to a rerun .rrd file")
         viz.add_argument("--spawn", action="store_true", help=f"stream {rerun} to a rerun viewer")
+
+
+def check_port(port: str, option: str = "--port") -> None:
+    """Refuse a port that is neither a URL nor an existing device, before anything starts.
+
+    Parameters
+    ----------
+    port : str
+        A port path or pyserial URL (``sim://``, ``socket://``, ...).
+    option : str
+        The option's name, for the message.
+
+    Raises
+    ------
+    StationError
+        ``--port PATH: no such device`` with the hint to ``station ports``.
+    """
+    port = str(port)
+    if "://" not in port and not Path(port).exists():
+        raise StationError(f"{option} {port}: no such device; `station ports` lists this machine's serial ports "
+                           f"(the simulated rig is sim://)")

@@ -9,7 +9,7 @@ from station import DT
 from station import experiment as ex
 from station.errors import StationError
 from station.commands.options import (add_model_options, add_protocol_option, add_report_options, add_seed_option,
-                                      check_port, check_writable, check_writable_dir, number, warn, write_json)
+                                      check_writable, check_writable_dir, number, warn, write_json)
 from station.config import apply_config
 from station.link import LinkLimits
 from station.protocol import check_ticks
@@ -105,7 +105,10 @@ def check_args(args) -> None:
         raise StationError(args._config_error)
     controller = str(args.controller)
     builtin_ref = args.reference in ex.REFERENCES
-    check_port(args.port)
+    port = str(args.port)
+    if "://" not in port and not Path(port).exists():
+        raise StationError(f"--port {port}: no such device; `station ports` lists this machine's serial ports "
+                           f"(the simulated rig is sim://)")
     if args.kp is not None and controller != "p":
         raise StationError(f"--kp: the P gain applies to --controller p only, not {controller}")
     if args.amplitude is not None and not builtin_ref:
