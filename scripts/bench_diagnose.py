@@ -20,7 +20,7 @@ There is no previous release of ``identify`` to print beside it.
 Usage: ``python scripts/bench_diagnose.py [--rig DIR] [--blind coulomb_friction=10]
 [--workers N] [--json FILE] [--identify [MODEL]] [--budget N]``; the JSON is ``{"seconds",
 "cpu_seconds", "simulations", "simulations_per_s", "cause", "causes", "gain_pct", "runs",
-"workers"}``, plus ``"identify": {"model", "seconds", "timings_s", "experiments", "used",
+"workers"}``, plus ``"identify": {"model", "seconds", "cpu_seconds", "timings_s", "experiments", "used",
 "diagnoses", "stopped", "causes", "effects"}`` with ``--identify``.
 """
 
@@ -100,18 +100,19 @@ def bench_identify(model: str, budget: int, out_dir: Path) -> dict:
     """Time station identify on ``sim://?model=MODEL`` (lockstep) and print the numbers."""
     from station.diagnosis.identify import identify
 
-    t = time.perf_counter()
+    t, cpu = time.perf_counter(), time.process_time()
     ident = identify(port=f"sim://?model={model}", budget=budget, out_dir=out_dir)
-    seconds = time.perf_counter() - t
+    seconds, cpu = time.perf_counter() - t, time.process_time() - cpu
     tm, n = ident.timings, len(ident.experiments)
     used = sum(r.used for r in ident.experiments)
     found = ident.model.effect_dict() if ident.model is not None else {}
     print(f"identify on sim://?model={model} (lockstep), budget {budget} designed experiments:")
     print(f"  {seconds:.1f} s: experiments {tm['experiments']:.1f} s, diagnoses {tm['diagnosis']:.1f} s, "
-          f"designs {tm['design']:.1f} s (load average {os.getloadavg()[0]:.1f})")
+          f"designs {tm['design']:.1f} s; CPU time of this process {cpu:.1f} s (load average "
+          f"{os.getloadavg()[0]:.1f}; the simulated rig runs in this process)")
     print(f"  {n} experiments ({n - 4} designed, {used} used), {ident.diagnoses} diagnoses; ended: {ident.stopped}")
     print(f"  found: {', '.join(f'{k} = {v:.4g}' for k, v in found.items()) or 'none'}")
-    return {"model": model, "seconds": seconds, "timings_s": tm, "experiments": n, "used": used,
+    return {"model": model, "seconds": seconds, "cpu_seconds": cpu, "timings_s": tm, "experiments": n, "used": used,
             "diagnoses": ident.diagnoses, "stopped": ident.stopped,
             "causes": ident.diagnosis.causes if ident.diagnosis is not None else [], "effects": found}
 
