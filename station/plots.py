@@ -4,7 +4,7 @@ Run logs: one run (``<log stem>.png`` after ``station step``) or several overlai
 (``station plot``): θ and u (encoder counts), v and v_applied (DAC counts), a
 (accelerometer counts). Model against measurement: ``station compare`` (:func:`plot_comparison`),
 ``station bode`` (:func:`plot_bode`), ``station diagnose`` (:func:`diagnosis_run_figure`,
-:func:`diagnosis_resid_figure`).
+:func:`diagnosis_resid_figure`), ``station identify`` (:func:`identify_design_figure`).
 
 matplotlib :class:`~matplotlib.figure.Figure` objects with the Agg canvas only - no
 pyplot, no global backend - so library users' own matplotlib set-up is never touched.
@@ -355,3 +355,40 @@ def diagnosis_resid_figure(run):
 
 def _fit_text(x) -> str:
     return "n/a" if x is None or not np.isfinite(x) else f"{x:.1f} %"
+
+
+def identify_design_figure(t, predicted, measured=None, title: str = ""):
+    """A designed experiment (``station identify --report``): θ and a predicted on the chosen
+    model and on each rival it was chosen to separate, and what the device measured.
+
+    Parameters
+    ----------
+    t : ndarray, shape (N,)
+        Time, s.
+    predicted : mapping of str to (ndarray, ndarray)
+        Model label -> predicted θ and a, counts, shape (N,) each; the first is the chosen model.
+    measured : (ndarray, ndarray), optional
+        The run's θ and a, counts (None when it did not complete).
+    title : str
+        The figure's title (the experiment and why).
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
+    fig = new_figure(9, 5.2)
+    fig.set_layout_engine("constrained")
+    ax1, ax2 = fig.subplots(2, 1, sharex=True)
+    for k, (label, (theta, a)) in enumerate(predicted.items()):
+        style = {"lw": 1.2, "color": "C0"} if k == 0 else {"lw": 0.9, "ls": "--", "color": f"C{k % 10}"}
+        ax1.plot(t[:len(theta)], theta, label=label, **style)
+        ax2.plot(t[:len(a)], a, **style)
+    if measured is not None:
+        ax1.plot(t[:len(measured[0])], measured[0], color="k", lw=0.8, label="measured")
+        ax2.plot(t[:len(measured[1])], measured[1], color="k", lw=0.6)
+    ax1.set_ylabel("θ (encoder counts)")
+    ax1.legend(loc="best", fontsize=7)
+    ax1.set_title(title, fontsize=8, wrap=True)
+    ax2.set_ylabel("a (accelerometer counts)")
+    ax2.set_xlabel("t (s)")
+    return fig

@@ -141,6 +141,27 @@ def warn(message: str) -> None:
     print(f"station: note: {message}", file=sys.stderr)
 
 
+def check_port(port: str, option: str = "--port") -> None:
+    """Refuse a port that is neither a URL nor an existing device, before anything starts.
+
+    Parameters
+    ----------
+    port : str
+        A port path or pyserial URL (``sim://``, ``socket://``, ...).
+    option : str
+        The option's name, for the message.
+
+    Raises
+    ------
+    StationError
+        ``--port PATH: no such device`` with the hint to ``station ports``.
+    """
+    port = str(port)
+    if "://" not in port and not Path(port).exists():
+        raise StationError(f"{option} {port}: no such device; `station ports` lists this machine's serial ports "
+                           f"(the simulated rig is sim://)")
+
+
 MANY_ELEMENTS = (1, 2, 4, 10, 20, 50, 100)
 """Default element counts of ``--elements N [N ...]`` (a convergence study)."""
 

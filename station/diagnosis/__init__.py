@@ -41,10 +41,18 @@ Modules, in the order a diagnosis uses them:
 - ``report``: ``report.html`` with its figures (:mod:`station.plots`); not imported here
   (it loads matplotlib): ``from station.diagnosis.report import write_report``.
 
+Identifying a rig on the device (``station identify``; not imported here: the loop runs
+experiments through :mod:`station.experiment`): ``experiments`` (what can be run:
+:class:`~station.diagnosis.experiments.Experiment`, the thesis's four, the candidates),
+``rivals`` (the explanations a diagnosis leaves open), ``experiment_design`` (the candidate
+that separates them most), ``identify`` (the loop: ``from station.diagnosis.identify import
+identify``) and ``identify_report``.
+
 May import: :mod:`station.analysis` (fits, residual tests, metrics), :mod:`station.plant`,
 :mod:`station.control`, :mod:`station.runlog`,
 :mod:`station.plots` and :mod:`station.logged` (a logged run understood and simulated on a
-model as the rig ran it). Never :mod:`station.replay` or :mod:`station.commands`; and nothing
+model as the rig ran it); ``identify`` also :mod:`station.experiment` (a run on a device).
+Never :mod:`station.replay` or :mod:`station.commands`; and nothing
 below (analysis, plant, ...) imports the diagnosis.
 """
 
