@@ -86,6 +86,11 @@ COMMANDS: dict[str, Command | None] = {
                       folders={"--report": ("001_step.json", "002_step2.json", "003_sweep.json", "survey.txt")}),
     "plot": Command(("{step}",), files=("--out",), inputs=("step",)),
     "modes": Command(("--elements", "1", "2", "--model", "{model}"), files=("--json",), inputs=("model",)),
+    "identify": Command(("--budget", "0", "--model", "{model}", "--out-dir", "runs/identify", "--quiet"),
+                        # not --save-model: the nominal model it saves here is shorter than the full-disk
+                        # fake's 100 bytes of room (diagnose's case covers the option's writing)
+                        files=("--json",), inputs=("model",),
+                        folders={"--report": ("identify.html", "report.html")}, together=False),
     "sim-device": None,  # serves a pty; its summary goes to stdout
     "ports": None,
 }

@@ -9,7 +9,8 @@ import sys
 from pathlib import Path
 
 from station.commands.options import (add_model_options, add_protocol_option, add_report_options, check_port,
-                                      check_writable, check_writable_dir, number, write_json)
+                                      model_inputs, number)
+from station.outputs import FORCE_HELP, Output, Transaction, check_folder, check_outputs
 
 NAME = "identify"
 HELP = ("identify the rig on the device: the thesis's four experiments, a diagnosis, then the experiments that "
@@ -50,42 +51,45 @@ def configure(parser: argparse.ArgumentParser) -> None:
                              "and DIR/report.html (the last diagnosis), with PNGs")
     parser.add_argument("--save-model", type=Path, default=None, metavar="FILE",
                         help="write the identified model (nominal + accepted effects) as a model file")
-    parser.add_argument("--force", action="store_true",
-                        help="overwrite existing output files and write into a folder that holds files")
+    parser.add_argument("--force", action="store_true", help=FORCE_HELP + "; write into an --out-dir that holds files")
     parser.add_argument("--quiet", action="store_true", help="no progress lines on stderr")
 
 
-def check_outputs(args: argparse.Namespace) -> Path:
-    """Refuse, before any run, outputs that exist (without ``--force``) or cannot be written.
+def outputs(args: argparse.Namespace) -> list[Output]:
+    """The files ``station identify`` writes besides the experiments' logs: --json,
+    --save-model and the report's pages (its figures are named per experiment).
 
     Parameters
     ----------
     args : argparse.Namespace
-        ``--json``, ``--save-model``, ``--report``, ``--out-dir`` and ``--force``.
+        ``--json``, ``--save-model``, ``--report``.
+    """
+    report = [] if args.report is None else [Output("--report", args.report / name)
+                                             for name in ("identify.html", "report.html")]
+    return [Output("--json", args.json), Output("--save-model", args.save_model), *report]
 
-    Returns
-    -------
-    Path
-        The experiments' folder (``--out-dir`` or a new one under runs/).
+
+def experiments_folder(args: argparse.Namespace) -> Path:
+    """The experiments' folder, checked before any run: ``--out-dir`` (a folder that holds
+    files needs ``--force``) or a new one under runs/.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        ``--out-dir``, ``--force``.
 
     Raises
     ------
     StationError
-        Naming the option and the path.
+        The folder holds files (without ``--force``) or cannot be written.
     """
     from station.diagnosis.identify import default_out_dir
     from station.errors import StationError
 
-    for option, path in (("--json", args.json), ("--save-model", args.save_model)):
-        check_writable(path, option, overwrite=args.force)
-    if args.report is not None:
-        check_writable_dir(args.report, "--report")
-        for name in ("identify.html", "report.html"):
-            check_writable(args.report / name, "--report", overwrite=args.force)
     folder = args.out_dir if args.out_dir is not None else default_out_dir()
     if folder.is_dir() and any(folder.iterdir()) and not args.force:
         raise StationError(f"--out-dir {folder}: holds files already; use --force to write into it, or another folder")
-    check_writable_dir(folder, "--out-dir")
+    check_folder(folder, "--out-dir")
     return folder
 
 
@@ -145,27 +149,27 @@ def run(args: argparse.Namespace) -> int:
 
     check_port(args.port)
     model = as_model(args.model)  # an unreadable model is refused before any run
-    folder = check_outputs(args)
+    check_outputs(outputs(args), model_inputs(args), force=args.force)
+    folder = experiments_folder(args)
     progress = None if args.quiet else (lambda msg: print(f"identify: {msg}", file=sys.stderr, flush=True))
     budget = DEFAULT_BUDGET if args.budget is None else args.budget
     ident = identify(port=args.port, model=model, budget=budget, out_dir=folder, protocol=args.protocol,
                      soft_limit=args.soft_limit, limit=args.limit, timeout=args.timeout, force=args.force,
                      progress=progress)
     print(format_identification(ident))
+    with Transaction() as tx:  # every file whole or none (station.outputs)
+        if args.report is not None:
+            from station.diagnosis.identify_report import write_identify_report
+
+            page = write_identify_report(ident, args.report, tx)
+        if args.json is not None:
+            from station.jsonio import to_jsonable
+
+            tx.write_json(args.json, to_jsonable(ident.to_json()))
+        if args.save_model is not None and ident.model is not None:
+            tx.write(args.save_model, ident.model.to_toml(), "the model")
     if args.report is not None:
-        from station.diagnosis.identify_report import write_identify_report
-
-        print(f"report: {write_identify_report(ident, args.report)}")
-    if args.json is not None:
-        from station.jsonio import to_jsonable
-
-        write_json(args.json, to_jsonable(ident.to_json()))
+        print(f"report: {page}")
     if args.save_model is not None and ident.model is not None:
-        from station.errors import StationError
-
-        try:
-            ident.model.save(args.save_model)
-        except OSError as exc:
-            raise StationError(f"--save-model {args.save_model}: cannot write it: {exc.strerror or exc}") from None
         print(f"model: {args.save_model}")
     return ident.exit_code

@@ -14,7 +14,7 @@ import numpy as np
 from station import DT
 from station.diagnosis.cases import load_case
 from station.diagnosis.report import write_report
-from station.errors import StationError
+from station.outputs import Transaction
 from station.plots import identify_design_figure, save_figure
 
 _STYLE = ("body{font-family:sans-serif;max-width:1000px;margin:auto}table{border-collapse:collapse}"
@@ -29,7 +29,7 @@ def _measured(record):
     return case.theta, case.a
 
 
-def write_identify_report(ident, folder: str | Path) -> Path:
+def write_identify_report(ident, folder: str | Path, transaction: Transaction | None = None) -> Path:
     """Write ``identify.html`` and its PNGs, and the last diagnosis's ``report.html``, to a folder.
 
     Parameters
@@ -38,6 +38,9 @@ def write_identify_report(ident, folder: str | Path) -> Path:
         What :func:`station.diagnosis.identify.identify` returned.
     folder : str or Path
         Created if needed.
+    transaction : station.outputs.Transaction, optional
+        Write through it (renamed into place with the command's other files); default: a
+        transaction of its own.
 
     Returns
     -------
@@ -49,15 +52,14 @@ def write_identify_report(ident, folder: str | Path) -> Path:
     StationError
         The folder or a file cannot be written.
     """
+    if transaction is None:
+        with Transaction() as tx:
+            return write_identify_report(ident, folder, tx)
     folder = Path(folder)
-    try:
-        folder.mkdir(parents=True, exist_ok=True)
-    except OSError as exc:
-        raise StationError(f"--report {folder}: cannot create it: {exc.strerror or exc}") from None
     diag = ident.diagnosis
     body = ["<h1>Identifying the rig</h1>", f"<p>{html.escape(ident.stopped)}.</p>"]
     if diag is not None:
-        write_report(diag, folder)
+        write_report(diag, folder, transaction)
         causes = ", ".join(diag.causes) or "none"
         body.append(f"<p>Last diagnosis ({ident.diagnoses} made): causes <b>{html.escape(causes)}</b>, θ RMS gain "
                     f"{diag.gain_pct:.1f} % on held-out runs; <a href='report.html'>the diagnosis report</a>.</p>")
@@ -73,14 +75,11 @@ def write_identify_report(ident, folder: str | Path) -> Path:
         preds = {label: (p.theta, p.a) for label, p in r.design.predictions.items()}
         t = np.arange(max(p.theta.size for p in r.design.predictions.values())) * DT
         fig = identify_design_figure(t, preds, _measured(r), title=r.why)
-        png = save_figure(fig, folder / f"experiment-{k:02d}.png")
+        png = save_figure(fig, folder / f"experiment-{k:02d}.png", transaction=transaction)
         body.append(f"<h2>Experiment {k}: {html.escape(r.experiment.label)}</h2><p>{html.escape(r.why)}</p>"
                     f"<img src='{png.name}' alt='experiment {k}'>")
     page = ("<!doctype html><html><head><meta charset='utf-8'><title>Identifying the rig</title><style>" + _STYLE
             + "</style></head><body>" + "\n".join(body) + "</body></html>")
     out = folder / "identify.html"
-    try:
-        out.write_text(page, encoding="utf-8")
-    except OSError as exc:
-        raise StationError(f"{out}: cannot write the report: {exc.strerror or exc}") from None
+    transaction.write(out, page, "the report")
     return out
