@@ -287,13 +287,20 @@ def sim_port(port: str, model=None, elements=None, seed=None) -> str:
     Raises
     ------
     StationError
-        One of them given for a port that is not ``sim://`` (named as its option, e.g. ``--model``).
+        One of them given for a port that is not ``sim://`` (named as its option, e.g.
+        ``--model``), or for a ``sim://`` URL that sets it too (naming both: which one
+        would win is not for the station to guess).
     """
     extra = {k: str(v) for k, v in (("model", model), ("elements", elements), ("seed", seed)) if v is not None}
     if not extra:
         return port
     if not port.lower().startswith("sim://"):
         raise StationError(f"--{next(iter(extra))}: only for the simulated rig (--port sim://...), not {port!r}")
+    given = dict(urllib.parse.parse_qsl(urllib.parse.urlsplit(port).query, keep_blank_values=True))
+    both = next((k for k in extra if k in given), None)
+    if both is not None:
+        raise StationError(f"--{both} {extra[both]} and --port {port}: both set the simulated "
+                           f"rig's {both}; give one of them", key=both)
     query = urllib.parse.urlencode(extra)
     return port + ("&" if "?" in port else "?") + query
 
@@ -308,7 +315,23 @@ def _sim_url(port: str, model, n_elements: int | None,
         path = Path(folder.name) / "model.toml"
         model.save(path)
         model = path
-    return sim_port(port, model, n_elements, seed), folder
+    url = sim_port(port, model, n_elements, seed)
+    if url.lower().startswith("sim://"):  # the URL's options and model checked before anything starts
+        from serial import SerialException
+
+        from station.sim.protocol_sim import OptionError, parse_url
+
+        try:
+            parse_url(url)
+        except SerialException as exc:
+            if folder is not None:
+                folder.cleanup()
+            option = exc.option if isinstance(exc, OptionError) else None
+            given = {"model": model, "elements": n_elements, "seed": seed}.get(option)
+            if given is not None:  # an option of the command line (or run_step's argument): name it
+                raise StationError(f"--{option}: {exc.detail}", key=option) from None
+            raise StationError(f"--port {url}: {exc}", key="port") from None
+    return url, folder
 
 
 def run_step(port: str = DEFAULT_PORT, protocol: str = "v1", controller: str = DEFAULT_CONTROLLER,

@@ -241,7 +241,10 @@ def _named_controller(log: RunLog) -> tuple[Compensator | OpenLoop | None, list[
         spec = log.meta.get("controller")
         if not isinstance(spec, dict):
             return None, []
-        return controller_from_spec(spec), []
+        try:
+            return controller_from_spec(spec), []
+        except StationError as exc:  # name the log
+            raise StationError(f"{log.path}: {exc}", file=log.path, key="controller") from None
     dt = log.dt
     try:
         return rig_controller(log.meta, dt)
