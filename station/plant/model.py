@@ -33,7 +33,6 @@ from station.errors import StationError
 from station.plant.discrete import DiscretePlant
 from station.inputs import TomlDoc, load_toml
 from station.plant.effects import EFFECTS, check_effects
-from station.plant.fem import modal_basis, state_matrices
 from station.plant.kernel import ModelPlant
 from station.plant.modal import LinearForm, linear_form  # noqa: F401 (LinearForm re-exported: it lived here)
 from station.plant.modes import modal_summary, with_beam_damping
@@ -48,6 +47,10 @@ SUBSTEPS = 10
 shows the θ of a 2 s run converged to well under a count at this grid)."""
 
 _KEYS = ("name", "params", "n_elements", "effects")
+
+STABLE_TOLERANCE = 1e-6
+"""How far above 1 a sampled eigenvalue's modulus may be before :func:`load_model` refuses
+the model (the plant is passive: every mode decays or, the rigid-body one, stays)."""
 
 
 @dataclass(frozen=True)
@@ -266,8 +269,9 @@ def load_model(name_or_path: str | Path = "tmm-fit", n_elements: int | None = No
     element count against :data:`station.ranges.N_ELEMENTS`, the parameter set's fields
     against :data:`station.plant.parameters.PARAM_RANGES`, each effect against
     :data:`station.plant.effects.EFFECTS`; a ``beam_damping`` below the first-mode damping
-    the set has without beam damping is out of range (DESIGN.md), and the FEM matrices
-    must come out finite. What the file asks for is what runs, or the file is refused.
+    the set has without beam damping is out of range (DESIGN.md), and the sampled plant
+    (:meth:`Model.linear_form`, cached for the run that follows) must come out finite and
+    stable. What the file asks for is what runs, or the file is refused.
 
     Parameters
     ----------
@@ -361,18 +365,20 @@ def _check_runs_as_written(model: Model, doc: TomlDoc) -> None:
             raise doc.error("beam_damping", f"{zeta:g} is below {floor:.4g}, the first-mode damping ratio of the "
                             f"parameter set without beam damping ({model.n_elements} elements, its param:NAME "
                             f"ratios applied): out of range (a lower damping is param:clamp_c < 1)", "effects")
-    lp = _ratio_params(model.params, model.effect_dict())
-    try:
-        matrices = state_matrices(lp, model.n_elements)
-        _, phi, omega, _ = modal_basis(lp, model.n_elements)
-        finite = all(np.all(np.isfinite(x)) for x in (*matrices, phi, omega))
+    try:  # the form the simulation steps (cached: the run that follows reuses it)
+        form = model.linear_form()
+        arrays = (form.lam, form.bm, form.bp, form.cm, form.co, form.vinv)
+        finite = all(np.all(np.isfinite(x)) for x in arrays) and math.isfinite(form.gw_v + form.gw_p)
+        radius = float(np.max(np.abs(form.lam))) if finite and form.lam.size else 0.0
+        why = "" if finite else " (not finite numbers)"
     except (ArithmeticError, ValueError, np.linalg.LinAlgError) as exc:
-        finite, why = False, f" ({type(exc).__name__}: {exc})"
-    else:
-        why = ""
+        finite, radius, why = False, 0.0, f" ({type(exc).__name__}: {str(exc)[:200]})"
+    if finite and radius > 1.0 + STABLE_TOLERANCE:  # a passive plant: rounding has taken over
+        finite, why = False, f" (a sampled eigenvalue of modulus {radius:.6g} > 1: the matrices are too ill-conditioned)"
     if not finite:
-        raise StationError(f"{doc.path}: parameter set {model.params_source!r} with these effects gives a FEM "
-                           f"plant that cannot be computed{why}", file=doc.path, key="params")
+        raise StationError(f"{doc.path}: parameter set {model.params_source!r} with {model.n_elements} elements"
+                           f"{' and these effects' if model.effects else ''} gives a FEM plant that cannot be "
+                           f"computed{why}", file=doc.path, key="params")
 
 
 def as_model(model: Model | str | Path | None, n_elements: int | None = None,
