@@ -29,6 +29,7 @@ from station.control.designs import read_compensator_file
 from station.control.contract import wire_limit
 from station.control.rerun import is_closed_loop
 from station.errors import StationError
+from station.inputs import exists
 from station.link import LinkLimits, open_session
 from station.protocol import legacy
 from station.loop import RunResult, run_loop
@@ -99,8 +100,8 @@ def make_reference(kind: str, amplitude: float, duration: float | None, step_tic
         else:
             u = swept_sine_reference(n_ticks, amplitude, dt)
         return u, {"kind": kind, "amplitude": amplitude, "step_tick": step_tick, "n_ticks": n_ticks}
-    path, _, column = kind.partition(":") if not Path(kind).exists() else (kind, "", "")
-    if not Path(path).exists():
+    path, _, column = kind.partition(":") if not exists(kind) else (kind, "", "")
+    if not exists(path):
         raise StationError(f"reference {kind!r}: expected one of {', '.join(REFERENCES)} or FILE[:COLUMN] "
                            f"of a run log; no file {path}")
     u = file_reference(path, column or "u")
@@ -249,7 +250,7 @@ def choose_controller(controller, kp: float | None = None, limit: float | None =
         return ChosenController(controller, None)
     kind = str(controller)
     clamp = DEFAULT_LIMIT if limit is None else limit
-    if kind in KINDS or not Path(kind).is_file():  # make_controller names what a kind may be
+    if kind in KINDS or not exists(kind):  # make_controller names what a kind may be (or refuses a folder)
         return ChosenController(make_controller(kind, dt=dt, kp=2.0 if kp is None else kp, limit=clamp), None)
     found = read_compensator_file(kind)
     note = None

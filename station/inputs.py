@@ -32,7 +32,7 @@ import tomllib
 from pathlib import Path
 from typing import Any, NamedTuple
 
-from station.errors import StationError
+from station.errors import StationError, one_line
 
 MAX_TOML_BYTES = 1_000_000
 """Largest TOML file read, bytes (a model, parameter set, compensator or config file is a few hundred)."""
@@ -68,6 +68,22 @@ _HEADER = re.compile(r"^[ \t]*\[\[?[ \t]*(\"[^\"\n]*\"|'[^'\n]*'|[^\]\s]+)[ \t]*
 
 _KINDS = ((stat.S_ISDIR, "a folder"), (stat.S_ISFIFO, "a FIFO (named pipe)"), (stat.S_ISCHR, "a character device"),
           (stat.S_ISBLK, "a block device"), (stat.S_ISSOCK, "a socket"))
+
+
+def exists(path: str | Path) -> bool:
+    """Whether ``path`` names something that exists; False (never an exception) for a name
+    the system cannot even look up (too long, a NUL byte): the loader then says "not found".
+
+    Parameters
+    ----------
+    path : str or Path
+        A name a user gave.
+    """
+    try:
+        os.stat(path)
+    except (OSError, ValueError):
+        return False
+    return True
 
 
 def check_regular(path: str | Path, what: str) -> os.stat_result:
@@ -218,7 +234,7 @@ class TomlDoc(NamedTuple):
         name = key_text(key) if table is None else f"[{key_text(table)}].{key_text(key)}"
         if index is not None:
             name += f"[{index}]"
-        what = what.replace("\r", "\\r").replace("\n", "\\n")  # one line, whatever a key held
+        what = one_line(what)  # whatever a key held
         if len(what) > MAX_MESSAGE:
             what = what[:MAX_MESSAGE - 3] + "..."
         return StationError(f"{self.path}:{where} {name}: {what}", file=self.path, line=line, key=name)

@@ -33,6 +33,8 @@ def shown(value, width: int = 40) -> str:
 
 
 def _cut(text: str, width: int = 40) -> str:
+    if not text.isprintable():  # a control character (float() takes some as blanks): show it escaped
+        text = repr(text)
     return text if len(text) <= width else text[:width - 3] + "..."
 
 

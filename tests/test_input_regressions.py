@@ -370,3 +370,18 @@ def test_log_header_controller_of_high_order_is_refused_not_replayed(tmp_path):
         LoggedRun(read_log(bad)).controller
     line = one_line_refusal(run_forked(["replay", str(bad)]))
     assert str(bad) in line
+
+
+@pytest.mark.parametrize("argv", [["step", "--model", "{long}"], ["step", "--model", "{long}.toml"],
+                                  ["step", "--controller", "{long}.toml"], ["step", "--reference", "{long}"],
+                                  ["step", "--port", "{long}"], ["replay", "{long}"],
+                                  ["modes", "--params", "{long}.toml"], ["modes", "--params", "{long}"]])
+def test_a_name_too_long_for_the_system_is_one_line(tmp_path, argv):
+    """Found by tests/test_input_fuzz.py: a built-in name or path longer than the system's
+    limit made Path.exists() raise (``OSError: File name too long``)."""
+    long = "x" * 5000
+    argv = [a.format(long=long) for a in argv]
+    if argv[0] == "step":
+        argv += ["--out", str(tmp_path / "r.tsv")]
+    line = one_line_refusal(run_forked(argv, cwd=tmp_path))
+    assert "xxxx" in line and "Traceback" not in line

@@ -39,7 +39,7 @@ from station.control.compensator import Compensator, OpenLoop
 from station.control.contract import DAC_LIMIT
 from station.control.tf import DiscreteTF, tustin
 from station.errors import StationError
-from station.inputs import TomlDoc, load_toml
+from station.inputs import TomlDoc, exists, load_toml
 from station.ranges import RangeError, number, shown
 
 _P_LEAD = 2 * math.pi * 20.0
@@ -426,7 +426,7 @@ def make_controller(kind: str, dt: float = 0.002, kp: float = 2.0,
         except ValueError as exc:  # a bad kp, limit or dt from the user
             raise StationError(f"controller {kind!r} (kp {kp:g}, limit {limit}, dt {dt:g}): {exc}") from None
     path = Path(kind)
-    if not path.is_file():
+    if not exists(path):
         raise StationError(f"controller {kind!r}: expected one of {', '.join(KINDS)} "
                            f"or a compensator file (TOML); no such file")
     return load_compensator_file(path, dt, limit)

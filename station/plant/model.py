@@ -31,7 +31,7 @@ import numpy as np
 from station import DT
 from station.errors import StationError
 from station.plant.discrete import DiscretePlant
-from station.inputs import TomlDoc, load_toml
+from station.inputs import TomlDoc, exists, load_toml
 from station.plant.effects import EFFECTS, check_effects
 from station.plant.kernel import ModelPlant
 from station.plant.modal import LinearForm, linear_form  # noqa: F401 (LinearForm re-exported: it lived here)
@@ -297,7 +297,7 @@ def load_model(name_or_path: str | Path = "tmm-fit", n_elements: int | None = No
     """
     text_name = str(name_or_path)
     path = Path(text_name) if _is_path(text_name) else MODELS_DIR / f"{text_name}.toml"
-    if not _is_path(text_name) and not path.exists():
+    if not _is_path(text_name) and not exists(path):
         raise StationError(f"{path}: model file not found (built-in models: {', '.join(builtin_models())})",
                            file=path)
     doc = load_toml(path, "model file")
@@ -346,7 +346,7 @@ def _read_params(doc: TomlDoc, name: str, override: str | Path | None) -> tuple[
     if _is_path(source):
         if not Path(source).is_absolute():
             source = str((path.parent / source).resolve())  # relative to the model file
-    elif not (PARAMS_DIR / f"{source}.toml").exists():
+    elif not exists(PARAMS_DIR / f"{source}.toml"):
         raise doc.error("params", f"unknown parameter set {source!r} (built-in sets: {', '.join(builtin_params())})")
     try:
         return load_params(source), source

@@ -12,8 +12,8 @@ from collections.abc import Callable
 from dataclasses import dataclass, fields
 from pathlib import Path
 
-from station.errors import StationError
-from station.inputs import load_toml
+from station.errors import StationError, one_line
+from station.inputs import exists, load_toml
 from station.ranges import Number, RangeError, number, shown
 
 PARAMS_DIR = Path(__file__).resolve().parent / "params"
@@ -158,7 +158,7 @@ def load_params(name_or_path: str | Path = "tmm-fit") -> Params:
         :data:`PARAM_RANGES` range; the message names the file, line and field.
     """
     path = _resolve(name_or_path)
-    if path.parent == PARAMS_DIR and not path.exists():
+    if path.parent == PARAMS_DIR and not exists(path):
         raise StationError(f"{path}: parameter file not found (packaged sets: {', '.join(builtin_params())})",
                            file=path)
     doc = load_toml(path, "parameter file")
@@ -192,7 +192,7 @@ def params_from_dict(raw: dict, where: str | Path, line_of: Callable[[str], int 
     def bad(name: str, what: str) -> StationError:
         line = line_of(name) if line_of is not None else None
         at = f" line {line}:" if line else ""
-        return StationError(f"{where}:{at} field '{name}': {what}", line=line, key=name)
+        return StationError(one_line(f"{where}:{at} field '{name}': {what}"), line=line, key=name)
 
     if not isinstance(raw, dict):
         raise StationError(f"{where}: expected a table of the parameter set's fields, got {raw!r}")

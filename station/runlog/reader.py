@@ -19,7 +19,7 @@ from typing import Any
 import numpy as np
 
 from station.errors import StationError
-from station.inputs import check_regular
+from station.inputs import check_regular, exists
 from station.runlog.log import RunLog
 from station.runlog.rig import Header, parse_column_line, parse_rig_header
 from station.runlog.rows import MAX_LINE, LineTooLong, Lines, load_rows
@@ -68,7 +68,7 @@ def read_log(path: str | Path) -> RunLog:
     """
     path = Path(path)
     try:  # a folder, a FIFO (opening it would block) or a device (/dev/zero never ends) is no log
-        if path.exists():  # (a missing file: open says so, below)
+        if exists(path):  # (a missing file: open says so, below)
             check_regular(path, "run log")
     except StationError as exc:
         raise RunLogError(str(exc), file=path) from None
