@@ -385,3 +385,15 @@ def test_a_name_too_long_for_the_system_is_one_line(tmp_path, argv):
         argv += ["--out", str(tmp_path / "r.tsv")]
     line = one_line_refusal(run_forked(argv, cwd=tmp_path))
     assert "xxxx" in line and "Traceback" not in line
+
+
+def test_rig_header_filter_of_high_order_is_refused_with_its_line(rig_data, tmp_path):
+    """A rig header's printed filter goes through the order bound of a compensator file (an
+    order in the thousands made every replay of every row cost that much)."""
+    lines = (rig_data / LEAD_LOG).read_text().split("\n")
+    lines[1] = "#Gth num=[ " + " ".join(["0.001"] * 3000) + "]"
+    lines[2] = "#Gth den=[ 1. " + " ".join(["0.0"] * 3000) + "]"
+    bad = tmp_path / "order.txt"
+    bad.write_text("\n".join(lines))
+    line = one_line_refusal(run_forked(["replay", "--no-model", str(bad)]))
+    assert f"{bad}: line 2: Gth: 3001 coefficients; a filter is of order at most 20" in line

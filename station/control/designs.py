@@ -159,7 +159,7 @@ def controller_from_spec(spec: dict[str, Any]) -> Compensator | OpenLoop:
                 if not isinstance(desc[field], list) or len(desc[field]) > MAX_ORDER + 1:
                     raise ValueError(f"{key}.{field}: expected a list of at most {MAX_ORDER + 1} coefficients")
             tf = DiscreteTF(desc["num_z"], desc["den_z"])
-            problem = _z_problem(tf.num, tf.den)
+            problem = z_problem(tf.num, tf.den)
             if problem is not None:
                 raise ValueError(f"{key}: {problem}")
             stages.append(tf)
@@ -214,8 +214,23 @@ Stage = tuple[list[float], list[float], str]
 """One filter of a compensator file: (num, den, domain), coefficients as written."""
 
 
-def _z_problem(num_z: np.ndarray, den_z: np.ndarray) -> str | None:
-    """What is wrong with a filter's z coefficients (normalized, den_z[0] = 1), None when nothing."""
+def z_problem(num_z: np.ndarray, den_z: np.ndarray) -> str | None:
+    """What is wrong with a filter's z coefficients, None when nothing: the one check of
+    every filter read (compensator files, our log headers' specs, the rig's headers).
+
+    Parameters
+    ----------
+    num_z, den_z : numpy.ndarray, shape (m+1,), (n+1,)
+        Normalized coefficients (den_z[0] = 1), ascending powers of z^-1.
+
+    Returns
+    -------
+    str or None
+        "num_z[0] = 1e+12 is outside ±1e+09 (...)", or a coefficient that is not finite;
+        None for a filter within :data:`MAX_Z_COEFF` and of order at most :data:`MAX_ORDER`.
+    """
+    if max(len(num_z), len(den_z)) > MAX_ORDER + 1:
+        return f"{max(len(num_z), len(den_z))} coefficients; a filter is of order at most {MAX_ORDER}"
     for name, c in (("num_z", num_z), ("den_z", den_z)):
         if not np.all(np.isfinite(c)):
             return f"{name} holds a number that is not finite"
@@ -242,7 +257,7 @@ def _check_discretizable(path: Path, table: str, stage: Stage, dt: float) -> Non
                                    file=path, key=f"[{table}].den")
         try:
             num_z, den_z = tustin(num, den, dt) if domain == "s" else (np.divide(num, den[0]), np.divide(den, den[0]))
-            problem = _z_problem(np.asarray(num_z, float), np.asarray(den_z, float))
+            problem = z_problem(np.asarray(num_z, float), np.asarray(den_z, float))
         except (ValueError, ArithmeticError, np.linalg.LinAlgError) as exc:
             problem = str(exc)
     if problem is not None:
