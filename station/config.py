@@ -23,7 +23,7 @@ from pathlib import Path
 from typing import Any
 
 from station.errors import StationError
-from station.inputs import load_toml
+from station.inputs import TomlDoc, load_toml
 from station.ranges import shown
 
 FILE_NAME = "station.toml"
@@ -67,13 +67,15 @@ def load_config(path: str | Path | None) -> dict[str, Any]:
         Not a regular file, unreadable, too large, not UTF-8, not valid or too deeply
         nested TOML, or an unknown key (names the file, line and key).
     """
-    if path is None:
-        return {}
+    return {} if path is None else _read(path).data
+
+
+def _read(path: str | Path) -> TomlDoc:
     doc = load_toml(path, "config file")
     unknown = sorted(set(doc.data) - set(KEYS))
     if unknown:
         raise doc.error(unknown[0], f"unknown setting (expected {', '.join(KEYS)})")
-    return doc.data
+    return doc
 
 
 def apply_config(parser: argparse.ArgumentParser, cwd: str | Path | None = None) -> None:
@@ -94,20 +96,23 @@ def apply_config(parser: argparse.ArgumentParser, cwd: str | Path | None = None)
     path = None
     try:
         path = config_path(cwd)
-        settings = load_config(path)
+        doc = None if path is None else _read(path)
         actions = {a.dest: a for a in parser._actions}
         defaults = {}
-        for key, value in settings.items():
+        for key, value in ({} if doc is None else doc.data).items():
             action = actions[key]
             if isinstance(value, bool) or not isinstance(value, (str, int, float)):
-                raise StationError(f"{path}: {key}: expected a string or a number, got {shown(value)}")
+                raise doc.error(key, f"expected a string or a number, got {shown(value)}")
             text = str(value)
+            line = doc.line_of(key)
+            where = f"{path}: line {line}: {key} = {shown(value)}" if line else f"{path}: {key} = {shown(value)}"
             try:
                 converted = action.type(text) if action.type is not None else text
             except (argparse.ArgumentTypeError, ValueError, TypeError) as exc:
-                raise StationError(f"{path}: {key} = {shown(value)}: {exc}") from None
+                raise StationError(f"{where}: {exc}", file=path, line=line, key=key) from None
             if action.choices is not None and converted not in action.choices:
-                raise StationError(f"{path}: {key} = {shown(value)}: expected one of {', '.join(action.choices)}")
+                raise StationError(f"{where}: expected one of {', '.join(action.choices)}", file=path, line=line,
+                                   key=key)
             defaults[key] = converted
         parser.set_defaults(**defaults, _config=str(path) if path else None, _config_error=None)
     except StationError as exc:

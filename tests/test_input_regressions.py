@@ -366,7 +366,7 @@ def test_log_header_controller_of_high_order_is_refused_not_replayed(tmp_path):
     lines[j] = "# " + json.dumps(meta)
     bad = tmp_path / "bad.tsv"
     bad.write_text("\n".join(lines))
-    with pytest.raises(StationError, match=rf"{re.escape(str(bad))}: controller spec in log header: .*at most 21"):
+    with pytest.raises(StationError, match=rf"{re.escape(str(bad))}: controller spec in log header: .*of order at most 20"):
         LoggedRun(read_log(bad)).controller
     line = one_line_refusal(run_forked(["replay", str(bad)]))
     assert str(bad) in line
