@@ -14,7 +14,7 @@ import warnings
 
 from station import __version__
 from station.commands.options import StationParser, document_ranges
-from station.errors import StationError
+from station.errors import StationError, one_line
 from station.signals import StopSignal, StopSignals
 
 COMMANDS = ("step", "replay", "sim_device", "bode", "compare", "modes", "survey", "diagnose", "identify", "plot", "ports")
@@ -77,7 +77,7 @@ def main(argv: list[str] | None = None) -> int:
                 _configure_logging(args.verbose)
                 return int(args._run(args) or 0)
             except StationError as exc:
-                print(f"station: error: {exc}", file=sys.stderr)
+                print(f"station: error: {one_line(str(exc))}", file=sys.stderr)
                 return 2
             except BrokenPipeError:  # `station step | head`: the reader left; nothing to say
                 _silence_stdout()

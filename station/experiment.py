@@ -29,6 +29,7 @@ from station.control.designs import read_compensator_file
 from station.control.contract import wire_limit
 from station.control.rerun import is_closed_loop
 from station.errors import StationError
+from station.inputs import exists
 from station.link import LinkLimits, open_session
 from station.protocol import check_ticks
 from station.loop import RunResult, run_loop
@@ -101,7 +102,7 @@ def make_reference(kind: str, amplitude: float, duration: float | None, step_tic
             u = swept_sine_reference(n_ticks, amplitude, dt)
         return u, {"kind": kind, "amplitude": amplitude, "step_tick": step_tick, "n_ticks": n_ticks}
     path, column = _reference_file(kind)
-    if not path.exists():
+    if not exists(path):
         raise StationError(f"reference {kind!r}: expected one of {', '.join(REFERENCES)} or FILE[:COLUMN] "
                            f"of a run log; no file {path}")
     u = file_reference(path, column or "u")
@@ -115,7 +116,7 @@ def make_reference(kind: str, amplitude: float, duration: float | None, step_tic
 
 def _reference_file(kind: str) -> tuple[Path, str]:
     """``FILE[:COLUMN]`` split: the file and the column ("" for the default)."""
-    if Path(kind).exists() or ":" not in kind:
+    if exists(kind) or ":" not in kind:  # (inputs.exists: never raises, even on a name too long)
         return Path(kind), ""
     path, _, column = kind.rpartition(":")
     return Path(path), column
@@ -280,7 +281,7 @@ def choose_controller(controller, kp: float | None = None, limit: float | None =
         return ChosenController(controller, None)
     kind = str(controller)
     clamp = DEFAULT_LIMIT if limit is None else limit
-    if kind in KINDS or not Path(kind).is_file():  # make_controller names what a kind may be
+    if kind in KINDS or not exists(kind):  # make_controller names what a kind may be (or refuses a folder)
         return ChosenController(make_controller(kind, dt=dt, kp=2.0 if kp is None else kp, limit=clamp), None)
     found = read_compensator_file(kind)
     note = None
@@ -318,13 +319,20 @@ def sim_port(port: str, model=None, elements=None, seed=None) -> str:
     Raises
     ------
     StationError
-        One of them given for a port that is not ``sim://`` (named as its option, e.g. ``--model``).
+        One of them given for a port that is not ``sim://`` (named as its option, e.g.
+        ``--model``), or for a ``sim://`` URL that sets it too (naming both: which one
+        would win is not for the station to guess).
     """
     extra = {k: str(v) for k, v in (("model", model), ("elements", elements), ("seed", seed)) if v is not None}
     if not extra:
         return port
     if not port.lower().startswith("sim://"):
         raise StationError(f"--{next(iter(extra))}: only for the simulated rig (--port sim://...), not {port!r}")
+    given = dict(urllib.parse.parse_qsl(urllib.parse.urlsplit(port).query, keep_blank_values=True))
+    both = next((k for k in extra if k in given), None)
+    if both is not None:
+        raise StationError(f"--{both} {extra[both]} and --port {port}: both set the simulated "
+                           f"rig's {both}; give one of them", key=both)
     query = urllib.parse.urlencode(extra)
     return port + ("&" if "?" in port else "?") + query
 
@@ -339,7 +347,23 @@ def _sim_url(port: str, model, n_elements: int | None,
         path = Path(folder.name) / "model.toml"
         model.save(path)
         model = path
-    return sim_port(port, model, n_elements, seed), folder
+    url = sim_port(port, model, n_elements, seed)
+    if url.lower().startswith("sim://"):  # the URL's options and model checked before anything starts
+        from serial import SerialException
+
+        from station.sim.protocol_sim import OptionError, parse_url
+
+        try:
+            parse_url(url)
+        except SerialException as exc:
+            if folder is not None:
+                folder.cleanup()
+            option = exc.option if isinstance(exc, OptionError) else None
+            given = {"model": model, "elements": n_elements, "seed": seed}.get(option)
+            if given is not None:  # an option of the command line (or run_step's argument): name it
+                raise StationError(f"--{option}: {exc.detail}", key=option) from None
+            raise StationError(f"--port {url}: {exc}", key="port") from None
+    return url, folder
 
 
 def run_step(port: str = DEFAULT_PORT, protocol: str = "v1", controller: str = DEFAULT_CONTROLLER,

@@ -3,7 +3,8 @@
 protocol, ``--json`` and rerun output, ``--force``). Output files follow one rule, checked
 before anything starts: :mod:`station.outputs`.
 
-A numeric option is declared with ``type=number(low, high, ...)``: argparse calls it on
+A numeric option is declared with ``type=number(low, high, ...)`` (:mod:`station.ranges`, where
+the simulated rig's ranges are shared with the ``sim://`` URL handler): argparse calls it on
 the text, so a value that is not finite or outside the range is refused while the
 arguments are parsed - before any file is opened or any device is touched - with
 argparse's own one-line ``argument --x: ...`` error and exit code 2
@@ -14,76 +15,13 @@ argparse's own one-line ``argument --x: ...`` error and exit code 2
 from __future__ import annotations
 
 import argparse
-import math
 import sys
 from pathlib import Path
 
 from station.errors import StationError
 from station.outputs import FORCE_HELP, Input
 from station.protocol import PROTOCOLS
-
-
-class Number:
-    """An argparse ``type=`` that parses a finite number within ``[low, high]``.
-
-    Parameters
-    ----------
-    low, high : float
-        Inclusive bounds (``integer``: whole numbers only).
-    integer : bool
-        Accept whole numbers only (returns ``int``).
-    unit : str
-        Unit shown in the range and the error (e.g. "s", "encoder counts").
-    nonzero : bool
-        Refuse 0 inside the range (e.g. a step height).
-    """
-
-    def __init__(self, low: float, high: float, integer: bool = False, unit: str = "", nonzero: bool = False):
-        self.low, self.high, self.integer, self.unit, self.nonzero = low, high, integer, unit, nonzero
-        self.__name__ = "integer" if integer else "number"  # argparse names the type in its errors
-
-    def range_text(self) -> str:
-        """The documented range, e.g. ``range 0.001..60 s`` or ``range 1..100, integer``."""
-        unit = f" {self.unit}" if self.unit else ""
-        kind = ", whole number" if self.integer else ""
-        nz = ", not 0" if self.nonzero else ""
-        fmt = (lambda x: str(int(x))) if self.integer else (lambda x: f"{x:.10g}")
-        return f"range {fmt(self.low)}..{fmt(self.high)}{unit}{kind}{nz}"
-
-    def __call__(self, text: str):
-        try:
-            value = float(text)
-        except ValueError:
-            raise argparse.ArgumentTypeError(f"{text!r} is not a number (expected {self.range_text()})") from None
-        if not math.isfinite(value):
-            raise argparse.ArgumentTypeError(f"{text} is not a finite number (expected {self.range_text()})")
-        if self.integer:
-            if value != int(value):
-                raise argparse.ArgumentTypeError(f"{text} is not a whole number (expected {self.range_text()})")
-            value = int(value)
-        if not self.low <= value <= self.high or (self.nonzero and value == 0):
-            raise argparse.ArgumentTypeError(f"{text} is out of range (expected {self.range_text()})")
-        return value
-
-    def __repr__(self) -> str:
-        return f"number({self.low!r}, {self.high!r}, integer={self.integer})"
-
-
-def number(low: float, high: float, integer: bool = False, unit: str = "", nonzero: bool = False) -> Number:
-    """``type=`` for a numeric option: finite and within ``[low, high]`` (see :class:`Number`).
-
-    Parameters
-    ----------
-    low, high : float
-        Inclusive bounds.
-    integer : bool, default False
-        Accept whole numbers only (returns ``int``).
-    unit : str, optional
-        Unit shown in the range and the error.
-    nonzero : bool, default False
-        Refuse 0 inside the range.
-    """
-    return Number(low, high, integer=integer, unit=unit, nonzero=nonzero)
+from station.ranges import SIM_RIG, Number, number  # noqa: F401 (Number, number: the commands' import place)
 
 
 class StationParser(argparse.ArgumentParser):
@@ -205,7 +143,7 @@ def add_model_options(parser: argparse.ArgumentParser, model_help: str = "", *, 
     parser.add_argument("--model", dest="model_spec" if no_model is not None else "model", default=None,
                         metavar="NAME|FILE",
                         help=more(f"{subject}: {MODEL_HELP}" + (f"; {model_help}" if model_help else ""), "model"))
-    count = number(1, 100, integer=True)
+    count = SIM_RIG["elements"]  # the model's and sim://?elements='s range
     if elements == "one":
         parser.add_argument("--elements", type=count, default=None, metavar="N",
                             help=more("beam elements of the model (default: the model's, 4)", "elements"))
@@ -255,7 +193,7 @@ def add_seed_option(parser: argparse.ArgumentParser, default: int | None = None,
     note : str
         Appended to the help; ``{key}`` becomes "seed" (as in :func:`add_model_options`).
     """
-    parser.add_argument("--seed", type=number(0, 2**32 - 1, integer=True), default=default, metavar="N",
+    parser.add_argument("--seed", type=SIM_RIG["seed"], default=default, metavar="N",
                         help="sensor noise seed, the same for every run (default 0)" + (f"; {note.format(key='seed')}" if note else ""))
 
 

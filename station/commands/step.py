@@ -8,6 +8,7 @@ from pathlib import Path
 from station import DT
 from station import experiment as ex
 from station.errors import StationError
+from station.inputs import exists
 from station.commands.options import (add_force_option, add_model_options, add_protocol_option, add_report_options,
                                       add_seed_option, model_inputs, number, warn)
 from station.config import apply_config
@@ -109,7 +110,7 @@ def check_args(args) -> None:
     controller = str(args.controller)
     builtin_ref = args.reference in ex.REFERENCES
     port = str(args.port)
-    if "://" not in port and not Path(port).exists():
+    if "://" not in port and not exists(port):
         raise StationError(f"--port {port}: no such device; `station ports` lists this machine's serial ports "
                            f"(the simulated rig is sim://)")
     if args.kp is not None and controller != "p":

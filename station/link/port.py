@@ -36,9 +36,10 @@ def sim_url(url: str, protocol: str) -> str:
     parts = urlsplit(url)
     if parts.scheme != "sim":
         return url
-    query = dict(parse_qsl(parts.query))
-    query.setdefault("protocol", protocol)
-    return f"sim://{parts.netloc}{parts.path}?{urlencode(query)}"
+    # the URL as given, repeats and blanks included: the handler refuses them, naming the option
+    if any(name == "protocol" for name, _ in parse_qsl(parts.query, keep_blank_values=True)):
+        return url
+    return f"{url}{'&' if parts.query else '' if url.endswith('?') else '?'}{urlencode({'protocol': protocol})}"
 
 
 def open_port(url: str, protocol: str = "v1", timeout: float = 0.1, baudrate: int | None = None,
