@@ -294,14 +294,18 @@ def _mark_sticking(ax, t, spans, label: str) -> None:
         ax.axvspan(t[s], t[min(e, t.size) - 1], color="tab:orange", alpha=0.15, lw=0, label=label if k == 0 else None)
 
 
-def diagnosis_run_figure(run):
+def diagnosis_run_figure(run, overshoot_points: float = 3.0):
     """Measured vs nominal vs extended θ and a of one run (a :class:`RunReport`), with the
-    stretches where the measured hub sticks while the beam rings shaded.
+    stretches where the measured hub sticks while the beam rings shaded; a closed-loop
+    step's title gives the overshoots and says when the extended model misses the rig's.
 
     Parameters
     ----------
     run : RunReport
         One run of a :class:`station.diagnosis.Diagnosis`.
+    overshoot_points : float
+        The extended model's overshoot is on target within this many percentage points of
+        the rig's.
 
     Returns
     -------
@@ -324,8 +328,15 @@ def diagnosis_run_figure(run):
         ax1.plot(t, run.u, color="0.6", lw=0.8, label="reference u")
     ax1.set_ylabel("θ (encoder counts)")
     ax1.legend(loc="best", fontsize=8)
-    fig.suptitle(f"{short_name(run.file)} ({run.controller})\nθ fit nominal {_fit_text(run.fit_nominal.get('theta'))}, "
-                 f"extended {_fit_text(run.fit_extended.get('theta'))}; θ RMS gain {run.gain_pct:.1f} %", fontsize=9)
+    title = (f"{short_name(run.file)} ({run.controller})\nθ fit nominal {_fit_text(run.fit_nominal.get('theta'))}, "
+             f"extended {_fit_text(run.fit_extended.get('theta'))}; θ RMS gain {run.gain_pct:.1f} %")
+    m = run.metrics
+    if m is not None and m.get("rig") is not None and m.get("extended") is not None:
+        rig, ext = m["rig"].overshoot_pct, m["extended"].overshoot_pct
+        title += f"; overshoot rig {rig:.1f} %, extended {ext:.1f} %"
+        if abs(ext - rig) > overshoot_points:
+            title += f" (target ±{overshoot_points:g} points missed)"
+    fig.suptitle(title, fontsize=9)
     ax2.plot(t, run.a, color="k", lw=0.8, label="measured")
     ax2.plot(t, run.nominal["a"], color="tab:red", lw=0.8, label="nominal")
     ax2.plot(t, run.extended["a"], color="tab:blue", lw=0.8, ls="--", label=label)

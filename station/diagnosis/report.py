@@ -174,7 +174,7 @@ def _run_section(run, folder: Path, extended: bool) -> list[str]:
     out.append("<p>Nominal model: " + esc("; ".join(sig_b) or "no notable signature") + "</p>")
     if extended:
         out.append("<p>Extended model: " + esc("; ".join(sig_a) or "no notable signature") + "</p>")
-    for kind, fig in (("run", diagnosis_run_figure(run)), ("resid", diagnosis_resid_figure(run))):
+    for kind, fig in (("run", diagnosis_run_figure(run, OVERSHOOT_POINTS)), ("resid", diagnosis_resid_figure(run))):
         png = _png(fig)
         name = f"{_slug(run.file)}_{kind}.png"
         (folder / name).write_bytes(png)
