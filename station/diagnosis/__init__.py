@@ -25,7 +25,7 @@ grey-box estimation with physical parameters and bounds, honest validation data)
    "none".
 5. The reported values are refitted on all fit runs.
 6. Doubt (:mod:`~station.diagnosis.doubt`): each accepted value's 95 % interval (profile
-   likelihood with the residuals' effective sample size, widened to the jackknife over the
+   likelihood with the residuals' effective sample size, widened to the range of the
    leave-one-run-out refits and the fit's resolution) and the alternatives: other
    explanations whose validation cost is within what luck and the data's information reach.
 7. What stays unexplained (:mod:`~station.diagnosis.unexplained`): the extended model's θ

@@ -213,6 +213,9 @@ def interval_words(name: str, interval, unit: str) -> str:
     suffix = "" if unit == "1" else f" {unit}"
     ends = [w for w, at in (("lower", interval.lo_at_bound), ("upper", interval.hi_at_bound)) if at]
     note = f", reaching the {' and '.join(ends)} end of its search range" if ends else ""
+    r = getattr(interval, "refits", None)
+    if r is not None and (math.isclose(r[0], interval.lo) or math.isclose(r[1], interval.hi)):
+        note += f"; refitted without each run {fmt(r[0])}–{fmt(r[1])}: it depends on which runs judge it"
     return f"95 % interval {fmt(interval.lo)}–{fmt(interval.hi)}{suffix}{note}"
 
 
