@@ -12,6 +12,7 @@ from __future__ import annotations
 import json
 import math
 import shutil
+import zlib
 
 import numpy as np
 import pytest
@@ -35,7 +36,7 @@ def blind_logs(tmp_path_factory):
 
 
 def _noise(case, scale: float) -> np.ndarray:
-    rng = np.random.default_rng(abs(hash(case.name)) % 2 ** 32)
+    rng = np.random.default_rng(zlib.crc32(case.name.encode()))
     return scale * rng.standard_normal(case.n)
 
 
@@ -73,7 +74,7 @@ def test_an_effect_fitted_on_its_range_end_runs_to_the_end_and_is_flagged(blind_
     d = diagnosis.diagnose(blind_logs, candidates=["param:act_K", "delay"], simulate=sim)
     assert d.causes == ["param:act_K"]
     act = next(e for e in d.effects if e.name == "param:act_K")
-    assert act.value == pytest.approx(0.1) and act.at_range_end
+    assert act.value == pytest.approx(0.1, rel=0.01) and act.at_range_end
     assert act.interval.lo == pytest.approx(0.1) and act.interval.lo_at_bound and not act.interval.hi_at_bound
     assert "at the end of its search range" in diagnosis.summary_paragraph(d)
 

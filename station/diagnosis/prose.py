@@ -140,8 +140,9 @@ OVERSHOOT_POINTS = 3.0
 
 
 def at_range_end(name: str, value: float) -> bool:
-    """The value sits at an end of the effect's search range (the fit wanted further); the
-    neutral value ("no effect", e.g. no friction at 0) does not count.
+    """The value sits at an end of the effect's search range, within the fit's resolution
+    (:data:`station.diagnosis.doubt.RESOLUTION_STEPS` grid steps): the fit wanted further.
+    The neutral value ("no effect", e.g. no friction at 0) does not count.
 
     Parameters
     ----------
@@ -150,11 +151,15 @@ def at_range_end(name: str, value: float) -> bool:
     value : float
         Its value, in its unit.
     """
+    from station.analysis.fitting import axis_for
+    from station.diagnosis.doubt import RESOLUTION_STEPS
     from station.plant.effects import EFFECTS
 
     spec = EFFECTS.get(name)
-    close = lambda b: math.isclose(value, b, rel_tol=1e-6, abs_tol=1e-9)  # noqa: E731
-    return spec is not None and not close(spec.neutral) and (close(spec.lower) or close(spec.upper))
+    if spec is None or not math.isfinite(value) or math.isclose(value, spec.neutral, rel_tol=1e-6, abs_tol=1e-9):
+        return False
+    ax = axis_for(name, spec.lower, spec.upper, spec.neutral)
+    return any(abs(ax.to_unit(value) - ax.to_unit(b)) <= RESOLUTION_STEPS * ax.step for b in (spec.lower, spec.upper))
 
 
 def plain_name(name: str) -> str:
