@@ -136,8 +136,13 @@ def _json_safe(x):
     return x
 
 
+def _short(text: str, width: int = 240) -> str:
+    return text if len(text) <= width else text[:width - 1] + "…"
+
+
 def format_diagnosis(diag) -> str:
-    """What ``station diagnose`` prints: the cause, the gain and the candidates table.
+    """What ``station diagnose`` prints: the cause, the gain, what is still unexplained, the
+    alternatives, the candidates table (with the accepted effects' 95 % intervals) and the runs.
 
     Parameters
     ----------
@@ -145,22 +150,35 @@ def format_diagnosis(diag) -> str:
         What :func:`station.diagnosis.diagnose` returned.
     """
     pct = lambda x: "n/a" if x is None else f"{x:.1f} %"  # noqa: E731
+    def num(x: float, unit: str) -> str:
+        return "inf" if not math.isfinite(x) else (f"{x:.0f}" if unit == "samples" else f"{x:.4g}")
+
+    u = diag.unexplained
     lines = [f"model: {diag.nominal_model.name}; judged by {diag.validation}",
              f"cause: {diag.cause}" + (f"   (all accepted: {', '.join(diag.causes)})" if len(diag.causes) > 1 else ""),
              f"θ fit {pct(diag.baseline_fit.get('theta'))} -> {pct(diag.extended_fit.get('theta'))}, "
              f"a fit {pct(diag.baseline_fit.get('accel'))} -> {pct(diag.extended_fit.get('accel'))}, "
              f"θ RMS gain {diag.gain_pct:.1f} %",
-             f"{'effect':<18} {'value':>12} {'unit':<15} {'θ gain':>8} {'cost gain':>9}  accepted"]
+             "unexplained: " + ("no" if u is None or not u.flag else "yes - " + _short(u.evidence))]
+    if diag.causes:
+        lines.append("alternatives: " + ("none" if not diag.alternatives else "; ".join(
+            f"{' + '.join(a.causes)} (cost ratio {a.cost_ratio:.3f}, θ gain {a.gain_pct:.1f} %)"
+            for a in diag.alternatives)))
+    lines.append(f"{'effect':<18} {'value':>12} {'unit':<15} {'θ gain':>8} {'cost gain':>9}  accepted  95 % interval")
     for e in diag.effects:
-        v = "inf" if not math.isfinite(e.value) else (f"{e.value:.0f}" if e.unit == "samples" else f"{e.value:.4g}")
-        lines.append(f"{e.name:<18} {v:>12} {e.unit:<15} {e.gain_pct:>7.1f}% {e.cost_gain_pct:>8.1f}%  "
-                     f"{'yes' if e.accepted else ''}")
+        iv = "" if e.interval is None else f"  {num(e.interval.lo, e.unit)} .. {num(e.interval.hi, e.unit)}"
+        end = "  (at the end of its search range)" if e.at_range_end else ""
+        lines.append(f"{e.name:<18} {num(e.value, e.unit):>12} {e.unit:<15} {e.gain_pct:>7.1f}% "
+                     f"{e.cost_gain_pct:>8.1f}%  "
+                     f"{'yes' if e.accepted else '   '}{iv}{end}".rstrip())
     for r in diag.runs:
         m = r.metrics
         ov = "" if m is None else ("   overshoot rig/nominal/extended " +
                                    " / ".join(f"{m[k].overshoot_pct:.2f}" for k in ("rig", "nominal", "extended")) + " %")
         lines.append(f"  {r.file} ({r.role}): θ fit {pct(r.fit_nominal.get('theta'))} -> "
                      f"{pct(r.fit_extended.get('theta'))}, gain {r.gain_pct:.1f} %{ov}")
+    for note in diag.notes:
+        lines.append(f"note: {note}")
     lines.append(f"{diag.simulations} simulations in {diag.elapsed_s:.1f} s")
     return "\n".join(lines)
 
@@ -199,8 +217,8 @@ def run(args: argparse.Namespace) -> int:
     ------
     StationError
         One run without --validate, an unreadable log, runs longer than --max-samples, a bad
-        --model; an output that is an input or another output, exists (without ``--force``)
-        or cannot be written.
+        --model, the same run given twice (or as a RUN and a --validate run); an output that is
+        an input or another output, exists (without ``--force``) or cannot be written.
     """
     from station.diagnosis import diagnose
 

@@ -16,7 +16,7 @@ from __future__ import annotations
 import math
 from collections.abc import Callable, Mapping, Sequence
 from concurrent.futures import ThreadPoolExecutor
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 from station.analysis.fitting import Axis, axis_for, fit
 from station.diagnosis.cost import Evaluator, pooled, relative_gain, rms_gain
@@ -111,6 +111,29 @@ class Singles:
 
 
 @dataclass
+class Step:
+    """One step of forward selection, kept for the alternatives
+    (:mod:`station.diagnosis.doubt`).
+
+    Attributes
+    ----------
+    before : list of str
+        The effects accepted before this step.
+    trials : dict of str to Trial
+        Every candidate tried at this step (jointly with ``before``).
+    chosen : str or None
+        The one accepted (None: nothing paid, selection stopped).
+    floor : float
+        What luck alone reaches around the model before this step (:func:`null_floor`).
+    """
+
+    before: list
+    trials: dict
+    chosen: str | None
+    floor: float
+
+
+@dataclass
 class Selection:
     """What forward selection accepted.
 
@@ -122,11 +145,14 @@ class Selection:
         The accepted set as fitted per fold (the nominal model's trial when none).
     values : dict of str to float
         The accepted effects refitted jointly on all fit runs.
+    steps : list of Step
+        Every step tried, in order.
     """
 
     accepted: list
     current: Trial
     values: dict
+    steps: list = field(default_factory=list)
 
 
 def effect_axes() -> dict[str, Axis]:
@@ -200,6 +226,27 @@ def screen(ev: Evaluator, axes: Mapping[str, Axis], names: Sequence[str], fixed:
     return keep[:SECOND_STEP_CANDIDATES]
 
 
+def perturbed(name: str, values: Mapping[str, float], factor: float) -> float:
+    """An effect's value scaled by a tiny factor, kept inside its range: a value fitted on
+    its bound is perturbed inward (divided by the factor instead).
+
+    Parameters
+    ----------
+    name : str
+        The effect (:data:`station.plant.effects.EFFECTS`).
+    values : mapping of str to float
+        The current values (the effect's neutral value when absent).
+    factor : float
+        Close to 1 (:data:`NULL_PERTURBATIONS`).
+    """
+    spec = EFFECTS[name]
+    v = values.get(name, spec.neutral)
+    for x in (v * factor, v / factor):
+        if spec.lower <= x <= spec.upper:
+            return x
+    return v
+
+
 def null_floor(ev: Evaluator, folds: Sequence[Fold], fold_values: Sequence[Mapping[str, float]]) -> float:
     """The validation cost reached by luck alone: per validation run the lowest weighted
     error over :data:`NULL_PERTURBATIONS` of the current model (as fitted per fold), summed.
@@ -216,8 +263,7 @@ def null_floor(ev: Evaluator, folds: Sequence[Fold], fold_values: Sequence[Mappi
         for i in fold.val:
             best = ev.weighted(values, i)
             for name, factor in NULL_PERTURBATIONS:
-                v = values.get(name, EFFECTS[name].neutral) * factor
-                best = min(best, ev.weighted({**values, name: v}, i))
+                best = min(best, ev.weighted({**values, name: perturbed(name, values, factor)}, i))
             total += best
     return total
 
@@ -308,6 +354,7 @@ def forward_select(search: Search, names: Sequence[str], singles: Singles, nomin
     accepted: list[str] = []
     current = nominal
     values: dict[str, float] = {}
+    steps: list[Step] = []
     for step in range(MAX_EFFECTS):
         if step == 0:
             trials = {n: singles.trials[n] for n in names}
@@ -320,7 +367,9 @@ def forward_select(search: Search, names: Sequence[str], singles: Singles, nomin
         search.say(f"step {step + 1}: best {best}, validation cost {trials[best].val_weighted / terms:.3g} per sample, "
                    f"current {current.val_weighted / terms:.3g}, reached by quantization and noise alone "
                    f"{floor / terms:.3g}")
-        if not accept(current.val_weighted, trials[best].val_weighted, terms, floor):
+        ok = accept(current.val_weighted, trials[best].val_weighted, terms, floor)
+        steps.append(Step(list(accepted), trials, best if ok else None, floor))
+        if not ok:
             break
         accepted.append(best)
         current = trials[best]
@@ -330,4 +379,4 @@ def forward_select(search: Search, names: Sequence[str], singles: Singles, nomin
             values = fit_set(ev, [search.axes[n] for n in accepted], search.fit_runs, values)
         search.say(f"accepted {best} (step {step + 1}): "
                    + ", ".join(f"{n} = {format_value(v, EFFECTS[n].unit)}" for n, v in values.items()))
-    return Selection(accepted, current, values)
+    return Selection(accepted, current, values, steps)
