@@ -269,8 +269,9 @@ class CompensatorFile(NamedTuple):
     def to_toml(self) -> str:
         """The file's text (TOML): what :func:`read_compensator_file` reads back to the same
         stages, limit and shaper (floats written with ``repr``: they round-trip exactly)."""
-        lines = [f"name = {json.dumps(self.name)}",
-                 f"limit = {'false' if self.limit is None else repr(float(self.limit))}"]
+        lines = [f"name = {json.dumps(self.name)}"]
+        if self.sets_limit:
+            lines.append(f"limit = {'false' if self.limit is None else repr(float(self.limit))}")
         for table, stage in (("gth", self.gth), ("ga", self.ga)):
             if stage is not None:
                 num, den, domain = stage
