@@ -21,7 +21,7 @@ from station.design.robust import (DEFAULT_DOUBT, default_intervals, model_from_
                                    sample_models)
 from station.design.search import Budget
 from station.design.space import THESIS, DesignSpace, ga_s
-from station.design.tune import tune
+from station.design.tuning import tune
 from station.errors import StationError
 from station.plant import load_model
 from station.plant.stability import closed_loop
@@ -156,7 +156,7 @@ def _unstable(rig):
 
 
 def test_an_unstable_model_is_refused_before_any_work(rig, monkeypatch):
-    import station.design.tune as tune_module
+    import station.design.tuning as tune_module
 
     monkeypatch.setattr(tune_module, "open_runner", lambda *a, **k: pytest.fail("work started"))
     with pytest.raises(StationError, match="unstable"):
@@ -199,7 +199,7 @@ def test_the_executor_does_not_change_the_design(small_design):
 @pytest.fixture
 def no_work(monkeypatch):
     """Any design work fails the test: a refused input must not get that far."""
-    import station.design.tune as tune_module
+    import station.design.tuning as tune_module
 
     monkeypatch.setattr(tune_module, "search", lambda *a, **k: pytest.fail("the search started"))
 

@@ -31,7 +31,7 @@ def configure(parser: argparse.ArgumentParser) -> None:
         ``--json``, ``--report``, ``--force``, ``--quiet``.
     """
     from station.design.space import SHAPERS, STRUCTURES
-    from station.design.tune import DEFAULT_SAMPLES
+    from station.design.tuning import DEFAULT_SAMPLES
 
     add_model_options(parser, "the model the compensator is designed on (its effects included); without it, "
                       "the first --robust diagnosis JSON's extended model", subject="the design model",
@@ -116,7 +116,7 @@ def format_result(result) -> str:
 
     Parameters
     ----------
-    result : station.design.tune.TuneResult
+    result : station.design.tuning.TuneResult
     """
     def settle(x):
         return "not settled" if x is None else f"{x:.3f} s"
@@ -168,14 +168,12 @@ def run(args: argparse.Namespace) -> int:
     import os
 
     from station.commands.options import write_json
-    from station.design.tune import check_request, tune
+    from station.design.tuning import DEFAULT_AMPLITUDE, check_request, tune
     from station.design.verify import verify
     from station.errors import StationError
 
     structure = args.controller
     jobs = args.jobs if args.jobs is not None else max(1, min(os.cpu_count() or 1, 64))
-    from station.design.tune import DEFAULT_AMPLITUDE
-
     amplitude = DEFAULT_AMPLITUDE[structure] if args.amplitude is None else args.amplitude
     check_request(structure, amplitude, args.limit, args.overshoot, args.shaper, args.samples, jobs)
     check_outputs(args)

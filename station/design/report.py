@@ -66,7 +66,7 @@ def write_report(result, folder: str | Path) -> Path:
 
     Parameters
     ----------
-    result : station.design.tune.TuneResult
+    result : station.design.tuning.TuneResult
     folder : str or Path
         Created if needed.
 

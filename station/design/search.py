@@ -19,8 +19,9 @@ settling time jumps between plateaus. The search therefore
    simplex), until a round neither finds a new worst model nor improves the objective.
 
 A design whose linear margins already fail is not simulated (it is out whatever its step).
-The robust objective is the worst case over the models plus 1 % of their mean (the mean
-only breaks ties between designs with the same worst case). Everything is a pure function
+The robust objective (:func:`robust_objective`) is the worst case over the models plus 1 % of
+their mean (the mean only breaks ties between designs with the same worst case) when the
+requirements are met on every model; a model where they are not adds its own cost. Everything is a pure function
 of the inputs and the seed: the tasks' results come back in order and the reductions are
 plain max/mean/sort with ties broken by index, so the design does not depend on the
 executor (:mod:`station.design.executor`).
@@ -132,16 +133,26 @@ class SearchResult(NamedTuple):
     working_set: tuple
 
 
-def robust_objective(costs) -> float:
-    """Worst case plus :data:`MEAN_WEIGHT` times the mean.
+def robust_objective(costs, run_s: float = RUN_S) -> float:
+    """The worst case over the models that meet every requirement, plus each other model's
+    cost, plus :data:`MEAN_WEIGHT` times the mean.
+
+    With every model met this is the worst case (and a tie-break); a design that fails some
+    models pays for each of them (its cost there is at least ``run_s``), so the search first
+    meets the requirements on as many models as it can, then makes the worst of those fast.
 
     Parameters
     ----------
     costs : sequence of float
-        One model's cost each.
+        One model's cost each (:func:`station.design.evaluate.cost`: below ``run_s`` exactly
+        when every requirement is met).
+    run_s : float
+        The run's length, s.
     """
     c = np.asarray(costs, dtype=float)
-    return float(c.max() + MEAN_WEIGHT * c.mean())
+    met = c < run_s
+    worst_met = float(c[met].max()) if met.any() else 0.0
+    return float(worst_met + c[~met].sum() + MEAN_WEIGHT * c.mean())
 
 
 def judge_point(problem: Problem, x, which) -> list[Figures]:
@@ -240,7 +251,7 @@ def refine(problem: Problem, x0, which, maxfev: int) -> tuple[np.ndarray, int]:
 
     def f(x):
         calls[0] += 1
-        return robust_objective(_costs(problem, judge_point(problem, x, which)))
+        return robust_objective(_costs(problem, judge_point(problem, x, which)), problem.run_s)
 
     res = minimize(f, x0, method="Nelder-Mead", bounds=[(0.0, 1.0)] * d,
                    options={"maxfev": int(maxfev), "initial_simplex": np.array(simplex), "xatol": 1e-3,
@@ -283,7 +294,7 @@ def search(problem: Problem, runner, budget: Budget = Budget(), seed: int = 0,
     judged = [pair for part in runner.map(bracket_points, tasks) for pair in part]
     points = [x for x, _ in judged]
     evaluations += len(points) * len(screen)
-    objective = [robust_objective(_costs(problem, f)) for _, f in judged]
+    objective = [robust_objective(_costs(problem, f), problem.run_s) for _, f in judged]
     ranked = sorted(range(len(points)), key=lambda i: (objective[i], i))[:budget.keep]
 
     everyone = list(range(n_models))
@@ -293,7 +304,8 @@ def search(problem: Problem, runner, budget: Budget = Budget(), seed: int = 0,
         out = []
         for x, (f,) in zip(xs, runner.map(judge_points, tasks)):
             c = _costs(problem, f)
-            out.append(Candidate(np.asarray(x, dtype=float), tuple(f), tuple(c), robust_objective(c)))
+            objective = robust_objective(c, problem.run_s)
+            out.append(Candidate(np.asarray(x, dtype=float), tuple(f), tuple(c), objective))
         return out
 
     pool = judge_all([points[i] for i in ranked])

@@ -154,8 +154,8 @@ class TuneResult:
                 "parameters": {k: {"value": v, "unit": units[k]} for k, v in self.values.items()},
                 "mode": None if self.space.mode is None else {"f_hz": self.space.mode[0], "zeta": self.space.mode[1]},
                 "compensator": spec, "requirements": self.requirements._asdict(),
-                "objective": f"worst case over {len(self.robust.models)} model(s) of the 2 % settling time "
-                             f"(+1 % of the mean), every requirement met",
+                "objective": f"the worst 2 % settling time over the {len(self.robust.models)} model(s) "
+                             f"(+1 % of the mean), every requirement met; a model where one is not adds its cost",
                 "feasible": all(self.met()), "margins": _margins_json(self.margins),
                 "evaluations": self.evaluations, "elapsed_s": round(self.elapsed_s, 3), "executor": self.executor,
                 "seed": self.seed}
