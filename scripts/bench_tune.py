@@ -5,7 +5,7 @@ Times :func:`station.design.tune` on the built-in ``rig`` model, step of 200 cou
 ``--samples 20`` (the nominal and 20 models drawn from the rig's doubt: 21 models), once with
 ``--samples 0`` (the model alone), both with the same executor (``--jobs``, default 2: this
 machine's cores), after a warm-up (worker start-up and numba's cached kernel). Prints the
-seconds, the step runs simulated and runs per second of each, their ratio, the load average,
+seconds, the evaluations (a design on a model) and evaluations per second of each, their ratio, the load average,
 and the design's worst case over the set beside the thesis's.
 
 Target (issue 18): the 20-model design in under 60 s on a 2-core machine.
@@ -58,7 +58,7 @@ def main(argv: list[str] | None = None) -> int:
     load = os.getloadavg()[0]
     print(f"station tune --model rig --controller lead-accel --amplitude 200, {args.jobs} local processes:")
     for name, d in ((f"{robust['models']} models", robust), ("1 model", one)):
-        print(f"  {name:10s} {d['seconds']:6.1f} s, {d['runs']:6d} step runs ({d['runs'] / d['seconds']:.0f}/s); "
+        print(f"  {name:10s} {d['seconds']:6.1f} s, {d['runs']:6d} evaluations ({d['runs'] / d['seconds']:.0f}/s); "
               f"worst 2 % settling {d['worst_settling_2pct_s']} s (thesis {d['thesis_worst_settling_2pct_s']} s), "
               f"worst overshoot {d['worst_overshoot_pct']:.1f} %, requirements {'met' if d['all_met'] else 'NOT met'}")
     print(f"  robust / one-model time: {ratio:.2f}x; load average {load:.1f} on {os.cpu_count()} CPUs")

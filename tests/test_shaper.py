@@ -155,3 +155,15 @@ def test_a_shaped_step_replays_bit_exact_from_its_log(tmp_path):
     rep = replay(tmp_path / "run.tsv", model=False)
     assert rep.max_abs_dv == 0.0
     assert rep.controller_spec["shaper"]["delays"] == [0, 98]
+
+
+def test_readme_shaper_example_loads(tmp_path):
+    import re
+    from pathlib import Path
+
+    readme = (Path(__file__).resolve().parents[1] / "README.md").read_text()
+    block = next(b for b in re.findall(r"```toml\n(.*?)```", readme, re.S) if "[shaper]" in b)
+    path = tmp_path / "c.toml"
+    path.write_text(LEAD + block)
+    comp = read_compensator_file(path).compensator()
+    assert comp.shaper.delays == (0, 98) and comp.shaper.amplitudes == (0.52, 0.48)

@@ -243,3 +243,12 @@ def test_tune_writes_a_file_station_step_runs_with_the_designs_metrics(tmp_path,
     assert step["settling_time_2pct_s"] == pytest.approx(doc["model"]["settling_2pct_s"])
     assert doc["model"]["overshoot_pct"] <= 5.0 and RUN_S == 2.0  # station step's default duration
     assert math.isfinite(doc["baseline"]["overshoot_pct"])
+
+
+def test_help_lists_every_option_with_its_range(capsys):
+    assert main(["tune", "--help"]) == 0
+    out = capsys.readouterr().out
+    for option in ("--model", "--controller", "--amplitude", "--limit", "--overshoot", "--shaper", "--robust",
+                   "--samples", "--jobs", "--scheduler", "--out", "--json", "--report", "--force"):
+        assert option in out
+    assert "range 0..100 percent" in out

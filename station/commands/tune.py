@@ -5,7 +5,6 @@ compensator on a model")."""
 from __future__ import annotations
 
 import argparse
-import json
 import sys
 import tempfile
 from pathlib import Path
@@ -33,7 +32,8 @@ def configure(parser: argparse.ArgumentParser) -> None:
     from station.design.space import SHAPERS, STRUCTURES
     from station.design.tuning import DEFAULT_SAMPLES
 
-    add_model_options(parser, "the model the compensator is designed on (its effects included); without it, "
+    add_model_options(parser, "the model the compensator is designed on (its effects included), or a diagnosis "
+                      "JSON (its extended model); without it, "
                       "the first --robust diagnosis JSON's extended model", subject="the design model",
                       elements=None, params=False)
     parser.add_argument("--controller", choices=STRUCTURES, default="lead-accel",
@@ -44,7 +44,7 @@ def configure(parser: argparse.ArgumentParser) -> None:
                              "lead-accel 200)")
     parser.add_argument("--limit", type=number(1, 255, unit="DAC counts"), default=200.0, metavar="COUNTS",
                         help="the compensator's clamp, written into the file (default 200)")
-    parser.add_argument("--overshoot", type=number(0, 100, unit="%"), default=5.0, metavar="PCT",
+    parser.add_argument("--overshoot", type=number(0, 100, unit="percent"), default=5.0, metavar="PCT",
                         help="largest overshoot on every model (default 5)")
     parser.add_argument("--shaper", choices=SHAPERS, default="opt",
                         help="reference shaper: none, ZV or ZVD of the model's first beam mode, or two impulses "
@@ -141,7 +141,8 @@ def format_result(result) -> str:
         lines.append(f"  station step on the simulated rig: {v.reason}, overshoot {v.overshoot_pct:.1f} %, 2 % "
                      f"settling {settle(v.settling_2pct_s)}; log {'equals' if v.matches else 'DIFFERS from'} "
                      f"the simulation (max |Δθ| {v.max_abs_dtheta:g}, |Δv| {v.max_abs_dv:g})")
-    lines.append(f"  {result.evaluations} step runs in {result.elapsed_s:.1f} s ({result.executor})")
+    lines.append(f"  {result.evaluations} evaluations (a design on a model) in {result.elapsed_s:.1f} s "
+                 f"({result.executor})")
     return "\n".join(lines)
 
 
@@ -206,5 +207,5 @@ def run(args: argparse.Namespace) -> int:
 
         print(f"report: {write_report(result, args.report)}")
     if args.json is not None:
-        write_json(args.json, json.loads(json.dumps(result.to_json(out), default=float)))
+        write_json(args.json, result.to_json(out))
     return 0

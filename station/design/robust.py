@@ -3,7 +3,8 @@
 A design is robust to doubt when it meets its requirements on every model of the set
 (DESIGN.md "Designing a compensator on a model"). The set is, in this order:
 
-1. the design model (``--model``; without it, the first diagnosis JSON's extended model);
+1. the design model (``--model``: a model file, a built-in name or a diagnosis JSON's extended
+   model; without it, the first ``--robust`` diagnosis JSON's extended model);
 2. every ``--robust`` file: a model file (TOML, or a built-in model's name), or a diagnosis
    JSON (``station diagnose --json``) giving its ``extended_model`` and each of its
    ``alternatives`` (the nominal parameter set with the alternative's effect ``values``);
@@ -255,7 +256,8 @@ def robust_set(model=None, robust=(), samples: int = 0, seed: int = SEED) -> Rob
     Parameters
     ----------
     model : Model, str, Path or None
-        The design model; None: the first diagnosis JSON's extended model, else "tmm-fit".
+        The design model: a Model, a built-in name, a model file or a diagnosis JSON (its
+        extended model); None: the first diagnosis JSON's extended model, else "tmm-fit".
     robust : sequence of str or Path
         Model files (or built-in names) and diagnosis JSONs.
     samples : int
@@ -276,6 +278,8 @@ def robust_set(model=None, robust=(), samples: int = 0, seed: int = SEED) -> Rob
             files.append((str(item), load_model(item)))
     if model is None and docs:
         nominal = docs[0][1].model
+    elif isinstance(model, (str, Path)) and str(model).lower().endswith(".json"):
+        nominal = read_diagnosis(model).model  # a diagnosis JSON's extended model
     else:
         nominal = as_model(model)
     models, labels = [nominal], ["nominal"]

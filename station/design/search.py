@@ -123,7 +123,8 @@ class SearchResult(NamedTuple):
     ----------
     best : Candidate
     evaluations : int
-        Step runs simulated (designs × models).
+        Designs judged on models (one design on one model: the linear checks, and the step
+        unless the margins already fail).
     working_set : tuple of int
         The models the last refinement ran on.
     """
@@ -236,7 +237,7 @@ def refine(problem: Problem, x0, which, maxfev: int) -> tuple[np.ndarray, int]:
     x : ndarray, shape (d,)
         The best point found (within the unit cube).
     evaluations : int
-        Step runs simulated.
+        Designs judged on models.
     """
     from scipy.optimize import minimize
 
@@ -327,7 +328,7 @@ def search(problem: Problem, runner, budget: Budget = Budget(), seed: int = 0,
         if new <= set(working) and best.objective > before.objective - 1e-3:
             break  # nothing new to learn: every worst model is in, and restarting did not pay
         working = sorted(set(working) | new)
-    say(f"done: {_describe(best)}; {evaluations} step runs")
+    say(f"done: {_describe(best)}; {evaluations} evaluations")
     return SearchResult(best, evaluations, tuple(working))
 
 

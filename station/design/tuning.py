@@ -29,7 +29,7 @@ from station.errors import StationError
 DEFAULT_AMPLITUDE = {"p": 50.0, "lead": 100.0, "lead-accel": 200.0}
 """Default step height per structure, encoder counts: the rig's three experiments (thesis)."""
 
-DEFAULT_SAMPLES = 8
+DEFAULT_SAMPLES = 20
 """Models drawn from the doubt by default (besides the nominal and any --robust files)."""
 
 METRICS = ("overshoot_pct", "settling_2pct_s", "settling_thesis_s", "peak_command", "saturated_s")
@@ -108,7 +108,7 @@ class TuneResult:
     margins, baseline_margins : Margins
         python-control's margins of the tuned and the thesis's loop on the nominal model.
     evaluations : int
-        Step runs simulated by the search.
+        Designs judged on models by the search.
     elapsed_s : float
     executor : str
         Where the evaluations ran.
