@@ -141,19 +141,22 @@ def robust_objective(costs, run_s: float = RUN_S) -> float:
     With every model met this is the worst case (and a tie-break); a design that fails some
     models pays for each of them (its cost there is at least ``run_s``), so the search first
     meets the requirements on as many models as it can, then makes the worst of those fast.
+    Failing the design model itself (``costs[0]``) weighs as much as failing all the others:
+    a design that does not work on the model it was asked for is no design.
 
     Parameters
     ----------
     costs : sequence of float
-        One model's cost each (:func:`station.design.evaluate.cost`: below ``run_s`` exactly
-        when every requirement is met).
+        One model's cost each, the design model's first (:func:`station.design.evaluate.cost`:
+        below ``run_s`` exactly when every requirement is met).
     run_s : float
         The run's length, s.
     """
     c = np.asarray(costs, dtype=float)
     met = c < run_s
     worst_met = float(c[met].max()) if met.any() else 0.0
-    return float(worst_met + c[~met].sum() + MEAN_WEIGHT * c.mean())
+    failed = c[~met].sum() + (0.0 if met[0] else (c.size - 1) * c[0])  # the design model itself weighs as all
+    return float(worst_met + failed + MEAN_WEIGHT * c.mean())
 
 
 def judge_point(problem: Problem, x, which) -> list[Figures]:
