@@ -8,9 +8,11 @@ A design is robust to doubt when it meets its requirements on every model of the
 2. every ``--robust`` file: a model file (TOML, or a built-in model's name), or a diagnosis
    JSON (``station diagnose --json``) giving its ``extended_model`` and each of its
    ``alternatives`` (the nominal parameter set with the alternative's effect ``values``);
-3. ``--samples N`` models drawn from intervals (a Latin hypercube sample, seeded): the
-   diagnosis JSONs' effect ``interval`` s when they have any, around the design model;
-   otherwise :data:`DEFAULT_DOUBT`, the rig's usual doubt.
+3. with ``--samples N`` (N > 0), the intervals' box: the diagnosis JSONs' effect ``interval`` s
+   when they have any, around the design model, otherwise :data:`DEFAULT_DOUBT`, the rig's usual
+   doubt: its corners (every effect at an end of its interval, up to
+   :data:`MAX_CORNER_EFFECTS` effects: a worst case often sits in a corner) and N models drawn
+   inside it (a Latin hypercube sample, seeded).
 
 Reading everything happens before any design work, and a bad input is one line naming the
 file (a JSON with no model, a model that does not load, an unstable plant).
@@ -46,6 +48,9 @@ left out."""
 
 SEED = 0
 """Seed of the drawn models."""
+
+MAX_CORNER_EFFECTS = 4
+"""The box's corners join the set when the intervals span at most this many effects (16 models)."""
 
 
 class RobustSet(NamedTuple):
@@ -201,21 +206,41 @@ def sample_models(model: Model, intervals: dict, n: int, seed: int = SEED) -> li
 
     if n <= 0 or not intervals:
         return []
-    names = sorted(intervals)
-    pts = qmc.LatinHypercube(len(names), seed=seed).random(n)
-    out = []
-    for k, row in enumerate(pts):
-        values = {}
-        for name, x in zip(names, row):
-            lo, hi = intervals[name]
-            spec = EFFECTS[name]
-            values[name] = float(min(max(lo + x * (hi - lo), spec.lower), spec.upper))
-            if name == "delay":
-                values[name] = float(round(values[name]))
-        if "static_friction" in values or "coulomb_friction" in values:  # breakaway is never below sliding
-            values = _breakaway_above_sliding(model, values)
-        out.append(model.with_effects(values, name=f"{model.name} sample {k + 1}"))
-    return out
+    pts = qmc.LatinHypercube(len(intervals), seed=seed).random(n)
+    return [_model_at(model, intervals, row, f"{model.name} sample {k + 1}") for k, row in enumerate(pts)]
+
+
+def corner_models(model: Model, intervals: dict) -> list[Model]:
+    """The models at the corners of the intervals' box (every effect at an end of its interval),
+    when there are at most :data:`MAX_CORNER_EFFECTS` effects (else none).
+
+    Parameters
+    ----------
+    model : Model
+        The model the corner values replace their own in.
+    intervals : dict
+        Effect -> (low, high).
+    """
+    import itertools
+
+    if not intervals or len(intervals) > MAX_CORNER_EFFECTS:
+        return []
+    return [_model_at(model, intervals, np.array(row, dtype=float), f"{model.name} corner {k + 1}")
+            for k, row in enumerate(itertools.product((0.0, 1.0), repeat=len(intervals)))]
+
+
+def _model_at(model: Model, intervals: dict, unit, name: str) -> Model:
+    """``model`` with each effect of ``intervals`` at its point ``unit`` (0..1 per effect, sorted names)."""
+    values = {}
+    for eff, x in zip(sorted(intervals), unit):
+        lo, hi = intervals[eff]
+        spec = EFFECTS[eff]
+        values[eff] = float(min(max(lo + x * (hi - lo), spec.lower), spec.upper))
+        if eff == "delay":
+            values[eff] = float(round(values[eff]))
+    if "static_friction" in values or "coulomb_friction" in values:  # breakaway is never below sliding
+        values = _breakaway_above_sliding(model, values)
+    return model.with_effects(values, name=name)
 
 
 def _breakaway_above_sliding(model: Model, values: dict) -> dict:
@@ -261,7 +286,7 @@ def robust_set(model=None, robust=(), samples: int = 0, seed: int = SEED) -> Rob
     robust : sequence of str or Path
         Model files (or built-in names) and diagnosis JSONs.
     samples : int
-        Models drawn from the intervals, ≥ 0.
+        Models drawn from the intervals, ≥ 0 (with any, the box's corners join too).
     seed : int
         Their seed.
 
@@ -298,9 +323,10 @@ def robust_set(model=None, robust=(), samples: int = 0, seed: int = SEED) -> Rob
         intervals.update(doc.intervals)
     if not intervals:
         intervals = default_intervals(nominal)
+    corners = corner_models(nominal, intervals) if samples > 0 else []
     drawn = sample_models(nominal, intervals, samples, seed)
-    models += drawn
-    labels += [f"sample {k + 1}" for k in range(len(drawn))]
+    models += corners + drawn
+    labels += [f"corner {k + 1}" for k in range(len(corners))] + [f"sample {k + 1}" for k in range(len(drawn))]
     for m, lab in zip(models, labels):
         check_stable(m, f"model {m.name!r} ({lab})")
     return RobustSet(tuple(models), tuple(labels), intervals if drawn else {})
