@@ -54,8 +54,8 @@ def configure(parser: argparse.ArgumentParser) -> None:
                              "intervals) the design is judged on too")
     parser.add_argument("--samples", type=number(0, 1000, integer=True), default=DEFAULT_SAMPLES, metavar="N",
                         help=f"models drawn from the doubt (the diagnosis JSON's intervals, else dry friction "
-                             f"5-20 counts, amplifier offset ±5, drive damping 0.85-2x; default {DEFAULT_SAMPLES}; "
-                             f"0: none)")
+                             f"5-20 counts, amplifier offset ±5, drive damping 0.85-2x), besides its corners "
+                             f"(default {DEFAULT_SAMPLES}; 0: neither, the model and the --robust files alone)")
     parser.add_argument("--jobs", type=number(1, 64, integer=True), default=None, metavar="N",
                         help="local worker processes (default: the CPU count)")
     parser.add_argument("--scheduler", default=None, metavar="ADDRESS",

@@ -10,7 +10,7 @@ settling time jumps between plateaus. The search therefore
    on a *screening set*: the nominal model and the models of
    the set farthest from it and from each other in their effects' values (greedy
    farthest-point selection, each effect scaled by its spread over the set);
-2. judges the best ``keep`` of them on every model;
+2. judges the best ``keep`` of them, and the best on the design model alone, on every model;
 3. **refines** the best few with Nelder–Mead (scipy, bounded to the unit cube, an initial
    simplex of 0.1 per parameter) on a *working set* of models, each start a task of its own;
    every result is judged on every model, and the model on which each result does worst joins
@@ -300,6 +300,11 @@ def search(problem: Problem, runner, budget: Budget = Budget(), seed: int = 0,
     evaluations += len(points) * len(screen)
     objective = [robust_objective(_costs(problem, f), problem.run_s) for _, f in judged]
     ranked = sorted(range(len(points)), key=lambda i: (objective[i], i))[:budget.keep]
+    # and the best on the design model alone: where the set's worst cases pull apart (P and dry
+    # friction), the design that works on the model itself must still be among the candidates
+    alone = min(range(len(points)), key=lambda i: (cost(judged[i][1][0], problem.requirements, problem.run_s), i))
+    if alone not in ranked:
+        ranked.append(alone)
 
     everyone = list(range(n_models))
 
