@@ -24,6 +24,10 @@ import time
 from pathlib import Path
 
 
+def _s(x) -> str:
+    return "not settled" if x is None else f"{x:.3f} s"
+
+
 def _design(samples: int, jobs: int) -> dict:
     from station.design import tune
 
@@ -59,7 +63,7 @@ def main(argv: list[str] | None = None) -> int:
     print(f"station tune --model rig --controller lead-accel --amplitude 200, {args.jobs} local processes:")
     for name, d in ((f"{robust['models']} models", robust), ("1 model", one)):
         print(f"  {name:10s} {d['seconds']:6.1f} s, {d['runs']:6d} evaluations ({d['runs'] / d['seconds']:.0f}/s); "
-              f"worst 2 % settling {d['worst_settling_2pct_s']} s (thesis {d['thesis_worst_settling_2pct_s']} s), "
+              f"worst 2 % settling {_s(d['worst_settling_2pct_s'])} (thesis {_s(d['thesis_worst_settling_2pct_s'])}), "
               f"worst overshoot {d['worst_overshoot_pct']:.1f} %, requirements {'met' if d['all_met'] else 'NOT met'}")
     print(f"  robust / one-model time: {ratio:.2f}x; load average {load:.1f} on {os.cpu_count()} CPUs")
     print(f"  target < 60 s for the robust design on 2 cores: {'met' if robust['seconds'] < 60 else 'NOT met'}")
