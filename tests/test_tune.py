@@ -212,8 +212,8 @@ def no_work(monkeypatch):
     (["tune", "--robust", "nomodel.json"], "no model"),
     (["tune", "--out", "same.toml", "--json", "same.toml"], "the same file"),
     (["tune", "--out", "exists.toml"], "--force"),
-    (["tune", "--robust", "m.toml", "--out", "m.toml", "--force"], "is the input --robust"),
-    (["tune", "--model", "m.toml", "--json", "m.toml", "--force"], "is the input --model"),
+    (["tune", "--robust", "m.toml", "--out", "m.toml", "--force"], "is an input of this command (--robust)"),
+    (["tune", "--model", "m.toml", "--json", "m.toml", "--force"], "is an input of this command (--model)"),
     (["tune", "--scheduler", "tcp://127.0.0.1:9", "--samples", "0"], "--scheduler"),
 ])
 def test_bad_input_is_one_line_and_exit_2_before_any_work(argv, words, tmp_path, monkeypatch, capsys, no_work, rig):

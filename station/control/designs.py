@@ -419,16 +419,17 @@ def _read_shaper(doc) -> ShaperTimes | None:
     if "shaper" not in data:
         return None
     table = data["shaper"]
+    line = doc.line_of("shaper", None)
+    where = f"{doc.path}: line {line}: [shaper]" if line else f"{doc.path}: [shaper]"
     if not isinstance(table, dict):
-        raise doc.error("shaper", "expected a table with times and amplitudes")
+        raise StationError(f"{where}: expected a table with times and amplitudes", file=doc.path, line=line,
+                           key="shaper")
     unknown = sorted(set(table) - {"times", "amplitudes"})
     if unknown:
         raise doc.error(unknown[0], "unknown field (expected times, amplitudes)", table="shaper")
     for key in ("times", "amplitudes"):
         if key not in table:
             raise doc.error(key, "missing", table="shaper")
-    line = doc.line_of("shaper", None)
-    where = f"{doc.path}: line {line}: [shaper]" if line else f"{doc.path}: [shaper]"
     return check_shaper(table["times"], table["amplitudes"], where)
 
 
