@@ -24,6 +24,7 @@ import pytest
 from station.errors import StationError
 from station.experiment import run_step
 from station.link import LinkLimits
+from station.logged import LoggedRun
 from station.protocol import PROTOCOLS, legacy, v1
 from station.runlog import SKIPPED, read_log
 
@@ -286,9 +287,10 @@ def test_a_link_that_stalls_20_ms_once_is_caught_up_and_the_run_completes(device
     # no byte for 20 ms (ticks 100..108 held back), then ten samples at once: the station logs
     # them all, answers only the newest, and goes on
     for attempt in range(3):  # a busy test machine can hold the station up on top of the stall
-        dev = device(protocol=protocol, theta=lambda k: k // 8, hold=lambda k: 100 <= k < 109)
-        report, path = _run(dev, tmp_path, protocol=protocol, duration=1.0, limits=LinkLimits(timeout=TIMEOUT),
-                            name=f"run{attempt}.tsv")
+        dev = device(protocol=protocol, theta=lambda k: min(k // 4, 50), accel=lambda k: k % 7 - 3,
+                     hold=lambda k: 100 <= k < 109)
+        report, path = _run(dev, tmp_path, protocol=protocol, controller="lead-accel", duration=1.0,
+                            limits=LinkLimits(timeout=TIMEOUT), name=f"run{attempt}.tsv")
         o = report.result.outcome
         if o.reason != "lag":
             break
@@ -303,6 +305,9 @@ def test_a_link_that_stalls_20_ms_once_is_caught_up_and_the_run_completes(device
     if protocol == "v1":
         answered = {seq for seq, _ in dev.commands()}
         assert not answered & set(range(100, 109)) and 109 in answered
+    # replay knows the skipped samples: the controller re-run reproduces every logged command
+    run = LoggedRun.from_path(path)
+    assert run.alignment == 1 and run.max_abs_dv == 0.0
 
 
 @pytest.mark.parametrize("protocol", PROTOCOLS)

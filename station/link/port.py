@@ -70,7 +70,13 @@ def _tty_name(device: str) -> str:
 
 
 def is_pty(device: str) -> bool:
-    """Whether ``device`` is a pseudo-terminal (``/dev/pts/N``; a simulated device, a test)."""
+    """Whether a port is a pseudo-terminal (``/dev/pts/N``: a simulated device, a test).
+
+    Parameters
+    ----------
+    device : str
+        A port path (a symlink is followed) or URL.
+    """
     return os.path.realpath(device).startswith("/dev/pts/")
 
 
