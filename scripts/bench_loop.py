@@ -110,7 +110,8 @@ def main(argv=None) -> int:
                     case = one_run(protocol, args.seconds, lean, Path(tmp), args.max_lag / 1000, f"-{i}")
                     cases.append(case)
                     print(f"  {protocol} {case['loop']} run {i + 1}: {case['reason']} after {case['ticks']} ticks, "
-                          f"skipped {case['skipped']}, max lag {case['max_lag_ms'] or 0:.1f} ms", flush=True)
+                          f"skipped {case['skipped']}, max lag {case['max_lag_ms'] or 0:.1f} ms (the device's own "
+                          f"clock slipped up to {case['device'].get('max_slip_ms', float('nan')):.1f} ms)", flush=True)
     load_after = os.getloadavg()
     print(f"{'protocol':8} {'loop':6} {'ticks':>7} {'p50 us':>8} {'p99 us':>8} {'max us':>8} "
           f"{'late/1000':>9} {'skipped':>7} {'lag ms':>7} {'dropped':>7}  outcome")

@@ -417,6 +417,8 @@ class Session:
             return self._hand(sample)
         self._hold(skipped + 1)
         behind = self._ahead.n + len(self._pending) + self._bytes_waiting() // self.sample_bytes - self._answered - 1
+        if behind * DT > self.max_lag_seen:
+            self.max_lag_seen = behind * DT
         if behind * DT > self.limits.max_lag:
             raise LagError(self._behind(skipped, f"{behind} samples ({1000 * behind * DT:.0f} ms of the device's "
                                                  f"time) to catch up, more than --max-lag "
