@@ -232,8 +232,18 @@ def _compile() -> None:
 
 
 def run_kernel(*args):
-    """The whole run's sample loop, compiled (:func:`station.plant.simulate.simulate` gives its
-    arguments, in :func:`_loop`'s order; returns theta, a, v, theta_d_hat)."""
+    """The whole run's sample loop, compiled on first use.
+
+    Parameters
+    ----------
+    *args
+        :func:`_loop`'s arguments in its order (:func:`station.plant.simulate.simulate`
+        gives them).
+
+    Returns
+    -------
+    theta, a, v, theta_d_hat : numpy.ndarray, shape (N,)
+    """
     _compile()
     return _compiled_loop(*args)
 
