@@ -276,10 +276,14 @@ class Session:
         catch_up = int(self.limits.max_lag / DT + 1e-9)
         if len(window) > self.limits.max_miss + catch_up:
             late = self.late if self.protocol == "v1" else self.held
-            raise LagError(self._behind(k, f"{len(window)} of the last {MISS_WINDOW} ticks ran on a held command, "
-                                           f"more than one catch-up (--max-lag {1000 * self.limits.max_lag:g} ms: "
-                                           f"{catch_up} ticks) and --max-miss {self.limits.max_miss} more "
-                                           f"(skipped {self.skipped}, late {late})"))
+            what = (f"{len(window)} of the last {MISS_WINDOW} ticks ran on a held command, more than one catch-up "
+                    f"(--max-lag {1000 * self.limits.max_lag:g} ms: {catch_up} ticks) and --max-miss "
+                    f"{self.limits.max_miss} more (skipped {self.skipped}, late {late})")
+            if self.late > 2 * (self.skipped + self.late_seen):  # the device saw them late, the station did not
+                raise LagError(f"commands reach {self.url} late: {what} at tick {k}, though the station answered "
+                               f"every sample within {1000 * self.max_lag_seen:.1f} ms: the link or the device "
+                               f"is held up")
+            raise LagError(self._behind(k, what))
 
     def _behind(self, n: int, what: str) -> str:
         """The one line of a "lag" stop at tick n: the bursts and their fix when the link
