@@ -198,3 +198,31 @@ class ScriptedDevice:
     def last_sent(self, count=2):
         """The last ``count`` messages the station sent (v1 messages / legacy command tuples)."""
         return self.received[-count:]
+
+
+class MemoryPort:
+    """An in-memory port for session tests: ``data`` is what has already arrived (all of it),
+    ``written`` every write in order; ``on_write(data)`` may answer (e.g. START with samples)."""
+
+    def __init__(self, on_write=None):
+        self.data = bytearray()
+        self.written: list[bytes] = []
+        self.on_write = on_write
+
+    def write(self, data):
+        self.written.append(bytes(data))
+        if self.on_write is not None:
+            self.data += self.on_write(bytes(data))
+        return len(data)
+
+    def reset_input_buffer(self):
+        pass
+
+    def read(self, size=1):
+        out = bytes(self.data[:size])
+        del self.data[:size]
+        return out
+
+    @property
+    def in_waiting(self):
+        return len(self.data)

@@ -22,34 +22,11 @@ from station.link.port import _ask_low_latency
 from station.progress import ProgressSink
 from station.protocol import legacy, v1
 from station.runlog import SKIPPED
-
-
-class BufferPort:
-    """A port whose input is what the test put there, all of it already arrived."""
-
-    def __init__(self):
-        self.data = bytearray()
-        self.written = []
-
-    def write(self, data):
-        self.written.append(bytes(data))
-        return len(data)
-
-    def reset_input_buffer(self):
-        pass
-
-    def read(self, size=1):
-        out = bytes(self.data[:size])
-        del self.data[:size]
-        return out
-
-    @property
-    def in_waiting(self):
-        return len(self.data)
+from tests.scripted_device import MemoryPort
 
 
 def _v1(limits=None, lockstep=False):
-    port = BufferPort()
+    port = MemoryPort()
     session = V1Session(port, "fake://", limits or LinkLimits(timeout=0.05, check_rate=False))
     session.start(0)
     session.lockstep = lockstep
@@ -161,7 +138,7 @@ def test_a_lockstep_device_holds_nothing():
 
 
 def test_legacy_catch_up_counts_held_ticks_as_late():
-    port = BufferPort()
+    port = MemoryPort()
     session = LegacySession(port, "fake://", LinkLimits(timeout=0.05, check_rate=False))
     session._reset_run()
     port.data += b"".join(legacy.tick_bytes(legacy.Tick(k, k, 0)) for k in range(6))

@@ -27,6 +27,7 @@ from station.link import LinkLimits
 from station.logged import LoggedRun
 from station.protocol import PROTOCOLS, legacy, v1
 from station.runlog import SKIPPED, read_log
+from tests.scripted_device import MemoryPort
 
 TIMEOUT = 0.1
 SLACK = 0.1
@@ -178,26 +179,7 @@ def test_v1_each_sample_twice_is_counted_as_duplicates_and_stops(device, tmp_pat
 def test_v1_sequence_arithmetic_is_modular_across_the_wrap():
     from station.link import V1Session
 
-    class Port:
-        def __init__(self):
-            self.data = bytearray()
-
-        def write(self, data):
-            return len(data)
-
-        def reset_input_buffer(self):
-            pass
-
-        def read(self, size=1):
-            out = bytes(self.data[:size])
-            del self.data[:size]
-            return out
-
-        @property
-        def in_waiting(self):
-            return len(self.data)
-
-    port = Port()
+    port = MemoryPort()
     session = V1Session(port, "fake://", LinkLimits(timeout=0.05, check_rate=False))
     session.start(0)
     port.data += v1.encode(v1.Sample(0, 0, 0, 0, 0))
