@@ -4,7 +4,8 @@
 Runs ``station step --json`` (the default lead step on the built-in simulated rig, or
 ``--model M``) as a new user would, each in a fresh process, and reads the time from the
 process's start to the first sample (``timing.first_tick_s``) and the whole command's wall
-time. Cold: empty caches (a fresh ``XDG_CACHE_HOME`` for the modal form and a fresh
+time, and the CPU time the process used until then (what the start-up costs, whatever
+else the machine runs). Cold: empty caches (a fresh ``XDG_CACHE_HOME`` for the modal form and a fresh
 ``NUMBA_CACHE_DIR`` for compiled kernels, so nothing is reused); warm: the same caches
 again after one run filled them. Python's own bytecode caches are warm in both (they come
 with any install).
@@ -39,7 +40,8 @@ def one(env: dict, workdir: Path, model: str | None, i: int) -> dict:
     if proc.returncode != 0:
         raise SystemExit(f"station step failed ({proc.returncode}): {proc.stderr.strip()}")
     timing = json.loads(out.read_text())["timing"]
-    return {"first_tick_s": timing["first_tick_s"], "setup_s": timing["setup_s"], "wall_s": wall}
+    return {"first_tick_s": timing["first_tick_s"], "cpu_s": timing["first_tick_cpu_s"], "setup_s": timing["setup_s"],
+            "wall_s": wall}
 
 
 def main(argv=None) -> int:
@@ -61,13 +63,15 @@ def main(argv=None) -> int:
             results["warm"].append(one(env, work, args.model, 200 + i))
     load_after = os.getloadavg()
     print(f"station step{' --model ' + args.model if args.model else ''}: {args.runs} runs each")
-    print(f"{'start':6} {'first tick s (median, min..max)':>32} {'setup s':>9} {'wall s':>8}")
+    print(f"{'start':6} {'first tick s (median, min..max)':>32} {'its CPU s':>10} {'setup s':>8} {'wall s':>7}")
     for kind, runs in results.items():
         first = [r["first_tick_s"] for r in runs]
         print(f"{kind:6} {statistics.median(first):14.2f} ({min(first):.2f}..{max(first):.2f})"
-              f"{statistics.median(r['setup_s'] for r in runs):20.2f} {statistics.median(r['wall_s'] for r in runs):8.2f}")
+              f"{statistics.median(r['cpu_s'] for r in runs):21.2f} {statistics.median(r['setup_s'] for r in runs):8.2f}"
+              f" {statistics.median(r['wall_s'] for r in runs):7.2f}")
     warm = statistics.median(r["first_tick_s"] for r in results["warm"])
-    print(f"warm first tick {warm:.2f} s = {warm / 1.0:.2f} x target 1 s; "
+    cpu = statistics.median(r["cpu_s"] for r in results["warm"])
+    print(f"warm first tick {warm:.2f} s = {warm / 1.0:.2f} x target 1 s (CPU time to it {cpu:.2f} s); "
           f"load average {load_before[0]:.1f} before, {load_after[0]:.1f} after ({os.cpu_count()} CPUs)")
     if args.json:
         args.json.write_text(json.dumps({"model": args.model, **results, "load_before": load_before,

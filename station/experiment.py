@@ -436,6 +436,7 @@ def run_step(port: str = DEFAULT_PORT, protocol: str = "v1", controller: str = D
             model_folder.cleanup()
         info = session.hello()
         accel_zero = session.zero_accel()
+        link = getattr(session.port, "station_info", None)
         meta = {
             "station_version": __version__,
             "kind": "step",
@@ -452,7 +453,7 @@ def run_step(port: str = DEFAULT_PORT, protocol: str = "v1", controller: str = D
             "limit": limit,
             "limits": {"timeout": limits.timeout, "max_lag_s": limits.max_lag, "max_miss": limits.max_miss,
                        "max_step": limits.max_step},
-            "link": _link_meta(session.port),
+            "link": None if link is None else link.to_json(),  # the adapter and its latency timer
             "start_time": _dt.datetime.now(_dt.UTC).isoformat(),
             "start_unix": time.time(),
         }
@@ -476,7 +477,8 @@ def run_step(port: str = DEFAULT_PORT, protocol: str = "v1", controller: str = D
             writer.close(None if result is None else result.outcome.to_json())
             if bar is not None:
                 bar.close()
-    _startup_times(result, called_at)
+    if result is not None:
+        result.extra["setup_s"] = result.extra["first_sample_at"] - called_at
     # step metrics compare θ with the step in encoder counts: closed-loop steps only
     closed_step = reference == "step" and is_closed_loop(ctrl) and result.ok
     metrics, info = _metrics_of(log_path, amplitude, limit, step_tick * dt) if closed_step else (None, None)
@@ -510,27 +512,6 @@ def start_line(session, n_ticks: int, dt: float, controller) -> str:
     where = info.summary() if info is not None else session.url
     return (f"run: {n_ticks} ticks ({n_ticks * dt:g} s), {log_tag(controller)}, protocol {session.protocol} "
             f"on {where}")
-
-
-def _link_meta(port) -> dict | None:
-    """The port's adapter and latency timer for the log header (:class:`station.link.PortInfo`)."""
-    info = getattr(port, "station_info", None)
-    if info is None:
-        return None
-    return {"adapter": info.adapter, "hwid": info.hwid,
-            "latency_timer_ms": None if info.latency is None else info.latency[0], "low_latency": info.low_latency}
-
-
-def _startup_times(result: RunResult | None, called_at: float) -> None:
-    """Add ``first_tick_s`` (process start to the first sample) and ``setup_s`` (this call to it)."""
-    if result is None:
-        return
-    from station.realtime import process_age
-
-    first = result.extra.get("first_sample_at", float("nan"))
-    now, age = time.perf_counter(), process_age()
-    result.extra["setup_s"] = first - called_at
-    result.extra["first_tick_s"] = float("nan") if age is None else age - (now - first)
 
 
 def _write_figure(report: StepReport) -> Path | None:

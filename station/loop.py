@@ -41,7 +41,7 @@ from station import DT
 from station.control.contract import ControllerFault, guard_command
 from station.link import DeviceStopped, LinkFault, Session
 from station.outcome import Outcome
-from station.realtime import RealtimePriority
+from station.realtime import RealtimePriority, process_age
 from station.runlog import SKIPPED, LogRow
 from station.signals import StopSignals
 
@@ -70,6 +70,9 @@ class TimingSummary:
         (:meth:`station.link.Session._command`; NaN when unknown).
     first_tick_s : float
         Start-up: from the process's start to the first sample, s (NaN when unknown).
+    first_tick_cpu_s : float
+        The CPU time the process had used when the first sample came, s (what the start-up
+        costs, whatever else the machine runs).
     setup_s : float
         From the run's call (:func:`station.experiment.run_step`) to the first sample, s.
     """
@@ -82,6 +85,7 @@ class TimingSummary:
     skipped: int = 0
     max_lag_ms: float = NAN
     first_tick_s: float = NAN
+    first_tick_cpu_s: float = NAN
     setup_s: float = NAN
 
     def to_json(self) -> dict:
@@ -91,7 +95,7 @@ class TimingSummary:
         return {"p50_us": num(self.p50_us), "p99_us": num(self.p99_us), "max_us": num(self.max_us),
                 "late": int(self.late), "dropped": int(self.dropped), "skipped": int(self.skipped),
                 "max_lag_ms": num(self.max_lag_ms, 2), "first_tick_s": num(self.first_tick_s, 3),
-                "setup_s": num(self.setup_s, 3)}
+                "first_tick_cpu_s": num(self.first_tick_cpu_s, 3), "setup_s": num(self.setup_s, 3)}
 
 
 @dataclass
@@ -110,7 +114,9 @@ class RunResult:
     extra : dict
         ``priority`` (the scheduling level reached), ``max_lag_ms`` (the most the station
         fell behind, ms), ``first_sample_at`` (``time.perf_counter()`` when the first sample
-        came, NaN when none), and what the caller adds (``first_tick_s``, ``setup_s``).
+        came, NaN when none), ``first_tick_s`` (from the process's start to it, s),
+        ``first_tick_cpu_s`` (the CPU time the process had used by then, s: the start-up's
+        cost on a busy machine), and what the caller adds (``setup_s``).
     """
 
     outcome: Outcome
@@ -138,7 +144,8 @@ class RunResult:
             p50 = p99 = mx = NAN
         x = self.extra
         return TimingSummary(p50, p99, mx, self.late, self.dropped, self.outcome.skipped,
-                             x.get("max_lag_ms", NAN), x.get("first_tick_s", NAN), x.get("setup_s", NAN))
+                             x.get("max_lag_ms", NAN), x.get("first_tick_s", NAN), x.get("first_tick_cpu_s", NAN),
+                             x.get("setup_s", NAN))
 
 
 class SoftLimitError(Exception):
@@ -218,7 +225,7 @@ def run_loop(session: Session, controller, reference: np.ndarray, writer, soft_l
     step, append = controller.step, writer.append
     lim, neg = float(limit), -float(limit)
     stop_ok = True
-    first_at = NAN
+    first_at = first_cpu = NAN
     v_k, dhat_k, lat_k = 0.0, u[0], NAN  # the command acting in the next tick to log (tick 0 outputs 0)
     logger.info("run: %d ticks, clamp ±%g, soft limit ±%g, lean %s", n_ticks, lim, soft_limit, lean)
     try:
@@ -231,7 +238,7 @@ def run_loop(session: Session, controller, reference: np.ndarray, writer, soft_l
             session.start(n_ticks)
             last = n_ticks - 1
             sample = read_sample()
-            first_at = time.perf_counter()
+            first_at, first_cpu = time.perf_counter(), time.process_time()
             while True:
                 # catch up: every sample is logged; a command only from the newest one waiting
                 while True:
@@ -338,8 +345,11 @@ def run_loop(session: Session, controller, reference: np.ndarray, writer, soft_l
         counters["watchdog_trips"] = max(counters["watchdog_trips"], stopped.get("watchdog_trips", 0))
     outcome = Outcome(reason, message, ticks=ticks, command_zero_sent=stop_ok, **counters)
     logger.log(logging.INFO if outcome.ok else logging.WARNING, "run ended: %s", outcome)
+    age = process_age()  # the start-up: from the process's start to the first sample
+    first_tick = NAN if age is None else age - (time.perf_counter() - first_at)
     return RunResult(outcome, latencies, stopped, {"priority": level, "max_lag_ms": 1000.0 * session.max_lag_seen,
-                                                    "first_sample_at": first_at})
+                                                    "first_sample_at": first_at, "first_tick_s": first_tick,
+                                                    "first_tick_cpu_s": first_cpu})
 
 
 def _quietly(fn):

@@ -55,6 +55,11 @@ class PortInfo(NamedTuple):
     latency: tuple[int, str] | None
     low_latency: bool | None = None
 
+    def to_json(self) -> dict:
+        """The log header's ``link``: adapter, hwid, latency_timer_ms, low_latency."""
+        return {"adapter": self.adapter, "hwid": self.hwid,
+                "latency_timer_ms": None if self.latency is None else self.latency[0], "low_latency": self.low_latency}
+
     def summary(self) -> str:
         """One phrase: ``/dev/ttyUSB0 (FT232R USB UART, latency timer 1 ms)``."""
         parts = [self.adapter] if self.adapter else []
