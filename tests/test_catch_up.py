@@ -74,10 +74,10 @@ def test_late_bits_of_skipped_ticks_are_not_counted_twice():
     assert session.late == 9 and session.skipped == 9 and session.held == 9
 
 
-@pytest.mark.parametrize("waiting, stops", [(10, False), (11, True), (30, True)])
+@pytest.mark.parametrize("waiting, stops", [(11, False), (12, True), (30, True)])
 def test_behind_more_than_max_lag_stops_before_any_is_answered(waiting, stops):
-    # the lag: 2 ms of the device's time per sample skipped since the last answer, plus the
-    # time to the command; --max-lag 20 ms lets 9 be skipped, not 10 (or more: seen at once)
+    # the lag: 2 ms of the device's time per sample skipped since the last answer (or come
+    # while computing); --max-lag 20 ms lets 10 be skipped, not 11 (or more: seen at once)
     port, session = _v1()
     _samples(port, [0])
     _answer_newest(session)
@@ -124,10 +124,23 @@ def test_a_command_computed_too_long_after_its_sample_is_not_written():
     port, session = _v1()
     _samples(port, [0])
     n = session.read_sample().n
-    time.sleep(0.025)  # a controller that took 25 ms: more than --max-lag 20 ms behind
-    with pytest.raises(LagError, match="would go out .* behind the device"):
+    _samples(port, range(1, 12))  # a controller that took 22 ms: 11 samples came meanwhile
+    with pytest.raises(LagError, match="would go out 22 ms of the device's time behind"):
         session.send_command(n, 5.0)
     assert _commands(port) == []
+
+
+def test_a_stall_of_the_station_with_a_device_that_waits_is_no_lag():
+    # legacy cannot declare lockstep: a simulated rig that waits for each command sends
+    # nothing while the station is held up, so the station is not behind, however long
+    port = MemoryPort()
+    session = LegacySession(port, "fake://", LinkLimits(timeout=0.05, check_rate=False))
+    session._reset_run()
+    port.data += legacy.tick_bytes(legacy.Tick(0, 0, 0))
+    n = session.read_sample().n
+    time.sleep(0.05)
+    session.send_command(n, 5.0)
+    assert session.max_lag_seen == 0.0 and session.held == 0
 
 
 def test_a_lockstep_device_holds_nothing():

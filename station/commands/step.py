@@ -66,7 +66,7 @@ def configure(parser) -> None:
                         help="stop safely when |θ| exceeds this (default 2048 = two revolutions)")
     parser.add_argument("--max-lag", type=number(0, 1000, unit="ms"), default=1000 * LinkLimits.max_lag,
                         metavar="MS", help="how far the station may fall behind the device and catch up (skipped "
-                        "samples × 2 ms + the time to its command); more stops the run (reason lag). A command is "
+                        "samples and those that arrive while it computes, × 2 ms); more stops the run (reason lag). A command is "
                         "only ever computed from the newest sample (default 20 ms, the v1 watchdog's 10 ticks)")
     parser.add_argument("--max-miss", type=number(0, 99, integer=True), default=LinkLimits.max_miss, metavar="TICKS",
                         help="stop when more of the last 100 ticks than this were dropped, stale or duplicated "

@@ -32,9 +32,9 @@ class LinkLimits:
         s: the next valid, new sample must arrive within this of the last one (of
         START for the first), whatever else arrives in between; else reason "timeout".
     max_lag : float
-        s: how far the station may fall behind the device and still catch up: the
-        device's time of the samples it skips in a row (each 2 ms) plus its own time from
-        taking the newest sample to writing its command. Above it, reason "lag". Default
+        s: how far the station may fall behind the device and still catch up, in the
+        device's time: 2 ms for each sample it skips in a row or that arrives while it
+        computes the command. Above it, reason "lag". Default
         20 ms: the v1 device's watchdog (10 ticks) would zero the output from the 10th
         missed tick on; at the motor's top speed (about 2 encoder counts per ms at ±200
         DAC counts) a command held that long moves the hub at most ~40 counts from where

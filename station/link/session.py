@@ -122,7 +122,6 @@ class Session:
         self.max_lag_seen = 0.0
         self._n = -1  # tick number of the last sample accepted
         self._answered = -1  # tick number of the last sample answered (its command written)
-        self._t_got = 0.0  # perf_counter when the sample in hand went to the loop
         self._ahead: Sample | None = None  # a newer sample taken by poll_sample, not yet handed over
         self._n_handed = -1  # tick number of the sample in the loop's hand
         self._stop_seen: list = []  # messages read while stopping (v1: until STOPPED)
@@ -339,7 +338,6 @@ class Session:
         raise NotImplementedError
 
     def _hand(self, sample: Sample) -> Sample:
-        self._t_got = time.perf_counter()
         self._n_handed = sample.n
         return sample
 
@@ -433,22 +431,25 @@ class Session:
     def _command(self, n: int, data: bytes, *what) -> None:
         """Write the command answering sample n (``data``, ``what`` as :meth:`_send`).
 
-        First the lag: the device's time of the samples skipped since the last answer
-        (2 ms each) plus the time since sample n went to the loop; above ``max_lag`` a
-        :class:`LagError` (nothing written). A sample already waiting makes this command
-        late (``late_seen``; its tick runs on the held command). The rate check's clock
-        restarts after the write.
+        First the lag, in the device's time (its samples, 2 ms each: the OS does not say
+        when a byte arrived, and a lockstep device that waits for us is never behind): the
+        samples skipped since the last answer and those that arrived while this command
+        was computed; above ``max_lag`` a :class:`LagError` (nothing written). A sample
+        already waiting makes this command late (``late_seen``; its tick runs on the held
+        command). The rate check's clock restarts after the write.
         """
-        now = time.perf_counter()
-        lag = (n - self._answered - 1) * DT + (now - self._t_got)
-        if lag > self.max_lag_seen:
-            self.max_lag_seen = lag
-        if lag > self.limits.max_lag and not self.lockstep:
-            raise LagError(self._behind(n, f"the command for it would go out {1000 * lag:.1f} ms behind the "
-                                           f"device, more than --max-lag {1000 * self.limits.max_lag:g} ms"))
-        if not self.lockstep and self._samples_waiting():
-            self.late_seen += 1  # the next sample is already here: this command is late
-            self._hold(n + 1)
+        if not self.lockstep:
+            waiting = self._samples_waiting()
+            lag = (n - self._answered - 1 + waiting) * DT
+            if lag > self.max_lag_seen:
+                self.max_lag_seen = lag
+            if lag > self.limits.max_lag:
+                raise LagError(self._behind(n, f"the command for it would go out {1000 * lag:.0f} ms of the "
+                                               f"device's time behind, more than --max-lag "
+                                               f"{1000 * self.limits.max_lag:g} ms"))
+            if waiting:
+                self.late_seen += 1  # the next sample is already here: this command is late
+                self._hold(n + 1)
         self._send(data, *what)
         self._answered = n
         self._t_ready = time.perf_counter()
