@@ -375,7 +375,7 @@ def run_step(port: str = DEFAULT_PORT, protocol: str = "v1", controller: str = D
              lean: bool = True, limits: LinkLimits | None = None, force: bool = False,
              figure: bool = True, progress: bool = False, out_dir: str | Path = "runs",
              model=None, n_elements: int | None = None, seed: int | None = None,
-             step_tick: int | None = None) -> StepReport:
+             step_tick: int | None = None, announce=None) -> StepReport:
     """Run a step test on a device and log it.
 
     Parameters
@@ -451,6 +451,10 @@ def run_step(port: str = DEFAULT_PORT, protocol: str = "v1", controller: str = D
         ``sim://?seed=``; ``station step --elements``, ``--seed``).
     step_tick : int, optional
         The step's tick instead of ``step_time`` (older scripts; not both).
+    announce : callable, optional
+        Gets the run's start line once the device answered, before the run (the port, its
+        adapter and latency timer, the protocol, ticks and controller: :func:`start_line`);
+        ``station step`` prints it.
 
     Returns
     -------
@@ -466,6 +470,7 @@ def run_step(port: str = DEFAULT_PORT, protocol: str = "v1", controller: str = D
     station.signals.StopSignal
         SIGINT / SIGTERM before the run started (nothing was started then).
     """
+    called_at = time.perf_counter()
     amplitude = DEFAULT_AMPLITUDE if amplitude is None else amplitude
     if step_tick is not None and step_time is not None:
         raise StationError("step_time and step_tick: give one of them")
@@ -493,6 +498,7 @@ def run_step(port: str = DEFAULT_PORT, protocol: str = "v1", controller: str = D
             model_folder.cleanup()
         info = session.hello()
         accel_zero = session.zero_accel()
+        link = getattr(session.port, "station_info", None)
         meta = {
             "station_version": __version__,
             "kind": "step",
@@ -507,8 +513,9 @@ def run_step(port: str = DEFAULT_PORT, protocol: str = "v1", controller: str = D
             "dt": dt,
             "soft_limit": soft_limit,
             "limit": limit,
-            "limits": {"timeout": limits.timeout, "max_lag": limits.max_lag, "max_miss": limits.max_miss,
+            "limits": {"timeout": limits.timeout, "max_lag_s": limits.max_lag, "max_miss": limits.max_miss,
                        "max_step": limits.max_step},
+            "link": None if link is None else link.to_json(),  # the adapter and its latency timer
             "start_time": _dt.datetime.now(_dt.UTC).isoformat(),
             "start_unix": time.time(),
         }
@@ -525,6 +532,8 @@ def run_step(port: str = DEFAULT_PORT, protocol: str = "v1", controller: str = D
             if log_path.is_file():
                 log_path.unlink()
             raise
+        if announce is not None:
+            announce(start_line(session, u.size, dt, ctrl))
         result = None
         try:
             result = run_loop(session, ctrl, u, writer, soft_limit=soft_limit, dt=dt, lean=lean,
@@ -535,6 +544,8 @@ def run_step(port: str = DEFAULT_PORT, protocol: str = "v1", controller: str = D
             writer.close(None if result is None else result.outcome.to_json())
             if bar is not None:
                 bar.close()
+    if result is not None:
+        result.extra["setup_s"] = result.extra["first_sample_at"] - called_at
     # step metrics compare θ with the step in encoder counts: closed-loop steps only
     closed_step = reference == "step" and is_closed_loop(ctrl) and result.ok
     metrics, info = _metrics_of(log_path, amplitude, limit, step_tick * dt) if closed_step else (None, None)
@@ -542,6 +553,32 @@ def run_step(port: str = DEFAULT_PORT, protocol: str = "v1", controller: str = D
     if figure:  # after command 0, STOP and the log's close: a figure never delays a stop
         report.figure_path = _write_figure(report)
     return report
+
+
+def start_line(session, n_ticks: int, dt: float, controller) -> str:
+    """The run's first line: what runs on which port, through which adapter and latency timer.
+
+    Parameters
+    ----------
+    session : station.link.Session
+        The open session (its port's ``station_info``, :class:`station.link.PortInfo`).
+    n_ticks : int
+        Ticks of the run.
+    dt : float
+        Sample time, s.
+    controller : controller object
+        Its ``spec`` names the kind.
+
+    Returns
+    -------
+    str
+        E.g. ``run: 1000 ticks (2 s), lead, protocol v1 on /dev/ttyUSB0 (FT232R USB UART,
+        latency timer 1 ms)``.
+    """
+    info = getattr(session.port, "station_info", None)
+    where = info.summary() if info is not None else session.url
+    return (f"run: {n_ticks} ticks ({n_ticks * dt:g} s), {log_tag(controller)}, protocol {session.protocol} "
+            f"on {where}")
 
 
 def _write_figure(report: StepReport) -> Path | None:
@@ -593,8 +630,11 @@ def format_report(report: StepReport) -> str:
     if report.info is not None:
         lines.append(report.info.summary())
     lines.append(f"latency p50 {tm.p50_us:.0f} us  p99 {tm.p99_us:.0f} us  max {tm.max_us:.0f} us   "
-                 f"late {tm.late}  dropped {tm.dropped}  stale {o.stale}  duplicates {o.duplicates}  "
-                 f"rx errors {o.rx_errors}")
+                 f"late {tm.late}  skipped {o.skipped}  dropped {tm.dropped}  stale {o.stale}  "
+                 f"duplicates {o.duplicates}  rx errors {o.rx_errors}")
+    if o.skipped:
+        lines.append(f"the station was held up: {o.skipped} sample(s) logged but not answered (skipped; the device "
+                     f"held its output), at most {tm.max_lag_ms:.1f} ms behind")
     if o.watchdog_trips:
         lines.append(f"the device's watchdog tripped {o.watchdog_trips} time(s): commands were missing")
     lines.append(f"log: {report.log_path}")
