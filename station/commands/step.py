@@ -7,6 +7,7 @@ from pathlib import Path
 
 from station import DT
 from station import experiment as ex
+from station import runsetup
 from station.errors import StationError
 from station.inputs import exists
 from station.commands.options import (add_force_option, add_model_options, add_protocol_option, add_report_options,
@@ -110,7 +111,7 @@ def check_args(args) -> None:
     if getattr(args, "_config_error", None):
         raise StationError(args._config_error)
     controller = str(args.controller)
-    builtin_ref = args.reference in ex.REFERENCES
+    builtin_ref = args.reference in runsetup.REFERENCES
     port = str(args.port)
     if "://" not in port and not exists(port):
         raise StationError(f"--port {port}: no such device; `station ports` lists this machine's serial ports "
@@ -132,7 +133,7 @@ def check_args(args) -> None:
     if args.step_time is None:
         args.step_time = ex.DEFAULT_STEP_TICK * DT
     if builtin_ref and args.reference != "swept-sine":
-        duration = ex.DEFAULT_DURATION if args.duration is None else args.duration
+        duration = runsetup.DEFAULT_DURATION if args.duration is None else args.duration
         if args.step_time >= duration:
             raise StationError(f"--step-time {args.step_time:g} s: the step must start before the run ends "
                                f"({duration:g} s)")
@@ -171,7 +172,7 @@ def inputs(args) -> list[Input]:
     args : argparse.Namespace
         ``--controller``, ``--reference``, ``--model`` and the settings file in use.
     """
-    return [Input("--controller", args.controller), Input("--reference", ex.reference_path(args.reference)),
+    return [Input("--controller", args.controller), Input("--reference", runsetup.reference_path(args.reference)),
             *model_inputs(args), Input("station.toml", getattr(args, "_config", None))]
 
 
@@ -230,7 +231,7 @@ def run(args) -> int:
         :func:`check_args`.
     """
     check_args(args)
-    chosen = ex.choose_controller(args.controller, args.kp, args.limit)  # before anything starts, once
+    chosen = runsetup.choose_controller(args.controller, args.kp, args.limit)  # before anything starts, once
     if chosen.note is not None:
         warn(chosen.note)
     if getattr(args, "_config", None):
