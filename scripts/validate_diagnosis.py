@@ -50,7 +50,13 @@ KNOWN = (*MAGNITUDES, "two", *NEW_CASES, "clean")
 
 
 def judged(case: str) -> tuple[str, ...]:
-    """The effects of a case that must be named and whose values are judged."""
+    """The effects of a case that must be named and whose values are judged.
+
+    Parameters
+    ----------
+    case : str
+        "clean", "two", an effect, or effects joined by "+" (tests/blind/cases.CASES).
+    """
     if case == "clean":
         return ()
     if case == "two":

@@ -181,9 +181,8 @@ def test_object_without_step_and_reset_is_a_type_error(nominal):
         simulate(DiscretePlant(), lambda u, th, a: (u, u), np.zeros(10))
 
 
-def test_model_plant_steps_like_simulate(nominal):
-    model = nominal.with_effects({"coulomb_friction": 6.0, "backlash": 4.0, "saturation": 150.0, "deadzone": 3.0,
-                                  "delay": 1.0, "accel_gain": 0.8})
+def _assert_plant_steps_like_simulate(model):
+    """ModelPlant stepped tick by tick gives simulate()'s open-loop θ and a exactly."""
     v = np.round(_pulses())
     run = _open(model, v)
     plant = model.plant()
@@ -192,6 +191,12 @@ def test_model_plant_steps_like_simulate(nominal):
         rows.append(plant.outputs())
         plant.advance(x)
     np.testing.assert_array_equal(np.array(rows), np.column_stack([run["theta"], run["a"]]))
+
+
+def test_model_plant_steps_like_simulate(nominal):
+    _assert_plant_steps_like_simulate(nominal.with_effects({"coulomb_friction": 6.0, "backlash": 4.0,
+                                                            "saturation": 150.0, "deadzone": 3.0, "delay": 1.0,
+                                                            "accel_gain": 0.8}))
 
 
 # --- breakaway friction, viscous friction, amplifier offset (issue 17) -------------------
@@ -303,15 +308,7 @@ NEW_EFFECTS = {"static_friction": 12.0, "coulomb_friction": 5.0, "stribeck_speed
 
 
 def test_model_plant_steps_like_simulate_with_the_new_effects(nominal):
-    model = nominal.with_effects(NEW_EFFECTS)
-    v = np.round(_pulses())
-    run = _open(model, v)
-    plant = model.plant()
-    rows = []
-    for x in v:
-        rows.append(plant.outputs())
-        plant.advance(x)
-    np.testing.assert_array_equal(np.array(rows), np.column_stack([run["theta"], run["a"]]))
+    _assert_plant_steps_like_simulate(nominal.with_effects(NEW_EFFECTS))
     # the delay line holds what the amplifier made of the device's 0 before the run: the offset
     plant = nominal.with_effects({"amp_offset": -3.0, "delay": 2.0}).plant()
     plant.advance(100.0)
