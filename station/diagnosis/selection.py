@@ -58,6 +58,11 @@ EXCESS = Axis("static_friction-coulomb_friction", 0.0,
 """The breakaway excess v_s - v_c, DAC counts: static_friction's second axis beside
 coulomb_friction's (module docstring)."""
 
+SLIDING_STARTS = (1.0, 0.7, 0.5)
+"""The sliding levels, as fractions of the start's coulomb_friction, a breakaway excess is
+bracketed at: a Coulomb friction fitted alone lands between v_c and v_s (on the rig's
+four thesis logs 16 counts, where breakaway lets it fall to 6-8: issue 17)."""
+
 ZOOM = 0.5
 """A breakaway excess e is fitted again on a grid over (1 ± ZOOM)·e: where the P loop's
 motor sticks depends on v_s in steps, and the cost's valley at the right v_s is a few
@@ -227,7 +232,10 @@ def fit_set(ev: Evaluator, axes: Sequence[Axis], runs: Sequence[int], start: Map
         sliding = [a for a in axes if a.name == "coulomb_friction"]
         fixed = {a.name: start[a.name] for a in axes if a.name in start}
         start.update(fit(lambda vals: ev.cost(vals, runs), sliding, fixed=fixed).values)
-    res = fit(lambda vals: ev.cost(_as_effects(vals), runs), axes, start=_as_coords(start))
+    coords = _as_coords(start)
+    if EXCESS.name in names and EXCESS.name not in coords:
+        coords["coulomb_friction"] = _sliding_start(ev, axes, runs, coords)
+    res = fit(lambda vals: ev.cost(_as_effects(vals), runs), axes, start=coords)
     if EXCESS.name in names:  # once more on a finer excess grid around the best (stick-slip's narrow valleys)
         e = res.values[EXCESS.name]
         zoom = Axis(EXCESS.name, max(EXCESS.lower, (1 - ZOOM) * e), min(EXCESS.upper, (1 + ZOOM) * e), "linear")
@@ -237,6 +245,16 @@ def fit_set(ev: Evaluator, axes: Sequence[Axis], runs: Sequence[int], start: Map
             if fine.cost < res.cost:
                 res = fine
     return _as_effects(res.values)
+
+
+def _sliding_start(ev: Evaluator, axes: Sequence[Axis], runs: Sequence[int], coords: Mapping[str, float]) -> float:
+    """The sliding level a breakaway excess is bracketed at: the start's, or a fraction of it
+    (:data:`SLIDING_STARTS`), whichever reaches the lowest cost on the excess grid."""
+    base = {a.name: coords[a.name] for a in axes if a.name in coords}
+    v_c = base["coulomb_friction"]
+    best = min((ev.cost(_as_effects({**base, "coulomb_friction": f * v_c, EXCESS.name: float(e)}), runs), f)
+               for f in SLIDING_STARTS for e in EXCESS.grid())
+    return best[1] * v_c
 
 
 def trial(ev: Evaluator, folds: Sequence[Fold], names: tuple, axes: Mapping[str, Axis],
@@ -389,6 +407,8 @@ def _joint_trials(search: Search, names: Sequence[str], accepted: list[str], cur
     open_ = [n for n in names if n not in accepted and n not in held
              and (not full or NESTED.get(n) in accepted)]
     pool = screen(ev, search.axes, open_, fixed, search.fit_runs)
+    # an upgrade in place is always tried: the screen holds the sliding level where it is
+    pool += [n for n in open_ if NESTED.get(n) in accepted and n not in pool]
     search.say(f"step {step + 1}: screening beside {' + '.join(accepted)} on all fit runs: {', '.join(pool)}")
     with ThreadPoolExecutor(search.workers) as ex:
         futures = {n: ex.submit(trial, ev, search.folds, _set_with(accepted, n), search.axes, current.fold_values)
