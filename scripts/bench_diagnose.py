@@ -11,9 +11,17 @@ diagnose, ``Diagnosis.simulations``) and simulations per second.
 
 Target (issue 8): under 60 s on a 2-core machine.
 
+With ``--identify`` it then times ``station identify`` (:func:`station.diagnosis.identify.identify`)
+on the lockstep simulated rig serving a model (default the built-in ``rig``: the thesis's four
+experiments, the diagnoses, the designed experiments): seconds in total and per phase (running
+experiments, diagnosing, designing), experiments run and used, diagnoses, and what it found.
+There is no previous release of ``identify`` to print beside it.
+
 Usage: ``python scripts/bench_diagnose.py [--rig DIR] [--blind coulomb_friction=10]
-[--workers N] [--json FILE]``; the JSON is ``{"seconds", "cpu_seconds", "simulations",
-"simulations_per_s", "cause", "causes", "gain_pct", "runs", "workers"}``.
+[--workers N] [--json FILE] [--identify [MODEL]] [--budget N]``; the JSON is ``{"seconds",
+"cpu_seconds", "simulations", "simulations_per_s", "cause", "causes", "gain_pct", "runs",
+"workers"}``, plus ``"identify": {"model", "seconds", "cpu_seconds", "timings_s", "experiments", "used",
+"diagnoses", "stopped", "causes", "effects"}`` with ``--identify``.
 """
 
 from __future__ import annotations
@@ -43,6 +51,9 @@ def main(argv: list[str] | None = None) -> int:
                         help="diagnose a generated hidden-effect case instead ('none' for a clean one)")
     parser.add_argument("--workers", type=int, default=None, help="threads fitting candidates at once (default 1)")
     parser.add_argument("--json", type=Path, default=None, help="write the numbers as JSON")
+    parser.add_argument("--identify", nargs="?", const="rig", default=None, metavar="MODEL",
+                        help="also time station identify on the lockstep simulated rig serving MODEL (default rig)")
+    parser.add_argument("--budget", type=int, default=8, help="identify's budget of designed experiments (default 8)")
     args = parser.parse_args(argv)
 
     from station.diagnosis import diagnose
@@ -76,11 +87,34 @@ def main(argv: list[str] | None = None) -> int:
           f"load average {os.getloadavg()[0]:.1f})")
     print(f"  cause {d.cause} (accepted: {', '.join(d.causes) or 'none'}), θ RMS gain {d.gain_pct:.1f} %")
     print(f"  target < 60 s on 2 cores: {'met' if seconds < 60 else 'NOT met'}")
+    doc = {"seconds": seconds, "cpu_seconds": cpu, "simulations": d.simulations, "simulations_per_s": rate,
+           "cause": d.cause, "causes": d.causes, "gain_pct": d.gain_pct, "runs": runs, "workers": args.workers}
+    if args.identify is not None:
+        doc["identify"] = bench_identify(args.identify, args.budget, tmp / "identify")
     if args.json is not None:
-        args.json.write_text(json.dumps({"seconds": seconds, "cpu_seconds": cpu, "simulations": d.simulations, "simulations_per_s": rate,
-                                         "cause": d.cause, "causes": d.causes, "gain_pct": d.gain_pct,
-                                         "runs": runs, "workers": args.workers}, indent=1))
+        args.json.write_text(json.dumps(doc, indent=1))
     return 0
+
+
+def bench_identify(model: str, budget: int, out_dir: Path) -> dict:
+    """Time station identify on ``sim://?model=MODEL`` (lockstep) and print the numbers."""
+    from station.diagnosis.identify import identify
+
+    t, cpu = time.perf_counter(), time.process_time()
+    ident = identify(port=f"sim://?model={model}", budget=budget, out_dir=out_dir)
+    seconds, cpu = time.perf_counter() - t, time.process_time() - cpu
+    tm, n = ident.timings, len(ident.experiments)
+    used = sum(r.used for r in ident.experiments)
+    found = ident.model.effect_dict() if ident.model is not None else {}
+    print(f"identify on sim://?model={model} (lockstep), budget {budget} designed experiments:")
+    print(f"  {seconds:.1f} s: experiments {tm['experiments']:.1f} s, diagnoses {tm['diagnosis']:.1f} s, "
+          f"designs {tm['design']:.1f} s; CPU time of this process {cpu:.1f} s (load average "
+          f"{os.getloadavg()[0]:.1f}; the simulated rig runs in this process)")
+    print(f"  {n} experiments ({n - 4} designed, {used} used), {ident.diagnoses} diagnoses; ended: {ident.stopped}")
+    print(f"  found: {', '.join(f'{k} = {v:.4g}' for k, v in found.items()) or 'none'}")
+    return {"model": model, "seconds": seconds, "cpu_seconds": cpu, "timings_s": tm, "experiments": n, "used": used,
+            "diagnoses": ident.diagnoses, "stopped": ident.stopped,
+            "causes": ident.diagnosis.causes if ident.diagnosis is not None else [], "effects": found}
 
 
 if __name__ == "__main__":

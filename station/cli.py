@@ -14,10 +14,11 @@ import warnings
 
 from station import __version__
 from station.commands.options import StationParser, document_ranges
-from station.errors import StationError
+from station.errors import StationError, one_line
 from station.signals import StopSignal, StopSignals
 
-COMMANDS = ("step", "replay", "sim_device", "bode", "compare", "modes", "survey", "diagnose", "plot", "ports")
+COMMANDS = ("step", "replay", "sim_device", "bode", "compare", "modes", "survey", "diagnose", "identify", "tune",
+            "plot", "ports")
 """Modules of :mod:`station.commands`, in the order ``--help`` lists them."""
 VERBOSE_HELP = "log what the link, loop and simulated device do (-v: info, -vv: every byte)"
 """``-v``/``--verbose``, before or after the command (``station -v step`` or ``station step -v``)."""
@@ -51,7 +52,9 @@ def main(argv: list[str] | None = None) -> int:
     """Entry point of the ``station`` console script; returns the exit code.
 
     SIGINT or SIGTERM at any moment - start-up imports included - ends the process with
-    one line naming the signal and exit code 130 / 143; during a run the loop handles
+    one line naming the signal and what the stopped work had (``StopSignal.note``), exit
+    code 130 / 143, within a second (long work calls :func:`station.signals.check_stop`);
+    during a run the loop handles
     them (command 0 and stop first, see :mod:`station.signals`) and the run's outcome
     gives the code. Called as the console script (``argv`` None), signals arriving once
     the work is done are ignored until the process exits (the tail of a burst must not
@@ -75,13 +78,14 @@ def main(argv: list[str] | None = None) -> int:
                 _configure_logging(args.verbose)
                 return int(args._run(args) or 0)
             except StationError as exc:
-                print(f"station: error: {exc}", file=sys.stderr)
+                print(f"station: error: {one_line(str(exc))}", file=sys.stderr)
                 return 2
             except BrokenPipeError:  # `station step | head`: the reader left; nothing to say
                 _silence_stdout()
                 return 0
-        except StopSignal as exc:
-            print(f"station: stopped by {exc} before the run started", file=sys.stderr)
+        except StopSignal as exc:  # outside a run's loop: the work stopped, saying what it had
+            print(f"station: stopped by {exc}; {exc.note or 'nothing written'}",
+                  file=sys.stderr)
             return exc.exit_code
         except KeyboardInterrupt:  # SIGINT before the guard was installed, or raised by code
             print("station: stopped by SIGINT", file=sys.stderr)

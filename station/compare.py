@@ -16,7 +16,6 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from pathlib import Path
 
-import numpy as np
 
 from station.analysis.metrics import SETTLE_HOLD_S, StepMetrics
 from station.errors import StationError
@@ -108,15 +107,11 @@ def compare_run(path, plant) -> RunComparison:
     Raises
     ------
     StationError
-        Unreadable log, a log that does not name its controller or has no rows.
+        Unreadable log, a log that does not name its controller or has no rows, or lacks a
+        column the simulation needs (:meth:`station.logged.LoggedRun.check_columns`).
     """
     run = LoggedRun.from_path(path)
     log, data = run.log, run.data
-    for key in ("t", "theta"):
-        bad = np.flatnonzero(~np.isfinite(data[key]))
-        if bad.size:
-            raise StationError(f"{path}: row {int(bad[0]) + 1} of the data: {key} is not a finite number; "
-                               f"cannot compare a run with missing samples")
     source = source_label(log)
     if len(log) == 0:  # the log's own notes say why: no controller to ask for
         raise StationError(f"{path}: the log has no rows; nothing to compare")
@@ -127,7 +122,7 @@ def compare_run(path, plant) -> RunComparison:
         clamp = "no clamp" if controller.limit is None else f"clamp ±{controller.limit:g}"
         notes.append(f"alignment {run.alignment} detected: the replay reproduces the logged v to "
                      f"{run.max_abs_dv:.3g} counts; {clamp}")
-    step = run.reference.amplitude if run.closed else None  # station.reference: the one definition of a step
+    step = run.reference.amplitude if run.closed else None  # station.logged.reference: the one definition of a step
     if run.held is not None:
         notes.append(f"{run.held_note}; `station replay` analyzes the beam's free vibration after the release")
         return RunComparison(str(path), controller.name, step, run.step_metrics(), None, None, None,

@@ -19,11 +19,12 @@ from __future__ import annotations
 
 import argparse
 import os
-import tomllib
 from pathlib import Path
 from typing import Any
 
 from station.errors import StationError
+from station.inputs import TomlDoc, load_toml
+from station.ranges import shown
 
 FILE_NAME = "station.toml"
 KEYS = ("port", "protocol", "baud", "limit", "soft_limit", "timeout", "max_lag", "max_miss", "max_step", "out_dir")
@@ -34,21 +35,26 @@ def config_path(cwd: str | Path | None = None) -> Path | None:
     """The config file in use: ``./station.toml``, else ``$XDG_CONFIG_HOME/station/station.toml``
     (default ``~/.config/station/station.toml``); None when neither exists.
 
+    Anything by that name counts (a folder or a FIFO too: :func:`load_config` refuses it,
+    rather than the station silently using the other file or none).
+
     Parameters
     ----------
     cwd : path, optional
         The working folder (default: the process's).
     """
     here = Path(cwd or ".") / FILE_NAME
-    if here.is_file():
+    if here.exists():
         return here
     home = Path(os.environ.get("XDG_CONFIG_HOME") or Path.home() / ".config")
     user = home / "station" / FILE_NAME
-    return user if user.is_file() else None
+    return user if user.exists() else None
 
 
 def load_config(path: str | Path | None) -> dict[str, Any]:
-    """The file's settings as a dict (empty without a file).
+    """The file's settings as a dict (empty without a file), read bounded
+    (:func:`station.inputs.load_toml`: a regular UTF-8 file of at most 1 MB, nested at most
+    8 deep).
 
     Parameters
     ----------
@@ -58,22 +64,17 @@ def load_config(path: str | Path | None) -> dict[str, Any]:
     Raises
     ------
     StationError
-        Unreadable file, not UTF-8 TOML, or an unknown key (names the file and key).
+        Not a regular file, unreadable, too large, not UTF-8, not valid or too deeply
+        nested TOML, or an unknown key (names the file, line and key).
     """
-    if path is None:
-        return {}
-    path = Path(path)
-    try:
-        doc = tomllib.loads(path.read_text(encoding="utf-8"))
-    except OSError as exc:
-        raise StationError(f"{path}: cannot read the config file: {exc.strerror or exc}") from None
-    except UnicodeDecodeError as exc:
-        raise StationError(f"{path}: not UTF-8 text ({exc.reason} at byte {exc.start})") from None
-    except tomllib.TOMLDecodeError as exc:
-        raise StationError(f"{path}: not valid TOML: {exc}") from None
-    unknown = sorted(set(doc) - set(KEYS))
+    return {} if path is None else _read(path).data
+
+
+def _read(path: str | Path) -> TomlDoc:
+    doc = load_toml(path, "config file")
+    unknown = sorted(set(doc.data) - set(KEYS))
     if unknown:
-        raise StationError(f"{path}: {unknown[0]}: unknown setting (expected {', '.join(KEYS)})")
+        raise doc.error(unknown[0], f"unknown setting (expected {', '.join(KEYS)})")
     return doc
 
 
@@ -95,20 +96,23 @@ def apply_config(parser: argparse.ArgumentParser, cwd: str | Path | None = None)
     path = None
     try:
         path = config_path(cwd)
-        settings = load_config(path)
+        doc = None if path is None else _read(path)
         actions = {a.dest: a for a in parser._actions}
         defaults = {}
-        for key, value in settings.items():
+        for key, value in ({} if doc is None else doc.data).items():
             action = actions[key]
             if isinstance(value, bool) or not isinstance(value, (str, int, float)):
-                raise StationError(f"{path}: {key}: expected a string or a number, got {value!r}")
+                raise doc.error(key, f"expected a string or a number, got {shown(value)}")
             text = str(value)
+            line = doc.line_of(key)
+            where = f"{path}: line {line}: {key} = {shown(value)}" if line else f"{path}: {key} = {shown(value)}"
             try:
                 converted = action.type(text) if action.type is not None else text
             except (argparse.ArgumentTypeError, ValueError, TypeError) as exc:
-                raise StationError(f"{path}: {key} = {value!r}: {exc}") from None
+                raise StationError(f"{where}: {exc}", file=path, line=line, key=key) from None
             if action.choices is not None and converted not in action.choices:
-                raise StationError(f"{path}: {key} = {value!r}: expected one of {', '.join(action.choices)}")
+                raise StationError(f"{where}: expected one of {', '.join(action.choices)}", file=path, line=line,
+                                   key=key)
             defaults[key] = converted
         parser.set_defaults(**defaults, _config=str(path) if path else None, _config_error=None)
     except StationError as exc:

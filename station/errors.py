@@ -30,3 +30,17 @@ class StationError(Exception):
         self.file = None if file is None else str(file)
         self.line = line
         self.key = key
+
+
+def one_line(text: str) -> str:
+    """``text`` as one line for the user: control characters and Unicode line or paragraph
+    separators (which a file's key or a path may hold) shown as escapes (``\\n``, ``\\x1e``).
+
+    Parameters
+    ----------
+    text : str
+        A message.
+    """
+    if text.isprintable():
+        return text
+    return "".join(c if c.isprintable() or c == " " else c.encode("unicode_escape").decode("ascii") for c in text)

@@ -4,7 +4,7 @@ Run logs: one run (``<log stem>.png`` after ``station step``) or several overlai
 (``station plot``): θ and u (encoder counts), v and v_applied (DAC counts), a
 (accelerometer counts). Model against measurement: ``station compare`` (:func:`plot_comparison`),
 ``station bode`` (:func:`plot_bode`), ``station diagnose`` (:func:`diagnosis_run_figure`,
-:func:`diagnosis_resid_figure`).
+:func:`diagnosis_resid_figure`), ``station identify`` (:func:`identify_design_figure`).
 
 matplotlib :class:`~matplotlib.figure.Figure` objects with the Agg canvas only - no
 pyplot, no global backend - so library users' own matplotlib set-up is never touched.
@@ -36,29 +36,34 @@ def new_figure(width: float = 9.0, height: float = 8.0):
     return fig
 
 
-def save_figure(fig, path: str | Path, dpi: int = 100) -> Path:
-    """Write ``fig`` as PNG to ``path``.
+def save_figure(fig, path: str | Path, dpi: int = 100, transaction=None) -> Path:
+    """Write ``fig`` as PNG to ``path``, whole or not at all (:mod:`station.outputs`).
 
     Parameters
     ----------
     fig : matplotlib.figure.Figure
         The figure.
     path : str or Path
-        The PNG file.
+        The PNG file (written as PNG whatever its suffix).
     dpi : int, default 100
         Resolution, dots per inch.
+    transaction : station.outputs.Transaction, optional
+        Write through it (renamed into place when it commits, with the command's other
+        files); default: at once.
 
     Raises
     ------
     StationError
-        The file cannot be written (names it).
+        The file cannot be written (names it); an existing file is unchanged then.
     """
-    path = Path(path)
-    try:
-        fig.savefig(path, dpi=dpi)
-    except OSError as exc:
-        raise StationError(f"{path}: cannot write the figure: {exc.strerror or exc}") from None
-    return path
+    from station.outputs import Transaction
+
+    if transaction is None:
+        with Transaction() as tx:
+            return save_figure(fig, path, dpi, tx)
+    with transaction.open(path, "the figure") as fh:
+        fig.savefig(fh, format="png", dpi=dpi)
+    return Path(path)
 
 
 def source_label(log) -> str:
@@ -168,7 +173,7 @@ def run_title(log, metrics_text: str = "") -> str:
     return " - ".join(parts)
 
 
-def plot_log_files(paths: Sequence[str | Path], out: str | Path) -> Path:
+def plot_log_files(paths: Sequence[str | Path], out: str | Path, transaction=None) -> Path:
     """Read ``paths`` and write their overlay to ``out`` (``station plot``).
 
     Parameters
@@ -177,6 +182,8 @@ def plot_log_files(paths: Sequence[str | Path], out: str | Path) -> Path:
         Run logs, any format :func:`station.runlog.read_log` reads.
     out : str or Path
         The PNG to write.
+    transaction : station.outputs.Transaction, optional
+        Write through it (see :func:`save_figure`).
 
     Returns
     -------
@@ -191,12 +198,12 @@ def plot_log_files(paths: Sequence[str | Path], out: str | Path) -> Path:
     from station.runlog import read_log
 
     logs = [read_log(p) for p in paths]
-    return save_figure(plot_runs(logs), out)
+    return save_figure(plot_runs(logs), out, transaction=transaction)
 
 
 # --- model comparisons: station compare, station bode, station diagnose --------------------
 
-def plot_comparison(c, path: Path):
+def plot_comparison(c, path: Path, transaction=None):
     """Write θ, a and v of the log and the model over time as a PNG.
 
     Parameters
@@ -204,6 +211,8 @@ def plot_comparison(c, path: Path):
     c : station.compare.RunComparison
     path : Path
         PNG file.
+    transaction : station.outputs.Transaction, optional
+        Write through it (see :func:`save_figure`).
 
     Returns
     -------
@@ -232,11 +241,11 @@ def plot_comparison(c, path: Path):
     fits = f"NRMSE fit {fits}" if c.prediction is not None else "hub-held beam test, no model fit"
     fig.suptitle(f"{Path(c.file).name} ({c.source})\n{c.controller}: {fits}", fontsize=9)
     fig.tight_layout()
-    save_figure(fig, path)
+    save_figure(fig, path, transaction=transaction)
     return fig
 
 
-def plot_bode(cmp, path: Path, title: str) -> None:
+def plot_bode(cmp, path: Path, title: str, transaction=None) -> None:
     """Write the Bode magnitude/phase of θ/v, a/v (measured and model) and the coherence.
 
     Parameters
@@ -246,6 +255,8 @@ def plot_bode(cmp, path: Path, title: str) -> None:
         PNG file to write.
     title : str
         Figure title.
+    transaction : station.outputs.Transaction, optional
+        Write through it (see :func:`save_figure`).
     """
     f = cmp.theta.f
     band = (f >= 0.5) & (f <= 40.0)
@@ -273,26 +284,56 @@ def plot_bode(cmp, path: Path, title: str) -> None:
                        xytext=(2, -2), textcoords="offset points", rotation=90, va="top", fontsize=7, color="grey")
     fig.suptitle(title)
     fig.tight_layout()
-    save_figure(fig, path)
+    save_figure(fig, path, transaction=transaction)
 
 
-def diagnosis_run_figure(run):
-    """Measured vs nominal vs extended θ and a of one run (a :class:`RunReport`).
+def short_name(name: str, width: int = 56) -> str:
+    """A run's file name cut in the middle to at most ``width`` characters (titles must not clip).
+
+    Parameters
+    ----------
+    name : str
+    width : int
+    """
+    if len(name) <= width:
+        return name
+    keep = (width - 1) // 2
+    return f"{name[:keep]}…{name[len(name) - (width - 1 - keep):]}"
+
+
+def _mark_sticking(ax, t, spans, label: str) -> None:
+    """Shade where the measured hub sticks while the beam rings."""
+    for k, (s, e) in enumerate(spans):
+        ax.axvspan(t[s], t[min(e, t.size) - 1], color="tab:orange", alpha=0.15, lw=0, label=label if k == 0 else None)
+
+
+def diagnosis_run_figure(run, overshoot_points: float = 3.0):
+    """Measured vs nominal vs extended θ and a of one run (a :class:`RunReport`), with the
+    stretches where the measured hub sticks while the beam rings shaded; a closed-loop
+    step's title gives the overshoots and says when the extended model misses the rig's.
 
     Parameters
     ----------
     run : RunReport
         One run of a :class:`station.diagnosis.Diagnosis`.
+    overshoot_points : float
+        The extended model's overshoot is on target within this many percentage points of
+        the rig's.
 
     Returns
     -------
     matplotlib.figure.Figure
     """
+    from station.analysis.residuals import sticking_spans
+
     fig = new_figure(9, 5.2)
     fig.set_layout_engine("constrained")
     ax1, ax2 = fig.subplots(2, 1, sharex=True)
     t = run.t
     label = "extended (held out)" if run.role == "validation" else "extended"
+    spans = sticking_spans(run.theta, run.a)
+    _mark_sticking(ax1, t, spans, "measured hub sticks, beam rings")
+    _mark_sticking(ax2, t, spans, None)
     ax1.plot(t, run.theta, color="k", lw=1.2, label="measured")
     ax1.plot(t, run.nominal["theta"], color="tab:red", lw=1, label="nominal")
     ax1.plot(t, run.extended["theta"], color="tab:blue", lw=1, ls="--", label=label)
@@ -300,8 +341,15 @@ def diagnosis_run_figure(run):
         ax1.plot(t, run.u, color="0.6", lw=0.8, label="reference u")
     ax1.set_ylabel("θ (encoder counts)")
     ax1.legend(loc="best", fontsize=8)
-    ax1.set_title(f"{run.file} ({run.controller}; θ fit nominal {_fit_text(run.fit_nominal.get('theta'))}, "
-                  f"extended {_fit_text(run.fit_extended.get('theta'))})", fontsize=9)
+    title = (f"{short_name(run.file)} ({run.controller})\nθ fit nominal {_fit_text(run.fit_nominal.get('theta'))}, "
+             f"extended {_fit_text(run.fit_extended.get('theta'))}; θ RMS gain {run.gain_pct:.1f} %")
+    m = run.metrics
+    if m is not None and m.get("rig") is not None and m.get("extended") is not None:
+        rig, ext = m["rig"].overshoot_pct, m["extended"].overshoot_pct
+        title += f"; overshoot rig {rig:.1f} %, extended {ext:.1f} %"
+        if abs(ext - rig) > overshoot_points:
+            title += f" (target ±{overshoot_points:g} points missed)"
+    fig.suptitle(title, fontsize=9)
     ax2.plot(t, run.a, color="k", lw=0.8, label="measured")
     ax2.plot(t, run.nominal["a"], color="tab:red", lw=0.8, label="nominal")
     ax2.plot(t, run.extended["a"], color="tab:blue", lw=0.8, ls="--", label=label)
@@ -310,37 +358,106 @@ def diagnosis_run_figure(run):
     return fig
 
 
-def diagnosis_resid_figure(run):
-    """``resid`` tests of the θ residual of one run, before (nominal) and after (extended).
+def diagnosis_resid_figure(run, max_lag_s: float = 0.5):
+    """The θ and a residuals of one run, nominal and extended on the same axes, so the two
+    models can be told apart: θ residual against time (±1 count: encoder rounding) and a's;
+    the θ residual's autocorrelation to ``max_lag_s`` with the 99 % band of a white residual;
+    the θ residual's spectrum (Welch).
 
     Parameters
     ----------
     run : RunReport
         One run of a :class:`station.diagnosis.Diagnosis`.
+    max_lag_s : float
+        Longest lag of the autocorrelation, s.
 
     Returns
     -------
     matplotlib.figure.Figure
     """
-    fig = new_figure(9, 3.4)
+    import scipy.signal
+
+    from station.analysis.residuals import resid_test
+
+    fig = new_figure(9, 6.4)
     fig.set_layout_engine("constrained")
-    ax1, ax2 = fig.subplots(1, 2)
-    for res, color, name in ((run.residuals_before, "tab:red", "nominal"),
-                             (run.residuals_after, "tab:blue", "extended")):
-        if res is None:
+    (ax1, ax2), (ax3, ax4) = fig.subplots(2, 2)
+    t = run.t
+    dt = float(np.median(np.diff(t))) if t.size > 1 else 0.002
+    lag = int(max(1, min(max_lag_s / dt, t.size // 2)))
+    outside = {}
+    for pred, color, name in ((run.nominal, "tab:red", "nominal"), (run.extended, "tab:blue", "extended")):
+        et, ea = run.theta - pred["theta"], run.a - pred["a"]
+        if not (np.all(np.isfinite(et)) and np.all(np.isfinite(ea))):
             continue
-        ax1.plot(res.theta.lags[1:], res.theta.autocorr[1:], "o-", ms=2.5, color=color, label=name)
-        ax2.plot(res.theta.cross_lags, res.theta.crosscorr, "o-", ms=2.5, color=color, label=name)
-        bound = res.theta.bound
-    for ax in (ax1, ax2):
-        ax.axhspan(-bound, bound, color="0.85", label="99 % band")
-        ax.axhline(0, color="0.5", lw=0.5)
-        ax.set_xlabel("lag (samples)")
-    ax1.set_title("autocorrelation of the θ residual", fontsize=9)
-    ax2.set_title("cross-correlation of the θ residual with v", fontsize=9)
-    ax1.legend(fontsize=8)
+        ax1.plot(t, et, color=color, lw=0.8, label=name)
+        ax2.plot(t, ea, color=color, lw=0.6, alpha=0.8, label=name)
+        r = resid_test(et, run.v, max_lag=lag)
+        ax3.plot(r.lags[1:] * dt, r.autocorr[1:], color=color, lw=1, label=f"{name}: {r.outside_pct:.0f} % outside")
+        bound = r.bound
+        outside[name] = r.outside_pct
+        f, pxx = scipy.signal.welch(et, fs=1.0 / dt, nperseg=min(512, et.size))
+        ax4.loglog(f[1:], pxx[1:] + 1e-12, color=color, lw=1, label=name)
+    ax1.axhspan(-1, 1, color="0.88", label="±1 count (rounding)")
+    ax1.set_ylabel("θ residual (counts)")
+    ax1.set_xlabel("t (s)")
+    ax1.legend(fontsize=7)
+    ax2.set_ylabel("a residual (counts)")
+    ax2.set_xlabel("t (s)")
+    if outside:
+        ax3.axhspan(-bound, bound, color="0.85", label="99 % band (white)")
+    ax3.axhline(0, color="0.5", lw=0.5)
+    ax3.set_xlabel("lag (s)")
+    ax3.set_ylabel("autocorrelation of θ residual")
+    ax3.legend(fontsize=7)
+    # white encoder rounding (1/12 counts²) spread over 0..fs/2, one-sided density
+    ax4.axhline((1 / 12) * 2 * dt, color="0.5", ls=":", lw=1, label="encoder rounding, white")
+    ax4.set_xlabel("frequency (Hz)")
+    ax4.set_ylabel("θ residual PSD (counts²/Hz)")
+    ax4.legend(fontsize=7)
+    far = outside.get("extended", 0.0) > 25.0
+    fig.suptitle(f"{short_name(run.file)} ({run.controller}): residuals\nautocorrelation lags outside the 99 % band: "
+                 + ", ".join(f"{k} {v:.0f} %" for k, v in outside.items())
+                 + (" (extended: still far from white)" if far else ""), fontsize=9)
     return fig
 
 
 def _fit_text(x) -> str:
     return "n/a" if x is None or not np.isfinite(x) else f"{x:.1f} %"
+
+
+def identify_design_figure(t, predicted, measured=None, title: str = ""):
+    """A designed experiment (``station identify --report``): θ and a predicted on the chosen
+    model and on each rival it was chosen to separate, and what the device measured.
+
+    Parameters
+    ----------
+    t : ndarray, shape (N,)
+        Time, s.
+    predicted : mapping of str to (ndarray, ndarray)
+        Model label -> predicted θ and a, counts, shape (N,) each; the first is the chosen model.
+    measured : (ndarray, ndarray), optional
+        The run's θ and a, counts (None when it did not complete).
+    title : str
+        The figure's title (the experiment and why).
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
+    fig = new_figure(9, 5.2)
+    fig.set_layout_engine("constrained")
+    ax1, ax2 = fig.subplots(2, 1, sharex=True)
+    for k, (label, (theta, a)) in enumerate(predicted.items()):
+        style = {"lw": 1.2, "color": "C0"} if k == 0 else {"lw": 0.9, "ls": "--", "color": f"C{k % 10}"}
+        ax1.plot(t[:len(theta)], theta, label=label, **style)
+        ax2.plot(t[:len(a)], a, **style)
+    if measured is not None:
+        ax1.plot(t[:len(measured[0])], measured[0], color="k", lw=0.8, label="measured")
+        ax2.plot(t[:len(measured[1])], measured[1], color="k", lw=0.6)
+    ax1.set_ylabel("θ (encoder counts)")
+    ax1.legend(loc="best", fontsize=7)
+    ax1.set_title(title, fontsize=8, wrap=True)
+    ax2.set_ylabel("a (accelerometer counts)")
+    ax2.set_xlabel("t (s)")
+    return fig

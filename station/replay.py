@@ -20,7 +20,7 @@ from station.analysis.beam import BeamTestReport, analyze_beam_test, model_first
 from station.analysis.metrics import StepMetrics
 from station.errors import StationError
 from station.logged import REPRODUCED_TOLERANCE, LoggedRun
-from station.reference import Reference
+from station.logged.reference import Reference
 from station.runlog import RunLog
 
 
@@ -45,7 +45,7 @@ class ReplayReport:
         max |v_replayed - v_logged|, DAC counts.
     metrics : StepMetrics or None
         Of the logged theta against the step's amplitude, for closed-loop step logs.
-    reference : station.reference.Reference
+    reference : station.logged.reference.Reference
         What the logged u is (reads as its JSON dict too: ``{"kind": "step", "amplitude",
         "tick"}``, ``{"kind": "zero"}``, ``{"kind": "missing"}`` or ``{"kind": "other"}``).
     fit_pct : dict or None
@@ -160,8 +160,9 @@ def replay(path: str | Path, model=True, n_elements: int | None = None) -> Repla
     station.runlog.RunLogError
         The log cannot be read.
     StationError
-        Our log's controller spec is malformed, the model cannot be read, or
-        ``n_elements`` is out of the model's range.
+        Our log's controller spec is malformed, the model cannot be read,
+        ``n_elements`` is out of the model's range, or the log lacks a column the replay
+        or the model needs (:meth:`station.logged.LoggedRun.check_columns`).
     """
     run = LoggedRun.from_path(path)
     log = run.log
@@ -187,6 +188,8 @@ def replay(path: str | Path, model=True, n_elements: int | None = None) -> Repla
     if not len(run):
         report.notes.append("the log has no rows")
     want_model = model is not False and model is not None
+    if want_model and run.held is None and len(run):
+        run.check_columns(run.model_columns, "simulating it on a model (--no-model: the commands only)")
     if want_model or run.held is not None:
         from station.plant.model import as_model  # the FEM: loaded only when a model runs
 

@@ -7,12 +7,20 @@ signal handler at an arbitrary bytecode can land inside the stop sequence or the
 close, so during the loop the handler only records the signal and the loop checks the
 record once per sample (and the link while it waits); before the loop (opening the
 port, HELLO) nothing can be lost, so the first signal raises :class:`StopSignal` there.
+
+Long work outside the loop (a diagnosis, a survey, comparisons, a design) must stop within
+a second too, also in its worker threads, where no handler runs: it calls
+:func:`check_stop` between two pieces of work (once per simulation), which raises
+:class:`StopSignal` in any thread once a signal has arrived, and says what it had when
+stopped with :func:`noting` (the CLI prints that line, exit 130 / 143).
 """
 
 from __future__ import annotations
 
 import signal
 import threading
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
 
 SIGNAL_REASONS = {signal.SIGINT: "sigint", signal.SIGTERM: "sigterm"}
 """Outcome reason per signal."""
@@ -24,6 +32,9 @@ class StopSignal(BaseException):
     A ``BaseException`` like ``KeyboardInterrupt``, so ``except Exception`` blocks do
     not swallow it. ``signum``: the signal; ``reason``: "sigint" or "sigterm".
 
+    ``note``: what the stopped work had done and kept, in a few words (set by
+    :func:`noting`; None: nothing was started).
+
     Parameters
     ----------
     signum : int
@@ -34,6 +45,7 @@ class StopSignal(BaseException):
         super().__init__(signal.Signals(signum).name)
         self.signum = signum
         self.reason = SIGNAL_REASONS[signum]
+        self.note: str | None = None
 
     @property
     def exit_code(self) -> int:
@@ -123,3 +135,39 @@ class StopSignals:
         self._old.clear()
         if StopSignals._active is self:
             StopSignals._active = None
+
+
+def check_stop() -> None:
+    """Raise :class:`StopSignal` if SIGINT or SIGTERM has arrived (any thread; one attribute read).
+
+    What long work outside the real-time loop calls between two pieces of work (e.g. once
+    per simulation), so that it stops within a second, worker threads included (signal
+    handlers run in the main thread only). Without an active :class:`StopSignals` guard
+    (a notebook) it does nothing: there, Ctrl-C is Python's KeyboardInterrupt.
+
+    Raises
+    ------
+    StopSignal
+        A signal arrived (the first one's).
+    """
+    active = StopSignals._active
+    if active is not None and active.signum is not None:
+        raise StopSignal(active.signum)
+
+
+@contextmanager
+def noting(describe: Callable[[], str]) -> Iterator[None]:
+    """Give a :class:`StopSignal` raised in the block its ``note``: what the work had when stopped.
+
+    Parameters
+    ----------
+    describe : callable() -> str
+        Called once, when a signal stops the block (e.g. ``"stopped after 3 of 7 logs;
+        nothing written"``); a note set deeper inside wins.
+    """
+    try:
+        yield
+    except StopSignal as exc:
+        if exc.note is None:
+            exc.note = describe()
+        raise

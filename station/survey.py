@@ -5,15 +5,19 @@ alignment and sample time, comes from the report's :class:`station.logged.Logged
 worker process
 (concurrent.futures.ProcessPoolExecutor, one per core); a file that cannot be used
 (binary, empty, a foreign CSV, a broken row) becomes a row with the one-line reason,
-never an abort.
+never an abort. A file the station wrote beside its logs (a figure, a JSON report, a
+model file, a survey table: :func:`not_a_log`) is "not a log", a status of its own: it is
+neither replayed nor counted as a broken log. SIGINT / SIGTERM stop the worker processes
+at once (:mod:`station.signals`).
 """
 
 from __future__ import annotations
 
 import csv
 import io
-import json
 import os
+import re
+import signal
 import warnings
 from collections.abc import Callable, Iterable, Sequence
 from concurrent.futures import ProcessPoolExecutor, as_completed
@@ -22,9 +26,14 @@ from pathlib import Path
 from typing import Any
 
 from station.errors import StationError
+from station.outputs import WRITTEN_SUFFIXES, Transaction
 from station.replay import replay
 
-FIELDS = ("file", "format", "rows", "sample_time_s", "controller", "controller_source", "alignment",
+STATUSES = ("ok", "unusable", "not a log")
+"""A file's status: replayed; a log (or what claims to be one) that could not be used; a file
+the station writes besides logs (:func:`not_a_log`)."""
+
+FIELDS = ("file", "status", "format", "rows", "sample_time_s", "controller", "controller_source", "alignment",
           "max_abs_dv", "overshoot_pct", "settling_time_s", "fit_theta_pct", "fit_accel_pct",
           "f1_hz", "zeta1", "f1_model_hz", "zeta1_model", "reason")
 """Columns of the survey table and CSV, in order."""
@@ -38,6 +47,8 @@ class SurveyRow:
     ----------
     file : str
         The log's path.
+    status : str
+        One of :data:`STATUSES` ("unusable" whenever ``reason`` is given without one).
     format : str
         Its layout ("station", "rig", "columns", ...; :attr:`station.runlog.RunLog.layout`).
     rows : int or None
@@ -61,12 +72,14 @@ class SurveyRow:
     f1_model_hz, zeta1_model : float or None
         The model's hub-held first mode beside it.
     reason : str
-        Empty for a usable file, else one line saying why it could not be used.
+        Empty for a usable file, else one line saying why it could not be used, or what
+        the file is when it is not a log.
     report : dict or None
         The replay's JSON (:meth:`station.replay.ReplayReport.to_json`); not a CSV column.
     """
 
     file: str
+    status: str = "ok"
     format: str = ""
     rows: int | None = None
     sample_time_s: float | None = None
@@ -85,10 +98,46 @@ class SurveyRow:
     reason: str = ""
     report: dict[str, Any] | None = field(default=None, repr=False)
 
+    def __post_init__(self) -> None:
+        if self.reason and self.status == "ok":
+            self.status = "unusable"
+
     @property
     def usable(self) -> bool:
         """True when the file was read and replayed."""
-        return not self.reason
+        return self.status == "ok"
+
+
+_SURVEY_TABLE = re.compile(r"file +format +rows +dt s +controller")
+
+
+def not_a_log(path: str | Path) -> str | None:
+    """What a file is when the station wrote it and it is no run log, else None.
+
+    By suffix (:data:`station.outputs.WRITTEN_SUFFIXES`: figures, JSON reports, rerun
+    recordings, report pages, model and compensator files), a PNG by its signature, and the
+    survey's own table and CSV by their first line.
+
+    Parameters
+    ----------
+    path : str or Path
+        Any file.
+    """
+    path = Path(path)
+    what = WRITTEN_SUFFIXES.get(path.suffix.lower())
+    if what is not None:
+        return what
+    try:
+        with open(path, "rb") as fh:
+            head = fh.read(4096)
+    except OSError:
+        return None
+    if head.startswith(b"\x89PNG\r\n\x1a\n"):
+        return WRITTEN_SUFFIXES[".png"]
+    first = head.split(b"\n", 1)[0].decode("utf-8", "replace")
+    if first.startswith(",".join(FIELDS[:4]) + ",") or _SURVEY_TABLE.match(first):
+        return "a survey table"
+    return None
 
 
 def find_logs(paths: Iterable[str | Path]) -> list[Path]:
@@ -131,19 +180,23 @@ def survey_one(path: str | Path, model: bool = True) -> SurveyRow:
     Returns
     -------
     SurveyRow
-        ``reason`` holds the one-line error when the file could not be used.
+        ``reason`` holds the one-line error when the file could not be used (status
+        "unusable"), or what the file is when it is not a log (status "not a log": it is
+        not replayed).
     """
+    what = not_a_log(path)
+    if what is not None:
+        return SurveyRow(file=str(path), status="not a log", reason=what)
     row = SurveyRow(file=str(path))
     try:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
             rep = replay(path, model=model)
     except StationError as exc:
-        row.reason = str(exc).replace(str(path) + ": ", "", 1)
-        return row
+        return SurveyRow(file=str(path), status="unusable", reason=str(exc).replace(str(path) + ": ", "", 1))
     except Exception as exc:  # noqa: BLE001 - a survey never stops at a file
-        row.reason = f"replay failed: {type(exc).__name__}: {exc}".splitlines()[0]
-        return row
+        return SurveyRow(file=str(path), status="unusable",
+                         reason=f"replay failed: {type(exc).__name__}: {exc}".splitlines()[0])
     run = rep.run
     row.report = rep.to_json()
     row.format = run.log.layout or run.log.format
@@ -161,7 +214,7 @@ def survey_one(path: str | Path, model: bool = True) -> SurveyRow:
         row.f1_hz, row.zeta1 = bt.measured.f1_hz, bt.measured.zeta1
         row.f1_model_hz, row.zeta1_model = bt.f1_model_hz, bt.zeta1_model
     if not len(run):
-        row.reason = "the log has no rows"
+        row.reason, row.status = "the log has no rows", "unusable"
     return row
 
 
@@ -202,7 +255,8 @@ def survey(paths: Sequence[str | Path], model: bool = True, workers: int | None 
             if progress:
                 progress(len(rows), len(files), rows[f])
     else:
-        with ProcessPoolExecutor(max_workers=min(workers, len(files))) as pool:
+        pool = ProcessPoolExecutor(max_workers=min(workers, len(files)), initializer=_worker_signals)
+        try:
             futures = {pool.submit(survey_one, f, model): f for f in files}
             for fut in as_completed(futures):
                 f = futures[fut]
@@ -212,7 +266,33 @@ def survey(paths: Sequence[str | Path], model: bool = True, workers: int | None 
                     rows[f] = SurveyRow(file=str(f), reason=f"worker failed: {type(exc).__name__}: {exc}")
                 if progress:
                     progress(len(rows), len(files), rows[f])
+        except BaseException:  # a signal (StopSignal), an error in progress: the workers stop now
+            _terminate(pool)
+            raise
+        pool.shutdown()
     return [rows[f] for f in files]
+
+
+def _worker_signals() -> None:
+    """A worker leaves SIGINT to the survey (a terminal's Ctrl-C reaches the whole process
+    group: no traceback per worker) and dies on SIGTERM (the survey's handler, inherited on
+    fork, would raise inside a replay)."""
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    signal.signal(signal.SIGTERM, signal.SIG_DFL)
+
+
+def _terminate(pool: ProcessPoolExecutor) -> None:
+    """Cancel what has not started and end the worker processes at once (not after their file)."""
+    terminate = getattr(pool, "terminate_workers", None)  # Python 3.14+
+    if terminate is not None:
+        terminate()
+        return
+    processes = list((getattr(pool, "_processes", None) or {}).values())  # before 3.14: no public way
+    pool.shutdown(wait=False, cancel_futures=True)  # (forgets the processes: taken above)
+    for p in processes:
+        p.terminate()
+    for p in processes:
+        p.join(1.0)
 
 
 def _cell(value: Any, fmt: str = "") -> str:
@@ -238,11 +318,16 @@ def format_table(rows: Sequence[SurveyRow], root: str | Path | None = None) -> s
         Columns: file, format, rows, dt (s), controller (name and h = named by the
         header / i = inferred), d (alignment), max|dv| (DAC counts), overshoot (%),
         settling (s), fit θ / a (%) or, for beam tests, f1 (Hz) and ζ1 with the model's;
-        an unusable file shows its reason instead.
+        an unusable file shows its reason instead. Files that are not logs are counted
+        in the last line, by kind, not listed.
     """
     head = ["file", "format", "rows", "dt s", "controller", "d", "max|dv|", "OS %", "Ts s", "model / beam test"]
     lines = []
+    others: dict[str, int] = {}
     for r in rows:
+        if r.status == "not a log":
+            others[r.reason] = others.get(r.reason, 0) + 1
+            continue
         name = r.file
         if root is not None:
             try:
@@ -267,10 +352,15 @@ def format_table(rows: Sequence[SurveyRow], root: str | Path | None = None) -> s
     widths = [max(len(head[i]), *(len(line[i]) for line in lines)) if lines else len(head[i])
               for i in range(len(head) - 1)]
     fmt_line = lambda cells: "  ".join(c.ljust(w) for c, w in zip(cells, widths)) + "  " + cells[-1]  # noqa: E731
-    used = sum(r.usable for r in rows)
+    used, bad = sum(r.usable for r in rows), sum(r.status == "unusable" for r in rows)
     out = [fmt_line(head), fmt_line(["-" * w for w in widths] + ["-" * 17])]
     out += [fmt_line(line) for line in lines]
-    out.append(f"{len(rows)} files: {used} replayed, {len(rows) - used} unusable")
+    summary = f"{len(rows)} files: {used} replayed, {bad} unusable"
+    if others:
+        n = sum(others.values())
+        summary += (f", {n} {'not a log' if n == 1 else 'not logs'} (not listed: "
+                    + ", ".join(f"{k} x {what}" for what, k in others.items()) + ")")
+    out.append(summary)
     return "\n".join(out)
 
 
@@ -291,16 +381,39 @@ def to_csv(rows: Sequence[SurveyRow]) -> str:
     return buf.getvalue()
 
 
-def write_reports(rows: Sequence[SurveyRow], folder: str | Path) -> list[Path]:
-    """Write each usable file's replay JSON (``<n>_<stem>.json``) and the table
-    (``survey.txt``) into ``folder`` (created).
+TABLE = "survey.txt"
+"""The table's file in a ``--report`` folder."""
+
+
+def report_files(files: Sequence[str | Path]) -> list[str]:
+    """The names :func:`write_reports` gives, in a folder, to the survey of these files:
+    ``<n>_<stem>.json`` per log (n: its place among all files; none for a file that is not
+    a log), then the table.
+
+    Parameters
+    ----------
+    files : sequence of str or Path
+        What :func:`find_logs` found, in its order.
+    """
+    return [_report_name(i, f) for i, f in enumerate(files) if not_a_log(f) is None] + [TABLE]
+
+
+def _report_name(i: int, file: str | Path) -> str:
+    return f"{i:03d}_{Path(file).stem}.json"  # the place keeps names of equal stems apart
+
+
+def write_reports(rows: Sequence[SurveyRow], folder: str | Path, transaction: Transaction | None = None) -> list[Path]:
+    """Write each log's replay JSON (its reason for an unusable one) and the table into
+    ``folder`` (created), named by :func:`report_files`, whole or not at all.
 
     Parameters
     ----------
     rows : sequence of SurveyRow
-        The survey's rows (unusable files get no JSON).
+        The survey's rows (files that are not logs get no JSON).
     folder : str or Path
         Output folder.
+    transaction : station.outputs.Transaction, optional
+        Write through it (renamed into place when it commits); default: at once.
 
     Returns
     -------
@@ -310,20 +423,21 @@ def write_reports(rows: Sequence[SurveyRow], folder: str | Path) -> list[Path]:
     Raises
     ------
     StationError
-        The folder cannot be created or written.
+        A file cannot be written (then none of them is).
     """
+    if transaction is None:
+        with Transaction() as tx:
+            return write_reports(rows, folder, tx)
     folder = Path(folder)
     written = []
-    try:
-        folder.mkdir(parents=True, exist_ok=True)
-        for i, r in enumerate(rows):
-            body = r.report if r.report is not None else {"file": r.file, "reason": r.reason}
-            p = folder / f"{i:03d}_{Path(r.file).stem}.json"
-            p.write_text(json.dumps(body, indent=1) + "\n")
-            written.append(p)
-        p = folder / "survey.txt"
-        p.write_text(format_table(rows) + "\n")
+    for i, r in enumerate(rows):
+        if r.status == "not a log":
+            continue
+        body = r.report if r.report is not None else {"file": r.file, "reason": r.reason}
+        p = folder / _report_name(i, r.file)
+        transaction.write_json(p, body, "the survey report")
         written.append(p)
-    except OSError as exc:
-        raise StationError(f"{folder}: cannot write the survey report: {exc.strerror or exc}") from None
+    p = folder / TABLE
+    transaction.write(p, format_table(rows) + "\n", "the survey table")
+    written.append(p)
     return written

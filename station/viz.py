@@ -22,6 +22,7 @@ from collections.abc import Mapping
 import numpy as np
 
 from station.errors import StationError
+from station.outputs import write_bytes
 
 LOG_ENTITIES = {
     "theta": "theta/measured",
@@ -35,6 +36,10 @@ LOG_ENTITIES = {
 
 MODEL_ENTITIES = {"theta": "theta/model", "a": "a/model", "v": "v/model"}
 """Model prediction key -> rerun entity path."""
+
+RRD_BYTES_PER_TICK = 300
+"""Memory an .rrd recording of a run takes per tick until it is written, bytes, rounded up
+(its six series of a run log; measured about 36 bytes per sample of one series)."""
 
 
 def _check_display() -> None:
@@ -60,7 +65,11 @@ class RerunSink:
     Parameters
     ----------
     rrd_path : str or Path, optional
-        Write the recording to this .rrd file.
+        Write the recording to this .rrd file when the sink is closed: the stream is kept
+        in memory (:data:`RRD_BYTES_PER_TICK`) and written whole or not at all by
+        :class:`station.outputs.Transaction` (a write error is raised, not lost in the
+        SDK's log; a recording's stream cannot be written in pieces: each read of it is a
+        stream of its own).
     spawn : bool
         Stream to a newly spawned rerun viewer instead.
     name : str
@@ -69,8 +78,7 @@ class RerunSink:
     Raises
     ------
     StationError
-        Both ``rrd_path`` and ``spawn`` given, or the .rrd file cannot be created or the
-        viewer cannot be spawned.
+        Both ``rrd_path`` and ``spawn`` given, or the viewer cannot be spawned.
 
     Notes
     -----
@@ -86,16 +94,14 @@ class RerunSink:
         self._rr = rr
         self.rrd_path = None if rrd_path is None else Path(rrd_path)
         self.rec = rr.RecordingStream(application_id=name, recording_id=uuid.uuid4())
-        try:
-            if self.rrd_path is not None:
-                self.rec.save(self.rrd_path)
-            elif spawn:
+        self._stream = self.rec.binary_stream() if self.rrd_path is not None else None
+        if spawn:
+            try:
                 _check_display()
                 rr.spawn(executable_path=_viewer_executable(), recording=self.rec)
-        except Exception as exc:  # noqa: BLE001 - the SDK raises various types
-            target = self.rrd_path if self.rrd_path is not None else "a rerun viewer"
-            first_line = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
-            raise StationError(f"rerun: cannot record to {target}: {first_line}") from None
+            except Exception as exc:  # noqa: BLE001 - the SDK raises various types
+                first_line = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
+                raise StationError(f"rerun: cannot record to a rerun viewer: {first_line}") from None
         self._closed = False
 
     def log_series(self, entity: str, values, n=None, t=None) -> None:
@@ -164,14 +170,39 @@ class RerunSink:
             if key in prediction:
                 self._send(n, t, entity, prediction[key])
 
-    def close(self) -> None:
-        """Flush the recording and close the file or viewer connection. Idempotent."""
+    def close(self, keep: bool = True, transaction=None) -> None:
+        """Flush the recording and write the .rrd file, or close the viewer connection. Idempotent.
+
+        Parameters
+        ----------
+        keep : bool, default True
+            Write the .rrd file (False: drop the recording, e.g. of a run that never
+            started). A recording that cannot be flushed is dropped too (with a warning).
+        transaction : station.outputs.Transaction, optional
+            Write the .rrd file through it (renamed into place with the command's other
+            files); default: at once.
+
+        Raises
+        ------
+        StationError
+            The .rrd file cannot be written (an existing file is unchanged, no part is left).
+        """
         if self._closed:
             return
         self._closed = True
+        data = None
         try:
-            self.rec.flush(timeout_sec=2.0)
+            if self._stream is not None:
+                data = self._stream.read(flush=True) or b""
+            else:
+                self.rec.flush(timeout_sec=2.0)
             self.rec.disconnect()
         except Exception as exc:  # noqa: BLE001 - the run and its log are done; only the view is lost
             first_line = (str(exc).strip().splitlines() or [type(exc).__name__])[0]
             warnings.warn(f"rerun: the recording could not be flushed: {first_line}", RuntimeWarning, stacklevel=2)
+            return
+        if keep and data is not None:
+            if transaction is not None:
+                transaction.write(self.rrd_path, data, "the rerun recording")
+            else:
+                write_bytes(self.rrd_path, data, "the rerun recording")

@@ -34,7 +34,7 @@ def test_user_config_and_its_errors(tmp_path, monkeypatch, capsys):
     user.write_text("soft_limit = -5\n")
     assert main(["step", "--duration", "0.1"]) == 2
     err = capsys.readouterr().err
-    assert f"{user}: soft_limit = -5: -5 is out of range" in err and len(err.strip().splitlines()) == 1
+    assert f"{user}: line 1: soft_limit = -5: -5 is out of range" in err and len(err.strip().splitlines()) == 1
     user.write_text('protocol = "v2"\n')
     assert main(["step"]) == 2 and "protocol = 'v2': expected one of v1, legacy" in capsys.readouterr().err
     user.write_text("colour = 1\n")

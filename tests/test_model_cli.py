@@ -45,7 +45,7 @@ def test_loop_and_simulated_device_equal_simulate_for_a_model_with_effects(tmp_p
 
 
 def test_step_command_model_options_build_the_sim_url():
-    from station.experiment import sim_port
+    from station.runsetup import sim_port
 
     assert sim_port("sim://", None, None, None) == "sim://"
     assert sim_port("sim://", "rig.toml", 6, 3) == "sim://?model=rig.toml&elements=6&seed=3"
@@ -79,7 +79,7 @@ def test_compare_and_replay_commands_take_a_model(rig_data, model_file, tmp_path
     assert _run(replay_cmd, [str(log), "--model", str(model_file)]) == 0
     assert "model: with-effects" in capsys.readouterr().out
     with pytest.raises(StationError, match="model file not found"):
-        _run(compare, [str(log), "--model", str(tmp_path / "none.toml"), "--out-dir", str(tmp_path)])
+        _run(compare, [str(log), "--model", str(tmp_path / "none.toml"), "--out-dir", str(tmp_path), "--force"])
 
 
 def test_modes_command_uses_the_model_linear_part(tmp_path, capsys):

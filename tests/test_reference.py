@@ -1,11 +1,11 @@
-"""One definition of a step reference (station.reference), shared by replay and compare."""
+"""One definition of a step reference (station.logged.reference), shared by replay and compare."""
 
 import math
 
 import numpy as np
 import pytest
 
-from station.reference import classify_reference, step_amplitude
+from station.logged.reference import classify_reference, step_amplitude
 
 
 @pytest.mark.parametrize("u, expected", [

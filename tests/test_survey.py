@@ -64,3 +64,24 @@ def test_command_on_rig_logs_prints_table_and_writes_csv(tmp_path, rig_data, cap
 def test_missing_path_is_a_one_line_error(tmp_path, capsys):
     assert main(["survey", str(tmp_path / "nope")]) == 2
     assert "no such file or folder" in capsys.readouterr().err
+
+
+def test_the_files_the_station_writes_beside_its_logs_are_not_logs(tmp_path, capsys):
+    """A folder of runs as `station step` leaves it (log, figure, JSON, rerun recording), with a
+    model file and a survey's own report: one log replayed, nothing unusable, the rest "not a log"."""
+    runs = tmp_path / "runs"
+    assert main(["step", "--duration", "0.1", "--quiet", "--out", str(runs / "r.tsv"), "--json", str(runs / "r.json"),
+                 "--rrd", str(runs / "r.rrd")]) == 0
+    (runs / "rig.toml").write_text('name = "rig-copy"\nparams = "tmm-fit"\n')
+    assert main(["survey", str(runs), "--no-model", "--jobs", "1", "--report", str(runs / "rep"),
+                 "--csv", str(runs / "s.csv")]) == 0
+    capsys.readouterr()
+    assert main(["survey", str(runs), "--no-model", "--jobs", "1"]) == 0
+    table = capsys.readouterr().out
+    assert "8 files: 1 replayed, 0 unusable, 7 not logs" in table and "UNUSABLE" not in table
+    rows = {r.file.split("/")[-1]: r for r in survey([runs], model=False, workers=1)}
+    assert rows["r.tsv"].status == "ok"
+    assert {name: r.reason for name, r in rows.items() if r.status == "not a log"} == {
+        "r.png": "a figure (PNG)", "r.json": "a JSON report", "r.rrd": "a rerun recording",
+        "rig.toml": "a model or compensator file (TOML)", "s.csv": "a survey table", "survey.txt": "a survey table",
+        "003_r.json": "a JSON report"}

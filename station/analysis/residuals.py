@@ -6,7 +6,8 @@ engineer looks for in the residuals (DESIGN.md "Model diagnosis contract", issue
   of the residual e and its cross-correlation with the input u, with the 99 % confidence
   band ±z/√N of a white residual independent of u.
 - :func:`hub_sticking`: the hub stands still (θ constant) for many samples while the beam
-  rings (|a| large): dry friction or backlash the linear model cannot show.
+  rings (|a| large): dry friction or backlash the linear model cannot show
+  (:func:`sticking_spans`: where).
 - :func:`steady_state_error`: the reference minus θ at the end of a closed-loop run.
 - :func:`band_response`: amplitude ratio and phase lag of the measured signal against the
   model's per frequency band (Welch cross spectra, ``scipy.signal.csd``/``welch``).
@@ -188,6 +189,37 @@ class Sticking:
     max_abs_a: float
 
 
+def sticking_spans(theta, a, min_samples: int = 25, a_threshold: float = 3.0) -> list[tuple[int, int]]:
+    """Where θ is constant for many samples while |a| is large (:func:`hub_sticking`'s rule).
+
+    Parameters
+    ----------
+    theta : array_like, shape (N,)
+        Hub angle, encoder counts (whole counts).
+    a : array_like, shape (N,)
+        Tip acceleration, accelerometer counts.
+    min_samples : int, default 25
+        Shortest run of equal θ that counts.
+    a_threshold : float, default 3.0
+        The beam rings when max |a| over the run exceeds this, counts.
+
+    Returns
+    -------
+    list of (int, int)
+        Sample ranges [start, stop), in order.
+    """
+    theta = np.asarray(theta, dtype=float).ravel()
+    a = np.asarray(a, dtype=float).ravel()
+    n = theta.size
+    if n == 0:
+        return []
+    change = np.flatnonzero(np.diff(theta) != 0) + 1
+    starts = np.concatenate(([0], change))
+    ends = np.concatenate((change, [n]))
+    return [(int(s), int(e)) for s, e in zip(starts, ends)
+            if e - s >= min_samples and float(np.max(np.abs(a[s:e]))) > a_threshold]
+
+
 def hub_sticking(theta, a, dt: float = 0.002, min_samples: int = 25, a_threshold: float = 3.0) -> Sticking:
     """Find where θ is constant for many samples while |a| is large.
 
@@ -209,23 +241,11 @@ def hub_sticking(theta, a, dt: float = 0.002, min_samples: int = 25, a_threshold
     -------
     Sticking
     """
-    theta = np.asarray(theta, dtype=float).ravel()
     a = np.asarray(a, dtype=float).ravel()
-    n = theta.size
-    if n == 0:
-        return Sticking(0, 0.0, 0.0)
-    change = np.flatnonzero(np.diff(theta) != 0) + 1
-    starts = np.concatenate(([0], change))
-    ends = np.concatenate((change, [n]))
-    count, samples, peak = 0, 0, 0.0
-    for s, e in zip(starts, ends):
-        if e - s >= min_samples:
-            m = float(np.max(np.abs(a[s:e])))
-            if m > a_threshold:
-                count += 1
-                samples += e - s
-                peak = max(peak, m)
-    return Sticking(count, float(samples * dt), peak)
+    spans = sticking_spans(theta, a, min_samples, a_threshold)
+    samples = sum(e - s for s, e in spans)
+    peak = max((float(np.max(np.abs(a[s:e]))) for s, e in spans), default=0.0)
+    return Sticking(len(spans), float(samples * dt), peak)
 
 
 def steady_state_error(theta, u, tail: float = 0.2) -> float:

@@ -4,10 +4,10 @@ coherence) against the FEM model's, and the θ/v antiresonances of both."""
 from __future__ import annotations
 
 import argparse
-import json
 from pathlib import Path
 
-from station.commands.options import add_model_options, add_report_options, check_writable, number
+from station.commands.options import add_force_option, add_model_options, add_report_options, model_inputs, number
+from station.outputs import Input, Output, Transaction, check_outputs
 
 NAME = "bode"
 HELP = "H1 frequency response (θ/v, a/v) of a swept-sine log against the FEM model; antiresonances"
@@ -19,7 +19,7 @@ def configure(parser: argparse.ArgumentParser) -> None:
     Parameters
     ----------
     parser : argparse.ArgumentParser
-        Gets FILE, the model options, ``--nperseg``, ``--png`` and ``--json``.
+        Gets FILE, the model options, ``--nperseg``, ``--png``, ``--json`` and ``--force``.
     """
     parser.add_argument("file", type=Path, metavar="FILE", help="run log (station or rig format), e.g. a swept sine")
     add_model_options(parser, "its linear part (param:NAME, beam_damping) gives the response")
@@ -29,6 +29,7 @@ def configure(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--png", type=Path, default=None, metavar="OUT",
                         help="figure file (default FILE's stem + _bode.png in the current folder)")
     add_report_options(parser, json="the antiresonances")
+    add_force_option(parser)
 
 
 def run(args: argparse.Namespace) -> int:
@@ -38,7 +39,7 @@ def run(args: argparse.Namespace) -> int:
     ----------
     args : argparse.Namespace
         FILE, the model (``--model``, ``--elements``, ``--params``), ``--nperseg``, ``--png``,
-        ``--json``.
+        ``--json``, ``--force``.
 
     Returns
     -------
@@ -49,7 +50,8 @@ def run(args: argparse.Namespace) -> int:
     ------
     StationError
         Unreadable log or parameter set, a log shorter than one Welch segment, bad
-        element count, unwritable output.
+        element count; an output that is an input or another output, exists (without
+        ``--force``) or cannot be written.
     """
     from station.analysis.frequency import compare_bode
     from station.errors import StationError
@@ -59,8 +61,8 @@ def run(args: argparse.Namespace) -> int:
     from station.plots import plot_bode
 
     png = args.png if args.png is not None else Path(f"{args.file.stem}_bode.png")
-    check_writable(png, "--png")
-    check_writable(args.json, "--json")
+    check_outputs([Output("--png", png), Output("--json", args.json)],
+                  [Input("FILE", args.file), *model_inputs(args)], force=args.force)
     run = LoggedRun.from_path(args.file)
     log, t, dt = run.log, run.data["t"], run.dt
     model = as_model(args.model, args.elements, args.params)
@@ -76,15 +78,13 @@ def run(args: argparse.Namespace) -> int:
     for i, (m, z, e) in enumerate(zip(cmp.antiresonances_measured_hz, cmp.antiresonances_model_hz,
                                       cmp.antiresonance_error_pct), 1):
         print(f"{i:>13} {m:12.3f} {z:9.3f} {e:+8.1f}")
-    try:
-        plot_bode(cmp, png, f"{args.file.name}: measured vs FEM model (n = {args.elements})")
+    with Transaction() as tx:
+        plot_bode(cmp, png, f"{args.file.name}: measured vs FEM model (n = {args.elements})", transaction=tx)
         if args.json is not None:
-            args.json.write_text(json.dumps({
+            tx.write_json(args.json, {
                 "file": str(args.file), "n_elements": args.elements,
                 "antiresonances": [{"measured_hz": float(m), "model_hz": float(z), "error_pct": float(e)}
                                    for m, z, e in zip(cmp.antiresonances_measured_hz, cmp.antiresonances_model_hz,
-                                                      cmp.antiresonance_error_pct)]}, indent=1))
-    except OSError as exc:
-        raise StationError(f"cannot write output: {exc}") from None
+                                                      cmp.antiresonance_error_pct)]})
     print(f"figure: {png}")
     return 0

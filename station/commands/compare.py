@@ -4,10 +4,11 @@ fits, the thesis's table alongside) with a figure per run."""
 from __future__ import annotations
 
 import argparse
-import json
 from pathlib import Path
 
-from station.commands.options import add_model_options, add_report_options, check_writable, check_writable_dir
+from station.commands.options import add_force_option, add_model_options, add_report_options, model_inputs
+from station.outputs import Input, Output, Transaction, check_outputs, unique_names
+from station.signals import noting
 
 NAME = "compare"
 HELP = "simulate logged runs on the FEM model as the rig ran them; step metrics and fits vs the thesis"
@@ -19,23 +20,38 @@ def configure(parser: argparse.ArgumentParser) -> None:
     Parameters
     ----------
     parser : argparse.ArgumentParser
-        Gets FILE..., the model options, ``--out-dir`` and ``--json``.
+        Gets FILE..., the model options, ``--out-dir``, ``--json`` and ``--force``.
     """
     parser.add_argument("files", type=Path, nargs="+", metavar="FILE", help="run logs (station or rig format)")
     add_model_options(parser)
     parser.add_argument("--out-dir", type=Path, default=Path("."), metavar="DIR",
-                        help="folder for the figures, <log stem>_compare.png (default: current folder)")
+                        help="folder for the figures, <log stem>_compare.png (logs of the same stem: -2, -3 "
+                             "added in the order given; default: current folder)")
     add_report_options(parser, json="the comparisons")
+    add_force_option(parser)
+
+
+def figure_paths(files, out_dir: Path) -> list[Path]:
+    """The figure of each log, ``<log stem>_compare.png`` in ``out_dir``, unique (:func:`station.outputs.unique_names`).
+
+    Parameters
+    ----------
+    files : sequence of path
+        The logs, in the order given.
+    out_dir : Path
+        The ``--out-dir`` folder.
+    """
+    return [out_dir / f"{stem}_compare.png" for stem in unique_names([Path(f).stem for f in files])]
 
 
 def run(args: argparse.Namespace) -> int:
-    """Compare each log; print the tables, write the figures (and JSON).
+    """Compare each log; print the tables, write the figures (and JSON) together at the end.
 
     Parameters
     ----------
     args : argparse.Namespace
         The logs (``files``), the model (``--model``, ``--elements``, ``--params``), ``--out-dir``,
-        ``--json``.
+        ``--json``, ``--force``.
 
     Returns
     -------
@@ -46,31 +62,28 @@ def run(args: argparse.Namespace) -> int:
     ------
     StationError
         Unreadable log, model file or parameter set, a log without a named controller, bad element
-        count, unwritable output.
+        count; an output that is an input or another output, exists (without ``--force``) or
+        cannot be written.
     """
     from station.compare import compare_run, format_comparison
     from station.plots import plot_comparison
-    from station.errors import StationError
     from station.plant.model import as_model
 
-    check_writable(args.json, "--json")
-    check_writable_dir(args.out_dir, "--out-dir")
+    pngs = figure_paths(args.files, args.out_dir)
+    check_outputs([Output("--json", args.json)] + [Output("--out-dir", p) for p in pngs],
+                  [Input("FILE", f) for f in args.files] + model_inputs(args), force=args.force)
     model = as_model(args.model, args.elements, args.params)
     effects = ", ".join(f"{k} = {v:g}" for k, v in model.effects) or "no effects"
     print(f"model: {model.name} ({model.params.name}, {model.n_elements} elements, {effects})")
     results = []
-    try:
-        args.out_dir.mkdir(parents=True, exist_ok=True)
-        for path in args.files:
+    with noting(lambda: f"after {len(results)} of {len(args.files)} logs; nothing written"), Transaction() as tx:
+        for path, png in zip(args.files, pngs):
             c = compare_run(path, model)
-            png = args.out_dir / f"{Path(path).stem}_compare.png"
-            plot_comparison(c, png)
+            plot_comparison(c, png, transaction=tx)
             print(format_comparison(c))
             print(f"  figure: {png}")
             results.append(c.to_json())
         if args.json is not None:
-            args.json.write_text(json.dumps({"n_elements": model.n_elements, "params": model.params.name,
-                                             "model": model.to_json(), "runs": results}, indent=1))
-    except OSError as exc:
-        raise StationError(f"cannot write output: {exc}") from None
+            tx.write_json(args.json, {"n_elements": model.n_elements, "params": model.params.name,
+                                      "model": model.to_json(), "runs": results})
     return 0

@@ -5,16 +5,33 @@ to (DESIGN.md "Model diagnosis contract")."""
 from __future__ import annotations
 
 import argparse
-import json
 import math
 import sys
 from pathlib import Path
 
-from station.commands.options import add_model_options, add_report_options, check_writable, check_writable_dir
+from station.commands.options import add_force_option, add_model_options, add_report_options, model_inputs, number
+from station.errors import StationError
+from station.outputs import Input, Output, Transaction, check_outputs
+from station.signals import noting
 
 NAME = "diagnose"
 HELP = ("diagnose the model on measured runs: residual tests, the missing effect (fitted and judged on "
         "runs it was not fitted to), the extended model and its gain")
+
+
+MAX_SAMPLES = 100_000
+"""Default ``--max-samples``: samples of all runs together (200 s of the rig's data at 500 Hz;
+four runs of 25 000 samples: about 1.5 min of computing here, more on a busy machine)."""
+SIMULATIONS_PER_FIT_RUN = 1000
+"""Simulations of one run per fold it is fitted in, about (the rig's four thesis logs with
+leave-one-run-out: 12 060 simulations = 1005 x 4 folds x 3 fit runs; two generated runs of
+20 000 samples: 2464 = 1232 x 2 folds x 1 fit run; scripts/bench_diagnose.py)."""
+SECONDS_PER_SIMULATION = 0.8e-3
+"""CPU time of a simulation besides its samples (building the model with its effects), s."""
+SECONDS_PER_SAMPLE = 0.25e-6
+"""CPU time of one sample of one simulation, s. Both measured here (2 cores, load 4-7):
+the rig's four thesis logs of 1000 samples, 12 060 simulations in 11.9 CPU s; two runs of
+20 000 samples, 2464 simulations in 12.7 CPU s."""
 
 
 def configure(parser: argparse.ArgumentParser) -> None:
@@ -24,7 +41,7 @@ def configure(parser: argparse.ArgumentParser) -> None:
     ----------
     parser : argparse.ArgumentParser
         Gets RUN..., ``--validate``, ``--json``, ``--report``, ``--model``, ``--save-model``,
-        ``--quiet``.
+        ``--force``, ``--max-samples``, ``--quiet``.
     """
     parser.add_argument("runs", type=Path, nargs="+", metavar="RUN", help="run logs the candidates are fitted on")
     parser.add_argument("--validate", type=Path, nargs="+", default=[], metavar="RUN",
@@ -35,7 +52,78 @@ def configure(parser: argparse.ArgumentParser) -> None:
     add_model_options(parser, subject="the nominal model", elements=None, params=False)
     parser.add_argument("--save-model", type=Path, default=None, metavar="FILE",
                         help="write the extended model (nominal + accepted effects) as a model file")
+    add_force_option(parser)
+    parser.add_argument("--max-samples", type=number(50, 10**9, integer=True), default=MAX_SAMPLES, metavar="N",
+                        help=f"most samples of all runs together (RUNs and --validate runs); longer logs are "
+                             f"refused before they are read: the diagnosis's time grows with their length times "
+                             f"the number of runs (default {MAX_SAMPLES}: 200 s of the rig's data, a few minutes "
+                             f"of computing with four runs)")
     parser.add_argument("--quiet", action="store_true", help="no progress lines on stderr")
+
+
+def count_samples(path: Path) -> int:
+    """A log's rows counted from its bytes, without parsing: its lines that do not start with
+    ``#`` (so the rig's 2014 column-name line counts as one); 0 when it cannot be read (the
+    diagnosis names the problem then).
+
+    Parameters
+    ----------
+    path : Path
+        A run log.
+    """
+    lines = comments = 0
+    last = b"\n"
+    try:
+        with open(path, "rb") as fh:
+            while chunk := fh.read(1 << 20):
+                lines += chunk.count(b"\n")
+                comments += chunk.count(b"\n#") + (last == b"\n" and chunk[:1] == b"#")
+                last = chunk[-1:]
+    except OSError:
+        return 0
+    return max(0, lines + (last != b"\n") - comments)
+
+
+def _human(seconds: float) -> str:
+    return f"{seconds:.0f} s" if seconds < 120 else f"{seconds / 60:.0f} min" if seconds < 7200 else \
+        f"{seconds / 3600:.1f} h"
+
+
+def plan(runs, validate, max_samples: int) -> str:
+    """Refuse logs longer than the bound before they are read; else say what the diagnosis will cost.
+
+    Parameters
+    ----------
+    runs, validate : sequence of Path
+        The RUNs and the ``--validate`` runs.
+    max_samples : int
+        ``--max-samples``.
+
+    Returns
+    -------
+    str
+        One line: runs, samples, the simulations expected and their computing time here.
+
+    Raises
+    ------
+    StationError
+        The runs hold more than ``max_samples`` samples together (names the longest, the
+        option and what it would cost).
+    """
+    counts = {p: count_samples(p) for p in list(runs) + list(validate)}
+    total = sum(counts.values())
+    folds = 1 if validate else len(runs)
+    fit_runs_per_fold = len(runs) if validate else max(1, len(runs) - 1)
+    fitted = sum(counts[p] for p in runs) * fit_runs_per_fold / max(1, len(runs))
+    simulations = SIMULATIONS_PER_FIT_RUN * folds * fit_runs_per_fold
+    seconds = simulations * SECONDS_PER_SIMULATION + SIMULATIONS_PER_FIT_RUN * folds * fitted * SECONDS_PER_SAMPLE
+    if total > max_samples:
+        longest = max(counts, key=counts.get)
+        raise StationError(f"--max-samples {max_samples}: {longest} holds about {counts[longest]} samples "
+                           f"({total} in all {len(counts)} runs), refused before reading them; the diagnosis would "
+                           f"take about {_human(seconds)} of computing here: give --max-samples {total} to run it anyway")
+    return (f"{len(counts)} run{'s' if len(counts) > 1 else ''}, {total} samples (--max-samples {max_samples}): "
+            f"about {simulations} simulations, {_human(seconds)} of computing here")
 
 
 def _json_safe(x):
@@ -48,8 +136,13 @@ def _json_safe(x):
     return x
 
 
+def _short(text: str, width: int = 240) -> str:
+    return text if len(text) <= width else text[:width - 1] + "…"
+
+
 def format_diagnosis(diag) -> str:
-    """What ``station diagnose`` prints: the cause, the gain and the candidates table.
+    """What ``station diagnose`` prints: the cause, the gain, what is still unexplained, the
+    alternatives, the candidates table (with the accepted effects' 95 % intervals) and the runs.
 
     Parameters
     ----------
@@ -57,34 +150,63 @@ def format_diagnosis(diag) -> str:
         What :func:`station.diagnosis.diagnose` returned.
     """
     pct = lambda x: "n/a" if x is None else f"{x:.1f} %"  # noqa: E731
+    def num(x: float, unit: str) -> str:
+        return "inf" if not math.isfinite(x) else (f"{x:.0f}" if unit == "samples" else f"{x:.4g}")
+
+    u = diag.unexplained
     lines = [f"model: {diag.nominal_model.name}; judged by {diag.validation}",
              f"cause: {diag.cause}" + (f"   (all accepted: {', '.join(diag.causes)})" if len(diag.causes) > 1 else ""),
              f"θ fit {pct(diag.baseline_fit.get('theta'))} -> {pct(diag.extended_fit.get('theta'))}, "
              f"a fit {pct(diag.baseline_fit.get('accel'))} -> {pct(diag.extended_fit.get('accel'))}, "
              f"θ RMS gain {diag.gain_pct:.1f} %",
-             f"{'effect':<18} {'value':>12} {'unit':<15} {'θ gain':>8} {'cost gain':>9}  accepted"]
+             "unexplained: " + ("no" if u is None or not u.flag else "yes - " + _short(u.evidence))]
+    if diag.causes:
+        lines.append("alternatives: " + ("none" if not diag.alternatives else "; ".join(
+            f"{' + '.join(a.causes)} (cost ratio {a.cost_ratio:.3f}, θ gain {a.gain_pct:.1f} %)"
+            for a in diag.alternatives)))
+    lines.append(f"{'effect':<18} {'value':>12} {'unit':<15} {'θ gain':>8} {'cost gain':>9}  accepted  95 % interval")
     for e in diag.effects:
-        v = "inf" if not math.isfinite(e.value) else (f"{e.value:.0f}" if e.unit == "samples" else f"{e.value:.4g}")
-        lines.append(f"{e.name:<18} {v:>12} {e.unit:<15} {e.gain_pct:>7.1f}% {e.cost_gain_pct:>8.1f}%  "
-                     f"{'yes' if e.accepted else ''}")
+        iv = "" if e.interval is None else f"  {num(e.interval.lo, e.unit)} .. {num(e.interval.hi, e.unit)}"
+        end = "  (at the end of its search range)" if e.at_range_end else ""
+        lines.append(f"{e.name:<18} {num(e.value, e.unit):>12} {e.unit:<15} {e.gain_pct:>7.1f}% "
+                     f"{e.cost_gain_pct:>8.1f}%  "
+                     f"{'yes' if e.accepted else '   '}{iv}{end}".rstrip())
     for r in diag.runs:
         m = r.metrics
         ov = "" if m is None else ("   overshoot rig/nominal/extended " +
                                    " / ".join(f"{m[k].overshoot_pct:.2f}" for k in ("rig", "nominal", "extended")) + " %")
         lines.append(f"  {r.file} ({r.role}): θ fit {pct(r.fit_nominal.get('theta'))} -> "
                      f"{pct(r.fit_extended.get('theta'))}, gain {r.gain_pct:.1f} %{ov}")
+    for note in diag.notes:
+        lines.append(f"note: {note}")
     lines.append(f"{diag.simulations} simulations in {diag.elapsed_s:.1f} s")
     return "\n".join(lines)
 
 
+def outputs(args: argparse.Namespace) -> list[Output]:
+    """Every file ``station diagnose`` writes: --json, --save-model and the report's files.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        ``runs``, ``--validate`` (the report names its figures after them), ``--json``,
+        ``--save-model``, ``--report``.
+    """
+    from station.diagnosis.report import report_files
+
+    report = [] if args.report is None else [
+        Output("--report", args.report / name) for name in report_files([p.name for p in args.runs + args.validate])]
+    return [Output("--json", args.json), Output("--save-model", args.save_model), *report]
+
+
 def run(args: argparse.Namespace) -> int:
-    """Diagnose; print the result; write the JSON, report and model file asked for.
+    """Diagnose; print the result; write the JSON, report and model file asked for, together.
 
     Parameters
     ----------
     args : argparse.Namespace
         The runs (``runs``, ``--validate``), the nominal ``--model``, the outputs (``--json``,
-        ``--report``, ``--save-model``) and ``--quiet``.
+        ``--report``, ``--save-model``, ``--force``), ``--max-samples`` and ``--quiet``.
 
     Returns
     -------
@@ -94,27 +216,37 @@ def run(args: argparse.Namespace) -> int:
     Raises
     ------
     StationError
-        One run without --validate, an unreadable log, a bad --model, unwritable output.
+        One run without --validate, an unreadable log, runs longer than --max-samples, a bad
+        --model, the same run given twice (or as a RUN and a --validate run); an output that is
+        an input or another output, exists (without ``--force``) or cannot be written.
     """
     from station.diagnosis import diagnose
-    from station.errors import StationError
 
-    for option, path in (("--json", args.json), ("--save-model", args.save_model)):
-        check_writable(path, option)
-    check_writable_dir(args.report, "--report")
-    progress = None if args.quiet else (lambda msg: print(f"diagnose: {msg}", file=sys.stderr, flush=True))
-    diag = diagnose(args.runs, validate=args.validate, model=args.model, progress=progress)
+    check_outputs(outputs(args), [Input("RUN", p) for p in args.runs] +
+                  [Input("--validate", p) for p in args.validate] + model_inputs(args), force=args.force)
+    cost = [plan(args.runs, args.validate, args.max_samples)]  # said with the first step: the runs are readable
+    last = ["reading the runs"]
+
+    def progress(msg: str) -> None:
+        last[0] = msg
+        if not args.quiet:
+            for line in cost + [msg]:
+                print(f"diagnose: {line}", file=sys.stderr, flush=True)
+            cost.clear()
+    with noting(lambda: f"the diagnosis was at: {last[0]}; nothing written"):
+        diag = diagnose(args.runs, validate=args.validate, model=args.model, progress=progress)
     print(format_diagnosis(diag))
-    if args.report is not None:
-        from station.diagnosis.report import write_report
+    with Transaction() as tx:
+        if args.report is not None:
+            from station.diagnosis.report import write_report
 
-        print(f"report: {write_report(diag, args.report)}")
-    try:
+            page = write_report(diag, args.report, tx)
         if args.json is not None:
-            args.json.write_text(json.dumps(_json_safe(diag.to_json()), indent=1))
+            tx.write_json(args.json, _json_safe(diag.to_json()))
         if args.save_model is not None:
-            diag.extended_model.save(args.save_model)
-            print(f"model: {args.save_model}")
-    except OSError as exc:
-        raise StationError(f"cannot write output: {exc}") from None
+            tx.write(args.save_model, diag.extended_model.to_toml(), "the model")
+    if args.report is not None:
+        print(f"report: {page}")
+    if args.save_model is not None:
+        print(f"model: {args.save_model}")
     return 0

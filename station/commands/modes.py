@@ -4,8 +4,9 @@ from __future__ import annotations
 
 import argparse
 
-from station.commands.options import add_model_options, add_report_options, check_writable, number, write_json
+from station.commands.options import add_force_option, add_model_options, add_report_options, model_inputs, number
 from station.errors import StationError
+from station.outputs import Output, check_outputs, write_json
 
 MAX_COUNT = 10
 """Most modes ``--count`` shows (beyond them the table is unreadable and the FEM far off the beam's)."""
@@ -25,12 +26,14 @@ def configure(parser: argparse.ArgumentParser) -> None:
     Parameters
     ----------
     parser : argparse.ArgumentParser
-        Gets the model options (``--elements`` takes several counts), ``--count`` and ``--json``.
+        Gets the model options (``--elements`` takes several counts), ``--count``, ``--json`` and
+        ``--force``.
     """
     add_model_options(parser, "its linear part (param:NAME, beam_damping) is analysed", elements="many")
     parser.add_argument("--count", type=number(1, MAX_COUNT, integer=True), default=3, metavar="K",
                         help="modes to show (default 3; the 1-element model has only a few)")
     add_report_options(parser, json="the numbers")
+    add_force_option(parser)
 
 
 def run(args: argparse.Namespace) -> int:
@@ -40,17 +43,18 @@ def run(args: argparse.Namespace) -> int:
     ----------
     args : argparse.Namespace
         The model (``--model``, ``--params``), the element counts (``--elements``), ``--count``,
-        ``--json``.
+        ``--json``, ``--force``.
 
     Raises
     ------
     StationError
-        Unknown parameter set or an element count outside 1..100.
+        Unknown parameter set or an element count outside 1..100; a --json that is an input,
+        exists (without ``--force``) or cannot be written.
     """
     from station.plant import modal_summary
     from station.plant.model import as_model
 
-    check_writable(args.json, "--json")
+    check_outputs([Output("--json", args.json)], model_inputs(args), force=args.force)
     model = as_model(args.model, None, args.params)
     label = model.params.name if not model.effects else f"{model.name} ({model.params.name}, " + \
         ", ".join(f"{k} = {v:g}" for k, v in model.effects) + ")"

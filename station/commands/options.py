@@ -1,8 +1,10 @@
-"""What the commands share: checked command-line values, output-path probes, and the option
-groups declared once (the model options of every command that simulates, the simulated rig's
-seed, the wire protocol, ``--json`` and rerun output).
+"""What the commands share: checked command-line values and the option groups declared once
+(the model options of every command that simulates, the simulated rig's seed, the wire
+protocol, ``--json`` and rerun output, ``--force``). Output files follow one rule, checked
+before anything starts: :mod:`station.outputs`.
 
-A numeric option is declared with ``type=number(low, high, ...)``: argparse calls it on
+A numeric option is declared with ``type=number(low, high, ...)`` (:mod:`station.ranges`, where
+the simulated rig's ranges are shared with the ``sim://`` URL handler): argparse calls it on
 the text, so a value that is not finite or outside the range is refused while the
 arguments are parsed - before any file is opened or any device is touched - with
 argparse's own one-line ``argument --x: ...`` error and exit code 2
@@ -13,79 +15,13 @@ argparse's own one-line ``argument --x: ...`` error and exit code 2
 from __future__ import annotations
 
 import argparse
-import json
-import math
-import os
 import sys
-import tempfile
 from pathlib import Path
-from typing import Any
 
 from station.errors import StationError
+from station.outputs import FORCE_HELP, Input
 from station.protocol import PROTOCOLS
-
-
-class Number:
-    """An argparse ``type=`` that parses a finite number within ``[low, high]``.
-
-    Parameters
-    ----------
-    low, high : float
-        Inclusive bounds (``integer``: whole numbers only).
-    integer : bool
-        Accept whole numbers only (returns ``int``).
-    unit : str
-        Unit shown in the range and the error (e.g. "s", "encoder counts").
-    nonzero : bool
-        Refuse 0 inside the range (e.g. a step height).
-    """
-
-    def __init__(self, low: float, high: float, integer: bool = False, unit: str = "", nonzero: bool = False):
-        self.low, self.high, self.integer, self.unit, self.nonzero = low, high, integer, unit, nonzero
-        self.__name__ = "integer" if integer else "number"  # argparse names the type in its errors
-
-    def range_text(self) -> str:
-        """The documented range, e.g. ``range 0.001..60 s`` or ``range 1..100, integer``."""
-        unit = f" {self.unit}" if self.unit else ""
-        kind = ", whole number" if self.integer else ""
-        nz = ", not 0" if self.nonzero else ""
-        fmt = (lambda x: str(int(x))) if self.integer else (lambda x: f"{x:.10g}")
-        return f"range {fmt(self.low)}..{fmt(self.high)}{unit}{kind}{nz}"
-
-    def __call__(self, text: str):
-        try:
-            value = float(text)
-        except ValueError:
-            raise argparse.ArgumentTypeError(f"{text!r} is not a number (expected {self.range_text()})") from None
-        if not math.isfinite(value):
-            raise argparse.ArgumentTypeError(f"{text} is not a finite number (expected {self.range_text()})")
-        if self.integer:
-            if value != int(value):
-                raise argparse.ArgumentTypeError(f"{text} is not a whole number (expected {self.range_text()})")
-            value = int(value)
-        if not self.low <= value <= self.high or (self.nonzero and value == 0):
-            raise argparse.ArgumentTypeError(f"{text} is out of range (expected {self.range_text()})")
-        return value
-
-    def __repr__(self) -> str:
-        return f"number({self.low!r}, {self.high!r}, integer={self.integer})"
-
-
-def number(low: float, high: float, integer: bool = False, unit: str = "", nonzero: bool = False) -> Number:
-    """``type=`` for a numeric option: finite and within ``[low, high]`` (see :class:`Number`).
-
-    Parameters
-    ----------
-    low, high : float
-        Inclusive bounds.
-    integer : bool, default False
-        Accept whole numbers only (returns ``int``).
-    unit : str, optional
-        Unit shown in the range and the error.
-    nonzero : bool, default False
-        Refuse 0 inside the range.
-    """
-    return Number(low, high, integer=integer, unit=unit, nonzero=nonzero)
+from station.ranges import SIM_RIG, Number, number  # noqa: F401 (Number, number: the commands' import place)
 
 
 class StationParser(argparse.ArgumentParser):
@@ -132,73 +68,6 @@ def numeric_actions(parser: argparse.ArgumentParser) -> list[argparse.Action]:
     return [a for a in parser._actions if a.option_strings and (isinstance(a.type, Number) or a.type in (int, float))]
 
 
-def check_writable(path: Path | None, option: str, overwrite: bool = True) -> None:
-    """Refuse, before a run, an output file that could not be written afterwards.
-
-    Parameters
-    ----------
-    path : Path or None
-        The output file (None: nothing to check).
-    option : str
-        The option's name, for the message (e.g. "--json").
-    overwrite : bool
-        False: an existing file is an error (``--out`` without ``--force``).
-
-    Raises
-    ------
-    StationError
-        The file exists and ``overwrite`` is False, it is a folder, it exists read-only,
-        or its folder cannot be created or written.
-    """
-    if path is None:
-        return
-    path = Path(path)
-    if path.is_dir():
-        raise StationError(f"{option} {path}: is a folder, expected a file")
-    if path.exists():
-        if not overwrite and path.is_file():
-            raise StationError(f"{option} {path}: exists; use --force to overwrite it, or another name")
-        if not os.access(path, os.W_OK):
-            raise StationError(f"{option} {path}: exists and is not writable")
-        return
-    check_writable_dir(path.parent, option, what=f"{option} {path}: its folder")
-
-
-def check_writable_dir(folder: Path | None, option: str, what: str | None = None) -> None:
-    """Refuse an output folder that does not exist and cannot be created, or is not writable.
-
-    Parameters
-    ----------
-    folder : Path or None
-        The output folder (None: nothing to check); created later if missing.
-    option : str
-        The option that named it, for the message.
-    what : str, optional
-        How the message names it (default ``"OPTION FOLDER"``).
-
-    Raises
-    ------
-    StationError
-        Naming ``option`` and the folder.
-    """
-    if folder is None:
-        return
-    folder = Path(folder)
-    what = what or f"{option} {folder}"
-    existing = folder
-    while not existing.exists():  # the nearest existing ancestor decides whether it can be created
-        if existing.parent == existing:
-            break
-        existing = existing.parent
-    if existing.exists() and not existing.is_dir():
-        raise StationError(f"{what}: {existing} is a file, not a folder")
-    try:  # a real probe: permission bits say nothing for root or on /proc-like file systems
-        with tempfile.TemporaryFile(dir=existing):
-            pass
-    except OSError as exc:
-        raise StationError(f"{what}: {existing} is not writable ({exc.strerror or exc})") from None
-
-
 def warn(message: str) -> None:
     """One line on stderr that says which value wins (``station: note: ...``).
 
@@ -208,6 +77,27 @@ def warn(message: str) -> None:
         The note, one line.
     """
     print(f"station: note: {message}", file=sys.stderr)
+
+
+def check_port(port: str, option: str = "--port") -> None:
+    """Refuse a port that is neither a URL nor an existing device, before anything starts.
+
+    Parameters
+    ----------
+    port : str
+        A port path or pyserial URL (``sim://``, ``socket://``, ...).
+    option : str
+        The option's name, for the message.
+
+    Raises
+    ------
+    StationError
+        ``--port PATH: no such device`` with the hint to ``station ports``.
+    """
+    port = str(port)
+    if "://" not in port and not Path(port).exists():
+        raise StationError(f"{option} {port}: no such device; `station ports` lists this machine's serial ports "
+                           f"(the simulated rig is sim://)")
 
 
 MANY_ELEMENTS = (1, 2, 4, 10, 20, 50, 100)
@@ -253,7 +143,7 @@ def add_model_options(parser: argparse.ArgumentParser, model_help: str = "", *, 
     parser.add_argument("--model", dest="model_spec" if no_model is not None else "model", default=None,
                         metavar="NAME|FILE",
                         help=more(f"{subject}: {MODEL_HELP}" + (f"; {model_help}" if model_help else ""), "model"))
-    count = number(1, 100, integer=True)
+    count = SIM_RIG["elements"]  # the model's and sim://?elements='s range
     if elements == "one":
         parser.add_argument("--elements", type=count, default=None, metavar="N",
                             help=more("beam elements of the model (default: the model's, 4)", "elements"))
@@ -303,7 +193,7 @@ def add_seed_option(parser: argparse.ArgumentParser, default: int | None = None,
     note : str
         Appended to the help; ``{key}`` becomes "seed" (as in :func:`add_model_options`).
     """
-    parser.add_argument("--seed", type=number(0, 2**32 - 1, integer=True), default=default, metavar="N",
+    parser.add_argument("--seed", type=SIM_RIG["seed"], default=default, metavar="N",
                         help="sensor noise seed, the same for every run (default 0)" + (f"; {note.format(key='seed')}" if note else ""))
 
 
@@ -316,30 +206,6 @@ def add_protocol_option(parser: argparse.ArgumentParser) -> None:
         The command's subparser.
     """
     parser.add_argument("--protocol", choices=PROTOCOLS, default="v1", help="wire protocol (default v1)")
-
-
-def write_json(path: Path, doc: Any, indent: int = 1) -> None:
-    """Write ``doc`` as JSON to ``path`` (its folder created), one line of error on failure.
-
-    Parameters
-    ----------
-    path : Path
-        The ``--json`` file.
-    doc : JSON-able
-        What to write.
-    indent : int
-        JSON indentation.
-
-    Raises
-    ------
-    StationError
-        ``PATH: cannot write the JSON report: REASON``.
-    """
-    try:
-        path.parent.mkdir(parents=True, exist_ok=True)
-        path.write_text(json.dumps(doc, indent=indent) + "\n")
-    except OSError as exc:
-        raise StationError(f"{path}: cannot write the JSON report: {exc.strerror or exc}") from None
 
 
 def add_report_options(parser: argparse.ArgumentParser, json: str | None = None, rerun: str | None = None) -> None:
@@ -360,3 +226,27 @@ def add_report_options(parser: argparse.ArgumentParser, json: str | None = None,
         viz = parser.add_mutually_exclusive_group()
         viz.add_argument("--rrd", type=Path, default=None, metavar="FILE", help=f"record {rerun} to a rerun .rrd file")
         viz.add_argument("--spawn", action="store_true", help=f"stream {rerun} to a rerun viewer")
+
+
+def add_force_option(parser: argparse.ArgumentParser) -> None:
+    """``--force``: replace output files that exist (the one rule, :mod:`station.outputs`).
+
+    Parameters
+    ----------
+    parser : argparse.ArgumentParser
+        The subparser of a command that writes files.
+    """
+    parser.add_argument("--force", action="store_true", help=FORCE_HELP)
+
+
+def model_inputs(args: argparse.Namespace) -> list[Input]:
+    """The files the model options name (``--model``, ``--params``): inputs no output may replace.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        Parsed options of :func:`add_model_options` (``model`` or ``model_spec``, ``params``).
+    """
+    model = getattr(args, "model_spec", None) or getattr(args, "model", None)
+    return [Input("--model", model if isinstance(model, (str, Path)) else None),
+            Input("--params", getattr(args, "params", None))]

@@ -5,7 +5,8 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from station.commands.options import check_writable
+from station.commands.options import add_force_option
+from station.outputs import Input, Output, check_outputs
 
 NAME = "plot"
 HELP = "draw run logs (ours or the rig's; several are overlaid): θ and u, v and v_applied, a"
@@ -17,11 +18,12 @@ def configure(parser: argparse.ArgumentParser) -> None:
     Parameters
     ----------
     parser : argparse.ArgumentParser
-        Gets LOG... and ``--out``.
+        Gets LOG..., ``--out`` and ``--force``.
     """
     parser.add_argument("files", type=Path, nargs="+", metavar="LOG", help="run logs (station or rig format)")
     parser.add_argument("--out", type=Path, default=None, metavar="PNG",
                         help="figure file (default: the first log's stem + .png in the current folder)")
+    add_force_option(parser)
 
 
 def run(args: argparse.Namespace) -> int:
@@ -30,16 +32,17 @@ def run(args: argparse.Namespace) -> int:
     Parameters
     ----------
     args : argparse.Namespace
-        The logs (``files``) and ``--out``.
+        The logs (``files``), ``--out`` and ``--force``.
 
     Raises
     ------
     StationError
-        An unreadable log (file, line, field) or an unwritable --out.
+        An unreadable log (file, line, field); an --out that is one of the logs, exists
+        (without ``--force``) or cannot be written.
     """
     from station.plots import plot_log_files
 
     out = args.out if args.out is not None else Path(args.files[0].stem + ".png")
-    check_writable(out, "--out")
+    check_outputs([Output("--out", out)], [Input("LOG", f) for f in args.files], force=args.force)
     print(f"figure: {plot_log_files(args.files, out)}")
     return 0

@@ -6,8 +6,8 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from station.commands.options import (add_model_options, add_report_options, check_writable,
-                                      chosen_model, write_json)
+from station.commands.options import add_force_option, add_model_options, add_report_options, chosen_model, model_inputs
+from station.outputs import Input, Output, Transaction, check_outputs
 
 NAME = "replay"
 HELP = ("replay a run log (ours or the rig's): reproduce the logged commands, detect the "
@@ -20,17 +20,20 @@ def configure(parser: argparse.ArgumentParser) -> None:
     Parameters
     ----------
     parser : argparse.ArgumentParser
-        Gets FILE, the model options (with ``--no-model``), ``--json``, ``--rrd``/``--spawn``.
+        Gets FILE, the model options (with ``--no-model``), ``--json``, ``--rrd``/``--spawn``,
+        ``--force``.
     """
     parser.add_argument("file", type=Path, metavar="FILE", help="run log (station or rig format)")
     add_model_options(parser, params=False, no_model="skip the FEM model prediction")
     add_report_options(parser, json="the report", rerun="the log, the replayed v and the model")
+    add_force_option(parser)
 
 
-def _record(report, rrd: Path | None, spawn: bool) -> None:
+def _record(report, rrd: Path | None, spawn: bool, tx: Transaction) -> None:
     from station.viz import RerunSink
 
     sink = RerunSink(rrd_path=rrd, spawn=spawn, name="station replay")
+    done = False
     try:
         if report.log is not None:
             sink.write_rows(report.log.data)
@@ -38,8 +41,9 @@ def _record(report, rrd: Path | None, spawn: bool) -> None:
             sink.log_series("v/replayed", report.v_replayed, t=report.log.data["t"])
         if report.prediction is not None:
             sink.log_prediction(report.prediction)
+        done = True
     finally:
-        sink.close()
+        sink.close(keep=done, transaction=tx)
 
 
 def run(args: argparse.Namespace) -> int:
@@ -49,7 +53,7 @@ def run(args: argparse.Namespace) -> int:
     ----------
     args : argparse.Namespace
         FILE, the model (``--no-model``, ``--model``, ``--elements``), ``--json``,
-        ``--rrd``/``--spawn``.
+        ``--rrd``/``--spawn``, ``--force``.
 
     Returns
     -------
@@ -60,20 +64,23 @@ def run(args: argparse.Namespace) -> int:
     Raises
     ------
     StationError
-        Unreadable log or model file, bad controller spec, unwritable JSON or .rrd file.
+        Unreadable log or model file, bad controller spec; an output that is an input or
+        another output, exists (without ``--force``) or cannot be written.
     """
     from station.replay import format_report, replay
 
     model = chosen_model(args)
-    check_writable(args.json, "--json")
-    check_writable(args.rrd, "--rrd")
+    check_outputs([Output("--json", args.json), Output("--rrd", args.rrd)],
+                  [Input("FILE", args.file), *model_inputs(args)], force=args.force)
     report = replay(args.file, model=model, n_elements=args.elements)
     print(format_report(report))
+    with Transaction() as tx:
+        if args.json is not None:
+            tx.write_json(args.json, report.to_json(), indent=2)
+        if args.rrd is not None or args.spawn:
+            _record(report, args.rrd, args.spawn, tx)
     if args.json is not None:
-        write_json(args.json, report.to_json(), indent=2)
         print(f"report: {args.json}")
-    if args.rrd is not None or args.spawn:
-        _record(report, args.rrd, args.spawn)
-        if args.rrd is not None:
-            print(f"rerun recording: {args.rrd}")
+    if args.rrd is not None:
+        print(f"rerun recording: {args.rrd}")
     return 0 if report.max_abs_dv is None or report.reproduced else 1

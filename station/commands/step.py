@@ -7,12 +7,17 @@ from pathlib import Path
 
 from station import DT
 from station import experiment as ex
+from station import runsetup
 from station.errors import StationError
-from station.commands.options import (add_model_options, add_protocol_option, add_report_options, add_seed_option,
-                                      check_writable, check_writable_dir, number, warn, write_json)
+from station.inputs import exists
+from station.commands.options import (add_force_option, add_model_options, add_protocol_option, add_report_options,
+                                      add_seed_option, model_inputs, number, warn)
 from station.config import apply_config
 from station.link import LinkLimits
-from station.protocol import legacy
+from station.outputs import Input, Output, check_folder, check_outputs, is_device, write_json
+from station.protocol import check_ticks
+from station.signals import noting
+from station.viz import RRD_BYTES_PER_TICK
 
 MAX_DURATION_S = (2**32 - 1) * DT
 """Longest run v1 can count (START's n_ticks is a u32), s."""
@@ -64,19 +69,21 @@ def configure(parser) -> None:
     parser.add_argument("--soft-limit", type=number(1, 32767, unit="encoder counts"), default=ex.DEFAULT_SOFT_LIMIT,
                         metavar="COUNTS",
                         help="stop safely when |θ| exceeds this (default 2048 = two revolutions)")
-    parser.add_argument("--max-lag", type=number(0, 100, integer=True), default=LinkLimits.max_lag, metavar="TICKS",
-                        help="stop (reason lag) when more samples than this are already waiting when a command "
-                             "is due: never drive the motor from stale samples (default 2)")
+    parser.add_argument("--max-lag", type=number(0, 1000, unit="ms"), default=1000 * LinkLimits.max_lag,
+                        metavar="MS", help="how far the station may fall behind the device and catch up (skipped "
+                        "samples and those that arrive while it computes, × 2 ms); more stops the run (reason lag). A command is "
+                        "only ever computed from the newest sample (default 20 ms, the v1 watchdog's 10 ticks)")
     parser.add_argument("--max-miss", type=number(0, 99, integer=True), default=LinkLimits.max_miss, metavar="TICKS",
-                        help="stop (reason sequence) when more of the last 100 ticks than this were dropped, "
-                             "stale, duplicated or late (default 10)")
+                        help="stop when more of the last 100 ticks than this were dropped, stale or duplicated "
+                             "(reason sequence), or ran on a held command (late or skipped) beyond one catch-up of "
+                             "--max-lag (reason lag) (default 10)")
     parser.add_argument("--max-step", type=number(1.0, 10000.0), default=LinkLimits.max_step, metavar="COUNTS",
                         help="largest plausible encoder change per tick; more stops the run (reason sequence; "
                              "default 40)")
     parser.add_argument("--out", type=Path, default=None, metavar="FILE",
-                        help="run log (default runs/step-<controller>-<UTC time with ms>.tsv); never overwritten "
-                             "without --force. The run's figure goes beside it as <log stem>.png")
-    parser.add_argument("--force", action="store_true", help="overwrite an existing --out file")
+                        help="run log (default runs/step-<controller>-<UTC time with ms>.tsv), streamed during the "
+                             "run. The run's figure goes beside it as <log stem>.png")
+    add_force_option(parser)
     parser.add_argument("--quiet", action="store_true",
                         help="no live progress line on stderr (it is shown only when stderr is a terminal)")
     parser.add_argument("--out-dir", type=Path, default=Path("runs"), metavar="DIR",
@@ -104,9 +111,9 @@ def check_args(args) -> None:
     if getattr(args, "_config_error", None):
         raise StationError(args._config_error)
     controller = str(args.controller)
-    builtin_ref = args.reference in ex.REFERENCES
+    builtin_ref = args.reference in runsetup.REFERENCES
     port = str(args.port)
-    if "://" not in port and not Path(port).exists():
+    if "://" not in port and not exists(port):
         raise StationError(f"--port {port}: no such device; `station ports` lists this machine's serial ports "
                            f"(the simulated rig is sim://)")
     if args.kp is not None and controller != "p":
@@ -126,20 +133,47 @@ def check_args(args) -> None:
     if args.step_time is None:
         args.step_time = ex.DEFAULT_STEP_TICK * DT
     if builtin_ref and args.reference != "swept-sine":
-        duration = ex.DEFAULT_DURATION if args.duration is None else args.duration
+        duration = runsetup.DEFAULT_DURATION if args.duration is None else args.duration
         if args.step_time >= duration:
             raise StationError(f"--step-time {args.step_time:g} s: the step must start before the run ends "
                                f"({duration:g} s)")
-    if args.duration is not None:
-        _check_resources(args.duration, args.out.parent if args.out is not None else args.out_dir)
-    if args.protocol == "legacy" and args.duration is not None and round(args.duration / DT) > legacy.MAX_TICKS:
-        raise StationError(f"--duration {args.duration:g} s: the legacy protocol counts at most "
-                           f"{legacy.MAX_TICKS} ticks ({legacy.MAX_TICKS * DT:g} s)")
-    check_writable(args.out, "--out", overwrite=args.force)
+    check_outputs(outputs(args), inputs(args), force=args.force)
     if args.out is None:
-        check_writable_dir(args.out_dir, "--out-dir")
-    check_writable(args.json, "--json")
-    check_writable(args.rrd, "--rrd")
+        check_folder(args.out_dir, "--out-dir")
+    if args.duration is not None:
+        _check_resources(args.duration, args.out.parent if args.out is not None else args.out_dir,
+                         rrd=args.rrd is not None)
+    if args.duration is not None:
+        try:
+            check_ticks(args.protocol, round(args.duration / DT))
+        except StationError as exc:  # the same refusal as run_step's, naming the option
+            raise StationError(f"--duration {args.duration:g} s: {exc}") from None
+
+
+def outputs(args) -> list[Output]:
+    """The files ``station step`` writes: the log (--out), its figure beside it, --json, --rrd.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        ``--out`` (None: a new default name, see :func:`station.experiment.default_log_path`),
+        ``--json``, ``--rrd``.
+    """
+    figure = None if args.out is None or is_device(args.out) else ex.figure_path(args.out)
+    return [Output("--out", args.out), Output("--out's figure", figure),
+            Output("--json", args.json), Output("--rrd", args.rrd)]
+
+
+def inputs(args) -> list[Input]:
+    """The files ``station step`` reads: a compensator file, a reference log, a model file, station.toml.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        ``--controller``, ``--reference``, ``--model`` and the settings file in use.
+    """
+    return [Input("--controller", args.controller), Input("--reference", runsetup.reference_path(args.reference)),
+            *model_inputs(args), Input("station.toml", getattr(args, "_config", None))]
 
 
 BYTES_PER_TICK_MEMORY = 200
@@ -149,8 +183,9 @@ BYTES_PER_TICK_DISK = 80
 """Disk a run log takes per tick, bytes (a row of our format is ~60)."""
 
 
-def _check_resources(duration: float, folder: Path) -> None:
-    """Refuse a run this machine cannot hold in memory or its log on disk (before it starts).
+def _check_resources(duration: float, folder: Path, rrd: bool = False) -> None:
+    """Refuse a run this machine cannot hold in memory (with an .rrd recording: that too) or
+    its log on disk (before it starts).
 
     Raises
     ------
@@ -160,7 +195,7 @@ def _check_resources(duration: float, folder: Path) -> None:
     import shutil
 
     ticks = round(duration / DT)
-    need_mem, need_disk = ticks * BYTES_PER_TICK_MEMORY, ticks * BYTES_PER_TICK_DISK
+    need_mem, need_disk = ticks * (BYTES_PER_TICK_MEMORY + RRD_BYTES_PER_TICK * rrd), ticks * BYTES_PER_TICK_DISK
     available = _available_memory()
     if available is not None and need_mem > available:
         raise StationError(f"--duration {duration:g} s: {ticks} ticks need about {need_mem / 1e9:.1f} GB of memory; "
@@ -196,7 +231,7 @@ def run(args) -> int:
         :func:`check_args`.
     """
     check_args(args)
-    chosen = ex.choose_controller(args.controller, args.kp, args.limit)  # before anything starts, once
+    chosen = runsetup.choose_controller(args.controller, args.kp, args.limit)  # before anything starts, once
     if chosen.note is not None:
         warn(chosen.note)
     if getattr(args, "_config", None):
@@ -206,25 +241,40 @@ def run(args) -> int:
         from station.viz import RerunSink
 
         sinks.append(RerunSink(rrd_path=args.rrd, spawn=args.spawn, name="station step"))
+    report = None
     try:
-        report = ex.run_step(port=args.port, protocol=args.protocol, controller=chosen.controller,
-                             amplitude=args.amplitude, duration=args.duration,
-                             step_time=args.step_time, reference=args.reference,
-                             out=args.out, sinks=sinks,
-                             kp=args.kp, limit=args.limit, soft_limit=args.soft_limit,
-                             timeout=args.timeout, baudrate=args.baud, force=args.force,
-                             limits=LinkLimits(timeout=args.timeout, max_lag=args.max_lag, max_miss=args.max_miss,
-                                               max_step=args.max_step),
-                             out_dir=args.out_dir, model=args.model, n_elements=args.elements, seed=args.seed,
-                             progress=not args.quiet and sys.stderr.isatty())
+        with noting(lambda: "before the run started; nothing written"):  # in the loop, the run's outcome says it
+            report = ex.run_step(port=args.port, protocol=args.protocol, controller=chosen.controller,
+                                 amplitude=args.amplitude, duration=args.duration,
+                                 step_time=args.step_time, reference=args.reference,
+                                 out=args.out, sinks=sinks,
+                                 kp=args.kp, limit=args.limit, soft_limit=args.soft_limit,
+                                 timeout=args.timeout, baudrate=args.baud, force=args.force,
+                                 limits=LinkLimits(timeout=args.timeout, max_lag=args.max_lag / 1000,
+                                                   max_miss=args.max_miss, max_step=args.max_step),
+                                 out_dir=args.out_dir, model=args.model, n_elements=args.elements, seed=args.seed,
+                                 progress=not args.quiet and sys.stderr.isatty(),
+                                 announce=lambda line: print(line, flush=True))
     finally:
-        for sink in sinks:
-            sink.close()
+        failed = _close(sinks, keep=report is not None)  # no recording of a run that never started
     print(ex.format_report(report))
     if report.figure_path is not None:
         print(f"figure: {report.figure_path}")
+    if failed is not None:  # after the run's report: the log is complete, an output is not
+        raise failed
     if args.rrd is not None:
         print(f"rerun recording: {args.rrd}")
     if args.json is not None:
         write_json(args.json, report.to_json())
     return report.result.outcome.exit_code
+
+
+def _close(sinks, keep: bool) -> StationError | None:
+    """Close every sink; the first one's error (an .rrd that could not be written), if any."""
+    failed = None
+    for sink in sinks:
+        try:
+            sink.close(keep=keep)
+        except StationError as exc:
+            failed = failed or exc
+    return failed

@@ -11,18 +11,28 @@ Continuous designs are discretized by Tustin's method at the sample time.
 A compensator file is TOML::
 
     name = "my-lead"          # optional
-    limit = 200.0             # optional, DAC counts; false for no clamp
+    limit = 200.0             # optional, the clamp of v: DAC counts in (0, 255]
     [gth]
     num = [20.0, 628.3185307179587]
     den = [1.0, 125.66370614359172]
     domain = "s"              # "s": Tustin at dt; "z": used as given (powers of z^-1)
     [ga]                      # optional, same fields
+    [shaper]                  # optional: reference shaper (station.control.shaper)
+    times = [0.0, 0.196]      # s, rounded to whole samples
+    amplitudes = [0.52, 0.48] # sum 1
+
+It is read bounded (:func:`station.inputs.load_toml`: a regular UTF-8 file of at most
+1 MB) and checked before anything runs: each filter of order at most :data:`MAX_ORDER`,
+finite coefficients, a design Tustin can discretize (no pole at s = 2/dt) into finite z
+coefficients, and a ``limit`` within :data:`FILE_LIMIT` (the DAC's ±255 at most: a
+larger clamp would not be what runs). What the file asks for is what runs, or the file
+is refused with one line naming it, the line and the field.
 """
 
 from __future__ import annotations
 
+import json
 import math
-import tomllib
 import warnings
 from pathlib import Path
 from typing import Any, NamedTuple
@@ -30,8 +40,12 @@ from typing import Any, NamedTuple
 import numpy as np
 
 from station.control.compensator import Compensator, OpenLoop
+from station.control.contract import DAC_LIMIT
+from station.control.shaper import ShaperTimes, check_shaper, make_shaper, shaper_from_spec
 from station.control.tf import DiscreteTF, tustin
 from station.errors import StationError
+from station.inputs import TomlDoc, exists, load_toml
+from station.ranges import RangeError, number, shown
 
 _P_LEAD = 2 * math.pi * 20.0
 _Z_LEAD = 2 * math.pi * 5.0
@@ -50,6 +64,19 @@ ACCEL_DEN_S = (1.0, _A2, _A1, _A0)
 KINDS = ("p", "lead", "lead-accel", "open-loop")
 """Built-in controller kinds of :func:`make_controller`."""
 
+MAX_ORDER = 20
+"""Highest order of a filter read from a compensator file or a log header's spec (the
+rig's designs are of order 1 and 3; discretizing and checking a filter costs about the
+cube of its order, and an order in the thousands would take hours)."""
+
+MAX_Z_COEFF = 1e9
+"""Largest magnitude of a filter's z coefficient (normalized, den_z[0] = 1): the rig's are
+below 40; a gain of 1e9 DAC counts per encoder count is no design, and larger ones make
+the recursion overflow to inf and NaN."""
+
+FILE_LIMIT = number(0.0, DAC_LIMIT, unit="DAC counts", nonzero=True)
+"""The range of a compensator file's ``limit``, ±DAC counts: (0, 255], the DAC's range."""
+
 
 def _stage(num: Any, den: Any, domain: str, dt: float) -> tuple[DiscreteTF, dict[str, Any]]:
     """One filter and its JSON-able description (continuous design and z coefficients)."""
@@ -66,13 +93,17 @@ def _stage(num: Any, den: Any, domain: str, dt: float) -> tuple[DiscreteTF, dict
 
 
 def _build(kind: str, name: str, gth: tuple, ga: tuple | None, limit: float | None, dt: float,
-           extra: dict[str, Any] | None = None) -> Compensator:
+           extra: dict[str, Any] | None = None, shaper: ShaperTimes | None = None,
+           where: str = "[shaper]") -> Compensator:
     gth_tf, gth_desc = _stage(*gth, dt)
     ga_tf, ga_desc = _stage(*ga, dt) if ga is not None else (None, None)
+    shaping = None if shaper is None else make_shaper(shaper.times, shaper.amplitudes, dt, where)
     spec: dict[str, Any] = {"kind": kind, "name": name, "dt": dt}
     spec.update(extra or {})
     spec.update({"gth": gth_desc, "ga": ga_desc, "limit": None if limit is None else float(limit)})
-    return Compensator(gth_tf, ga_tf, limit=limit, name=name, spec=spec)
+    if shaping is not None:  # only then: a log without a shaper keeps the header it always had
+        spec["shaper"] = shaping.spec
+    return Compensator(gth_tf, ga_tf, limit=limit, name=name, spec=spec, shaper=shaping)
 
 
 def p_controller(kp: float = 2.0, limit: float | None = 200.0, dt: float = 0.002) -> Compensator:
@@ -110,7 +141,8 @@ def lead_controller(limit: float | None = 200.0, dt: float = 0.002, accel: bool 
 def controller_from_spec(spec: dict[str, Any]) -> Compensator | OpenLoop:
     """Rebuild a controller from the ``spec`` a log header holds (our format).
 
-    Uses the z coefficients as recorded (JSON floats round-trip exactly).
+    Uses the z coefficients as recorded (JSON floats round-trip exactly), and the
+    reference shaper's delays and amplitudes when the spec has a ``shaper``.
 
     Parameters
     ----------
@@ -133,52 +165,114 @@ def controller_from_spec(spec: dict[str, Any]) -> Compensator | OpenLoop:
             if desc is None:
                 stages.append(None)
                 continue
-            stages.append(DiscreteTF(desc["num_z"], desc["den_z"]))
+            tf = DiscreteTF(desc["num_z"], desc["den_z"])
+            problem = z_problem(tf.num, tf.den)  # the one check of every filter read
+            if problem is not None:
+                raise ValueError(f"{key}: {problem}")
+            stages.append(tf)
         if stages[0] is None:
             raise KeyError("gth")
-        return Compensator(stages[0], stages[1], limit=limit, name=str(spec.get("name", kind)), spec=spec)
-    except (KeyError, TypeError, ValueError) as exc:
-        raise StationError(f"controller spec in log header: bad or missing field {exc}") from None
+        shaper = spec.get("shaper")
+        shaping = None if shaper is None else shaper_from_spec(shaper, float(spec.get("dt", 0.002)))
+        return Compensator(stages[0], stages[1], limit=limit, name=str(spec.get("name", kind)), spec=spec,
+                           shaper=shaping)
+    except (KeyError, TypeError, ValueError, AttributeError) as exc:
+        raise StationError(f"controller spec in log header: bad or missing field {str(exc)[:200]}") from None
 
 
-def _check_coeffs(path: Path, field: str, value: Any) -> list[float]:
+def _check_coeffs(doc: TomlDoc, table: str, field: str, value: Any) -> list[float]:
     if not isinstance(value, list) or not value:
-        raise StationError(f"{path}: {field}: expected a non-empty list of numbers, got {value!r}")
+        raise doc.error(field, f"expected a non-empty list of numbers, got {shown(value)}", table)
+    if len(value) > MAX_ORDER + 1:
+        raise doc.error(field, f"{len(value)} coefficients: a filter is of order at most {MAX_ORDER} "
+                        f"(at most {MAX_ORDER + 1} coefficients)", table)
     out = []
     for i, c in enumerate(value):
         if isinstance(c, bool) or not isinstance(c, (int, float)) or not math.isfinite(c):
-            raise StationError(f"{path}: {field}[{i}]: expected a finite number, got {c!r}")
+            raise doc.error(field, f"expected a finite number, got {shown(c)}", table, index=i)
         out.append(float(c))
     return out
 
 
-def _read_stage(path: Path, table: str, doc: dict[str, Any]) -> tuple[list[float], list[float], str]:
-    stage = doc[table]
+def _read_stage(doc: TomlDoc, table: str) -> tuple[list[float], list[float], str]:
+    stage = doc.data[table]
     if not isinstance(stage, dict):
-        raise StationError(f"{path}: [{table}]: expected a table with num, den and domain")
+        raise StationError(f"{doc.path}: [{table}]: expected a table with num, den and domain",
+                           file=doc.path, line=doc.line_of(table), key=table)
     unknown = sorted(set(stage) - {"num", "den", "domain"})
     if unknown:
-        raise StationError(f"{path}: [{table}].{unknown[0]}: unknown field (expected num, den, domain)")
+        raise doc.error(unknown[0], "unknown field (expected num, den, domain)", table)
     for key in ("num", "den", "domain"):
         if key not in stage:
-            raise StationError(f"{path}: [{table}].{key}: missing")
+            raise doc.error(key, "missing", table)
     domain = stage["domain"]
     if domain not in ("s", "z"):
-        raise StationError(f'{path}: [{table}].domain: expected "s" or "z", got {domain!r}')
-    num = _check_coeffs(path, f"[{table}].num", stage["num"])
-    den = _check_coeffs(path, f"[{table}].den", stage["den"])
+        raise doc.error("domain", f'expected "s" or "z", got {shown(domain)}', table)
+    num = _check_coeffs(doc, table, "num", stage["num"])
+    den = _check_coeffs(doc, table, "den", stage["den"])
     if den[0] == 0.0:
-        raise StationError(f"{path}: [{table}].den[0]: must not be zero")
+        raise doc.error("den", "must not be zero", table, index=0)
     if domain == "s":
         num_t = np.trim_zeros(np.asarray(num), "f")
         if len(num_t) > len(den):
-            raise StationError(f"{path}: [{table}].num: improper design (numerator degree {len(num_t) - 1} "
-                               f"> denominator degree {len(den) - 1})")
+            raise doc.error("num", f"improper design (numerator degree {len(num_t) - 1} > denominator degree "
+                            f"{len(den) - 1})", table)
     return num, den, domain
 
 
 Stage = tuple[list[float], list[float], str]
 """One filter of a compensator file: (num, den, domain), coefficients as written."""
+
+
+def z_problem(num_z: np.ndarray, den_z: np.ndarray) -> str | None:
+    """What is wrong with a filter's z coefficients, None when nothing: the one check of
+    every filter read (compensator files, our log headers' specs, the rig's headers).
+
+    Parameters
+    ----------
+    num_z, den_z : numpy.ndarray, shape (m+1,), (n+1,)
+        Normalized coefficients (den_z[0] = 1), ascending powers of z^-1.
+
+    Returns
+    -------
+    str or None
+        "num_z[0] = 1e+12 is outside ±1e+09 (...)", or a coefficient that is not finite;
+        None for a filter within :data:`MAX_Z_COEFF` and of order at most :data:`MAX_ORDER`.
+    """
+    if max(len(num_z), len(den_z)) > MAX_ORDER + 1:
+        return f"{max(len(num_z), len(den_z))} coefficients; a filter is of order at most {MAX_ORDER}"
+    for name, c in (("num_z", num_z), ("den_z", den_z)):
+        if not np.all(np.isfinite(c)):
+            return f"{name} holds a number that is not finite"
+        big = np.flatnonzero(np.abs(c) > MAX_Z_COEFF)
+        if big.size:
+            return (f"{name}[{int(big[0])}] = {float(c[big[0]]):.4g} is outside ±{MAX_Z_COEFF:g} (the recursion "
+                    f"would overflow)")
+    return None
+
+
+def _check_discretizable(path: Path, table: str, stage: Stage, dt: float) -> None:
+    """StationError naming the file and table when an s-domain filter has a pole at s = 2/dt
+    (Tustin maps it to z = infinity), or its z coefficients (Tustin at ``dt``, or the
+    z-domain ones normalized by den[0]) are not finite or outside ±:data:`MAX_Z_COEFF`."""
+    num, den, domain = stage
+    with np.errstate(all="ignore"):
+        if domain == "s":
+            w = 2.0 / dt  # Tustin maps s = 2/dt to z = infinity: den(2/dt) = 0 makes the leading z coefficient 0
+            powers = w ** np.arange(len(den) - 1, -1, -1, dtype=float)
+            scale = float(np.sum(np.abs(den) * powers))
+            if math.isfinite(scale) and abs(float(np.polyval(den, w))) <= 1e-12 * scale:
+                raise StationError(f"{path}: [{table}].den: a pole at s = 2/dt = {w:g} rad/s, which Tustin at "
+                                   f"dt = {dt:g} s maps to z = infinity (no causal recursion)",
+                                   file=path, key=f"[{table}].den")
+        try:
+            num_z, den_z = tustin(num, den, dt) if domain == "s" else (np.divide(num, den[0]), np.divide(den, den[0]))
+            problem = z_problem(np.asarray(num_z, float), np.asarray(den_z, float))
+        except (ValueError, ArithmeticError, np.linalg.LinAlgError) as exc:
+            problem = str(exc)
+    if problem is not None:
+        how = f"Tustin at dt = {dt:g} s" if domain == "s" else "normalized by den[0]"
+        raise StationError(f"{path}: [{table}]: {how}: {problem}", file=path, key=f"[{table}]")
 
 
 class CompensatorFile(NamedTuple):
@@ -193,9 +287,12 @@ class CompensatorFile(NamedTuple):
     gth, ga : Stage, Stage or None
         ``(num, den, domain)`` of [gth] and [ga] (None without [ga]).
     limit : float or None
-        The clamp the file sets, ±DAC counts (None: ``limit = false``, no clamp).
+        The clamp the file sets, ±DAC counts in (0, 255] (None: the file sets none).
     sets_limit : bool
         The file has a ``limit``: then it wins over any other (:meth:`clamp`).
+    shaper : ShaperTimes or None
+        The ``[shaper]``'s times (s, as written; rounded to whole samples when the
+        compensator is built) and amplitudes (None without [shaper]).
     """
 
     path: Path
@@ -204,6 +301,7 @@ class CompensatorFile(NamedTuple):
     ga: Stage | None
     limit: float | None
     sets_limit: bool
+    shaper: ShaperTimes | None = None
 
     def clamp(self, limit: float | None) -> float | None:
         """The clamp the compensator runs with: the file's own ``limit`` wins over ``limit``.
@@ -216,8 +314,8 @@ class CompensatorFile(NamedTuple):
         return self.limit if self.sets_limit else limit
 
     def limit_text(self) -> str:
-        """The file's ``limit`` as written in TOML (``150``, ``false``), for messages."""
-        return "false" if self.limit is None else f"{self.limit:g}"
+        """The file's ``limit`` as written in TOML (``150``), for messages ("none" without one)."""
+        return "none" if self.limit is None else f"{self.limit:g}"
 
     def compensator(self, dt: float = 0.002, limit: float | None = 200.0) -> Compensator:
         """The compensator, ``domain = "s"`` stages discretized by Tustin at ``dt``.
@@ -232,12 +330,17 @@ class CompensatorFile(NamedTuple):
         Raises
         ------
         StationError
-            A design that cannot be discretized (naming the file).
+            A design that cannot be discretized (naming the file and the table), or shaper
+            times that fall on the same sample at ``dt``.
         """
+        for table, stage in (("gth", self.gth), ("ga", self.ga)):
+            if stage is not None:
+                _check_discretizable(self.path, table, stage, dt)
         try:
-            comp = _build("file", self.name, self.gth, self.ga, self.clamp(limit), dt, {"file": str(self.path)})
+            comp = _build("file", self.name, self.gth, self.ga, self.clamp(limit), dt, {"file": str(self.path)},
+                          self.shaper, f"{self.path}: [shaper]")
         except ValueError as exc:
-            raise StationError(f"{self.path}: {exc}") from None
+            raise StationError(f"{self.path}: {exc}", file=self.path) from None
         for table, tf in (("gth", comp.gth), ("ga", comp.ga)):
             poles = np.roots(tf.den) if tf is not None and tf.den.size > 1 else np.array([])
             bad = poles[np.abs(poles) > 1.0 + 1e-9]
@@ -246,6 +349,25 @@ class CompensatorFile(NamedTuple):
                               f"> 1 after discretization at {dt:g} s): the compensator alone diverges",
                               RuntimeWarning, stacklevel=3)
         return comp
+
+    def to_toml(self) -> str:
+        """The file's text (TOML): what :func:`read_compensator_file` reads back to the same
+        stages, limit and shaper (floats written with ``repr``: they round-trip exactly)."""
+        lines = [f"name = {json.dumps(self.name)}"]
+        if self.sets_limit:
+            lines.append(f"limit = {'false' if self.limit is None else repr(float(self.limit))}")
+        for table, stage in (("gth", self.gth), ("ga", self.ga)):
+            if stage is not None:
+                num, den, domain = stage
+                lines += ["", f"[{table}]", f'domain = "{domain}"', f"num = {_floats(num)}", f"den = {_floats(den)}"]
+        if self.shaper is not None:
+            lines += ["", "[shaper]", f"times = {_floats(self.shaper.times)}  # s",
+                      f"amplitudes = {_floats(self.shaper.amplitudes)}"]
+        return "\n".join(lines) + "\n"
+
+
+def _floats(values) -> str:
+    return "[" + ", ".join(repr(float(x)) for x in values) + "]"
 
 
 def read_compensator_file(path: str | Path) -> CompensatorFile:
@@ -264,40 +386,51 @@ def read_compensator_file(path: str | Path) -> CompensatorFile:
     Raises
     ------
     StationError
-        Naming the file and the field: unreadable file, invalid TOML, missing [gth],
-        unknown field, bad coefficients, bad domain, improper design, bad limit.
+        Naming the file, the line and the field: not a regular file, larger than 1 MB,
+        not UTF-8, invalid or too deeply nested TOML, missing [gth], unknown field, bad
+        coefficients, a filter of order above :data:`MAX_ORDER`, bad domain, improper
+        design, a limit that is not a number in (0, 255], a [shaper] whose times are not
+        increasing from >= 0 s or whose amplitudes do not sum to 1.
     """
-    path = Path(path)
-    try:
-        text = path.read_text(encoding="utf-8")
-    except OSError as exc:
-        raise StationError(f"{path}: cannot read compensator file: {exc.strerror or exc}") from None
-    except UnicodeDecodeError as exc:
-        line = path.read_bytes()[:exc.start].count(b"\n") + 1
-        raise StationError(f"{path}: line {line}: not UTF-8 text ({exc.reason} at byte {exc.start}); "
-                           f"a compensator file is TOML, UTF-8") from None
-    try:
-        doc = tomllib.loads(text)
-    except tomllib.TOMLDecodeError as exc:
-        raise StationError(f"{path}: not valid TOML: {exc}") from None
-    unknown = sorted(set(doc) - {"gth", "ga", "limit", "name"})
+    doc = load_toml(path, "compensator file")
+    path, data = doc.path, doc.data
+    unknown = sorted(set(data) - {"gth", "ga", "limit", "name", "shaper"})
     if unknown:
-        raise StationError(f"{path}: {unknown[0]}: unknown field (expected gth, ga, limit, name)")
-    if "gth" not in doc:
-        raise StationError(f"{path}: [gth]: missing (the compensator from e to v)")
-    gth = _read_stage(path, "gth", doc)
-    ga = _read_stage(path, "ga", doc) if "ga" in doc else None
+        raise doc.error(unknown[0], "unknown field (expected gth, ga, limit, name, shaper)")
+    if "gth" not in data:
+        raise StationError(f"{path}: [gth]: missing (the compensator from e to v)", file=path, key="gth")
+    gth = _read_stage(doc, "gth")
+    ga = _read_stage(doc, "ga") if "ga" in data else None
     limit = None
-    if "limit" in doc:
-        lim = doc["limit"]
-        if lim is not False:
-            if isinstance(lim, bool) or not isinstance(lim, (int, float)) or not (math.isfinite(lim) and lim > 0):
-                raise StationError(f"{path}: limit: expected a positive number of DAC counts or false, got {lim!r}")
-            limit = float(lim)
-    name = doc.get("name", path.stem)
+    if "limit" in data:
+        try:
+            limit = float(FILE_LIMIT.check(data["limit"]))
+        except RangeError as exc:
+            raise doc.error("limit", f"the clamp of v: {exc}") from None
+    name = data.get("name", path.stem)
     if not isinstance(name, str) or not name:
-        raise StationError(f"{path}: name: expected a non-empty string, got {name!r}")
-    return CompensatorFile(path, name, gth, ga, limit, "limit" in doc)
+        raise doc.error("name", f"expected a non-empty string, got {shown(name)}")
+    return CompensatorFile(path, name, gth, ga, limit, "limit" in data, _read_shaper(doc))
+
+
+def _read_shaper(doc) -> ShaperTimes | None:
+    """The file's [shaper] (None without one), checked (:func:`station.control.shaper.check_shaper`)."""
+    data = doc.data
+    if "shaper" not in data:
+        return None
+    table = data["shaper"]
+    line = doc.line_of("shaper", None)
+    where = f"{doc.path}: line {line}: [shaper]" if line else f"{doc.path}: [shaper]"
+    if not isinstance(table, dict):
+        raise StationError(f"{where}: expected a table with times and amplitudes", file=doc.path, line=line,
+                           key="shaper")
+    unknown = sorted(set(table) - {"times", "amplitudes"})
+    if unknown:
+        raise doc.error(unknown[0], "unknown field (expected times, amplitudes)", table="shaper")
+    for key in ("times", "amplitudes"):
+        if key not in table:
+            raise doc.error(key, "missing", table="shaper")
+    return check_shaper(table["times"], table["amplitudes"], where)
 
 
 def load_compensator_file(path: str | Path, dt: float = 0.002, limit: float | None = 200.0) -> Compensator:
@@ -364,7 +497,7 @@ def make_controller(kind: str, dt: float = 0.002, kp: float = 2.0,
         except ValueError as exc:  # a bad kp, limit or dt from the user
             raise StationError(f"controller {kind!r} (kp {kp:g}, limit {limit}, dt {dt:g}): {exc}") from None
     path = Path(kind)
-    if not path.is_file():
+    if not exists(path):
         raise StationError(f"controller {kind!r}: expected one of {', '.join(KINDS)} "
                            f"or a compensator file (TOML); no such file")
     return load_compensator_file(path, dt, limit)

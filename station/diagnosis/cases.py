@@ -83,11 +83,13 @@ def load_case(path: str | Path) -> RunCase:
     ------
     StationError
         Unreadable log (:class:`station.runlog.RunLogError`), a log of fewer than 50 rows,
+        a log without a column the simulation needs (:attr:`station.logged.LoggedRun.model_columns`),
         or a malformed controller in its header.
     """
     run = LoggedRun.from_path(path)
     if len(run) < 50:
         raise StationError(f"{path}: {len(run)} rows; a diagnosis needs a run of at least 50 samples")
+    run.check_columns(run.model_columns, "a diagnosis (the run simulated on a model and fitted)")
     notes = list(run.notes)
     if run.closed:
         if run.max_abs_dv > REPRODUCED_DV:

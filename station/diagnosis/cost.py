@@ -18,6 +18,8 @@ import numpy as np
 
 from station.analysis.residuals import ACCEL_NOISE_STD, THETA_QUANTIZATION_STD, noise_std
 from station.diagnosis.cases import RunCase, Simulator, simulate_case
+from station.signals import check_stop
+from station.errors import StationError
 
 
 def _key(effects: Mapping[str, float]) -> tuple:
@@ -69,12 +71,27 @@ class Evaluator:
         i : int
             Index of the run in ``cases``.
         """
+        return self.predict_case(self.cases[i], effects)
+
+    def predict_case(self, case: RunCase, effects: Mapping[str, float]) -> tuple[np.ndarray, np.ndarray]:
+        """Simulated θ and a of a run (e.g. a copy of one of ``cases`` with another
+        controller), counted in :attr:`simulations`, not cached.
+
+        Parameters
+        ----------
+        case : RunCase
+            The run.
+        effects : mapping of str to float
+            Effect name -> value, applied to the base model.
+        """
+        check_stop()  # SIGINT / SIGTERM: every thread stops before its next simulation
         with self._lock:
             self.simulations += 1
-        return self.simulate(self.cases[i], self.model_with(effects))
+        return self.simulate(case, self.model_with(effects))
 
     def sse(self, effects: Mapping[str, float], i: int) -> tuple[float, float]:
-        """Sum of squared θ and a errors of run i, counts² (inf when the simulation diverges).
+        """Sum of squared θ and a errors of run i, counts² (inf when the simulation diverges or
+        the model cannot be built, e.g. values a model file may not hold).
 
         Parameters
         ----------
@@ -88,7 +105,8 @@ class Evaluator:
         if hit is None:
             try:
                 theta, a = self.predict(effects, i)
-            except (ArithmeticError, ValueError, np.linalg.LinAlgError):  # a model that cannot be built or run
+            # a model that cannot be built (values a model may not hold) or run
+            except (ArithmeticError, ValueError, np.linalg.LinAlgError, StationError):
                 self._cache[key] = hit = (math.inf, math.inf)
                 return hit
             c = self.cases[i]

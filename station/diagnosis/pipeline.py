@@ -1,5 +1,6 @@
-""":func:`diagnose`: the diagnosis's steps in order (read the runs, the nominal model and the
-noise levels, every candidate alone, forward selection, the result)."""
+""":func:`diagnose`: the diagnosis's steps in order (read the runs and check them, the nominal
+model and the noise levels, every candidate alone, forward selection, the intervals and
+alternatives, what remains unexplained, the result)."""
 
 from __future__ import annotations
 
@@ -11,9 +12,12 @@ from typing import NamedTuple
 from station.diagnosis.cases import Simulator, load_case
 from station.diagnosis.cost import Evaluator, calibrate_noise, pooled, relative_gain, rms_gain
 from station.diagnosis.folds import fold_records, make_folds, validation_runs
-from station.diagnosis.records import effect_results, run_reports
+from station.diagnosis.doubt import alternatives, effective_terms, effect_interval, interval_method
+from station.diagnosis.inputs import refuse_repeated_runs, set_aside_beam_tests
+from station.diagnosis.records import effect_results, model_predictions, run_reports
 from station.diagnosis.result import Diagnosis
 from station.diagnosis.selection import Search, Trial, effect_axes, fit_each_alone, forward_select
+from station.diagnosis.unexplained import check_unexplained
 from station.errors import StationError
 from station.plant.effects import CANDIDATES, EFFECTS
 from station.plant.model import as_model
@@ -98,6 +102,51 @@ def _nominal(search: Search, how: str) -> _Nominal:
     return _Nominal(predictions, trial)
 
 
+def _use_runs(runs: list, validate: list) -> tuple[list, int, list[str]]:
+    """Load the runs; refuse a run given twice; set hub-held beam tests aside. Returns the
+    cases kept (RUNs first), how many are RUNs, and the notes saying what was left out."""
+    cases = [load_case(p) for p in runs + validate]
+    refuse_repeated_runs(cases, len(runs))
+    kept, notes = set_aside_beam_tests(cases)
+    n_fit = sum(1 for i in kept if i < len(runs))
+    n_val = len(kept) - n_fit
+    left = "; ".join(n.split(" is a ")[0] for n in notes)
+    why = f" after leaving out the hub-held beam test(s) {left} (a free-hub model cannot simulate a held hub)"
+    if n_fit == 0:
+        raise StationError(f"diagnose: no run left to fit on{why}")
+    if validate and n_val == 0:
+        raise StationError(f"diagnose: no --validate run left{why}")
+    if not validate and n_fit < 2:
+        raise StationError(f"diagnose: leave-one-run-out needs at least two runs, {n_fit} left{why}; "
+                           "give more runs or --validate RUN")
+    return [cases[i] for i in kept], n_fit, notes
+
+
+class _Doubt(NamedTuple):
+    intervals: dict     # accepted effect -> Interval
+    method: str         # interval_method
+    alternatives: list  # of Alternative
+
+
+def _doubt(search: Search, sel, nominal: Trial, judged: dict, final: dict) -> _Doubt:
+    """Intervals of the accepted effects (profile likelihood on the fit runs) and the
+    alternatives the validation data cannot tell apart."""
+    if not sel.accepted:
+        return _Doubt({}, "", [])
+    ev = search.ev
+    n_fit = effective_terms(ev, final, search.fit_runs)
+    intervals = {}
+    for name in sel.accepted:
+        iv = effect_interval(ev, search.axes, name, sel.values, search.fit_runs, n_fit,
+                             [fv[name] for fv in sel.current.fold_values])
+        if iv is not None:
+            intervals[name] = iv
+            search.say(f"95 % interval of {name}: {iv.lo:.4g} .. {iv.hi:.4g} ({ev.simulations} simulations)")
+    n_val = effective_terms(ev, judged, validation_runs(search.folds))
+    alts = alternatives(search, sel, nominal, n_val)
+    return _Doubt(intervals, interval_method(n_fit, ev.terms(search.fit_runs), len(search.folds)), alts)
+
+
 def _diagnose(runs, validate, model, progress, candidates, simulate, workers) -> Diagnosis:
     t0 = time.perf_counter()
     runs, validate = list(runs), list(validate)
@@ -105,10 +154,12 @@ def _diagnose(runs, validate, model, progress, candidates, simulate, workers) ->
     base = as_model(model)
     names = _candidates(candidates)
     workers, axes = max(1, int(workers or 1)), effect_axes()
-    cases = [load_case(p) for p in runs + validate]
-    folds, how = make_folds(len(runs), len(validate))
+    cases, n_fit, notes = _use_runs(runs, validate)
+    folds, how = make_folds(n_fit, len(cases) - n_fit)
     ev = Evaluator(cases, base, simulate)
-    search = Search(ev, folds, tuple(range(len(runs))), axes, workers, progress or (lambda msg: None))
+    search = Search(ev, folds, tuple(range(n_fit)), axes, workers, progress or (lambda msg: None))
+    for note in notes:
+        search.say(note)
 
     nominal = _nominal(search, how)
     singles = fit_each_alone(search, names, nominal.trial)
@@ -118,8 +169,13 @@ def _diagnose(runs, validate, model, progress, candidates, simulate, workers) ->
     fit_nom, fit_ext = pooled(ev, nominal.trial.val_sse), pooled(ev, sel.current.val_sse)
     gain = rms_gain(fit_ext.rms_theta, fit_nom.rms_theta) if accepted else 0.0
     cost_gain = relative_gain(sel.current.val_weighted, nominal.trial.val_weighted) if accepted else 0.0
-    reports, before = run_reports(ev, folds, nominal.predictions, sel)
-    effects = effect_results(ev, how, names, singles, sel, nominal.trial, before)
+    judged, final = model_predictions(ev, folds, nominal.predictions, sel)
+    doubt = _doubt(search, sel, nominal.trial, judged, final)
+    unexplained = check_unexplained(ev, sel.values, final)
+    search.say("unexplained: " + (unexplained.evidence if unexplained.flag else
+                                  "no; the residuals are what encoder rounding and accelerometer noise produce"))
+    reports, before = run_reports(ev, folds, nominal.predictions, sel, judged, final)
+    effects = effect_results(ev, how, names, singles, sel, nominal.trial, before, doubt.intervals)
 
     search.say(f"done: cause {accepted[0] if accepted else 'none'}, θ gain {gain:.1f} %, {ev.simulations} "
                f"simulations in {time.perf_counter() - t0:.1f} s")
@@ -129,4 +185,5 @@ def _diagnose(runs, validate, model, progress, candidates, simulate, workers) ->
         gain_pct=float(gain), effects=effects, extended_model=extended, nominal_model=base, runs=reports,
         validation=how, simulations=ev.simulations,
         folds=fold_records(folds, [c.name for c in cases], sel.current.fold_values),
-        elapsed_s=time.perf_counter() - t0, cost_gain_pct=float(cost_gain))
+        elapsed_s=time.perf_counter() - t0, cost_gain_pct=float(cost_gain), unexplained=unexplained,
+        alternatives=doubt.alternatives, interval_method=doubt.method, notes=notes)

@@ -112,8 +112,167 @@ def format_pct(x: float | None) -> str:
     return "n/a" if x is None or not math.isfinite(x) else f"{x:.1f} %"
 
 
-def summary_paragraph(diag) -> str:
-    """One paragraph naming the cause, its value and the gain.
+EFFECT_WORDS = {
+    "coulomb_friction": "dry (Coulomb) friction on the motor",
+    "deadzone": "a dead-zone in the amplifier",
+    "saturation": "amplifier saturation",
+    "delay": "extra delay of the command",
+    "backlash": "backlash (free play) in the drive train",
+    "beam_damping": "the beam's damping",
+    "accel_gain": "the accelerometer's sensitivity",
+    "static_friction": "breakaway (static) friction on the motor",
+    "viscous_friction": "viscous friction on the motor",
+    "amp_offset": "an amplifier offset",
+}
+"""Plain words for the effects of the vocabulary (others are shown by their code name)."""
+
+PARAMETER_WORDS = {
+    "mu": "beam mass per length", "EI": "beam bending stiffness (EI)", "drive_k": "drive-train stiffness",
+    "drive_c": "drive-train damping", "clamp_k": "clamp stiffness", "clamp_c": "clamp damping",
+    "J_base": "base inertia", "m_accel": "accelerometer mass", "J_accel": "accelerometer rotary inertia",
+    "act_K": "actuator gain", "act_p": "actuator pole (the motor's own damping)",
+}
+"""Plain words for the parameters a param:NAME ratio scales."""
+
+OVERSHOOT_POINTS = 3.0
+"""A model's step overshoot is on target within this many percentage points of the rig's
+(issue 17)."""
+
+
+def at_range_end(name: str, value: float) -> bool:
+    """The value sits at an end of the effect's search range, within the fit's resolution
+    (:data:`station.diagnosis.doubt.RESOLUTION_STEPS` grid steps): the fit wanted further.
+    The neutral value ("no effect", e.g. no friction at 0) does not count.
+
+    Parameters
+    ----------
+    name : str
+        An effect of :data:`station.plant.effects.EFFECTS`.
+    value : float
+        Its value, in its unit.
+    """
+    from station.analysis.fitting import axis_for
+    from station.diagnosis.doubt import RESOLUTION_STEPS
+    from station.plant.effects import EFFECTS
+
+    spec = EFFECTS.get(name)
+    if spec is None or not math.isfinite(value) or math.isclose(value, spec.neutral, rel_tol=1e-6, abs_tol=1e-9):
+        return False
+    ax = axis_for(name, spec.lower, spec.upper, spec.neutral)
+    return any(abs(ax.to_unit(value) - ax.to_unit(b)) <= RESOLUTION_STEPS * ax.step for b in (spec.lower, spec.upper))
+
+
+def plain_name(name: str) -> str:
+    """An effect in plain words with its code name, e.g. "drive-train damping
+    (param:drive_c)"; the code name alone when no words are known.
+
+    Parameters
+    ----------
+    name : str
+        The effect's code name.
+    """
+    words = PARAMETER_WORDS.get(name[6:]) if name.startswith("param:") else EFFECT_WORDS.get(name)
+    return f"{words} ({name})" if words else name
+
+
+def plain_value(name: str, value: float, unit: str) -> str:
+    """An effect's value as a person reads it: ratios as "1.98× nominal" (param:NAME) or
+    "0.92× the model's" (accel_gain), the beam damping as "ζ = 0.021", the rest with their
+    unit (:func:`format_value`).
+
+    Parameters
+    ----------
+    name : str
+        The effect's code name.
+    value : float
+        Its value, in ``unit``.
+    unit : str
+        Its unit (:data:`station.plant.effects.EFFECTS`).
+    """
+    if not math.isfinite(value):
+        return format_value(value, unit)
+    if name.startswith("param:"):
+        return f"{value:.3g}× nominal"
+    if name == "accel_gain":
+        return f"{value:.3g}× the model's"
+    if name == "beam_damping":
+        return f"ζ = {value:.3g}"
+    return format_value(value, unit)
+
+
+def interval_words(name: str, interval, unit: str) -> str:
+    """ "95 % interval 1.54–3.16", with the range's end named where the interval reaches it.
+
+    Parameters
+    ----------
+    name : str
+        The effect's code name.
+    interval : Interval or None
+        :class:`station.diagnosis.doubt.Interval`.
+    unit : str
+        The effect's unit.
+    """
+    if interval is None:
+        return ""
+    fmt = (lambda x: f"{x:.0f}") if unit == "samples" else (lambda x: f"{x:.3g}")  # noqa: E731
+    suffix = "" if unit == "1" else f" {unit}"
+    ends = [w for w, at in (("lower", interval.lo_at_bound), ("upper", interval.hi_at_bound)) if at]
+    note = f", reaching the {' and '.join(ends)} end of its search range" if ends else ""
+    r = getattr(interval, "refits", None)
+    if r is not None and (math.isclose(r[0], interval.lo) or math.isclose(r[1], interval.hi)):
+        note += f"; refitted without each run {fmt(r[0])}–{fmt(r[1])}: it depends on which runs judge it"
+    return f"95 % interval {fmt(interval.lo)}–{fmt(interval.hi)}{suffix}{note}"
+
+
+def cause_words(effect) -> str:
+    """An accepted effect as the answer names it: plain words, code name, value with its
+    95 % interval, flagged when the fit sits at its search range's end.
+
+    Parameters
+    ----------
+    effect : EffectResult
+    """
+    text = f"{plain_name(effect.name)} {plain_value(effect.name, effect.value, effect.unit)}"
+    iv = interval_words(effect.name, effect.interval, effect.unit)
+    if iv:
+        text += f" ({iv})"
+    if effect.at_range_end:
+        text += " — at the end of its search range: the data want it further"
+    return text
+
+
+def target_notes(diag) -> list[str]:
+    """Where the extended model misses its targets: a closed-loop step's overshoot more
+    than :data:`OVERSHOOT_POINTS` points from the rig's, and θ residuals that stay far from
+    white (more than a quarter of the autocorrelation lags outside the 99 % band).
+
+    Parameters
+    ----------
+    diag : Diagnosis
+    """
+    notes = []
+    for r in diag.runs:
+        m = r.metrics
+        if m is None or m.get("rig") is None or m.get("extended") is None:
+            continue
+        off = m["extended"].overshoot_pct - m["rig"].overshoot_pct
+        if abs(off) > OVERSHOOT_POINTS:
+            notes.append(f"overshoot target missed on {r.file}: the extended model {m['extended'].overshoot_pct:.1f} % "
+                         f"against the rig's {m['rig'].overshoot_pct:.1f} % ({off:+.1f} points; target within "
+                         f"±{OVERSHOOT_POINTS:g})")
+    far = [r for r in diag.runs if r.residuals_after is not None and r.residuals_after.theta.outside_pct > 25.0]
+    if far:
+        lo, hi = (f(r.residuals_after.theta.outside_pct for r in far) for f in (min, max))
+        span = f"{lo:.0f} %" if round(lo) == round(hi) else f"{lo:.0f}–{hi:.0f} %"
+        notes.append(f"the extended model's θ residual is far from white on {len(far)} of {len(diag.runs)} runs "
+                     f"({span} of the autocorrelation lags to 25 samples outside the 99 % band)")
+    return notes
+
+
+def answer_points(diag) -> list[tuple[str, str]]:
+    """The answer, point by point: (label, sentence) for the cause, the gain on held-out
+    data, what is still unexplained, the alternatives, the targets missed and how the runs
+    were treated.
 
     Parameters
     ----------
@@ -121,22 +280,51 @@ def summary_paragraph(diag) -> str:
         What :func:`station.diagnosis.diagnose` returned.
     """
     base = diag.nominal_model.name
+    points = []
     if not diag.causes:
         best = diag.effects[0] if diag.effects else None
-        extra = "" if best is None else (f" The best candidate, {best.name} = {format_value(best.value, best.unit)}, "
-                                         f"changes the θ RMS error on held-out data by {best.gain_pct:+.1f} %, "
-                                         "below the significance threshold.")
-        return (f"No effect explains the differences between {base} and the runs beyond what sensor "
-                f"quantization and noise can: the cause is \"none\" ({diag.validation}).{extra}")
-    accepted = {e.name: e for e in diag.effects if e.accepted}
-    parts = [f"{n} = {format_value(accepted[n].value, accepted[n].unit)}" for n in diag.causes]
-    more = "" if len(parts) == 1 else f", together with {', '.join(parts[1:])}"
-    first = accepted[diag.causes[0]]
-    value = format_value(first.value, first.unit)
-    what = (f"has its {first.name[6:]} off: {value} times the nominal value" if first.name.startswith("param:")
-            else f"is missing {first.name}: fitted value {value}")
-    return (f"The model {base} {what}{more}. "
-            f"On data it was not fitted to ({diag.validation}) the extended model lowers the θ RMS error by "
-            f"{diag.gain_pct:.1f} % (NRMSE fit of θ {format_pct(diag.baseline_fit.get('theta'))} → "
-            f"{format_pct(diag.extended_fit.get('theta'))}, of a {format_pct(diag.baseline_fit.get('accel'))} → "
-            f"{format_pct(diag.extended_fit.get('accel'))}). Evidence: {first.evidence}.")
+        extra = "" if best is None else (f" The best candidate, {plain_name(best.name)} "
+                                         f"{plain_value(best.name, best.value, best.unit)}, changes the θ RMS error "
+                                         f"on held-out data by {best.gain_pct:+.1f} %, below the significance threshold.")
+        points.append(("Cause", f"none: no effect explains the differences between {base} and the runs beyond what "
+                                f"sensor quantization and noise can ({diag.validation}).{extra}"))
+    else:
+        accepted = {e.name: e for e in diag.effects if e.accepted}
+        more = [cause_words(accepted[n]) for n in diag.causes[1:]]
+        points.append(("Cause", cause_words(accepted[diag.causes[0]])
+                       + (f", together with {'; '.join(more)}" if more else "") + "."))
+        points.append(("Gain", f"on runs it was not fitted to ({diag.validation}) the extended model lowers the θ RMS "
+                               f"error by {diag.gain_pct:.1f} % (θ fit {format_pct(diag.baseline_fit.get('theta'))} → "
+                               f"{format_pct(diag.extended_fit.get('theta'))}, a fit "
+                               f"{format_pct(diag.baseline_fit.get('accel'))} → "
+                               f"{format_pct(diag.extended_fit.get('accel'))})."))
+    u = diag.unexplained
+    if u is not None:
+        points.append(("Still unexplained", u.evidence if u.flag else
+                       "nothing: the remaining θ and a residuals are what encoder rounding and accelerometer noise "
+                       "produce around the model."))
+    if diag.causes:
+        if diag.alternatives:
+            alts = "; ".join(f"{' + '.join(a.causes)} (instead of {a.instead_of}; validation cost {a.cost_ratio:.3f}× "
+                             f"the chosen one's, θ gain {a.gain_pct:.1f} %)" for a in diag.alternatives)
+            points.append(("Alternatives", f"the validation data cannot tell this apart from {alts}."))
+        else:
+            points.append(("Alternatives", "none: no other explanation comes as close on the validation data."))
+    for note in target_notes(diag):
+        points.append(("Target missed" if note.startswith("overshoot") else "Residuals", note + "."))
+    for note in diag.notes:
+        points.append(("Note", note + "."))
+    return points
+
+
+def summary_paragraph(diag) -> str:
+    """The answer in one paragraph (:func:`answer_points` joined): the cause in plain words
+    and code name with its value and 95 % interval, the gain on held-out data, what is still
+    unexplained, the alternatives, the targets missed and how the runs were treated.
+
+    Parameters
+    ----------
+    diag : Diagnosis
+        What :func:`station.diagnosis.diagnose` returned.
+    """
+    return " ".join(f"{label}: {text}" for label, text in answer_points(diag))

@@ -13,7 +13,7 @@ from station.analysis.residuals import RunResiduals, run_residuals
 from station.diagnosis.cases import RunCase
 from station.diagnosis.cost import Evaluator, pooled, relative_gain, rms_gain
 from station.diagnosis.folds import Fold
-from station.diagnosis.prose import effect_evidence
+from station.diagnosis.prose import at_range_end, effect_evidence
 from station.diagnosis.result import EffectResult, RunReport
 from station.diagnosis.selection import Selection, Singles, Trial
 from station.plant.effects import EFFECTS
@@ -33,14 +33,14 @@ def _step_metrics(case: RunCase, nominal: Mapping, final: Mapping) -> dict | Non
             "extended": case.run.step_metrics(final["theta"])}
 
 
-def _run_report(ev: Evaluator, i: int, role: str, nominal: tuple, extended_values: Mapping[str, float],
+def _run_report(ev: Evaluator, i: int, role: str, nominal: tuple, extended: tuple, final: tuple,
                 sel: Selection) -> RunReport:
     """Run i measured, on the nominal model, on the extended model as judged (held out) and
     on the final one; residual tests before and after."""
     c, changed = ev.cases[i], bool(sel.accepted)
     nom = dict(zip(("theta", "a"), nominal))
-    ext = dict(zip(("theta", "a"), ev.predict(extended_values, i))) if changed else nom
-    fin = dict(zip(("theta", "a"), ev.predict(sel.values, i))) if changed else nom
+    ext = dict(zip(("theta", "a"), extended)) if changed else nom
+    fin = dict(zip(("theta", "a"), final)) if changed else nom
     d = c.log.data
     rb = run_residuals(c.theta, c.a, nom["theta"], nom["a"], d["v"], d["u"], c.closed)
     ra = run_residuals(c.theta, c.a, ext["theta"], ext["a"], d["v"], d["u"], c.closed) if changed else rb
@@ -53,8 +53,40 @@ def _run_report(ev: Evaluator, i: int, role: str, nominal: tuple, extended_value
                      list(c.notes))
 
 
-def run_reports(ev: Evaluator, folds: Sequence[Fold], nominal: Mapping[int, tuple],
-                sel: Selection) -> tuple[list[RunReport], dict[str, RunResiduals]]:
+def model_predictions(ev: Evaluator, folds: Sequence[Fold], nominal: Mapping[int, tuple],
+                      sel: Selection) -> tuple[dict[int, tuple], dict[int, tuple]]:
+    """Every run on the extended model: as judged (a validation run on the model fitted
+    without it, a fit run on the final one) and on the final model (refitted on all fit
+    runs); the nominal model's when nothing was accepted.
+
+    Parameters
+    ----------
+    ev : Evaluator
+    folds : sequence of Fold
+    nominal : mapping of int to (ndarray, ndarray)
+        Run index -> the nominal model's θ and a.
+    sel : Selection
+        What forward selection accepted.
+
+    Returns
+    -------
+    judged, final : dict of int to (ndarray, ndarray)
+        Run index -> θ and a.
+    """
+    if not sel.accepted:
+        return dict(nominal), dict(nominal)
+    final = {i: ev.predict(sel.values, i) for i in range(len(ev.cases))}
+    judged = dict(final)
+    for f, fold in enumerate(folds):
+        for i in fold.val:
+            values = sel.current.fold_values[f]
+            judged[i] = final[i] if values == sel.values else ev.predict(values, i)
+    return judged, final
+
+
+def run_reports(ev: Evaluator, folds: Sequence[Fold], nominal: Mapping[int, tuple], sel: Selection,
+                judged: Mapping[int, tuple],
+                final: Mapping[int, tuple]) -> tuple[list[RunReport], dict[str, RunResiduals]]:
     """Every run side by side with the models: a validation run with the extended model as
     fitted without it, a fit run with the final one.
 
@@ -66,6 +98,9 @@ def run_reports(ev: Evaluator, folds: Sequence[Fold], nominal: Mapping[int, tupl
         Run index -> the nominal model's θ and a (:func:`station.diagnosis.cost.calibrate_noise`).
     sel : Selection
         What forward selection accepted.
+    judged, final : mapping of int to (ndarray, ndarray)
+        Run index -> the extended model's θ and a as judged and as finally refitted
+        (:func:`model_predictions`).
 
     Returns
     -------
@@ -75,18 +110,17 @@ def run_reports(ev: Evaluator, folds: Sequence[Fold], nominal: Mapping[int, tupl
         Run name -> residual analysis of the nominal model.
     """
     reports, before = [], {}
-    fold_of = {i: f for f, fold in enumerate(folds) for i in fold.val}
+    held_out = {i for fold in folds for i in fold.val}
     for i, c in enumerate(ev.cases):
-        held_out = i in fold_of
-        values = sel.current.fold_values[fold_of[i]] if (held_out and sel.accepted) else sel.values
-        report = _run_report(ev, i, "validation" if held_out else "fit", nominal[i], values, sel)
+        report = _run_report(ev, i, "validation" if i in held_out else "fit", nominal[i], judged[i], final[i], sel)
         before[c.name] = report.residuals_before
         reports.append(report)
     return reports, before
 
 
 def effect_results(ev: Evaluator, how: str, names: Sequence[str], singles: Singles, sel: Selection,
-                   nominal: Trial, before: Mapping[str, RunResiduals]) -> list[EffectResult]:
+                   nominal: Trial, before: Mapping[str, RunResiduals],
+                   intervals: Mapping[str, object] | None = None) -> list[EffectResult]:
     """Every candidate once, best first: the accepted ones in the order they were added,
     then the others by their validation cost alone.
 
@@ -105,7 +139,10 @@ def effect_results(ev: Evaluator, how: str, names: Sequence[str], singles: Singl
         The nominal model's validation errors.
     before : mapping of str to RunResiduals
         Run name -> residual analysis of the nominal model.
+    intervals : mapping of str to Interval, optional
+        Accepted effect -> its 95 % interval (:func:`station.diagnosis.doubt.profile_interval`).
     """
+    intervals = intervals or {}
     accepted = sel.accepted
     order = sorted(names, key=lambda n: singles.trials[n].val_weighted)
     rms_nom = pooled(ev, nominal.val_sse).rms_theta
@@ -124,5 +161,6 @@ def effect_results(ev: Evaluator, how: str, names: Sequence[str], singles: Singl
         evidence = effect_evidence(name, unit, alone, fold_values, how, rms_nom, rms_alone, g, cg, step, joint,
                                    before)
         results.append(EffectResult(name, float(value), unit, float(g), float(cg), name in accepted, evidence,
-                                    [float(v) for v in fold_values]))
+                                    [float(v) for v in fold_values], float(alone),
+                                    intervals.get(name) if name in accepted else None, at_range_end(name, value)))
     return results

@@ -32,6 +32,13 @@ class EffectResult:
         In words: the fit, the gains and the signatures that point to it.
     fold_values : list of float
         The value fitted alone in each fold.
+    value_alone : float
+        Fitted alone on all fit runs (equals ``value`` when not accepted).
+    interval : Interval or None
+        95 % interval of an accepted effect's value (:mod:`station.diagnosis.doubt`), clipped
+        to its range; None for the others.
+    at_range_end : bool
+        ``value`` sits at an end of the effect's search range (the fit wanted further).
     """
 
     name: str
@@ -42,13 +49,21 @@ class EffectResult:
     accepted: bool
     evidence: str
     fold_values: list = field(default_factory=list)
+    value_alone: float = math.nan
+    interval: Any = None
+    at_range_end: bool = False
 
     def to_json(self) -> dict:
-        value = self.value if math.isfinite(self.value) else None
-        return {"name": self.name, "value": value, "unit": self.unit, "gain_pct": round(self.gain_pct, 3),
+        fin = lambda x: x if math.isfinite(x) else None  # noqa: E731
+        iv = self.interval
+        return {"name": self.name, "value": fin(self.value), "unit": self.unit, "gain_pct": round(self.gain_pct, 3),
                 "evidence": self.evidence, "accepted": self.accepted,
                 "cost_gain_pct": round(self.cost_gain_pct, 3),
-                "fold_values": [v if math.isfinite(v) else None for v in self.fold_values]}
+                "fold_values": [fin(v) for v in self.fold_values],
+                "value_alone": fin(self.value_alone),
+                "interval": None if iv is None else [fin(iv.lo), fin(iv.hi)],
+                "interval_at_range_end": None if iv is None else [iv.lo_at_bound, iv.hi_at_bound],
+                "at_range_end": self.at_range_end}
 
 
 @dataclass
@@ -137,6 +152,15 @@ class Diagnosis:
         Gain of the joint noise-normalised θ + a cost on the validation data, %.
     folds : list of dict
         Per fold: fit and validation run names and the accepted effects' values.
+    unexplained : Unexplained or None
+        The extended model's residuals against the sensor model's null
+        (:mod:`station.diagnosis.unexplained`).
+    alternatives : list of Alternative
+        Other explanations the validation data cannot tell apart (:mod:`station.diagnosis.doubt`).
+    interval_method : str
+        How the effects' intervals were found.
+    notes : list of str
+        How the runs were treated (e.g. a hub-held beam test left out).
     """
 
     cause: str
@@ -153,10 +177,16 @@ class Diagnosis:
     elapsed_s: float = 0.0
     cost_gain_pct: float = 0.0
     folds: list = field(default_factory=list)
+    unexplained: Any = None
+    alternatives: list = field(default_factory=list)
+    interval_method: str = ""
+    notes: list = field(default_factory=list)
 
     def to_json(self) -> dict:
-        """DESIGN.md's JSON: cause, causes, baseline, extended, gain_pct, effects (+ extras:
-        validation, model, extended_model, runs, simulations, elapsed_s)."""
+        """DESIGN.md's JSON: cause, causes, baseline, extended, gain_pct, effects (each with
+        its interval), unexplained, unexplained_evidence, alternatives (+ extras: validation,
+        interval_method, model, extended_model, runs, simulations, elapsed_s, notes)."""
+        u = self.unexplained
         return {
             "cause": self.cause,
             "causes": list(self.causes),
@@ -164,6 +194,12 @@ class Diagnosis:
             "extended": {"fit_pct": dict(self.extended_fit)},
             "gain_pct": round(self.gain_pct, 3),
             "effects": [e.to_json() for e in self.effects],
+            "unexplained": bool(u.flag) if u is not None else False,
+            "unexplained_evidence": u.evidence if u is not None else "",
+            "alternatives": [a.to_json() for a in self.alternatives],
+            "interval_method": self.interval_method,
+            "residual_check": u.to_json() if u is not None else None,
+            "notes": list(self.notes),
             "validation": self.validation,
             "cost_gain_pct": round(self.cost_gain_pct, 3),
             "model": self.nominal_model.name,

@@ -29,7 +29,7 @@ from __future__ import annotations
 import math
 from collections.abc import Callable, Mapping, Sequence
 from concurrent.futures import ThreadPoolExecutor
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -153,6 +153,29 @@ class Singles:
 
 
 @dataclass
+class Step:
+    """One step of forward selection, kept for the alternatives
+    (:mod:`station.diagnosis.doubt`).
+
+    Attributes
+    ----------
+    before : list of str
+        The effects accepted before this step.
+    trials : dict of str to Trial
+        Every candidate tried at this step (jointly with ``before``).
+    chosen : str or None
+        The one accepted (None: nothing paid, selection stopped).
+    floor : float
+        What luck alone reaches around the model before this step (:func:`null_floor`).
+    """
+
+    before: list
+    trials: dict
+    chosen: str | None
+    floor: float
+
+
+@dataclass
 class Selection:
     """What forward selection accepted.
 
@@ -164,11 +187,14 @@ class Selection:
         The accepted set as fitted per fold (the nominal model's trial when none).
     values : dict of str to float
         The accepted effects refitted jointly on all fit runs.
+    steps : list of Step
+        Every step tried, in order.
     """
 
     accepted: list
     current: Trial
     values: dict
+    steps: list = field(default_factory=list)
 
 
 def effect_axes() -> dict[str, Axis]:
@@ -318,6 +344,27 @@ def _screen_points(name: str, axes: Mapping[str, Axis], fixed: Mapping[str, floa
     return [{**fixed, "coulomb_friction": 0.5 * float(g), name: float(g)} for g in axes[name].grid()]
 
 
+def perturbed(name: str, values: Mapping[str, float], factor: float) -> float:
+    """An effect's value scaled by a tiny factor, kept inside its range: a value fitted on
+    its bound is perturbed inward (divided by the factor instead).
+
+    Parameters
+    ----------
+    name : str
+        The effect (:data:`station.plant.effects.EFFECTS`).
+    values : mapping of str to float
+        The current values (the effect's neutral value when absent).
+    factor : float
+        Close to 1 (:data:`NULL_PERTURBATIONS`).
+    """
+    spec = EFFECTS[name]
+    v = values.get(name, spec.neutral)
+    for x in (v * factor, v / factor):
+        if spec.lower <= x <= spec.upper:
+            return x
+    return v
+
+
 def null_floor(ev: Evaluator, folds: Sequence[Fold], fold_values: Sequence[Mapping[str, float]]) -> float:
     """The validation cost reached by luck alone: per validation run the lowest weighted
     error over :data:`NULL_PERTURBATIONS` of the current model (as fitted per fold), summed.
@@ -334,8 +381,7 @@ def null_floor(ev: Evaluator, folds: Sequence[Fold], fold_values: Sequence[Mappi
         for i in fold.val:
             best = ev.weighted(values, i)
             for name, factor in NULL_PERTURBATIONS:
-                v = values.get(name, EFFECTS[name].neutral) * factor
-                best = min(best, ev.weighted({**values, name: v}, i))
+                best = min(best, ev.weighted({**values, name: perturbed(name, values, factor)}, i))
             total += best
     return total
 
@@ -505,6 +551,7 @@ def forward_select(search: Search, names: Sequence[str], singles: Singles, nomin
     accepted: list[str] = []
     current = nominal
     values: dict[str, float] = {}
+    steps: list[Step] = []
     for step in range(MAX_EFFECTS + len(NESTED)):
         if step == 0:
             trials = {n: singles.trials[n] for n in names}
@@ -518,7 +565,9 @@ def forward_select(search: Search, names: Sequence[str], singles: Singles, nomin
         search.say(f"step {step + 1}: best {best}, validation cost {trials[best].val_weighted / terms:.3g} per sample, "
                    f"current {current.val_weighted / terms:.3g}, reached by quantization and noise alone "
                    f"{floor / terms:.3g}")
-        if not accept(current.val_weighted, trials[best].val_weighted, terms, floor):
+        ok = accept(current.val_weighted, trials[best].val_weighted, terms, floor)
+        steps.append(Step(list(accepted), trials, best if ok else None, floor))
+        if not ok:
             break
         simpler = NESTED.get(best)
         if simpler in accepted:  # an upgrade in place
@@ -536,7 +585,7 @@ def forward_select(search: Search, names: Sequence[str], singles: Singles, nomin
                    + ", ".join(f"{n} = {format_value(v, EFFECTS[n].unit)}" for n, v in values.items()))
     if "static_friction" in accepted:
         current, values = _fit_shape(search, current, values, terms)
-    return Selection(accepted, current, values)
+    return Selection(accepted, current, values, steps)
 
 
 def _fit_shape(search: Search, current: Trial, values: dict, terms: int) -> tuple[Trial, dict]:

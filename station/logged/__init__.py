@@ -9,10 +9,12 @@ the rig ran it.
   discretization; else inferred from the data): :func:`identify_controller`,
   :func:`rig_controller`.
 - ``simulate``: :func:`simulate_log`, :class:`ModelRun` (the model glue).
+- ``reference``: what a logged u is (:class:`Reference`, :func:`classify_reference`: the one
+  definition of a step).
 - ``device``: the device's command quantization (the sample time is :attr:`station.runlog.RunLog.dt`).
 
 Layering: this package sits above ``station.analysis``, ``station.control``,
-``station.plant``, ``station.runlog`` and ``station.reference`` and imports only those (and
+``station.plant`` and ``station.runlog`` and imports only those (and
 ``station.errors``). Replay, compare, survey and the diagnosis sit above it; nothing here
 imports them.
 """

@@ -17,6 +17,7 @@ import numpy as np
 
 from station.analysis.identify import infer_controller, match_pid
 from station.control import Compensator, DiscreteTF, OpenLoop, controller_from_spec, lead_controller, p_controller
+from station.control.designs import MAX_ORDER, z_problem
 from station.errors import StationError
 from station.runlog import RIG_DT, RunLog  # RIG_DT: the rig's sample time, its compensators ran at it
 
@@ -37,13 +38,19 @@ def _rig_stage(meta: dict, key: str, design: DiscreteTF, notes: list[str]) -> tu
     if not coeffs or not coeffs.get("num"):
         return None, True
     num, den = coeffs.get("num", []), coeffs.get("den", [])
+    if max(len(num), len(den)) > MAX_ORDER + 1:  # before any arithmetic on them
+        raise StationError(f"{key}: {z_problem(num, den)}", key=key)
     if _matches_printed(num, design.num) and _matches_printed(den, design.den):
         return design, True
     notes.append(f"{key} coefficients as printed in the header (8 decimals; not a known design)")
     try:
-        return DiscreteTF(num, den), False
+        tf = DiscreteTF(num, den)
     except ValueError as exc:
-        raise StationError(f"header {key} num={num} den={den}: {exc}") from None
+        raise StationError(f"header {key} num={num} den={den}: {exc}", key=key) from None
+    problem = z_problem(tf.num, tf.den)  # the one check of every filter read
+    if problem is not None:
+        raise StationError(f"{key}: {problem}", key=key)
+    return tf, False
 
 
 def _header_number(meta: dict[str, Any], key: str) -> float:
@@ -241,7 +248,10 @@ def _named_controller(log: RunLog) -> tuple[Compensator | OpenLoop | None, list[
         spec = log.meta.get("controller")
         if not isinstance(spec, dict):
             return None, []
-        return controller_from_spec(spec), []
+        try:
+            return controller_from_spec(spec), []
+        except StationError as exc:  # name the log
+            raise StationError(f"{log.path}: {exc}", file=log.path, key="controller") from None
     dt = log.dt
     try:
         return rig_controller(log.meta, dt)

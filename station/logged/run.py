@@ -10,10 +10,11 @@ import numpy as np
 from station.analysis.beam import HELD_MIN_V, HubHeld, hub_held
 from station.analysis.metrics import StepMetrics, step_metrics
 from station.control.rerun import AlignmentFit, detect_alignment, is_closed_loop
+from station.errors import StationError
 from station.logged.controller import ControllerId, identify_controller
 from station.logged.simulate import ModelRun, compared_theta, simulate_log
-from station.reference import Reference, classify_reference
-from station.runlog import RunLog, read_log
+from station.logged.reference import Reference, classify_reference
+from station.runlog import SKIPPED, RunLog, read_log
 
 REPRODUCED_TOLERANCE = 1e-6
 """max |v_replayed - v_logged| (DAC counts) under which a replay counts as reproducing the log."""
@@ -110,14 +111,89 @@ class LoggedRun:
         """Whether the run was closed loop (:func:`station.control.rerun.is_closed_loop`)."""
         return is_closed_loop(self.controller)
 
+    # --- what the log holds: the columns each use needs ------------------------------------
+
+    def has_column(self, name: str) -> bool:
+        """Whether the log holds the column ``name`` (the reader fills a column the log lacks
+        with NaN; a log without rows lacks none).
+
+        Parameters
+        ----------
+        name : str
+            A standard column name (:data:`station.runlog.COLUMNS`).
+        """
+        col = self.data[name]
+        return not col.size or bool(np.any(~np.isnan(col)))
+
+    @property
+    def replay_columns(self) -> tuple[str, ...]:
+        """The columns replaying the log's controller needs: u and v; in closed loop also θ,
+        and a when the controller has accelerometer feedback (() without a controller)."""
+        c = self.controller
+        if c is None:
+            return ()
+        if not self.closed:
+            return ("u", "v")
+        return ("u", "theta", "v") + (("a",) if getattr(c, "ga", None) is not None else ())
+
+    @property
+    def model_columns(self) -> tuple[str, ...]:
+        """The columns simulating the run on a model needs: θ and a (the fit) and what drives
+        the model: u in closed loop, else v (none when the log has v_applied)."""
+        if self.closed:
+            return ("u", "theta", "a")
+        return (() if self.has_column("v_applied") else ("v",)) + ("theta", "a")
+
+    def check_columns(self, names, purpose: str) -> None:
+        """Refuse a log that lacks a column a use needs: one line naming the log, the column
+        and the use, instead of a result computed on NaN.
+
+        Parameters
+        ----------
+        names : iterable of str
+            The columns needed (e.g. :attr:`replay_columns`, :attr:`model_columns`).
+        purpose : str
+            The use, for the message (e.g. "simulating it on a model").
+
+        Raises
+        ------
+        StationError
+            ``PATH: no 'a' column: PURPOSE needs u, theta, a (columns found: ...)``; ``key``
+            is the first missing column.
+        """
+        names = tuple(names)
+        missing = [n for n in names if not self.has_column(n)]
+        if missing:
+            found = ", ".join(n for n in self.data if self.has_column(n)) or "none"
+            raise StationError(f"{self.log.path}: no {', '.join(repr(m) for m in missing)} column: {purpose} "
+                               f"needs {', '.join(names)} (columns found: {found})",
+                               file=self.log.path, key=missing[0])
+
     @cached_property
     def replayed(self) -> AlignmentFit | None:
         """The controller run over the logged samples at its best alignment
-        (:func:`station.control.rerun.detect_alignment`); None without a controller or rows."""
+        (:func:`station.control.rerun.detect_alignment`); None without a controller or rows.
+
+        Raises
+        ------
+        StationError
+            The log lacks a column the replay needs (:attr:`replay_columns`).
+        """
         if self.controller is None or not len(self):
             return None
+        self.check_columns(self.replay_columns, f"replaying its controller ({self.controller.name})")
         d = self.data
-        return detect_alignment(self.controller, d["u"], d["theta"], d["a"], d["v"])
+        return detect_alignment(self.controller, d["u"], d["theta"], d["a"], d["v"], skipped=self.skipped)
+
+    @property
+    def skipped(self) -> np.ndarray | None:
+        """Rows whose sample the station did not answer (our logs' :data:`station.runlog.SKIPPED`
+        status bit; None for a log without a status column or without skips)."""
+        status = self.data.get("status")
+        if status is None or self.log.format != "station":
+            return None
+        mask = (np.nan_to_num(status).astype(np.int64) & SKIPPED) != 0
+        return mask if mask.any() else None
 
     @property
     def alignment(self) -> int | None:
@@ -145,7 +221,7 @@ class LoggedRun:
 
     @cached_property
     def reference(self) -> Reference:
-        """What the logged u is (:func:`station.reference.classify_reference`)."""
+        """What the logged u is (:func:`station.logged.reference.classify_reference`)."""
         return classify_reference(self.data["u"])
 
     @cached_property
@@ -214,5 +290,11 @@ class LoggedRun:
         Returns
         -------
         ModelRun
+
+        Raises
+        ------
+        StationError
+            The log lacks a column the simulation or its fit needs (:attr:`model_columns`).
         """
+        self.check_columns(self.model_columns, "simulating it on a model")
         return simulate_log(self.log, self.controller, self.alignment, model)

@@ -27,7 +27,10 @@ import math
 from collections.abc import Mapping
 from typing import NamedTuple
 
+import numpy as np
+
 from station.errors import StationError
+from station.plant.diskcache import cached_arrays
 from station.plant.modes import modal_summary
 from station.plant.parameters import load_params
 
@@ -69,8 +72,11 @@ STRIBECK_SPEED = 0.05
 
 
 def _nominal_beam_damping() -> float:
-    # tmm-fit's own first hub-held mode damping ratio (from the clamp damper alone)
-    return float(modal_summary(load_params("tmm-fit"), 4).antiresonance_damping[0])
+    # tmm-fit's own first hub-held mode damping ratio (from the clamp damper alone); cached
+    # on disk: an eigenvalue problem at import would cost every command scipy's start-up
+    params = load_params("tmm-fit")
+    return float(cached_arrays("beam-damping", tuple(vars(params).values()), lambda: {
+        "zeta": np.asarray(modal_summary(params, 4).antiresonance_damping[0])})["zeta"])
 
 
 PARAM_RATIO_RANGE = (0.1, 10.0)

@@ -33,12 +33,7 @@ import numpy as np
 from station import DT
 from station.plant.effects import friction_levels
 from station.plant.modal import LinearForm
-from station.rounding import half_away, half_away_compiled, sensor_count, sensor_count_compiled
-
-try:  # compiled kernel when numba is installed; plain Python otherwise
-    import numba
-except ImportError:  # pragma: no cover - exercised only without numba
-    numba = None
+from station.rounding import half_away, sensor_count
 
 
 def _commit(num, den, xs, ys, x, y):  # pragma: no cover - compiled by numba
@@ -219,20 +214,51 @@ def _loop(lam, bm, bp, cm, co, gw_v, gw_p, substeps, z0, u, v_open, use_v_open, 
     return theta, acc, v, thd
 
 
-_half_away = half_away  # the device's command rounding (station.rounding), compiled below
-_sensor_count = sensor_count  # the sensors' quantization (station.rounding), compiled below
+_half_away = half_away  # the device's command rounding (station.rounding), compiled by _compile
+_sensor_count = sensor_count  # the sensors' quantization (station.rounding), compiled by _compile
+_PLAIN = (_outputs, _amplifier, _advance)  # the per-sample functions as plain Python (same float operations)
+_compiled_loop = None
 
-if numba is not None:
-    _half_away = half_away_compiled
-    _sensor_count = sensor_count_compiled
-    _commit = numba.njit(cache=True, nogil=True)(_commit)
-    _outputs = numba.njit(cache=True, nogil=True)(_outputs)
-    _amplifier = numba.njit(cache=True, nogil=True)(_amplifier)
-    _advance = numba.njit(cache=True, nogil=True)(_advance)
-    run_kernel = numba.njit(cache=True, nogil=True)(_loop)
-    """The whole run's sample loop (:func:`station.plant.simulate.simulate` gives its arguments)."""
-else:  # pragma: no cover
-    run_kernel = _loop
+
+def _compile() -> None:
+    """Compile the kernel's functions with numba (or load them from numba's cache), once.
+
+    Numba is imported here, on first use, not with the module: importing it and loading
+    its cache costs most of a second of start-up, which a small linear plant stepped
+    sample by sample does not need (:class:`Stepper`). Without numba everything stays
+    plain Python (same results, about 1000x slower).
+    """
+    global _half_away, _sensor_count, _commit, _outputs, _amplifier, _advance, _compiled_loop
+    if _compiled_loop is not None:
+        return
+    try:
+        import numba
+    except ImportError:  # pragma: no cover - exercised only without numba
+        _compiled_loop = _loop
+        return
+    from station.rounding import half_away_compiled, sensor_count_compiled
+
+    jit = numba.njit(cache=True, nogil=True)
+    _half_away, _sensor_count = half_away_compiled, sensor_count_compiled
+    _commit, _outputs, _amplifier, _advance = jit(_commit), jit(_outputs), jit(_amplifier), jit(_advance)
+    _compiled_loop = jit(_loop)
+
+
+def run_kernel(*args):
+    """The whole run's sample loop, compiled on first use.
+
+    Parameters
+    ----------
+    *args
+        :func:`_loop`'s arguments in its order (:func:`station.plant.simulate.simulate`
+        gives them).
+
+    Returns
+    -------
+    theta, a, v, theta_d_hat : numpy.ndarray, shape (N,)
+    """
+    _compile()
+    return _compiled_loop(*args)
 
 
 def coefficients(tf) -> tuple[np.ndarray, np.ndarray]:
@@ -335,6 +361,12 @@ def device_command(vk: float, cmd_mode: int) -> float:
     return vk
 
 
+PLAIN_MAX_STATES = 32
+"""A linear form without sub-steps and with at most this many states (up to 6 beam elements)
+is stepped in plain Python by default (:class:`ModelPlant`): tens of µs per sample, and no
+compiler at start-up."""
+
+
 class Stepper:
     """A linear form plus effects, stepped one sample at a time with the kernel's own functions.
 
@@ -346,6 +378,10 @@ class Stepper:
         The amplifier, output and in-plant effects.
     z0 : array_like of complex, shape (n,), optional
         Initial modal state (default: at rest).
+    compiled : bool, default True
+        Step with the numba-compiled functions (compiled or loaded now, not on a real-time
+        device's first tick); False: the same functions as plain Python (the same float
+        operations, the same bits).
 
     Attributes
     ----------
@@ -353,27 +389,33 @@ class Stepper:
         The current modal state.
     """
 
-    def __init__(self, form: LinearForm, fx: KernelEffects, z0=None) -> None:
+    def __init__(self, form: LinearForm, fx: KernelEffects, z0=None, compiled: bool = True) -> None:
         self._form = form
         self._fx = fx
         self._z0 = np.zeros(form.lam.size, complex) if z0 is None else np.asarray(z0, complex).copy()
+        if compiled:
+            _compile()
+            self._fns = (_outputs, _amplifier, _advance)
+        else:
+            self._fns = _PLAIN
         self.reset()
         # compile (or load) the kernel's functions now, not on a real-time device's first tick
         self.outputs()
-        _advance(self.z.copy(), 0.0, form.lam, form.bm, form.bp, form.co, form.gw_v, form.gw_p, form.substeps,
-                 fx.v_c, fx.v_s, fx.w_s, fx.half_gap, fx.k_d, fx.c_d)
+        self._fns[1](0.0, fx.amp_offset, fx.saturation, fx.deadzone)
+        self._fns[2](self.z.copy(), 0.0, form.lam, form.bm, form.bp, form.co, form.gw_v, form.gw_p, form.substeps,
+                     fx.v_c, fx.v_s, fx.w_s, fx.half_gap, fx.k_d, fx.c_d)
 
     def reset(self) -> None:
         """Back to the initial state (at rest for a model), the amplifier's delay line
         holding what it made of the device's 0 before the run."""
         fx = self._fx
         self.z = self._z0.copy()
-        self._fifo = [float(_amplifier(0.0, fx.amp_offset, fx.saturation, fx.deadzone))] * fx.delay
+        self._fifo = [float(self._fns[1](0.0, fx.amp_offset, fx.saturation, fx.deadzone))] * fx.delay
         self._head = 0
 
     def outputs(self) -> tuple[float, float]:
         """Noise-free (theta, a): encoder counts, accelerometer counts (accel_gain applied)."""
-        y0, y1 = _outputs(self.z, self._form.cm, self._fx.accel_gain)
+        y0, y1 = self._fns[0](self.z, self._form.cm, self._fx.accel_gain)
         return float(y0), float(y1)
 
     def advance(self, v: float) -> None:
@@ -386,12 +428,13 @@ class Stepper:
             The command the device applies during the sample, DAC counts.
         """
         fx, f = self._fx, self._form
-        vk = _amplifier(float(v), fx.amp_offset, fx.saturation, fx.deadzone)
+        _, amplifier, advance = self._fns
+        vk = amplifier(float(v), fx.amp_offset, fx.saturation, fx.deadzone)
         if fx.delay > 0:
             vk, self._fifo[self._head] = self._fifo[self._head], vk
             self._head = (self._head + 1) % fx.delay
-        _advance(self.z, vk, f.lam, f.bm, f.bp, f.co, f.gw_v, f.gw_p, f.substeps, fx.v_c, fx.v_s, fx.w_s,
-                 fx.half_gap, fx.k_d, fx.c_d)
+        advance(self.z, vk, f.lam, f.bm, f.bp, f.co, f.gw_v, f.gw_p, f.substeps, fx.v_c, fx.v_s, fx.w_s,
+                fx.half_gap, fx.k_d, fx.c_d)
 
 
 class ModelPlant(Stepper):
@@ -412,6 +455,10 @@ class ModelPlant(Stepper):
         Sample time, s.
     substeps : int, optional
         Sub-steps per sample with friction or backlash (default :data:`station.plant.model.SUBSTEPS`).
+    compiled : bool, optional
+        As :class:`Stepper`; default: plain Python for a linear form without sub-steps of at
+        most :data:`PLAIN_MAX_STATES` states (the default model: the simulated rig starts
+        without a compiler), compiled otherwise.
 
     Attributes
     ----------
@@ -421,10 +468,13 @@ class ModelPlant(Stepper):
         The model's nominal parameter set.
     """
 
-    def __init__(self, model, dt: float = DT, substeps: int | None = None) -> None:
+    def __init__(self, model, dt: float = DT, substeps: int | None = None, compiled: bool | None = None) -> None:
         self.model = model
         self.dt = float(dt)
         self.n_elements = model.n_elements
         self.params = model.params
-        super().__init__(model.linear_form(self.dt, substeps), effects_of(model))
+        form = model.linear_form(self.dt, substeps)
+        if compiled is None:
+            compiled = form.substeps > 0 or form.lam.size > PLAIN_MAX_STATES
+        super().__init__(form, effects_of(model), compiled=compiled)
 

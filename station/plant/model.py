@@ -23,21 +23,23 @@ import dataclasses
 import functools
 import json
 import math
-import re
-import tomllib
 from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+import numpy as np
+
 from station import DT
 from station.errors import StationError
 from station.plant.discrete import DiscretePlant
+from station.inputs import TomlDoc, exists, load_toml
 from station.plant.effects import EFFECTS, check_effects
 from station.plant.kernel import ModelPlant
 from station.plant.modal import LinearForm, linear_form  # noqa: F401 (LinearForm re-exported: it lived here)
-from station.plant.modes import with_beam_damping
-from station.plant.parameters import PARAMS_DIR, Params, load_params, params_from_dict
+from station.plant.modes import modal_summary, with_beam_damping
+from station.plant.parameters import PARAMS_DIR, Params, builtin_params, load_params, params_from_dict
+from station.ranges import N_ELEMENTS, RangeError
 
 MODELS_DIR = Path(__file__).resolve().parent / "models"
 """Folder of the built-in models (``<name>.toml``)."""
@@ -47,6 +49,10 @@ SUBSTEPS = 10
 shows the θ of a 2 s run converged to well under a count at this grid)."""
 
 _KEYS = ("name", "params", "n_elements", "effects")
+
+STABLE_TOLERANCE = 1e-6
+"""How far above 1 a sampled eigenvalue's modulus may be before :func:`load_model` refuses
+the model (the plant is passive: every mode decays or, the rigid-body one, stays)."""
 
 
 @dataclass(frozen=True)
@@ -75,12 +81,13 @@ class Model:
     params_source: str = "tmm-fit"
 
     def __post_init__(self) -> None:
-        if isinstance(self.n_elements, bool) or int(self.n_elements) != self.n_elements \
-                or not 1 <= self.n_elements <= 100:
-            raise StationError(f"model {self.name!r}: n_elements must be an integer in 1..100, got {self.n_elements!r}")
+        try:
+            n = N_ELEMENTS.check(self.n_elements)
+        except RangeError as exc:
+            raise StationError(f"model {self.name!r}: n_elements: {exc}", key="n_elements") from None
         values = check_effects(dict(self.effects), f"model {self.name!r}")
         pairs = tuple(sorted((k, v) for k, v in values.items() if v != EFFECTS[k].neutral))
-        object.__setattr__(self, "n_elements", int(self.n_elements))
+        object.__setattr__(self, "n_elements", n)
         object.__setattr__(self, "effects", pairs)
 
     def effect_dict(self) -> dict[str, float]:
@@ -129,11 +136,23 @@ class Model:
         """The parameter set of the linear part: param:NAME ratios applied, then the
         beam damping (``beam_beta``) that gives the beam_damping effect's first-mode ζ.
 
-        A beam_damping at or below what the (scaled) set has without beam damping
-        leaves ``beam_beta`` = 0.
+        A beam_damping at or below :meth:`beam_damping_floor` leaves ``beam_beta`` = 0
+        (:func:`load_model` refuses a file that asks for less; a fit's search may try it).
         """
         linear = tuple((k, v) for k, v in self.effects if EFFECTS[k].kind == "linear")
         return _linear_params(self.params, self.n_elements, linear)
+
+    def beam_damping_floor(self) -> float:
+        """The first-mode damping ratio of the linear part without beam damping (param:NAME
+        ratios applied, ``beam_beta`` = 0): the lowest ``beam_damping`` this model can have.
+
+        Returns
+        -------
+        float
+            Damping ratio of the first hub-held mode, 1 (tmm-fit, 4 elements: 0.0054).
+        """
+        p = dataclasses.replace(_ratio_params(self.params, self.effect_dict()), beam_beta=0.0)
+        return float(modal_summary(p, self.n_elements).antiresonance_damping[0])
 
     def linear_form(self, dt: float = DT, substeps: int | None = None) -> LinearForm:
         """The modal form of the linear part, cached per (parameters, elements, dt, sub-steps).
@@ -238,12 +257,6 @@ def _is_path(text: str) -> bool:
     return text.endswith(".toml") or "/" in text or "\\" in text
 
 
-def _line_of(text: str, key: str) -> str:
-    pattern = re.compile(rf'^\s*("{re.escape(key)}"|{re.escape(key)})\s*=', re.M)
-    m = pattern.search(text)
-    return f" line {text.count(chr(10), 0, m.start()) + 1}:" if m else ""
-
-
 def builtin_models() -> list[str]:
     """Names of the built-in models (``station/plant/models/*.toml``)."""
     return sorted(p.stem for p in MODELS_DIR.glob("*.toml"))
@@ -251,7 +264,16 @@ def builtin_models() -> list[str]:
 
 def load_model(name_or_path: str | Path = "tmm-fit", n_elements: int | None = None,
                params: str | Path | None = None) -> Model:
-    """Read a model: a built-in's name or a model file (DESIGN.md "Model file").
+    """Read a model: a built-in's name or a model file (DESIGN.md "Model file"), bounded.
+
+    The file is read by :func:`station.inputs.load_toml` (a regular file of at most 1 MB,
+    UTF-8, nested at most 8 deep); every field is checked before the model is used: the
+    element count against :data:`station.ranges.N_ELEMENTS`, the parameter set's fields
+    against :data:`station.plant.parameters.PARAM_RANGES`, each effect against
+    :data:`station.plant.effects.EFFECTS`; a ``beam_damping`` below the first-mode damping
+    the set has without beam damping is out of range (DESIGN.md), and the sampled plant
+    (:meth:`Model.linear_form`, cached for the run that follows) must come out finite and
+    stable. What the file asks for is what runs, or the file is refused.
 
     Parameters
     ----------
@@ -271,62 +293,98 @@ def load_model(name_or_path: str | Path = "tmm-fit", n_elements: int | None = No
     Raises
     ------
     StationError
-        Missing file, invalid TOML, unknown key, a value of the wrong type, an unknown
-        effect or a value out of range: one line naming the file, line and key.
+        Missing file, not a regular file, too large, not UTF-8, invalid or too deeply
+        nested TOML, unknown key, a value of the wrong type, an unknown effect or a value
+        out of range: one line naming the file, line and key.
     """
     text_name = str(name_or_path)
     path = Path(text_name) if _is_path(text_name) else MODELS_DIR / f"{text_name}.toml"
-    try:
-        text = path.read_text()
-    except FileNotFoundError:
-        raise StationError(f"{path}: model file not found (built-in models: {', '.join(builtin_models())})") from None
-    except OSError as exc:
-        raise StationError(f"{path}: cannot read the model file: {exc.strerror}") from None
-    try:
-        raw = tomllib.loads(text)
-    except tomllib.TOMLDecodeError as exc:
-        raise StationError(f"{path}: not valid TOML: {exc}") from None
-
-    def bad(key: str, what: str) -> StationError:
-        return StationError(f"{path}:{_line_of(text, key)} {key}: {what}")
-
+    if not _is_path(text_name) and not exists(path):
+        raise StationError(f"{path}: model file not found (built-in models: {', '.join(builtin_models())})",
+                           file=path)
+    doc = load_toml(path, "model file")
+    raw = doc.data
     unknown = [k for k in raw if k not in _KEYS]
     if unknown:
-        raise bad(unknown[0], f"unknown key (expected {', '.join(_KEYS)})")
+        raise doc.error(unknown[0], f"unknown key (expected {', '.join(_KEYS)})")
     name = raw.get("name", path.stem)
     if not isinstance(name, str):
-        raise bad("name", f"expected a string, got {name!r}")
-    n = raw.get("n_elements", 4) if n_elements is None else n_elements
-    if isinstance(n, bool) or not isinstance(n, int) or not 1 <= n <= 100:
-        if n_elements is not None:  # the caller's override, not the file's
-            raise StationError(f"n_elements: expected an integer in 1..100, got {n!r}")
-        raise bad("n_elements", f"expected an integer in 1..100, got {n!r}")
-    source = raw.get("params", "tmm-fit") if params is None else str(params)
-    if isinstance(source, dict):
-        p = params_from_dict({"name": name, **source}, f"{path} [params]")
-        source = f"{path} [params]"
-    elif isinstance(source, str):
-        if params is None and _is_path(source) and not Path(source).is_absolute():
-            source = str((path.parent / source).resolve())  # relative to the model file
-        elif not _is_path(source) and not (PARAMS_DIR / f"{source}.toml").exists():
-            known = ", ".join(sorted(q.stem for q in PARAMS_DIR.glob("*.toml")))
-            raise bad("params", f"unknown parameter set {source!r} (built-in sets: {known})")
-        p = load_params(source)
+        raise doc.error("name", f"expected a string, got {name!r}")
+    if n_elements is not None:  # the caller's override, not the file's
+        try:
+            n = N_ELEMENTS.check(n_elements)
+        except RangeError as exc:
+            raise StationError(f"n_elements: {exc}", key="n_elements") from None
     else:
-        raise bad("params", f"expected a parameter set's name or path, got {source!r}")
+        try:
+            n = N_ELEMENTS.check(raw.get("n_elements", 4))
+        except RangeError as exc:
+            raise doc.error("n_elements", str(exc)) from None
+    p, source = _read_params(doc, name, params)
     effects = raw.get("effects", {})
     if not isinstance(effects, dict):
-        raise bad("effects", "expected a table [effects]")
+        raise doc.error("effects", "expected a table [effects]")
     for key, value in effects.items():
         try:
             check_effects({key: value})
         except StationError as exc:
-            raise bad(key, str(exc)) from None
+            raise doc.error(key, str(exc), "effects") from None
     try:
         check_effects(effects)  # the rules between effects (static_friction >= coulomb_friction)
     except StationError as exc:
-        raise bad("static_friction", str(exc)) from None
-    return Model(name=name, params=p, n_elements=n, effects=tuple(effects.items()), params_source=source)
+        raise doc.error("static_friction", str(exc), "effects") from None
+    model = Model(name=name, params=p, n_elements=n, effects=tuple(effects.items()), params_source=source)
+    _check_runs_as_written(model, doc)
+    return model
+
+
+def _read_params(doc: TomlDoc, name: str, override: str | Path | None) -> tuple[Params, str]:
+    """The model file's parameter set (or the override) and where it came from."""
+    path, raw = doc.path, doc.data
+    if override is not None:
+        return load_params(override), str(override)
+    source = raw.get("params", "tmm-fit")
+    if isinstance(source, dict):
+        p = params_from_dict({"name": name, **source}, f"{path} [params]", lambda key: doc.line_of(key, "params"))
+        return p, f"{path} [params]"
+    if not isinstance(source, str):
+        raise doc.error("params", f"expected a parameter set's name or path, got {source!r}")
+    if _is_path(source):
+        if not Path(source).is_absolute():
+            source = str((path.parent / source).resolve())  # relative to the model file
+    elif not exists(PARAMS_DIR / f"{source}.toml"):
+        raise doc.error("params", f"unknown parameter set {source!r} (built-in sets: {', '.join(builtin_params())})")
+    try:
+        return load_params(source), source
+    except StationError as exc:  # the set's own file at fault: say which model file named it
+        raise doc.error("params", str(exc)) from None
+
+
+def _check_runs_as_written(model: Model, doc: TomlDoc) -> None:
+    """Refuse a model that would not run as its file says: a beam_damping below what its
+    parameter set has without beam damping (it would be ignored), or a parameter set
+    whose FEM matrices are not finite numbers."""
+    zeta = model.effect_dict().get("beam_damping")
+    if zeta is not None:
+        floor = model.beam_damping_floor()
+        if zeta < floor:
+            raise doc.error("beam_damping", f"{zeta:g} is below {floor:.4g}, the first-mode damping ratio of the "
+                            f"parameter set without beam damping ({model.n_elements} elements, its param:NAME "
+                            f"ratios applied): out of range (a lower damping is param:clamp_c < 1)", "effects")
+    try:  # the form the simulation steps (cached: the run that follows reuses it)
+        form = model.linear_form()
+        arrays = (form.lam, form.bm, form.bp, form.cm, form.co, form.vinv)
+        finite = all(np.all(np.isfinite(x)) for x in arrays) and math.isfinite(form.gw_v + form.gw_p)
+        radius = float(np.max(np.abs(form.lam))) if finite and form.lam.size else 0.0
+        why = "" if finite else " (not finite numbers)"
+    except (ArithmeticError, ValueError, np.linalg.LinAlgError) as exc:
+        finite, radius, why = False, 0.0, f" ({type(exc).__name__}: {str(exc)[:200]})"
+    if finite and radius > 1.0 + STABLE_TOLERANCE:  # a passive plant: rounding has taken over
+        finite, why = False, f" (a sampled eigenvalue of modulus {radius:.6g} > 1: the matrices are too ill-conditioned)"
+    if not finite:
+        raise StationError(f"{doc.path}: parameter set {model.params_source!r} with {model.n_elements} elements"
+                           f"{' and these effects' if model.effects else ''} gives a FEM plant that cannot be "
+                           f"computed{why}", file=doc.path, key="params")
 
 
 def as_model(model: Model | str | Path | None, n_elements: int | None = None,
@@ -353,11 +411,16 @@ def as_model(model: Model | str | Path | None, n_elements: int | None = None,
 
 # --- the linear part, cached ------------------------------------------------------------
 
+def _ratio_params(params: Params, values: Mapping[str, float]) -> Params:
+    """The parameter set with the param:NAME ratios of ``values`` applied."""
+    ratios = {k.split(":", 1)[1]: v for k, v in values.items() if k.startswith("param:")}
+    return dataclasses.replace(params, **{k: getattr(params, k) * r for k, r in ratios.items()}) if ratios else params
+
+
 @functools.lru_cache(maxsize=512)
 def _linear_params(params: Params, n_elements: int, linear: tuple[tuple[str, float], ...]) -> Params:
     values = dict(linear)
-    ratios = {k.split(":", 1)[1]: v for k, v in values.items() if k.startswith("param:")}
-    p = dataclasses.replace(params, **{k: getattr(params, k) * r for k, r in ratios.items()}) if ratios else params
+    p = _ratio_params(params, values)
     b = values.get("viscous_friction")
     if b:
         p = with_viscous_friction(p, b)
@@ -365,7 +428,7 @@ def _linear_params(params: Params, n_elements: int, linear: tuple[tuple[str, flo
     if zeta is not None:
         try:
             p = with_beam_damping(p, zeta, n_elements)
-        except ValueError:  # at or below the set's own first-mode damping: no beam damping
+        except ValueError:  # below the floor: only a fit's search gets here (load_model refuses it)
             p = dataclasses.replace(p, beam_beta=0.0)
     return p
 

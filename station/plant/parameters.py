@@ -8,11 +8,13 @@ counts, H in encoder counts).
 from __future__ import annotations
 
 import math
-import tomllib
+from collections.abc import Callable
 from dataclasses import dataclass, fields
 from pathlib import Path
 
-from station.errors import StationError
+from station.errors import StationError, one_line
+from station.inputs import exists, load_toml
+from station.ranges import Number, RangeError, number, shown
 
 PARAMS_DIR = Path(__file__).resolve().parent / "params"
 """Folder of the packaged parameter sets (``<name>.toml``)."""
@@ -96,8 +98,30 @@ class Params:
         return self.act_p * self.J_m
 
 
+PARAM_RANGES: dict[str, Number] = {
+    "mu": number(1e-3, 10.0, unit="kg/m"),
+    "L": number(0.05, 5.0, unit="m"),
+    "EI": number(1e-3, 1e3, unit="N·m²"),
+    "drive_k": number(1e-3, 1e3, unit="N·m/rad"),
+    "drive_c": number(0.0, 10.0, unit="N·m·s/rad"),
+    "clamp_k": number(1e-2, 1e4, unit="N·m/rad"),
+    "clamp_c": number(0.0, 10.0, unit="N·m·s/rad"),
+    "J_base": number(1e-6, 1.0, unit="kg·m²"),
+    "m_accel": number(0.0, 1.0, unit="kg"),
+    "J_accel": number(0.0, 1e-2, unit="kg·m²"),
+    "act_K": number(1e-4, 10.0),
+    "act_p": number(0.1, 1e4, unit="rad/s"),
+    "a_gain": number(1e-3, 1e3, unit="counts/(m/s²)"),
+    "k_tau": number(1e-5, 1.0, unit="N·m/count"),
+    "beam_beta": number(0.0, 1.0, unit="s"),
+}
+"""The physical range of each field of a parameter set, checked when a set is read
+(:func:`params_from_dict`). A bench-top flexible link: about two decades either side of
+tmm-fit's values (the diagnosis's param:NAME ratios span one), wide enough for another
+rig, narrow enough that every set within them gives a FEM plant that can be computed
+(tests/test_input_fuzz.py builds random sets from these ranges)."""
+
 _OPTIONAL = {"beam_beta", "name"}
-_NONNEGATIVE = {"drive_c", "clamp_c", "beam_beta", "m_accel", "J_accel"}
 
 
 def _resolve(name_or_path: str | Path) -> Path:
@@ -107,8 +131,13 @@ def _resolve(name_or_path: str | Path) -> Path:
     return PARAMS_DIR / f"{text}.toml"
 
 
+def builtin_params() -> list[str]:
+    """Names of the packaged parameter sets (``station/plant/params/*.toml``)."""
+    return sorted(p.stem for p in PARAMS_DIR.glob("*.toml"))
+
+
 def load_params(name_or_path: str | Path = "tmm-fit") -> Params:
-    """Read a parameter set from its TOML file.
+    """Read a parameter set from its TOML file (bounded: :func:`station.inputs.load_toml`).
 
     Parameters
     ----------
@@ -124,23 +153,21 @@ def load_params(name_or_path: str | Path = "tmm-fit") -> Params:
     Raises
     ------
     StationError
-        When the file is missing or not valid TOML, or a field is missing, not a
-        number, not finite or out of range; the message names the file and field.
+        When the file is missing, not a regular file, too large, not UTF-8 or not valid
+        TOML, or a field is missing, unknown, not a number, not finite or outside its
+        :data:`PARAM_RANGES` range; the message names the file, line and field.
     """
     path = _resolve(name_or_path)
-    try:
-        with open(path, "rb") as fh:
-            raw = tomllib.load(fh)
-    except FileNotFoundError:
-        known = ", ".join(sorted(p.stem for p in PARAMS_DIR.glob("*.toml")))
-        raise StationError(f"{path}: parameter file not found (packaged sets: {known})") from None
-    except tomllib.TOMLDecodeError as exc:
-        raise StationError(f"{path}: not valid TOML: {exc}") from None
-    return params_from_dict(raw, path)
+    if path.parent == PARAMS_DIR and not exists(path):
+        raise StationError(f"{path}: parameter file not found (packaged sets: {', '.join(builtin_params())})",
+                           file=path)
+    doc = load_toml(path, "parameter file")
+    return params_from_dict(doc.data, path, doc.line_of)
 
 
-def params_from_dict(raw: dict, where: str | Path) -> Params:
-    """A parameter set from a mapping of the table's names to values (SI units).
+def params_from_dict(raw: dict, where: str | Path, line_of: Callable[[str], int | None] | None = None) -> Params:
+    """A parameter set from a mapping of the table's names to values (SI units), each field
+    checked against its :data:`PARAM_RANGES` range.
 
     Parameters
     ----------
@@ -148,6 +175,9 @@ def params_from_dict(raw: dict, where: str | Path) -> Params:
         As a parameter-set TOML file holds them (``name`` and ``beam_beta`` optional).
     where : str or Path
         Named in error messages (a file, or a file and its table).
+    line_of : callable, optional
+        ``line_of(field) -> line number or None`` (e.g. :meth:`station.inputs.TomlDoc.line_of`),
+        to name the field's line.
 
     Returns
     -------
@@ -156,27 +186,34 @@ def params_from_dict(raw: dict, where: str | Path) -> Params:
     Raises
     ------
     StationError
-        A field missing, unknown, not a finite number or out of range (naming ``where``
-        and the field).
+        A field missing, unknown, not a finite number or out of range (naming ``where``,
+        the line and the field; ``key`` is the field).
     """
-    path = where
+    def bad(name: str, what: str) -> StationError:
+        line = line_of(name) if line_of is not None else None
+        at = f" line {line}:" if line else ""
+        return StationError(one_line(f"{where}:{at} field '{name}': {what}"), line=line, key=name)
+
+    if not isinstance(raw, dict):
+        raise StationError(f"{where}: expected a table of the parameter set's fields, got {raw!r}")
+    unknown = sorted(set(raw) - {f.name for f in fields(Params)})
+    if unknown:
+        raise bad(unknown[0], f"unknown field (expected {', '.join(f.name for f in fields(Params))})")
     values: dict[str, object] = {}
     for f in fields(Params):
         if f.name not in raw:
             if f.name in _OPTIONAL:
                 continue
-            raise StationError(f"{path}: missing field '{f.name}'")
+            raise StationError(f"{where}: missing field '{f.name}'", key=f.name)
         value = raw[f.name]
         if f.name == "name":
-            values["name"] = str(value)
+            if not isinstance(value, str):
+                raise bad("name", f"expected a string, got {shown(value)}")
+            values["name"] = value
             continue
-        if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
-            raise StationError(f"{path}: field '{f.name}' must be a finite number, got {value!r}")
-        if value < 0 or (value == 0 and f.name not in _NONNEGATIVE):
-            raise StationError(f"{path}: field '{f.name}' must be positive, got {value!r}")
-        values[f.name] = float(value)
-    unknown = sorted(set(raw) - {f.name for f in fields(Params)})
-    if unknown:
-        raise StationError(f"{path}: unknown field '{unknown[0]}'")
-    values.setdefault("name", Path(str(path)).stem)
+        try:
+            values[f.name] = float(PARAM_RANGES[f.name].check(value))
+        except RangeError as exc:
+            raise bad(f.name, str(exc)) from None
+    values.setdefault("name", Path(str(where)).stem)
     return Params(**values)

@@ -4,7 +4,8 @@ The header is read line by line and decides the layout (ours, :mod:`station.runl
 two); the rows go through :func:`station.runlog.rows.load_rows`; then the checks that need
 whole columns (finite numbers where they belong), the time base and the end record.
 
-Imports :mod:`station.runlog.schema`, ``.rows``, ``.rig``, ``.timebase`` and ``.log``.
+Imports :mod:`station.runlog.schema`, ``.rows``, ``.rig``, ``.timebase`` and ``.log``, and
+:func:`station.inputs.check_regular` (a log is a regular file).
 """
 
 from __future__ import annotations
@@ -17,10 +18,15 @@ from typing import Any
 
 import numpy as np
 
+from station.errors import StationError
+from station.inputs import check_regular, exists
 from station.runlog.log import RunLog
 from station.runlog.rig import Header, parse_column_line, parse_rig_header
-from station.runlog.rows import Lines, load_rows
-from station.runlog.schema import COLUMN_LINE, COLUMNS, END_PREFIX, FINITE_COLUMNS, MAGIC, log_error
+from station.runlog.rows import MAX_LINE, LineTooLong, Lines, load_rows
+from station.runlog.schema import COLUMN_LINE, COLUMNS, END_PREFIX, FINITE_COLUMNS, MAGIC, RunLogError, log_error
+
+MAX_HEADER_LINES = 1000
+"""Most ``#`` lines of a rig log's header (it has about ten): a file of comments is no log."""
 from station.runlog.timebase import complete_time_base
 
 
@@ -49,7 +55,9 @@ def read_log(path: str | Path) -> RunLog:
     Raises
     ------
     RunLogError
-        File missing or unreadable, unknown format, bad header, no usable columns (lists
+        File missing, not a regular file or unreadable, a line longer than
+        :data:`station.runlog.rows.MAX_LINE`, more than :data:`MAX_HEADER_LINES` header
+        lines, unknown format, bad header, no usable columns (lists
         the columns found and expected), or a malformed row other than a torn last line
         (names the file, line number and what was expected).
 
@@ -59,6 +67,11 @@ def read_log(path: str | Path) -> RunLog:
         When a torn last line (interrupted write) is skipped.
     """
     path = Path(path)
+    try:  # a folder, a FIFO (opening it would block) or a device (/dev/zero never ends) is no log
+        if exists(path):  # (a missing file: open says so, below)
+            check_regular(path, "run log")
+    except StationError as exc:
+        raise RunLogError(str(exc), file=path) from None
     try:
         fh = open(path, encoding="utf-8", newline="")
     except OSError as exc:
@@ -68,6 +81,8 @@ def read_log(path: str | Path) -> RunLog:
             return _read_stream(path, Lines(fh))
         except UnicodeDecodeError as exc:
             raise log_error(path, None, f"not a text run log ({exc.reason} at byte {exc.start} of a block)") from None
+        except LineTooLong as exc:
+            raise log_error(path, exc.lineno, f"longer than {MAX_LINE} characters: not a run log") from None
         except OSError as exc:
             raise log_error(path, None, f"cannot read run log: {exc.strerror or exc}") from None
 
@@ -99,6 +114,9 @@ def _read_stream(path: Path, lines: Lines) -> RunLog:
                 lines.push(item)
                 break
             header.append(item[1])
+            if len(header) > MAX_HEADER_LINES:
+                raise log_error(path, item[0], f"more than {MAX_HEADER_LINES} '#' header lines before the first "
+                                f"row: not a run log (the rig's header has about ten)")
         found = parse_rig_header(path, header)
     else:
         fmt, layout = "rig", "columns"

@@ -66,9 +66,29 @@ def parse_row(line: str, names: list[str], sep: str | None) -> tuple[list[float]
         return None, f"expected a number in column {names[bad]!r}, got {parts[bad]!r}"
 
 
+MAX_LINE = 1_000_000
+"""Longest line of a run log, characters: a row is under 200, our JSON header a few
+thousand; a longer line (a binary file, a file without newlines) is no log, and reading
+it whole could take all the memory there is."""
+
+
+class LineTooLong(Exception):
+    """A line of more than :data:`MAX_LINE` characters (:meth:`Lines.next`).
+
+    Parameters
+    ----------
+    lineno : int
+        Its 1-based line number.
+    """
+
+    def __init__(self, lineno: int):
+        super().__init__(f"line {lineno}: longer than {MAX_LINE} characters")
+        self.lineno = lineno
+
+
 class Lines:
     """A text file's lines, numbered from 1, without their newline (and a trailing CR),
-    with a push-back for the header parsers.
+    with a push-back for the header parsers; no line longer than :data:`MAX_LINE` is read.
 
     Parameters
     ----------
@@ -83,12 +103,20 @@ class Lines:
 
     def next(self) -> tuple[int, str, bool] | None:
         """The next line as (line number, text, terminated), None at the end of the file;
-        ``terminated`` is False for a last line with no newline."""
+        ``terminated`` is False for a last line with no newline.
+
+        Raises
+        ------
+        LineTooLong
+            The line is longer than :data:`MAX_LINE` characters (not read further).
+        """
         if self._back:
             return self._back.pop()
-        raw = self.fh.readline()
+        raw = self.fh.readline(MAX_LINE + 2)  # (+2: the line's end, "\r\n")
         if not raw:
             return None
+        if len(raw) > MAX_LINE and len(raw.rstrip("\r\n")) > MAX_LINE:
+            raise LineTooLong(self.lineno + 1)
         self.lineno += 1
         terminated = raw.endswith("\n")
         return self.lineno, raw.rstrip("\n").rstrip("\r"), terminated

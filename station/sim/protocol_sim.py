@@ -15,24 +15,26 @@ options:
   current sample (legacy: each '/') makes the next tick happen inside ``write``;
   ``realtime`` ticks every 2 ms on its own clock thread (absolute deadlines) and never
   waits for the station: missing commands give LATE / hold / WATCHDOG as on the rig.
-- ``seed=N``: seed of the sensor noise and of injected garbage (default 0).
+- ``seed=N``: seed of the sensor noise and of injected garbage, 0..2^32-1 (default 0).
 - ``model=NAME|FILE``: the simulated rig's model: a built-in model's name
   (``station/plant/models``) or a model file (DESIGN.md "Model file"), effects included
   (default ``tmm-fit``, the nominal FEM).
-- ``elements=N``: FEM element count of the plant (default: the model's, 4).
-- ``noise=STD``: accelerometer noise std, ADC counts (default 0.3).
+- ``elements=N``: FEM element count of the plant, 1..100 (default: the model's, 4).
+- ``noise=STD``: accelerometer noise std, 0..100 ADC counts (default 0.3).
 - ``watchdog=N``: v1 watchdog_ticks, 1..255 (default 10).
-- ``silent_after=N``: fault: nothing is sent after tick N of a run; the device keeps
-  running.
-- ``garbage_every=N``: fault, v1: after every N-th sample, random bytes and a frame with
-  a bad CRC (two rx errors for the station). Ignored by legacy.
-- ``skip_tick=N``: fault, legacy: n jumps by one at tick N (a lost record). Ignored by
-  v1.
+- ``silent_after=N``: fault: nothing is sent after tick N (0..2^32-1) of a run; the
+  device keeps running.
+- ``garbage_every=N``: fault, v1: after every N-th sample (1..2^32-1), random bytes and
+  a frame with a bad CRC (two rx errors for the station). Ignored by legacy.
+- ``skip_tick=N``: fault, legacy: n jumps by one at tick N (0..2^32-1; a lost record).
+  Ignored by v1.
 - ``logging=debug|info|warning|error``: level of the ``station.sim`` logger (as
   pyserial's ``loop://?logging=debug``): debug shows every byte in and out.
 
-An unknown option, a repeated option or a bad value raises ``serial.SerialException``
-naming it. The baud rate and the line settings are accepted and ignored.
+The numbers' ranges are :data:`station.ranges.SIM_RIG`'s, the same that ``--seed`` and
+``--elements`` check. An unknown option, a repeated option, a blank value (``seed=``) or
+a value outside its range raises ``serial.SerialException`` naming the option, before
+anything is built. The baud rate and the line settings are accepted and ignored.
 
 Reads: ``read(size)`` returns as soon as ``size`` bytes are there, or when ``timeout``
 runs out with what there is; in lockstep pacing nothing can arrive between writes, so a
@@ -51,6 +53,7 @@ import urllib.parse
 from serial.serialutil import PortNotOpenError, SerialBase, SerialException, to_bytes
 
 from station.protocol import PROTOCOLS
+from station.ranges import SIM_RIG, shown
 from station.sim.device import RATE_HZ, SimDevice
 from station.sim.driver import DeviceDriver, Faults
 
@@ -71,46 +74,37 @@ def _choice(*allowed: str):
     return parse
 
 
-def _count(minimum: int):
-    def parse(text: str) -> int:
-        n = int(text)
-        if n < minimum:
-            raise ValueError(f"expected an integer >= {minimum}")
-        return n
-    return parse
-
-
-def _model(text: str) -> str:
-    from station.errors import StationError
-    from station.plant.model import load_model
-
-    try:
-        load_model(text)
-    except StationError as exc:
-        raise ValueError(str(exc)) from None
-    return text
-
-
-def _std(text: str) -> float:
-    x = float(text)
-    if not x >= 0:
-        raise ValueError("expected a number >= 0")
-    return x
-
-
-_OPTIONS = {  # name: (parser, default)
+_OPTIONS = {  # name: (parser, default); the numbers' ranges are station.ranges.SIM_RIG's (--seed, --elements)
     "protocol": (_choice(*PROTOCOLS), "v1"),
     "pacing": (_choice("lockstep", "realtime"), "lockstep"),
-    "seed": (_count(0), 0),
-    "model": (_model, "tmm-fit"),
-    "elements": (_count(1), 4),
-    "noise": (_std, 0.3),
-    "watchdog": (_count(1), 10),
-    "silent_after": (_count(0), None),
-    "garbage_every": (_count(1), None),
-    "skip_tick": (_count(0), None),
+    "seed": (SIM_RIG["seed"], 0),
+    "model": (str, "tmm-fit"),  # read and checked with the element count, at the end of parse_url
+    "elements": (SIM_RIG["elements"], 4),
+    "noise": (SIM_RIG["noise"], 0.3),
+    "watchdog": (SIM_RIG["watchdog"], 10),
+    "silent_after": (SIM_RIG["silent_after"], None),
+    "garbage_every": (SIM_RIG["garbage_every"], None),
+    "skip_tick": (SIM_RIG["skip_tick"], None),
     "logging": (_choice(*LOGGER_LEVELS), None),
 }
+
+
+class OptionError(SerialException):
+    """A ``sim://`` option with a bad value: ``sim:// option NAME='VALUE': DETAIL``.
+
+    Parameters
+    ----------
+    option : str
+        The option's name.
+    value : str
+        Its value as given.
+    detail : str
+        What is wrong and what was expected (the range, or the model file's own error).
+    """
+
+    def __init__(self, option: str, value: str, detail: str):
+        super().__init__(f"sim:// option {option}={shown(value)}: {detail}")
+        self.option, self.value, self.detail = option, value, detail
 
 
 def parse_url(url: str) -> dict:
@@ -129,8 +123,8 @@ def parse_url(url: str) -> dict:
     Raises
     ------
     serial.SerialException
-        Not a ``sim://`` URL, unknown or repeated option, or a bad value; the message
-        names the option.
+        Not a ``sim://`` URL, unknown or repeated option; :class:`OptionError` (one) for a
+        bad value. The message names the option.
     """
     parts = urllib.parse.urlsplit(url)
     if parts.scheme.lower() != "sim":
@@ -141,18 +135,23 @@ def parse_url(url: str) -> dict:
     seen = set()
     for name, value in urllib.parse.parse_qsl(parts.query, keep_blank_values=True, strict_parsing=False):
         if name not in _OPTIONS:
-            raise SerialException(f"{_FORMAT}: unknown option {name!r}")
+            raise SerialException(f"{_FORMAT}: unknown option {shown(name)}")
         if name in seen:
-            raise SerialException(f"{_FORMAT}: option {name!r} given twice")
+            raise SerialException(f"sim:// option {name}: given twice (give each option once)")
         seen.add(name)
         try:
             opts[name] = _OPTIONS[name][0](value)
-        except ValueError as e:
-            raise SerialException(f"sim:// option {name}={value!r}: {e}") from None
-    if "model" in seen and "elements" not in seen:
+        except ValueError as e:  # (a RangeError is one)
+            raise OptionError(name, value, str(e)) from None
+    if "model" in seen or "elements" in seen:
+        from station.errors import StationError
         from station.plant.model import load_model
 
-        opts["elements"] = load_model(opts["model"]).n_elements
+        try:  # bounded: a regular file of at most 1 MB, every field in its range, for this element count
+            model = load_model(opts["model"], n_elements=opts["elements"] if "elements" in seen else None)
+        except StationError as exc:
+            raise OptionError("model", opts["model"], str(exc)) from None
+        opts["elements"] = model.n_elements
     return opts
 
 

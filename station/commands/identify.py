@@ -1,0 +1,175 @@
+"""``station identify --port URL``: identify a rig by experiments on the device itself (DESIGN.md
+"Identifying a rig"): the thesis's four, a diagnosis, then while the diagnosis leaves rivals
+the experiment that best separates them, up to ``--budget`` designed experiments."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+
+from station.commands.options import (add_model_options, add_protocol_option, add_report_options, check_port,
+                                      model_inputs, number)
+from station.outputs import FORCE_HELP, Output, Transaction, check_folder, check_outputs
+
+NAME = "identify"
+HELP = ("identify the rig on the device: the thesis's four experiments, a diagnosis, then the experiments that "
+        "best separate what it leaves open, each a logged step run")
+
+
+def configure(parser: argparse.ArgumentParser) -> None:
+    """Add ``station identify``'s arguments to ``parser``.
+
+    Parameters
+    ----------
+    parser : argparse.ArgumentParser
+        Gets ``--port``, ``--protocol``, ``--model``, ``--budget``, the limits, the outputs
+        (``--out-dir``, ``--json``, ``--report``, ``--save-model``, ``--force``) and ``--quiet``.
+    """
+    parser.add_argument("--port", default="sim://", metavar="URL",
+                        help="the device: port path or pyserial URL (default sim://, the simulated rig; "
+                             "sim://?model=FILE serves a model file)")
+    add_protocol_option(parser)
+    add_model_options(parser, subject="the nominal model the diagnoses extend", elements=None, params=False)
+    # the default is station.diagnosis.identify.DEFAULT_BUDGET, not imported here: the diagnosis
+    # loads scipy and numba, and every command's start-up builds this parser
+    parser.add_argument("--budget", type=number(0, 100, integer=True), default=None, metavar="N",
+                        help="designed experiments after the thesis's four, at most (default 8; 0: the four only)")
+    parser.add_argument("--limit", type=number(1, 255, unit="DAC counts"), default=200.0, metavar="COUNTS",
+                        help="the controllers' clamp, ±DAC counts (default 200, the rig's)")
+    parser.add_argument("--soft-limit", type=number(1, 32767, unit="encoder counts"), default=2048.0,
+                        metavar="COUNTS", help="stop a run safely when |θ| exceeds this (default 2048); designed "
+                                               "experiments keep the predicted |θ| within 80 %% of it")
+    parser.add_argument("--timeout", type=number(1e-3, 60.0, unit="s"), default=0.1, metavar="S",
+                        help="longest wait for a sample before stopping a run safely (default 0.1 s)")
+    parser.add_argument("--out-dir", type=Path, default=None, metavar="DIR",
+                        help="folder of the experiments' logs (default runs/identify-<UTC time>); a folder "
+                             "that holds files needs --force")
+    add_report_options(parser, json="the diagnosis and the experiments")
+    parser.add_argument("--report", type=Path, default=None, metavar="DIR",
+                        help="write DIR/identify.html (the experiments, why each was run, predicted vs measured) "
+                             "and DIR/report.html (the last diagnosis), with PNGs")
+    parser.add_argument("--save-model", type=Path, default=None, metavar="FILE",
+                        help="write the identified model (nominal + accepted effects) as a model file")
+    parser.add_argument("--force", action="store_true", help=FORCE_HELP + "; write into an --out-dir that holds files")
+    parser.add_argument("--quiet", action="store_true", help="no progress lines on stderr")
+
+
+def outputs(args: argparse.Namespace) -> list[Output]:
+    """The files ``station identify`` writes besides the experiments' logs: --json,
+    --save-model and the report's pages (its figures are named per experiment).
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        ``--json``, ``--save-model``, ``--report``.
+    """
+    report = [] if args.report is None else [Output("--report", args.report / name)
+                                             for name in ("identify.html", "report.html")]
+    return [Output("--json", args.json), Output("--save-model", args.save_model), *report]
+
+
+def experiments_folder(args: argparse.Namespace) -> Path:
+    """The experiments' folder, checked before any run: ``--out-dir`` (a folder that holds
+    files needs ``--force``) or a new one under runs/.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        ``--out-dir``, ``--force``.
+
+    Raises
+    ------
+    StationError
+        The folder holds files (without ``--force``) or cannot be written.
+    """
+    from station.diagnosis.identify import default_out_dir
+    from station.errors import StationError
+
+    folder = args.out_dir if args.out_dir is not None else default_out_dir()
+    if folder.is_dir() and any(folder.iterdir()) and not args.force:
+        raise StationError(f"--out-dir {folder}: holds files already; use --force to write into it, or another folder")
+    check_folder(folder, "--out-dir")
+    return folder
+
+
+def format_identification(ident) -> str:
+    """What ``station identify`` prints: every experiment (why, outcome), how it ended, the diagnosis.
+
+    Parameters
+    ----------
+    ident : Identification
+        What :func:`station.diagnosis.identify.identify` returned.
+    """
+    from station.commands.diagnose import format_diagnosis
+    from station.diagnosis.rivals import describe
+
+    lines = []
+    for k, r in enumerate(ident.experiments, 1):
+        lines.append(f"{k:2d}. {r.experiment.label}: {r.reason}{'' if r.used else ' (not used)'}")
+        lines.append(f"    why: {r.why}")
+        lines.append(f"    log: {r.log}")
+    t = ident.timings
+    lines.append(f"ended: {ident.stopped}")
+    for note in ident.kept:
+        lines.append(f"kept the earlier explanation: {note}")
+    if ident.model is not None:
+        lines.append(f"identified model: {describe(ident.model.effect_dict())}")
+    lines.append(f"{len(ident.experiments)} experiments ({sum(r.used for r in ident.experiments)} used), "
+                 f"{ident.diagnoses} diagnoses in {t.get('total', 0):.1f} s (experiments {t.get('experiments', 0):.1f} s, "
+                 f"diagnoses {t.get('diagnosis', 0):.1f} s, designs {t.get('design', 0):.1f} s)")
+    if ident.diagnosis is not None:
+        lines.append(format_diagnosis(ident.diagnosis))
+    return "\n".join(lines)
+
+
+def run(args: argparse.Namespace) -> int:
+    """Identify; print the experiments and the diagnosis; write the outputs asked for.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The device (``--port``, ``--protocol``), ``--model``, ``--budget``, the limits and the
+        outputs; checked before any run.
+
+    Returns
+    -------
+    int
+        0 when it ran to the end, 1 when fewer than two experiments completed (nothing to
+        diagnose), 130 / 143 when a signal stopped it.
+
+    Raises
+    ------
+    StationError
+        Bad input (an unknown port, an unreadable model, an output that exists or cannot be
+        written), before any run.
+    """
+    from station.diagnosis.identify import DEFAULT_BUDGET, identify
+    from station.plant.model import as_model
+
+    check_port(args.port)
+    model = as_model(args.model)  # an unreadable model is refused before any run
+    check_outputs(outputs(args), model_inputs(args), force=args.force)
+    folder = experiments_folder(args)
+    progress = None if args.quiet else (lambda msg: print(f"identify: {msg}", file=sys.stderr, flush=True))
+    budget = DEFAULT_BUDGET if args.budget is None else args.budget
+    ident = identify(port=args.port, model=model, budget=budget, out_dir=folder, protocol=args.protocol,
+                     soft_limit=args.soft_limit, limit=args.limit, timeout=args.timeout, force=args.force,
+                     progress=progress)
+    print(format_identification(ident))
+    with Transaction() as tx:  # every file whole or none (station.outputs)
+        if args.report is not None:
+            from station.diagnosis.identify_report import write_identify_report
+
+            page = write_identify_report(ident, args.report, tx)
+        if args.json is not None:
+            from station.jsonio import to_jsonable
+
+            tx.write_json(args.json, to_jsonable(ident.to_json()))
+        if args.save_model is not None and ident.model is not None:
+            tx.write(args.save_model, ident.model.to_toml(), "the model")
+    if args.report is not None:
+        print(f"report: {page}")
+    if args.save_model is not None and ident.model is not None:
+        print(f"model: {args.save_model}")
+    return ident.exit_code

@@ -1,0 +1,466 @@
+"""Identifying a rig on the device itself (DESIGN.md "Identifying a rig"): run the thesis's four
+experiments, diagnose, and while the diagnosis leaves rivals (alternatives, wide intervals)
+design the experiment that best separates them, run it and diagnose again, up to a budget
+(:func:`identify`; ``station identify`` is its CLI).
+
+Every experiment is a normal ``station step`` run (:func:`station.experiment.run_step`:
+fail-safe, logged; the reference of a designed experiment is written beside its log as
+``<log stem>.u.tsv`` and given as ``FILE:u``). A run that does not complete (any stop, or a
+watchdog trip) is reported and not used; a SIGINT or SIGTERM ends the identification.
+
+The first diagnosis tries the whole vocabulary (or the ``candidates`` given); each later one
+only the effects the first found worth a look (:func:`recheck_candidates`), which keeps a
+re-diagnosis of up to twelve runs by leave-one-run-out affordable.
+"""
+
+from __future__ import annotations
+
+import datetime as _dt
+import math
+import time
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, NamedTuple
+
+from station.diagnosis.cases import load_case
+from station.diagnosis.cost import Evaluator, calibrate_noise
+from station.diagnosis.experiment_design import Design, choose_experiment
+from station.diagnosis.experiments import THESIS_EXPERIMENTS, Experiment, candidate_experiments, write_reference
+from station.diagnosis.pipeline import diagnose
+from station.diagnosis.rivals import describe, rivals
+from station.diagnosis.selection import accept, effect_axes, fit_set
+from station.errors import StationError
+from station.experiment import run_step
+from station.logged.device import command_quantization
+from station.plant.effects import CANDIDATES
+from station.plant.model import as_model
+from station.runlog import read_log
+
+DEFAULT_BUDGET = 8
+"""Designed experiments after the thesis's four, at most (``station identify --budget``)."""
+
+RECHECK_CANDIDATES = 8
+"""Re-diagnoses try at most this many effects: the first diagnosis's accepted ones, its rivals'
+and the best of the others alone."""
+
+THESIS_WHY = ("the thesis's P step", "the thesis's lead step", "the thesis's lead + accelerometer step",
+              "the thesis's open-loop pulses")
+"""Why each of :data:`~station.diagnosis.experiments.THESIS_EXPERIMENTS` is run."""
+
+
+class ExperimentRun(NamedTuple):
+    """What running one experiment gave.
+
+    Attributes
+    ----------
+    log : Path
+        Its run log.
+    reason : str
+        The outcome's reason (DESIGN.md "Run outcome"; "completed" when it ran to the end).
+    exit_code : int
+        As ``station step``'s: 0 completed without a watchdog trip, 130 / 143 stopped by a signal.
+    """
+
+    log: Path
+    reason: str
+    exit_code: int
+
+
+Runner = Callable[[Experiment, Path], ExperimentRun]
+"""``runner(experiment, log_path) -> ExperimentRun``: runs an experiment on the device."""
+
+
+def step_runner(port: str, protocol: str = "v1", soft_limit: float = 2048.0, limit: float = 200.0,
+                timeout: float = 0.1, force: bool = False) -> Runner:
+    """A runner that runs each experiment as ``station step`` does (:func:`station.experiment.run_step`).
+
+    Parameters
+    ----------
+    port : str
+        Port path or pyserial URL (``sim://`` is the simulated rig).
+    protocol : {"v1", "legacy"}
+        The device's wire protocol.
+    soft_limit : float
+        Encoder soft limit, counts.
+    limit : float
+        The controller's clamp, ±DAC counts.
+    timeout : float
+        Longest wait for one sample, s.
+    force : bool
+        Overwrite an existing log (and reference file) of the same name.
+    """
+    def run(experiment: Experiment, log: Path) -> ExperimentRun:
+        if experiment.reference == "step":
+            ref = {"reference": "step", "amplitude": experiment.amplitude, "step_time": experiment.step_time}
+        else:
+            path = log.with_name(log.stem + ".u.tsv")
+            if path.exists() and not force:
+                raise StationError(f"{path}: exists; use --force to overwrite it, or another --out-dir")
+            ref = {"reference": f"{write_reference(experiment, path)}:u"}
+        report = run_step(port=port, protocol=protocol, controller=experiment.controller, kp=experiment.kp,
+                          limit=limit, soft_limit=soft_limit, timeout=timeout, out=log, force=force,
+                          duration=experiment.duration, **ref)
+        o = report.result.outcome
+        return ExperimentRun(report.log_path, o.reason, o.exit_code)
+
+    return run
+
+
+@dataclass
+class ExperimentRecord:
+    """One experiment of an identification.
+
+    Attributes
+    ----------
+    experiment : Experiment
+    log : Path
+    why : str
+        Why it was run (the thesis's, or the design's reason in words).
+    reason : str
+        Its outcome's reason.
+    used : bool
+        Completed (without a watchdog trip): the diagnoses use it.
+    design : Design or None
+        The design that chose it (None for the thesis's four).
+    """
+
+    experiment: Experiment
+    log: Path
+    why: str
+    reason: str
+    used: bool
+    design: Design | None = field(default=None, repr=False)
+
+    def to_json(self) -> dict:
+        """``{"log", "controller", "kp", "reference", "label", "why", "outcome", "used"}``."""
+        return {"log": str(self.log), **self.experiment.to_json(), "why": self.why, "outcome": self.reason,
+                "used": self.used}
+
+
+@dataclass
+class Identification:
+    """The result of :func:`identify`.
+
+    Attributes
+    ----------
+    diagnosis : Diagnosis or None
+        The last diagnosis (None when fewer than two experiments completed).
+    experiments : list of ExperimentRecord
+        In the order they ran.
+    stopped : str
+        Why the loop ended, in words.
+    budget : int
+        Designed experiments allowed.
+    diagnoses : int
+        Diagnoses made.
+    timings : dict of str to float
+        Seconds spent running experiments, diagnosing, designing, and in total.
+    exit_code : int
+        0, or 130 / 143 when a signal ended it, 1 when nothing could be diagnosed.
+    kept : list of str
+        Each time a re-diagnosis was set aside for the earlier explanation, why (:func:`prefer`).
+    model : station.plant.model.Model or None
+        The identified model: the diagnosis's extended model, or, when the last re-diagnosis was
+        set aside, the kept explanation refitted on every completed run.
+    """
+
+    diagnosis: Any
+    experiments: list
+    stopped: str
+    budget: int
+    diagnoses: int = 0
+    timings: dict = field(default_factory=dict)
+    exit_code: int = 0
+    kept: list = field(default_factory=list)
+    model: Any = None
+
+    def to_json(self) -> dict:
+        """The diagnosis's JSON (DESIGN.md) plus ``"experiments"`` and ``"identify"`` (how it
+        ended, the budget, the diagnoses made, the timings)."""
+        doc = self.diagnosis.to_json() if self.diagnosis is not None else {"cause": None, "causes": []}
+        doc["experiments"] = [e.to_json() for e in self.experiments]
+        doc["identify"] = {"stopped": self.stopped, "budget": self.budget, "diagnoses": self.diagnoses,
+                           "kept_earlier": list(self.kept),
+                           "model": None if self.model is None else self.model.to_json(),
+                           "experiments_run": len(self.experiments),
+                           "experiments_used": sum(e.used for e in self.experiments),
+                           "timings_s": {k: round(v, 3) for k, v in self.timings.items()}}
+        return doc
+
+
+def default_out_dir(when: _dt.datetime | None = None, folder: str | Path = "runs") -> Path:
+    """``runs/identify-<UTC time, ms>``, with ``-2``, ``-3``... when taken.
+
+    Parameters
+    ----------
+    when : datetime, optional
+        The time in the name (default now, UTC).
+    folder : str or Path
+        Where the folder goes.
+    """
+    when = when or _dt.datetime.now(_dt.UTC)
+    stem = f"identify-{when:%Y%m%d-%H%M%S}-{when.microsecond // 1000:03d}"
+    path, k = Path(folder) / stem, 1
+    while path.exists():
+        k += 1
+        path = Path(folder) / f"{stem}-{k}"
+    return path
+
+
+def recheck_candidates(diag, rival_effects: Sequence[str], allowed: Sequence[str]) -> list[str]:
+    """The effects later diagnoses try: the accepted ones, the rivals', then the best of the rest
+    by their cost gain alone (positive only), at most :data:`RECHECK_CANDIDATES`.
+
+    Parameters
+    ----------
+    diag : Diagnosis
+        The first diagnosis.
+    rival_effects : sequence of str
+        Effects named by its rivals.
+    allowed : sequence of str
+        The candidates of the first diagnosis.
+    """
+    order = list(diag.causes) + list(rival_effects)
+    order += [e.name for e in sorted(diag.effects, key=lambda e: -e.cost_gain_pct) if e.cost_gain_pct > 0]
+    out: list[str] = []
+    for n in order:
+        if n in allowed and n not in out:
+            out.append(n)
+    return out[:max(RECHECK_CANDIDATES, len(diag.causes))] or list(allowed)
+
+
+def identify(port: str = "sim://", model=None, budget: int = DEFAULT_BUDGET, out_dir: str | Path | None = None,
+             protocol: str = "v1", candidates: Sequence[str] | None = None, soft_limit: float = 2048.0,
+             limit: float = 200.0, timeout: float = 0.1, force: bool = False,
+             progress: Callable[[str], None] | None = None, runner: Runner | None = None) -> Identification:
+    """Identify a rig by experiments on the device (module docstring).
+
+    Parameters
+    ----------
+    port : str
+        The device (a port path or pyserial URL; ``sim://?model=FILE`` a simulated rig).
+    model : Model, str, Path or None
+        The nominal model the diagnoses extend (default tmm-fit).
+    budget : int
+        Designed experiments after the thesis's four, at most (0: the four only).
+    out_dir : str or Path, optional
+        Folder of the experiments' logs (default :func:`default_out_dir`); created.
+    protocol : {"v1", "legacy"}
+        The device's wire protocol.
+    candidates : sequence of str, optional
+        Effects the first diagnosis tries (default the whole vocabulary).
+    soft_limit : float
+        Encoder soft limit of every run, counts.
+    limit : float
+        The controllers' clamp, ±DAC counts.
+    timeout : float
+        Longest wait for one sample, s.
+    force : bool
+        Overwrite logs of the same name in ``out_dir``.
+    progress : callable, optional
+        Called with one line per experiment, design and diagnosis step.
+    runner : callable, optional
+        ``runner(experiment, log_path) -> ExperimentRun`` (default :func:`step_runner` on
+        ``port``); tests plug in their own.
+
+    Returns
+    -------
+    Identification
+
+    Raises
+    ------
+    StationError
+        A negative budget, a bad model or candidate, a port that cannot be opened (before
+        any run), an unwritable folder.
+    """
+    if isinstance(budget, bool) or int(budget) != budget or budget < 0:
+        raise StationError(f"identify: the budget must be a whole number of experiments >= 0, got {budget!r}")
+    base = as_model(model)
+    names = list(CANDIDATES if candidates is None else candidates)
+    say = progress or (lambda msg: None)
+    run = runner or step_runner(port, protocol, soft_limit, limit, timeout, force)
+    folder = Path(out_dir) if out_dir is not None else default_out_dir()
+    try:
+        folder.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise StationError(f"{folder}: cannot create the experiments' folder: {exc.strerror or exc}") from None
+    loop = _Loop(base, folder, run, say, soft_limit, limit)
+
+    for exp, why in zip(THESIS_EXPERIMENTS, THESIS_WHY):
+        code = loop.run(exp, why)
+        if code is not None:
+            return loop.result(None, f"stopped by {loop.records[-1].reason}", budget, code)
+    diag = loop.diagnose(names)
+    if diag is None:
+        return loop.result(None, "fewer than two of the thesis's experiments completed: nothing to diagnose", budget, 1)
+    recheck = None
+    tried = set(THESIS_EXPERIMENTS)
+    designed = 0
+    while True:
+        rv = rivals(diag)
+        if not rv.rivals:
+            stopped = ("the diagnosis accepted no effect: nothing to tell apart" if not diag.causes else
+                       f"settled: {describe(rv.chosen)}, no alternatives and every interval narrow")
+            break
+        if designed >= budget:
+            stopped = f"budget of {budget} designed experiment(s) spent; {len(rv.rivals)} rival(s) remain"
+            break
+        design = loop.design(rv, [c for c in candidate_experiments() if c not in tried])
+        if design.experiment is None:
+            stopped = design.why
+            break
+        tried.add(design.experiment)
+        designed += 1
+        code = loop.run(design.experiment, design.why, design)
+        if code is not None:
+            return loop.result(diag, f"stopped by {loop.records[-1].reason}", budget, code)
+        if not loop.records[-1].used:
+            continue
+        if recheck is None:
+            recheck = recheck_candidates(diag, [n for r in rv.rivals for n in r.effects], names)
+        new = loop.diagnose(recheck)
+        if new is not None:
+            diag = loop.prefer(diag, new)
+    return loop.result(diag, stopped, budget, 0)
+
+
+class Preference(NamedTuple):
+    """Which of two explanations fits every completed run better (:func:`prefer`).
+
+    Attributes
+    ----------
+    keep_old : bool
+        The earlier explanation, refitted on all the runs, fits them better.
+    values : dict of str to float
+        The earlier explanation's effects refitted on all the runs ({} when not compared).
+    old_cost, new_cost : float
+        Noise-normalised cost per error term on all the runs (1 ≈ the noise floor).
+    note : str
+        The comparison in words.
+    """
+
+    keep_old: bool
+    values: dict
+    old_cost: float
+    new_cost: float
+    note: str
+
+
+def prefer(old, new, runs: Sequence[str | Path], base) -> Preference:
+    """Compare an earlier diagnosis's explanation with a new one on the same runs.
+
+    Forward selection is greedy: a new run can send it down another path to an explanation
+    that fits every run worse than the one it had (seen on the simulated rig: deadzone +
+    param:act_K found on the thesis's four, Coulomb friction + backlash + delay once an
+    open-loop ramp was added). The earlier explanation's effects are refitted on all the runs
+    (from its values) and both are judged by the diagnosis's cost on all of them; the earlier
+    one is kept when it fits better with no more effects, or, with more, when it pays for
+    them as forward selection's acceptance demands
+    (:func:`station.diagnosis.selection.accept`).
+
+    Parameters
+    ----------
+    old, new : Diagnosis
+        The current answer and the re-diagnosis (on ``runs``).
+    runs : sequence of path
+        Every completed run.
+    base : station.plant.model.Model
+        The nominal model.
+    """
+    old_values = {e.name: e.value for e in old.effects if e.accepted}
+    new_values = {e.name: e.value for e in new.effects if e.accepted}
+    if not old_values or set(old_values) == set(new_values):
+        return Preference(False, {}, math.nan, math.nan, "")
+    ev = Evaluator([load_case(p) for p in runs], base)
+    calibrate_noise(ev)
+    idx = list(range(len(ev.cases)))
+    axes = effect_axes()
+    names = list(old_values)
+    refit = fit_set(ev, [axes[n] for n in names], idx, old_values) if names else {}
+    terms = ev.terms(idx)
+    c_old, c_new = ev.cost(refit, idx), ev.cost(new_values, idx)
+    if len(old_values) <= len(new_values):
+        keep = c_old < c_new
+    else:
+        keep = accept(c_new * terms, c_old * terms, terms)
+    note = (f"{describe(refit)} (the earlier explanation, refitted on all {len(idx)} runs) fits them "
+            f"{'better' if keep else 'no better'}: cost {c_old:.3g} against {c_new:.3g} per term for "
+            f"{describe(new_values)}")
+    return Preference(keep, refit, c_old, c_new, note)
+
+
+class _Loop:
+    """The identification's state: the records, the timings, and its three steps."""
+
+    def __init__(self, base, folder: Path, runner: Runner, say, soft_limit: float, limit: float):
+        self.base, self.folder, self.runner, self.say = base, folder, runner, say
+        self.soft_limit, self.limit = soft_limit, limit
+        self.records: list[ExperimentRecord] = []
+        self.timings = {"experiments": 0.0, "diagnosis": 0.0, "design": 0.0}
+        self.diagnoses = 0
+        self.kept: list[str] = []
+        self.model = None  # the kept explanation refitted on every completed run
+        self.command = "round"
+        self.t0 = time.perf_counter()
+
+    def run(self, exp: Experiment, why: str, design: Design | None = None) -> int | None:
+        """Run one experiment and record it; a signal's exit code when one stopped it, else None."""
+        k = len(self.records) + 1
+        log = self.folder / f"{k:02d}-{exp.slug}.tsv"
+        t = time.perf_counter()
+        done = self.runner(exp, log)
+        self.timings["experiments"] += time.perf_counter() - t
+        used = done.exit_code == 0
+        self.records.append(ExperimentRecord(exp, done.log, why, done.reason, used, design))
+        self.say(f"experiment {k}: {exp.label}: {done.reason} in {time.perf_counter() - t:.1f} s"
+                 + ("" if used else ", NOT USED (stopped early)") + f"; log {done.log}")
+        if used and not any(r.used for r in self.records[:-1]):
+            self.command = command_quantization(read_log(done.log))  # how this device turns v into counts
+        return done.exit_code if done.exit_code in (130, 143) else None
+
+    def diagnose(self, names: Sequence[str]):
+        """Diagnose every completed run (None when fewer than two)."""
+        runs = [str(r.log) for r in self.records if r.used]
+        if len(runs) < 2:
+            return None
+        self.diagnoses += 1
+        n = self.diagnoses
+        self.say(f"diagnosis {n}: {len(runs)} runs, {len(names)} candidate effects")
+        t = time.perf_counter()
+        diag = diagnose(runs, model=self.base, candidates=names,
+                        progress=lambda msg: self.say(f"diagnosis {n}: {msg}"))
+        self.timings["diagnosis"] += time.perf_counter() - t
+        return diag
+
+    def design(self, rv, candidates: Sequence[Experiment]) -> Design:
+        """The next experiment (:func:`station.diagnosis.experiment_design.choose_experiment`)."""
+        t = time.perf_counter()
+        self.say(f"design: {len(rv.rivals)} rival(s) of {rv.label} ({'; '.join(rv.sources)}): "
+                 + ", ".join(r.label for r in rv.rivals))
+        design = choose_experiment(self.base, rv, candidates, self.command, self.soft_limit, self.limit)
+        self.timings["design"] += time.perf_counter() - t
+        self.say(f"design ({len(design.candidates)} candidates in {time.perf_counter() - t:.1f} s): {design.why}")
+        return design
+
+    def prefer(self, old, new):
+        """The better supported of the current answer and a re-diagnosis (:func:`prefer`)."""
+        t = time.perf_counter()
+        runs = [str(r.log) for r in self.records if r.used]
+        pref = prefer(old, new, runs, self.base)
+        self.timings["diagnosis"] += time.perf_counter() - t
+        if pref.note:
+            self.say(f"diagnosis {self.diagnoses}: {pref.note}" + ("; kept the earlier diagnosis" if pref.keep_old else ""))
+        if pref.keep_old:
+            self.kept.append(pref.note)
+            self.model = self.base.with_effects(pref.values, name=f"{self.base.name} + {' + '.join(pref.values)}")
+        else:
+            self.model = None
+        return old if pref.keep_old else new
+
+    def result(self, diag, stopped: str, budget: int, code: int) -> Identification:
+        self.timings["total"] = time.perf_counter() - self.t0
+        self.say(f"done: {stopped}")
+        model = self.model or (diag.extended_model if diag is not None else None)
+        return Identification(diag, self.records, stopped, budget, self.diagnoses, dict(self.timings), code,
+                              list(self.kept), model)

@@ -1,0 +1,93 @@
+"""Which runs a diagnosis may use, checked before any work starts: no run judged on itself
+(the same data rows given twice, as a copy, or as both a RUN and a ``--validate`` run), and
+hub-held beam tests set aside (the motor model cannot simulate a hand holding the hub)."""
+
+from __future__ import annotations
+
+import hashlib
+from collections.abc import Sequence
+
+import numpy as np
+
+from station.analysis.beam import HELD_COUNTS, HELD_MIN_S, HELD_MIN_V, hub_held
+from station.diagnosis.cases import RunCase
+from station.errors import StationError
+
+DIGEST_COLUMNS = ("t", "u", "v", "theta", "a")
+"""The columns whose rows identify a run (its header and file name do not)."""
+
+
+def data_digest(case: RunCase) -> str:
+    """SHA-256 of a run's data rows (:data:`DIGEST_COLUMNS`, as read): equal for a copy of
+    the file under another name or with another header.
+
+    Parameters
+    ----------
+    case : RunCase
+        The run as loaded (:func:`station.diagnosis.cases.load_case`).
+    """
+    h = hashlib.sha256()
+    for name in DIGEST_COLUMNS:
+        col = case.log.data.get(name)
+        h.update(name.encode())
+        h.update(np.ascontiguousarray(np.asarray(col, dtype=np.float64)).tobytes() if col is not None else b"-")
+    return h.hexdigest()
+
+
+def refuse_repeated_runs(cases: Sequence[RunCase], n_fit: int) -> None:
+    """Refuse the same data rows given twice: a run cannot validate itself (its twin would
+    sit in the fit runs of the fold that judges it).
+
+    Parameters
+    ----------
+    cases : sequence of RunCase
+        The RUNs (the first ``n_fit``) then the ``--validate`` runs.
+    n_fit : int
+        How many of ``cases`` are RUNs.
+
+    Raises
+    ------
+    StationError
+        One line naming both files (and their roles when one is a ``--validate`` run).
+    """
+    seen: dict[str, int] = {}
+    for i, c in enumerate(cases):
+        key = data_digest(c)
+        j = seen.setdefault(key, i)
+        if j == i:
+            continue
+        role = lambda k: "--validate run" if k >= n_fit else "RUN"  # noqa: E731
+        same = "the same file" if cases[j].path == c.path else "the same data rows"
+        raise StationError(f"diagnose: {role(j)} {cases[j].path} and {role(i)} {c.path} are {same}: "
+                           "a run cannot be judged on itself; give each run once")
+
+
+def set_aside_beam_tests(cases: Sequence[RunCase]) -> tuple[list[int], list[str]]:
+    """Hub-held beam tests (:func:`station.analysis.beam.hub_held`) among the runs: the hand
+    holds the hub while the motor is powered, which no motor model simulates; their beam
+    modes are ``station replay``'s.
+
+    Parameters
+    ----------
+    cases : sequence of RunCase
+
+    Returns
+    -------
+    kept : list of int
+        Indices of the runs the diagnosis uses.
+    notes : list of str
+        One sentence per run set aside, saying why and how it was treated.
+    """
+    kept, notes = [], []
+    for i, c in enumerate(cases):
+        d = c.log.data
+        held = hub_held(d["theta"], d["v"], c.log.dt) if c.n else None
+        if held is None:
+            kept.append(i)
+            continue
+        notes.append(f"{c.name} is a hub-held beam test (θ within {held.theta_span:.0f} counts for "
+                     f"{held.duration_s:.1f} s while |v| reached {held.v:.0f} DAC counts; a powered motor "
+                     f"moves far with |v| >= {HELD_MIN_V:g} held for {HELD_MIN_S:g} s unless the hub is held "
+                     f"within {HELD_COUNTS:g} counts): left out of the diagnosis, which simulates a free hub "
+                     "(station replay analyses its beam modes)")
+    return kept, notes
