@@ -7,6 +7,7 @@ import pytest
 
 from station.control import make_controller, step_reference
 from station.plant import DiscretePlant, simulate
+from station.plant.kernel import KernelEffects
 import importlib
 
 simulate_module = importlib.import_module("station.plant.simulate")
@@ -98,7 +99,7 @@ def test_plain_python_kernel_matches_compiled():
     args = (lam, bm, np.zeros(n, complex), np.ascontiguousarray(cm), np.zeros((4, n), complex), 0.0, 0.0, 0,
             np.zeros(n, complex), u, np.zeros(1), False, True,
             gnum, gden, anum, aden, True, 200.0, 1, True, 1,  # command quantization: round
-            np.inf, 0.0, 0, 1.0, 0.0, 0.0, 0.0, 0.0)  # no effects
+            *KernelEffects())  # no effects
     plain = kernel._compiled_loop.py_func(*args)
     compiled = simulate_module._kernel(*args)
     for x, y in zip(plain, compiled):

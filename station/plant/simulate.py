@@ -142,11 +142,13 @@ def simulate(model, controller, u, alignment: int = 1, v_open=None, quantize: bo
     ----------
     model : station.plant.model.Model or station.plant.DiscretePlant
         A Model is simulated with its effects (DESIGN.md "Model diagnosis contract"):
-        the device's command quantization, then the amplifier's saturation, dead-zone
-        and extra delay on the command; Coulomb friction (stick-slip) and backlash
-        inside the plant on a grid of ``substeps`` per sample; accel_gain on the
-        accelerometer before its quantization; beam_damping and param:NAME in the
-        linear part. A Model without effects gives exactly the DiscretePlant's result.
+        the device's command quantization, then the amplifier's offset, saturation,
+        dead-zone and extra delay on the command (before the first sample the device
+        outputs 0 and the amplifier its offset); dry friction (Coulomb, breakaway and
+        Stribeck: stick-slip) and backlash inside the plant on a grid of ``substeps``
+        per sample; accel_gain on the accelerometer before its quantization;
+        viscous_friction, beam_damping and param:NAME in the linear part. A Model
+        without effects gives exactly the DiscretePlant's result.
         The linear part's modal form is cached per (parameters, elements, dt, substeps).
     controller : Compensator, OpenLoop, or a `station.control.Controller`
         A Compensator / OpenLoop (exactly those types) runs compiled from its ``gth``,
@@ -239,7 +241,6 @@ def simulate(model, controller, u, alignment: int = 1, v_open=None, quantize: bo
             form.lam, form.bm, form.bp, form.cm, form.co, form.gw_v, form.gw_p, form.substeps,
             np.zeros(form.lam.size, complex) if z0 is None else z0, u_ctrl, v_open if use_v_open else np.zeros(1),
             use_v_open, gth is not None, gnum, gden, anum, aden, ga is not None,
-            math.inf if limit is None else float(limit), d, bool(quantize), cmd_mode,
-            fx.saturation, fx.deadzone, fx.delay, fx.accel_gain, fx.v_c, fx.half_gap, fx.k_d, fx.c_d,
+            math.inf if limit is None else float(limit), d, bool(quantize), cmd_mode, *fx,
         )
     return SimResult(np.arange(u.size) * dt, u, v, theta, a, thd)
