@@ -29,9 +29,9 @@ error it holds, encoder counts), and :attr:`Figures.settling_rest_s`, the settli
 that band (the same definition and hold).
 
 Cost (:func:`cost`): the 2 % settling time when every constraint holds; held by friction
-(and ``held=True``), the run's length plus the settling time into the held band plus the held
-error's fraction of the step times the rest of the run (:func:`cost`), so a hub held farther
-off costs more, and any design that meets the band on the model costs less; otherwise the time the response last leaves
+(and ``held=True``), as infeasible, its "not settled" graded by the settling time into the
+held band plus the held error's fraction of the step times the rest of the run (:func:`cost`),
+so a hub held farther off costs more, and any design that meets the band costs less; otherwise the time the response last leaves
 the band, plus the run's length, plus the constraints' normalised violations, so any feasible
 design beats any infeasible one and an infeasible one still shows the way to feasibility.
 """
@@ -293,14 +293,14 @@ def held_error(f: Figures) -> int:
 def cost(f: Figures, req: Requirements, run_s: float = RUN_S, held: bool = True) -> float:
     """One model's cost of a design (module docstring), s.
 
-    Feasible: the 2 % settling time. Held by friction (:func:`friction_held`, with ``held``):
-    a requirement not met, so ``run_s`` plus the settling time ts into the band the hub holds,
-    plus the held band's excess over the 2 % band as a fraction r of the step times the rest
-    of the run: run_s + ts + r·(run_s − ts) (a design that meets the band costs less, and the
-    held ones are ranked by how soon and how close they come to rest). Other infeasible: how late
-    the response leaves the band for the last time (:attr:`Figures.last_out_s`), plus
-    ``run_s``, plus the violations (:func:`violations`): every feasible design costs less
-    than any infeasible one, and the infeasible ones are graded by how close they come.
+    Feasible: the 2 % settling time. Infeasible: how late the response leaves the band for
+    the last time (:attr:`Figures.last_out_s`), plus ``run_s``, plus the violations
+    (:func:`violations`): every feasible design costs less than any infeasible one, and the
+    infeasible ones are graded by how close they come. Held by friction (:func:`friction_held`,
+    with ``held``), the one violation, not settled, is graded by the band the hub holds: the
+    settling time ts into it plus the held band's excess over the 2 % band as a fraction r of
+    the step times the rest of the run, ts + r·(run_s − ts), so the held designs are ranked by
+    how soon and how close to the target they come to rest.
 
     Parameters
     ----------
@@ -316,6 +316,6 @@ def cost(f: Figures, req: Requirements, run_s: float = RUN_S, held: bool = True)
         return f.settling_2pct_s
     if held and friction_held(f, req):
         r = (f.rest_band - f.band) / (f.band / BAND)  # the held excess, a fraction of the step
-        return run_s + f.settling_rest_s + r * (run_s - f.settling_rest_s)
+        bad["not_settled"] = f.settling_rest_s + r * (run_s - f.settling_rest_s)
     late = run_s if math.isnan(f.last_out_s) else f.last_out_s
     return late + run_s + sum(bad.values())
