@@ -15,11 +15,13 @@ import pytest
 from station.analysis.metrics import step_info, step_metrics
 from station.cli import main
 from station.control import lead_controller, make_controller, p_controller
-from station.design.evaluate import RUN_S, Requirements, judge, step_figures, step_run, violations
+from station.design.evaluate import (RUN_S, Figures, Requirements, cost, friction_held, held_error, judge, step_figures,
+                                     step_run, violations)
+from station.design.hold import design_model_warning, held_summary
 from station.design.linear import LoopModel
 from station.design.robust import (DEFAULT_DOUBT, default_intervals, model_from_json, read_diagnosis, robust_set,
                                    sample_models)
-from station.design.search import Budget
+from station.design.search import Budget, objective
 from station.design.space import THESIS, DesignSpace, ga_s
 from station.design.tuning import tune
 from station.errors import StationError
@@ -253,3 +255,74 @@ def test_help_lists_every_option_with_its_range(capsys):
                    "--samples", "--jobs", "--scheduler", "--out", "--json", "--report", "--force"):
         assert option in out
     assert "range 0..100 percent" in " ".join(out.split())
+
+
+def _figures(settling=0.5, overshoot=2.0, final_error=0.0, rest_band=1.0, settling_rest=None, at_rest=True):
+    """Fabricated figures of a 50-count step (2 % band: 1 count) with margins that pass."""
+    return Figures(overshoot, settling, settling, 60.0, 0.0, at_rest, 12.0, 40.0, 0.9, final_error,
+                   settling or RUN_S, 1.0, rest_band, settling if settling_rest is None else settling_rest)
+
+
+def test_the_ranking_puts_the_design_model_first():
+    req = Requirements()
+    # A meets everything on the design model and is slow on another; B is faster everywhere
+    # else but overshoots 8 % on the design model
+    a = [_figures(0.6), _figures(1.4), _figures(0.7)]
+    b = [_figures(0.4, overshoot=8.0), _figures(0.5), _figures(0.5)]
+    assert objective(a, req) < objective(b, req)
+    assert max(cost(f, req) for f in b[1:]) < max(cost(f, req) for f in a[1:])  # B's worst case is better
+    # the design model settling later than the thesis's compensator there fails the first tier too
+    assert objective(a, req, bar_s=0.5) > objective([_figures(0.45), _figures(1.9), _figures(1.9)], req, bar_s=0.5)
+
+
+def test_models_held_by_friction_still_rank_the_designs():
+    req = Requirements()
+    # on the second model friction holds the hub 3 counts (of 50) off the target: no 2 % settling
+    near = _figures(None, final_error=3.0, rest_band=3.0, settling_rest=0.8)
+    far = _figures(None, final_error=6.0, rest_band=6.0, settling_rest=0.8)
+    late = _figures(None, final_error=3.0, rest_band=3.0, settling_rest=1.2)
+    assert all(friction_held(f, req) for f in (near, far, late)) and held_error(far) == 6
+    assert cost(_figures(1.5), req) < cost(near, req) < cost(late, req)  # meeting the band beats any hold
+    assert cost(near, req) < cost(far, req)  # held closer costs less: a wide band is no reward
+    ranks = [objective([_figures(0.6), f], req) for f in (near, far, late)]
+    assert ranks == sorted(ranks) and len(set(ranks)) == 3
+    swinging = near._replace(at_rest=False)
+    assert not friction_held(swinging, req) and not friction_held(_figures(0.5), req)
+    summary = held_summary([_figures(0.6), near, far], req)
+    assert summary["models"] == 2 and summary["held_error_counts"] == [3, 6] and "2 of 3 models" in summary["note"]
+
+
+@pytest.fixture(scope="module")
+def p_design():
+    return tune("rig", structure="p", jobs=1)  # station tune --controller p: step 50, the robust defaults
+
+
+def test_p_beats_the_thesis_p_on_the_model_with_the_robust_defaults(p_design):
+    r = p_design
+    tuned, thesis = r.figures[0], r.baseline[0]
+    assert len(r.figures) == 1 + 4 + 20 and r.met()[0]  # every requirement met on the design model itself
+    assert tuned.overshoot_pct < thesis.overshoot_pct
+    if thesis.settling_2pct_s is not None:
+        assert tuned.settling_2pct_s <= thesis.settling_2pct_s
+    else:  # the thesis's P held off the band by friction: the tuned one settles into it
+        assert tuned.settling_2pct_s is not None
+    # over the set, never worse in overshoot than the thesis's on the same model
+    assert max(f.overshoot_pct for f in r.figures) <= max(b.overshoot_pct for b in r.baseline)
+    doc = json.loads(json.dumps(r.to_json("P.toml")))
+    held = doc["robust"]["friction_held"]
+    assert held["models"] == sum(p["held_error_counts"] is not None for p in doc["robust"]["per_model"])
+    if held["models"]:
+        assert f"on {held['models']} of 25 models friction holds" in held["note"]
+    assert doc["design"]["warnings"] == [] and "lexicographic" in doc["design"]["objective"]
+
+
+def test_friction_holding_the_design_models_hub_is_a_one_line_warning(rig):
+    req = Requirements()
+    space = DesignSpace("p")
+    sticky = rig.with_effects({"coulomb_friction": 30.0})
+    f = judge(sticky, space.compensator_file({"kp": 1.0}).compensator(), 50.0)
+    assert friction_held(f, req)
+    text = design_model_warning(space, {"kp": 1.0}, sticky, f, req)
+    assert f"{held_error(f)} encoder counts off the target" in text and "integral action" in text
+    assert "(kp 30, this design's 1)" in text and "would not meet" in text and "\n" not in text  # 30 DAC counts of friction / a 1-count band
+    assert design_model_warning(space, {"kp": 2.0}, rig, judge(rig, p_controller(2.0), 50.0), req) is None

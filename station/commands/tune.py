@@ -104,6 +104,8 @@ def format_result(result) -> str:
     def settle(x):
         return "not settled" if x is None else f"{x:.3f} s"
 
+    from station.design.hold import held_summary
+
     d = result.design_json()
     lines = [f"{result.space.structure} on {result.nominal.name!r}, step {result.amplitude:g}, "
              f"{len(result.robust.models)} model(s): " + ", ".join(f"{k} {v['value']:.4g}"
@@ -119,6 +121,9 @@ def format_result(result) -> str:
     m = result.margins
     lines.append(f"  margins (model): gain {m.gain_margin_db:.1f} dB, phase {m.phase_margin_deg:.1f}°; requirements "
                  f"{'met on every model' if d['feasible'] else 'NOT met on every model'}")
+    note = held_summary(result.figures, result.requirements)["note"]
+    if note:
+        lines.append(f"  {note}")
     v = result.verification
     if v is not None:
         lines.append(f"  station step on the simulated rig: {v.reason}, overshoot {v.overshoot_pct:.1f} %, 2 % "
@@ -150,6 +155,7 @@ def run(args: argparse.Namespace) -> int:
         an input; an unreachable scheduler.
     """
     import os
+    import warnings
 
     from station.design.tuning import DEFAULT_AMPLITUDE, check_request, tune
     from station.design.verify import verify
@@ -173,6 +179,8 @@ def run(args: argparse.Namespace) -> int:
         result.verification = verify(result.nominal, path, amplitude, log=log)
         verify_log = log.read_bytes() if log.is_file() else None
     print(format_result(result))
+    for line in result.warnings():
+        warnings.warn(line, RuntimeWarning, stacklevel=2)
     with Transaction() as tx:  # every file whole or none (station.outputs)
         if out is not None:
             tx.write(out, result.file.to_toml(), "the compensator file")

@@ -20,10 +20,20 @@ and the command by at most :data:`REST_COMMAND` DAC counts. A loop still swingin
 (a limit cycle of the clamp or the friction, a beam mode the hub no longer damps) is not at
 rest. The commands stay within the clamp by construction (the compensator's ``limit``).
 
-Cost (:func:`cost`): the 2 % settling time when every constraint holds; otherwise the time
-the response last leaves the band, plus the run's length, plus the constraints' normalised
-violations, so any feasible design beats any infeasible one and an infeasible one still
-shows the way to feasibility.
+Held by friction (:func:`friction_held`): a loop without integral action comes to rest
+wherever its command stays below the motor's dry friction, so on some models it holds the hub
+a few counts off the target, outside the 2 % band (1 count of a 50-count step) for good,
+while meeting everything else. There the step is also measured to the band the hub holds:
+:attr:`Figures.rest_band`, the largest |step − θ| over the rest window (the steady-state
+error it holds, encoder counts), and :attr:`Figures.settling_rest_s`, the settling time into
+that band (the same definition and hold).
+
+Cost (:func:`cost`): the 2 % settling time when every constraint holds; held by friction
+(and ``held=True``), as infeasible, its "not settled" graded by the settling time into the
+held band plus the held error's fraction of the step times the rest of the run (:func:`cost`),
+so a hub held farther off costs more, and any design that meets the band costs less; otherwise the time the response last leaves
+the band, plus the run's length, plus the constraints' normalised violations, so any feasible
+design beats any infeasible one and an infeasible one still shows the way to feasibility.
 """
 
 from __future__ import annotations
@@ -41,6 +51,9 @@ from station.plant.simulate import simulate
 
 RUN_S = 2.0
 """Length of a judged step run, s: ``station step``'s default, so its metrics are the design's."""
+
+BAND = 0.02
+"""The settling band's half-width, a fraction of the step (2 %)."""
 
 STEP_TICK = 10
 """The step's tick (t = 0.02 s), as ``station step``."""
@@ -99,6 +112,14 @@ class Figures(NamedTuple):
         Time after the step of the first sample after the last one outside the 2 % band,
         without the hold (the run's end when the last sample is outside), s: how late the
         response is, also for a design that does not settle (it grades the infeasible ones).
+    band : float
+        The 2 % band's half-width, encoder counts (2 % of the step).
+    rest_band : float
+        The band the hub holds at the run's end: the larger of ``band`` and the largest
+        |step − θ| over the rest window, encoder counts (NaN: not simulated).
+    settling_rest_s : float or None
+        Settling time into ``rest_band`` after the step, s (None: not settled within the run);
+        the 2 % settling time when the hub rests inside the 2 % band.
     """
 
     overshoot_pct: float
@@ -112,6 +133,9 @@ class Figures(NamedTuple):
     spectral_radius: float
     final_error: float
     last_out_s: float
+    band: float = math.nan
+    rest_band: float = math.nan
+    settling_rest_s: float | None = None
 
     def to_json(self) -> dict:
         """The DESIGN.md metrics (overshoot_pct, settling_2pct_s, settling_thesis_s,
@@ -149,7 +173,7 @@ def step_run(model, compensator, amplitude: float, run_s: float = RUN_S, dt: flo
 
 def step_figures(run, amplitude: float, limit: float | None) -> tuple:
     """The step figures of a run: (overshoot_pct, settling_2pct_s, settling_thesis_s,
-    peak_command, saturated_s, at_rest, final_error, last_out_s).
+    peak_command, saturated_s, at_rest, final_error, last_out_s, band, rest_band, settling_rest_s).
 
     Parameters
     ----------
@@ -166,14 +190,18 @@ def step_figures(run, amplitude: float, limit: float | None) -> tuple:
     thesis = step_metrics(t, theta, amplitude)
     after = slice(STEP_TICK, None)
     ts, ys = t[after] - t[STEP_TICK], theta[after]
-    k = settled_index(ts, ys, amplitude, 0.02 * abs(amplitude))  # as step_info's 2 % settling time
+    band = BAND * abs(amplitude)
+    k = settled_index(ts, ys, amplitude, band)  # as step_info's 2 % settling time
     sat = float(np.count_nonzero(np.abs(v) >= limit) * dt) if limit is not None else 0.0
     tail = max(2, int(round(REST_WINDOW_S / dt)))
     at_rest = bool(np.ptp(theta[-tail:]) <= 1.0 and np.ptp(v[-tail:]) <= REST_COMMAND)
-    out = np.flatnonzero(np.abs(ys - amplitude) > 0.02 * abs(amplitude))
+    out = np.flatnonzero(np.abs(ys - amplitude) > band)
     last_out = 0.0 if out.size == 0 else float(ts[-1] + dt if out[-1] == ys.size - 1 else ts[out[-1] + 1])
+    rest_band = max(band, float(np.max(np.abs(amplitude - theta[-tail:]))))
+    k_rest = k if rest_band == band else settled_index(ts, ys, amplitude, rest_band)
     return (thesis.overshoot_pct, None if k is None else float(ts[k]), thesis.settling_time_s,
-            float(np.max(np.abs(v))), sat, at_rest, float(abs(amplitude - ys[-1])), last_out)
+            float(np.max(np.abs(v))), sat, at_rest, float(abs(amplitude - ys[-1])), last_out, band, rest_band,
+            None if k_rest is None else float(ts[k_rest]))
 
 
 def judge(model, compensator, amplitude: float, run_s: float = RUN_S, dt: float = DT,
@@ -204,7 +232,8 @@ def judge(model, compensator, amplitude: float, run_s: float = RUN_S, dt: float 
                                            or mg.phase_margin_deg < requirements.phase_margin_deg)
     if not rho < 1.0 or failed:
         nan = math.nan
-        return Figures(nan, None, None, nan, nan, False, mg.gain_margin_db, mg.phase_margin_deg, rho, nan, nan)
+        return Figures(nan, None, None, nan, nan, False, mg.gain_margin_db, mg.phase_margin_deg, rho, nan, nan,
+                       BAND * abs(amplitude))
     fig = step_figures(step_run(model, compensator, amplitude, run_s, dt), amplitude, compensator.limit)
     return Figures(*fig[:6], mg.gain_margin_db, mg.phase_margin_deg, rho, *fig[6:])
 
@@ -237,13 +266,41 @@ def violations(f: Figures, req: Requirements) -> dict[str, float]:
     return out
 
 
-def cost(f: Figures, req: Requirements, run_s: float = RUN_S) -> float:
+def friction_held(f: Figures, req: Requirements) -> bool:
+    """The loop meets every requirement but the 2 % band, at rest outside it: something (dry
+    friction) holds the hub off the target (module docstring).
+
+    Parameters
+    ----------
+    f : Figures
+    req : Requirements
+    """
+    return (f.at_rest and f.settling_2pct_s is None and f.settling_rest_s is not None
+            and set(violations(f, req)) == {"not_settled"})
+
+
+def held_error(f: Figures) -> int:
+    """The steady-state error the hub is held at, whole encoder counts (|step − θ| at the
+    run's end; θ is counted, so it is whole).
+
+    Parameters
+    ----------
+    f : Figures
+    """
+    return int(round(f.final_error))
+
+
+def cost(f: Figures, req: Requirements, run_s: float = RUN_S, held: bool = True) -> float:
     """One model's cost of a design (module docstring), s.
 
     Feasible: the 2 % settling time. Infeasible: how late the response leaves the band for
     the last time (:attr:`Figures.last_out_s`), plus ``run_s``, plus the violations
     (:func:`violations`): every feasible design costs less than any infeasible one, and the
-    infeasible ones are graded by how close they come.
+    infeasible ones are graded by how close they come. Held by friction (:func:`friction_held`,
+    with ``held``), the one violation, not settled, is graded by the band the hub holds: the
+    settling time ts into it plus the held band's excess over the 2 % band as a fraction r of
+    the step times the rest of the run, ts + r·(run_s − ts), so the held designs are ranked by
+    how soon and how close to the target they come to rest.
 
     Parameters
     ----------
@@ -251,9 +308,14 @@ def cost(f: Figures, req: Requirements, run_s: float = RUN_S) -> float:
     req : Requirements
     run_s : float
         The run's length, s.
+    held : bool
+        Grade a design held by friction as above (False: as infeasible).
     """
     bad = violations(f, req)
     if not bad:
         return f.settling_2pct_s
+    if held and friction_held(f, req):
+        r = (f.rest_band - f.band) / (f.band / BAND)  # the held excess, a fraction of the step
+        bad["not_settled"] = f.settling_rest_s + r * (run_s - f.settling_rest_s)
     late = run_s if math.isnan(f.last_out_s) else f.last_out_s
     return late + run_s + sum(bad.values())

@@ -32,6 +32,8 @@ def _fmt(x, unit: str = "", digits: int = 3) -> str:
 
 
 def _tables(result) -> list[str]:
+    from station.design.hold import held_summary
+
     esc = html.escape
     d = result.design_json()
     rows = [f"<h1>Compensator design: {esc(result.space.structure)} on {esc(result.nominal.name)}</h1>",
@@ -39,6 +41,9 @@ def _tables(result) -> list[str]:
             f"gain margin ≥ {result.requirements.gain_margin_db:g} dB, phase margin ≥ "
             f"{result.requirements.phase_margin_deg:g}°, no limit cycle, settled within the run. "
             f"{'All met on every model.' if d['feasible'] else 'NOT met on every model: see the table.'}</p>",
+            *[f"<p><b>Warning:</b> {esc(w)}.</p>" for w in d["warnings"]],
+            *([f"<p>Friction: {esc(note)}.</p>"] if (note := held_summary(result.figures,
+                                                                       result.requirements)["note"]) else []),
             "<h2>Parameters</h2><table><tr><th>parameter</th><th>value</th><th>unit</th></tr>"]
     for k, v in d["parameters"].items():
         rows.append(f"<tr><td>{esc(k)}</td><td>{v['value']:.6g}</td><td>{esc(v['unit'])}</td></tr>")

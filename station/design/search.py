@@ -19,9 +19,16 @@ settling time jumps between plateaus. The search therefore
    simplex), until a round neither finds a new worst model nor improves the objective.
 
 A design whose linear margins already fail is not simulated (it is out whatever its step).
-The robust objective (:func:`robust_objective`) is the worst case over the models plus 1 % of
-their mean (the mean only breaks ties between designs with the same worst case) when the
-requirements are met on every model; a model where they are not adds its own cost. Everything is a pure function
+The objective (:func:`objective`, :func:`robust_objective`) is lexicographic: first every
+requirement met on the design model, settling there no later than the thesis's compensator
+(a design that fails there is ranked by how close it comes, behind every design that meets
+it); then the worst case over the set plus 1 % of the
+mean (the mean only breaks ties between designs with the same worst case), where a model
+that fails a requirement adds its own cost, and a model on which friction holds the hub
+outside the 2 % band (and nothing else fails) adds the settling time into the band it
+holds, charged for the held error (:func:`station.design.evaluate.cost`): with dry
+friction and no integral action the 2 % band of a small step is reached on some models by
+luck alone, and those models must still rank the designs. Everything is a pure function
 of the inputs and the seed: the tasks' results come back in order and the reductions are
 plain max/mean/sort with ties broken by index, so the design does not depend on the
 executor (:mod:`station.design.executor`).
@@ -39,6 +46,10 @@ from station.design.linear import loop_model
 
 MEAN_WEIGHT = 0.01
 """Weight of the mean over the models in the robust objective (a tie-break)."""
+
+DESIGN_MODEL_FIRST = 1e6
+"""Added to the objective of a design that fails a requirement on the design model: above any
+robust worst case (which is capped below it), so the ranking is lexicographic."""
 
 
 class Budget(NamedTuple):
@@ -81,6 +92,9 @@ class Problem(NamedTuple):
     requirements : Requirements
     run_s : float
         Run length, s.
+    bar_s : float or None
+        The 2 % settling time to beat on the design model, s: the thesis's compensator's there
+        (None: no bar, it does not settle).
     """
 
     space: object
@@ -88,6 +102,7 @@ class Problem(NamedTuple):
     amplitude: float
     requirements: Requirements
     run_s: float = RUN_S
+    bar_s: float | None = None
 
 
 class Candidate(NamedTuple):
@@ -102,7 +117,7 @@ class Candidate(NamedTuple):
     costs : tuple of float
         One per model.
     objective : float
-        The robust objective (worst + MEAN_WEIGHT · mean).
+        The objective (:func:`objective`: the design model first, then the worst case).
     """
 
     x: np.ndarray
@@ -134,15 +149,15 @@ class SearchResult(NamedTuple):
     working_set: tuple
 
 
-def robust_objective(costs, run_s: float = RUN_S) -> float:
-    """The worst case over the models that meet every requirement, plus each other model's
-    cost, plus :data:`MEAN_WEIGHT` times the mean.
+def robust_objective(costs, run_s: float = RUN_S, design_cost: float | None = None) -> float:
+    """The lexicographic objective of a design from its costs (module docstring).
 
-    With every model met this is the worst case (and a tie-break); a design that fails some
-    models pays for each of them (its cost there is at least ``run_s``), so the search first
-    meets the requirements on as many models as it can, then makes the worst of those fast.
-    Failing the design model itself (``costs[0]``) weighs as much as failing all the others:
-    a design that does not work on the model it was asked for is no design.
+    The design model first: when it fails a requirement there (``design_cost`` ≥ ``run_s``),
+    :data:`DESIGN_MODEL_FIRST` + ``design_cost`` (+ the mean's tie-break), behind every design
+    that meets it. Then the worst case over the models whose cost is below ``run_s`` (every
+    requirement met), plus each other model's cost (held by friction: graded by the band it
+    holds, :func:`station.design.evaluate.cost`),
+    plus :data:`MEAN_WEIGHT` times the mean, capped below :data:`DESIGN_MODEL_FIRST`.
 
     Parameters
     ----------
@@ -151,12 +166,45 @@ def robust_objective(costs, run_s: float = RUN_S) -> float:
         below ``run_s`` exactly when every requirement is met).
     run_s : float
         The run's length, s.
+    design_cost : float, optional
+        The design model's cost against every requirement, the 2 % band included
+        (``cost(..., held=False)``); default ``costs[0]``.
     """
     c = np.asarray(costs, dtype=float)
+    first = float(c[0]) if design_cost is None else float(design_cost)
+    tie = MEAN_WEIGHT * float(c.mean())
+    if not first < run_s:
+        return DESIGN_MODEL_FIRST + first + tie
     met = c < run_s
     worst_met = float(c[met].max()) if met.any() else 0.0
-    failed = c[~met].sum() + (0.0 if met[0] else (c.size - 1) * c[0])  # the design model itself weighs as all
-    return float(worst_met + failed + MEAN_WEIGHT * c.mean())
+    return float(min(worst_met + c[~met].sum() + tie, 0.5 * DESIGN_MODEL_FIRST))
+
+
+def objective(figures, requirements: Requirements, run_s: float = RUN_S, bar_s: float | None = None) -> float:
+    """A design's objective from its figures on the models (:func:`robust_objective`).
+
+    The design model's part: its cost against every requirement, the 2 % band included; a
+    design that meets them but settles later there than ``bar_s`` (the thesis's compensator
+    on the same model) is no improvement on it and counts as failing, by how much later.
+
+    Parameters
+    ----------
+    figures : sequence of Figures
+        One per model, the design model's first.
+    requirements : Requirements
+    run_s : float
+        The run's length, s.
+    bar_s : float, optional
+        The 2 % settling time to beat on the design model, s.
+    """
+    first = cost(figures[0], requirements, run_s, held=False)
+    if bar_s is not None and first < run_s and first > bar_s:
+        first = run_s + (first - bar_s)
+    return robust_objective([cost(f, requirements, run_s) for f in figures], run_s, first)
+
+
+def _objective(problem: Problem, figures) -> float:
+    return objective(figures, problem.requirements, problem.run_s, problem.bar_s)
 
 
 def judge_point(problem: Problem, x, which) -> list[Figures]:
@@ -255,7 +303,7 @@ def refine(problem: Problem, x0, which, maxfev: int) -> tuple[np.ndarray, int]:
 
     def f(x):
         calls[0] += 1
-        return robust_objective(_costs(problem, judge_point(problem, x, which)), problem.run_s)
+        return _objective(problem, judge_point(problem, x, which))
 
     res = minimize(f, x0, method="Nelder-Mead", bounds=[(0.0, 1.0)] * d,
                    options={"maxfev": int(maxfev), "initial_simplex": np.array(simplex), "xatol": 1e-3,
@@ -298,11 +346,12 @@ def search(problem: Problem, runner, budget: Budget = Budget(), seed: int = 0,
     judged = [pair for part in runner.map(bracket_points, tasks) for pair in part]
     points = [x for x, _ in judged]
     evaluations += len(points) * len(screen)
-    objective = [robust_objective(_costs(problem, f), problem.run_s) for _, f in judged]
-    ranked = sorted(range(len(points)), key=lambda i: (objective[i], i))[:budget.keep]
+    ranks = [_objective(problem, f) for _, f in judged]
+    ranked = sorted(range(len(points)), key=lambda i: (ranks[i], i))[:budget.keep]
     # and the best on the design model alone: where the set's worst cases pull apart (P and dry
     # friction), the design that works on the model itself must still be among the candidates
-    alone = min(range(len(points)), key=lambda i: (cost(judged[i][1][0], problem.requirements, problem.run_s), i))
+    alone = min(range(len(points)),
+                key=lambda i: (cost(judged[i][1][0], problem.requirements, problem.run_s, held=False), i))
     if alone not in ranked:
         ranked.append(alone)
 
@@ -312,9 +361,8 @@ def search(problem: Problem, runner, budget: Budget = Budget(), seed: int = 0,
         tasks = [(problem, [x], everyone) for x in xs]
         out = []
         for x, (f,) in zip(xs, runner.map(judge_points, tasks)):
-            c = _costs(problem, f)
-            objective = robust_objective(c, problem.run_s)
-            out.append(Candidate(np.asarray(x, dtype=float), tuple(f), tuple(c), objective))
+            out.append(Candidate(np.asarray(x, dtype=float), tuple(f), tuple(_costs(problem, f)),
+                                 _objective(problem, f)))
         return out
 
     pool = judge_all([points[i] for i in ranked])

@@ -18,8 +18,9 @@ from pathlib import Path
 from typing import Any
 
 from station.control.designs import CompensatorFile
-from station.design.evaluate import Figures, Requirements, judge, violations
+from station.design.evaluate import Figures, Requirements, friction_held, held_error, judge, violations
 from station.design.executor import open_runner
+from station.design.hold import design_model_warning, held_summary
 from station.design.linear import Margins, loop_model
 from station.design.robust import SEED, RobustSet, robust_set
 from station.design.search import Budget, Problem, judge_points, search
@@ -142,8 +143,14 @@ class TuneResult:
         """Per model: every requirement met."""
         return [not violations(f, self.requirements) for f in self.figures]
 
+    def warnings(self) -> list[str]:
+        """One line each: what the user must know about the design beyond its figures (friction
+        holding the hub outside the 2 % band on the design model, :mod:`station.design.hold`)."""
+        held = design_model_warning(self.space, self.values, self.nominal, self.figures[0], self.requirements)
+        return [] if held is None else [held]
+
     def design_json(self) -> dict:
-        """The ``design`` block: structure, parameters, compensator, requirements, search."""
+        """The ``design`` block: structure, parameters, compensator, requirements, search, warnings."""
         comp = self.file.compensator()
         spec = {k: comp.spec[k] for k in ("gth", "ga", "limit") if k in comp.spec}
         if "shaper" in comp.spec:
@@ -154,11 +161,15 @@ class TuneResult:
                 "parameters": {k: {"value": v, "unit": units[k]} for k, v in self.values.items()},
                 "mode": None if self.space.mode is None else {"f_hz": self.space.mode[0], "zeta": self.space.mode[1]},
                 "compensator": spec, "requirements": self.requirements._asdict(),
-                "objective": f"the worst 2 % settling time over the {len(self.robust.models)} model(s) "
-                             f"(+1 % of the mean), every requirement met; a model where one is not adds its cost",
+                "objective": f"lexicographic: every requirement met on the design model first, settling there no "
+                             f"later than the thesis's compensator; then the worst "
+                             f"2 % settling time over the {len(self.robust.models)} model(s) (+1 % of the mean), "
+                             f"a model where a requirement is not met adding its cost, and a model where friction "
+                             f"holds the hub outside the 2 % band (nothing else failing) counting with the settling "
+                             f"time into the band it holds, charged for the held error",
                 "feasible": all(self.met()), "margins": _margins_json(self.margins),
                 "evaluations": self.evaluations, "elapsed_s": round(self.elapsed_s, 3), "executor": self.executor,
-                "seed": self.seed}
+                "seed": self.seed, "warnings": self.warnings()}
 
     def to_json(self, controller: str | Path | None = None) -> dict:
         """DESIGN.md's JSON: controller, design, model, robust, baseline (and verification).
@@ -203,7 +214,9 @@ def _spread(figures: Sequence[Figures]) -> dict:
 
 def robust_json(rs: RobustSet, figures, baseline, req: Requirements) -> dict:
     """The ``robust`` block: worst case and spread of the tuned compensator over the set,
-    per model with the thesis's beside it.
+    per model with the thesis's beside it, and the models where friction holds the hub outside
+    the 2 % band (``friction_held``: :func:`station.design.hold.held_summary`; per model
+    ``held_error_counts``, ``held_band_counts``, ``settling_held_s``, None where it is not held).
 
     Parameters
     ----------
@@ -219,11 +232,15 @@ def robust_json(rs: RobustSet, figures, baseline, req: Requirements) -> dict:
         if f.settling_2pct_s is not None and b.settling_2pct_s:
             ratio = round(f.settling_2pct_s / b.settling_2pct_s, 4)
             ratios.append(ratio)
+        held = friction_held(f, req)
         per_model.append({"label": lab, "name": m.name, "effects": m.effect_dict(), **f.to_json(),
                           "requirements_met": not violations(f, req), "baseline_settling_2pct_s":
-                          b.to_json()["settling_2pct_s"], "settling_ratio_to_baseline": ratio})
+                          b.to_json()["settling_2pct_s"], "settling_ratio_to_baseline": ratio,
+                          "held_error_counts": held_error(f) if held else None,
+                          "held_band_counts": f.rest_band if held else None,
+                          "settling_held_s": f.settling_rest_s if held else None})
     out = _spread(figures)
-    out.update({"all_met": all(p["requirements_met"] for p in per_model),
+    out.update({"all_met": all(p["requirements_met"] for p in per_model), "friction_held": held_summary(figures, req),
                 "settling_ratio_to_baseline": [min(ratios), max(ratios)] if ratios else None,
                 "intervals": {k: list(v) for k, v in rs.intervals.items()}, "per_model": per_model})
     return out
@@ -289,13 +306,14 @@ def tune(model=None, structure: str = "lead-accel", amplitude: float | None = No
     req = Requirements(overshoot_pct=float(overshoot))
     say = progress or (lambda msg: None)
     thesis = thesis_compensator(structure, limit)
-    problem = Problem(space, rs.models, float(amplitude), req)
     everyone = list(range(len(rs.models)))
     with threadpool_limits(limits=1, user_api="blas"), open_runner(jobs, scheduler) as runner:
         say(f"{structure}, step {amplitude:g}, {len(rs.models)} model(s), evaluations in {runner.where}")
         baseline = [judge(m, thesis, float(amplitude)) for m in rs.models] if len(rs.models) < 2 else \
             [f for part in runner.map(_judge_thesis, [(m, structure, limit, float(amplitude)) for m in rs.models])
              for f in part]
+        # the bar on the design model: settle no later than the thesis's compensator there
+        problem = Problem(space, rs.models, float(amplitude), req, bar_s=baseline[0].settling_2pct_s)
         result = search(problem, runner, budget, seed, say)
         values = space.values(result.best.x)
         final = runner.map(judge_points, [(problem._replace(requirements=None), [result.best.x], everyone)])[0][0]
