@@ -18,8 +18,11 @@ runs a simulation.
    effect's value shared by all sessions (the others still per session) is fitted and
    judged on the same folds; the effect drifts when its per-session values lower the
    held-out cost beyond the same acceptance rule, measured from the shared model (and what
-   tiny perturbations of it reach by luck). The others are shared; the final structure
-   (shared + drifting) is judged once more and refitted on all runs.
+   tiny perturbations of it reach by luck), *and* the sessions' values stand apart: the
+   ranges of their leave-one-run-out refits are disjoint for at least two sessions
+   (:func:`session_refits`; near the noise floor, stick-slip makes the held-out cost jump by
+   tens of percent for value changes far below any drift). The others are shared; the
+   final structure (shared + drifting) is judged once more and refitted on all runs.
 
 Folds: leave-one-run-out over all runs (:func:`station.diagnosis.folds.make_folds`). A
 session with no run left in a fold (a session of one run) gets, in that fold, the mean of
@@ -153,6 +156,10 @@ class Decision:
         value, % (negative: they raise it).
     theta_gain_pct : float
         The same for the pooled held-out θ RMS, %.
+    ranges : list of (float, float)
+        Per session, the range of its leave-one-run-out refits with every effect per session.
+    apart : bool
+        Two sessions' ranges are disjoint.
     luck_gain_pct : float
         How much lower than the shared model's held-out cost tiny perturbations of it reach
         by luck (:func:`luck_floor`), % (0 when they reach nothing lower).
@@ -166,6 +173,8 @@ class Decision:
     theta_gain_pct: float
     luck_gain_pct: float
     shared_value: float
+    ranges: list
+    apart: bool
 
 
 @dataclass
@@ -187,6 +196,9 @@ class DriftResult:
     separate : dict of str to float
         Every accepted effect per session (per-session keys), fitted on all runs: the
         structure before the drift decisions.
+    refit_values : dict of str to list of list of float
+        Per accepted effect, per session, its leave-one-run-out refits with every effect
+        per session (:func:`session_refits`).
     """
 
     accepted: list
@@ -197,6 +209,7 @@ class DriftResult:
     nominal: Trial
     final: Trial
     separate: dict
+    refit_values: dict
 
     def session_effects(self, s: int) -> dict[str, float]:
         """Session s's effects: the shared values and its own drifting ones.
@@ -209,8 +222,8 @@ class DriftResult:
         return PerSession([s])(self.values, 0)
 
     def refits(self, name: str, s: int) -> list[float]:
-        """An accepted effect's value in session s as refitted in each fold (leaving one run
-        out) in the final structure.
+        """An accepted effect's value in session s with every effect per session, refitted
+        leaving each run out (:func:`session_refits`).
 
         Parameters
         ----------
@@ -219,8 +232,7 @@ class DriftResult:
         s : int
             The session's index.
         """
-        own = key(name, s)
-        return [fv[own] if own in fv else fv[name] for fv in self.final.fold_values if own in fv or name in fv]
+        return list(self.refit_values[name][s])
 
 
 def session_axes(search: Search, names: Sequence[str], sessions: int) -> None:
@@ -315,6 +327,23 @@ def structure_trial(search: Search, layout: Layout, shared: Sequence[str], drift
             val_sse[i] = ev.sse(values, i)
             total += ev.weighted(values, i)
     return Trial(tuple(shared) + tuple(drifting), fold_values, val_sse, total)
+
+
+def session_refits(search: Search, layout: Layout, trial: Trial, name: str) -> list[list[float]]:
+    """Per session, an effect's values fitted per session in the folds whose fit runs hold
+    runs of that session (leaving one run out; a session of one run: its one fit).
+
+    Parameters
+    ----------
+    search : Search
+    layout : Layout
+    trial : Trial
+        Fitted with ``name`` per session.
+    name : str
+        The effect.
+    """
+    return [[fv[key(name, s)] for fold, fv in zip(search.folds, trial.fold_values) if set(fold.fit) & set(g)]
+            for s, g in enumerate(layout.groups)]
 
 
 def luck_floor(search: Search, trial: Trial) -> float:
@@ -449,7 +478,8 @@ def decide_drift(search: Search, layout: Layout, structure: Structure, nominal: 
     terms = ev.terms(validation_runs(search.folds))
     if layout.sessions < 2 or not accepted:
         values = ({n: structure.values[key(n, 0)] for n in accepted} if layout.sessions == 1 else {})
-        return DriftResult(accepted, accepted, [], [], values, nominal, structure.current, dict(structure.values))
+        refits = {n: session_refits(search, layout, structure.current, n) for n in accepted}
+        return DriftResult(accepted, accepted, [], [], values, nominal, structure.current, dict(structure.values), refits)
     per_session = structure.current
     rms_per = pooled(ev, per_session.val_sse).rms_theta
     decisions, tried = [], {}
@@ -458,15 +488,20 @@ def decide_drift(search: Search, layout: Layout, structure: Structure, nominal: 
         tr = structure_trial(search, layout, (n,), others, per_session.fold_values)
         tried[n] = tr
         floor = luck_floor(search, tr)
-        drifts = accept(tr.val_weighted, per_session.val_weighted, terms, floor)
+        ranges = [(min(v), max(v)) for v in session_refits(search, layout, per_session, n)]
+        apart = max(lo for lo, _ in ranges) > min(hi for _, hi in ranges)
+        drifts = accept(tr.val_weighted, per_session.val_weighted, terms, floor) and apart
         shared_value = fit_structure(search, layout, (n,), others, all_runs, structure.values)[n]
         d = Decision(n, drifts, relative_gain(per_session.val_weighted, tr.val_weighted),
                      rms_gain(rms_per, pooled(ev, tr.val_sse).rms_theta),
-                     max(0.0, relative_gain(floor, tr.val_weighted)), shared_value)
+                     max(0.0, relative_gain(floor, tr.val_weighted)), shared_value, ranges, apart)
         decisions.append(d)
         search.say(f"drift of {n}: per-session values lower the held-out cost by {d.cost_gain_pct:.1f} % "
                    f"against one shared value ({format_value(shared_value, EFFECTS[n].unit)}), luck alone by "
-                   f"{d.luck_gain_pct:.1f} %: {'drifts' if drifts else 'shared'} ({ev.simulations} simulations)")
+                   f"{d.luck_gain_pct:.1f} %; leave-one-run-out refits "
+                   + ", ".join(f"{format_value(lo, EFFECTS[n].unit)}..{format_value(hi, EFFECTS[n].unit)} ({name})"
+                               for (lo, hi), name in zip(ranges, session_names))
+                   + f"{'' if apart else ' overlap'}: {'drifts' if drifts else 'shared'} ({ev.simulations} simulations)")
     shared = [d.name for d in decisions if not d.drifts]
     drifting = [d.name for d in decisions if d.drifts]
     start = dict(structure.values)
@@ -486,7 +521,8 @@ def decide_drift(search: Search, layout: Layout, structure: Structure, nominal: 
     search.say(f"final: {_values_text(values, accepted, session_names)}; held-out θ gain "
                f"{rms_gain(pooled(ev, final.val_sse).rms_theta, pooled(ev, nominal.val_sse).rms_theta):.1f} % "
                f"({ev.simulations} simulations)")
-    return DriftResult(accepted, shared, drifting, decisions, values, nominal, final, dict(structure.values))
+    refits = {n: session_refits(search, layout, per_session, n) for n in accepted}
+    return DriftResult(accepted, shared, drifting, decisions, values, nominal, final, dict(structure.values), refits)
 
 
 def nominal_trial(ev: Evaluator, folds: Sequence[Fold]) -> Trial:

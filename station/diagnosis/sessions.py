@@ -316,7 +316,8 @@ class SessionResult:
         Every accepted effect's value when each is fitted per session (before the drift
         decisions).
     refits : dict of str to list of float
-        Per accepted effect, its value in this session refitted leaving each run out.
+        Per accepted effect, its value in this session refitted leaving each run out, with
+        every effect per session.
     """
 
     name: str
@@ -473,6 +474,11 @@ def _diagnose_sessions(sessions, model, say, candidates, max_samples, simulate) 
                              f"{ACCEL_DRIFT_WINDOW_S:g} s moves {drift:.0f} counts from rest: no tip acceleration "
                              f"does that); its θ is")
                 say(notes[-1])
+    for s, g in zip(loaded.names, layout.groups):
+        if len(g) == 1 and layout.sessions > 1:
+            notes.append(f"{s}: one usable run: held out, it is predicted with the mean of the other sessions' "
+                         "values, so its own values are never judged on a run they were not fitted to")
+            say(notes[-1])
     if layout.sessions == 1:
         notes.append(f"one session ({loaded.names[0]}): its runs are diagnosed, but nothing can drift")
         say(notes[-1])
