@@ -3,28 +3,32 @@
 
 For each protocol, starts ``station sim-device --pty --realtime`` (its own 500 Hz
 clock, like the PSoC's interrupt), runs a lead + accelerometer step test on the pty for
-``--seconds`` and prints the compute latency (sample received → command written,
-p50/p99/max µs), late commands per 1000 ticks and dropped samples. Side by side, the
-same run with the plain loop (garbage collection on, default GIL switch interval and
-priority) is the baseline; the ratios printed are baseline / lean.
+``--seconds`` and prints whether it completed, the compute latency (sample received →
+command written, p50/p99/max µs), late commands per 1000 ticks, the samples the station
+skipped (it had been held up and caught up) and the most it fell behind (ms), and dropped
+samples. ``--repeat R`` runs each case R times; ``--burn N`` keeps N CPU burners (``while
+True: pass`` processes) running beside it, a busy lab PC. Side by side, the same run with
+the plain loop (garbage collection on, default GIL switch interval and priority) is the
+baseline; the ratios printed are baseline / lean.
 
 Targets (issue "Control station end to end"): p99 ≤ 200 µs, ≤ 1 late per 1000 ticks,
-no dropped sample.
+no dropped sample; issue 16: with one burner, at least 5 of 6 20 s runs complete.
 
-Usage: ``python scripts/bench_loop.py [--seconds 60] [--protocols v1 legacy]
-[--no-baseline] [--max-lag TICKS] [--json FILE]``. Run it on a quiet machine: under
-other load the pty's kernel worker delivers samples in bursts and the station stops
-with "lag" (as it must: those samples are stale).
+Usage: ``python scripts/bench_loop.py [--seconds 60] [--repeat R] [--burn N]
+[--protocols v1 legacy] [--no-baseline] [--max-lag MS] [--json FILE]``. The machine's
+load average is printed with the results: say it with any number you quote.
 """
 
 from __future__ import annotations
 
 import argparse
 import json
+import os
 import signal
 import subprocess
 import sys
 import tempfile
+from contextlib import contextmanager
 from pathlib import Path
 
 from station.experiment import run_step
@@ -55,13 +59,26 @@ def stop_device(proc: subprocess.Popen) -> dict:
     return {}
 
 
-def one_run(protocol: str, seconds: float, lean: bool, workdir: Path, max_lag: int = LinkLimits.max_lag) -> dict:
-    """One step test over a fresh pty device; returns the case's numbers."""
+@contextmanager
+def burners(count: int):
+    """``count`` CPU burners (busy-looping processes at normal priority) while the block runs."""
+    procs = [subprocess.Popen([sys.executable, "-c", "while True: pass"]) for _ in range(count)]
+    try:
+        yield procs
+    finally:
+        for p in procs:
+            p.kill()
+            p.wait()
+
+
+def one_run(protocol: str, seconds: float, lean: bool, workdir: Path, max_lag: float = LinkLimits.max_lag,
+            name: str = "") -> dict:
+    """One step test over a fresh pty device; returns the case's numbers (``max_lag`` in s)."""
     proc, path = start_device(protocol)
     try:
-        report = run_step(port=path, protocol=protocol, controller="lead-accel", amplitude=100,
-                          duration=seconds, out=workdir / f"{protocol}-{'lean' if lean else 'plain'}.tsv", lean=lean,
-                          limits=LinkLimits(max_lag=max_lag))
+        report = run_step(port=path, protocol=protocol, controller="lead-accel", amplitude=100, duration=seconds,
+                          out=workdir / f"{protocol}-{'lean' if lean else 'plain'}{name}.tsv", lean=lean,
+                          limits=LinkLimits(max_lag=max_lag), figure=False)
     finally:
         device = stop_device(proc)
     timing = report.result.timing().to_json()
@@ -69,41 +86,57 @@ def one_run(protocol: str, seconds: float, lean: bool, workdir: Path, max_lag: i
     # v1 reports late commands itself; the legacy firmware cannot, the simulated device counts them
     late = timing["late"] if protocol == "v1" else device.get("late", 0)
     return {"protocol": protocol, "loop": "lean" if lean else "plain", "ok": report.result.ok,
-            "reason": report.result.reason, "ticks": report.result.ticks, **timing, "late": late,
-            "late_per_1000": 1000.0 * late / ticks, "device": device}
+            "reason": report.result.reason, "message": report.result.message, "ticks": report.result.ticks,
+            **timing, "late": late, "late_per_1000": 1000.0 * late / ticks, "device": device}
 
 
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--seconds", type=float, default=60.0)
+    parser.add_argument("--repeat", type=int, default=1, help="runs of each case (default 1)")
+    parser.add_argument("--burn", type=int, default=0, metavar="N", help="CPU burners beside the loop (default 0)")
     parser.add_argument("--protocols", nargs="+", default=list(PROTOCOLS), choices=PROTOCOLS)
     parser.add_argument("--no-baseline", action="store_true", help="skip the plain-loop baseline runs")
     parser.add_argument("--json", type=Path, default=None)
-    parser.add_argument("--max-lag", type=int, default=LinkLimits.max_lag,
-                        help="the station's --max-lag (default 2, the station's own; a smoke test on a loaded "
-                             "machine may raise it)")
+    parser.add_argument("--max-lag", type=float, default=1000 * LinkLimits.max_lag, metavar="MS",
+                        help="the station's --max-lag (default 20 ms, the station's own)")
     args = parser.parse_args(argv)
     cases = []
-    with tempfile.TemporaryDirectory() as tmp:
+    load_before = os.getloadavg()
+    with tempfile.TemporaryDirectory() as tmp, burners(args.burn):
         for protocol in args.protocols:
             for lean in ([True] if args.no_baseline else [True, False]):
-                cases.append(one_run(protocol, args.seconds, lean, Path(tmp), args.max_lag))
+                for i in range(args.repeat):
+                    case = one_run(protocol, args.seconds, lean, Path(tmp), args.max_lag / 1000, f"-{i}")
+                    cases.append(case)
+                    print(f"  {protocol} {case['loop']} run {i + 1}: {case['reason']} after {case['ticks']} ticks, "
+                          f"skipped {case['skipped']}, max lag {case['max_lag_ms'] or 0:.1f} ms (the device's own "
+                          f"clock slipped up to {case['device'].get('max_slip_ms', float('nan')):.1f} ms)", flush=True)
+    load_after = os.getloadavg()
     print(f"{'protocol':8} {'loop':6} {'ticks':>7} {'p50 us':>8} {'p99 us':>8} {'max us':>8} "
-          f"{'late/1000':>9} {'dropped':>7}  outcome")
+          f"{'late/1000':>9} {'skipped':>7} {'lag ms':>7} {'dropped':>7}  outcome")
     for c in cases:
         print(f"{c['protocol']:8} {c['loop']:6} {c['ticks']:7d} {c['p50_us'] or 0:8.0f} {c['p99_us'] or 0:8.0f} "
-              f"{c['max_us'] or 0:8.0f} {c['late_per_1000']:9.2f} {c['dropped']:7d}  {c['reason']}")
+              f"{c['max_us'] or 0:8.0f} {c['late_per_1000']:9.2f} {c['skipped']:7d} {c['max_lag_ms'] or 0:7.1f} "
+              f"{c['dropped']:7d}  {c['reason']}")
     for protocol in args.protocols:
-        lean = next(c for c in cases if c["protocol"] == protocol and c["loop"] == "lean")
+        lean_runs = [c for c in cases if c["protocol"] == protocol and c["loop"] == "lean"]
+        done = sum(c["ok"] for c in lean_runs)
+        lean = lean_runs[0]
         verdict = (lean["p99_us"] or 1e9) <= 200 and lean["late_per_1000"] <= 1 and lean["dropped"] == 0 and lean["ok"]
-        line = f"{protocol}: p99 {lean['p99_us']:.0f} us = {lean['p99_us'] / 200:.2f} x target 200 us"
+        line = (f"{protocol}: {done} of {len(lean_runs)} runs completed, skipped {sum(c['skipped'] for c in lean_runs)}"
+                f" ticks, worst lag {max(c['max_lag_ms'] or 0 for c in lean_runs):.1f} ms; "
+                f"p99 {lean['p99_us'] or 0:.0f} us = {(lean['p99_us'] or 0) / 200:.2f} x target 200 us")
         plain = next((c for c in cases if c["protocol"] == protocol and c["loop"] == "plain"), None)
-        if plain:
+        if plain and lean["p99_us"] and lean["max_us"] and plain["p99_us"] and plain["max_us"]:
             line += (f"; plain/lean p99 {plain['p99_us'] / lean['p99_us']:.2f}x, "
                      f"max {plain['max_us'] / lean['max_us']:.2f}x")
         print(line + f"; targets {'MET' if verdict else 'NOT MET'}")
+    print(f"{args.burn} CPU burner(s); load average {load_before[0]:.1f} before, {load_after[0]:.1f} after "
+          f"({os.cpu_count()} CPUs)")
     if args.json:
-        args.json.write_text(json.dumps({"cases": cases}, indent=1) + "\n")
+        args.json.write_text(json.dumps({"cases": cases, "burn": args.burn, "load_before": load_before,
+                                         "load_after": load_after}, indent=1) + "\n")
     return 0
 
 

@@ -15,22 +15,34 @@ Targets (issue "FEM model ..."): n = 4 >= 1000x real time and >= 50x the baselin
 n = 100 >= 50x real time; lead + accel stable at every n.
 
 Then a Model with effects (``bench_effects``): one 1000-sample lead + accel run with
-Coulomb friction, backlash (sub-stepped) or amplifier effects, in ms and as a ratio to
-the same Model without effects (target: friction under ~2 ms).
+Coulomb or breakaway friction, backlash (sub-stepped), viscous friction (linear) or
+amplifier effects, in ms and as a ratio to the same Model without effects (target:
+friction under ~2 ms; breakaway friction about what Coulomb friction costs).
+
+``--against DIR`` compares with another checkout of the station (e.g. the commit before a
+change, ``git worktree add`` or ``git archive | tar -x``): its own ``scripts/bench_sim.py``
+runs on its own ``station`` package in a subprocess, alternating with this one for
+``--rounds`` rounds; printed side by side are each case's median seconds over the rounds
+and the ratio this / other (cases only one side has are left out).
 
 Usage: ``python scripts/bench_sim.py [--elements 1 4 10 100] [--baseline-max 10]
-[--repeats 5] [--json FILE]``. The JSON is
+[--repeats 5] [--json FILE] [--against DIR [--rounds 3]]``. The JSON is
 ``{"cases": [{"n_elements", "controller", "seconds", "baseline_seconds",
 "realtime_factor", "baseline_ratio", "stable"}], "effects": [{"effects", "seconds", "ratio"}]}``
-(baseline fields null where not run).
+(baseline fields null where not run); with ``--against`` it is
+``{"against": DIR, "rows": [{"case", "seconds", "other_seconds", "ratio"}]}``.
 """
 
 from __future__ import annotations
 
 import argparse
 import json
+import statistics
+import subprocess
 import sys
+import tempfile
 import time
+from pathlib import Path
 
 import numpy as np
 import scipy.integrate
@@ -151,6 +163,9 @@ EFFECT_CASES = {  # a 1000-sample lead + accel run (step 200) of the 4-element m
     "backlash": {"backlash": 10.0},
     "friction+backlash": {"coulomb_friction": 10.0, "backlash": 10.0},
     "amplifier": {"saturation": 150.0, "deadzone": 5.0, "delay": 2.0},
+    "static_friction": {"static_friction": 15.0, "coulomb_friction": 7.0},
+    "viscous_friction": {"viscous_friction": 3.0},
+    "amp_offset": {"amp_offset": -2.0, "saturation": 150.0},
 }
 
 
@@ -179,6 +194,68 @@ def bench_effects(repeats: int = 20, out=sys.stdout) -> list[dict]:
     return rows
 
 
+# run ROOT/scripts/bench_sim.py on ROOT's own station package: the editable install's
+# import hook (if any) would otherwise hand this checkout's package to the other script
+_OTHER = """import runpy, sys
+root = sys.argv[1]
+sys.meta_path[:] = [f for f in sys.meta_path if "editable" not in repr(f)]
+sys.path.insert(0, root)
+import station
+assert station.__file__.startswith(root), station.__file__
+runpy.run_path(root + "/scripts/bench_sim.py")["main"](sys.argv[2:])
+"""
+
+
+def _labelled(result: dict) -> dict[str, float]:
+    """{case label: seconds} of a bench JSON (element count / controller, and the effects)."""
+    rows = {f"n={c['n_elements']} {c['controller']}": c["seconds"] for c in result.get("cases", [])}
+    rows.update({f"model with {e['effects']}": e["seconds"] for e in result.get("effects", [])})
+    return rows
+
+
+def compare(other: Path, argv: list[str], rounds: int = 3, out=sys.stdout) -> list[dict]:
+    """This checkout's benchmark against another's, alternating, median seconds per case.
+
+    Parameters
+    ----------
+    other : Path
+        The other checkout's root (holds ``station/`` and ``scripts/bench_sim.py``).
+    argv : list of str
+        Options both benchmarks run with (without ``--json``/``--against``).
+    rounds : int
+        Runs of each side, alternating (this one first).
+    out : file or None
+        Where to print the table.
+
+    Returns
+    -------
+    list of dict
+        ``{"case", "seconds", "other_seconds", "ratio"}`` for the cases both report.
+    """
+    here = Path(__file__).resolve().parents[1]
+    runs: dict[str, list[dict]] = {"this": [], "other": []}
+    with tempfile.TemporaryDirectory() as tmp:
+        for k in range(rounds):
+            for side, root in (("this", here), ("other", Path(other).resolve())):
+                path = Path(tmp) / f"{side}{k}.json"
+                subprocess.run([sys.executable, "-c", _OTHER, str(root), *argv, "--json", str(path)], check=True,
+                               stdout=subprocess.DEVNULL)
+                runs[side].append(_labelled(json.loads(path.read_text())))
+    rows = []
+    for case in runs["this"][0]:
+        if all(case in r for r in runs["other"]):
+            mine = statistics.median(r[case] for r in runs["this"])
+            theirs = statistics.median(r[case] for r in runs["other"])
+            rows.append({"case": case, "seconds": mine, "other_seconds": theirs, "ratio": mine / theirs})
+    if out:
+        print(f"median of {rounds} alternating rounds; other: {other}", file=out)
+        print(f"{'case':<32} {'this ms':>9} {'other ms':>9} {'this/other':>10}", file=out)
+        for r in rows:
+            print(f"{r['case']:<32} {r['seconds'] * 1e3:9.3f} {r['other_seconds'] * 1e3:9.3f} {r['ratio']:10.3f}",
+                  file=out)
+    return rows
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--elements", type=int, nargs="+", default=[1, 4, 10, 100])
@@ -186,7 +263,19 @@ def main(argv=None) -> int:
     ap.add_argument("--baseline-max", type=int, default=10, help="odeint baseline for n <= this (0: none)")
     ap.add_argument("--repeats", type=int, default=5)
     ap.add_argument("--json", metavar="FILE")
+    ap.add_argument("--against", metavar="DIR", type=Path, help="compare with another checkout's benchmark")
+    ap.add_argument("--rounds", type=int, default=3, help="alternating rounds with --against (median)")
     args = ap.parse_args(argv)
+    if args.against is not None:
+        if not (args.against / "scripts" / "bench_sim.py").is_file():
+            ap.error(f"--against: {args.against} holds no scripts/bench_sim.py")
+        same = ["--elements", *map(str, args.elements), "--controllers", *args.controllers,
+                "--baseline-max", str(args.baseline_max), "--repeats", str(args.repeats)]
+        rows = compare(args.against, same, args.rounds)
+        if args.json:
+            with open(args.json, "w") as fh:
+                json.dump({"against": str(args.against), "rows": rows}, fh, indent=1)
+        return 0
     result = bench(args.elements, args.controllers, args.baseline_max, args.repeats)
     result["effects"] = bench_effects(max(args.repeats, 20))
     if args.json:

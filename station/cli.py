@@ -17,7 +17,8 @@ from station.commands.options import StationParser, document_ranges
 from station.errors import StationError, one_line
 from station.signals import StopSignal, StopSignals
 
-COMMANDS = ("step", "replay", "sim_device", "bode", "compare", "modes", "survey", "diagnose", "identify", "plot", "ports")
+COMMANDS = ("step", "replay", "sim_device", "bode", "compare", "modes", "survey", "diagnose", "identify", "tune",
+            "plot", "ports")
 """Modules of :mod:`station.commands`, in the order ``--help`` lists them."""
 VERBOSE_HELP = "log what the link, loop and simulated device do (-v: info, -vv: every byte)"
 """``-v``/``--verbose``, before or after the command (``station -v step`` or ``station step -v``)."""

@@ -6,8 +6,14 @@ loop computes v[k+1] = C(u[k+1], θ[k], a[k]). Row k of the log holds θ[k], a[k
 reference u[k], the command v[k] acting during tick k (computed on sample k−1, with its
 θ̂_d and compute latency) and what the device reports it applied.
 
-The hot path does only: blocking read, controller step, write, and an O(1) append of
-the row to the log writer's queue; formatting, disk and rerun happen on the writer's
+Catch up, don't give up: when the station was held up and several samples are waiting,
+each one is logged, all but the newest marked :data:`~station.runlog.SKIPPED` (no command
+computed from them, the controller not stepped on them: the device holds its last
+output), and the command is computed from the newest only (:meth:`station.link.Session.poll_sample`);
+the link stops the run (reason "lag") when the station cannot catch up.
+
+The hot path does only: blocking read, a non-blocking look for a newer sample, controller
+step, write, and an O(1) append of the row to the log writer's queue; formatting, disk and rerun happen on the writer's
 thread. Garbage collection is off during the run, the GIL switch interval is short so
 the writer thread cannot hold the loop up, and the scheduling priority is raised where
 the OS allows it.
@@ -15,8 +21,8 @@ the OS allows it.
 Fail safe: on any stop - a link fault (timeout, lag, sequence, rate, a failed port:
 :mod:`station.link`), SIGINT / SIGTERM (recorded by :mod:`station.signals`, acted on at
 the next sample), an exception or NaN from the controller, or the encoder passing the soft
-limit - the loop sends command 0 and stop *first*, then logs the last answered sample's
-row, then the caller closes the log, then the outcome is reported (:class:`RunResult`,
+limit - the loop sends command 0 and stop *first*, then logs the sample in hand and every
+sample that had already arrived (skipped), then the caller closes the log, then the outcome is reported (:class:`RunResult`,
 :class:`station.outcome.Outcome`). Every command is clamped to ±limit before the wire.
 """
 
@@ -35,8 +41,8 @@ from station import DT
 from station.control.contract import ControllerFault, guard_command
 from station.link import DeviceStopped, LinkFault, Session
 from station.outcome import Outcome
-from station.realtime import RealtimePriority
-from station.runlog import LogRow
+from station.realtime import RealtimePriority, process_age
+from station.runlog import SKIPPED, LogRow
 from station.signals import StopSignals
 
 NAN = math.nan
@@ -57,6 +63,18 @@ class TimingSummary:
         Commands the device reports as late (v1 LATE status).
     dropped : int
         Samples missing from the sequence numbers.
+    skipped : int
+        Samples not answered: a newer one was already waiting.
+    max_lag_ms : float
+        The most the station fell behind the device when a command went out, ms
+        (:meth:`station.link.Session._command`; NaN when unknown).
+    first_tick_s : float
+        Start-up: from the process's start to the first sample, s (NaN when unknown).
+    first_tick_cpu_s : float
+        The CPU time the process had used when the first sample came, s (what the start-up
+        costs, whatever else the machine runs).
+    setup_s : float
+        From the run's call (:func:`station.experiment.run_step`) to the first sample, s.
     """
 
     p50_us: float
@@ -64,13 +82,20 @@ class TimingSummary:
     max_us: float
     late: int
     dropped: int
+    skipped: int = 0
+    max_lag_ms: float = NAN
+    first_tick_s: float = NAN
+    first_tick_cpu_s: float = NAN
+    setup_s: float = NAN
 
     def to_json(self) -> dict:
         """The ``timing`` object of ``station step --json``."""
-        def num(x):
-            return None if math.isnan(x) else round(float(x), 1)
+        def num(x, digits=1):
+            return None if math.isnan(x) else round(float(x), digits)
         return {"p50_us": num(self.p50_us), "p99_us": num(self.p99_us), "max_us": num(self.max_us),
-                "late": int(self.late), "dropped": int(self.dropped)}
+                "late": int(self.late), "dropped": int(self.dropped), "skipped": int(self.skipped),
+                "max_lag_ms": num(self.max_lag_ms, 2), "first_tick_s": num(self.first_tick_s, 3),
+                "first_tick_cpu_s": num(self.first_tick_cpu_s, 3), "setup_s": num(self.setup_s, 3)}
 
 
 @dataclass
@@ -87,8 +112,11 @@ class RunResult:
     stopped : dict or None
         The device's STOPPED counters (v1) or None.
     extra : dict
-        ``priority`` (the scheduling level reached), ``max_lag`` (most samples seen
-        waiting).
+        ``priority`` (the scheduling level reached), ``max_lag_ms`` (the most the station
+        fell behind, ms), ``first_sample_at`` (``time.perf_counter()`` when the first sample
+        came, NaN when none), ``first_tick_s`` (from the process's start to it, s),
+        ``first_tick_cpu_s`` (the CPU time the process had used by then, s: the start-up's
+        cost on a busy machine), and what the caller adds (``setup_s``).
     """
 
     outcome: Outcome
@@ -114,7 +142,10 @@ class RunResult:
             p50, p99, mx = np.percentile(lat, 50), np.percentile(lat, 99), lat.max()
         else:
             p50 = p99 = mx = NAN
-        return TimingSummary(p50, p99, mx, self.late, self.dropped)
+        x = self.extra
+        return TimingSummary(p50, p99, mx, self.late, self.dropped, self.outcome.skipped,
+                             x.get("max_lag_ms", NAN), x.get("first_tick_s", NAN), x.get("first_tick_cpu_s", NAN),
+                             x.get("setup_s", NAN))
 
 
 class SoftLimitError(Exception):
@@ -181,7 +212,7 @@ def run_loop(session: Session, controller, reference: np.ndarray, writer, soft_l
     u = np.asarray(reference, dtype=float).tolist()
     n_ticks = len(u)
     latencies = np.full(n_ticks, NAN)
-    ticks = 0
+    ticks = skipped = 0
     reason, message = "completed", f"completed {n_ticks} ticks"
     stopped = None
     old_switch = sys.getswitchinterval()
@@ -190,9 +221,12 @@ def run_loop(session: Session, controller, reference: np.ndarray, writer, soft_l
     level = priority.level
     perf_ns = time.perf_counter_ns
     pending = None  # the row of a sample received but not yet logged
-    read_sample, send_command, step, append = session.read_sample, session.send_command, controller.step, writer.append
+    read_sample, poll_sample, send_command = session.read_sample, session.poll_sample, session.send_command
+    step, append = controller.step, writer.append
     lim, neg = float(limit), -float(limit)
     stop_ok = True
+    first_at = first_cpu = NAN
+    v_k, dhat_k, lat_k = 0.0, u[0], NAN  # the command acting in the next tick to log (tick 0 outputs 0)
     logger.info("run: %d ticks, clamp ±%g, soft limit ±%g, lean %s", n_ticks, lim, soft_limit, lean)
     try:
         try:
@@ -202,21 +236,38 @@ def run_loop(session: Session, controller, reference: np.ndarray, writer, soft_l
                 gc.disable()
                 sys.setswitchinterval(5e-5)  # the writer thread must not hold the GIL for ms
             session.start(n_ticks)
-            v_k, dhat_k, lat_k = 0.0, u[0], NAN  # tick 0 outputs 0
             last = n_ticks - 1
+            sample = read_sample()
+            first_at, first_cpu = time.perf_counter(), time.process_time()
             while True:
-                n, theta, accel, v_applied, status = read_sample()
-                t_recv = perf_ns()
+                # catch up: every sample is logged; a command only from the newest one waiting
+                while True:
+                    n, theta, accel, v_applied, status = sample
+                    t_recv = perf_ns()
+                    if n > last:
+                        break
+                    # sample n is in: its row is complete (v[n] was sent on sample n-1) and must be
+                    # logged whatever happens next (a signal, a controller fault, a failed write)
+                    pending = LogRow(n * dt, n, u[n], v_k, theta, accel, dhat_k,
+                                     NAN if v_applied is None else v_applied, status, lat_k)
+                    if signals.signum is not None:
+                        raise _Signalled()
+                    if abs(theta) > soft_limit:
+                        raise SoftLimitError(f"encoder at {theta} counts passed the soft limit ±{soft_limit:g} "
+                                             f"at tick {n}")
+                    if n == last:
+                        break
+                    newer = poll_sample()  # None on a healthy link: one look at the port
+                    if newer is None:
+                        break
+                    append(pending._replace(status=status | SKIPPED))  # not answered: v held
+                    pending = None
+                    ticks += 1
+                    skipped += 1
+                    lat_k = NAN
+                    sample = newer
                 if n > last:
                     break
-                # sample n is in: its row is complete (v[n] was sent on sample n-1) and must be
-                # logged whatever happens next (a signal, a controller fault, a failed write)
-                pending = LogRow(n * dt, n, u[n], v_k, theta, accel, dhat_k,
-                                 NAN if v_applied is None else v_applied, status, lat_k)
-                if signals.signum is not None:
-                    raise _Signalled()
-                if abs(theta) > soft_limit:
-                    raise SoftLimitError(f"encoder at {theta} counts passed the soft limit ±{soft_limit:g} at tick {n}")
                 if n < last:
                     try:
                         v_next, dhat_next = step(u[n + 1], theta, accel)
@@ -233,6 +284,7 @@ def run_loop(session: Session, controller, reference: np.ndarray, writer, soft_l
                 if n == last:
                     break
                 v_k, dhat_k, lat_k = v_next, dhat_next, lat_next
+                sample = read_sample()
         finally:
             # first: command 0 and stop, before anything else; signals are only recorded now
             signals.defer()
@@ -261,9 +313,23 @@ def run_loop(session: Session, controller, reference: np.ndarray, writer, soft_l
         session.stop_requested = None
         if own_signals:
             signals.__exit__(None, None, None)
-    if pending is not None:  # after the stop, before the caller closes the log
+    # after the stop, before the caller closes the log: the sample in hand, and every sample that
+    # had already arrived (nothing measured is lost), all unanswered (skipped when a newer followed)
+    unread = [s for s in (_quietly(session.unread_samples) or ()) if 0 <= s.n < n_ticks]
+    if pending is not None:
+        if unread:
+            pending = pending._replace(status=pending.status | SKIPPED)
+            skipped += 1
         _quietly(lambda: append(pending))
         ticks += 1
+        lat_k = NAN
+    for i, s in enumerate(unread):
+        row = LogRow(s.n * dt, s.n, u[s.n], v_k, s.theta, s.accel, dhat_k,
+                     NAN if s.v_applied is None else s.v_applied, s.status | SKIPPED * (i + 1 < len(unread)), lat_k)
+        if _quietly(lambda row=row: append(row)):
+            ticks += 1
+            skipped += i + 1 < len(unread)
+            lat_k = NAN
     if signals.signum is not None and reason not in ("sigint", "sigterm") and ticks < n_ticks:
         reason, message = signals.reason, f"{signals.name} at tick {ticks} ({message})"
     if not stop_ok and reason not in ("sigint", "sigterm"):
@@ -273,22 +339,29 @@ def run_loop(session: Session, controller, reference: np.ndarray, writer, soft_l
     if stop_info is not None:
         stopped = stop_info
     counters = session.counters()
+    counters["skipped"] = skipped  # the rows marked SKIPPED
     if stopped is not None and session.protocol == "v1":
         counters["late"] = max(counters["late"], stopped.get("late", 0))
         counters["watchdog_trips"] = max(counters["watchdog_trips"], stopped.get("watchdog_trips", 0))
     outcome = Outcome(reason, message, ticks=ticks, command_zero_sent=stop_ok, **counters)
     logger.log(logging.INFO if outcome.ok else logging.WARNING, "run ended: %s", outcome)
-    return RunResult(outcome, latencies, stopped, {"priority": level, "max_lag": session.max_lag_seen})
+    age = process_age()  # the start-up: from the process's start to the first sample
+    first_tick = NAN if age is None else age - (time.perf_counter() - first_at)
+    return RunResult(outcome, latencies, stopped, {"priority": level, "max_lag_ms": 1000.0 * session.max_lag_seen,
+                                                    "first_sample_at": first_at, "first_tick_s": first_tick,
+                                                    "first_tick_cpu_s": first_cpu})
 
 
-def _quietly(fn) -> None:
-    """Call ``fn``; whatever it raises (a late signal included) is dropped: the run is ending."""
+def _quietly(fn):
+    """Call ``fn`` and return what it returns (True when that is None); whatever it raises (a
+    late signal included) is dropped and gives None: the run is ending."""
     for _ in range(2):
         try:
-            fn()
-            return
+            out = fn()
+            return True if out is None else out
         except BaseException:  # noqa: BLE001
             continue
+    return None
 
 
 def _safe_stop(session: Session) -> tuple[dict | None, bool, str]:

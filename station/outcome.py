@@ -19,7 +19,7 @@ REASONS = {
     "timeout": "no new valid sample within the sample timeout",
     "soft-limit": "the encoder passed the soft limit",
     "controller-fault": "the controller raised or returned NaN",
-    "lag": "the station fell behind the device (samples waiting above --max-lag)",
+    "lag": "the station fell behind the device and could not catch up (--max-lag, or held ticks above --max-miss)",
     "rate": "the device ticks at the wrong rate",
     "sequence": "samples lost, duplicated, reordered or implausible beyond the allowed",
     "link": "the port failed or the device ended the run on its own",
@@ -48,6 +48,9 @@ class Outcome:
         cannot tell (legacy), seen by the station (``late_seen``).
     late_seen : int
         Commands the station wrote after the next sample had already arrived.
+    skipped : int
+        Samples logged but not answered: the station had been held up and a newer one
+        was already waiting (the log marks them, :data:`station.runlog.SKIPPED`).
     dropped : int
         Samples missing from the sequence numbers (a gap of g counts g − 1).
     stale : int
@@ -68,6 +71,7 @@ class Outcome:
     ticks: int = 0
     late: int = 0
     late_seen: int = 0
+    skipped: int = 0
     dropped: int = 0
     stale: int = 0
     duplicates: int = 0

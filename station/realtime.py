@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import os
 import threading
+import time
 
 
 def _threads() -> list[int]:
@@ -64,3 +65,15 @@ class RealtimePriority:
             except (PermissionError, OSError):
                 pass  # thread gone, or lowering nice back needs a privilege we lack
         self.level = "default"
+
+
+def process_age() -> float | None:
+    """Seconds since this process started (Linux ``/proc/self/stat`` against the boot clock,
+    10 ms resolution), None where the OS does not tell: the start-up time of a command."""
+    try:
+        with open("/proc/self/stat") as fh:
+            stat = fh.read()
+        start_ticks = int(stat[stat.rindex(")") + 2:].split()[19])
+        return time.clock_gettime(time.CLOCK_BOOTTIME) - start_ticks / os.sysconf("SC_CLK_TCK")
+    except (OSError, ValueError, IndexError, AttributeError):
+        return None

@@ -19,11 +19,6 @@ import math
 
 import numpy as np
 
-try:
-    import numba
-except ImportError:  # pragma: no cover - numba is a dependency; plain Python without it
-    numba = None
-
 _WHOLE = 4503599627370496.0  # 2**52: every float at or beyond it is already whole
 
 
@@ -87,14 +82,25 @@ def _sensor_count_with(rounding):
 half_away = _half_away_with(math.floor)
 sensor_count = _sensor_count_with(half_away)
 
-if numba is None:  # pragma: no cover
-    half_away_compiled = half_away
-    sensor_count_compiled = sensor_count
-else:
-    half_away_compiled = numba.njit(cache=True, nogil=True)(_half_away_with(np.floor))
-    sensor_count_compiled = numba.njit(cache=True, nogil=True)(_sensor_count_with(half_away_compiled))
-""":func:`half_away` and :func:`sensor_count` compiled by numba, for compiled kernels (the
-same float operations: np.floor and math.floor agree below 2**52)."""
+
+
+def __getattr__(name: str):
+    """``half_away_compiled`` and ``sensor_count_compiled``: :func:`half_away` and
+    :func:`sensor_count` compiled by numba, for compiled kernels (the same float operations:
+    np.floor and math.floor agree below 2**52). Made on first use: numba takes a second to
+    import, and the protocol codec, which uses this module too, never needs it."""
+    if name not in ("half_away_compiled", "sensor_count_compiled"):
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    try:
+        import numba
+    except ImportError:  # pragma: no cover - numba is a dependency; plain Python without it
+        compiled = {"half_away_compiled": half_away, "sensor_count_compiled": sensor_count}
+    else:
+        half = numba.njit(cache=True, nogil=True)(_half_away_with(np.floor))
+        compiled = {"half_away_compiled": half,
+                    "sensor_count_compiled": numba.njit(cache=True, nogil=True)(_sensor_count_with(half))}
+    globals().update(compiled)
+    return compiled[name]
 
 
 def round_half_away(x: float) -> int:

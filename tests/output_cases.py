@@ -91,6 +91,9 @@ COMMANDS: dict[str, Command | None] = {
                         # fake's 100 bytes of room (diagnose's case covers the option's writing)
                         files=("--json",), inputs=("model",),
                         folders={"--report": ("identify.html", "report.html")}, together=False),
+    "tune": Command(("--controller", "lead", "--samples", "0", "--shaper", "none", "--jobs", "1", "--model", "{model}",
+                     "--quiet"), files=("--out", "--json"), inputs=("model",),
+                    folders={"--report": ("report.html", "steps.png", "bode.png", "robust.png", "verify-step.tsv")}),
     "sim-device": None,  # serves a pty; its summary goes to stdout
     "ports": None,
 }

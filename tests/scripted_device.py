@@ -30,12 +30,15 @@ class ScriptedDevice:
     well-formed ``data`` (hostile behaviours: noise, repeats, swaps, byte slips; the wall
     time of the first tick whose bytes it changed is kept in ``fault_time``);
     status(k) -> v1 status bits of tick k; hello_reply(data) -> bytes: the answer to HELLO
-    (v1) or 'r' (legacy) instead of INFO / θ; rate_hz: INFO's rate (0 declares lockstep).
+    (v1) or 'r' (legacy) instead of INFO / θ; rate_hz: INFO's rate (0 declares lockstep);
+    hold(k) -> bool: tick k's bytes are held back and go out together with the next tick
+    that is not held (a stalled link, a USB adapter's latency timer: bursts); the wall time
+    of each release of held bytes is kept in ``released_at``.
     """
 
     def __init__(self, protocol="v1", theta=lambda k: 0, silent_after=None, garbage_every=None,
                  skip_at=None, period=0.002, accel=lambda k: 0, after_start=b"", mutate=None,
-                 status=lambda k: 0, hello_reply=None, rate_hz=500):
+                 status=lambda k: 0, hello_reply=None, rate_hz=500, hold=None):
         self.protocol = protocol
         self.theta = theta
         self.accel = accel
@@ -44,6 +47,9 @@ class ScriptedDevice:
         self.period = period if callable(period) else (lambda k, p=period: p)
         self.mutate, self.status, self.hello_reply, self.rate_hz = mutate, status, hello_reply, rate_hz
         self.fault_time: float | None = None         # wall time (time.time) of the first mutated tick
+        self.hold = hold
+        self._held: list[tuple[int, bytes]] = []     # ticks held back, not yet written
+        self.released_at: list[float] = []           # wall time of each release of held ticks
         self.received_at: list[float] = []            # wall time each entry of ``received`` arrived
         self.master, self.slave = pty.openpty()
         tty.setraw(self.master)
@@ -118,6 +124,7 @@ class ScriptedDevice:
                         elif isinstance(msg, v1.Stop):
                             running, output = False, 0
                             self.outputs.append(0)
+                            self._release()
                             self._write(v1.encode(v1.Stopped(0, k, 0, 0, decoder.rx_errors)))
                     else:
                         if msg[0] == "r":
@@ -129,6 +136,7 @@ class ScriptedDevice:
                             last_cmd = msg[1]
                         elif msg[0] == "s":
                             running = False
+                            self._release()
             if running and time.perf_counter() >= next_tick:
                 if last_cmd is not None:
                     output = last_cmd
@@ -139,6 +147,16 @@ class ScriptedDevice:
                 # a stalled test thread (a loaded CI machine) ticks late rather than bursting
                 # the missed ticks at once: a real device's clock does not stall
                 next_tick = max(next_tick + self.period(k), time.perf_counter() + 0.2 * self.period(k))
+
+    def _release(self):
+        """Write what is held back (the link passes it on at the latest when the device stops)."""
+        held, self._held = self._held, []
+        if held:
+            try:
+                self._write(b"".join(d for _, d in held))
+            except OSError:
+                return
+            self.sent.extend((j, time.time()) for j, _ in held)
 
     def _send_tick(self, k, output):
         if self.protocol == "v1":
@@ -155,15 +173,24 @@ class ScriptedDevice:
             if real != data and self.fault_time is None:
                 self.fault_time = time.time()
             data = real
+        if self.hold is not None and self.hold(k):
+            self._held.append((k, data))
+            return
+        ticks = [*self._held, (k, data)]
+        self._held = []
         try:
-            self._write(data)
+            self._write(b"".join(d for _, d in ticks))
         except OSError:  # the station closed its end
             return
-        self.sent.append((k, time.time()))
+        now = time.time()
+        if len(ticks) > 1:
+            self.released_at.append(now)
+        self.sent.extend((j, now) for j, _ in ticks)
 
     def stop_time(self) -> float | None:
-        """Wall time the station's stop (v1 STOP, legacy 's') arrived, or None."""
-        for msg, at in zip(self.received, self.received_at):
+        """Wall time the station's last stop (v1 STOP, legacy 's') arrived, or None (the last:
+        a legacy station stops its accelerometer pre-run with 's' too)."""
+        for msg, at in zip(reversed(self.received), reversed(self.received_at)):
             if (isinstance(msg, v1.Stop) if self.protocol == "v1" else msg == ("s",)):
                 return at
         return None
@@ -171,3 +198,31 @@ class ScriptedDevice:
     def last_sent(self, count=2):
         """The last ``count`` messages the station sent (v1 messages / legacy command tuples)."""
         return self.received[-count:]
+
+
+class MemoryPort:
+    """An in-memory port for session tests: ``data`` is what has already arrived (all of it),
+    ``written`` every write in order; ``on_write(data)`` may answer (e.g. START with samples)."""
+
+    def __init__(self, on_write=None):
+        self.data = bytearray()
+        self.written: list[bytes] = []
+        self.on_write = on_write
+
+    def write(self, data):
+        self.written.append(bytes(data))
+        if self.on_write is not None:
+            self.data += self.on_write(bytes(data))
+        return len(data)
+
+    def reset_input_buffer(self):
+        pass
+
+    def read(self, size=1):
+        out = bytes(self.data[:size])
+        del self.data[:size]
+        return out
+
+    @property
+    def in_waiting(self):
+        return len(self.data)

@@ -12,7 +12,7 @@ import pytest
 from station.cli import build_parser, main
 from station.commands import options
 
-SIMULATING = ("step", "replay", "sim-device", "bode", "compare", "modes", "survey", "diagnose", "identify")
+SIMULATING = ("step", "replay", "sim-device", "bode", "compare", "modes", "survey", "diagnose", "identify", "tune")
 """The commands that simulate the model (or serve it, as the simulated rig)."""
 STATION = Path(__file__).resolve().parents[1] / "station"
 

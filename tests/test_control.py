@@ -245,3 +245,20 @@ def test_file_reference_reads_a_log_column(rig_data):
         file_reference(rig_data / SWEEP, "w")
     with pytest.raises(StationError, match="holds no values"):
         file_reference(rig_data / SWEEP, "theta_d_hat")
+
+
+def test_tustin_equals_scipy_bilinear_on_random_designs():
+    # independent truth: scipy.signal.cont2discrete (tf -> ss -> bilinear -> tf)
+    from scipy.signal import cont2discrete
+
+    rng = np.random.default_rng(7)
+    for order in range(1, 6):
+        for _ in range(40):
+            den = np.concatenate([[rng.uniform(0.5, 2.0)], rng.uniform(0.1, 500.0, order)])
+            num = rng.uniform(-500.0, 500.0, int(rng.integers(1, order + 2)))
+            got_num, got_den = tustin(num, den, 0.002)
+            num_z, den_z, _ = cont2discrete((num, den), 0.002, method="bilinear")
+            num_z = np.atleast_1d(np.squeeze(num_z))
+            num_z = np.concatenate([np.zeros(den_z.size - num_z.size), num_z]) / den_z[0]
+            assert np.allclose(got_den, den_z / den_z[0], rtol=0, atol=1e-12)
+            assert np.allclose(got_num, num_z, rtol=0, atol=1e-12 * max(1.0, np.abs(num_z).max()))

@@ -14,6 +14,7 @@ Skips with the reason when gcc/make are missing or `station step` is not availab
 
 from __future__ import annotations
 
+import json
 import select
 import shutil
 import signal
@@ -31,6 +32,7 @@ HOST = FIRMWARE / "build" / "sflr_host"
 WATCHDOG_TICKS = 10  # sflr_host's default, reported in INFO
 V_LIMIT = 255  # firmware clamp (INFO v_limit)
 LATE, WATCHDOG = 0x01, 0x02
+SKIPPED = 0x80  # the station's own status bit in its log (README "Run logs"), not the device's
 DT = 0.002
 
 
@@ -123,23 +125,47 @@ def samples_of(trace: dict[str, np.ndarray]) -> dict[str, np.ndarray]:
     return {k: v[keep] for k, v in trace.items()}
 
 
+def _last_tick(trace: Path) -> int:
+    tr = samples_of(read_trace(trace))
+    return int(tr["tick"][-1]) if len(tr["tick"]) else -1
+
+
 def round_half_away(v: np.ndarray) -> np.ndarray:
     return (np.sign(v) * np.floor(np.abs(v) + 0.5)).astype(np.int64)
 
 
 def run_station(port: str, out: Path, duration: float, **popen) -> subprocess.Popen:
-    # --max-lag 50: the subject is the firmware; a virtual machine's scheduler can stall the
-    # station for several ms, which the default bound rightly stops on (test_failsafe tests it)
-    cmd = [sys.executable, "-m", "station", "step", "--protocol", "v1", "--port", port,
-           "--duration", str(duration), "--max-lag", "50", "--out", str(out), "--json", str(out.with_suffix(".json"))]
+    # --max-lag 50 (ms), --max-miss 99: the subject is the firmware. A busy machine can hold the
+    # station up beyond the default 20 ms, or the host firmware process itself (a normal process:
+    # its late ticks come back to back, and the commands for them are LATE), which the station
+    # rightly stops on (test_failsafe and test_catch_up test those bounds)
+    cmd = [sys.executable, "-m", "station", "step", "--protocol", "v1", "--port", port, "--duration", str(duration),
+           "--max-lag", "50", "--max-miss", "99", "--out", str(out), "--json", str(out.with_suffix(".json"))]
     return subprocess.Popen(cmd, cwd=REPO, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, **popen)
 
 
+def _held_up(out: Path) -> bool:
+    """The machine held the station up: it stopped on "lag", or it completed but skipped
+    ticks while the firmware's watchdog (10 ticks) zeroed the output (exit 1). The pty's
+    kernel workers run at normal priority, so a busy machine does this; it says nothing
+    about the firmware, and such a run is tried again."""
+    json_path = out.with_suffix(".json")
+    if not json_path.exists():
+        return False
+    outcome = json.loads(json_path.read_text())["outcome"]
+    held_up = outcome["reason"] == "completed" and outcome["watchdog_trips"] > 0 and outcome["skipped"] > 0
+    return outcome["reason"] == "lag" or held_up
+
+
 def test_step_run_in_the_loop(fw_host, tmp_path):
-    host = fw_host()
-    log_path = tmp_path / "run.tsv"
-    proc = run_station(host.pty, log_path, duration=1)
-    stdout, stderr = proc.communicate(timeout=120)
+    for attempt in range(5):
+        host = fw_host()
+        log_path = tmp_path / f"run{attempt}.tsv"
+        proc = run_station(host.pty, log_path, duration=1)
+        stdout, stderr = proc.communicate(timeout=120)
+        if proc.returncode == 0 or not _held_up(log_path):
+            break
+        host.stop()
     assert proc.returncode == 0, f"station step failed:\n{stdout}\n{stderr}"
     host.stop()
 
@@ -158,7 +184,7 @@ def test_step_run_in_the_loop(fw_host, tmp_path):
 
     # What the station logged as applied/reported is what the firmware applied/reported.
     v_applied = log["v_applied"].astype(np.int64)
-    status = log["status"].astype(np.int64)
+    status = log["status"].astype(np.int64) & ~SKIPPED  # the device's bits (SKIPPED is the station's own)
     assert np.array_equal(v_applied, tr["output"])
     assert np.array_equal(status, tr["status"])
     assert tr["output"][0] == 0 and not status[0] & LATE, "tick 0 outputs 0 and is never LATE"
@@ -183,8 +209,15 @@ def test_step_run_in_the_loop(fw_host, tmp_path):
 
 
 def test_watchdog_after_station_killed(fw_host, tmp_path):
-    host = fw_host()
-    proc = run_station(host.pty, tmp_path / "killed.tsv", duration=10)
+    for attempt in range(3):
+        host = fw_host()
+        out = tmp_path / f"killed{attempt}.tsv"
+        proc = run_station(host.pty, out, duration=10)
+        while proc.poll() is None and not (host.trace.exists() and _last_tick(host.trace) >= 300):
+            time.sleep(0.05)
+        if proc.poll() is None or not _held_up(out):
+            break
+        host.stop()
     deadline = time.monotonic() + 60
     try:
         while True:  # let the run get going (a held position needs a nonzero command)
@@ -215,11 +248,13 @@ def test_watchdog_after_station_killed(fw_host, tmp_path):
 
     miss = np.arange(k_last + 1, k_last + WATCHDOG_TICKS)  # misses 1 .. watchdog_ticks-1: hold
     assert np.all(out[miss] == out[k_last]) and np.all(en[miss] == 1)
-    assert np.all(st[miss] == LATE)
+    # (a command the station wrote before it died may reach the device late on a busy machine:
+    # STALE beside LATE, ignored; the hold and the watchdog are what is tested)
+    assert np.all(st[miss] & (LATE | WATCHDOG) == LATE)
     trip = np.arange(k_last + WATCHDOG_TICKS, len(ticks))  # from the watchdog_ticks-th miss on: 0
     assert np.all(out[trip] == 0), "output must be 0 from the watchdog_ticks-th miss on"
     assert np.all(en[trip] == 0), "amplifier disabled while WATCHDOG"
-    assert np.all(st[trip] == LATE | WATCHDOG)
+    assert np.all(st[trip] & (LATE | WATCHDOG) == LATE | WATCHDOG)
     first_zero = k_last + WATCHDOG_TICKS
     assert first_zero - k_kill <= WATCHDOG_TICKS, (
         f"output reached 0 {first_zero - k_kill} ticks after the kill (watchdog_ticks {WATCHDOG_TICKS})")

@@ -9,6 +9,7 @@ import pytest
 
 from station.errors import StationError
 from station.link import LinkLimits, open_session, sim_url
+from tests.scripted_device import MemoryPort
 
 
 def test_missing_port_names_it():
@@ -97,32 +98,11 @@ def test_v1_lost_first_samples_count_as_dropped():
     from station.link import V1Session
     from station.protocol import v1
 
-    class Port:
-        """Answers START with ``data`` (the device's samples), like a device would."""
-
-        def __init__(self, data):
-            self.data = bytearray()
-            self.answer = bytes(data)
-
-        def write(self, data):
-            if any(isinstance(m, v1.Start) for m in v1.Decoder().feed(data)):
-                self.data += self.answer
-            return len(data)
-
-        def reset_input_buffer(self):
-            self.data.clear()
-
-        def read(self, size=1):
-            out = bytes(self.data[:size])
-            del self.data[:size]
-            return out
-
-        @property
-        def in_waiting(self):
-            return len(self.data)
-
     frames = b"".join(v1.encode(v1.Sample(seq, 0, 0, 0, 0)) for seq in (2, 3, 5))
-    session = V1Session(Port(frames), "fake://", LinkLimits(timeout=0.01))
+    # the port answers START with the device's samples, like a device would
+    port = MemoryPort(on_write=lambda data: frames if any(isinstance(m, v1.Start) for m in v1.Decoder().feed(data))
+                      else b"")
+    session = V1Session(port, "fake://", LinkLimits(timeout=0.01))
     session.start(10)
     assert [session.read_sample()[0] for _ in range(3)] == [2, 3, 5]
     assert session.dropped == 3  # 0, 1 and 4

@@ -25,7 +25,7 @@ class ScriptedSession:
         self.k = 0
 
     def counters(self):
-        return {"late": 0, "late_seen": 0, "dropped": 0, "stale": 0, "duplicates": 0, "rx_errors": 0,
+        return {"late": 0, "late_seen": 0, "skipped": 0, "dropped": 0, "stale": 0, "duplicates": 0, "rx_errors": 0,
                 "watchdog_trips": 0}
 
     def start(self, n_ticks):
@@ -40,12 +40,18 @@ class ScriptedSession:
         self.k += 1
         return s
 
+    def poll_sample(self):
+        return None  # one sample at a time: nothing is ever waiting
+
     def send_command(self, n, v):
         self.events.append(("command", n, v))
 
     def stop(self):
         self.events.append(("stop",))
         return None
+
+    def unread_samples(self):
+        return []
 
 
 class ListWriter:

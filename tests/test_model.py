@@ -19,11 +19,16 @@ def test_builtin_tmm_fit_is_the_nominal_four_element_model():
 
 
 def test_vocabulary_matches_design():
-    named = {"coulomb_friction", "deadzone", "saturation", "delay", "backlash", "beam_damping", "accel_gain"}
+    named = {"coulomb_friction", "deadzone", "saturation", "delay", "backlash", "beam_damping", "accel_gain",
+             "static_friction", "viscous_friction", "amp_offset"}
     params = {"mu", "EI", "drive_k", "drive_c", "clamp_k", "clamp_c", "J_base", "m_accel", "J_accel", "act_K",
               "act_p"}
-    assert set(EFFECTS) == named | {f"param:{p}" for p in params}
-    assert set(CANDIDATES) == named | {f"param:{p}" for p in params} and len(CANDIDATES) == 18
+    # stribeck_speed: a setting of static_friction in a model file, never a candidate cause
+    assert set(EFFECTS) == named | {f"param:{p}" for p in params} | {"stribeck_speed"}
+    assert set(CANDIDATES) == named | {f"param:{p}" for p in params} and len(CANDIDATES) == 21
+    assert EFFECTS["stribeck_speed"].neutral == 0.05 and EFFECTS["stribeck_speed"].unit == "rad/s"
+    assert EFFECTS["viscous_friction"].unit == "DAC counts per rad/s" and EFFECTS["amp_offset"].neutral == 0.0
+    assert EFFECTS["amp_offset"].lower < 0 < EFFECTS["amp_offset"].upper
     assert EFFECTS["saturation"].neutral == math.inf and EFFECTS["accel_gain"].neutral == 1.0
     assert EFFECTS["beam_damping"].neutral == pytest.approx(0.0054, abs=1e-4)  # DESIGN.md: tmm-fit 0.0054
     assert EFFECTS["backlash"].unit == "encoder counts" and EFFECTS["delay"].unit == "samples"
@@ -78,6 +83,9 @@ def test_neutral_value_removes_an_effect():
     ('[effects]\ndelay = 1.5\n', "delay"),
     ('[effects]\n"param:k_tau" = 2.0\n', "param:k_tau"),
     ('[effects]\naccel_gain = "x"\n', "accel_gain"),
+    ('[effects]\ncoulomb_friction = 8.0\nstatic_friction = 5.0\n', "static_friction"),
+    ('[effects]\nstribeck_speed = 0.0\n', "stribeck_speed"),
+    ('[effects]\namp_offset = -25.0\n', "amp_offset"),
     ('name = 3\n', "name"),
 ])
 def test_bad_file_is_one_line_naming_file_and_key(tmp_path, body, key):
@@ -121,3 +129,52 @@ def test_to_json_records_name_params_and_effects():
     j = load_model().with_effects({"backlash": 3.0}).to_json()
     assert j["name"] == "tmm-fit" and j["params"] == "tmm-fit" and j["effects"] == {"backlash": 3.0}
     assert j["parameters"]["drive_k"] == load_params().drive_k and j["n_elements"] == 4
+
+
+def test_new_effects_round_trip_through_toml_and_the_log_header(tmp_path):
+    fx = {"coulomb_friction": 6.0, "static_friction": 11.0, "stribeck_speed": 0.1, "viscous_friction": 2.5,
+          "amp_offset": -2.0}
+    m = load_model().with_effects(fx, name="rig-like")
+    m.save(tmp_path / "m.toml")
+    text = (tmp_path / "m.toml").read_text()
+    assert '"stribeck_speed" = 0.1' in text and '"amp_offset" = -2.0' in text
+    back = load_model(tmp_path / "m.toml")
+    assert back == m and back.effect_dict() == fx
+    assert m.to_json()["effects"] == fx  # what a simulated run's log header records
+    # the default Stribeck speed is no setting at all
+    assert m.with_effects({"stribeck_speed": 0.05}).effect("stribeck_speed") == 0.05
+    assert "stribeck_speed" not in m.with_effects({"stribeck_speed": 0.05}).effect_dict()
+
+
+def test_static_friction_below_coulomb_friction_is_one_line_naming_the_key():
+    with pytest.raises(StationError, match=r"^m: effect 'static_friction' = 5 below coulomb_friction = 8"):
+        check_effects({"coulomb_friction": 8.0, "static_friction": 5.0}, "m")
+    assert check_effects({"coulomb_friction": 8.0, "static_friction": 8.0})  # equal: plain Coulomb
+    assert check_effects({"static_friction": 8.0})  # no sliding level: v_c = 0
+    m = load_model().with_effects({"static_friction": 9.0})
+    with pytest.raises(StationError, match="static_friction"):
+        m.with_effects({"coulomb_friction": 10.0})
+
+
+def test_friction_levels():
+    from station.plant.effects import friction_levels
+
+    assert friction_levels({}) == (0.0, 0.0, 0.05)
+    assert friction_levels({"coulomb_friction": 4.0}) == (4.0, 4.0, 0.05)
+    assert friction_levels({"static_friction": 9.0, "stribeck_speed": 0.2}) == (0.0, 9.0, 0.2)
+
+
+def test_viscous_friction_adds_exactly_k_tau_b_to_the_motor_damping():
+    m = load_model()
+    p = m.with_effects({"viscous_friction": 3.0}).linear_params()
+    assert p.J_m == pytest.approx(m.params.J_m, rel=1e-12)
+    assert p.c_m == pytest.approx(m.params.c_m + m.params.k_tau * 3.0, rel=1e-12)
+    assert p.drive_c == m.params.drive_c and p.k_tau == m.params.k_tau
+    # beside a param ratio: the ratio first, then the friction on the scaled motor
+    q = m.with_effects({"viscous_friction": 3.0, "param:act_p": 2.0}).linear_params()
+    scaled = m.with_effects({"param:act_p": 2.0}).linear_params()
+    assert q.c_m == pytest.approx(scaled.c_m + m.params.k_tau * 3.0, rel=1e-12)
+    assert q.J_m == pytest.approx(scaled.J_m, rel=1e-12)
+    assert not m.with_effects({"viscous_friction": 3.0}).has_plant_effects
+    assert not m.with_effects({"amp_offset": 3.0, "stribeck_speed": 0.2}).has_plant_effects
+    assert m.with_effects({"static_friction": 3.0}).has_plant_effects

@@ -45,7 +45,7 @@ def test_loop_and_simulated_device_equal_simulate_for_a_model_with_effects(tmp_p
 
 
 def test_step_command_model_options_build_the_sim_url():
-    from station.experiment import sim_port
+    from station.runsetup import sim_port
 
     assert sim_port("sim://", None, None, None) == "sim://"
     assert sim_port("sim://", "rig.toml", 6, 3) == "sim://?model=rig.toml&elements=6&seed=3"

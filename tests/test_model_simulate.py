@@ -181,9 +181,8 @@ def test_object_without_step_and_reset_is_a_type_error(nominal):
         simulate(DiscretePlant(), lambda u, th, a: (u, u), np.zeros(10))
 
 
-def test_model_plant_steps_like_simulate(nominal):
-    model = nominal.with_effects({"coulomb_friction": 6.0, "backlash": 4.0, "saturation": 150.0, "deadzone": 3.0,
-                                  "delay": 1.0, "accel_gain": 0.8})
+def _assert_plant_steps_like_simulate(model):
+    """ModelPlant stepped tick by tick gives simulate()'s open-loop θ and a exactly."""
     v = np.round(_pulses())
     run = _open(model, v)
     plant = model.plant()
@@ -192,3 +191,166 @@ def test_model_plant_steps_like_simulate(nominal):
         rows.append(plant.outputs())
         plant.advance(x)
     np.testing.assert_array_equal(np.array(rows), np.column_stack([run["theta"], run["a"]]))
+
+
+def test_model_plant_steps_like_simulate(nominal):
+    _assert_plant_steps_like_simulate(nominal.with_effects({"coulomb_friction": 6.0, "backlash": 4.0,
+                                                            "saturation": 150.0, "deadzone": 3.0, "delay": 1.0,
+                                                            "accel_gain": 0.8}))
+
+
+# --- breakaway friction, viscous friction, amplifier offset (issue 17) -------------------
+
+BREAKAWAY = [{"static_friction": 30.0, "coulomb_friction": 9.0, "stribeck_speed": 0.02},
+             {"static_friction": 60.0, "stribeck_speed": 0.01},
+             {"static_friction": 12.0, "coulomb_friction": 4.0, "stribeck_speed": 0.2}]
+
+
+@pytest.mark.parametrize("effects", BREAKAWAY)
+@pytest.mark.parametrize("kind", ["p", "lead-accel", "open-loop"])
+def test_breakaway_friction_converges_as_the_sub_step_grid_is_refined(nominal, effects, kind):
+    c = make_controller(kind)
+    u = pulse_reference(100.0, N, 20, 50, return_tick=700) if kind == "open-loop" \
+        else step_reference(CASES[kind], N, at_tick=10)
+    model = nominal.with_effects(effects)
+    grids = (10, 20, 40, 320)
+    runs = {m: simulate(model, c, u, command="trunc", quantize=False, substeps=m)["theta"] for m in grids}
+    for m, m2 in zip(grids[:2], grids[1:3]):  # doubling the sub-steps moves θ by under a count
+        assert np.abs(runs[m] - runs[m2]).max() < 1.0, (m, m2)
+    assert np.abs(runs[10] - runs[320]).max() < 1.0
+    # and the breakaway level matters: plain Coulomb friction at the sliding level differs
+    sliding = nominal.with_effects({"coulomb_friction": effects.get("coulomb_friction", 0.0)})
+    plain = simulate(sliding, c, u, command="trunc", quantize=False, substeps=320)["theta"]
+    assert np.abs(runs[320] - plain).max() > 0.5
+
+
+@pytest.mark.parametrize("effects, start", [({"static_friction": 12.0, "coulomb_friction": 5.0}, 12.0),
+                                            ({"static_friction": 12.0}, 12.0),
+                                            ({"coulomb_friction": 5.0}, 5.0)])
+def test_a_slow_ramp_starts_the_motor_when_the_command_crosses_the_breakaway_level(nominal, effects, start):
+    v = 0.02 * np.arange(1000)  # 0 to 20 DAC counts in 2 s
+    theta = _open(nominal.with_effects(effects), v)["theta"]
+    k = int(np.argmax(np.abs(theta) > 1e-9))  # θ[k] is the first sample after a command moved it
+    assert v[k - 1] > start >= v[k - 2]
+    assert np.abs(theta[:k]).max() < 1e-12 and theta[k + 50] > 0.2
+
+
+@pytest.mark.parametrize("kind", ["p", "lead-accel", "open-loop"])
+def test_static_friction_at_the_coulomb_level_is_exactly_coulomb_friction(nominal, kind):
+    c = make_controller(kind)
+    u = pulse_reference(100.0, N, 20, 50, return_tick=700) if kind == "open-loop" \
+        else step_reference(CASES[kind], N, at_tick=10)
+    coulomb = simulate(nominal.with_effects({"coulomb_friction": 10.0}), c, u, command="trunc")
+    equal = simulate(nominal.with_effects({"coulomb_friction": 10.0, "static_friction": 10.0,
+                                           "stribeck_speed": 0.02}), c, u, command="trunc")
+    for key in coulomb.keys():
+        np.testing.assert_array_equal(equal[key], coulomb[key], err_msg=key)
+
+
+@pytest.mark.parametrize("b", [1.0, 5.0, 20.0])
+def test_viscous_friction_shortens_the_travel_after_a_pulse_by_c_m_over_c_m_plus_k_tau_b(nominal, b):
+    # a torque pulse's impulse is all taken by the damping to ground, the motor's: the hub
+    # comes to rest at H·k_tau·Σv·dt / (c_m + k_tau·b)
+    p = nominal.params
+    v = np.zeros(10000)
+    v[20:70] = 100.0
+    free = _open(nominal, v)["theta"][-1]
+    damped = _open(nominal.with_effects({"viscous_friction": b}), v)["theta"][-1]
+    assert damped / free == pytest.approx(p.c_m / (p.c_m + p.k_tau * b), rel=1e-5)
+    assert damped == pytest.approx(p.H * p.k_tau * 100.0 * 50 * 0.002 / (p.c_m + p.k_tau * b), rel=1e-5)
+
+
+@pytest.mark.parametrize("o", [3.0, -1.5])
+def test_amp_offset_drives_the_free_motor_at_h_o_num_over_act_p(nominal, o):
+    p = nominal.params
+    theta = _open(nominal.with_effects({"amp_offset": o}), np.zeros(10000))["theta"]
+    rate = (theta[9999] - theta[5000]) / (4999 * 0.002)  # after the start's slow transient
+    assert rate == pytest.approx(p.H * o * p.act_num / p.act_p, rel=1e-6)
+
+
+@pytest.mark.parametrize("kp, o", [(2.0, 4.0), (1.0, -3.0)])
+def test_a_p_loop_rests_past_its_target_by_the_offset_over_kp(nominal, kp, o):
+    u = step_reference(50.0, 10000, at_tick=10)
+    run = simulate(nominal.with_effects({"amp_offset": o}), make_controller("p", kp=kp), u, quantize=False)
+    assert run["theta"][-1] == pytest.approx(50.0 + o / kp, abs=1e-6)
+
+
+def test_amp_offset_with_friction_may_stick_the_p_loop_short(nominal):
+    # at rest the P loop's torque kp·e + o only has to stay below the breakaway level
+    u = step_reference(50.0, 2000, at_tick=10)
+    run = simulate(nominal.with_effects({"amp_offset": 4.0, "static_friction": 12.0, "coulomb_friction": 6.0}),
+                   make_controller("p"), u, quantize=False)
+    e = 50.0 - run["theta"][-1]
+    assert abs(run["theta"][-1] - 52.0) > 1.0  # not where the loop without friction rests
+    assert abs(2.0 * e + 4.0) <= 12.0  # the stuck motor's torque is within the breakaway level
+
+
+def test_amplifier_order_offset_saturation_deadzone_delay(nominal):
+    v = _pulses()
+    o, sat, w, d = 7.0, 90.0, 10.0, 3
+
+    def shape(x):  # DESIGN.md: quantization, offset, saturation, dead-zone
+        x = np.clip(np.trunc(x) + o, -sat, sat)
+        return np.where(np.abs(x) > w, x - w * np.sign(x), 0.0)
+
+    hand = shape(v)
+    hand = np.concatenate([np.full(d, shape(np.zeros(1))[0]), hand[:-d]])  # before the run the device sent 0
+    want = _open(nominal, hand)
+    model = nominal.with_effects({"amp_offset": o, "saturation": sat, "deadzone": w, "delay": d})
+    got = simulate(model, None, np.zeros(v.size), alignment=0, v_open=v, quantize=False, command="trunc")
+    np.testing.assert_allclose(got["theta"], want["theta"], rtol=0, atol=1e-9)
+    np.testing.assert_allclose(got["a"], want["a"], rtol=0, atol=1e-9)
+    assert hand[25] == 80.0 and hand[0] == 0.0  # 100 + 7 clamped at 90 less the dead-zone; 7 - 10 -> 0
+
+
+NEW_EFFECTS = {"static_friction": 12.0, "coulomb_friction": 5.0, "stribeck_speed": 0.1, "viscous_friction": 3.0,
+               "amp_offset": -3.0, "delay": 2.0}
+
+
+def test_model_plant_steps_like_simulate_with_the_new_effects(nominal):
+    _assert_plant_steps_like_simulate(nominal.with_effects(NEW_EFFECTS))
+    # the delay line holds what the amplifier made of the device's 0 before the run: the offset
+    plant = nominal.with_effects({"amp_offset": -3.0, "delay": 2.0}).plant()
+    plant.advance(100.0)
+    plant.reset()
+    assert plant.outputs() == (0.0, 0.0)
+    for _ in range(3):
+        plant.advance(0.0)
+    assert plant.outputs()[0] < 0.0
+
+
+def test_custom_controller_runs_in_python_with_the_new_effects(nominal):
+    model = nominal.with_effects(NEW_EFFECTS)
+    c, u = make_controller("lead-accel"), step_reference(200.0, N, at_tick=10)
+    compiled = simulate(model, c, u, command="round")
+    python = simulate(model, _Wrapped(c), u, command="round")
+    for key in ("theta", "a"):
+        np.testing.assert_array_equal(python[key], compiled[key], err_msg=key)
+
+
+@pytest.mark.parametrize("protocol", ["v1", "legacy"])
+@pytest.mark.parametrize("kind", ["p", "lead-accel", "open-loop"])
+def test_station_step_on_the_simulated_rig_equals_simulate_with_the_new_effects(tmp_path, nominal, kind, protocol):
+    """sim://?model=FILE, noise-free: the logged θ and a are simulate()'s, sample for sample."""
+    from station.experiment import run_step
+    from station.runlog import read_log
+
+    model = nominal.with_effects(NEW_EFFECTS, name="new-effects")
+    path = tmp_path / "new.toml"
+    model.save(path)
+    log_path = tmp_path / "run.tsv"
+    rep = run_step(port=f"sim://?noise=0&model={path}", protocol=protocol, controller=kind,
+                   amplitude=60.0 if kind != "lead-accel" else 200.0, step_tick=10, duration=1.0,
+                   out=log_path, lean=False, timeout=5.0)  # lockstep: a busy machine must not time it out
+    assert rep.result.ok, rep.result.message
+    log = read_log(log_path)
+    d = log.data
+    command = "round" if protocol == "v1" else "trunc"
+    if kind == "open-loop":
+        run = simulate(model, None, d["u"], alignment=1, v_open=d["v"], command=command)
+    else:
+        run = simulate(model, make_controller(kind), d["u"], alignment=1, command=command)
+        np.testing.assert_allclose(run["v"], d["v"], rtol=0, atol=1e-6)
+    np.testing.assert_array_equal(run["theta"], d["theta"])
+    np.testing.assert_array_equal(run["a"], d["a"])
+    assert log.meta["plant"]["model"]["effects"] == NEW_EFFECTS

@@ -7,6 +7,7 @@ import pytest
 
 from station.control import make_controller, step_reference
 from station.plant import DiscretePlant, simulate
+from station.plant.kernel import KernelEffects
 import importlib
 
 simulate_module = importlib.import_module("station.plant.simulate")
@@ -84,7 +85,10 @@ def test_starts_from_current_state_and_leaves_it():
 def test_plain_python_kernel_matches_compiled():
     # numba is a dependency: the kernel must be compiled (a plain _kernel = _loop would make
     # this test compare the loop with itself); its own Python source must give the same run
-    assert hasattr(simulate_module._kernel, "py_func"), "the sample loop is not numba-compiled"
+    from station.plant import kernel
+
+    kernel._compile()  # numba is imported on first use (start-up time), then the loop is compiled
+    assert hasattr(kernel._compiled_loop, "py_func"), "the sample loop is not numba-compiled"
     plant = DiscretePlant(n_elements=2)
     controller = make_controller("lead-accel")
     u = step_reference(200.0, 200, at_tick=10)
@@ -95,8 +99,8 @@ def test_plain_python_kernel_matches_compiled():
     args = (lam, bm, np.zeros(n, complex), np.ascontiguousarray(cm), np.zeros((4, n), complex), 0.0, 0.0, 0,
             np.zeros(n, complex), u, np.zeros(1), False, True,
             gnum, gden, anum, aden, True, 200.0, 1, True, 1,  # command quantization: round
-            np.inf, 0.0, 0, 1.0, 0.0, 0.0, 0.0, 0.0)  # no effects
-    plain = simulate_module._kernel.py_func(*args)
+            *KernelEffects())  # no effects
+    plain = kernel._compiled_loop.py_func(*args)
     compiled = simulate_module._kernel(*args)
     for x, y in zip(plain, compiled):
         np.testing.assert_allclose(x, y, rtol=1e-12, atol=1e-12)
@@ -121,3 +125,21 @@ def test_simulate_returns_a_named_result_that_unpacks_and_exports():
     assert list(df.columns) == ["t", "u", "v", "theta", "a", "theta_d_hat"] and len(df) == 200
     with pytest.raises(KeyError):
         run["nope"]
+
+
+def test_the_simulated_rig_steps_in_plain_python_to_the_same_bits():
+    # the device's plant of a small linear model steps in plain Python (no compiler at start-up);
+    # the compiled functions are the independent check, sample for sample, effects included
+    from station.plant.kernel import ModelPlant
+    from station.plant.model import load_model
+
+    rng = np.random.default_rng(5)
+    commands = np.round(rng.uniform(-220.0, 220.0, 1500))
+    for name in ("tmm-fit", "rig"):
+        model = load_model(name)
+        plain, compiled = ModelPlant(model, compiled=False), ModelPlant(model, compiled=True)
+        for v in commands:
+            assert plain.outputs() == compiled.outputs()
+            plain.advance(v)
+            compiled.advance(v)
+    assert ModelPlant(load_model("tmm-fit"))._fns[2] is not ModelPlant(load_model("rig"))._fns[2]

@@ -87,7 +87,7 @@ def test_ports_lists_device_and_description(monkeypatch, capsys):
 
 def _stderr_of_run(tmp_path, *extra, terminal=True) -> bytes:
     """Run a 1 s realtime step with stderr on a pty (or a pipe) and return what it wrote there."""
-    # --max-lag 50: the subject is the progress line, and a virtual machine's scheduler can
+    # --max-lag 50 (ms): the subject is the progress line, and a virtual machine's scheduler can
     # stall any process for several ms (test_failsafe tests the lag bound)
     args = [sys.executable, "-m", "station", "step", "--port", "sim://?pacing=realtime", "--duration", "1",
             "--max-lag", "50",

@@ -56,7 +56,7 @@ def test_v1_lockstep_round_trip_and_summary():
             assert dec.rx_errors == 0
     finally:
         summary = stop(proc)
-    assert summary == {"ticks": 21, "late": 0, "watchdog_trips": 0, "rx_errors": 0, "tx_lost": 0}
+    assert summary == {"ticks": 21, "late": 0, "watchdog_trips": 0, "rx_errors": 0, "tx_lost": 0, "max_slip_ms": 0.0}
 
 
 def test_legacy_realtime_ticks_without_the_station():

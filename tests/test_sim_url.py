@@ -150,8 +150,13 @@ def test_realtime_ticks_about_500_per_second_and_answered_commands_are_on_time()
         clock = port._clock
         assert 300 <= len(samples) <= 700
         assert [s.seq for s in samples] == list(range(len(samples)))
-        late = sum(1 for s in samples if s.status & v1.LATE)
-        assert late < len(samples) / 4
+        # every answer that came in time acted at the next tick, every other tick held the last
+        # output or, from the 10th miss on, 0 (how many were in time measures the machine, not
+        # the device: not tested)
+        for prev, s in zip(samples[1:], samples[2:]):
+            held = 0 if s.status & v1.WATCHDOG else prev.v_applied
+            assert s.v_applied == (held if s.status & v1.LATE else 10), (prev, s)
+        assert any(not s.status & v1.LATE for s in samples[2:])
     assert not clock.is_alive()  # close() stops the clock thread
 
 

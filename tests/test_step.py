@@ -22,7 +22,10 @@ def test_p_step_shows_thesis_fem_overshoot_plus_one_sample_delay(tmp_path):
     assert result["metrics"]["overshoot_pct"] == pytest.approx(40.0, abs=2.0)
     assert result["timing"]["dropped"] == 0 and result["timing"]["late"] == 0
     assert set(result) >= {"log", "metrics", "timing"}
-    assert set(result["timing"]) == {"p50_us", "p99_us", "max_us", "late", "dropped"}
+    assert set(result["timing"]) == {"p50_us", "p99_us", "max_us", "late", "dropped", "skipped", "max_lag_ms",
+                                     "first_tick_s", "first_tick_cpu_s", "setup_s"}
+    assert result["timing"]["skipped"] == result["outcome"]["skipped"] == 0  # lockstep: nothing ever waits
+    assert 0 < result["timing"]["setup_s"] < result["timing"]["first_tick_s"]
 
 
 @pytest.mark.parametrize("protocol", PROTOCOLS)

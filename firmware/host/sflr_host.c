@@ -233,6 +233,11 @@ int main(int argc, char **argv)
     }
     pthread_attr_destroy(&attr);
     pthread_sigmask(SIG_SETMASK, &old, NULL);
+    /* The UART receive is an interrupt on the MCU too: this reader gets a real-time class
+     * just below the tick's when allowed, or on a busy host commands wait behind ordinary
+     * load (and the tick thread behind the lock this thread holds) and tick LATE. */
+    struct sched_param rx_prio = { .sched_priority = 49 };
+    (void)pthread_setschedparam(pthread_self(), SCHED_FIFO, &rx_prio);
 
     printf("%s\n", slave_path);
     fflush(stdout);

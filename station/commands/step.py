@@ -7,6 +7,7 @@ from pathlib import Path
 
 from station import DT
 from station import experiment as ex
+from station import runsetup
 from station.errors import StationError
 from station.inputs import exists
 from station.commands.options import (add_force_option, add_model_options, add_protocol_option, add_report_options,
@@ -68,12 +69,14 @@ def configure(parser) -> None:
     parser.add_argument("--soft-limit", type=number(1, 32767, unit="encoder counts"), default=ex.DEFAULT_SOFT_LIMIT,
                         metavar="COUNTS",
                         help="stop safely when |θ| exceeds this (default 2048 = two revolutions)")
-    parser.add_argument("--max-lag", type=number(0, 100, integer=True), default=LinkLimits.max_lag, metavar="TICKS",
-                        help="stop (reason lag) when more samples than this are already waiting when a command "
-                             "is due: never drive the motor from stale samples (default 2)")
+    parser.add_argument("--max-lag", type=number(0, 1000, unit="ms"), default=1000 * LinkLimits.max_lag,
+                        metavar="MS", help="how far the station may fall behind the device and catch up (skipped "
+                        "samples and those that arrive while it computes, × 2 ms); more stops the run (reason lag). A command is "
+                        "only ever computed from the newest sample (default 20 ms, the v1 watchdog's 10 ticks)")
     parser.add_argument("--max-miss", type=number(0, 99, integer=True), default=LinkLimits.max_miss, metavar="TICKS",
-                        help="stop (reason sequence) when more of the last 100 ticks than this were dropped, "
-                             "stale, duplicated or late (default 10)")
+                        help="stop when more of the last 100 ticks than this were dropped, stale or duplicated "
+                             "(reason sequence), or ran on a held command (late or skipped) beyond one catch-up of "
+                             "--max-lag (reason lag) (default 10)")
     parser.add_argument("--max-step", type=number(1.0, 10000.0), default=LinkLimits.max_step, metavar="COUNTS",
                         help="largest plausible encoder change per tick; more stops the run (reason sequence; "
                              "default 40)")
@@ -108,7 +111,7 @@ def check_args(args) -> None:
     if getattr(args, "_config_error", None):
         raise StationError(args._config_error)
     controller = str(args.controller)
-    builtin_ref = args.reference in ex.REFERENCES
+    builtin_ref = args.reference in runsetup.REFERENCES
     port = str(args.port)
     if "://" not in port and not exists(port):
         raise StationError(f"--port {port}: no such device; `station ports` lists this machine's serial ports "
@@ -130,7 +133,7 @@ def check_args(args) -> None:
     if args.step_time is None:
         args.step_time = ex.DEFAULT_STEP_TICK * DT
     if builtin_ref and args.reference != "swept-sine":
-        duration = ex.DEFAULT_DURATION if args.duration is None else args.duration
+        duration = runsetup.DEFAULT_DURATION if args.duration is None else args.duration
         if args.step_time >= duration:
             raise StationError(f"--step-time {args.step_time:g} s: the step must start before the run ends "
                                f"({duration:g} s)")
@@ -169,7 +172,7 @@ def inputs(args) -> list[Input]:
     args : argparse.Namespace
         ``--controller``, ``--reference``, ``--model`` and the settings file in use.
     """
-    return [Input("--controller", args.controller), Input("--reference", ex.reference_path(args.reference)),
+    return [Input("--controller", args.controller), Input("--reference", runsetup.reference_path(args.reference)),
             *model_inputs(args), Input("station.toml", getattr(args, "_config", None))]
 
 
@@ -228,7 +231,7 @@ def run(args) -> int:
         :func:`check_args`.
     """
     check_args(args)
-    chosen = ex.choose_controller(args.controller, args.kp, args.limit)  # before anything starts, once
+    chosen = runsetup.choose_controller(args.controller, args.kp, args.limit)  # before anything starts, once
     if chosen.note is not None:
         warn(chosen.note)
     if getattr(args, "_config", None):
@@ -247,10 +250,11 @@ def run(args) -> int:
                                  out=args.out, sinks=sinks,
                                  kp=args.kp, limit=args.limit, soft_limit=args.soft_limit,
                                  timeout=args.timeout, baudrate=args.baud, force=args.force,
-                                 limits=LinkLimits(timeout=args.timeout, max_lag=args.max_lag,
+                                 limits=LinkLimits(timeout=args.timeout, max_lag=args.max_lag / 1000,
                                                    max_miss=args.max_miss, max_step=args.max_step),
                                  out_dir=args.out_dir, model=args.model, n_elements=args.elements, seed=args.seed,
-                                 progress=not args.quiet and sys.stderr.isatty())
+                                 progress=not args.quiet and sys.stderr.isatty(),
+                                 announce=lambda line: print(line, flush=True))
     finally:
         failed = _close(sinks, keep=report is not None)  # no recording of a run that never started
     print(ex.format_report(report))

@@ -2,13 +2,15 @@
 
 DESIGN.md "Compensators": theta_d_hat = u - Ga(a) (u without Ga); e = theta_d_hat - theta;
 v = sat(Gth(e)) at +-limit; the Gth recursion remembers the saturated v (anti-windup),
-the Ga recursion its own output.
+the Ga recursion its own output. With a reference shaper (:mod:`station.control.shaper`,
+a compensator file's ``[shaper]``) the reference is shaped first: theta_d_hat = S(u) - Ga(a).
 """
 
 from __future__ import annotations
 
 from typing import Any
 
+from station.control.shaper import ReferenceShaper
 from station.control.tf import DiscreteTF
 
 
@@ -41,11 +43,13 @@ class Compensator:
     name : str
         Short name for reports ("p", "lead", "lead-accel", a file name).
     spec : dict
-        JSON-able description for log headers (kind, designs, z coefficients, limit).
+        JSON-able description for log headers (kind, designs, z coefficients, limit, shaper).
+    shaper : ReferenceShaper or None
+        Shapes the reference before anything else (None: u as given).
     """
 
     def __init__(self, gth: DiscreteTF, ga: DiscreteTF | None = None, limit: float | None = 200.0,
-                 name: str = "", spec: dict[str, Any] | None = None):
+                 name: str = "", spec: dict[str, Any] | None = None, shaper: ReferenceShaper | None = None):
         if limit is not None and not limit > 0:
             raise ValueError(f"limit must be positive or None, got {limit}")
         self.gth = gth
@@ -53,12 +57,15 @@ class Compensator:
         self.limit = None if limit is None else float(limit)
         self.name = name
         self.spec = dict(spec) if spec else {}
+        self.shaper = shaper
 
     def reset(self) -> None:
-        """Return both filters to rest."""
+        """Return the filters (and the shaper) to rest."""
         self.gth.reset()
         if self.ga is not None:
             self.ga.reset()
+        if self.shaper is not None:
+            self.shaper.reset()
 
     def step(self, u: float, theta: float, a: float) -> tuple[float, float]:
         """Compute one command.
@@ -77,8 +84,10 @@ class Compensator:
         v : float
             Command, DAC counts, within +-limit.
         theta_d_hat : float
-            The reference after accelerometer feedback, encoder counts.
+            The reference after the shaper and accelerometer feedback, encoder counts.
         """
+        if self.shaper is not None:
+            u = self.shaper.step(u)
         ga = self.ga
         theta_d_hat = u - ga.step(a) if ga is not None else u
         e = theta_d_hat - theta
@@ -88,7 +97,8 @@ class Compensator:
         return v, theta_d_hat
 
     def __repr__(self) -> str:
-        return f"Compensator(name={self.name!r}, gth={self.gth!r}, ga={self.ga!r}, limit={self.limit})"
+        shaped = "" if self.shaper is None else f", shaper={self.shaper!r}"
+        return f"Compensator(name={self.name!r}, gth={self.gth!r}, ga={self.ga!r}, limit={self.limit}{shaped})"
 
 
 class OpenLoop:
@@ -104,6 +114,7 @@ class OpenLoop:
 
     gth = None
     ga = None
+    shaper = None
 
     def __init__(self, limit: float | None = None, name: str = "open-loop"):
         if limit is not None and not limit > 0:

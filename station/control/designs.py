@@ -17,6 +17,9 @@ A compensator file is TOML::
     den = [1.0, 125.66370614359172]
     domain = "s"              # "s": Tustin at dt; "z": used as given (powers of z^-1)
     [ga]                      # optional, same fields
+    [shaper]                  # optional: reference shaper (station.control.shaper)
+    times = [0.0, 0.196]      # s, rounded to whole samples
+    amplitudes = [0.52, 0.48] # sum 1
 
 It is read bounded (:func:`station.inputs.load_toml`: a regular UTF-8 file of at most
 1 MB) and checked before anything runs: each filter of order at most :data:`MAX_ORDER`,
@@ -28,6 +31,7 @@ is refused with one line naming it, the line and the field.
 
 from __future__ import annotations
 
+import json
 import math
 import warnings
 from pathlib import Path
@@ -37,6 +41,7 @@ import numpy as np
 
 from station.control.compensator import Compensator, OpenLoop
 from station.control.contract import DAC_LIMIT
+from station.control.shaper import ShaperTimes, check_shaper, make_shaper, shaper_from_spec
 from station.control.tf import DiscreteTF, tustin
 from station.errors import StationError
 from station.inputs import TomlDoc, exists, load_toml
@@ -88,13 +93,17 @@ def _stage(num: Any, den: Any, domain: str, dt: float) -> tuple[DiscreteTF, dict
 
 
 def _build(kind: str, name: str, gth: tuple, ga: tuple | None, limit: float | None, dt: float,
-           extra: dict[str, Any] | None = None) -> Compensator:
+           extra: dict[str, Any] | None = None, shaper: ShaperTimes | None = None,
+           where: str = "[shaper]") -> Compensator:
     gth_tf, gth_desc = _stage(*gth, dt)
     ga_tf, ga_desc = _stage(*ga, dt) if ga is not None else (None, None)
+    shaping = None if shaper is None else make_shaper(shaper.times, shaper.amplitudes, dt, where)
     spec: dict[str, Any] = {"kind": kind, "name": name, "dt": dt}
     spec.update(extra or {})
     spec.update({"gth": gth_desc, "ga": ga_desc, "limit": None if limit is None else float(limit)})
-    return Compensator(gth_tf, ga_tf, limit=limit, name=name, spec=spec)
+    if shaping is not None:  # only then: a log without a shaper keeps the header it always had
+        spec["shaper"] = shaping.spec
+    return Compensator(gth_tf, ga_tf, limit=limit, name=name, spec=spec, shaper=shaping)
 
 
 def p_controller(kp: float = 2.0, limit: float | None = 200.0, dt: float = 0.002) -> Compensator:
@@ -132,7 +141,8 @@ def lead_controller(limit: float | None = 200.0, dt: float = 0.002, accel: bool 
 def controller_from_spec(spec: dict[str, Any]) -> Compensator | OpenLoop:
     """Rebuild a controller from the ``spec`` a log header holds (our format).
 
-    Uses the z coefficients as recorded (JSON floats round-trip exactly).
+    Uses the z coefficients as recorded (JSON floats round-trip exactly), and the
+    reference shaper's delays and amplitudes when the spec has a ``shaper``.
 
     Parameters
     ----------
@@ -162,7 +172,10 @@ def controller_from_spec(spec: dict[str, Any]) -> Compensator | OpenLoop:
             stages.append(tf)
         if stages[0] is None:
             raise KeyError("gth")
-        return Compensator(stages[0], stages[1], limit=limit, name=str(spec.get("name", kind)), spec=spec)
+        shaper = spec.get("shaper")
+        shaping = None if shaper is None else shaper_from_spec(shaper, float(spec.get("dt", 0.002)))
+        return Compensator(stages[0], stages[1], limit=limit, name=str(spec.get("name", kind)), spec=spec,
+                           shaper=shaping)
     except (KeyError, TypeError, ValueError, AttributeError) as exc:
         raise StationError(f"controller spec in log header: bad or missing field {str(exc)[:200]}") from None
 
@@ -277,6 +290,9 @@ class CompensatorFile(NamedTuple):
         The clamp the file sets, ±DAC counts in (0, 255] (None: the file sets none).
     sets_limit : bool
         The file has a ``limit``: then it wins over any other (:meth:`clamp`).
+    shaper : ShaperTimes or None
+        The ``[shaper]``'s times (s, as written; rounded to whole samples when the
+        compensator is built) and amplitudes (None without [shaper]).
     """
 
     path: Path
@@ -285,6 +301,7 @@ class CompensatorFile(NamedTuple):
     ga: Stage | None
     limit: float | None
     sets_limit: bool
+    shaper: ShaperTimes | None = None
 
     def clamp(self, limit: float | None) -> float | None:
         """The clamp the compensator runs with: the file's own ``limit`` wins over ``limit``.
@@ -313,13 +330,15 @@ class CompensatorFile(NamedTuple):
         Raises
         ------
         StationError
-            A design that cannot be discretized (naming the file and the table).
+            A design that cannot be discretized (naming the file and the table), or shaper
+            times that fall on the same sample at ``dt``.
         """
         for table, stage in (("gth", self.gth), ("ga", self.ga)):
             if stage is not None:
                 _check_discretizable(self.path, table, stage, dt)
         try:
-            comp = _build("file", self.name, self.gth, self.ga, self.clamp(limit), dt, {"file": str(self.path)})
+            comp = _build("file", self.name, self.gth, self.ga, self.clamp(limit), dt, {"file": str(self.path)},
+                          self.shaper, f"{self.path}: [shaper]")
         except ValueError as exc:
             raise StationError(f"{self.path}: {exc}", file=self.path) from None
         for table, tf in (("gth", comp.gth), ("ga", comp.ga)):
@@ -330,6 +349,25 @@ class CompensatorFile(NamedTuple):
                               f"> 1 after discretization at {dt:g} s): the compensator alone diverges",
                               RuntimeWarning, stacklevel=3)
         return comp
+
+    def to_toml(self) -> str:
+        """The file's text (TOML): what :func:`read_compensator_file` reads back to the same
+        stages, limit and shaper (floats written with ``repr``: they round-trip exactly)."""
+        lines = [f"name = {json.dumps(self.name)}"]
+        if self.sets_limit:
+            lines.append(f"limit = {'false' if self.limit is None else repr(float(self.limit))}")
+        for table, stage in (("gth", self.gth), ("ga", self.ga)):
+            if stage is not None:
+                num, den, domain = stage
+                lines += ["", f"[{table}]", f'domain = "{domain}"', f"num = {_floats(num)}", f"den = {_floats(den)}"]
+        if self.shaper is not None:
+            lines += ["", "[shaper]", f"times = {_floats(self.shaper.times)}  # s",
+                      f"amplitudes = {_floats(self.shaper.amplitudes)}"]
+        return "\n".join(lines) + "\n"
+
+
+def _floats(values) -> str:
+    return "[" + ", ".join(repr(float(x)) for x in values) + "]"
 
 
 def read_compensator_file(path: str | Path) -> CompensatorFile:
@@ -351,13 +389,14 @@ def read_compensator_file(path: str | Path) -> CompensatorFile:
         Naming the file, the line and the field: not a regular file, larger than 1 MB,
         not UTF-8, invalid or too deeply nested TOML, missing [gth], unknown field, bad
         coefficients, a filter of order above :data:`MAX_ORDER`, bad domain, improper
-        design, a limit that is not a number in (0, 255].
+        design, a limit that is not a number in (0, 255], a [shaper] whose times are not
+        increasing from >= 0 s or whose amplitudes do not sum to 1.
     """
     doc = load_toml(path, "compensator file")
     path, data = doc.path, doc.data
-    unknown = sorted(set(data) - {"gth", "ga", "limit", "name"})
+    unknown = sorted(set(data) - {"gth", "ga", "limit", "name", "shaper"})
     if unknown:
-        raise doc.error(unknown[0], "unknown field (expected gth, ga, limit, name)")
+        raise doc.error(unknown[0], "unknown field (expected gth, ga, limit, name, shaper)")
     if "gth" not in data:
         raise StationError(f"{path}: [gth]: missing (the compensator from e to v)", file=path, key="gth")
     gth = _read_stage(doc, "gth")
@@ -371,7 +410,27 @@ def read_compensator_file(path: str | Path) -> CompensatorFile:
     name = data.get("name", path.stem)
     if not isinstance(name, str) or not name:
         raise doc.error("name", f"expected a non-empty string, got {shown(name)}")
-    return CompensatorFile(path, name, gth, ga, limit, "limit" in data)
+    return CompensatorFile(path, name, gth, ga, limit, "limit" in data, _read_shaper(doc))
+
+
+def _read_shaper(doc) -> ShaperTimes | None:
+    """The file's [shaper] (None without one), checked (:func:`station.control.shaper.check_shaper`)."""
+    data = doc.data
+    if "shaper" not in data:
+        return None
+    table = data["shaper"]
+    line = doc.line_of("shaper", None)
+    where = f"{doc.path}: line {line}: [shaper]" if line else f"{doc.path}: [shaper]"
+    if not isinstance(table, dict):
+        raise StationError(f"{where}: expected a table with times and amplitudes", file=doc.path, line=line,
+                           key="shaper")
+    unknown = sorted(set(table) - {"times", "amplitudes"})
+    if unknown:
+        raise doc.error(unknown[0], "unknown field (expected times, amplitudes)", table="shaper")
+    for key in ("times", "amplitudes"):
+        if key not in table:
+            raise doc.error(key, "missing", table="shaper")
+    return check_shaper(table["times"], table["amplitudes"], where)
 
 
 def load_compensator_file(path: str | Path, dt: float = 0.002, limit: float | None = 200.0) -> Compensator:

@@ -41,12 +41,15 @@ def is_closed_loop(controller: Any) -> bool:
     return not (isinstance(spec, dict) and spec.get("kind") == "open-loop")
 
 
-def replay_commands(controller, u, theta, a, alignment: int) -> tuple[np.ndarray, np.ndarray]:
+def replay_commands(controller, u, theta, a, alignment: int, skipped=None) -> tuple[np.ndarray, np.ndarray]:
     """Run a controller over logged samples: v[k] = C(u[k], theta[k-d], a[k-d]).
 
     Before the first sample (k < d) there is nothing to compute from: v[k] = 0 and
     theta_d_hat[k] = u[k], and the controller is not stepped (as :func:`station.loop.run_loop`
-    and the device do: tick 0 outputs 0; the rig's logs start with v[0] = 0).
+    and the device do: tick 0 outputs 0; the rig's logs start with v[0] = 0). A sample the
+    station skipped (``skipped[k-d]``, our logs' :data:`station.runlog.SKIPPED` bit) was not
+    answered either: the controller is not stepped on it and v[k], theta_d_hat[k] are
+    those of the row before (the command the device held).
 
     Parameters
     ----------
@@ -58,6 +61,8 @@ def replay_commands(controller, u, theta, a, alignment: int) -> tuple[np.ndarray
         Logged encoder and accelerometer counts.
     alignment : int
         d >= 0, samples.
+    skipped : array_like of bool, shape (N,), optional
+        The samples the station did not answer (default: none).
 
     Returns
     -------
@@ -79,16 +84,27 @@ def replay_commands(controller, u, theta, a, alignment: int) -> tuple[np.ndarray
     a = np.asarray(a, dtype=float)
     v_out = np.zeros(n)
     hat_out = u.copy()  # k < d: theta_d_hat = u
+    rows = np.arange(min(d, n), n)
+    held = None
+    if skipped is not None:
+        skipped = np.asarray(skipped, dtype=bool)
+        held = skipped[rows - d]
+        rows = rows[~held] if held.any() else rows
     controller.reset()
     step = controller.step
     # in blocks: Python floats for speed, without a list per sample of a 100 MB log at once
-    for lo in range(min(d, n), n, _BLOCK):
-        hi = min(n, lo + _BLOCK)
-        uu, th, ac = u[lo:hi].tolist(), theta[lo - d:hi - d].tolist(), a[lo - d:hi - d].tolist()
+    for lo in range(0, rows.size, _BLOCK):
+        k = rows[lo:lo + _BLOCK]
+        uu, th, ac = u[k].tolist(), theta[k - d].tolist(), a[k - d].tolist()
         out = [step(x, y, z) for x, y, z in zip(uu, th, ac)]
-        block = np.array(out, dtype=float).reshape(hi - lo, 2)
-        v_out[lo:hi], hat_out[lo:hi] = block[:, 0], block[:, 1]
+        block = np.array(out, dtype=float).reshape(k.size, 2)
+        v_out[k], hat_out[k] = block[:, 0], block[:, 1]
     controller.reset()
+    if held is not None and held.any():  # skipped samples: the row before's command, held
+        source = np.arange(n)
+        source[min(d, n):][held] = 0
+        source = np.maximum.accumulate(source)
+        v_out, hat_out = v_out[source], hat_out[source]
     return v_out, hat_out
 
 
@@ -110,7 +126,7 @@ class AlignmentFit(NamedTuple):
     v_replayed: np.ndarray
 
 
-def detect_alignment(controller, u, theta, a, v, alignments=ALIGNMENTS) -> AlignmentFit:
+def detect_alignment(controller, u, theta, a, v, alignments=ALIGNMENTS, skipped=None) -> AlignmentFit:
     """The computational delay d with which ``controller`` best reproduces the logged
     commands ``v`` (DESIGN.md: headers do not say; the data do).
 
@@ -121,6 +137,8 @@ def detect_alignment(controller, u, theta, a, v, alignments=ALIGNMENTS) -> Align
         The log's reference, samples and commands.
     alignments : sequence of int
         The delays tried, samples (default :data:`ALIGNMENTS`).
+    skipped : array_like of bool, shape (N,), optional
+        The samples the station did not answer (:func:`replay_commands`).
 
     Returns
     -------
@@ -131,7 +149,7 @@ def detect_alignment(controller, u, theta, a, v, alignments=ALIGNMENTS) -> Align
     v = np.asarray(v, dtype=float)
     best = None
     for d in alignments:
-        v_hat, _ = replay_commands(controller, u, theta, a, d)
+        v_hat, _ = replay_commands(controller, u, theta, a, d, skipped)
         err = float(np.max(np.abs(v_hat - v)))
         if best is None or err < best.max_abs_dv:
             best = AlignmentFit(d, err, v_hat)

@@ -172,8 +172,6 @@ def tustin(num_s: Sequence[float], den_s: Sequence[float], dt: float = 0.002) ->
     ValueError
         If the design is improper, not finite, or ``dt`` is not positive.
     """
-    from scipy.signal import cont2discrete
-
     num_s = np.atleast_1d(np.asarray(num_s, dtype=float))
     den_s = np.atleast_1d(np.asarray(den_s, dtype=float))
     if not dt > 0:
@@ -187,10 +185,15 @@ def tustin(num_s: Sequence[float], den_s: Sequence[float], dt: float = 0.002) ->
         num_s = np.trim_zeros(num_s, "f")
         if num_s.size > den_s.size:
             raise ValueError("the continuous design is improper (numerator degree > denominator degree)")
-    num_z, den_z, _ = cont2discrete((num_s, den_s), dt, method="bilinear")
-    num_z = np.atleast_1d(np.squeeze(np.asarray(num_z, dtype=float)))
-    den_z = np.atleast_1d(np.asarray(den_z, dtype=float))
-    n = den_z.size
-    if num_z.size < n:
-        num_z = np.concatenate([np.zeros(n - num_z.size), num_z])
+    n = den_s.size - 1
+    num_s = np.concatenate([np.zeros(n + 1 - num_s.size), num_s])
+    # s = c (z − 1)/(z + 1), c = 2/dt, times (z + 1)^n: the power s^j becomes
+    # c^j (z − 1)^j (z + 1)^(n − j) (numpy's polynomials; scipy.signal takes a second to import)
+    num_z, den_z = np.zeros(n + 1), np.zeros(n + 1)
+    c = 2.0 / dt
+    for j in range(n + 1):
+        term = np.polynomial.polynomial.polypow([-1.0, 1.0], j)[::-1] * c**j
+        term = np.convolve(term, np.polynomial.polynomial.polypow([1.0, 1.0], n - j)[::-1])
+        num_z += num_s[n - j] * term
+        den_z += den_s[n - j] * term
     return num_z / den_z[0], den_z / den_z[0]

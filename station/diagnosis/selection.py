@@ -9,6 +9,19 @@ variances per sample, both measured from the lower of the current model's cost a
 cost that tiny perturbations of it reach by luck (:data:`NULL_PERTURBATIONS`); otherwise the
 answer is "none". Fits are grid bracketing then local refinement
 (:func:`station.analysis.fitting.fit`).
+
+Breakaway friction is one step: the static_friction candidate is fitted as its sliding
+level coulomb_friction plus a breakaway excess (:data:`EXCESS`), so it brings
+coulomb_friction along (v_s >= v_c by construction) and takes one of the
+:data:`MAX_EFFECTS` places (the rig's suspected amp_offset + breakaway friction +
+param:drive_c fits in three). It is chosen over plain Coulomb friction only when the
+excess pays for itself (:func:`accept` of the one over the other, :data:`NESTED`); once
+coulomb_friction is accepted, static_friction is tried in its place (an upgrade that takes
+no new place), and once static_friction is, coulomb_friction is no more a candidate; when
+a later effect joins it, static_friction is judged again against coulomb_friction in its
+place (a downgrade when the excess no longer pays). An accepted static_friction's
+stribeck_speed is fitted last with the accepted values fixed and kept only when it pays on
+the validation runs (:func:`_fit_shape`); else it stays the model's (default 0.05 rad/s).
 """
 
 from __future__ import annotations
@@ -17,6 +30,8 @@ import math
 from collections.abc import Callable, Mapping, Sequence
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
+
+import numpy as np
 
 from station.analysis.fitting import Axis, axis_for, fit
 from station.diagnosis.cost import Evaluator, pooled, relative_gain, rms_gain
@@ -37,6 +52,33 @@ MAX_EFFECTS = 3
 SECOND_STEP_CANDIDATES = 6
 """From the second forward step on, only this many of the best single effects are tried
 jointly with the accepted ones (the rest did not pay alone)."""
+
+EXCESS = Axis("static_friction-coulomb_friction", 0.0,
+              EFFECTS["static_friction"].upper - EFFECTS["coulomb_friction"].upper, "sqrt")
+"""The breakaway excess v_s - v_c, DAC counts: static_friction's second axis beside
+coulomb_friction's (module docstring)."""
+
+SLIDING_STARTS = (1.0, 0.7, 0.5)
+"""The sliding levels, as fractions of the start's coulomb_friction, a breakaway excess is
+bracketed at: a Coulomb friction fitted alone lands between v_c and v_s (on the rig's
+four thesis logs 16 counts, where breakaway lets it fall to 6-8: issue 17)."""
+
+ZOOM = 0.5
+"""A breakaway excess e is fitted again on a grid over (1 ± ZOOM)·e: where the P loop's
+motor sticks depends on v_s in steps, and the cost's valley at the right v_s is a few
+percent wide, narrower than the excess axis's grid."""
+
+SHAPE = "stribeck_speed"
+"""static_friction's shape setting: fitted last, beside an accepted static_friction only."""
+
+NESTED = {"static_friction": "coulomb_friction"}
+"""A candidate -> the simpler candidate it holds as a special case (no breakaway excess)."""
+
+MIN_EXCESS = 0.1
+"""static_friction is named only when its breakaway excess is at least this fraction of v_s
+(median over the folds): the cost of stick-slip is so jagged in v_c (a twentieth of a count
+moves it by 20 % near the noise floor) that a second friction axis finds lower points by
+luck, with an excess of a few percent, where plain Coulomb friction is hidden."""
 
 NULL_PERTURBATIONS = (("accel_gain", 0.996), ("accel_gain", 0.998), ("accel_gain", 1.002), ("accel_gain", 1.004),
                       ("param:act_K", 0.998), ("param:act_K", 1.002), ("param:EI", 0.998), ("param:EI", 1.002))
@@ -160,6 +202,40 @@ def effect_axes() -> dict[str, Axis]:
     return {name: axis_for(name, s.lower, s.upper, s.neutral) for name, s in EFFECTS.items()}
 
 
+def set_axes(names: Sequence[str], axes: Mapping[str, Axis]) -> list[Axis]:
+    """The axes a set of effects is fitted on, in order: each effect's own, static_friction
+    as coulomb_friction's and :data:`EXCESS` (module docstring).
+
+    Parameters
+    ----------
+    names : sequence of str
+        The effects fitted together (the one being added last).
+    axes : mapping of str to Axis
+        Every effect's axis (:func:`effect_axes`).
+    """
+    out = []
+    for n in names:
+        out += [axes["coulomb_friction"], EXCESS] if n == "static_friction" else [axes[n]]
+    return out
+
+
+def _as_effects(coords: Mapping[str, float]) -> dict:
+    """Axis coordinates -> effect values (v_s = v_c + excess)."""
+    values = dict(coords)
+    if EXCESS.name in values:
+        values["static_friction"] = values.get("coulomb_friction", 0.0) + values.pop(EXCESS.name)
+    return values
+
+
+def _as_coords(values: Mapping[str, float]) -> dict:
+    """Effect values -> axis coordinates (the excess of a static_friction)."""
+    coords = dict(values)
+    if "static_friction" in coords:
+        excess = coords.pop("static_friction") - coords.get("coulomb_friction", 0.0)
+        coords[EXCESS.name] = min(max(excess, EXCESS.lower), EXCESS.upper)
+    return coords
+
+
 def fit_set(ev: Evaluator, axes: Sequence[Axis], runs: Sequence[int], start: Mapping[str, float]) -> dict:
     """Effect values that minimise the cost over runs.
 
@@ -167,14 +243,44 @@ def fit_set(ev: Evaluator, axes: Sequence[Axis], runs: Sequence[int], start: Map
     ----------
     ev : Evaluator
     axes : sequence of Axis
-        The effects fitted together.
+        The effects fitted together (:func:`set_axes`).
     runs : sequence of int
         The runs fitted on.
     start : mapping of str to float
-        Starting values (others start at their grid's best point).
+        Starting effect values (others start at their grid's best point). A breakaway
+        excess without a starting sliding level starts from coulomb_friction fitted with
+        the others at their start.
     """
-    res = fit(lambda vals: ev.cost(vals, runs), axes, start=start)
-    return res.values
+    axes = list(axes)
+    start = dict(start)
+    names = [a.name for a in axes]
+    if EXCESS.name in names and "coulomb_friction" not in start:
+        sliding = [a for a in axes if a.name == "coulomb_friction"]
+        fixed = {a.name: start[a.name] for a in axes if a.name in start}
+        start.update(fit(lambda vals: ev.cost(vals, runs), sliding, fixed=fixed).values)
+    coords = _as_coords(start)
+    if EXCESS.name in names and EXCESS.name not in coords:
+        coords["coulomb_friction"] = _sliding_start(ev, axes, runs, coords)
+    res = fit(lambda vals: ev.cost(_as_effects(vals), runs), axes, start=coords)
+    if EXCESS.name in names:  # once more on a finer excess grid around the best (stick-slip's narrow valleys)
+        e = res.values[EXCESS.name]
+        zoom = Axis(EXCESS.name, max(EXCESS.lower, (1 - ZOOM) * e), min(EXCESS.upper, (1 + ZOOM) * e), "linear")
+        if zoom.upper > zoom.lower:
+            fine = fit(lambda vals: ev.cost(_as_effects(vals), runs),
+                       [a for a in axes if a.name != EXCESS.name] + [zoom], start=res.values)
+            if fine.cost < res.cost:
+                res = fine
+    return _as_effects(res.values)
+
+
+def _sliding_start(ev: Evaluator, axes: Sequence[Axis], runs: Sequence[int], coords: Mapping[str, float]) -> float:
+    """The sliding level a breakaway excess is bracketed at: the start's, or a fraction of it
+    (:data:`SLIDING_STARTS`), whichever reaches the lowest cost on the excess grid."""
+    base = {a.name: coords[a.name] for a in axes if a.name in coords}
+    v_c = base["coulomb_friction"]
+    best = min((ev.cost(_as_effects({**base, "coulomb_friction": f * v_c, EXCESS.name: float(e)}), runs), f)
+               for f in SLIDING_STARTS for e in EXCESS.grid())
+    return best[1] * v_c
 
 
 def trial(ev: Evaluator, folds: Sequence[Fold], names: tuple, axes: Mapping[str, Axis],
@@ -193,7 +299,7 @@ def trial(ev: Evaluator, folds: Sequence[Fold], names: tuple, axes: Mapping[str,
     """
     fold_values, val_sse, total = [], {}, 0.0
     for fold, start in zip(folds, starts):
-        values = fit_set(ev, [axes[n] for n in names], fold.fit, start)
+        values = fit_set(ev, set_axes(names, axes), fold.fit, start)
         fold_values.append(values)
         for i in fold.val:
             val_sse[i] = ev.sse(values, i)
@@ -221,9 +327,21 @@ def screen(ev: Evaluator, axes: Mapping[str, Axis], names: Sequence[str], fixed:
     c0 = ev.cost(fixed, runs)
     best = {}
     for n in names:
-        best[n] = min(ev.cost({**fixed, n: float(g)}, runs) for g in axes[n].grid())
+        best[n] = min(ev.cost(point, runs) for point in _screen_points(n, axes, fixed))
     keep = sorted((n for n in names if best[n] < c0), key=best.get)
     return keep[:SECOND_STEP_CANDIDATES]
+
+
+def _screen_points(name: str, axes: Mapping[str, Axis], fixed: Mapping[str, float]) -> list[dict]:
+    """The values :func:`screen` tries for one effect beside ``fixed``: its grid; for
+    static_friction the excess grid over an accepted sliding level, else its grid with
+    the sliding level at half of it."""
+    if name != "static_friction":
+        return [{**fixed, name: float(g)} for g in axes[name].grid()]
+    if "coulomb_friction" in fixed:
+        v_c = fixed["coulomb_friction"]
+        return [{**fixed, name: v_c + float(e)} for e in EXCESS.grid()]
+    return [{**fixed, "coulomb_friction": 0.5 * float(g), name: float(g)} for g in axes[name].grid()]
 
 
 def perturbed(name: str, values: Mapping[str, float], factor: float) -> float:
@@ -304,7 +422,8 @@ def fit_each_alone(search: Search, names: Sequence[str], nominal: Trial) -> Sing
 
     def alone(name):
         tr = trial(ev, folds, (name,), search.axes, [{}] * len(folds))
-        return tr, (tr.fold_values[whole] if whole is not None else fit_set(ev, [search.axes[name]], fit_runs, {}))
+        return tr, (tr.fold_values[whole] if whole is not None
+                    else fit_set(ev, set_axes((name,), search.axes), fit_runs, {}))
 
     rms_nom = pooled(ev, nominal.val_sse).rms_theta
     trials, values = {}, {}
@@ -318,26 +437,104 @@ def fit_each_alone(search: Search, names: Sequence[str], nominal: Trial) -> Sing
     return Singles(trials, values)
 
 
+def _set_with(accepted: Sequence[str], name: str) -> tuple:
+    """The set tried when ``name`` joins the accepted effects: added last, or in place of
+    the simpler effect it holds (static_friction in place of coulomb_friction)."""
+    simpler = NESTED.get(name)
+    return tuple(a for a in accepted if a != simpler) + (name,)
+
+
 def _joint_trials(search: Search, names: Sequence[str], accepted: list[str], current: Trial,
                   fixed: Mapping[str, float], step: int) -> dict[str, Trial]:
     """The screened candidates, each fitted per fold jointly with the accepted ones."""
     ev = search.ev
-    pool = screen(ev, search.axes, [n for n in names if n not in accepted], fixed, search.fit_runs)
+    held = {NESTED[a] for a in accepted if a in NESTED}  # coulomb_friction is in an accepted static_friction
+    full = len(accepted) >= MAX_EFFECTS  # then only an upgrade in place is left
+    open_ = [n for n in names if n not in accepted and n not in held
+             and (not full or NESTED.get(n) in accepted)]
+    pool = screen(ev, search.axes, open_, fixed, search.fit_runs)
+    # an upgrade in place is always tried: the screen holds the sliding level where it is
+    pool += [n for n in open_ if NESTED.get(n) in accepted and n not in pool]
     search.say(f"step {step + 1}: screening beside {' + '.join(accepted)} on all fit runs: {', '.join(pool)}")
     with ThreadPoolExecutor(search.workers) as ex:
-        futures = {n: ex.submit(trial, ev, search.folds, tuple(accepted) + (n,), search.axes, current.fold_values)
+        futures = {n: ex.submit(trial, ev, search.folds, _set_with(accepted, n), search.axes, current.fold_values)
                    for n in pool}
     trials = {n: f.result() for n, f in futures.items()}
     for n in pool:
-        search.say(f"step {step + 1}: {' + '.join(accepted + [n])}: validation cost gain "
+        search.say(f"step {step + 1}: {' + '.join(trials[n].names)}: validation cost gain "
                    f"{relative_gain(trials[n].val_weighted, current.val_weighted):.1f} % over {' + '.join(accepted)} "
                    f"({ev.simulations} simulations)")
     return trials
 
 
+def excess_fraction(tr: Trial) -> float:
+    """(v_s − v_c) / v_s of a trial's static_friction, the median over its folds (0 without one).
+
+    Parameters
+    ----------
+    tr : Trial
+    """
+    fr = [(v["static_friction"] - v.get("coulomb_friction", 0.0)) / v["static_friction"]
+          for v in tr.fold_values if v.get("static_friction", 0.0) > 0]
+    return float(np.median(fr)) if fr else 0.0
+
+
+def credible(trials: Mapping[str, Trial], terms: int) -> dict[str, Trial]:
+    """The trials without a candidate that does not pay for its extra parameter over the
+    simpler one it holds (:data:`NESTED`): a static_friction whose breakaway excess is
+    below :data:`MIN_EXCESS`, or which does not :func:`accept` over coulomb_friction tried
+    beside the same effects.
+
+    Parameters
+    ----------
+    trials : mapping of str to Trial
+        Candidate -> its trial in this step.
+    terms : int
+        Error terms of the validation runs.
+    """
+    out = dict(trials)
+    for name, tr in trials.items():
+        simpler = NESTED.get(name)
+        if simpler is None:
+            continue
+        if excess_fraction(tr) < MIN_EXCESS or (
+                simpler in trials and not accept(trials[simpler].val_weighted, tr.val_weighted, terms)):
+            del out[name]
+    return out
+
+
+def _refit_start(values: Mapping[str, float], current: Trial) -> dict:
+    """Where the joint refit on all fit runs starts: the accepted values, and for an effect
+    new to them the median of its fold values (for a new static_friction its sliding level
+    too: the breakaway excess lowers it)."""
+    start = {k: v for k, v in values.items() if k in current.fold_values[0]}
+    fresh = [k for k in current.fold_values[0] if k not in start]
+    if "static_friction" in fresh:
+        fresh.append("coulomb_friction")
+    for k in fresh:
+        start[k] = float(np.median([fv[k] for fv in current.fold_values]))
+    return start
+
+
+def _downgrade(search: Search, accepted: list[str], current: Trial, terms: int) -> tuple[list[str], Trial]:
+    """After an effect joined an accepted static_friction: the simpler effect in its place
+    when the breakaway excess no longer pays beside the others (:func:`credible`)."""
+    for name, simpler in NESTED.items():
+        if name not in accepted:
+            continue
+        names = tuple(simpler if n == name else n for n in current.names)
+        alt = trial(search.ev, search.folds, names, search.axes, current.fold_values)
+        if credible({name: current, simpler: alt}, terms).get(name) is None:
+            search.say(f"{simpler} in place of {name}: the breakaway excess no longer pays beside "
+                       f"{' + '.join(n for n in accepted if n != name)}")
+            return [simpler if n == name else n for n in accepted], alt
+    return accepted, current
+
+
 def forward_select(search: Search, names: Sequence[str], singles: Singles, nominal: Trial) -> Selection:
     """Add the best effect while it pays (:func:`accept`), at most :data:`MAX_EFFECTS`;
-    after each, refit the accepted effects jointly on all fit runs.
+    after each, refit the accepted effects jointly on all fit runs. static_friction may
+    replace an accepted coulomb_friction (one more step, no new place).
 
     Parameters
     ----------
@@ -355,11 +552,12 @@ def forward_select(search: Search, names: Sequence[str], singles: Singles, nomin
     current = nominal
     values: dict[str, float] = {}
     steps: list[Step] = []
-    for step in range(MAX_EFFECTS):
+    for step in range(MAX_EFFECTS + len(NESTED)):
         if step == 0:
             trials = {n: singles.trials[n] for n in names}
         else:
             trials = _joint_trials(search, names, accepted, current, values, step)
+        trials = credible(trials, terms)
         if not trials:
             break
         best = min(trials, key=lambda n: trials[n].val_weighted)
@@ -371,12 +569,42 @@ def forward_select(search: Search, names: Sequence[str], singles: Singles, nomin
         steps.append(Step(list(accepted), trials, best if ok else None, floor))
         if not ok:
             break
-        accepted.append(best)
+        simpler = NESTED.get(best)
+        if simpler in accepted:  # an upgrade in place
+            accepted[accepted.index(simpler)] = best
+        else:
+            accepted.append(best)
         current = trials[best]
+        if step > 0 and best not in NESTED:
+            accepted, current = _downgrade(search, accepted, current, terms)
         if step == 0:
             values = dict(singles.values[best])
         else:
-            values = fit_set(ev, [search.axes[n] for n in accepted], search.fit_runs, values)
+            values = fit_set(ev, set_axes(current.names, search.axes), search.fit_runs, _refit_start(values, current))
         search.say(f"accepted {best} (step {step + 1}): "
                    + ", ".join(f"{n} = {format_value(v, EFFECTS[n].unit)}" for n, v in values.items()))
+    if "static_friction" in accepted:
+        current, values = _fit_shape(search, current, values, terms)
     return Selection(accepted, current, values, steps)
+
+
+def _fit_shape(search: Search, current: Trial, values: dict, terms: int) -> tuple[Trial, dict]:
+    """The Stribeck speed of an accepted static_friction, fitted alone with the accepted
+    values fixed (per fold, then on all fit runs) and kept only when it pays on the
+    validation runs (:func:`accept`); never a cause of its own."""
+    ev, folds, axis = search.ev, search.folds, search.axes[SHAPE]
+    fold_values, val_sse, total = [], {}, 0.0
+    for fold, fixed in zip(folds, current.fold_values):
+        fitted = fit(lambda vals: ev.cost(vals, fold.fit), [axis], fixed=fixed).values
+        fold_values.append(fitted)
+        for i in fold.val:
+            val_sse[i] = ev.sse(fitted, i)
+            total += ev.weighted(fitted, i)
+    shaped = Trial(current.names, fold_values, val_sse, total)
+    if not accept(current.val_weighted, shaped.val_weighted, terms):
+        search.say(f"{SHAPE}: left at the model's (a fitted one gains {relative_gain(total, current.val_weighted):.1f} %)")
+        return current, values
+    values = fit(lambda vals: ev.cost(vals, search.fit_runs), [axis], fixed=values).values
+    search.say(f"{SHAPE} = {format_value(values[SHAPE], EFFECTS[SHAPE].unit)} (validation cost gain "
+               f"{relative_gain(total, current.val_weighted):.1f} %)")
+    return shaped, values

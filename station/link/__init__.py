@@ -10,8 +10,10 @@ naming the port.
 Fail-safe (the link's half of it; :mod:`station.loop` has the rest): one wall-clock
 deadline per expected sample (pyserial's ``Timeout``), whatever arrives in between;
 modular v1 sequence arithmetic (duplicates, stale, dropped) with a miss budget per 100
-ticks; a plausibility bound on the encoder change per tick; the lag (samples already
-waiting when a command is due); the device's tick rate. Each ends the run by raising a
+ticks; a plausibility bound on the encoder change per tick; the catch-up (samples
+waiting are handed over in turn, all but the newest skipped) and the lag (how far the
+station fell behind, and the held ticks per 100), with samples that come in bursts named
+with their latency timer; the device's tick rate. Each ends the run by raising a
 :class:`LinkFault` whose ``reason`` is the outcome reason (DESIGN.md "Run outcome").
 
 Both sessions give the loop the same :class:`Sample` ``(n, theta, accel, v_applied,
@@ -21,8 +23,12 @@ not report it), status the v1 status bits (0 for legacy).
 
 What lives here:
 
-- :mod:`~station.link.port`: :func:`open_port`, :func:`sim_url` (pyserial; registers the
-  ``sim://`` handler package by name).
+- :mod:`~station.link.port`: :func:`open_port` (asks the OS for low-latency mode on a
+  serial device), :func:`sim_url` (pyserial; registers the ``sim://`` handler package by
+  name), :class:`PortInfo` / :func:`port_info` / :func:`latency_timer` (the adapter and
+  its latency timer).
+- :mod:`~station.link.bursts`: :class:`BurstMeter`, :class:`Burst`, :func:`burst_line`
+  (samples in bursts, and the line that names the fix).
 - :mod:`~station.link.faults`: :class:`LinkLimits` and the :class:`LinkFault` family,
   :class:`DeviceStopped`.
 - :mod:`~station.link.session`: :class:`Session`, the fail-safe supervisor (deadline,
@@ -42,14 +48,16 @@ from station.errors import StationError
 from station.link.faults import (MISS_WINDOW, POLL_S, RATE_FAST, RATE_SLOW, RATE_WINDOW_S, DeviceStopped,
                                  Interrupted, LagError, LinkFault, LinkLimits, LinkTimeout, RateError, SequenceError)
 from station.link.legacy import LegacySession
-from station.link.port import DEFAULT_BAUD, SIM_HANDLERS, open_port, sim_url
+from station.link.bursts import Burst, BurstMeter, burst_line
+from station.link.port import DEFAULT_BAUD, SIM_HANDLERS, PortInfo, latency_timer, open_port, port_info, sim_url
 from station.link.session import HANDSHAKE_TIMEOUT, ZERO_ACCEL_TICKS, Sample, Session, logger
 from station.link.v1 import FIRST_SEQ_WINDOW, V1Session
 
 __all__ = ["DEFAULT_BAUD", "FIRST_SEQ_WINDOW", "HANDSHAKE_TIMEOUT", "MISS_WINDOW", "POLL_S", "RATE_FAST", "RATE_SLOW",
-           "RATE_WINDOW_S", "SIM_HANDLERS", "ZERO_ACCEL_TICKS", "DeviceStopped", "Interrupted", "LagError",
-           "LegacySession", "LinkFault", "LinkLimits", "LinkTimeout", "RateError", "Sample", "SequenceError",
-           "Session", "V1Session", "logger", "open_port", "open_session", "sim_url"]
+           "RATE_WINDOW_S", "SIM_HANDLERS", "ZERO_ACCEL_TICKS", "Burst", "BurstMeter", "DeviceStopped", "Interrupted",
+           "LagError", "LegacySession", "LinkFault", "LinkLimits", "LinkTimeout", "PortInfo", "RateError", "Sample",
+           "SequenceError", "Session", "V1Session", "burst_line", "latency_timer", "logger", "open_port",
+           "open_session", "port_info", "sim_url"]
 
 _SESSIONS = {"v1": V1Session, "legacy": LegacySession}
 

@@ -31,12 +31,21 @@ class LinkLimits:
     timeout : float
         s: the next valid, new sample must arrive within this of the last one (of
         START for the first), whatever else arrives in between; else reason "timeout".
-    max_lag : int
-        Samples already waiting (port input buffer + decoded, unprocessed) when a
-        command is about to be written; above it, reason "lag".
+    max_lag : float
+        s: how far the station may fall behind the device and still catch up, in the
+        device's time: 2 ms for each sample it skips in a row or that arrives while it
+        computes the command. Above it, reason "lag". Default
+        20 ms: the v1 device's watchdog (10 ticks) would zero the output from the 10th
+        missed tick on; at the motor's top speed (about 2 encoder counts per ms at ±200
+        DAC counts) a command held that long moves the hub at most ~40 counts from where
+        a fresh one would have taken it (README "Safety").
     max_miss : int
-        Ticks among the last :data:`MISS_WINDOW` that were dropped, stale, duplicated
-        or LATE; above it, reason "sequence".
+        Two budgets over the last :data:`MISS_WINDOW` ticks: ticks dropped, stale or
+        duplicated (above it, reason "sequence"), and ticks that ran on a held command (v1
+        LATE, a skipped sample, a command written after the next sample had arrived, each
+        tick once) beyond one catch-up's worth (``max_lag`` / 2 ms: a stall the station may
+        catch up from must not spend the budget by itself); above it, reason "lag": the
+        station cannot keep up.
     max_step : float
         Largest plausible encoder change per tick, counts; above it (a byte slip, a
         corrupted sample), reason "sequence". Default: the rig's top motor speed
@@ -50,7 +59,7 @@ class LinkLimits:
     """
 
     timeout: float = 0.1
-    max_lag: int = 2
+    max_lag: float = 0.020
     max_miss: int = 10
     max_step: float = 40.0
     check_rate: bool = True
@@ -77,7 +86,9 @@ class SequenceError(LinkFault):
 
 
 class LagError(LinkFault):
-    """The station fell behind: more samples waiting than ``max_lag`` when a command was due."""
+    """The station fell behind the device and cannot catch up: behind by more than
+    ``max_lag``, or more held ticks than ``max_miss`` in the window (bursts of samples
+    included: the message names the latency timer then)."""
 
     reason = "lag"
 

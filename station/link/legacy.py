@@ -18,7 +18,8 @@ class LegacySession(Session):
     """The rig's original PSoC protocol (``shared/spec/protocol.md``, "legacy").
 
     The device cannot declare lockstep, so only the slow-rate check applies, and it
-    cannot report late commands: ``late`` counts what the station sees (``late_seen``).
+    cannot report late commands: ``late`` counts the held ticks the station sees (its
+    skipped samples and its commands written after the next sample had arrived).
 
     Parameters
     ----------
@@ -128,34 +129,40 @@ class LegacySession(Session):
         check_ticks(self.protocol, n_ticks)
         self._begin()
 
-    def read_sample(self) -> tuple:
-        """Block for the next tick record; see :meth:`V1Session.read_sample`.
+    def _next_pending(self) -> Sample | None:
+        """The next tick record among the pending ones (hot path), accepted; None when none.
 
         Raises
         ------
-        LinkTimeout
-            No record within the sample timeout.
         SequenceError
             n did not advance by one (a lost or torn record: the stream is out of step),
             or the encoder jumped implausibly (a byte slip whose n happened to match).
-        RateError, Interrupted, LinkFault
-            As for v1.
+        RateError, LagError
+            As :meth:`Session.read_sample`.
         """
-        pending = self._pending
-        while not pending:
-            self._check_wait("sample")
-            self._receive()
-        tick = pending.popleft()
+        if not self._pending:
+            return None
+        tick = self._pending.popleft()
         if tick.n != self._n + 1:
             raise SequenceError(f"legacy device {self.url}: tick number jumped from {self._n} to {tick.n}; "
                                 "stream out of step")
         self._accept(tick.n, tick.theta, 0)
         return Sample(tick.n, tick.theta, tick.accel - self.accel_offset, None, 0)
 
+    def _lenient(self, msgs: list) -> list[Sample]:
+        out = []
+        for tick in msgs:
+            if tick.n != self._n + 1:
+                break  # out of step: nothing after it can be trusted
+            self._n = tick.n
+            out.append(Sample(tick.n, tick.theta, tick.accel - self.accel_offset, None, 0))
+        return out
+
     def send_command(self, n: int, v: float) -> None:
         """Send '/' + v (truncated toward zero); n is implicit in this protocol.
 
-        Raises LagError first when more than ``max_lag`` samples are already waiting.
+        Raises LagError first when the station is more than ``max_lag`` behind
+        (:meth:`Session._command`).
 
         Parameters
         ----------
@@ -167,8 +174,9 @@ class LegacySession(Session):
         self._command(n, legacy.command_bytes(v))
 
     def counters(self) -> dict:
-        """As :meth:`Session.counters`; ``late`` is what the station saw (the device cannot tell)."""
-        return {**super().counters(), "late": self.late_seen}
+        """As :meth:`Session.counters`; ``late`` counts the ticks the station knows ran on a held
+        command (skipped samples and late commands, each tick once): the device cannot tell."""
+        return {**super().counters(), "late": self.held}
 
     def stop(self) -> dict | None:
         """v = 0, then 's' (the old firmware has no watchdog: this must run on every exit path)."""

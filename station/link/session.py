@@ -3,10 +3,19 @@
 :class:`Session` owns the run's book-keeping and every stop of the wire: one wall-clock
 deadline per expected sample (pyserial's ``Timeout``), whatever arrives in between; the
 miss budget per :data:`~station.link.faults.MISS_WINDOW` ticks; a plausibility bound on
-the encoder change per tick; the device's tick rate; the lag (samples already waiting
-when a command is due: :meth:`Session._command`, the one place a command goes out); and
-every read and write of the port. The protocol sessions (:mod:`station.link.v1`,
+the encoder change per tick; the device's tick rate; the catch-up and the lag; and every
+read and write of the port. The protocol sessions (:mod:`station.link.v1`,
 :mod:`station.link.legacy`) decode their wire and call these.
+
+Catch up, don't give up: when the station was held up and several samples are waiting,
+:meth:`Session.poll_sample` hands the loop each one in turn (every sample is logged) and
+marks all but the newest *skipped*: no command is computed from them, the device holds
+its last output for those ticks (a v1 device reports them LATE). A command is computed
+only from the newest sample waiting. The run stops with reason "lag" only when the
+station cannot catch up: behind by more than ``--max-lag`` (:meth:`Session._command`,
+the one place a command goes out, and each skip), or more held ticks than
+``--max-miss`` in the window; when the samples come in bursts the message names the
+latency timer and its fix (:mod:`station.link.bursts`).
 """
 
 from __future__ import annotations
@@ -21,8 +30,10 @@ import serial
 from serial.serialutil import Timeout
 
 from station import DT
+from station.link.bursts import BurstMeter, burst_line
 from station.link.faults import (MISS_WINDOW, RATE_FAST, RATE_SLOW, RATE_WINDOW_S, Interrupted, LagError, LinkFault,
                                  LinkLimits, LinkTimeout, RateError, SequenceError)
+from station.link.port import latency_timer
 from station.protocol import v1
 
 logger = logging.getLogger("station.link")
@@ -30,6 +41,8 @@ logger = logging.getLogger("station.link")
 
 ZERO_ACCEL_TICKS = 16
 """Readings averaged for the accelerometer's zero (protocol v1, START bit1)."""
+IDLE_S = 0.25 * DT
+"""A read that blocked this long found nothing waiting: the station was idle, the link late."""
 HANDSHAKE_TIMEOUT = 1.0
 """Seconds to wait for the device's answer to HELLO / θ0 / STOPPED."""
 
@@ -64,8 +77,10 @@ class Session:
 
     Counters of the current run (restarted by ``start``): ``dropped``, ``stale``,
     ``duplicates``, ``late`` (device-reported), ``late_seen`` (commands written after
-    the next sample had already arrived), ``rx_errors``, ``watchdog_trips`` (WATCHDOG
-    status edges), ``max_lag_seen``.
+    the next sample had already arrived), ``skipped`` (samples not answered: a newer one
+    was waiting), ``held`` (ticks the station knows ran on a held command: skipped,
+    late_seen or LATE, each tick once), ``rx_errors``, ``watchdog_trips`` (WATCHDOG
+    status edges), ``max_lag_seen`` (the largest lag, s, see :meth:`_command`).
 
     ``stop_requested``: a callable polled while waiting for a sample; when it returns
     a reason ("sigint" / "sigterm") the wait ends with :class:`Interrupted`.
@@ -97,19 +112,29 @@ class Session:
         self._debug = logger.isEnabledFor(logging.DEBUG)  # checked once: the hot path pays one test
         self._pending: deque = deque()
         self._deadline = Timeout(limits.timeout)
+        self.bursts = BurstMeter()
         self._reset_run()
 
     def _reset_run(self) -> None:
         self.dropped = self.stale = self.duplicates = 0
         self.late = self.late_seen = self.rx_errors = self.watchdog_trips = 0
-        self.max_lag_seen = 0
-        self._n = -1  # tick number of the last sample
+        self.skipped = self.held = 0
+        self.max_lag_seen = 0.0
+        self._n = -1  # tick number of the last sample accepted
+        self._answered = -1  # tick number of the last sample answered (its command written)
+        self._ahead: Sample | None = None  # a newer sample taken by poll_sample, not yet handed over
+        self._n_handed = -1  # tick number of the sample in the loop's hand
+        self._stop_seen: list = []  # messages read while stopping (v1: until STOPPED)
         self._theta = None  # its encoder count (plausibility check)
-        self._misses: deque = deque()  # tick numbers of recent misses (MISS_WINDOW)
+        self._misses: deque = deque()  # ticks dropped, stale or duplicated in the window (MISS_WINDOW)
+        self._held_window: deque = deque()  # ticks that ran on a held command in the window
+        self._held_ticks: set = set()  # the same, to count each once
+        self._grace = False  # the deadline passed once with bytes waiting (the station was held up)
         self._watchdog = False
         self._arrivals: deque = deque()  # (arrival time, time spent waiting for it) over RATE_WINDOW_S
         self._waited = 0.0
         self._t_first = self._t_ready = None
+        self.bursts.clear()
 
     # -- the port: every read and write ------------------------------------------------
 
@@ -130,11 +155,40 @@ class Session:
             raise LinkFault(f"read from {self.url} failed: {exc}") from None
         return b""
 
-    def _receive(self) -> None:
-        """One :meth:`_read_some`, decoded onto the pending messages (the protocol's ``_decoder``)."""
+    def _receive(self) -> int:
+        """One :meth:`_read_some`, decoded onto the pending messages (the protocol's ``_decoder``);
+        returns how many messages it completed."""
         data = self._read_some()
         if data:
+            msgs = self._decoder.feed(data)
+            self._pending.extend(msgs)
+            return len(msgs)
+        return 0
+
+    def _receive_waiting(self) -> None:
+        """Decode whatever has already arrived, without blocking."""
+        try:
+            waiting = self.port.in_waiting
+            data = self.port.read(waiting) if waiting else b""
+        except (serial.SerialException, OSError) as exc:
+            raise LinkFault(f"read from {self.url} failed: {exc}") from None
+        if data:
+            if self._debug:
+                logger.debug("%s rx %s", self.url, data.hex(" "))
             self._pending.extend(self._decoder.feed(data))
+
+    def _wait(self, waiting_for: str) -> None:
+        """Nothing is pending: wait (at most :data:`~station.link.faults.POLL_S`) for more,
+        checking the deadline and stop signals. A chunk that ends a real wait (the read
+        blocked: nothing had been there) feeds the burst meter; one that was already
+        waiting (the station was busy) does not."""
+        self._check_wait(waiting_for)
+        t0 = time.perf_counter()
+        got = self._receive()
+        if got:
+            now = time.perf_counter()
+            if now - t0 > IDLE_S:
+                self.bursts.record(got, now)
 
     def _send(self, data: bytes, *what) -> None:
         """Write ``data``; a failed write is a :class:`LinkFault` naming the port.
@@ -163,6 +217,9 @@ class Session:
                 exc.reason = reason
                 raise exc
         if self._deadline.expired():
+            if not self._grace and self._bytes_waiting():
+                self._grace = True  # the station was held up past the deadline: first read what is here
+                return
             raise LinkTimeout(f"device {self.url} went silent: no {waiting_for} for {self._deadline.duration:g} s "
                               f"after tick {self._n}")
 
@@ -175,10 +232,11 @@ class Session:
                                 f"counts at tick {n} (more than --max-step {self.limits.max_step:g} per tick)")
         self._n, self._theta = n, theta
         self._deadline.restart(self.timeout)
+        self._grace = False
         if status:
             if status & v1.LATE:
                 self.late += 1
-                self._miss(n)
+                self._hold(n)
             wd = bool(status & v1.WATCHDOG)
             if wd and not self._watchdog:
                 self.watchdog_trips += 1
@@ -189,7 +247,8 @@ class Session:
             self._check_rate()
 
     def _miss(self, n: int, count: int = 1) -> None:
-        """Count ``count`` missed ticks at tick n; raise when the window holds too many."""
+        """Count ``count`` ticks dropped, stale or duplicated at tick n; more than ``max_miss``
+        in the window: :class:`SequenceError`."""
         limit = self.limits.max_miss
         misses = self._misses
         misses.extend([n] * min(count, limit + 1))
@@ -197,8 +256,42 @@ class Session:
             misses.popleft()
         if len(misses) > limit:
             raise SequenceError(f"{self.url}: more than --max-miss {limit} of the last {MISS_WINDOW} ticks were "
-                                f"dropped, stale, duplicated or late at tick {n} (dropped {self.dropped}, "
-                                f"stale {self.stale}, duplicates {self.duplicates}, late {self.late})")
+                                f"dropped, stale or duplicated at tick {n} (dropped {self.dropped}, "
+                                f"stale {self.stale}, duplicates {self.duplicates})")
+
+    def _hold(self, k: int) -> None:
+        """Tick k ran on a held command (v1 LATE, a skipped sample, a late command), counted once
+        per tick whoever saw it first. The window may hold one catch-up's worth (``max_lag``
+        / 2 ms) and ``max_miss`` more; beyond that the station cannot keep up: :class:`LagError`."""
+        held = self._held_ticks
+        if k in held:
+            return
+        held.add(k)
+        self.held += 1
+        window = self._held_window
+        window.append(k)
+        while window and window[0] <= k - MISS_WINDOW:
+            held.discard(window.popleft())
+        catch_up = int(self.limits.max_lag / DT + 1e-9)
+        if len(window) > self.limits.max_miss + catch_up:
+            late = self.late if self.protocol == "v1" else self.held
+            what = (f"{len(window)} of the last {MISS_WINDOW} ticks ran on a held command, more than one catch-up "
+                    f"(--max-lag {1000 * self.limits.max_lag:g} ms: {catch_up} ticks) and --max-miss "
+                    f"{self.limits.max_miss} more (skipped {self.skipped}, late {late})")
+            if self.late > 2 * (self.skipped + self.late_seen):  # the device saw them late, the station did not
+                raise LagError(f"commands reach {self.url} late: {what} at tick {k}, though the station answered "
+                               f"every sample within {1000 * self.max_lag_seen:.1f} ms: the link or the device "
+                               f"is held up")
+            raise LagError(self._behind(k, what))
+
+    def _behind(self, n: int, what: str) -> str:
+        """The one line of a "lag" stop at tick n: the bursts and their fix when the link
+        delivers in bursts, else what the station could not keep up with."""
+        burst = self.bursts.burst()
+        if burst is not None:
+            return f"{burst_line(burst, self.url, latency_timer(self.url))}; stopped at tick {n}"
+        return (f"the station cannot keep up with {self.url}: {what} at tick {n}; it was held up "
+                f"(a busy CPU?); no command was computed from an older sample than the newest")
 
     def _check_rate(self) -> None:
         now = time.perf_counter()
@@ -227,40 +320,162 @@ class Session:
             raise RateError(f"device {self.url} ticks too fast: {count} samples in the last {RATE_WINDOW_S:g} s "
                             f"(nominal {RATE_WINDOW_S / DT:.0f}) at tick {self._n}")
 
-    # -- a command goes out: the lag -----------------------------------------------------
+    # -- catching up, and a command goes out: the lag ----------------------------------
 
-    def _samples_waiting(self) -> int:
-        """Samples received but not processed: decoded ones plus whole ones in the port's buffer."""
+    def _bytes_waiting(self) -> int:
         try:
-            return len(self._pending) + self.port.in_waiting // self.sample_bytes
+            return self.port.in_waiting
         except (serial.SerialException, OSError) as exc:
             raise LinkFault(f"{self.url}: {exc}") from None
 
-    def _check_lag(self, n: int) -> None:
-        """Lag and station-seen lateness, measured just before the command for sample n goes out."""
-        waiting = self._samples_waiting()
-        if waiting:
-            if not self.lockstep:
-                self.late_seen += 1  # the next sample is already here: this command is late
-            if waiting > self.max_lag_seen:
-                self.max_lag_seen = waiting
-            if waiting > self.limits.max_lag:
-                raise LagError(f"the station fell behind {self.url}: {waiting} samples waiting at tick {n} "
-                               f"(--max-lag {self.limits.max_lag}); no command computed from stale samples")
+    def _samples_waiting(self) -> int:
+        """Samples received but not processed: taken ahead, decoded, and whole ones in the port's buffer."""
+        return (self._ahead is not None) + len(self._pending) + self._bytes_waiting() // self.sample_bytes
+
+    def _next_pending(self):
+        """The next valid, new sample among the pending messages (accepted), or None when
+        they run out; the protocol sessions define it."""
+        raise NotImplementedError
+
+    def _hand(self, sample: Sample) -> Sample:
+        self._n_handed = sample.n
+        return sample
+
+    def _lenient(self, msgs: list) -> list[Sample]:
+        """The new samples among decoded messages, without any check that could raise (after a
+        stop); the protocol sessions define it."""
+        raise NotImplementedError
+
+    def read_sample(self) -> Sample:
+        """Block for the next valid, new sample (hot path); see the protocol session's
+        ``_next_pending`` for what is checked.
+
+        Returns
+        -------
+        Sample
+            ``(n, theta, accel, v_applied, status)``.
+
+        Raises
+        ------
+        LinkTimeout
+            No valid, new sample within the timeout of the last one, whatever arrived.
+        SequenceError
+            Too many misses in the window, or an implausible encoder jump (legacy: n did
+            not advance by one).
+        LagError
+            The station fell behind and cannot catch up.
+        RateError
+            The device ticks at the wrong rate.
+        Interrupted
+            A stop signal was recorded while waiting.
+        DeviceStopped
+            The device sent STOPPED (v1).
+        LinkFault
+            The port failed.
+        """
+        if self._ahead is not None:
+            sample, self._ahead = self._ahead, None
+            return self._hand(sample)
+        while True:
+            sample = self._next_pending()
+            if sample is not None:
+                return self._hand(sample)
+            self._wait("new valid sample")
+
+    def poll_sample(self) -> Sample | None:
+        """A newer sample than the one in hand if it has already arrived (never blocks), else None.
+
+        When one is returned, the sample in hand is *skipped*: it will not be answered
+        (counted in ``skipped``; its next tick runs on the held command, counted once in
+        the miss window), and the lag is checked: the samples skipped in a row plus those
+        still waiting must be within ``max_lag`` of the device's time. (A lockstep device
+        holds nothing: neither is checked.)
+
+        Returns
+        -------
+        Sample or None
+            As :meth:`read_sample`.
+
+        Raises
+        ------
+        LagError
+            Behind by more than ``max_lag``, or the miss budget is spent (the message names
+            the bursts and the latency timer when the samples come in bursts).
+        SequenceError, RateError, DeviceStopped, LinkFault
+            As :meth:`read_sample`, for the newer sample.
+        """
+        if self._ahead is None:
+            if not self._pending:
+                if self._bytes_waiting() < self.sample_bytes:
+                    return None
+                self._receive_waiting()
+            self._ahead = self._next_pending()
+            if self._ahead is None:
+                return None
+        skipped = self._n_handed
+        self.skipped += 1
+        if self.lockstep:  # a device that waits for each command holds nothing
+            sample, self._ahead = self._ahead, None
+            return self._hand(sample)
+        self._hold(skipped + 1)
+        behind = self._ahead.n + len(self._pending) + self._bytes_waiting() // self.sample_bytes - self._answered - 1
+        if behind * DT > self.max_lag_seen:
+            self.max_lag_seen = behind * DT
+        if behind * DT > self.limits.max_lag:
+            raise LagError(self._behind(skipped, f"{behind} samples ({1000 * behind * DT:.0f} ms of the device's "
+                                                 f"time) to catch up, more than --max-lag "
+                                                 f"{1000 * self.limits.max_lag:g} ms"))
+        sample, self._ahead = self._ahead, None
+        return self._hand(sample)
 
     def _command(self, n: int, data: bytes, *what) -> None:
-        """Write the command answering sample n (``data``, ``what`` as :meth:`_send`): the lag
-        is checked first (:class:`LagError`), and the rate check's clock restarts after it."""
-        self._check_lag(n)
+        """Write the command answering sample n (``data``, ``what`` as :meth:`_send`).
+
+        First the lag, in the device's time (its samples, 2 ms each: the OS does not say
+        when a byte arrived, and a lockstep device that waits for us is never behind): the
+        samples skipped since the last answer and those that arrived while this command
+        was computed; above ``max_lag`` a :class:`LagError` (nothing written). A sample
+        already waiting makes this command late (``late_seen``; its tick runs on the held
+        command). The rate check's clock restarts after the write.
+        """
+        if not self.lockstep:
+            waiting = self._samples_waiting()
+            lag = (n - self._answered - 1 + waiting) * DT
+            if lag > self.max_lag_seen:
+                self.max_lag_seen = lag
+            if lag > self.limits.max_lag:
+                raise LagError(self._behind(n, f"the command for it would go out {1000 * lag:.0f} ms of the "
+                                               f"device's time behind, more than --max-lag "
+                                               f"{1000 * self.limits.max_lag:g} ms"))
+            if waiting:
+                self.late_seen += 1  # the next sample is already here: this command is late
+                self._hold(n + 1)
         self._send(data, *what)
+        self._answered = n
         self._t_ready = time.perf_counter()
+
+    def unread_samples(self) -> list[Sample]:
+        """Samples that arrived but never reached the loop (taken ahead, decoded, waiting in
+        the port, or seen while stopping), in order; for the log after a stop. Never raises;
+        no check stops anything here (the run has ended), but only new samples are given."""
+        out = [] if self._ahead is None else [self._ahead]
+        self._ahead = None
+        try:
+            self._receive_waiting()
+        except LinkFault:
+            pass
+        out.extend(self._lenient(list(self._stop_seen) + list(self._pending)))
+        self._pending.clear()
+        self._stop_seen.clear()
+        return out
 
     # -- life cycle ----------------------------------------------------------------------
 
     def counters(self) -> dict:
         """The current run's counters (names of DESIGN.md "Run outcome")."""
-        return {"late": self.late, "late_seen": self.late_seen, "dropped": self.dropped, "stale": self.stale,
-                "duplicates": self.duplicates, "rx_errors": self.rx_errors, "watchdog_trips": self.watchdog_trips}
+        return {"late": self.late, "late_seen": self.late_seen, "skipped": self.skipped, "dropped": self.dropped,
+                "stale": self.stale, "duplicates": self.duplicates, "rx_errors": self.rx_errors,
+                "watchdog_trips": self.watchdog_trips}
 
     def close(self) -> None:
         """Close the port (idempotent)."""

@@ -94,69 +94,63 @@ class V1Session(Session):
         self._write(v1.Start(v1.START_RESET_ENCODER | v1.START_ZERO_ACCEL, n_ticks))
         self._deadline = Timeout(self.timeout + ZERO_ACCEL_TICKS * DT)
 
-    def read_sample(self) -> tuple:
-        """Block for the next valid, new SAMPLE (hot path).
+    def _next_pending(self) -> Sample | None:
+        """The next valid, new SAMPLE among the pending messages (hot path), or None.
 
-        Returns a :class:`Sample` ``(n, theta, accel, v_applied, status)``. Modular sequence arithmetic:
-        a repeated seq is a duplicate, a seq behind the last one is stale (both
-        discarded and counted), a gap of g counts g − 1 dropped.
-
-        Raises
-        ------
-        LinkTimeout
-            No valid, new sample within the timeout of the last one, whatever arrived.
-        SequenceError
-            Too many misses in the window, or an implausible encoder jump.
-        RateError
-            The device ticks at the wrong rate.
-        Interrupted
-            A stop signal was recorded while waiting.
-        DeviceStopped
-            The device sent STOPPED (n_ticks reached).
-        LinkFault
-            The port failed.
+        Modular sequence arithmetic: a repeated seq is a duplicate, a seq behind the last
+        one is stale (both discarded and counted), a gap of g counts g − 1 dropped; the
+        sample is then accepted (:meth:`Session._accept`: plausibility, LATE, rate).
+        STOPPED raises :class:`DeviceStopped` (n_ticks reached).
         """
         pending = self._pending
-        while True:
-            while pending:
-                msg = pending.popleft()
-                if type(msg) is v1.Sample:
-                    last = self._last_seq
-                    if last < 0:
-                        if msg.seq > FIRST_SEQ_WINDOW:
-                            self.stale += 1  # in flight from before START: this run counts from seq 0
-                            continue
-                        step = msg.seq + 1
-                        n = msg.seq
-                    else:
-                        step = (msg.seq - last) & 0xFFFF
-                        if step == 0:
-                            self.duplicates += 1
-                            self._miss(self._n)
-                            continue
-                        if step >= 0x8000:
-                            self.stale += 1
-                            self._miss(self._n)
-                            continue
-                        n = self._n + step
-                    if step > 1:
-                        self.dropped += step - 1
-                        self._miss(n, step - 1)
-                    self._accept(n, msg.theta, msg.status, step)
-                    self._last_seq = msg.seq
-                    self.rx_errors = self._decoder.rx_errors
-                    return Sample(n, msg.theta, msg.accel, msg.v_applied, msg.status)
-                if type(msg) is v1.Stopped:
-                    self.rx_errors = self._decoder.rx_errors
-                    raise DeviceStopped(f"device stopped (reason {msg.reason}) after {msg.ticks} ticks",
-                                        dataclasses.asdict(msg))
-            self._check_wait("new valid sample")
-            self._receive()
+        while pending:
+            msg = pending.popleft()
+            if type(msg) is v1.Sample:
+                last = self._last_seq
+                if last < 0:
+                    if msg.seq > FIRST_SEQ_WINDOW:
+                        self.stale += 1  # in flight from before START: this run counts from seq 0
+                        continue
+                    step = msg.seq + 1
+                    n = msg.seq
+                else:
+                    step = (msg.seq - last) & 0xFFFF
+                    if step == 0:
+                        self.duplicates += 1
+                        self._miss(self._n)
+                        continue
+                    if step >= 0x8000:
+                        self.stale += 1
+                        self._miss(self._n)
+                        continue
+                    n = self._n + step
+                if step > 1:
+                    self.dropped += step - 1
+                    self._miss(n, step - 1)
+                self._accept(n, msg.theta, msg.status, step)
+                self._last_seq = msg.seq
+                self.rx_errors = self._decoder.rx_errors
+                return Sample(n, msg.theta, msg.accel, msg.v_applied, msg.status)
+            if type(msg) is v1.Stopped:
+                self.rx_errors = self._decoder.rx_errors
+                raise DeviceStopped(f"device stopped (reason {msg.reason}) after {msg.ticks} ticks",
+                                    dataclasses.asdict(msg))
+        return None
+
+    def _lenient(self, msgs: list) -> list[Sample]:
+        out = []
+        for msg in msgs:
+            if type(msg) is v1.Sample and self._last_seq >= 0 and 0 < (step := (msg.seq - self._last_seq) & 0xFFFF) < 0x8000:
+                self._n += step
+                self._last_seq = msg.seq
+                out.append(Sample(self._n, msg.theta, msg.accel, msg.v_applied, msg.status))
+        return out
 
     def send_command(self, n: int, v: float) -> None:
         """Answer sample n with command v (DAC counts, rounded halves away from zero).
 
-        Raises LagError first when more than ``max_lag`` samples are already waiting.
+        Raises LagError first when the station is more than ``max_lag`` behind
+        (:meth:`Session._command`).
 
         Parameters
         ----------
@@ -169,7 +163,8 @@ class V1Session(Session):
         self._command(n, v1.encode(v1.Command(seq, v1.round_command(v))), "COMMAND seq %d v %r", seq, v)
 
     def stop(self) -> dict | None:
-        """Command 0 for the last sample, then STOP; wait for STOPPED. Returns its fields or None.
+        """Command 0 for the last sample, then STOP; wait for STOPPED. Returns its fields or None
+        (the samples that arrive meanwhile are kept for :meth:`Session.unread_samples`).
 
         STOP is sent even when the COMMAND could not be written (then the error is raised
         after it): STOP alone sets the device's output to 0.
@@ -187,4 +182,5 @@ class V1Session(Session):
         while (msg := self._next_message(deadline)) is not None:
             if isinstance(msg, v1.Stopped):
                 return dataclasses.asdict(msg)
+            self._stop_seen.append(msg)  # samples in flight: logged (unread_samples)
         return None

@@ -14,7 +14,7 @@ from station.errors import StationError
 from station.logged.controller import ControllerId, identify_controller
 from station.logged.simulate import ModelRun, compared_theta, simulate_log
 from station.logged.reference import Reference, classify_reference
-from station.runlog import RunLog, read_log
+from station.runlog import SKIPPED, RunLog, read_log
 
 REPRODUCED_TOLERANCE = 1e-6
 """max |v_replayed - v_logged| (DAC counts) under which a replay counts as reproducing the log."""
@@ -183,7 +183,17 @@ class LoggedRun:
             return None
         self.check_columns(self.replay_columns, f"replaying its controller ({self.controller.name})")
         d = self.data
-        return detect_alignment(self.controller, d["u"], d["theta"], d["a"], d["v"])
+        return detect_alignment(self.controller, d["u"], d["theta"], d["a"], d["v"], skipped=self.skipped)
+
+    @property
+    def skipped(self) -> np.ndarray | None:
+        """Rows whose sample the station did not answer (our logs' :data:`station.runlog.SKIPPED`
+        status bit; None for a log without a status column or without skips)."""
+        status = self.data.get("status")
+        if status is None or self.log.format != "station":
+            return None
+        mask = (np.nan_to_num(status).astype(np.int64) & SKIPPED) != 0
+        return mask if mask.any() else None
 
     @property
     def alignment(self) -> int | None:

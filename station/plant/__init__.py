@@ -16,7 +16,7 @@
 - `closed_loop`, `closed_loop_spectral_radius` (``stability``): small-signal closed-loop poles.
 
 Imports within: parameters <- fem <- modes, discrete <- modal <- kernel <- model <- simulate
-(effects uses modes). From the rest of the station it may import only
+(effects uses modes; kernel uses effects' friction levels). From the rest of the station it may import only
 :mod:`station.errors`, :mod:`station.rounding` and :mod:`station.control` (the
 compensator types and the controller contract, for `simulate`).
 """

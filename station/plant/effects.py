@@ -5,10 +5,20 @@ that do not depend on a model's internals (DAC counts, samples, encoder counts, 
 Where each acts:
 
 - "amplifier" (on the command, in this order after the device's command quantization):
-  saturation, deadzone, delay;
-- "plant" (inside the plant, integrated on a sub-step grid): coulomb_friction, backlash;
-- "linear" (rebuild the linear FEM part): beam_damping, param:NAME;
-- "output": accel_gain (on the accelerometer output, before its quantization).
+  amp_offset, saturation, deadzone, delay;
+- "plant" (inside the plant, integrated on a sub-step grid): coulomb_friction,
+  static_friction, backlash;
+- "linear" (rebuild the linear FEM part): viscous_friction, beam_damping, param:NAME;
+- "output": accel_gain (on the accelerometer output, before its quantization);
+- "setting": the shape of another effect, no effect alone: stribeck_speed (of
+  static_friction). It is a key of a model file's ``[effects]`` like the others, but never a
+  candidate cause; a diagnosis fits it only beside static_friction.
+
+Dry friction: ``coulomb_friction`` v_c is the sliding level and, alone, also the static
+level; ``static_friction`` v_s >= v_c is the breakaway level, and the sliding friction falls
+from v_s to v_c as exp(-(ω/ω_s)²) of the motor speed ω, ω_s = ``stribeck_speed`` (rad/s of
+the motor, default :data:`STRIBECK_SPEED`). A static_friction without coulomb_friction has
+v_c = 0. :func:`friction_levels` gives (v_c, v_s, ω_s) of a set of effects.
 """
 
 from __future__ import annotations
@@ -17,7 +27,10 @@ import math
 from collections.abc import Mapping
 from typing import NamedTuple
 
+import numpy as np
+
 from station.errors import StationError
+from station.plant.diskcache import cached_arrays
 from station.plant.modes import modal_summary
 from station.plant.parameters import load_params
 
@@ -35,7 +48,7 @@ class EffectSpec(NamedTuple):
         The value that means "no effect".
     lower, upper : float
         The range a fit may search (and a model file may hold, besides ``neutral``).
-    kind : {"amplifier", "plant", "linear", "output"}
+    kind : {"amplifier", "plant", "linear", "output", "setting"}
         Where it acts (module docstring).
     """
 
@@ -51,13 +64,19 @@ PARAM_NAMES = ("mu", "EI", "drive_k", "drive_c", "clamp_k", "clamp_c", "J_base",
                "act_K", "act_p")
 """Parameters a param:NAME ratio may scale (all of the table but beam_beta, L, k_tau, a_gain)."""
 
-AMPLIFIER_ORDER = ("saturation", "deadzone", "delay")
+AMPLIFIER_ORDER = ("amp_offset", "saturation", "deadzone", "delay")
 """DESIGN.md: after the device's command quantization, in this order."""
+
+STRIBECK_SPEED = 0.05
+"""Default Stribeck speed ω_s of static_friction, rad/s of the motor (DESIGN.md)."""
 
 
 def _nominal_beam_damping() -> float:
-    # tmm-fit's own first hub-held mode damping ratio (from the clamp damper alone)
-    return float(modal_summary(load_params("tmm-fit"), 4).antiresonance_damping[0])
+    # tmm-fit's own first hub-held mode damping ratio (from the clamp damper alone); cached
+    # on disk: an eigenvalue problem at import would cost every command scipy's start-up
+    params = load_params("tmm-fit")
+    return float(cached_arrays("beam-damping", tuple(vars(params).values()), lambda: {
+        "zeta": np.asarray(modal_summary(params, 4).antiresonance_damping[0])})["zeta"])
 
 
 PARAM_RATIO_RANGE = (0.1, 10.0)
@@ -73,6 +92,14 @@ EFFECTS: dict[str, EffectSpec] = {
     spec.name: spec
     for spec in (
         EffectSpec("coulomb_friction", "DAC counts", 0.0, 0.0, 40.0, "plant"),
+        # v_s: the sliding level's 0..40 plus a breakaway excess of up to 30 (a diagnosis
+        # fits static_friction as coulomb_friction + excess, station.diagnosis.selection)
+        EffectSpec("static_friction", "DAC counts", 0.0, 0.0, 70.0, "plant"),
+        EffectSpec("stribeck_speed", "rad/s", STRIBECK_SPEED, 0.01, 1.0, "setting"),
+        # the motor's own damping c_m/k_tau is 14.8 counts per rad/s (tmm-fit): up to 2.4x
+        EffectSpec("viscous_friction", "DAC counts per rad/s", 0.0, 0.0, 20.0, "linear"),
+        # 20 counts (0.2 V) would drive the free motor at 220 encoder counts/s open loop
+        EffectSpec("amp_offset", "DAC counts", 0.0, -20.0, 20.0, "amplifier"),
         EffectSpec("deadzone", "DAC counts", 0.0, 0.0, 40.0, "amplifier"),
         EffectSpec("saturation", "DAC counts", math.inf, 50.0, 255.0, "amplifier"),
         EffectSpec("delay", "samples", 0.0, 0.0, 6.0, "amplifier"),
@@ -87,10 +114,11 @@ EFFECTS: dict[str, EffectSpec] = {
 
 CANDIDATES: tuple[str, ...] = (
     "coulomb_friction", "deadzone", "saturation", "delay", "backlash", "beam_damping", "accel_gain",
+    "static_friction", "viscous_friction", "amp_offset",
     *(f"param:{name}" for name in ("drive_k", "drive_c", "clamp_k", "clamp_c", "J_base", "act_K", "act_p",
                                    "EI", "mu", "m_accel", "J_accel")),
 )
-"""The effects a diagnosis tries (DESIGN.md "Candidates")."""
+"""The effects a diagnosis tries (DESIGN.md "Candidates"); never a "setting"."""
 
 
 def is_neutral(name: str, value: float) -> bool:
@@ -125,8 +153,9 @@ def check_effects(effects: Mapping[str, float], where: str = "") -> dict[str, fl
     ------
     StationError
         Unknown name, a value that is not a number, out of ``[lower, upper]`` (and not
-        the neutral value), or a delay that is not a whole number of samples. One line
-        naming ``where`` and the effect.
+        the neutral value), a delay that is not a whole number of samples, or a
+        static_friction below the coulomb_friction beside it. One line naming ``where``
+        and the effect.
     """
     prefix = f"{where}: " if where else ""
     out: dict[str, float] = {}
@@ -143,4 +172,39 @@ def check_effects(effects: Mapping[str, float], where: str = "") -> dict[str, fl
         if name == "delay" and value != int(value):
             raise StationError(f"{prefix}effect 'delay' must be a whole number of samples, got {value:g}")
         out[name] = value
+    v_s, v_c = out.get("static_friction", 0.0), out.get("coulomb_friction", 0.0)
+    if "static_friction" in out and v_s != 0.0 and v_s < v_c:
+        raise StationError(f"{prefix}effect 'static_friction' = {v_s:g} below coulomb_friction = {v_c:g} "
+                           "(the breakaway level must be at least the sliding level)")
     return out
+
+
+class FrictionLevels(NamedTuple):
+    """The motor's dry friction of a set of effects.
+
+    Attributes
+    ----------
+    v_c : float
+        Sliding (Coulomb) level, DAC counts.
+    v_s : float
+        Breakaway (static) level, DAC counts: static_friction, else v_c (0: no dry friction).
+    w_s : float
+        Stribeck speed, rad/s of the motor.
+    """
+
+    v_c: float
+    v_s: float
+    w_s: float
+
+
+def friction_levels(effects: Mapping[str, float]) -> FrictionLevels:
+    """(v_c, v_s, ω_s) of checked effects (module docstring, "Dry friction").
+
+    Parameters
+    ----------
+    effects : mapping of str to float
+        Effect name -> value (:func:`check_effects` holds v_s >= v_c).
+    """
+    v_c = float(effects.get("coulomb_friction", 0.0))
+    v_s = max(float(effects.get("static_friction", 0.0)), v_c)
+    return FrictionLevels(v_c, v_s, float(effects.get("stribeck_speed", STRIBECK_SPEED)))

@@ -10,15 +10,17 @@ the same compiled functions one sample at a time (the simulated device's plant, 
 does the same float operations.
 
 Effects of a :class:`station.plant.model.Model` (DESIGN.md "Model diagnosis contract"):
-the command goes through the device's quantization, the amplifier's saturation,
-dead-zone and extra delay; Coulomb friction (Karnopp stick-slip) and backlash act inside
-the plant on a sub-step grid dt/M of the same exact ZOH (friction through the command's
-channel, backlash as a torque pair on motor and base); accel_gain scales a before its
-quantization.
+the command goes through the device's quantization, the amplifier's offset, saturation,
+dead-zone and extra delay (before the first sample the device outputs 0, so the amplifier
+outputs its offset); dry friction (Karnopp stick-slip: Coulomb, with a breakaway level
+and the Stribeck curve when static_friction is above it) and backlash act inside the
+plant on a sub-step grid dt/M of the same exact ZOH (friction through the command's
+channel, backlash as a torque pair on motor and base); viscous friction, beam damping and
+param:NAME are in the linear part; accel_gain scales a before its quantization.
 
-Imports the modal form and the rounding rule only; a Model is used through its methods
-(``linear_form``, ``linear_params``, ``effect_dict``), so :mod:`station.plant.model` can
-build a `ModelPlant` without a circle.
+Imports the modal form, the rounding rule and the vocabulary's friction levels only; a
+Model is used through its methods (``linear_form``, ``linear_params``, ``effect_dict``),
+so :mod:`station.plant.model` can build a `ModelPlant` without a circle.
 """
 
 from __future__ import annotations
@@ -29,13 +31,9 @@ from typing import NamedTuple
 import numpy as np
 
 from station import DT
+from station.plant.effects import friction_levels
 from station.plant.modal import LinearForm
-from station.rounding import half_away, half_away_compiled, sensor_count, sensor_count_compiled
-
-try:  # compiled kernel when numba is installed; plain Python otherwise
-    import numba
-except ImportError:  # pragma: no cover - exercised only without numba
-    numba = None
+from station.rounding import half_away, sensor_count
 
 
 def _commit(num, den, xs, ys, x, y):  # pragma: no cover - compiled by numba
@@ -68,8 +66,9 @@ def _outputs(z, cm, accel_gain):  # pragma: no cover - compiled by numba
     return y0, y1 * accel_gain
 
 
-def _amplifier(vk, saturation, deadzone):  # pragma: no cover - compiled by numba
-    """The amplifier's saturation then dead-zone (DESIGN.md order), DAC counts."""
+def _amplifier(vk, offset, saturation, deadzone):  # pragma: no cover - compiled by numba
+    """The amplifier's offset, saturation then dead-zone (DESIGN.md order), DAC counts."""
+    vk = vk + offset
     if vk > saturation:
         vk = saturation
     elif vk < -saturation:
@@ -84,22 +83,25 @@ def _amplifier(vk, saturation, deadzone):  # pragma: no cover - compiled by numb
     return vk
 
 
-def _advance(z, vk, lam, bm, bp, co, gw_v, gw_p, substeps, v_c, half_gap, k_d, c_d):  # pragma: no cover
+def _advance(z, vk, lam, bm, bp, co, gw_v, gw_p, substeps, v_c, v_s, w_s, half_gap, k_d,
+             c_d):  # pragma: no cover - compiled by numba
     """One sample with the torque command vk (DAC counts) held: z in place.
 
     substeps == 0: the linear ZOH step z <- lam z + bm vk. Else ``substeps`` steps of the
-    sub-step grid, each with the backlash torque pair T and the Coulomb friction f
-    (counts, through the command's channel) held over the step: T = k_d·(δ − dz(δ)) +
+    sub-step grid, each with the backlash torque pair T and the dry friction f (counts,
+    through the command's channel) held over the step: T = k_d·(δ − dz(δ)) +
     c_d·δ'·[|δ| <= half_gap] cancels what the drive spring/damper would transmit inside
-    the gap; friction slides at v_c·sign(ω_m) while ω_m keeps its sign over the step, else
-    (Karnopp) takes the value that stops the motor at the step's end when that is within
-    ±v_c (stick), else ±v_c against the motion (break-away).
+    the gap. Friction (Karnopp): a moving motor slides against F(ω_m) = v_c + (v_s −
+    v_c)·exp(−(ω_m/w_s)²) (ω_m at the step's start; v_c when v_s == v_c) while ω_m keeps
+    its sign over the step; else f takes the value that stops the motor at the step's end
+    when that is within ±v_s (stick), else ±v_s against the net torque (break-away).
     """
     n = z.shape[0]
     if substeps == 0:
         for i in range(n):
             z[i] = lam[i] * z[i] + bm[i] * vk
         return
+    stribeck = v_s > v_c
     for _ in range(substeps):
         dl = 0.0
         ddl = 0.0
@@ -109,7 +111,7 @@ def _advance(z, vk, lam, bm, bp, co, gw_v, gw_p, substeps, v_c, half_gap, k_d, c
             for i in range(n):
                 dl += (co[0, i] * z[i]).real
                 ddl += (co[1, i] * z[i]).real
-        if v_c > 0.0:
+        if v_s > 0.0:
             for i in range(n):
                 wm += (co[2, i] * z[i]).real
                 wf += (co[3, i] * z[i]).real
@@ -122,28 +124,33 @@ def _advance(z, vk, lam, bm, bp, co, gw_v, gw_p, substeps, v_c, half_gap, k_d, c
             else:
                 t = k_d * dl + c_d * ddl
         f = 0.0
-        if v_c > 0.0:
+        if v_s > 0.0:
             w_free = wf + gw_v * vk + gw_p * t  # ω_m at the step's end without friction
             sliding = False
             if wm != 0.0:
                 sg = 1.0 if wm > 0.0 else -1.0
-                if (w_free - gw_v * v_c * sg) * sg > 0.0:
-                    f = v_c * sg
+                level = v_c
+                if stribeck:
+                    r = wm / w_s
+                    if r * r < 40.0:  # beyond, exp(-40) of the excess: below a float's resolution
+                        level = v_c + (v_s - v_c) * math.exp(-r * r)
+                if (w_free - gw_v * level * sg) * sg > 0.0:
+                    f = level * sg
                     sliding = True
             if not sliding:
                 f = w_free / gw_v
-                if f > v_c:
-                    f = v_c
-                elif f < -v_c:
-                    f = -v_c
+                if f > v_s:
+                    f = v_s
+                elif f < -v_s:
+                    f = -v_s
         ue = vk - f
         for i in range(n):
             z[i] = lam[i] * z[i] + bm[i] * ue + bp[i] * t
 
 
 def _loop(lam, bm, bp, cm, co, gw_v, gw_p, substeps, z0, u, v_open, use_v_open, closed, gnum, gden, anum, aden,
-          use_ga, limit, d, quantize, cmd_mode, saturation, deadzone, delay, accel_gain, v_c, half_gap, k_d,
-          c_d):  # pragma: no cover - compiled by numba
+          use_ga, limit, d, quantize, cmd_mode, offset, saturation, deadzone, delay, accel_gain, v_c, v_s, w_s,
+          half_gap, k_d, c_d):  # pragma: no cover - compiled by numba
     n = u.shape[0]
     theta = np.zeros(n)
     acc = np.zeros(n)
@@ -154,7 +161,8 @@ def _loop(lam, bm, bp, cm, co, gw_v, gw_p, substeps, z0, u, v_open, use_v_open, 
     gy = np.zeros(gden.shape[0] - 1)  # Gth output history: the saturated v
     ax = np.zeros(anum.shape[0] - 1)  # Ga input history
     ay = np.zeros(aden.shape[0] - 1)  # Ga output history
-    fifo = np.zeros(max(delay, 1))  # the amplifier's extra delay, samples
+    # the amplifier's extra delay, samples; before the run the device output 0
+    fifo = np.full(max(delay, 1), _amplifier(0.0, offset, saturation, deadzone))
     head = 0
     g_acc = 0.0
     a_acc = 0.0
@@ -196,30 +204,61 @@ def _loop(lam, bm, bp, cm, co, gw_v, gw_p, substeps, z0, u, v_open, use_v_open, 
             vk = _half_away(vk)
         elif cmd_mode == 2:
             vk = float(math.trunc(vk))
-        vk = _amplifier(vk, saturation, deadzone)
+        vk = _amplifier(vk, offset, saturation, deadzone)
         if delay > 0:
             out = fifo[head]
             fifo[head] = vk
             head = (head + 1) % delay
             vk = out
-        _advance(z, vk, lam, bm, bp, co, gw_v, gw_p, substeps, v_c, half_gap, k_d, c_d)
+        _advance(z, vk, lam, bm, bp, co, gw_v, gw_p, substeps, v_c, v_s, w_s, half_gap, k_d, c_d)
     return theta, acc, v, thd
 
 
-_half_away = half_away  # the device's command rounding (station.rounding), compiled below
-_sensor_count = sensor_count  # the sensors' quantization (station.rounding), compiled below
+_half_away = half_away  # the device's command rounding (station.rounding), compiled by _compile
+_sensor_count = sensor_count  # the sensors' quantization (station.rounding), compiled by _compile
+_PLAIN = (_outputs, _amplifier, _advance)  # the per-sample functions as plain Python (same float operations)
+_compiled_loop = None
 
-if numba is not None:
-    _half_away = half_away_compiled
-    _sensor_count = sensor_count_compiled
-    _commit = numba.njit(cache=True, nogil=True)(_commit)
-    _outputs = numba.njit(cache=True, nogil=True)(_outputs)
-    _amplifier = numba.njit(cache=True, nogil=True)(_amplifier)
-    _advance = numba.njit(cache=True, nogil=True)(_advance)
-    run_kernel = numba.njit(cache=True, nogil=True)(_loop)
-    """The whole run's sample loop (:func:`station.plant.simulate.simulate` gives its arguments)."""
-else:  # pragma: no cover
-    run_kernel = _loop
+
+def _compile() -> None:
+    """Compile the kernel's functions with numba (or load them from numba's cache), once.
+
+    Numba is imported here, on first use, not with the module: importing it and loading
+    its cache costs most of a second of start-up, which a small linear plant stepped
+    sample by sample does not need (:class:`Stepper`). Without numba everything stays
+    plain Python (same results, about 1000x slower).
+    """
+    global _half_away, _sensor_count, _commit, _outputs, _amplifier, _advance, _compiled_loop
+    if _compiled_loop is not None:
+        return
+    try:
+        import numba
+    except ImportError:  # pragma: no cover - exercised only without numba
+        _compiled_loop = _loop
+        return
+    from station.rounding import half_away_compiled, sensor_count_compiled
+
+    jit = numba.njit(cache=True, nogil=True)
+    _half_away, _sensor_count = half_away_compiled, sensor_count_compiled
+    _commit, _outputs, _amplifier, _advance = jit(_commit), jit(_outputs), jit(_amplifier), jit(_advance)
+    _compiled_loop = jit(_loop)
+
+
+def run_kernel(*args):
+    """The whole run's sample loop, compiled on first use.
+
+    Parameters
+    ----------
+    *args
+        :func:`_loop`'s arguments in its order (:func:`station.plant.simulate.simulate`
+        gives them).
+
+    Returns
+    -------
+    theta, a, v, theta_d_hat : numpy.ndarray, shape (N,)
+    """
+    _compile()
+    return _compiled_loop(*args)
 
 
 def coefficients(tf) -> tuple[np.ndarray, np.ndarray]:
@@ -247,10 +286,13 @@ the rig's legacy firmware truncates toward zero (spec/protocol.md)."""
 class KernelEffects(NamedTuple):
     """A model's amplifier, output and in-plant effects as the kernel takes them.
 
-    The defaults are no effects (a `DiscretePlant`).
+    The defaults are no effects (a `DiscretePlant`); the fields are :func:`run_kernel`'s
+    last arguments, in its order.
 
     Attributes
     ----------
+    amp_offset : float
+        Added to the command before the saturation, DAC counts.
     saturation : float
         The amplifier's clamp, DAC counts (inf: none).
     deadzone : float
@@ -260,18 +302,25 @@ class KernelEffects(NamedTuple):
     accel_gain : float
         Scale of a before its quantization.
     v_c : float
-        Coulomb friction, DAC counts.
+        Sliding (Coulomb) friction, DAC counts.
+    v_s : float
+        Breakaway friction, DAC counts (>= v_c; 0: no dry friction).
+    w_s : float
+        Stribeck speed, rad/s of the motor (used when v_s > v_c).
     half_gap : float
         Backlash / 2, rad.
     k_d, c_d : float
         Drive spring N·m/rad and damper N·m·s/rad of the linear part (backlash).
     """
 
+    amp_offset: float = 0.0
     saturation: float = math.inf
     deadzone: float = 0.0
     delay: int = 0
     accel_gain: float = 1.0
     v_c: float = 0.0
+    v_s: float = 0.0
+    w_s: float = 1.0
     half_gap: float = 0.0
     k_d: float = 0.0
     c_d: float = 0.0
@@ -287,9 +336,10 @@ def effects_of(model) -> KernelEffects:
     """
     fx = model.effect_dict()
     p = model.linear_params()
-    return KernelEffects(saturation=float(fx.get("saturation", math.inf)), deadzone=float(fx.get("deadzone", 0.0)),
-                         delay=int(fx.get("delay", 0)), accel_gain=float(fx.get("accel_gain", 1.0)),
-                         v_c=float(fx.get("coulomb_friction", 0.0)),
+    fr = friction_levels(fx)
+    return KernelEffects(amp_offset=float(fx.get("amp_offset", 0.0)), saturation=float(fx.get("saturation", math.inf)),
+                         deadzone=float(fx.get("deadzone", 0.0)), delay=int(fx.get("delay", 0)),
+                         accel_gain=float(fx.get("accel_gain", 1.0)), v_c=fr.v_c, v_s=fr.v_s, w_s=fr.w_s,
                          half_gap=float(fx.get("backlash", 0.0)) / 2.0 / p.H, k_d=p.drive_k, c_d=p.drive_c)
 
 
@@ -311,6 +361,12 @@ def device_command(vk: float, cmd_mode: int) -> float:
     return vk
 
 
+PLAIN_MAX_STATES = 32
+"""A linear form without sub-steps and with at most this many states (up to 6 beam elements)
+is stepped in plain Python by default (:class:`ModelPlant`): tens of µs per sample, and no
+compiler at start-up."""
+
+
 class Stepper:
     """A linear form plus effects, stepped one sample at a time with the kernel's own functions.
 
@@ -322,6 +378,10 @@ class Stepper:
         The amplifier, output and in-plant effects.
     z0 : array_like of complex, shape (n,), optional
         Initial modal state (default: at rest).
+    compiled : bool, default True
+        Step with the numba-compiled functions (compiled or loaded now, not on a real-time
+        device's first tick); False: the same functions as plain Python (the same float
+        operations, the same bits).
 
     Attributes
     ----------
@@ -329,31 +389,38 @@ class Stepper:
         The current modal state.
     """
 
-    def __init__(self, form: LinearForm, fx: KernelEffects, z0=None) -> None:
+    def __init__(self, form: LinearForm, fx: KernelEffects, z0=None, compiled: bool = True) -> None:
         self._form = form
         self._fx = fx
         self._z0 = np.zeros(form.lam.size, complex) if z0 is None else np.asarray(z0, complex).copy()
+        if compiled:
+            _compile()
+            self._fns = (_outputs, _amplifier, _advance)
+        else:
+            self._fns = _PLAIN
         self.reset()
         # compile (or load) the kernel's functions now, not on a real-time device's first tick
         self.outputs()
-        _amplifier(0.0, fx.saturation, fx.deadzone)
-        _advance(self.z.copy(), 0.0, form.lam, form.bm, form.bp, form.co, form.gw_v, form.gw_p, form.substeps,
-                 fx.v_c, fx.half_gap, fx.k_d, fx.c_d)
+        self._fns[1](0.0, fx.amp_offset, fx.saturation, fx.deadzone)
+        self._fns[2](self.z.copy(), 0.0, form.lam, form.bm, form.bp, form.co, form.gw_v, form.gw_p, form.substeps,
+                     fx.v_c, fx.v_s, fx.w_s, fx.half_gap, fx.k_d, fx.c_d)
 
     def reset(self) -> None:
-        """Back to the initial state (at rest for a model), the amplifier's delay line empty."""
+        """Back to the initial state (at rest for a model), the amplifier's delay line
+        holding what it made of the device's 0 before the run."""
+        fx = self._fx
         self.z = self._z0.copy()
-        self._fifo = [0.0] * self._fx.delay
+        self._fifo = [float(self._fns[1](0.0, fx.amp_offset, fx.saturation, fx.deadzone))] * fx.delay
         self._head = 0
 
     def outputs(self) -> tuple[float, float]:
         """Noise-free (theta, a): encoder counts, accelerometer counts (accel_gain applied)."""
-        y0, y1 = _outputs(self.z, self._form.cm, self._fx.accel_gain)
+        y0, y1 = self._fns[0](self.z, self._form.cm, self._fx.accel_gain)
         return float(y0), float(y1)
 
     def advance(self, v: float) -> None:
         """One sample with the device's command v (DAC counts, already quantized by the
-        device) through the amplifier's saturation, dead-zone and delay into the plant.
+        device) through the amplifier's offset, saturation, dead-zone and delay into the plant.
 
         Parameters
         ----------
@@ -361,11 +428,13 @@ class Stepper:
             The command the device applies during the sample, DAC counts.
         """
         fx, f = self._fx, self._form
-        vk = _amplifier(float(v), fx.saturation, fx.deadzone)
+        _, amplifier, advance = self._fns
+        vk = amplifier(float(v), fx.amp_offset, fx.saturation, fx.deadzone)
         if fx.delay > 0:
             vk, self._fifo[self._head] = self._fifo[self._head], vk
             self._head = (self._head + 1) % fx.delay
-        _advance(self.z, vk, f.lam, f.bm, f.bp, f.co, f.gw_v, f.gw_p, f.substeps, fx.v_c, fx.half_gap, fx.k_d, fx.c_d)
+        advance(self.z, vk, f.lam, f.bm, f.bp, f.co, f.gw_v, f.gw_p, f.substeps, fx.v_c, fx.v_s, fx.w_s,
+                fx.half_gap, fx.k_d, fx.c_d)
 
 
 class ModelPlant(Stepper):
@@ -373,8 +442,8 @@ class ModelPlant(Stepper):
 
     The interface of `DiscretePlant` that the simulated device uses (``reset``,
     ``outputs``, ``advance``); ``advance`` takes the command the device applies (after
-    its own quantization and clamp) and passes it through the amplifier's saturation,
-    dead-zone and delay; friction and backlash act inside the plant on the sub-step
+    its own quantization and clamp) and passes it through the amplifier's offset,
+    saturation, dead-zone and delay; friction and backlash act inside the plant on the sub-step
     grid; ``outputs`` applies accel_gain. Sample for sample equal to
     :func:`station.plant.simulate.simulate` with the same model (the same compiled
     functions do the arithmetic).
@@ -386,6 +455,10 @@ class ModelPlant(Stepper):
         Sample time, s.
     substeps : int, optional
         Sub-steps per sample with friction or backlash (default :data:`station.plant.model.SUBSTEPS`).
+    compiled : bool, optional
+        As :class:`Stepper`; default: plain Python for a linear form without sub-steps of at
+        most :data:`PLAIN_MAX_STATES` states (the default model: the simulated rig starts
+        without a compiler), compiled otherwise.
 
     Attributes
     ----------
@@ -395,10 +468,13 @@ class ModelPlant(Stepper):
         The model's nominal parameter set.
     """
 
-    def __init__(self, model, dt: float = DT, substeps: int | None = None) -> None:
+    def __init__(self, model, dt: float = DT, substeps: int | None = None, compiled: bool | None = None) -> None:
         self.model = model
         self.dt = float(dt)
         self.n_elements = model.n_elements
         self.params = model.params
-        super().__init__(model.linear_form(self.dt, substeps), effects_of(model))
+        form = model.linear_form(self.dt, substeps)
+        if compiled is None:
+            compiled = form.substeps > 0 or form.lam.size > PLAIN_MAX_STATES
+        super().__init__(form, effects_of(model), compiled=compiled)
 

@@ -12,13 +12,16 @@ Imports fem, discrete and parameters only (below :mod:`station.plant.model` and
 
 from __future__ import annotations
 
+import dataclasses
 import functools
 from typing import NamedTuple
 
 import numpy as np
-import scipy.linalg
-import scipy.signal
 
+# scipy.linalg / scipy.signal / scipy.optimize / python-control are imported where used:
+# they cost seconds, and a run's first tick does not need them (start-up time).
+
+from station.plant.diskcache import cached_arrays
 from station.plant.discrete import DiscretePlant
 from station.plant.fem import modal_basis, state_matrices
 from station.plant.parameters import Params
@@ -84,6 +87,10 @@ def sampled_form(plant: DiscretePlant) -> LinearForm:
 def linear_form(params: Params, n_elements: int, dt: float, substeps: int) -> LinearForm:
     """The (cached) :class:`LinearForm` of a parameter set.
 
+    Cached in memory and on disk (:mod:`station.plant.diskcache`, keyed by the parameter
+    values, the element count, dt, the sub-steps and the plant's code): a warm start
+    neither imports scipy nor decomposes anything, and gets the same bits.
+
     Parameters
     ----------
     params : Params
@@ -94,6 +101,19 @@ def linear_form(params: Params, n_elements: int, dt: float, substeps: int) -> Li
         0: sampled at dt exactly as `DiscretePlant` (bp, co zero); M >= 1: sub-step
         grid dt / M with the outputs friction and backlash need.
     """
+    parts = (*(getattr(params, f.name) for f in dataclasses.fields(params)), int(n_elements), float(dt),
+             int(substeps))
+    arrays = cached_arrays("linear-form", parts,
+                           lambda: _form_arrays(_linear_form(params, n_elements, dt, substeps)))
+    return LinearForm(*(arrays[name] if arrays[name].ndim else arrays[name].item() for name in LinearForm._fields))
+
+
+def _form_arrays(form: LinearForm) -> dict[str, np.ndarray]:
+    return {name: np.asarray(value) for name, value in zip(LinearForm._fields, form)}
+
+
+def _linear_form(params: Params, n_elements: int, dt: float, substeps: int) -> LinearForm:
+    """:func:`linear_form` computed (not cached)."""
     if substeps == 0:
         return sampled_form(DiscretePlant(params, n_elements, dt))
     A, B, C = state_matrices(params, n_elements)
@@ -107,8 +127,10 @@ def linear_form(params: Params, n_elements: int, dt: float, substeps: int) -> Li
     rows[1, n_dof:] = Phi[0] - Phi[m.base]             # δ'
     rows[2, n_dof:] = Phi[0]                            # ω_m
     h = dt / substeps
+    import scipy.signal
     Ad, Bd, _, _, _ = scipy.signal.cont2discrete((A, np.column_stack([B[:, 0], Bp]), C, np.zeros((2, 2))),
                                                  h, method="zoh")
+    import scipy.linalg
     lam, V = scipy.linalg.eig(Ad)
     vinv = scipy.linalg.lu_solve(scipy.linalg.lu_factor(V), np.eye(V.shape[0]))
     # the state is real: keep one of each conjugate pair (LAPACK returns exact conjugates)

@@ -8,6 +8,8 @@ diagnosis) and one TOML file::
     n_elements = 4
     [effects]                    # optional; names and units of station.plant.effects
     coulomb_friction = 5.0
+    static_friction = 9.0        # breakaway level (>= coulomb_friction)
+    stribeck_speed = 0.05        # rad/s of the motor: static_friction's Stribeck curve
     "param:drive_c" = 2.0
 
 Built-in models live in ``station/plant/models/<name>.toml`` ("tmm-fit": the nominal
@@ -327,6 +329,10 @@ def load_model(name_or_path: str | Path = "tmm-fit", n_elements: int | None = No
             check_effects({key: value})
         except StationError as exc:
             raise doc.error(key, str(exc), "effects") from None
+    try:
+        check_effects(effects)  # the rules between effects (static_friction >= coulomb_friction)
+    except StationError as exc:
+        raise doc.error("static_friction", str(exc), "effects") from None
     model = Model(name=name, params=p, n_elements=n, effects=tuple(effects.items()), params_source=source)
     _check_runs_as_written(model, doc)
     return model
@@ -415,6 +421,9 @@ def _ratio_params(params: Params, values: Mapping[str, float]) -> Params:
 def _linear_params(params: Params, n_elements: int, linear: tuple[tuple[str, float], ...]) -> Params:
     values = dict(linear)
     p = _ratio_params(params, values)
+    b = values.get("viscous_friction")
+    if b:
+        p = with_viscous_friction(p, b)
     zeta = values.get("beam_damping")
     if zeta is not None:
         try:
@@ -424,5 +433,28 @@ def _linear_params(params: Params, n_elements: int, linear: tuple[tuple[str, flo
     return p
 
 
+def with_viscous_friction(params: Params, b: float) -> Params:
+    """The parameter set whose motor has the extra viscous friction torque k_tau·b·ω.
+
+    The actuator's damping is c_m = act_p·J_m with J_m = k_tau/num, num = act_K·|2πj +
+    act_p| (DESIGN.md): act_p grows by b·num and act_K shrinks so that num, hence J_m, stays
+    the same, which adds exactly k_tau·b to c_m (to rounding).
+
+    Parameters
+    ----------
+    params : Params
+    b : float
+        Viscous friction, DAC counts per rad/s of the motor (>= 0).
+
+    Returns
+    -------
+    Params
+        With ``act_p`` and ``act_K`` changed; the other fields as given.
+    """
+    num = params.act_num
+    act_p = params.act_p + b * num
+    return dataclasses.replace(params, act_p=act_p, act_K=num / abs(complex(act_p, 2.0 * math.pi)))
+
+
 __all__ = ["MODELS_DIR", "SUBSTEPS", "LinearForm", "Model", "as_model", "builtin_models", "linear_form",
-           "load_model"]
+           "load_model", "with_viscous_friction"]

@@ -11,8 +11,9 @@ import dataclasses
 from dataclasses import dataclass
 
 import numpy as np
-import scipy.linalg
-import scipy.optimize
+
+# scipy.linalg / scipy.signal / scipy.optimize / python-control are imported where used:
+# they cost seconds, and a run's first tick does not need them (start-up time).
 
 from station.plant.fem import SecondOrderModel, state_matrices
 from station.plant.parameters import Params
@@ -72,6 +73,7 @@ def modal_summary(params: Params, n_elements: int = 4, max_hz: float = 200.0) ->
         generic invariant-zero solver (control.zeros) loses digits.
     """
     A, _, _ = state_matrices(params, n_elements)
+    import scipy.linalg
     f, z = _oscillatory(scipy.linalg.eigvals(A), max_hz)
     fz, zz = _oscillatory(scipy.linalg.eigvals(base_held_matrix(params, n_elements)), max_hz)
     return ModalSummary(int(n_elements), f, z, fz, zz)
@@ -140,5 +142,6 @@ def with_beam_damping(params: Params, zeta: float, n_elements: int = 4) -> Param
     hi = 1e-4
     while first_zeta(hi) < zeta:
         hi *= 4.0
+    import scipy.optimize
     beta = scipy.optimize.brentq(lambda b: first_zeta(b) - zeta, 0.0, hi, xtol=1e-14, rtol=1e-12)
     return dataclasses.replace(params, beam_beta=beta)

@@ -142,16 +142,20 @@ def simulate(model, controller, u, alignment: int = 1, v_open=None, quantize: bo
     ----------
     model : station.plant.model.Model or station.plant.DiscretePlant
         A Model is simulated with its effects (DESIGN.md "Model diagnosis contract"):
-        the device's command quantization, then the amplifier's saturation, dead-zone
-        and extra delay on the command; Coulomb friction (stick-slip) and backlash
-        inside the plant on a grid of ``substeps`` per sample; accel_gain on the
-        accelerometer before its quantization; beam_damping and param:NAME in the
-        linear part. A Model without effects gives exactly the DiscretePlant's result.
+        the device's command quantization, then the amplifier's offset, saturation,
+        dead-zone and extra delay on the command (before the first sample the device
+        outputs 0 and the amplifier its offset); dry friction (Coulomb, breakaway and
+        Stribeck: stick-slip) and backlash inside the plant on a grid of ``substeps``
+        per sample; accel_gain on the accelerometer before its quantization;
+        viscous_friction, beam_damping and param:NAME in the linear part. A Model
+        without effects gives exactly the DiscretePlant's result.
         The linear part's modal form is cached per (parameters, elements, dt, substeps).
     controller : Compensator, OpenLoop, or a `station.control.Controller`
         A Compensator / OpenLoop (exactly those types) runs compiled from its ``gth``,
         ``ga`` (DiscreteTF or None, coefficients in z⁻¹) and ``limit`` (DAC counts or
-        None); OpenLoop is v = u clamped at ±limit. Any other object with ``step(u,
+        None), a Compensator's reference ``shaper`` applied to u first
+        (:meth:`station.control.shaper.ReferenceShaper.apply`, from tick d on: the same
+        floats as its ``step``); OpenLoop is v = u clamped at ±limit. Any other object with ``step(u,
         theta, a) -> (v, theta_d_hat)`` and ``reset()`` (a subclass of those two as
         well, so its own ``step`` counts) runs in a Python loop with the same timing
         and quantization (reset before and after the run); each command goes through
@@ -230,11 +234,13 @@ def simulate(model, controller, u, alignment: int = 1, v_open=None, quantize: bo
         limit = getattr(controller, "limit", None)
         gnum, gden = _coeffs(gth)
         anum, aden = _coeffs(ga)
+        shaper = None if use_v_open else getattr(controller, "shaper", None)
+        # a reference shaper is linear in u alone: shaped here, float for float as its step() would
+        u_ctrl = u if shaper is None else shaper.apply(u, start=d)
         theta, a, v, thd = _kernel(
             form.lam, form.bm, form.bp, form.cm, form.co, form.gw_v, form.gw_p, form.substeps,
-            np.zeros(form.lam.size, complex) if z0 is None else z0, u, v_open if use_v_open else np.zeros(1),
+            np.zeros(form.lam.size, complex) if z0 is None else z0, u_ctrl, v_open if use_v_open else np.zeros(1),
             use_v_open, gth is not None, gnum, gden, anum, aden, ga is not None,
-            math.inf if limit is None else float(limit), d, bool(quantize), cmd_mode,
-            fx.saturation, fx.deadzone, fx.delay, fx.accel_gain, fx.v_c, fx.half_gap, fx.k_d, fx.c_d,
+            math.inf if limit is None else float(limit), d, bool(quantize), cmd_mode, *fx,
         )
     return SimResult(np.arange(u.size) * dt, u, v, theta, a, thd)

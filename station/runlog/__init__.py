@@ -26,8 +26,8 @@ What lives where, from the bottom up (each module imports only those above it in
 list, plus :mod:`station` for ``DT``, :mod:`station.errors` and :mod:`station.jsonio`;
 nothing here imports the rest of the station):
 
-- ``schema``: the row (:class:`LogRow`, :data:`COLUMNS`), column synonyms, the format's
-  marks, the rig's sample time :data:`RIG_DT`, :class:`RunLogError` and its one form.
+- ``schema``: the row (:class:`LogRow`, :data:`COLUMNS`, the station's status bit
+  :data:`SKIPPED`), column synonyms, the format's marks, the rig's sample time :data:`RIG_DT`, :class:`RunLogError` and its one form.
 - ``text``: values, rows, header and end record as text.
 - ``writer``: :class:`RunLogWriter` (queue, writer thread, sink thread, rescue file).
 - ``rows``: the lines of a file, the data lines (the torn last line decided once) and
@@ -49,6 +49,7 @@ from station.runlog.schema import (
     MAGIC,
     RIG_DT,
     SIGNAL_COLUMNS,
+    SKIPPED,
     LogRow,
     RunLogError,
     standard_column,
@@ -58,6 +59,6 @@ from station.runlog.writer import FLUSH_INTERVAL_S, RunLogWriter
 
 __all__ = [
     "COLUMNS", "COLUMN_SYNONYMS", "END_PREFIX", "FINITE_COLUMNS", "FLUSH_INTERVAL_S", "MAGIC", "RIG_DT",
-    "SIGNAL_COLUMNS", "LogRow", "RunLog", "RunLogError", "RunLogWriter", "format_lines", "format_value",
+    "SIGNAL_COLUMNS", "SKIPPED", "LogRow", "RunLog", "RunLogError", "RunLogWriter", "format_lines", "format_value",
     "header_lines", "read_log", "standard_column",
 ]

@@ -35,7 +35,7 @@ class LogRow(NamedTuple):
     v_applied : float
         DAC counts the device reports, NaN when it does not.
     status : int
-        v1 status bits.
+        v1 status bits (bits 0-4), plus the station's own :data:`SKIPPED` (bit 7).
     latency_us : float
         Compute latency of v[k], µs; NaN for tick 0.
     """
@@ -51,6 +51,13 @@ class LogRow(NamedTuple):
     status: int
     latency_us: float
 
+
+SKIPPED = 0x80
+"""The station's own status bit (bit 7; the device's v1 bits are 0-4): the station did
+not answer this sample, because a newer one was already waiting when it got to it (it
+had been held up). No command was computed from it and the controller was not stepped
+on it: the next row's v is the command held from before (the device holds its output;
+a v1 device marks that tick LATE). Replay knows it (:func:`station.control.rerun.replay_commands`)."""
 
 COLUMNS = LogRow._fields
 """Columns of our run log, in row order (units: s, tick, counts, DAC counts, encoder

@@ -3,9 +3,10 @@
 The first line on stdout is the pty's slave path (flushed), so a parent process can read
 it and open the port like a real device. The device then runs on the master side until
 SIGTERM or SIGINT, and prints a one-line JSON summary of the last run's counters,
-``{"ticks": .., "late": .., "watchdog_trips": .., "rx_errors": .., "tx_lost": ..}``, which
-benchmarks parse (tx_lost: bytes the device sent that did not fit into the pty because
-nobody read them; the device never blocks on them). Pacing as for ``sim://`` (:mod:`station.sim.driver`): lockstep, or realtime
+``{"ticks": .., "late": .., "watchdog_trips": .., "rx_errors": .., "tx_lost": .., "max_slip_ms": ..}``,
+which benchmarks parse (tx_lost: bytes the device sent that did not fit into the pty because
+nobody read them; the device never blocks on them; max_slip_ms: the most a realtime tick
+came after its time, this process held up - its samples then go out together). Pacing as for ``sim://`` (:mod:`station.sim.driver`): lockstep, or realtime
 (500 Hz on absolute deadlines, ``select`` with a timeout up to the next deadline).
 
 Run it as ``station sim-device --pty [--realtime] [--protocol legacy] [--seed N] [--model NAME|FILE]
@@ -90,6 +91,7 @@ def serve_pty(protocol: str = "v1", realtime: bool = False, seed: int = 0, n_ele
     period = 1.0 / RATE_HZ
     deadline = time.perf_counter() + period
     lost = 0
+    slip = 0.0  # the most a tick came after its time (this process held up): a benchmark tells it from lag
     try:
         while not stop:
             timeout = max(0.0, deadline - time.perf_counter()) if realtime else 0.1
@@ -104,7 +106,8 @@ def serve_pty(protocol: str = "v1", realtime: bool = False, seed: int = 0, n_ele
                     data = b""  # EIO: no process has the slave open right now
                 if data:
                     lost += _send(master, driver.feed(data))
-            if realtime and time.perf_counter() >= deadline:
+            if realtime and (now := time.perf_counter()) >= deadline:
+                slip = max(slip, now - deadline)
                 lost += _send(master, driver.clock_tick())
                 deadline += period
     finally:
@@ -114,7 +117,7 @@ def serve_pty(protocol: str = "v1", realtime: bool = False, seed: int = 0, n_ele
         os.close(slave)
     c = device.counters
     summary = {"ticks": c.ticks, "late": c.late, "watchdog_trips": c.watchdog_trips, "rx_errors": c.rx_errors,
-               "tx_lost": lost}
+               "tx_lost": lost, "max_slip_ms": round(1000 * slip, 2)}
     print(json.dumps(summary), file=out, flush=True)
     return summary
 

@@ -1,0 +1,192 @@
+"""``station tune``: design a compensator of the rig's structure on a model, robust to what the
+diagnosis doubts, verified on the simulated rig before it is written (DESIGN.md "Designing a
+compensator on a model")."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import tempfile
+from pathlib import Path
+
+from station.commands.options import add_model_options, add_report_options, model_inputs, number
+from station.outputs import FORCE_HELP, Input, Output, Transaction, check_outputs
+
+NAME = "tune"
+HELP = ("design a compensator (p, lead, lead + accelerometer, optional reference shaper) on a model, robust over "
+        "its doubt, verified on the simulated rig, written as a compensator file")
+
+SOFT_LIMIT = 2048.0
+"""Largest step height, encoder counts (``station step``'s default soft limit)."""
+
+
+def configure(parser: argparse.ArgumentParser) -> None:
+    """Add ``station tune``'s arguments to ``parser``.
+
+    Parameters
+    ----------
+    parser : argparse.ArgumentParser
+        Gets ``--model``, ``--controller``, ``--amplitude``, ``--limit``, ``--overshoot``,
+        ``--shaper``, ``--robust``, ``--samples``, ``--jobs``, ``--scheduler``, ``--out``,
+        ``--json``, ``--report``, ``--force``, ``--quiet``.
+    """
+    from station.design.space import SHAPERS, STRUCTURES
+    from station.design.tuning import DEFAULT_SAMPLES
+
+    add_model_options(parser, "the model the compensator is designed on (its effects included), or a diagnosis "
+                      "JSON (its extended model); without it, "
+                      "the first --robust diagnosis JSON's extended model", subject="the design model",
+                      elements=None, params=False)
+    parser.add_argument("--controller", choices=STRUCTURES, default="lead-accel",
+                        help="the compensator's structure (default lead-accel: Gth and the accelerometer filter Ga)")
+    parser.add_argument("--amplitude", type=number(-SOFT_LIMIT, SOFT_LIMIT, unit="encoder counts", nonzero=True),
+                        default=None, metavar="COUNTS",
+                        help="the step it is designed for (default: the rig's experiment, p 50, lead 100, "
+                             "lead-accel 200)")
+    parser.add_argument("--limit", type=number(1, 255, unit="DAC counts"), default=200.0, metavar="COUNTS",
+                        help="the compensator's clamp, written into the file (default 200)")
+    parser.add_argument("--overshoot", type=number(0, 100, unit="percent"), default=5.0, metavar="PCT",
+                        help="largest overshoot on every model (default 5)")
+    parser.add_argument("--shaper", choices=SHAPERS, default="opt",
+                        help="reference shaper: none, ZV or ZVD of the model's first beam mode, or two impulses "
+                             "optimized with the rest (default opt)")
+    parser.add_argument("--robust", nargs="+", default=[], metavar="FILE",
+                        help="model files (or built-in names) and diagnosis JSONs (extended model, alternatives, "
+                             "intervals) the design is judged on too")
+    parser.add_argument("--samples", type=number(0, 1000, integer=True), default=DEFAULT_SAMPLES, metavar="N",
+                        help=f"models drawn from the doubt (the diagnosis JSON's intervals, else dry friction "
+                             f"5-20 counts, amplifier offset ±5, drive damping 0.85-2x), besides its corners "
+                             f"(default {DEFAULT_SAMPLES}; 0: neither, the model and the --robust files alone)")
+    parser.add_argument("--jobs", type=number(1, 64, integer=True), default=None, metavar="N",
+                        help="local worker processes (default: the CPU count)")
+    parser.add_argument("--scheduler", default=None, metavar="ADDRESS",
+                        help="evaluate on a Dask distributed cluster (tcp://host:8786) instead of local processes")
+    parser.add_argument("--out", type=Path, default=None, metavar="FILE.toml",
+                        help="write the compensator file (station step --controller FILE runs it)")
+    add_report_options(parser, json="the design, its metrics on the model and the set, and the thesis's")
+    parser.add_argument("--report", type=Path, default=None, metavar="DIR",
+                        help="write DIR/report.html with its figures (also as PNG beside it)")
+    parser.add_argument("--force", action="store_true", help=FORCE_HELP)
+    parser.add_argument("--quiet", action="store_true", help="no progress lines on stderr")
+
+
+def outputs(args: argparse.Namespace) -> list[Output]:
+    """The files ``station tune`` writes: --out, --json and the report's files.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        ``out``, ``json``, ``report``.
+    """
+    from station.design.report import REPORT_FILES
+
+    report = [] if args.report is None else [Output("--report", args.report / name) for name in REPORT_FILES]
+    return [Output("--out", args.out), Output("--json", args.json), *report]
+
+
+def inputs(args: argparse.Namespace) -> list[Input]:
+    """The files ``station tune`` reads: the model and every --robust file.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        ``model``, ``robust``.
+    """
+    return model_inputs(args) + [Input("--robust", p) for p in args.robust]
+
+def format_result(result) -> str:
+    """What ``station tune`` prints: the design, its worst case over the set beside the thesis's.
+
+    Parameters
+    ----------
+    result : station.design.tuning.TuneResult
+    """
+    def settle(x):
+        return "not settled" if x is None else f"{x:.3f} s"
+
+    d = result.design_json()
+    lines = [f"{result.space.structure} on {result.nominal.name!r}, step {result.amplitude:g}, "
+             f"{len(result.robust.models)} model(s): " + ", ".join(f"{k} {v['value']:.4g}"
+                                                                  for k, v in d["parameters"].items())]
+    for name, figs in (("tuned", result.figures), ("thesis", result.baseline)):
+        nominal = figs[0]
+        worst_os = max(f.overshoot_pct for f in figs)
+        settles = [f.settling_2pct_s for f in figs]
+        worst = None if any(s is None for s in settles) else max(settles)
+        lines.append(f"  {name:6s} model: overshoot {nominal.overshoot_pct:5.1f} %, 2 % settling "
+                     f"{settle(nominal.settling_2pct_s)};  worst over the set: overshoot {worst_os:5.1f} %, "
+                     f"2 % settling {settle(worst)}")
+    m = result.margins
+    lines.append(f"  margins (model): gain {m.gain_margin_db:.1f} dB, phase {m.phase_margin_deg:.1f}°; requirements "
+                 f"{'met on every model' if d['feasible'] else 'NOT met on every model'}")
+    v = result.verification
+    if v is not None:
+        lines.append(f"  station step on the simulated rig: {v.reason}, overshoot {v.overshoot_pct:.1f} %, 2 % "
+                     f"settling {settle(v.settling_2pct_s)}; log {'equals' if v.matches else 'DIFFERS from'} "
+                     f"the simulation (max |Δθ| {v.max_abs_dtheta:g}, |Δv| {v.max_abs_dv:g})")
+    lines.append(f"  {result.evaluations} evaluations (a design on a model) in {result.elapsed_s:.1f} s "
+                 f"({result.executor})")
+    return "\n".join(lines)
+
+
+def run(args: argparse.Namespace) -> int:
+    """Check everything, design, verify, write what was asked for.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The options of :func:`configure`.
+
+    Returns
+    -------
+    int
+        0 when the design ran to the end (its JSON says whether every requirement was met).
+
+    Raises
+    ------
+    StationError
+        Bad input, before any work: an impossible value, an unreadable or unstable model, a
+        JSON with no model, an output that exists (without ``--force``), repeats another or is
+        an input; an unreachable scheduler.
+    """
+    import os
+
+    from station.design.tuning import DEFAULT_AMPLITUDE, check_request, tune
+    from station.design.verify import verify
+
+    structure = args.controller
+    jobs = args.jobs if args.jobs is not None else max(1, min(os.cpu_count() or 1, 64))
+    amplitude = DEFAULT_AMPLITUDE[structure] if args.amplitude is None else args.amplitude
+    check_request(structure, amplitude, args.limit, args.overshoot, args.shaper, args.samples, jobs)
+    check_outputs(outputs(args), inputs(args), force=args.force)
+    progress = None if args.quiet else (lambda msg: print(f"tune: {msg}", file=sys.stderr, flush=True))
+    out = args.out
+    result = tune(model=args.model, structure=structure, amplitude=amplitude, limit=args.limit,
+                  overshoot=args.overshoot, shaper=args.shaper, robust=args.robust, samples=args.samples,
+                  jobs=jobs, scheduler=args.scheduler, out=out or Path("tuned.toml"), progress=progress)
+    with tempfile.TemporaryDirectory(prefix="station-tune-") as tmp:
+        path = Path(tmp) / (out.name if out is not None else "tuned.toml")  # verified before it is written
+        path.write_text(result.file.to_toml(), encoding="utf-8")
+        if progress:
+            progress("verifying: station step on the simulated rig serving the model")
+        log = Path(tmp) / "verify-step.tsv"
+        result.verification = verify(result.nominal, path, amplitude, log=log)
+        verify_log = log.read_bytes() if log.is_file() else None
+    print(format_result(result))
+    with Transaction() as tx:  # every file whole or none (station.outputs)
+        if out is not None:
+            tx.write(out, result.file.to_toml(), "the compensator file")
+        if args.report is not None:
+            from station.design.report import write_report
+
+            page = write_report(result, args.report, tx, verify_log)
+        if args.json is not None:
+            tx.write_json(args.json, result.to_json(out))
+    if out is None:
+        print("compensator file (use --out FILE.toml to write it):")
+        print(result.file.to_toml(), end="")
+    else:
+        print(f"compensator: {out}")
+    if args.report is not None:
+        print(f"report: {page}")
+    return 0

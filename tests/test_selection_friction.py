@@ -1,0 +1,114 @@
+"""Breakaway friction in the diagnosis's search (station.diagnosis.selection): static_friction
+is fitted as coulomb_friction plus a breakaway excess (one step, v_s >= v_c by construction),
+named over plain Coulomb friction only when the excess pays for itself.
+
+Objectives here are synthetic (smooth, with a known optimum), runs come from the independent
+generator (tests/blind), never from station.plant.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from station import diagnosis
+from station.diagnosis.selection import (EXCESS, MIN_EXCESS, Trial, credible, effect_axes, excess_fraction,
+                                         fit_set, set_axes)
+
+
+def test_static_friction_is_fitted_on_the_sliding_level_and_an_excess():
+    axes = effect_axes()
+    assert set_axes(("static_friction",), axes) == [axes["coulomb_friction"], EXCESS]
+    assert set_axes(("amp_offset", "static_friction"), axes) == [axes["amp_offset"], axes["coulomb_friction"], EXCESS]
+    assert set_axes(("param:drive_c",), axes) == [axes["param:drive_c"]]
+    assert EXCESS.lower == 0.0 and EXCESS.upper == 30.0  # static_friction's 70 = coulomb_friction's 40 + 30
+
+
+class _Cost:
+    """An evaluator whose cost is smooth with its minimum at (v_c, v_s, o) = (6, 14, -2); it
+    fails on a breakaway level below the sliding level (a model file error)."""
+
+    def __init__(self):
+        self.calls = 0
+
+    def cost(self, values, runs):
+        self.calls += 1
+        v_c = values.get("coulomb_friction", 0.0)
+        v_s = values.get("static_friction", v_c)
+        assert v_s >= v_c, values
+        return 1.0 + (v_c - 6.0) ** 2 + 0.5 * (v_s - 14.0) ** 2 + (values.get("amp_offset", 0.0) + 2.0) ** 2
+
+
+def test_fit_set_finds_both_friction_levels_and_never_asks_for_v_s_below_v_c():
+    ev = _Cost()
+    axes = effect_axes()
+    alone = fit_set(ev, set_axes(("static_friction",), axes), [0], {})
+    assert set(alone) == {"coulomb_friction", "static_friction"}
+    assert alone["coulomb_friction"] == pytest.approx(6.0, abs=0.2)
+    assert alone["static_friction"] == pytest.approx(14.0, abs=0.3)
+    # beside an accepted effect, from its value: all three refined together
+    joint = fit_set(ev, set_axes(("amp_offset", "static_friction"), axes), [0], {"amp_offset": -1.0})
+    assert joint["amp_offset"] == pytest.approx(-2.0, abs=0.3) and joint["static_friction"] == pytest.approx(14, abs=0.5)
+
+
+def _trial(name, excess_fractions, cost):
+    values = [{"coulomb_friction": 10.0 * (1 - f), "static_friction": 10.0} for f in excess_fractions]
+    if name == "coulomb_friction":
+        values = [{"coulomb_friction": 8.0}] * len(excess_fractions)
+    return Trial((name,), values, {}, cost)
+
+
+def test_breakaway_friction_is_named_only_when_its_excess_pays():
+    terms = 1000
+    assert excess_fraction(_trial("static_friction", [0.3, 0.5, 0.4], 1.0)) == pytest.approx(0.4)
+    coulomb = _trial("coulomb_friction", [0, 0, 0], 2000.0)
+    big = {"coulomb_friction": coulomb, "static_friction": _trial("static_friction", [0.4, 0.5, 0.45], 1000.0)}
+    assert set(credible(big, terms)) == {"coulomb_friction", "static_friction"}
+    # an excess of a few percent is what a second friction axis finds by luck on a jagged cost
+    small = {"coulomb_friction": coulomb, "static_friction": _trial("static_friction", [0.05, 0.02, 0.2], 1000.0)}
+    assert set(credible(small, terms)) == {"coulomb_friction"}
+    assert MIN_EXCESS == 0.1
+    # a real excess that does not pay for its parameter over Coulomb friction beside the same effects
+    close = {"coulomb_friction": coulomb, "static_friction": _trial("static_friction", [0.4, 0.5, 0.45], 1980.0)}
+    assert set(credible(close, terms)) == {"coulomb_friction"}
+    # without a Coulomb trial to compare with (an upgrade in place), the excess alone decides
+    assert set(credible({"static_friction": big["static_friction"]}, terms)) == {"static_friction"}
+    assert credible({"static_friction": small["static_friction"]}, terms) == {}
+
+
+@pytest.fixture(scope="module")
+def blind_logs(tmp_path_factory):
+    """Four rig-format logs of a clean case from the independent generator (tests/blind)."""
+    from tests.blind.generator import write_case
+
+    return [str(p) for p in write_case(tmp_path_factory.mktemp("logs"), {}, 0)]
+
+
+def friction_simulator(v_c: float, v_s: float):
+    """θ off from the log by smooth errors that vanish only at the given sliding and
+    breakaway levels (v_s = v_c: plain Coulomb friction)."""
+    def simulate(case, model):
+        eff = model.effect_dict()
+        k = np.arange(case.n)
+        fc = eff.get("coulomb_friction", 0.0)
+        fs = max(eff.get("static_friction", 0.0), fc)
+        theta = case.theta + 0.4 * (fc - v_c) * np.sin(np.pi * k / case.n) \
+            + 0.4 * (fs - v_s) * np.sin(2 * np.pi * k / case.n)
+        return theta, case.a + eff.get("delay", 0.0)
+    return simulate
+
+
+def test_diagnose_names_breakaway_friction_as_one_cause_with_its_sliding_level(blind_logs):
+    d = diagnosis.diagnose(blind_logs, candidates=["coulomb_friction", "static_friction", "delay"],
+                           simulate=friction_simulator(6.0, 14.0))
+    assert d.causes == ["static_friction"]
+    fx = d.extended_model.effect_dict()
+    assert fx["static_friction"] == pytest.approx(14.0, abs=0.3)
+    assert fx["coulomb_friction"] == pytest.approx(6.0, abs=0.3)
+
+
+def test_diagnose_keeps_plain_coulomb_friction_when_there_is_no_breakaway(blind_logs):
+    d = diagnosis.diagnose(blind_logs, candidates=["coulomb_friction", "static_friction", "delay"],
+                           simulate=friction_simulator(10.0, 10.0))
+    assert d.causes == ["coulomb_friction"]
+    assert d.extended_model.effect_dict() == {"coulomb_friction": pytest.approx(10.0, abs=0.3)}
