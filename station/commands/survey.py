@@ -198,7 +198,7 @@ def run_diagnose(args: argparse.Namespace) -> int:
         if args.json is not None:
             tx.write_json(args.json, result.to_json(models))
         for name, path in models.items():
-            tx.write(path, result.session_model(name).to_toml(), "the session's model")
+            tx.write(path, result.model_text(name), "the session's model")
     if args.report is not None:
         print(f"report: {page}")
     return 0

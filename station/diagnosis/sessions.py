@@ -394,6 +394,28 @@ class SessionsDiagnosis:
         base = self.nominal_model
         return base.with_effects(s.effects, name=f"{base.name} session {name}")
 
+    def model_text(self, name: str) -> str:
+        """A session's model file (``--save-models``): :meth:`session_model`'s TOML after comment
+        lines saying where it comes from (the session, its runs, what drifts and what is shared).
+
+        Parameters
+        ----------
+        name : str
+            The session's name.
+
+        Raises
+        ------
+        KeyError
+            No such session.
+        """
+        model = self.session_model(name)
+        s = next(s for s in self.sessions if s.name == name)
+        head = [f"# station survey --diagnose: session {name}, {len(s.runs)} runs: "
+                + ", ".join(Path(r).name for r in s.runs),
+                "# drifting (this session's values): " + (", ".join(self.drifting) or "none")
+                + "; shared by all sessions: " + (", ".join(self.shared) or "none")]
+        return "\n".join(line.replace("\n", " ") for line in head) + "\n" + model.to_toml()
+
     def to_json(self, models: Mapping[str, str] | None = None) -> dict:
         """The JSON of DESIGN.md "Sessions and drift".
 
