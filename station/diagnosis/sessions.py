@@ -15,7 +15,6 @@ each cut is said.
 from __future__ import annotations
 
 import json
-import math
 import re
 import time
 from collections.abc import Callable, Iterable, Mapping, Sequence
@@ -31,6 +30,7 @@ from station.diagnosis.drift import (
     Layout,
     PerSession,
     decide_drift,
+    finite,
     key,
     nominal_trial,
     select_structure,
@@ -279,7 +279,9 @@ def load_sessions(sessions: Sequence[SessionLogs], max_samples: int = MAX_SAMPLE
         else:
             notes.append(f"{s.name}: no usable run; the session is left out")
     if not per_session:
-        raise StationError("survey --diagnose: no usable run in " + ", ".join(s.name for s in sessions))
+        why = "; ".join(n for n in notes if "no usable run" not in n)
+        raise StationError("survey --diagnose: no usable run in " + ", ".join(s.name for s in sessions)
+                           + (f" ({why})" if why else ""))
     flat = [c for _, cs in per_session for c in cs]
     lengths = [c.n for c in flat]
     used = cut_lengths(lengths, max_samples)
@@ -424,8 +426,7 @@ class SessionsDiagnosis:
         models : mapping of str to str, optional
             Session name -> its saved model file (``--save-models``); null otherwise.
         """
-        models = models or {}
-        fin = lambda x: float(x) if math.isfinite(x) else None  # noqa: E731
+        models, fin = models or {}, finite
         return {"sessions": [{"name": s.name, "runs": list(s.runs), "effects": {k: fin(v) for k, v in s.effects.items()},
                               "model": models.get(s.name)} for s in self.sessions],
                 "shared": {k: fin(v) for k, v in self.shared.items()},

@@ -148,7 +148,7 @@ def drift_figure(result):
         if math.isfinite(neutral):  # the nominal model's value keeps the scale honest
             ax.axhline(neutral, color="0.3", ls="--", lw=1, label="nominal model (no effect)")
         ax.set_title(title, fontsize=10)
-        ax.set_ylabel(EFFECTS[n].unit)
+        ax.set_ylabel("fitted / nominal" if n.startswith("param:") else EFFECTS[n].unit)
         ax.set_xticks(x)
         ax.set_xticklabels(labels)
         ax.set_xlim(-0.5, len(x) - 0.5)
