@@ -113,6 +113,23 @@ def test_options_that_do_not_go_together_are_refused(tmp_path, capsys, extra, ex
     assert expected in err and "\n" not in err
 
 
+def test_no_usable_run_says_why_in_one_line(tmp_path, capsys):
+    (tmp_path / "notes.txt").write_text("x\n")
+    assert main(["survey", str(tmp_path), "--diagnose"]) == 2
+    err = [line for line in capsys.readouterr().err.splitlines() if line.startswith("station:")]
+    assert len(err) == 1 and "no usable run" in err[0] and "notes.txt" in err[0] and "no usable columns" in err[0]
+
+
+def test_one_usable_run_is_refused(tmp_path, capsys):
+    write_case(tmp_path / "all", {}, 1)
+    one = tmp_path / "one"
+    one.mkdir()
+    src = sorted((tmp_path / "all").iterdir())[0]
+    (one / src.name).write_bytes(src.read_bytes())
+    assert main(["survey", str(one), "--diagnose"]) == 2
+    assert "leave-one-run-out needs at least two" in capsys.readouterr().err
+
+
 def test_an_existing_output_is_refused_before_the_diagnosis(drift_folder, tmp_path, capsys):
     out = tmp_path / "drift.json"
     out.write_text("{}")
