@@ -65,9 +65,10 @@ class Command:
     folders: dict[str, tuple[str, ...]] = field(default_factory=dict)
     figure_of: str | None = None   # the file option whose <stem>.png is drawn beside it
     together: bool = True          # all its outputs are written at the end, whole or none
+    command: str | None = None     # the subcommand, when the table's name is a mode of it
 
     def argv(self, name: str, inputs: dict[str, Path]) -> list[str]:
-        return [name] + [a.format(**{k: str(v) for k, v in inputs.items()}) for a in self.args]
+        return [self.command or name] + [a.format(**{k: str(v) for k, v in inputs.items()}) for a in self.args]
 
 
 COMMANDS: dict[str, Command | None] = {
@@ -84,6 +85,9 @@ COMMANDS: dict[str, Command | None] = {
                                               "step2_resid.png")}),
     "survey": Command(("{in}", "--no-model", "--jobs", "1"), files=("--csv",), inputs=("model", "step", "step2", "sweep"),
                       folders={"--report": ("001_step.json", "002_step2.json", "003_sweep.json", "survey.txt")}),
+    "survey --diagnose": Command(("--diagnose", "{in}", "--model", "{model}"), files=("--json",),
+                                 inputs=("model", "step", "step2", "sweep"), command="survey",
+                                 folders={"--save-models": ("in.toml",), "--report": ("report.html", "drift.png")}),
     "plot": Command(("{step}",), files=("--out",), inputs=("step",)),
     "modes": Command(("--elements", "1", "2", "--model", "{model}"), files=("--json",), inputs=("model",)),
     "identify": Command(("--budget", "0", "--model", "{model}", "--out-dir", "runs/identify", "--quiet"),
@@ -145,7 +149,9 @@ def run_on_file_systems(root: Path, full: Path, ro: Path) -> list[dict]:
     import station.diagnosis.pipeline as pipeline
     from station.cli import main
 
-    pipeline.CANDIDATES = ("coulomb_friction",)  # the writing is tested, not the search
+    import station.diagnosis.sessions as sessions
+
+    pipeline.CANDIDATES = sessions.CANDIDATES = ("coulomb_friction",)  # the writing is tested, not the search
     with open(full / "filler", "wb", buffering=0) as fh:  # take every page of the tmpfs
         try:
             while fh.write(b"\0" * 4096):

@@ -165,9 +165,10 @@ def test_made_up_names_are_unique_and_keep_the_first_of_each(names):
 def test_every_command_is_in_the_table():
     parser = build_parser()
     sub = next(a for a in parser._actions if a.dest == "command")
-    assert sorted(sub.choices) == sorted(COMMANDS), "add the new command to tests/output_cases.py"
+    assert sorted(sub.choices) == sorted({c.command or n if c else n for n, c in COMMANDS.items()}), \
+        "add the new command to tests/output_cases.py"
     for name, cmd in COMMANDS.items():
-        options = {o for a in sub.choices[name]._actions for o in a.option_strings}
+        options = {o for a in sub.choices[cmd.command or name if cmd else name]._actions for o in a.option_strings}
         if cmd is not None:
             assert set(cmd.files) | set(cmd.folders) <= options and "--force" in options, name
 
@@ -189,6 +190,7 @@ def ws(template, tmp_path, monkeypatch):
     shutil.copytree(template / "in", tmp_path / "in")
     monkeypatch.chdir(tmp_path)
     monkeypatch.setattr("station.diagnosis.pipeline.CANDIDATES", ("coulomb_friction",))
+    monkeypatch.setattr("station.diagnosis.sessions.CANDIDATES", ("coulomb_friction",))
     return tmp_path
 
 
@@ -331,7 +333,8 @@ def test_a_full_disk_leaves_no_part_and_changes_nothing_that_existed(ws, capsys,
     if failing.suffix == ".png" and option == cmd.figure_of:  # step's figure: a warning, the run is kept
         assert code == 0 and "the run's figure was not written" in err and not failing.exists()
         return
-    lines = [line for line in err.strip().splitlines() if not line.startswith(f"{name}: ")]  # progress
+    lines = [line for line in err.strip().splitlines()
+             if not line.startswith(f"{cmd.command or name}: ")]  # progress
     assert code == 2 and len(lines) == 1 and "No space left on device" in lines[0], err
     assert "Traceback" not in err
     if cmd.together:

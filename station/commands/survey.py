@@ -1,4 +1,6 @@
-"""``station survey DIR|FILES...``: replay every log of a folder and print one table."""
+"""``station survey DIR|FILES...``: replay every log of a folder and print one table; with
+``--diagnose``, one model structure on all its logs grouped into sessions and the effects that
+drift between them (DESIGN.md "Sessions and drift")."""
 
 from __future__ import annotations
 
@@ -13,7 +15,15 @@ from station.signals import noting
 NAME = "survey"
 HELP = ("replay every log of a folder (or the files given) on all cores and print one table: format, "
         "rows, sample time, controller (named / inferred / none), alignment, max |dv|, step metrics, "
-        "model fits or beam-test results, and why a file could not be used")
+        "model fits or beam-test results, and why a file could not be used; --diagnose: the logs grouped "
+        "into sessions, one model structure on all of them, and the effects that drift between sessions")
+
+MAX_SAMPLES = 20_000
+"""``--max-samples``' default (:data:`station.diagnosis.sessions.MAX_SAMPLES`; not imported here:
+the parser loads no diagnosis)."""
+
+DIAGNOSE_ONLY = ("json", "save_models", "max_samples")
+"""Options that belong to ``--diagnose``."""
 
 
 def configure(parser: argparse.ArgumentParser) -> None:
@@ -23,18 +33,32 @@ def configure(parser: argparse.ArgumentParser) -> None:
     ----------
     parser : argparse.ArgumentParser
         Gets DIR|FILE..., ``--csv``, ``--report``, the model options (with ``--no-model``), ``--jobs``,
-        ``--force``.
+        ``--force``, and ``--diagnose`` with ``--json``, ``--save-models``, ``--max-samples``.
     """
     parser.add_argument("paths", nargs="+", type=Path, metavar="DIR|FILE",
                         help="folders (searched recursively) and files to survey")
     parser.add_argument("--csv", type=Path, default=None, metavar="OUT", help="also write the table as CSV")
     parser.add_argument("--report", type=Path, default=None, metavar="DIR",
-                        help="write each file's replay JSON and the table into DIR")
+                        help="write each file's replay JSON and the table into DIR (with --diagnose: report.html "
+                             "and drift.png)")
     add_model_options(parser, "each log is simulated on it as the rig ran it", params=False,
                       no_model="skip the FEM model fits (beam tests are still analyzed)")
     parser.add_argument("--jobs", type=number(1, 64, integer=True), default=None, metavar="N",
                         help="worker processes (default: the machine's cores)")
     add_force_option(parser)
+    diag = parser.add_argument_group("sessions and drift (--diagnose)")
+    diag.add_argument("--diagnose", action="store_true",
+                      help="group the logs into sessions (the folder a log is in, or 'session' in our log header), "
+                           "fit one model structure on all of them and give the effects that drift between "
+                           "sessions a value per session")
+    diag.add_argument("--json", type=Path, default=None, metavar="OUT",
+                      help="write the sessions, their effects, the shared effects and the drifting ones as JSON")
+    diag.add_argument("--save-models", type=Path, default=None, metavar="DIR",
+                      help="write each session's model (nominal + shared + its drifting values) as DIR/<session>.toml")
+    diag.add_argument("--max-samples", type=number(50, 10**9, integer=True), default=None, metavar="N",
+                      help=f"most samples of all runs together; longer runs are cut to their first samples, the "
+                           f"longest first, and each cut is said (default {MAX_SAMPLES}: the rig's folder then "
+                           f"takes a few minutes)")
 
 
 def run(args: argparse.Namespace) -> int:
@@ -62,6 +86,11 @@ def run(args: argparse.Namespace) -> int:
     from station.plant.model import as_model
     from station.survey import find_logs, format_table, report_files, survey, to_csv, write_reports
 
+    if args.diagnose:
+        return run_diagnose(args)
+    for name in DIAGNOSE_ONLY:
+        if getattr(args, name) is not None:
+            raise StationError(f"--{name.replace('_', '-')}: only with --diagnose")
     model = chosen_model(args)
     if model and (model is not True or args.elements is not None):  # loaded once: a bad --model is one error
         model = as_model(None if model is True else model, args.elements)
@@ -93,4 +122,83 @@ def run(args: argparse.Namespace) -> int:
         print(f"csv: {args.csv}")
     if args.report is not None:
         print(f"reports: {args.report}")
+    return 0
+
+
+def _diagnose_checks(args: argparse.Namespace) -> None:
+    """Options that do not go with --diagnose (one line, before anything starts)."""
+    from station.errors import StationError
+
+    if not args.model:
+        raise StationError("--no-model: not with --diagnose (the diagnosis simulates every log on the model)")
+    for option, value in (("--csv", args.csv), ("--jobs", args.jobs)):
+        if value is not None:
+            raise StationError(f"{option}: not with --diagnose (it belongs to the survey's table of replays)")
+
+
+def run_diagnose(args: argparse.Namespace) -> int:
+    """``station survey DIR... --diagnose``: the logs grouped into sessions, one model structure on
+    all of them and the effects that drift between sessions (:mod:`station.diagnosis.sessions`).
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The paths, ``--model`` / ``--elements``, ``--json``, ``--save-models``, ``--report``,
+        ``--max-samples``, ``--force``.
+
+    Returns
+    -------
+    int
+        0 when the diagnosis ran to the end, whatever it found.
+
+    Raises
+    ------
+    StationError
+        A path that does not exist, no log, ``--csv``, ``--jobs`` or ``--no-model`` with
+        ``--diagnose``, a bad ``--model``; an output that is an input or another output,
+        exists (without ``--force``) or cannot be written; no usable run, or only one.
+    """
+    from station.diagnosis.sessions import diagnose_sessions, group_sessions, model_file_names
+    from station.diagnosis.sessions_report import REPORT_FILES, format_sessions
+    from station.errors import StationError
+    from station.plant.model import as_model
+    from station.survey import find_logs, not_a_log
+
+    _diagnose_checks(args)
+    files = find_logs(args.paths)
+    logs = [f for f in files if not_a_log(f) is None]
+    if not logs:
+        raise StationError(f"{', '.join(map(str, args.paths))}: no logs to diagnose")
+    sessions = group_sessions(logs)
+    model_paths = ({} if args.save_models is None else
+                   {s.name: args.save_models / f for s, f in zip(sessions, model_file_names(sessions))})
+    outputs = [Output("--json", args.json), *(Output("--save-models", p) for p in model_paths.values()),
+               *([] if args.report is None else [Output("--report", args.report / n) for n in REPORT_FILES])]
+    check_outputs(outputs, [Input("DIR|FILE", f) for f in files] + model_inputs(args), force=args.force)
+    spec = chosen_model(args)
+    model = as_model(None if spec is True else spec, args.elements)
+    last = ["reading the logs"]
+
+    def progress(msg: str) -> None:
+        last[0] = msg
+        print(f"survey: {msg}", file=sys.stderr, flush=True)
+
+    print(f"survey: {len(logs)} logs in {len(sessions)} session(s): "
+          + ", ".join(f"{s.name} ({len(s.paths)})" for s in sessions), file=sys.stderr, flush=True)
+    with noting(lambda: f"the diagnosis was at: {last[0]}; nothing written"):
+        result = diagnose_sessions(sessions, model=model, progress=progress,
+                                   max_samples=MAX_SAMPLES if args.max_samples is None else args.max_samples)
+    models = {s.name: str(model_paths[s.name]) for s in result.sessions if s.name in model_paths}
+    print(format_sessions(result, models))
+    with Transaction() as tx:
+        if args.report is not None:
+            from station.diagnosis.sessions_report import write_report
+
+            page = write_report(result, args.report, tx, models)
+        if args.json is not None:
+            tx.write_json(args.json, result.to_json(models))
+        for name, path in models.items():
+            tx.write(path, result.model_text(name), "the session's model")
+    if args.report is not None:
+        print(f"report: {page}")
     return 0

@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import math
 import threading
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from typing import NamedTuple
 
 import numpy as np
@@ -36,6 +36,10 @@ class Evaluator:
         The nominal model; effects are applied with ``model.with_effects``.
     simulate : callable, optional
         ``simulate(case, model) -> (theta, a)``, default :func:`simulate_case`.
+    run_effects : callable, optional
+        ``run_effects(effects, i) -> effects``: the effects run i is simulated with, given
+        the effects asked for (default: the same for every run). Sessions give each run
+        its session's values of the effects that drift (:class:`station.diagnosis.drift.PerSession`).
 
     Attributes
     ----------
@@ -43,10 +47,12 @@ class Evaluator:
         Runs simulated so far (cache misses).
     """
 
-    def __init__(self, cases: Sequence[RunCase], model, simulate: Simulator | None = None):
+    def __init__(self, cases: Sequence[RunCase], model, simulate: Simulator | None = None,
+                 run_effects: Callable[[Mapping[str, float], int], Mapping[str, float]] | None = None):
         self.cases = list(cases)
         self.model = model
         self.simulate = simulate or simulate_case
+        self.run_effects = run_effects
         self.simulations = 0
         self._cache: dict[tuple, tuple[float, float]] = {}
         self._lock = threading.Lock()
@@ -61,6 +67,18 @@ class Evaluator:
         """
         return self.model.with_effects(effects) if effects else self.model
 
+    def effects_for(self, effects: Mapping[str, float], i: int) -> Mapping[str, float]:
+        """The effects run i is simulated with (``run_effects``; ``effects`` itself without it).
+
+        Parameters
+        ----------
+        effects : mapping of str to float
+            The effects asked for.
+        i : int
+            Index of the run in ``cases``.
+        """
+        return effects if self.run_effects is None else self.run_effects(effects, i)
+
     def predict(self, effects: Mapping[str, float], i: int) -> tuple[np.ndarray, np.ndarray]:
         """Simulated θ and a of run i (not cached).
 
@@ -71,7 +89,7 @@ class Evaluator:
         i : int
             Index of the run in ``cases``.
         """
-        return self.predict_case(self.cases[i], effects)
+        return self.predict_case(self.cases[i], self.effects_for(effects, i))
 
     def predict_case(self, case: RunCase, effects: Mapping[str, float]) -> tuple[np.ndarray, np.ndarray]:
         """Simulated θ and a of a run (e.g. a copy of one of ``cases`` with another
@@ -100,11 +118,12 @@ class Evaluator:
         i : int
             Index of the run in ``cases``.
         """
+        effects = self.effects_for(effects, i)  # cached per run's own effects: other sessions' values never miss
         key = (_key(effects), i)
         hit = self._cache.get(key)
         if hit is None:
             try:
-                theta, a = self.predict(effects, i)
+                theta, a = self.predict_case(self.cases[i], effects)
             # a model that cannot be built (values a model may not hold) or run
             except (ArithmeticError, ValueError, np.linalg.LinAlgError, StationError):
                 self._cache[key] = hit = (math.inf, math.inf)
