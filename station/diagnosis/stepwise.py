@@ -1,0 +1,239 @@
+"""Stepwise selection of the effects the runs call for: forward selection from the single
+effects (:func:`station.diagnosis.selection.fit_each_alone`), with a lookahead over its
+first step.
+
+Forward selection adds the best effect while it pays (:func:`~station.diagnosis.selection.accept`:
+the null floor, parsimony and noise), at most :data:`~station.diagnosis.selection.MAX_EFFECTS`,
+refitting the accepted effects jointly on all fit runs after each; static_friction may
+replace an accepted coulomb_friction in place and be downgraded again
+(:mod:`station.diagnosis.selection`, breakaway friction).
+
+Lookahead (a beam of width 1 + :data:`LOOKAHEAD` over the first step). Greedy forward
+selection keeps its first choice, and with two effects hidden the best single effect is
+often a proxy for both that the true pair cannot be reached from (Coulomb friction for
+viscous friction plus backlash: backlash beside it does not pay, beside viscous friction it
+takes the cost to the noise floor; a dead-zone for breakaway friction plus drive damping).
+So at the second step the next :data:`LOOKAHEAD` single effects that paid alone are tried
+as first effects too: every other candidate is scanned beside each on all fit runs
+(:func:`~station.diagnosis.selection.screen_costs`, as beside the chosen one), the
+:data:`LOOKAHEAD_TRIALS` pairs that reach a lower in-sample cost than the best pair beside
+the chosen first effect are fitted per fold and judged on the validation runs like every
+second-step candidate, and the best of them all is accepted by the same rule against the
+chosen first effect alone; a pair from the lookahead replaces the first choice.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from concurrent.futures import ThreadPoolExecutor
+
+import numpy as np
+
+from station.analysis.fitting import fit
+from station.diagnosis.cost import relative_gain
+from station.diagnosis.folds import validation_runs
+from station.diagnosis.prose import format_value
+from station.diagnosis.selection import (MAX_EFFECTS, NESTED, SECOND_STEP_CANDIDATES, SHAPE, Search, Selection,
+                                         Singles, Step, Trial, accept, credible, fit_set, null_floor, screen_costs,
+                                         set_axes, trial)
+from station.plant.effects import EFFECTS
+
+LOOKAHEAD = 3
+"""Single effects beside the chosen one tried as first effects at the second step (module
+docstring); each must have paid alone, breakaway and plain Coulomb friction count as one."""
+
+LOOKAHEAD_TRIALS = 2
+"""Pairs from the lookahead fitted per fold: those with the lowest screened cost, if below
+the best pair beside the chosen first effect."""
+
+
+def _set_with(accepted: Sequence[str], name: str) -> tuple:
+    """The set tried when ``name`` joins the accepted effects: added last, or in place of
+    the simpler effect it holds (static_friction in place of coulomb_friction)."""
+    simpler = NESTED.get(name)
+    return tuple(a for a in accepted if a != simpler) + (name,)
+
+
+def _family(name: str) -> set[str]:
+    """An effect and those nested with it (static_friction and coulomb_friction)."""
+    return {name} | {k for k, v in NESTED.items() if v == name} | ({NESTED[name]} if name in NESTED else set())
+
+
+def _try_sets(search: Search, sets: Mapping, starts: Sequence) -> dict[str, Trial]:
+    """Per key, its set of effects fitted per fold (:func:`trial`) from ``starts``."""
+    with ThreadPoolExecutor(search.workers) as ex:
+        futures = {n: ex.submit(trial, search.ev, search.folds, names, search.axes, starts) for n, names in sets.items()}
+    return {n: f.result() for n, f in futures.items()}
+
+
+def _joint_trials(search: Search, names: Sequence[str], accepted: list[str], current: Trial,
+                  fixed: Mapping[str, float], step: int) -> tuple[dict[str, Trial], float]:
+    """The screened candidates, each fitted per fold jointly with the accepted ones, and the
+    lowest in-sample cost the screen reached (the accepted effects' own when none lowers it)."""
+    ev = search.ev
+    held = {NESTED[a] for a in accepted if a in NESTED}  # coulomb_friction is in an accepted static_friction
+    full = len(accepted) >= MAX_EFFECTS  # then only an upgrade in place is left
+    open_ = [n for n in names if n not in accepted and n not in held
+             and (not full or NESTED.get(n) in accepted)]
+    costs = screen_costs(ev, search.axes, open_, fixed, search.fit_runs)
+    pool = list(costs)[:SECOND_STEP_CANDIDATES]
+    # an upgrade in place is always tried: the screen holds the sliding level where it is
+    pool += [n for n in open_ if NESTED.get(n) in accepted and n not in pool]
+    search.say(f"step {step + 1}: screening beside {' + '.join(accepted)} on all fit runs: {', '.join(pool)}")
+    trials = _try_sets(search, {n: _set_with(accepted, n) for n in pool}, current.fold_values)
+    for n in pool:
+        search.say(f"step {step + 1}: {' + '.join(trials[n].names)}: validation cost gain "
+                   f"{relative_gain(trials[n].val_weighted, current.val_weighted):.1f} % over {' + '.join(accepted)} "
+                   f"({ev.simulations} simulations)")
+    return trials, min(costs.values(), default=ev.cost(fixed, search.fit_runs))
+
+
+def _lookahead(search: Search, names: Sequence[str], singles: Singles, first: Step, nominal: Trial,
+               bar: float, terms: int) -> dict[str, dict[str, Trial]]:
+    """Other first effects with the second effect that pays most beside them (module
+    docstring): first effect -> {second effect: the pair's trial}, credible ones only.
+
+    ``bar`` is the lowest in-sample cost screened beside the chosen first effect."""
+    ev, chosen = search.ev, first.chosen
+    taken = _family(chosen)
+    firsts = []
+    for n in sorted(first.trials, key=lambda n: first.trials[n].val_weighted):
+        if len(firsts) >= LOOKAHEAD:
+            break
+        if n not in taken and accept(nominal.val_weighted, first.trials[n].val_weighted, terms, first.floor):
+            firsts.append(n)
+            taken |= _family(n)
+    pairs = []
+    for f in firsts:
+        others = [n for n in names if n not in _family(f)]
+        pairs += [(cost, f, n) for n, cost in screen_costs(ev, search.axes, others, singles.values[f],
+                                                           search.fit_runs).items() if cost < bar]
+    pairs = sorted(pairs)[:LOOKAHEAD_TRIALS]
+    search.say(f"step 2: lookahead over {', '.join(firsts) or 'no other first effect'}: "
+               + (", ".join(f"{f} + {n}" for _, f, n in pairs) or f"no pair below {chosen}'s best")
+               + f" ({ev.simulations} simulations)")
+    out: dict[str, dict[str, Trial]] = {}
+    for _, f, n in pairs:
+        tr = _try_sets(search, {n: (f, n)}, singles.trials[f].fold_values)[n]
+        search.say(f"step 2: {f} + {n}: validation cost gain {relative_gain(tr.val_weighted, first.trials[chosen].val_weighted):.1f} % "
+                   f"over {chosen} ({ev.simulations} simulations)")
+        out.setdefault(f, {})[n] = tr
+    return {f: kept for f, group in out.items() if (kept := credible(group, terms))}
+
+
+def _refit_start(values: Mapping[str, float], current: Trial) -> dict:
+    """Where the joint refit on all fit runs starts: the accepted values, and for an effect
+    new to them the median of its fold values (for a new static_friction its sliding level
+    too: the breakaway excess lowers it)."""
+    start = {k: v for k, v in values.items() if k in current.fold_values[0]}
+    fresh = [k for k in current.fold_values[0] if k not in start]
+    if "static_friction" in fresh:
+        fresh.append("coulomb_friction")
+    for k in fresh:
+        start[k] = float(np.median([fv[k] for fv in current.fold_values]))
+    return start
+
+
+def _downgrade(search: Search, accepted: list[str], current: Trial, terms: int) -> tuple[list[str], Trial]:
+    """After an effect joined an accepted static_friction: the simpler effect in its place
+    when the breakaway excess no longer pays beside the others (:func:`credible`)."""
+    for name, simpler in NESTED.items():
+        if name not in accepted:
+            continue
+        names = tuple(simpler if n == name else n for n in current.names)
+        alt = trial(search.ev, search.folds, names, search.axes, current.fold_values)
+        if credible({name: current, simpler: alt}, terms).get(name) is None:
+            search.say(f"{simpler} in place of {name}: the breakaway excess no longer pays beside "
+                       f"{' + '.join(n for n in accepted if n != name)}")
+            return [simpler if n == name else n for n in accepted], alt
+    return accepted, current
+
+
+def forward_select(search: Search, names: Sequence[str], singles: Singles, nominal: Trial) -> Selection:
+    """Add the best effect while it pays (:func:`accept`), at most :data:`MAX_EFFECTS`,
+    with a lookahead over the first effect at the second step (module docstring); after
+    each, refit the accepted effects jointly on all fit runs. static_friction may replace
+    an accepted coulomb_friction (one more step, no new place).
+
+    Parameters
+    ----------
+    search : Search
+    names : sequence of str
+        The candidates.
+    singles : Singles
+        Step 1 (:func:`fit_each_alone`).
+    nominal : Trial
+        The nominal model's validation errors: where selection starts.
+    """
+    ev, folds = search.ev, search.folds
+    terms = ev.terms(validation_runs(folds))
+    accepted: list[str] = []
+    current = nominal
+    values: dict[str, float] = {}
+    steps: list[Step] = []
+    for step in range(MAX_EFFECTS + len(NESTED)):
+        if step == 0:
+            trials = {n: singles.trials[n] for n in names}
+        else:
+            trials, bar = _joint_trials(search, names, accepted, current, values, step)
+        trials = credible(trials, terms)
+        pairs = _lookahead(search, names, singles, steps[0], nominal, bar, terms) if step == 1 else {}
+        if not trials and not pairs:
+            break
+        best = min(trials, key=lambda n: trials[n].val_weighted) if trials else None
+        new_first = None
+        for f, group in pairs.items():  # a pair from the lookahead replaces the first choice
+            n = min(group, key=lambda n: group[n].val_weighted)
+            if best is None or group[n].val_weighted < trials[best].val_weighted:
+                search.say(f"step 2: {f} + {n} beats {' + '.join(trials[best].names) if best else accepted[0]}")
+                new_first, best, trials = f, n, group
+        floor = null_floor(ev, folds, current.fold_values)
+        search.say(f"step {step + 1}: best {best}, validation cost {trials[best].val_weighted / terms:.3g} per sample, "
+                   f"current {current.val_weighted / terms:.3g}, reached by quantization and noise alone "
+                   f"{floor / terms:.3g}")
+        ok = accept(current.val_weighted, trials[best].val_weighted, terms, floor)
+        if ok and new_first is not None:
+            steps[0].chosen = new_first
+            accepted, values = [new_first], dict(singles.values[new_first])
+        steps.append(Step(list(accepted), trials, best if ok else None, floor))
+        if not ok:
+            break
+        simpler = NESTED.get(best)
+        if simpler in accepted:  # an upgrade in place
+            accepted[accepted.index(simpler)] = best
+        else:
+            accepted.append(best)
+        current = trials[best]
+        if step > 0 and best not in NESTED:
+            accepted, current = _downgrade(search, accepted, current, terms)
+        if step == 0:
+            values = dict(singles.values[best])
+        else:
+            values = fit_set(ev, set_axes(current.names, search.axes), search.fit_runs, _refit_start(values, current))
+        search.say(f"accepted {best} (step {step + 1}): "
+                   + ", ".join(f"{n} = {format_value(v, EFFECTS[n].unit)}" for n, v in values.items()))
+    if "static_friction" in accepted:
+        current, values = _fit_shape(search, current, values, terms)
+    return Selection(accepted, current, values, steps)
+
+
+def _fit_shape(search: Search, current: Trial, values: dict, terms: int) -> tuple[Trial, dict]:
+    """The Stribeck speed of an accepted static_friction, fitted alone with the accepted
+    values fixed (per fold, then on all fit runs) and kept only when it pays on the
+    validation runs (:func:`accept`); never a cause of its own."""
+    ev, folds, axis = search.ev, search.folds, search.axes[SHAPE]
+    fold_values, val_sse, total = [], {}, 0.0
+    for fold, fixed in zip(folds, current.fold_values):
+        fitted = fit(lambda vals: ev.cost(vals, fold.fit), [axis], fixed=fixed).values
+        fold_values.append(fitted)
+        for i in fold.val:
+            val_sse[i] = ev.sse(fitted, i)
+            total += ev.weighted(fitted, i)
+    shaped = Trial(current.names, fold_values, val_sse, total)
+    if not accept(current.val_weighted, shaped.val_weighted, terms):
+        search.say(f"{SHAPE}: left at the model's (a fitted one gains {relative_gain(total, current.val_weighted):.1f} %)")
+        return current, values
+    values = fit(lambda vals: ev.cost(vals, search.fit_runs), [axis], fixed=values).values
+    search.say(f"{SHAPE} = {format_value(values[SHAPE], EFFECTS[SHAPE].unit)} (validation cost gain "
+               f"{relative_gain(total, current.val_weighted):.1f} %)")
+    return shaped, values
