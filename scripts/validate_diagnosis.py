@@ -39,13 +39,13 @@ from pathlib import Path
 REPO = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(REPO))  # tests.blind is not installed with the package
 
-from tests.blind.cases import (MAGNITUDES, NEW_MAGNITUDES, PAIRS, SETTING_MAGNITUDES, TOLERANCE,  # noqa: E402
-                               TRIPLES, TWO_EFFECTS, case_effects, value_error)
+from tests.blind.cases import (MAGNITUDES, NEW_MAGNITUDES, OOV_CASES, PAIRS, SETTING_MAGNITUDES,  # noqa: E402
+                               TOLERANCE, TRIPLES, TWO_EFFECTS, case_effects, value_error)
 
 RANGES = {**MAGNITUDES, **NEW_MAGNITUDES, **SETTING_MAGNITUDES}
 NEW_CASES = (*NEW_MAGNITUDES, *PAIRS, *TRIPLES)
 """The cases of issue 17's effects (``--effects new``)."""
-KNOWN = (*MAGNITUDES, "two", *NEW_CASES, "clean")
+KNOWN = (*MAGNITUDES, "two", *NEW_CASES, "clean", *OOV_CASES)
 """Every case this script runs (the default), in the table's order."""
 
 
@@ -57,7 +57,7 @@ def judged(case: str) -> tuple[str, ...]:
     case : str
         "clean", "two", an effect, or effects joined by "+" (tests/blind/cases.CASES).
     """
-    if case == "clean":
+    if case == "clean" or case in OOV_CASES:
         return ()
     if case == "two":
         return TWO_EFFECTS
@@ -79,6 +79,7 @@ class Outcome:
     extended: dict = None  # the extended model's effects
     cost_hidden: float = float("nan")  # in-sample cost J of the hidden effects (the diagnosis's own cost)
     cost_found: float = float("nan")   # ... and of the extended model
+    unexplained: bool = False          # the diagnosis's flag
 
     @property
     def search_miss(self) -> bool:
@@ -91,8 +92,10 @@ class Outcome:
         """Every judged effect is a cause (module docstring): "none" for clean, the first
         cause for a single effect, among the causes for two or three."""
         names = judged(self.case)
+        if self.case in OOV_CASES:  # out of vocabulary: flagged, whatever it names
+            return self.unexplained
         if not names:
-            return not self.causes
+            return not self.causes and not self.unexplained
         if len(names) == 1 and not (self.causes and self.causes[0] == names[0]):
             return False
         if not set(names) <= set(self.causes):
@@ -120,11 +123,12 @@ def run_case(case: str, seed: int) -> Outcome:
         result = diagnose([str(p) for p in paths]).to_json()
         seconds = time.perf_counter() - t0
         extended = dict(result["extended_model"]["effects"])
-        cost_hidden, cost_found = _costs(paths, hidden, extended)
+        cost_hidden, cost_found = (_costs(paths, hidden, extended) if case not in OOV_CASES
+                                   else (float("nan"), float("nan")))
     values = {e["name"]: e["value"] for e in result["effects"] if e["name"] in hidden}
     values.update({k: v for k, v in extended.items() if k in hidden})  # the joint values
     return Outcome(case, seed, hidden, list(result["causes"]), values, float(result["gain_pct"]), seconds,
-                   extended, cost_hidden, cost_found)
+                   extended, cost_hidden, cost_found, bool(result["unexplained"]))
 
 
 def _costs(paths, hidden: dict, found: dict) -> tuple[float, float]:
@@ -172,7 +176,7 @@ def table(outcomes: list[Outcome], seeds: int, elapsed: float) -> str:
         "|---|---|---|---|---|---|---|",
     ]
     for case, group in by_case.items():
-        if case == "clean":
+        if case == "clean" or case in OOV_CASES:
             continue
         parts = TWO_EFFECTS if case == "two" else case.split("+")
         rng = " + ".join(f"{n} {RANGES[n][0]:g}–{RANGES[n][1]:g}" for n in parts) if len(parts) > 1 \
@@ -185,8 +189,15 @@ def table(outcomes: list[Outcome], seeds: int, elapsed: float) -> str:
                      f"{sum(o.ok for o in group)} | {med} | {mx} |")
     clean = by_case.get("clean", [])
     if clean:
-        lines += ["", f"Clean cases: \"none\" in {sum(o.named for o in clean)} of {len(clean)} "
-                      f"({100 * sum(o.named for o in clean) / len(clean):.0f} %)."]
+        lines += ["", f"Clean cases: \"none\" with `unexplained: false` in {sum(o.named for o in clean)} of "
+                      f"{len(clean)} ({100 * sum(o.named for o in clean) / len(clean):.0f} %); \"none\" in "
+                      f"{sum(not o.causes for o in clean)}, `unexplained: false` in {sum(not o.unexplained for o in clean)}."]
+    for case in OOV_CASES:
+        group = by_case.get(case, [])
+        if group:
+            lines += ["", f"Out-of-vocabulary {case} ({', '.join(OOV_CASES[case])} hidden): `unexplained: true` in "
+                          f"{sum(o.ok for o in group)} of {len(group)}; named as a cause anyway: "
+                          f"{', '.join(sorted({c for o in group for c in o.causes})) or 'nothing'}."]
     misses = [o for o in outcomes if not o.ok]
     if misses:
         search = sum(o.search_miss for o in misses)
@@ -197,13 +208,13 @@ def table(outcomes: list[Outcome], seeds: int, elapsed: float) -> str:
                       "proxy such as deadzone or coulomb_friction often comes first), rather than the runs failing "
                       "to tell the explanations apart."]
     lines += ["", "## Every case", "",
-              "| case | seed | hidden | causes found | values found | θ gain % | J hidden | J found | s |",
-              "|---|---|---|---|---|---|---|---|---|"]
+              "| case | seed | hidden | causes found | values found | θ gain % | J hidden | J found | unexplained | s |",
+              "|---|---|---|---|---|---|---|---|---|---|"]
     for o in outcomes:
         mark = "" if o.ok else " ✗"
         lines.append(f"| {o.case}{mark} | {o.seed} | {_fmt_hidden(o.hidden)} | {', '.join(o.causes) or 'none'} | "
                      f"{_fmt_hidden(o.values)} | {o.gain_pct:.1f} | {o.cost_hidden:.3g} | {o.cost_found:.3g} | "
-                     f"{o.seconds:.0f} |")
+                     f"{'yes' if o.unexplained else 'no'} | {o.seconds:.0f} |")
     return "\n".join(lines) + "\n"
 
 

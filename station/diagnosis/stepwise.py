@@ -42,6 +42,11 @@ LOOKAHEAD = 3
 """Single effects beside the chosen one tried as first effects at the second step (module
 docstring); each must have paid alone, breakaway and plain Coulomb friction count as one."""
 
+LOOKAHEAD_GRID = 2
+"""The lookahead scans every second grid point of the candidates beside another first
+effect (half the simulations of the chosen one's screen; the second effects that make a
+wrong first choice matter lower the cost by far more than a grid step does)."""
+
 LOOKAHEAD_TRIALS = 2
 """Pairs from the lookahead fitted per fold: those with the lowest screened cost, if below
 the best pair beside the chosen first effect."""
@@ -106,8 +111,8 @@ def _lookahead(search: Search, names: Sequence[str], singles: Singles, first: St
     pairs = []
     for f in firsts:
         others = [n for n in names if n not in _family(f)]
-        pairs += [(cost, f, n) for n, cost in screen_costs(ev, search.axes, others, singles.values[f],
-                                                           search.fit_runs).items() if cost < bar]
+        costs = screen_costs(ev, search.axes, others, singles.values[f], search.fit_runs, LOOKAHEAD_GRID)
+        pairs += [(cost, f, n) for n, cost in costs.items() if cost < bar]
     pairs = sorted(pairs)[:LOOKAHEAD_TRIALS]
     search.say(f"step 2: lookahead over {', '.join(firsts) or 'no other first effect'}: "
                + (", ".join(f"{f} + {n}" for _, f, n in pairs) or f"no pair below {chosen}'s best")
