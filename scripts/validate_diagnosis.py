@@ -5,10 +5,11 @@ For every effect of ``tests.blind.cases.MAGNITUDES`` and ``NEW_MAGNITUDES`` (the
 vocabulary's named effects and param:drive_c, drive_k, J_base, act_K), for seeds 0..N-1,
 the independent generator (tests/blind) writes the four rig-format logs of a case with the
 effect hidden at a value drawn in the issue's range; ``station.diagnosis.diagnose`` sees
-only those files. Also N clean cases (must give "none"), N two-effect cases
-(``TWO_EFFECTS``) and the pairs and triples of ``PAIRS`` and ``TRIPLES`` (every effect
-named). Bar (issues 8 and 17): named in >= 9 of 10 seeds with the value within 25 %, clean
-"none" in >= 9 of 10.
+only those files. Also N clean cases (must give "none" and ``unexplained: false``), N
+two-effect cases (``TWO_EFFECTS``), the pairs and triples of ``PAIRS`` and ``TRIPLES``
+(every effect named) and the out-of-vocabulary cases of ``OOV_CASES`` (``oov:encoder_cyclic``,
+``oov:cogging``, ``oov:position_spring``: must give ``unexplained: true``, whatever they
+name). Bar (issues 8 and 17): each in >= 9 of 10 seeds, named values within 25 %.
 
 A case's effects are named when each is among the accepted causes (a single effect: the
 first cause); static_friction, which the generator always hides with its coulomb_friction
@@ -20,7 +21,7 @@ model's (the joint values) where it holds the effect, else the value fitted alon
 
 Usage: ``python scripts/validate_diagnosis.py [--seeds 10] [--effects NAME ...]
 [--out docs/diagnosis_validation.md] [--jobs 1]``. ``--effects`` also takes ``clean``,
-``two`` and the pairs and triples by name (e.g. ``coulomb_friction+amp_offset``), and
+``two``, the ``oov:`` cases and the pairs and triples by name (e.g. ``coulomb_friction+amp_offset``), and
 ``new`` for the three new effects with their pairs and triples. Progress goes to stderr,
 one line per case; the table is printed and written.
 """

@@ -84,6 +84,9 @@ def test_new_hidden_effect_is_named_with_its_value(tmp_path, effect, seed):
     # seed 0 of this triple is one of docs/diagnosis_validation.md's misses (a dead-zone is
     # taken first for Coulomb friction plus an offset, and forward selection never undoes it)
     ("amp_offset+coulomb_friction+param:drive_c", 1),
+    # before the lookahead (station.diagnosis.stepwise) 0 of 10: Coulomb friction came first
+    # and backlash never paid beside it; seed 0 named coulomb_friction + param:drive_c
+    ("viscous_friction+backlash", 0),
 ])
 def test_new_effects_in_pairs_and_triples_are_all_named(tmp_path, case, seed):
     effects = case_effects(case, seed)

@@ -1,7 +1,9 @@
-"""Which effects the runs call for: every candidate fitted alone per fold, then forward
-selection (at most :data:`MAX_EFFECTS`, joint refit of all accepted effects at each step),
-each step accepted only when it pays on held-out data beyond what quantization and noise
-reach by luck.
+"""Which effects the runs call for, the search's parts: every candidate fitted alone per
+fold, sets of effects fitted per fold and judged on held-out runs (:func:`trial`), the
+in-sample screen of candidates beside accepted effects, and the acceptance rule: a step is
+accepted only when it pays on held-out data beyond what quantization and noise reach by
+luck. The order of the search (forward selection, at most :data:`MAX_EFFECTS`, with a
+lookahead over its first effect) is :mod:`station.diagnosis.stepwise`'s.
 
 Acceptance: the pooled validation cost must fall by at least :data:`MIN_RELATIVE_GAIN`
 (parsimony: an effect must pay for itself) and by at least :data:`MIN_NOISE_GAIN` noise
@@ -21,7 +23,7 @@ no new place), and once static_friction is, coulomb_friction is no more a candid
 a later effect joins it, static_friction is judged again against coulomb_friction in its
 place (a downgrade when the excess no longer pays). An accepted static_friction's
 stribeck_speed is fitted last with the accepted values fixed and kept only when it pays on
-the validation runs (:func:`_fit_shape`); else it stays the model's (default 0.05 rad/s).
+the validation runs (:func:`station.diagnosis.stepwise.forward_select`); else it stays the model's (default 0.05 rad/s).
 """
 
 from __future__ import annotations
