@@ -87,12 +87,19 @@ def test_new_hidden_effect_is_named_with_its_value(tmp_path, effect, seed):
     # before the lookahead (station.diagnosis.stepwise) 0 of 10: Coulomb friction came first
     # and backlash never paid beside it; seed 0 named coulomb_friction + param:drive_c
     ("viscous_friction+backlash", 0),
+    # 5 of 10 before: a dead-zone came first; then the alternatives' refit failed on the
+    # breakaway friction the lookahead reached (static_friction's sliding level not held)
+    ("static_friction+param:drive_c", 0),
 ])
 def test_new_effects_in_pairs_and_triples_are_all_named(tmp_path, case, seed):
     effects = case_effects(case, seed)
     result = _diagnose(tmp_path, effects, seed)
-    assert set(effects) <= set(result["causes"]), f"hidden {effects}: found {result['causes']}"
-    for name, hidden in effects.items():
+    # breakaway friction is one cause, judged on v_s; its sliding level is in the model beside it
+    judged = {k: v for k, v in effects.items() if not (k == "coulomb_friction" and "static_friction" in effects)}
+    assert set(judged) <= set(result["causes"]), f"hidden {effects}: found {result['causes']}"
+    if "static_friction" in effects:
+        assert "coulomb_friction" in result["extended_model"]["effects"]
+    for name, hidden in judged.items():
         found = _joint(result, name)
         assert value_error(hidden, found) <= TOLERANCE, f"{name}: hidden {hidden:.4g}, found {found:.4g}"
 
