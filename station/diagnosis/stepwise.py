@@ -13,13 +13,17 @@ selection keeps its first choice, and with two effects hidden the best single ef
 often a proxy for both that the true pair cannot be reached from (Coulomb friction for
 viscous friction plus backlash: backlash beside it does not pay, beside viscous friction it
 takes the cost to the noise floor; a dead-zone for breakaway friction plus drive damping).
-So at the second step the next :data:`LOOKAHEAD` single effects that paid alone are tried
-as first effects too: every other candidate is scanned beside each on all fit runs
-(:func:`~station.diagnosis.selection.screen_costs`, as beside the chosen one), the
-:data:`LOOKAHEAD_TRIALS` pairs that reach a lower in-sample cost than the best pair beside
-the chosen first effect are fitted per fold and judged on the validation runs like every
-second-step candidate, and the best of them all is accepted by the same rule against the
-chosen first effect alone; a pair from the lookahead replaces the first choice.
+So at the second step the next :data:`LOOKAHEAD` single effects (by their in-sample cost
+fitted alone) are tried as first effects too: every other candidate is scanned beside each
+on all fit runs on a coarse grid (:func:`~station.diagnosis.selection.screen_costs`), the
+:data:`LOOKAHEAD_TRIALS` pairs whose in-sample cost is below the best pair's beside the
+chosen first effect by the parsimony margin (MIN_RELATIVE_GAIN) are fitted per fold and
+judged on the validation runs like every second-step candidate, and the best of them all
+is accepted by the same rule against the chosen first effect alone. A pair from the
+lookahead replaces the first choice; its first effect is then dropped when it does not pay
+beside the second (SFFS's conditional exclusion, :func:`_drop`) and selection goes on.
+The lookahead is not repeated at the third step: it did not reach the hidden triples of
+the blind set and costs a tenth of a diagnosis of the rig's four logs.
 """
 
 from __future__ import annotations
@@ -33,19 +37,27 @@ from station.analysis.fitting import fit
 from station.diagnosis.cost import relative_gain
 from station.diagnosis.folds import validation_runs
 from station.diagnosis.prose import format_value
-from station.diagnosis.selection import (MAX_EFFECTS, NESTED, SECOND_STEP_CANDIDATES, SHAPE, Search, Selection,
-                                         Singles, Step, Trial, accept, credible, fit_set, null_floor, screen_costs,
-                                         set_axes, trial)
+from station.diagnosis.selection import (MAX_EFFECTS, MIN_RELATIVE_GAIN, NESTED, SECOND_STEP_CANDIDATES, SHAPE,
+                                         Search, Selection, Singles, Step, Trial, accept, credible, fit_set,
+                                         null_floor, screen_costs, set_axes, trial)
 from station.plant.effects import EFFECTS
 
 LOOKAHEAD = 3
 """Single effects beside the chosen one tried as first effects at the second step (module
-docstring); each must have paid alone, breakaway and plain Coulomb friction count as one."""
+docstring): those that fit all fit runs best alone (in-sample: a member of a hidden pair may
+not pay alone on held-out runs, e.g. viscous friction beside backlash); breakaway and plain
+Coulomb friction count as one."""
+
+DROPS = 2
+"""Forward steps beyond :data:`MAX_EFFECTS` (and the upgrades in place) that replace a first
+effect the lookahead brought and then dropped (:func:`_drop`)."""
 
 LOOKAHEAD_GRID = 2
 """The lookahead scans every second grid point of the candidates beside another first
-effect (half the simulations of the chosen one's screen; the second effects that make a
-wrong first choice matter lower the cost by far more than a grid step does)."""
+effect (half the simulations of the chosen one's screen: the pairs a wrong first choice
+hides lower the in-sample cost by far more than the coarser grid misses, e.g. 14 against
+98 for viscous friction + backlash; every fourth point, a factor 3 apart on a ratio's
+axis, lost drive damping beside breakaway friction)."""
 
 LOOKAHEAD_TRIALS = 2
 """Pairs from the lookahead fitted per fold: those with the lowest screened cost, if below
@@ -81,7 +93,11 @@ def _joint_trials(search: Search, names: Sequence[str], accepted: list[str], cur
     open_ = [n for n in names if n not in accepted and n not in held
              and (not full or NESTED.get(n) in accepted)]
     costs = screen_costs(ev, search.axes, open_, fixed, search.fit_runs)
-    pool = list(costs)[:SECOND_STEP_CANDIDATES]
+    # a candidate that lowers the in-sample cost by less than the parsimony margin with the
+    # others held will not pay it on held-out runs (on the rig's four logs in-sample screen
+    # gains of 8-31 % came out at 3-5 % held out)
+    c0 = ev.cost(fixed, search.fit_runs)
+    pool = [n for n in costs if costs[n] <= (1 - MIN_RELATIVE_GAIN) * c0][:SECOND_STEP_CANDIDATES]
     # an upgrade in place is always tried: the screen holds the sliding level where it is
     pool += [n for n in open_ if NESTED.get(n) in accepted and n not in pool]
     search.say(f"step {step + 1}: screening beside {' + '.join(accepted)} on all fit runs: {', '.join(pool)}")
@@ -93,37 +109,62 @@ def _joint_trials(search: Search, names: Sequence[str], accepted: list[str], cur
     return trials, min(costs.values(), default=ev.cost(fixed, search.fit_runs))
 
 
-def _lookahead(search: Search, names: Sequence[str], singles: Singles, first: Step, nominal: Trial,
-               bar: float, terms: int) -> dict[str, dict[str, Trial]]:
-    """Other first effects with the second effect that pays most beside them (module
-    docstring): first effect -> {second effect: the pair's trial}, credible ones only.
+def _held(names: Sequence[str]) -> set[str]:
+    """The effect values a set holds (a static_friction's sliding level too)."""
+    return set(names) | {NESTED[n] for n in names if n in NESTED}
 
-    ``bar`` is the lowest in-sample cost screened beside the chosen first effect."""
-    ev, chosen = search.ev, first.chosen
-    taken = _family(chosen)
+
+def _lookahead(search: Search, names: Sequence[str], singles: Singles, accepted: list[str], current: Trial,
+               values: Mapping[str, float], bar: float, terms: int) -> dict[str, dict[str, Trial]]:
+    """Other first effects, beside the accepted ones after the first, with the next effect
+    that pays most beside them (module docstring): first effect -> {next effect: the set's
+    trial}, credible ones only. ``bar`` is the lowest in-sample cost screened beside the
+    accepted effects."""
+    ev, runs = search.ev, search.fit_runs
+    chosen, kept = accepted[0], accepted[1:]
+    keep = {k: v for k, v in values.items() if k in _held(kept)}
+    taken = _family(chosen).union(*(_family(k) for k in kept))
+    fitted = {n: ev.cost(singles.values[n], runs) for n in singles.values}  # cached: fitted on these runs
     firsts = []
-    for n in sorted(first.trials, key=lambda n: first.trials[n].val_weighted):
+    for n in sorted(fitted, key=fitted.get):
         if len(firsts) >= LOOKAHEAD:
             break
-        if n not in taken and accept(nominal.val_weighted, first.trials[n].val_weighted, terms, first.floor):
+        if n not in taken and fitted[n] < ev.cost({}, runs):
             firsts.append(n)
             taken |= _family(n)
-    pairs = []
+    sets = []
     for f in firsts:
-        others = [n for n in names if n not in _family(f)]
-        costs = screen_costs(ev, search.axes, others, singles.values[f], search.fit_runs, LOOKAHEAD_GRID)
-        pairs += [(cost, f, n) for n, cost in costs.items() if cost < bar]
-    pairs = sorted(pairs)[:LOOKAHEAD_TRIALS]
-    search.say(f"step 2: lookahead over {', '.join(firsts) or 'no other first effect'}: "
-               + (", ".join(f"{f} + {n}" for _, f, n in pairs) or f"no pair below {chosen}'s best")
+        others = [n for n in names if n not in _family(f) and n not in _held(kept)]
+        costs = screen_costs(ev, search.axes, others, {**singles.values[f], **keep}, runs, LOOKAHEAD_GRID)
+        sets += [(cost, f, n) for n, cost in costs.items() if cost < (1 - MIN_RELATIVE_GAIN) * bar]
+    sets = sorted(sets)[:LOOKAHEAD_TRIALS]
+    step = len(accepted) + 1
+    search.say(f"step {step}: lookahead over {', '.join(firsts) or 'no other first effect'} in place of {chosen}: "
+               + (", ".join(" + ".join((f, *kept, n)) for _, f, n in sets) or f"nothing below {chosen}'s best")
                + f" ({ev.simulations} simulations)")
     out: dict[str, dict[str, Trial]] = {}
-    for _, f, n in pairs:
-        tr = _try_sets(search, {n: (f, n)}, singles.trials[f].fold_values)[n]
-        search.say(f"step 2: {f} + {n}: validation cost gain {relative_gain(tr.val_weighted, first.trials[chosen].val_weighted):.1f} % "
-                   f"over {chosen} ({ev.simulations} simulations)")
+    for _, f, n in sets:
+        starts = [{**fv, **{k: v for k, v in cv.items() if k in _held(kept)}}
+                  for fv, cv in zip(singles.trials[f].fold_values, current.fold_values)]
+        tr = _try_sets(search, {n: (f, *kept, n)}, starts)[n]
+        search.say(f"step {step}: {' + '.join(tr.names)}: validation cost gain "
+                   f"{relative_gain(tr.val_weighted, current.val_weighted):.1f} % over {' + '.join(accepted)} "
+                   f"({ev.simulations} simulations)")
         out.setdefault(f, {})[n] = tr
-    return {f: kept for f, group in out.items() if (kept := credible(group, terms))}
+    return {f: ok for f, group in out.items() if (ok := credible(group, terms))}
+
+
+def _drop(search: Search, name: str, current: Trial, terms: int) -> Trial | None:
+    """The accepted set without ``name`` when ``name`` no longer pays beside the others (it
+    would not be :func:`accept`-ed added to them; SFFS's conditional exclusion), else None."""
+    names = tuple(n for n in current.names if n != name)
+    starts = [{k: v for k, v in fv.items() if k != name} for fv in current.fold_values]
+    without = _try_sets(search, {name: names}, starts)[name]
+    if accept(without.val_weighted, current.val_weighted, terms):
+        return None
+    search.say(f"{name} dropped: it no longer pays beside {' + '.join(names)} (validation cost gain "
+               f"{relative_gain(current.val_weighted, without.val_weighted):.1f} %)")
+    return without
 
 
 def _refit_start(values: Mapping[str, float], current: Trial) -> dict:
@@ -176,21 +217,22 @@ def forward_select(search: Search, names: Sequence[str], singles: Singles, nomin
     current = nominal
     values: dict[str, float] = {}
     steps: list[Step] = []
-    for step in range(MAX_EFFECTS + len(NESTED)):
+    for step in range(MAX_EFFECTS + len(NESTED) + DROPS):
         if step == 0:
             trials = {n: singles.trials[n] for n in names}
         else:
             trials, bar = _joint_trials(search, names, accepted, current, values, step)
         trials = credible(trials, terms)
-        pairs = _lookahead(search, names, singles, steps[0], nominal, bar, terms) if step == 1 else {}
+        pairs = _lookahead(search, names, singles, accepted, current, values, bar, terms) if step == 1 else {}
         if not trials and not pairs:
             break
         best = min(trials, key=lambda n: trials[n].val_weighted) if trials else None
         new_first = None
-        for f, group in pairs.items():  # a pair from the lookahead replaces the first choice
+        for f, group in pairs.items():  # a set from the lookahead replaces the first choice
             n = min(group, key=lambda n: group[n].val_weighted)
             if best is None or group[n].val_weighted < trials[best].val_weighted:
-                search.say(f"step 2: {f} + {n} beats {' + '.join(trials[best].names) if best else accepted[0]}")
+                search.say(f"step {step + 1}: {' + '.join(group[n].names)} beats "
+                           f"{' + '.join(trials[best].names) if best else ' + '.join(accepted)}")
                 new_first, best, trials = f, n, group
         floor = null_floor(ev, folds, current.fold_values)
         search.say(f"step {step + 1}: best {best}, validation cost {trials[best].val_weighted / terms:.3g} per sample, "
@@ -198,8 +240,12 @@ def forward_select(search: Search, names: Sequence[str], singles: Singles, nomin
                    f"{floor / terms:.3g}")
         ok = accept(current.val_weighted, trials[best].val_weighted, terms, floor)
         if ok and new_first is not None:
+            old = accepted[0]
+            values = {**singles.values[new_first], **{k: v for k, v in values.items() if k in _held(accepted[1:])}}
+            accepted = [new_first, *accepted[1:]]
             steps[0].chosen = new_first
-            accepted, values = [new_first], dict(singles.values[new_first])
+            for st in steps[1:]:
+                st.before = [new_first if n == old else n for n in st.before]
         steps.append(Step(list(accepted), trials, best if ok else None, floor))
         if not ok:
             break
@@ -217,6 +263,16 @@ def forward_select(search: Search, names: Sequence[str], singles: Singles, nomin
             values = fit_set(ev, set_axes(current.names, search.axes), search.fit_runs, _refit_start(values, current))
         search.say(f"accepted {best} (step {step + 1}): "
                    + ", ".join(f"{n} = {format_value(v, EFFECTS[n].unit)}" for n, v in values.items()))
+        if new_first is not None and ok:  # the first effect the lookahead brought: does it pay beside the others?
+            dropped = _drop(search, new_first, current, terms)
+            if dropped is not None:
+                accepted.remove(new_first)
+                steps = [st for st in steps if st.chosen != new_first]
+                for st in steps:
+                    st.before = [n for n in st.before if n != new_first]
+                current = dropped
+                values = fit_set(ev, set_axes(current.names, search.axes), search.fit_runs,
+                                 {k: v for k, v in values.items() if k != new_first})
     if "static_friction" in accepted:
         current, values = _fit_shape(search, current, values, terms)
     return Selection(accepted, current, values, steps)
