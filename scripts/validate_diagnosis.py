@@ -121,7 +121,11 @@ def run_case(case: str, seed: int) -> Outcome:
     with tempfile.TemporaryDirectory(prefix=f"blind_{case.replace(':', '_')}_{seed}_") as tmp:
         paths = write_case(Path(tmp), hidden, seed)
         t0 = time.perf_counter()
-        result = diagnose([str(p) for p in paths]).to_json()
+        try:
+            result = diagnose([str(p) for p in paths]).to_json()
+        except Exception as exc:  # a defect: counted as a miss, the other cases still run
+            return Outcome(case, seed, hidden, [f"error: {type(exc).__name__}: {exc}"], {}, 0.0,
+                           time.perf_counter() - t0)
         seconds = time.perf_counter() - t0
         extended = dict(result["extended_model"]["effects"])
         cost_hidden, cost_found = (_costs(paths, hidden, extended) if case not in OOV_CASES

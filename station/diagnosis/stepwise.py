@@ -158,7 +158,7 @@ def _drop(search: Search, name: str, current: Trial, terms: int) -> Trial | None
     """The accepted set without ``name`` when ``name`` no longer pays beside the others (it
     would not be :func:`accept`-ed added to them; SFFS's conditional exclusion), else None."""
     names = tuple(n for n in current.names if n != name)
-    starts = [{k: v for k, v in fv.items() if k != name} for fv in current.fold_values]
+    starts = [{k: v for k, v in fv.items() if k not in _held([name])} for fv in current.fold_values]
     without = _try_sets(search, {name: names}, starts)[name]
     if accept(without.val_weighted, current.val_weighted, terms):
         return None
@@ -264,15 +264,16 @@ def forward_select(search: Search, names: Sequence[str], singles: Singles, nomin
         search.say(f"accepted {best} (step {step + 1}): "
                    + ", ".join(f"{n} = {format_value(v, EFFECTS[n].unit)}" for n, v in values.items()))
         if new_first is not None and ok:  # the first effect the lookahead brought: does it pay beside the others?
-            dropped = _drop(search, new_first, current, terms)
+            first = accepted[0]  # new_first, or breakaway/plain friction in its place after a downgrade
+            dropped = _drop(search, first, current, terms)
             if dropped is not None:
-                accepted.remove(new_first)
-                steps = [st for st in steps if st.chosen != new_first]
+                accepted.remove(first)
+                steps = [st for st in steps if st.chosen not in _family(first)]
                 for st in steps:
-                    st.before = [n for n in st.before if n != new_first]
+                    st.before = [n for n in st.before if n not in _family(first)]
                 current = dropped
                 values = fit_set(ev, set_axes(current.names, search.axes), search.fit_runs,
-                                 {k: v for k, v in values.items() if k != new_first})
+                                 {k: v for k, v in values.items() if k in _held(accepted)})
     if "static_friction" in accepted:
         current, values = _fit_shape(search, current, values, terms)
     return Selection(accepted, current, values, steps)
