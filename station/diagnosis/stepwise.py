@@ -114,8 +114,8 @@ def _held(names: Sequence[str]) -> set[str]:
     return set(names) | {NESTED[n] for n in names if n in NESTED}
 
 
-def _lookahead(search: Search, names: Sequence[str], singles: Singles, accepted: list[str], current: Trial,
-               values: Mapping[str, float], bar: float, terms: int) -> dict[str, dict[str, Trial]]:
+def _lookahead(search: Search, names: Sequence[str], singles: Singles, pool: Sequence[str], accepted: list[str],
+               current: Trial, values: Mapping[str, float], bar: float, terms: int) -> dict[str, dict[str, Trial]]:
     """Other first effects, beside the accepted ones after the first, with the next effect
     that pays most beside them (module docstring): first effect -> {next effect: the set's
     trial}, credible ones only. ``bar`` is the lowest in-sample cost screened beside the
@@ -124,7 +124,8 @@ def _lookahead(search: Search, names: Sequence[str], singles: Singles, accepted:
     chosen, kept = accepted[0], accepted[1:]
     keep = {k: v for k, v in values.items() if k in _held(kept)}
     taken = _family(chosen).union(*(_family(k) for k in kept))
-    fitted = {n: ev.cost(singles.values[n], runs) for n in singles.values}  # cached: fitted on these runs
+    # the first step's credible candidates (a static_friction whose excess did not pay alone is not one)
+    fitted = {n: ev.cost(singles.values[n], runs) for n in pool}  # cached: fitted on these runs
     firsts = []
     for n in sorted(fitted, key=fitted.get):
         if len(firsts) >= LOOKAHEAD:
@@ -223,7 +224,8 @@ def forward_select(search: Search, names: Sequence[str], singles: Singles, nomin
         else:
             trials, bar = _joint_trials(search, names, accepted, current, values, step)
         trials = credible(trials, terms)
-        pairs = _lookahead(search, names, singles, accepted, current, values, bar, terms) if step == 1 else {}
+        pairs = (_lookahead(search, names, singles, list(steps[0].trials), accepted, current, values, bar, terms)
+                 if step == 1 else {})
         if not trials and not pairs:
             break
         best = min(trials, key=lambda n: trials[n].val_weighted) if trials else None
