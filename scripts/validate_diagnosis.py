@@ -209,9 +209,9 @@ def table(outcomes: list[Outcome], seeds: int, elapsed: float) -> str:
         lines += ["", f"Misses: {len(misses)} of {len(outcomes)} cases. In {search} of them the hidden effects fit "
                       "the four runs better than the answer (in-sample cost J, the diagnosis's own: noise-normalised "
                       "θ and a errors, 1 at the noise floor; columns J hidden / J found below): the search did not "
-                      "reach the better explanation (forward selection keeps its first choice, and a friction-like "
-                      "proxy such as deadzone or coulomb_friction often comes first), rather than the runs failing "
-                      "to tell the explanations apart."]
+                      "reach the better explanation (a friction-like proxy such as deadzone often comes first; the "
+                      "lookahead of station.diagnosis.stepwise replaces it at the second step only), rather than the "
+                      "runs failing to tell the explanations apart."]
     lines += ["", "## Every case", "",
               "| case | seed | hidden | causes found | values found | θ gain % | J hidden | J found | unexplained | s |",
               "|---|---|---|---|---|---|---|---|---|---|"]

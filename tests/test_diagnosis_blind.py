@@ -118,5 +118,10 @@ def test_validation_script_writes_the_table(tmp_path, monkeypatch):
     assert module.main(["--seeds", "1", "--effects", "clean", "--out", str(out)]) == 0
     text = out.read_text()
     assert "| effect | hidden range |" in text
-    assert 'Clean cases: "none" in 1 of 1' in text
+    assert 'Clean cases: "none" with `unexplained: false` in 1 of 1' in text
     assert "| clean | 0 | - | none |" in text
+    # the verdicts: a clean rig flagged unexplained is a miss; an out-of-vocabulary effect must be flagged
+    outcome = module.Outcome
+    assert not outcome("clean", 0, {}, [], {}, 0.0, 1.0, unexplained=True).ok
+    assert outcome("oov:cogging", 0, {}, ["coulomb_friction"], {}, 0.0, 1.0, unexplained=True).ok
+    assert not outcome("oov:cogging", 0, {}, [], {}, 0.0, 1.0, unexplained=False).ok
