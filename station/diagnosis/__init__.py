@@ -44,8 +44,9 @@ Modules, in the order a diagnosis uses them:
 - ``cost``: the noise-normalised cost, cached per effect set (:class:`Evaluator`), the
   noise levels, pooled fits and gains;
 - ``folds``: leave-one-run-out or the ``--validate`` runs (:class:`Fold`);
-- ``selection``: every candidate alone, screening, joint refits, forward selection and its
-  acceptance against what noise reaches by luck;
+- ``selection``: every candidate alone, screening, joint refits and the acceptance against
+  what noise reaches by luck; ``stepwise``: forward selection with a lookahead over its
+  first effect;
 - ``doubt``: intervals (:class:`Interval`) and alternatives (:class:`Alternative`);
 - ``unexplained``: the residuals against the sensor model's null (:class:`Unexplained`);
 - ``result``: the typed result (:class:`EffectResult`, :class:`RunReport`,

@@ -42,7 +42,7 @@ import scipy.optimize
 
 from station.analysis.fitting import Axis
 from station.diagnosis.cost import Evaluator, pooled, rms_gain
-from station.diagnosis.selection import Search, Selection, Trial, fit_set, null_floor, trial
+from station.diagnosis.selection import NESTED, Search, Selection, Trial, fit_set, null_floor, set_axes, trial
 
 CHI2_95 = 3.841458820694124
 """χ²₁ at 95 %: the likelihood-ratio threshold of one parameter."""
@@ -398,8 +398,11 @@ def alternatives(search: Search, sel: Selection, nominal: Trial, n_eff: float) -
         if tr.val_weighted - final.val_weighted > tol_final:
             continue
         others = [n for n in names if n != c]
-        values = fit_set(ev, [axes[n] for n in others] + [axes[c]], search.fit_runs,
-                         {n: sel.values[n] for n in others})
+        held = set(others) | {NESTED[n] for n in others if n in NESTED}  # a static_friction's sliding level
+        if c in held:  # coulomb_friction beside a static_friction that holds it
+            continue
+        values = fit_set(ev, set_axes(others + [c], axes), search.fit_runs,
+                         {n: v for n, v in sel.values.items() if n in held})
         gain = rms_gain(pooled(ev, tr.val_sse).rms_theta, rms_nom)
         result.append(Alternative(names, {n: float(values[n]) for n in names}, float(gain),
                                   float(tr.val_weighted / final.val_weighted), instead))

@@ -16,7 +16,8 @@ from station.diagnosis.doubt import alternatives, effective_terms, effect_interv
 from station.diagnosis.inputs import refuse_repeated_runs, set_aside_beam_tests
 from station.diagnosis.records import effect_results, model_predictions, run_reports
 from station.diagnosis.result import Diagnosis
-from station.diagnosis.selection import Search, Trial, effect_axes, fit_each_alone, forward_select
+from station.diagnosis.selection import Search, Trial, effect_axes, fit_each_alone
+from station.diagnosis.stepwise import forward_select
 from station.diagnosis.unexplained import check_unexplained
 from station.errors import StationError
 from station.plant.effects import CANDIDATES, EFFECTS

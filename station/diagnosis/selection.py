@@ -1,7 +1,9 @@
-"""Which effects the runs call for: every candidate fitted alone per fold, then forward
-selection (at most :data:`MAX_EFFECTS`, joint refit of all accepted effects at each step),
-each step accepted only when it pays on held-out data beyond what quantization and noise
-reach by luck.
+"""Which effects the runs call for, the search's parts: every candidate fitted alone per
+fold, sets of effects fitted per fold and judged on held-out runs (:func:`trial`), the
+in-sample screen of candidates beside accepted effects, and the acceptance rule: a step is
+accepted only when it pays on held-out data beyond what quantization and noise reach by
+luck. The order of the search (forward selection, at most :data:`MAX_EFFECTS`, with a
+lookahead over its first effect) is :mod:`station.diagnosis.stepwise`'s.
 
 Acceptance: the pooled validation cost must fall by at least :data:`MIN_RELATIVE_GAIN`
 (parsimony: an effect must pay for itself) and by at least :data:`MIN_NOISE_GAIN` noise
@@ -21,7 +23,7 @@ no new place), and once static_friction is, coulomb_friction is no more a candid
 a later effect joins it, static_friction is judged again against coulomb_friction in its
 place (a downgrade when the excess no longer pays). An accepted static_friction's
 stribeck_speed is fitted last with the accepted values fixed and kept only when it pays on
-the validation runs (:func:`_fit_shape`); else it stays the model's (default 0.05 rad/s).
+the validation runs (:func:`station.diagnosis.stepwise.forward_select`); else it stays the model's (default 0.05 rad/s).
 """
 
 from __future__ import annotations
@@ -35,7 +37,7 @@ import numpy as np
 
 from station.analysis.fitting import Axis, axis_for, fit
 from station.diagnosis.cost import Evaluator, pooled, relative_gain, rms_gain
-from station.diagnosis.folds import Fold, validation_runs
+from station.diagnosis.folds import Fold
 from station.diagnosis.prose import format_value
 from station.plant.effects import EFFECTS
 
@@ -309,9 +311,9 @@ def trial(ev: Evaluator, folds: Sequence[Fold], names: tuple, axes: Mapping[str,
 
 def screen(ev: Evaluator, axes: Mapping[str, Axis], names: Sequence[str], fixed: Mapping[str, float],
            runs: Sequence[int]) -> list[str]:
-    """The effects worth a joint trial beside the accepted ones: each scanned on its grid
-    with the accepted effects fixed (all fit runs); the best :data:`SECOND_STEP_CANDIDATES`
-    that lower the cost, best first. An effect that did not pay alone may pay beside another.
+    """The effects worth a joint trial beside the accepted ones: the best
+    :data:`SECOND_STEP_CANDIDATES` of :func:`screen_costs`, best first. An effect that did
+    not pay alone may pay beside another.
 
     Parameters
     ----------
@@ -324,12 +326,30 @@ def screen(ev: Evaluator, axes: Mapping[str, Axis], names: Sequence[str], fixed:
     runs : sequence of int
         The fit runs.
     """
+    return list(screen_costs(ev, axes, names, fixed, runs))[:SECOND_STEP_CANDIDATES]
+
+
+def screen_costs(ev: Evaluator, axes: Mapping[str, Axis], names: Sequence[str], fixed: Mapping[str, float],
+                 runs: Sequence[int], every: int = 1) -> dict[str, float]:
+    """Each effect scanned on its grid with ``fixed`` held (in-sample, on ``runs``): the
+    lowest cost it reaches, for those that lower the cost of ``fixed`` alone, best first.
+
+    Parameters
+    ----------
+    ev : Evaluator
+    axes : mapping of str to Axis
+    names : sequence of str
+        The effects scanned.
+    fixed : mapping of str to float
+        The effects held at their values.
+    runs : sequence of int
+        The runs the cost is summed over.
+    every : int, optional
+        Scan every so many grid points (2: half the simulations, a coarser look).
+    """
     c0 = ev.cost(fixed, runs)
-    best = {}
-    for n in names:
-        best[n] = min(ev.cost(point, runs) for point in _screen_points(n, axes, fixed))
-    keep = sorted((n for n in names if best[n] < c0), key=best.get)
-    return keep[:SECOND_STEP_CANDIDATES]
+    best = {n: min(ev.cost(point, runs) for point in _screen_points(n, axes, fixed)[::every]) for n in names}
+    return {n: best[n] for n in sorted((n for n in names if best[n] < c0), key=best.get)}
 
 
 def _screen_points(name: str, axes: Mapping[str, Axis], fixed: Mapping[str, float]) -> list[dict]:
@@ -437,36 +457,6 @@ def fit_each_alone(search: Search, names: Sequence[str], nominal: Trial) -> Sing
     return Singles(trials, values)
 
 
-def _set_with(accepted: Sequence[str], name: str) -> tuple:
-    """The set tried when ``name`` joins the accepted effects: added last, or in place of
-    the simpler effect it holds (static_friction in place of coulomb_friction)."""
-    simpler = NESTED.get(name)
-    return tuple(a for a in accepted if a != simpler) + (name,)
-
-
-def _joint_trials(search: Search, names: Sequence[str], accepted: list[str], current: Trial,
-                  fixed: Mapping[str, float], step: int) -> dict[str, Trial]:
-    """The screened candidates, each fitted per fold jointly with the accepted ones."""
-    ev = search.ev
-    held = {NESTED[a] for a in accepted if a in NESTED}  # coulomb_friction is in an accepted static_friction
-    full = len(accepted) >= MAX_EFFECTS  # then only an upgrade in place is left
-    open_ = [n for n in names if n not in accepted and n not in held
-             and (not full or NESTED.get(n) in accepted)]
-    pool = screen(ev, search.axes, open_, fixed, search.fit_runs)
-    # an upgrade in place is always tried: the screen holds the sliding level where it is
-    pool += [n for n in open_ if NESTED.get(n) in accepted and n not in pool]
-    search.say(f"step {step + 1}: screening beside {' + '.join(accepted)} on all fit runs: {', '.join(pool)}")
-    with ThreadPoolExecutor(search.workers) as ex:
-        futures = {n: ex.submit(trial, ev, search.folds, _set_with(accepted, n), search.axes, current.fold_values)
-                   for n in pool}
-    trials = {n: f.result() for n, f in futures.items()}
-    for n in pool:
-        search.say(f"step {step + 1}: {' + '.join(trials[n].names)}: validation cost gain "
-                   f"{relative_gain(trials[n].val_weighted, current.val_weighted):.1f} % over {' + '.join(accepted)} "
-                   f"({ev.simulations} simulations)")
-    return trials
-
-
 def excess_fraction(tr: Trial) -> float:
     """(v_s − v_c) / v_s of a trial's static_friction, the median over its folds (0 without one).
 
@@ -501,110 +491,3 @@ def credible(trials: Mapping[str, Trial], terms: int) -> dict[str, Trial]:
                 simpler in trials and not accept(trials[simpler].val_weighted, tr.val_weighted, terms)):
             del out[name]
     return out
-
-
-def _refit_start(values: Mapping[str, float], current: Trial) -> dict:
-    """Where the joint refit on all fit runs starts: the accepted values, and for an effect
-    new to them the median of its fold values (for a new static_friction its sliding level
-    too: the breakaway excess lowers it)."""
-    start = {k: v for k, v in values.items() if k in current.fold_values[0]}
-    fresh = [k for k in current.fold_values[0] if k not in start]
-    if "static_friction" in fresh:
-        fresh.append("coulomb_friction")
-    for k in fresh:
-        start[k] = float(np.median([fv[k] for fv in current.fold_values]))
-    return start
-
-
-def _downgrade(search: Search, accepted: list[str], current: Trial, terms: int) -> tuple[list[str], Trial]:
-    """After an effect joined an accepted static_friction: the simpler effect in its place
-    when the breakaway excess no longer pays beside the others (:func:`credible`)."""
-    for name, simpler in NESTED.items():
-        if name not in accepted:
-            continue
-        names = tuple(simpler if n == name else n for n in current.names)
-        alt = trial(search.ev, search.folds, names, search.axes, current.fold_values)
-        if credible({name: current, simpler: alt}, terms).get(name) is None:
-            search.say(f"{simpler} in place of {name}: the breakaway excess no longer pays beside "
-                       f"{' + '.join(n for n in accepted if n != name)}")
-            return [simpler if n == name else n for n in accepted], alt
-    return accepted, current
-
-
-def forward_select(search: Search, names: Sequence[str], singles: Singles, nominal: Trial) -> Selection:
-    """Add the best effect while it pays (:func:`accept`), at most :data:`MAX_EFFECTS`;
-    after each, refit the accepted effects jointly on all fit runs. static_friction may
-    replace an accepted coulomb_friction (one more step, no new place).
-
-    Parameters
-    ----------
-    search : Search
-    names : sequence of str
-        The candidates.
-    singles : Singles
-        Step 1 (:func:`fit_each_alone`).
-    nominal : Trial
-        The nominal model's validation errors: where selection starts.
-    """
-    ev, folds = search.ev, search.folds
-    terms = ev.terms(validation_runs(folds))
-    accepted: list[str] = []
-    current = nominal
-    values: dict[str, float] = {}
-    steps: list[Step] = []
-    for step in range(MAX_EFFECTS + len(NESTED)):
-        if step == 0:
-            trials = {n: singles.trials[n] for n in names}
-        else:
-            trials = _joint_trials(search, names, accepted, current, values, step)
-        trials = credible(trials, terms)
-        if not trials:
-            break
-        best = min(trials, key=lambda n: trials[n].val_weighted)
-        floor = null_floor(ev, folds, current.fold_values)
-        search.say(f"step {step + 1}: best {best}, validation cost {trials[best].val_weighted / terms:.3g} per sample, "
-                   f"current {current.val_weighted / terms:.3g}, reached by quantization and noise alone "
-                   f"{floor / terms:.3g}")
-        ok = accept(current.val_weighted, trials[best].val_weighted, terms, floor)
-        steps.append(Step(list(accepted), trials, best if ok else None, floor))
-        if not ok:
-            break
-        simpler = NESTED.get(best)
-        if simpler in accepted:  # an upgrade in place
-            accepted[accepted.index(simpler)] = best
-        else:
-            accepted.append(best)
-        current = trials[best]
-        if step > 0 and best not in NESTED:
-            accepted, current = _downgrade(search, accepted, current, terms)
-        if step == 0:
-            values = dict(singles.values[best])
-        else:
-            values = fit_set(ev, set_axes(current.names, search.axes), search.fit_runs, _refit_start(values, current))
-        search.say(f"accepted {best} (step {step + 1}): "
-                   + ", ".join(f"{n} = {format_value(v, EFFECTS[n].unit)}" for n, v in values.items()))
-    if "static_friction" in accepted:
-        current, values = _fit_shape(search, current, values, terms)
-    return Selection(accepted, current, values, steps)
-
-
-def _fit_shape(search: Search, current: Trial, values: dict, terms: int) -> tuple[Trial, dict]:
-    """The Stribeck speed of an accepted static_friction, fitted alone with the accepted
-    values fixed (per fold, then on all fit runs) and kept only when it pays on the
-    validation runs (:func:`accept`); never a cause of its own."""
-    ev, folds, axis = search.ev, search.folds, search.axes[SHAPE]
-    fold_values, val_sse, total = [], {}, 0.0
-    for fold, fixed in zip(folds, current.fold_values):
-        fitted = fit(lambda vals: ev.cost(vals, fold.fit), [axis], fixed=fixed).values
-        fold_values.append(fitted)
-        for i in fold.val:
-            val_sse[i] = ev.sse(fitted, i)
-            total += ev.weighted(fitted, i)
-    shaped = Trial(current.names, fold_values, val_sse, total)
-    if not accept(current.val_weighted, shaped.val_weighted, terms):
-        search.say(f"{SHAPE}: left at the model's (a fitted one gains {relative_gain(total, current.val_weighted):.1f} %)")
-        return current, values
-    values = fit(lambda vals: ev.cost(vals, search.fit_runs), [axis], fixed=values).values
-    search.say(f"{SHAPE} = {format_value(values[SHAPE], EFFECTS[SHAPE].unit)} (validation cost gain "
-               f"{relative_gain(total, current.val_weighted):.1f} %)")
-    return shaped, values

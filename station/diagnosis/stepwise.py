@@ -1,0 +1,303 @@
+"""Stepwise selection of the effects the runs call for: forward selection from the single
+effects (:func:`station.diagnosis.selection.fit_each_alone`), with a lookahead over its
+first step.
+
+Forward selection adds the best effect while it pays (:func:`~station.diagnosis.selection.accept`:
+the null floor, parsimony and noise), at most :data:`~station.diagnosis.selection.MAX_EFFECTS`,
+refitting the accepted effects jointly on all fit runs after each; static_friction may
+replace an accepted coulomb_friction in place and be downgraded again
+(:mod:`station.diagnosis.selection`, breakaway friction).
+
+Lookahead (a beam of width 1 + :data:`LOOKAHEAD` over the first step). Greedy forward
+selection keeps its first choice, and with two effects hidden the best single effect is
+often a proxy for both that the true pair cannot be reached from (Coulomb friction for
+viscous friction plus backlash: backlash beside it does not pay, beside viscous friction it
+takes the cost to the noise floor; a dead-zone for breakaway friction plus drive damping).
+So at the second step the next :data:`LOOKAHEAD` single effects (by their in-sample cost
+fitted alone) are tried as first effects too: every other candidate is scanned beside each
+on all fit runs on a coarse grid (:func:`~station.diagnosis.selection.screen_costs`), the
+:data:`LOOKAHEAD_TRIALS` pairs whose in-sample cost is below the best pair's beside the
+chosen first effect by the parsimony margin (MIN_RELATIVE_GAIN) are fitted per fold and
+judged on the validation runs like every second-step candidate, and the best of them all
+is accepted by the same rule against the chosen first effect alone. A pair from the
+lookahead replaces the first choice; its first effect is then dropped when it does not pay
+beside the second (SFFS's conditional exclusion, :func:`_drop`) and selection goes on.
+The lookahead is not repeated at the third step: it did not reach the hidden triples of
+the blind set and costs a tenth of a diagnosis of the rig's four logs.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from concurrent.futures import ThreadPoolExecutor
+
+import numpy as np
+
+from station.analysis.fitting import fit
+from station.diagnosis.cost import relative_gain
+from station.diagnosis.folds import validation_runs
+from station.diagnosis.prose import format_value
+from station.diagnosis.selection import (MAX_EFFECTS, MIN_RELATIVE_GAIN, NESTED, SECOND_STEP_CANDIDATES, SHAPE,
+                                         Search, Selection, Singles, Step, Trial, accept, credible, fit_set,
+                                         null_floor, screen_costs, set_axes, trial)
+from station.plant.effects import EFFECTS
+
+LOOKAHEAD = 3
+"""Single effects beside the chosen one tried as first effects at the second step (module
+docstring): those that fit all fit runs best alone (in-sample: a member of a hidden pair may
+not pay alone on held-out runs, e.g. viscous friction beside backlash); breakaway and plain
+Coulomb friction count as one."""
+
+DROPS = 2
+"""Forward steps beyond :data:`MAX_EFFECTS` (and the upgrades in place) that replace a first
+effect the lookahead brought and then dropped (:func:`_drop`)."""
+
+LOOKAHEAD_GRID = 2
+"""The lookahead scans every second grid point of the candidates beside another first
+effect (half the simulations of the chosen one's screen: the pairs a wrong first choice
+hides lower the in-sample cost by far more than the coarser grid misses, e.g. 14 against
+98 for viscous friction + backlash; every fourth point, a factor 3 apart on a ratio's
+axis, lost drive damping beside breakaway friction)."""
+
+LOOKAHEAD_TRIALS = 2
+"""Pairs from the lookahead fitted per fold: those with the lowest screened cost, if below
+the best pair beside the chosen first effect."""
+
+
+def _set_with(accepted: Sequence[str], name: str) -> tuple:
+    """The set tried when ``name`` joins the accepted effects: added last, or in place of
+    the simpler effect it holds (static_friction in place of coulomb_friction)."""
+    simpler = NESTED.get(name)
+    return tuple(a for a in accepted if a != simpler) + (name,)
+
+
+def _family(name: str) -> set[str]:
+    """An effect and those nested with it (static_friction and coulomb_friction)."""
+    return {name} | {k for k, v in NESTED.items() if v == name} | ({NESTED[name]} if name in NESTED else set())
+
+
+def _try_sets(search: Search, sets: Mapping, starts: Sequence) -> dict[str, Trial]:
+    """Per key, its set of effects fitted per fold (:func:`trial`) from ``starts``."""
+    with ThreadPoolExecutor(search.workers) as ex:
+        futures = {n: ex.submit(trial, search.ev, search.folds, names, search.axes, starts) for n, names in sets.items()}
+    return {n: f.result() for n, f in futures.items()}
+
+
+def _joint_trials(search: Search, names: Sequence[str], accepted: list[str], current: Trial,
+                  fixed: Mapping[str, float], step: int) -> tuple[dict[str, Trial], float]:
+    """The screened candidates, each fitted per fold jointly with the accepted ones, and the
+    lowest in-sample cost the screen reached (the accepted effects' own when none lowers it)."""
+    ev = search.ev
+    held = {NESTED[a] for a in accepted if a in NESTED}  # coulomb_friction is in an accepted static_friction
+    full = len(accepted) >= MAX_EFFECTS  # then only an upgrade in place is left
+    open_ = [n for n in names if n not in accepted and n not in held
+             and (not full or NESTED.get(n) in accepted)]
+    costs = screen_costs(ev, search.axes, open_, fixed, search.fit_runs)
+    # a candidate that lowers the in-sample cost by less than the parsimony margin with the
+    # others held will not pay it on held-out runs (on the rig's four logs in-sample screen
+    # gains of 8-31 % came out at 3-5 % held out)
+    c0 = ev.cost(fixed, search.fit_runs)
+    pool = [n for n in costs if costs[n] <= (1 - MIN_RELATIVE_GAIN) * c0][:SECOND_STEP_CANDIDATES]
+    # an upgrade in place is always tried: the screen holds the sliding level where it is
+    pool += [n for n in open_ if NESTED.get(n) in accepted and n not in pool]
+    search.say(f"step {step + 1}: screening beside {' + '.join(accepted)} on all fit runs: {', '.join(pool)}")
+    trials = _try_sets(search, {n: _set_with(accepted, n) for n in pool}, current.fold_values)
+    for n in pool:
+        search.say(f"step {step + 1}: {' + '.join(trials[n].names)}: validation cost gain "
+                   f"{relative_gain(trials[n].val_weighted, current.val_weighted):.1f} % over {' + '.join(accepted)} "
+                   f"({ev.simulations} simulations)")
+    return trials, min(costs.values(), default=ev.cost(fixed, search.fit_runs))
+
+
+def _held(names: Sequence[str]) -> set[str]:
+    """The effect values a set holds (a static_friction's sliding level too)."""
+    return set(names) | {NESTED[n] for n in names if n in NESTED}
+
+
+def _lookahead(search: Search, names: Sequence[str], singles: Singles, pool: Sequence[str], accepted: list[str],
+               current: Trial, values: Mapping[str, float], bar: float, terms: int) -> dict[str, dict[str, Trial]]:
+    """Other first effects, beside the accepted ones after the first, with the next effect
+    that pays most beside them (module docstring): first effect -> {next effect: the set's
+    trial}, credible ones only. ``bar`` is the lowest in-sample cost screened beside the
+    accepted effects."""
+    ev, runs = search.ev, search.fit_runs
+    chosen, kept = accepted[0], accepted[1:]
+    keep = {k: v for k, v in values.items() if k in _held(kept)}
+    taken = _family(chosen).union(*(_family(k) for k in kept))
+    # the first step's credible candidates (a static_friction whose excess did not pay alone is not one)
+    fitted = {n: ev.cost(singles.values[n], runs) for n in pool}  # cached: fitted on these runs
+    firsts = []
+    for n in sorted(fitted, key=fitted.get):
+        if len(firsts) >= LOOKAHEAD:
+            break
+        if n not in taken and fitted[n] < ev.cost({}, runs):
+            firsts.append(n)
+            taken |= _family(n)
+    sets = []
+    for f in firsts:
+        others = [n for n in names if n not in _family(f) and n not in _held(kept)]
+        costs = screen_costs(ev, search.axes, others, {**singles.values[f], **keep}, runs, LOOKAHEAD_GRID)
+        sets += [(cost, f, n) for n, cost in costs.items() if cost < (1 - MIN_RELATIVE_GAIN) * bar]
+    sets = sorted(sets)[:LOOKAHEAD_TRIALS]
+    step = len(accepted) + 1
+    search.say(f"step {step}: lookahead over {', '.join(firsts) or 'no other first effect'} in place of {chosen}: "
+               + (", ".join(" + ".join((f, *kept, n)) for _, f, n in sets) or f"nothing below {chosen}'s best")
+               + f" ({ev.simulations} simulations)")
+    out: dict[str, dict[str, Trial]] = {}
+    for _, f, n in sets:
+        starts = [{**fv, **{k: v for k, v in cv.items() if k in _held(kept)}}
+                  for fv, cv in zip(singles.trials[f].fold_values, current.fold_values)]
+        tr = _try_sets(search, {n: (f, *kept, n)}, starts)[n]
+        search.say(f"step {step}: {' + '.join(tr.names)}: validation cost gain "
+                   f"{relative_gain(tr.val_weighted, current.val_weighted):.1f} % over {' + '.join(accepted)} "
+                   f"({ev.simulations} simulations)")
+        out.setdefault(f, {})[n] = tr
+    return {f: ok for f, group in out.items() if (ok := credible(group, terms))}
+
+
+def _drop(search: Search, name: str, current: Trial, terms: int) -> Trial | None:
+    """The accepted set without ``name`` when ``name`` no longer pays beside the others (it
+    would not be :func:`accept`-ed added to them; SFFS's conditional exclusion), else None."""
+    names = tuple(n for n in current.names if n != name)
+    starts = [{k: v for k, v in fv.items() if k not in _held([name])} for fv in current.fold_values]
+    without = _try_sets(search, {name: names}, starts)[name]
+    if accept(without.val_weighted, current.val_weighted, terms):
+        return None
+    search.say(f"{name} dropped: it no longer pays beside {' + '.join(names)} (validation cost gain "
+               f"{relative_gain(current.val_weighted, without.val_weighted):.1f} %)")
+    return without
+
+
+def _refit_start(values: Mapping[str, float], current: Trial) -> dict:
+    """Where the joint refit on all fit runs starts: the accepted values, and for an effect
+    new to them the median of its fold values (for a new static_friction its sliding level
+    too: the breakaway excess lowers it)."""
+    start = {k: v for k, v in values.items() if k in current.fold_values[0]}
+    fresh = [k for k in current.fold_values[0] if k not in start]
+    if "static_friction" in fresh:
+        fresh.append("coulomb_friction")
+    for k in fresh:
+        start[k] = float(np.median([fv[k] for fv in current.fold_values]))
+    return start
+
+
+def _downgrade(search: Search, accepted: list[str], current: Trial, terms: int) -> tuple[list[str], Trial]:
+    """After an effect joined an accepted static_friction: the simpler effect in its place
+    when the breakaway excess no longer pays beside the others (:func:`credible`)."""
+    for name, simpler in NESTED.items():
+        if name not in accepted:
+            continue
+        names = tuple(simpler if n == name else n for n in current.names)
+        alt = trial(search.ev, search.folds, names, search.axes, current.fold_values)
+        if credible({name: current, simpler: alt}, terms).get(name) is None:
+            search.say(f"{simpler} in place of {name}: the breakaway excess no longer pays beside "
+                       f"{' + '.join(n for n in accepted if n != name)}")
+            return [simpler if n == name else n for n in accepted], alt
+    return accepted, current
+
+
+def forward_select(search: Search, names: Sequence[str], singles: Singles, nominal: Trial) -> Selection:
+    """Add the best effect while it pays (:func:`accept`), at most :data:`MAX_EFFECTS`,
+    with a lookahead over the first effect at the second step (module docstring); after
+    each, refit the accepted effects jointly on all fit runs. static_friction may replace
+    an accepted coulomb_friction (one more step, no new place).
+
+    Parameters
+    ----------
+    search : Search
+    names : sequence of str
+        The candidates.
+    singles : Singles
+        Step 1 (:func:`fit_each_alone`).
+    nominal : Trial
+        The nominal model's validation errors: where selection starts.
+    """
+    ev, folds = search.ev, search.folds
+    terms = ev.terms(validation_runs(folds))
+    accepted: list[str] = []
+    current = nominal
+    values: dict[str, float] = {}
+    steps: list[Step] = []
+    for step in range(MAX_EFFECTS + len(NESTED) + DROPS):
+        if step == 0:
+            trials = {n: singles.trials[n] for n in names}
+        else:
+            trials, bar = _joint_trials(search, names, accepted, current, values, step)
+        trials = credible(trials, terms)
+        pairs = (_lookahead(search, names, singles, list(steps[0].trials), accepted, current, values, bar, terms)
+                 if step == 1 else {})
+        if not trials and not pairs:
+            break
+        best = min(trials, key=lambda n: trials[n].val_weighted) if trials else None
+        new_first = None
+        for f, group in pairs.items():  # a set from the lookahead replaces the first choice
+            n = min(group, key=lambda n: group[n].val_weighted)
+            if best is None or group[n].val_weighted < trials[best].val_weighted:
+                search.say(f"step {step + 1}: {' + '.join(group[n].names)} beats "
+                           f"{' + '.join(trials[best].names) if best else ' + '.join(accepted)}")
+                new_first, best, trials = f, n, group
+        floor = null_floor(ev, folds, current.fold_values)
+        search.say(f"step {step + 1}: best {best}, validation cost {trials[best].val_weighted / terms:.3g} per sample, "
+                   f"current {current.val_weighted / terms:.3g}, reached by quantization and noise alone "
+                   f"{floor / terms:.3g}")
+        ok = accept(current.val_weighted, trials[best].val_weighted, terms, floor)
+        if ok and new_first is not None:
+            old = accepted[0]
+            values = {**singles.values[new_first], **{k: v for k, v in values.items() if k in _held(accepted[1:])}}
+            accepted = [new_first, *accepted[1:]]
+            steps[0].chosen = new_first
+            for st in steps[1:]:
+                st.before = [new_first if n == old else n for n in st.before]
+        steps.append(Step(list(accepted), trials, best if ok else None, floor))
+        if not ok:
+            break
+        simpler = NESTED.get(best)
+        if simpler in accepted:  # an upgrade in place
+            accepted[accepted.index(simpler)] = best
+        else:
+            accepted.append(best)
+        current = trials[best]
+        if step > 0 and best not in NESTED:
+            accepted, current = _downgrade(search, accepted, current, terms)
+        if step == 0:
+            values = dict(singles.values[best])
+        else:
+            values = fit_set(ev, set_axes(current.names, search.axes), search.fit_runs, _refit_start(values, current))
+        search.say(f"accepted {best} (step {step + 1}): "
+                   + ", ".join(f"{n} = {format_value(v, EFFECTS[n].unit)}" for n, v in values.items()))
+        if new_first is not None and ok:  # the first effect the lookahead brought: does it pay beside the others?
+            first = accepted[0]  # new_first, or breakaway/plain friction in its place after a downgrade
+            dropped = _drop(search, first, current, terms)
+            if dropped is not None:
+                accepted.remove(first)
+                steps = [st for st in steps if st.chosen not in _family(first)]
+                for st in steps:
+                    st.before = [n for n in st.before if n not in _family(first)]
+                current = dropped
+                values = fit_set(ev, set_axes(current.names, search.axes), search.fit_runs,
+                                 {k: v for k, v in values.items() if k in _held(accepted)})
+    if "static_friction" in accepted:
+        current, values = _fit_shape(search, current, values, terms)
+    return Selection(accepted, current, values, steps)
+
+
+def _fit_shape(search: Search, current: Trial, values: dict, terms: int) -> tuple[Trial, dict]:
+    """The Stribeck speed of an accepted static_friction, fitted alone with the accepted
+    values fixed (per fold, then on all fit runs) and kept only when it pays on the
+    validation runs (:func:`accept`); never a cause of its own."""
+    ev, folds, axis = search.ev, search.folds, search.axes[SHAPE]
+    fold_values, val_sse, total = [], {}, 0.0
+    for fold, fixed in zip(folds, current.fold_values):
+        fitted = fit(lambda vals: ev.cost(vals, fold.fit), [axis], fixed=fixed).values
+        fold_values.append(fitted)
+        for i in fold.val:
+            val_sse[i] = ev.sse(fitted, i)
+            total += ev.weighted(fitted, i)
+    shaped = Trial(current.names, fold_values, val_sse, total)
+    if not accept(current.val_weighted, shaped.val_weighted, terms):
+        search.say(f"{SHAPE}: left at the model's (a fitted one gains {relative_gain(total, current.val_weighted):.1f} %)")
+        return current, values
+    values = fit(lambda vals: ev.cost(vals, search.fit_runs), [axis], fixed=values).values
+    search.say(f"{SHAPE} = {format_value(values[SHAPE], EFFECTS[SHAPE].unit)} (validation cost gain "
+               f"{relative_gain(total, current.val_weighted):.1f} %)")
+    return shaped, values
