@@ -119,6 +119,8 @@ def test_default_doubt_samples_are_seeded_and_inside_their_intervals(rig):
     assert a == b and len(a) == 6 and a != sample_models(rig, iv, 6, seed=4)
     for m in a:
         for name, (lo, hi) in iv.items():
+            if name == "static_friction" and m.effect(name) == m.effect("coulomb_friction") > hi:
+                continue  # breakaway raised to the sliding level drawn above it (never below it)
             assert lo <= m.effect(name) <= hi
 
 
@@ -171,14 +173,16 @@ def small_design():
 
 def test_a_small_design_meets_its_requirements_and_beats_the_thesis(small_design):
     r = small_design
-    assert all(r.met()) and len(r.figures) == 1 + 4 + 2  # the model, the doubt's corners, two drawn
+    rig = load_model("rig")
+    corners = 2 ** len(default_intervals(rig))  # every doubted effect of the rig model at either end
+    assert all(r.met()) and len(r.figures) == 1 + corners + 2  # the model, the doubt's corners, two drawn
     for tuned, thesis in zip(r.figures, r.baseline):
-        assert tuned.overshoot_pct <= 5.0 < thesis.overshoot_pct  # the thesis's lead overshoots 15 % on the rig
+        assert tuned.overshoot_pct <= 5.0 < thesis.overshoot_pct  # the thesis's lead overshoots 10 % on the rig model
     doc = json.loads(json.dumps(r.to_json("c.toml")))
     assert set(doc) >= {"controller", "design", "model", "robust", "baseline"}
     for block in (doc["model"], doc["baseline"], doc["robust"]["worst"]):
         assert set(block) >= {"overshoot_pct", "settling_2pct_s", "settling_thesis_s", "peak_command", "saturated_s"}
-    assert doc["robust"]["models"] == 7 and doc["robust"]["all_met"]
+    assert doc["robust"]["models"] == 1 + corners + 2 and doc["robust"]["all_met"]
     assert doc["design"]["margins"]["gain_margin_db"] >= 6 and doc["design"]["margins"]["phase_margin_deg"] >= 30
 
 
