@@ -29,7 +29,7 @@ from station.analysis.metrics import step_metrics
 from station.diagnosis.cases import load_case
 from station.diagnosis.cost import Evaluator, calibrate_noise
 from station.diagnosis.folds import make_folds
-from station.diagnosis.selection import effect_axes, trial
+from station.diagnosis.selection import effect_axes, fit_set, set_axes, trial
 from station.plant.model import as_model
 
 RIG = Path(__file__).resolve().parents[1] / ".." / "shared" / "data" / "rig"
@@ -57,6 +57,7 @@ STRUCTURES = [
 
 
 def short(path: str) -> str:
+    """A log's name cut to a table column."""
     return Path(path).name[:34]
 
 
@@ -73,11 +74,8 @@ def head(path: Path, n: int, folder: Path) -> Path:
     return out
 
 
-def theta_rms(ev: Evaluator, effects: dict, i: int) -> float:
-    return math.sqrt(ev.sse(effects, i)[0] / ev.cases[i].n)
-
-
 def overshoot(ev: Evaluator, effects: dict, i: int) -> float | None:
+    """Step overshoot (%) of run i simulated with the effects (None: not a closed-loop step)."""
     c = ev.cases[i]
     u = np.asarray(c.run.data["u"], float)
     if not c.closed or u[-1] == 0:
@@ -106,7 +104,6 @@ def study(ev: Evaluator, fit_idx: list[int], other_idx: list[int], names: tuple,
             f" -> {math.sqrt(st / ev.cases[i].n):6.2f}  gain {100 * (1 - math.sqrt(st / s0)):5.1f} %")
     loo = 100 * (1 - math.sqrt(num / den))
     out(f"  leave-one-run-out θ RMS gain (pooled): {loo:.1f} %")
-    from station.diagnosis.selection import fit_set, set_axes
     final = fit_set(ev, set_axes(names, axes), fit_idx, tr.fold_values[0])
     out("  refitted on all: " + ", ".join(f"{k} = {v:.4g}" for k, v in final.items()))
     fin_num = sum(ev.sse(final, i)[0] for i in fit_idx)
