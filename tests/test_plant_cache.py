@@ -16,7 +16,6 @@ from station.plant.diskcache import cache_key, cached_arrays
 def cache(tmp_path, monkeypatch):
     monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path))
     monkeypatch.delenv("STATION_NO_CACHE", raising=False)
-    monkeypatch.setattr(modal, "in_startup", lambda: True)  # scipy is loaded in the tests
     modal.linear_form.cache_clear()
     yield tmp_path / "station"
     modal.linear_form.cache_clear()
@@ -83,17 +82,17 @@ def test_station_no_cache_turns_it_off(tmp_path, monkeypatch):
     assert not (tmp_path / "station").exists()
 
 
-def test_past_start_up_forms_are_computed_not_stored(tmp_path, monkeypatch):
-    # a diagnosis builds thousands of forms once scipy is loaded: none reaches the disk
+def test_in_bulk_forms_are_computed_not_stored(tmp_path, monkeypatch):
+    # a diagnosis builds thousands of forms: none is read from or written to the disk
+    from station.plant.diskcache import bulk, use_disk
+
     monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path))
     monkeypatch.delenv("STATION_NO_CACHE", raising=False)
     modal.linear_form.cache_clear()
     params = load_params("tmm-fit")
-    import scipy.linalg  # noqa: F401 - past start-up
-
-    from station.plant.diskcache import in_startup
-
-    assert not in_startup()
-    _same(modal.linear_form(params, 4, 0.002, 10), modal._linear_form(params, 4, 0.002, 10))
+    with bulk():
+        assert not use_disk()
+        _same(modal.linear_form(params, 4, 0.002, 10), modal._linear_form(params, 4, 0.002, 10))
+    assert use_disk()
     assert not list(tmp_path.rglob("*.npz"))
     modal.linear_form.cache_clear()

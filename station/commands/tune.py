@@ -30,8 +30,10 @@ def configure(parser: argparse.ArgumentParser) -> None:
         ``--shaper``, ``--robust``, ``--samples``, ``--jobs``, ``--scheduler``, ``--out``,
         ``--json``, ``--report``, ``--force``, ``--quiet``.
     """
+    # light modules only: every command's parser is built at start-up (the design's
+    # evaluation imports scipy.signal and python-control, most of a second)
+    from station.design.robust import DEFAULT_SAMPLES
     from station.design.space import SHAPERS, STRUCTURES
-    from station.design.tuning import DEFAULT_SAMPLES
 
     add_model_options(parser, "the model the compensator is designed on (its effects included), or a diagnosis "
                       "JSON (its extended model); without it, "

@@ -13,12 +13,18 @@ Imports the control, plant and analysis packages and :mod:`station.experiment` (
 imports it but the ``tune`` command and scripts.
 """
 
-from station.design.evaluate import Figures, Requirements
-from station.design.robust import RobustSet, robust_set
-from station.design.search import Budget
-from station.design.space import SHAPERS, STRUCTURES, DesignSpace
-from station.design.tuning import TuneResult, tune
-from station.design.verify import Verification, verify
+import importlib
 
-__all__ = ["SHAPERS", "STRUCTURES", "Budget", "DesignSpace", "Figures", "Requirements", "RobustSet",
-           "TuneResult", "Verification", "robust_set", "tune", "verify"]
+_WHERE = {"Figures": "evaluate", "Requirements": "evaluate", "RobustSet": "robust", "robust_set": "robust",
+          "Budget": "search", "SHAPERS": "space", "STRUCTURES": "space", "DesignSpace": "space",
+          "TuneResult": "tuning", "tune": "tuning", "Verification": "verify", "verify": "verify"}
+
+__all__ = sorted(_WHERE)
+
+
+def __getattr__(name: str):
+    # imported on first use (PEP 562): the tune command's parser, built with every command's
+    # at start-up, needs only the light `space` and `robust`, not scipy.signal and control
+    if name in _WHERE:
+        return getattr(importlib.import_module(f"station.design.{_WHERE[name]}"), name)
+    raise AttributeError(f"module 'station.design' has no attribute {name!r}")

@@ -49,6 +49,9 @@ left out."""
 SEED = 0
 """Seed of the drawn models."""
 
+DEFAULT_SAMPLES = 20
+"""Models drawn from the doubt by default (besides the nominal and any --robust files)."""
+
 MAX_CORNER_EFFECTS = 4
 """The box's corners join the set when the intervals span at most this many effects (16 models)."""
 

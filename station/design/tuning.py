@@ -22,16 +22,13 @@ from station.design.evaluate import Figures, Requirements, friction_held, held_e
 from station.design.executor import open_runner
 from station.design.hold import design_model_warning, held_summary
 from station.design.linear import Margins, loop_model
-from station.design.robust import SEED, RobustSet, robust_set
+from station.design.robust import DEFAULT_SAMPLES, SEED, RobustSet, robust_set
 from station.design.search import Budget, Problem, judge_points, search
 from station.design.space import SHAPERS, STRUCTURES, DesignSpace, thesis_compensator
 from station.errors import StationError
 
 DEFAULT_AMPLITUDE = {"p": 50.0, "lead": 100.0, "lead-accel": 200.0}
 """Default step height per structure, encoder counts: the rig's three experiments (thesis)."""
-
-DEFAULT_SAMPLES = 20
-"""Models drawn from the doubt by default (besides the nominal and any --robust files)."""
 
 METRICS = ("overshoot_pct", "settling_2pct_s", "settling_thesis_s", "peak_command", "saturated_s")
 """DESIGN.md's metrics, in the JSON's order."""

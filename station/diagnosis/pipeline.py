@@ -62,9 +62,11 @@ def diagnose(runs: Sequence[str | Path], validate: Sequence[str | Path] = (), mo
     """
     from threadpoolctl import threadpool_limits
 
+    from station.plant.diskcache import bulk
+
     # the matrices are tiny (22 x 22): BLAS threads only contend with each other and the
     # compiled sample loop (measured 3x slower on a loaded 2-core machine)
-    with threadpool_limits(limits=1, user_api="blas"):
+    with threadpool_limits(limits=1, user_api="blas"), bulk():  # thousands of forms: not via the disk
         return _diagnose(runs, validate, model, progress, candidates, simulate, workers)
 
 

@@ -464,7 +464,9 @@ def diagnose_sessions(sessions: Sequence[SessionLogs], model=None, progress: Cal
     """
     from threadpoolctl import threadpool_limits
 
-    with threadpool_limits(limits=1, user_api="blas"):  # tiny matrices (see station.diagnosis.diagnose)
+    from station.plant.diskcache import bulk
+
+    with threadpool_limits(limits=1, user_api="blas"), bulk():  # tiny matrices; forms not via the disk (see diagnose)
         return _diagnose_sessions(sessions, model, progress or (lambda msg: None), candidates, max_samples, simulate)
 
 

@@ -16,6 +16,7 @@ change under ``station/plant`` invalidates every entry.)
 
 from __future__ import annotations
 
+import contextlib
 import functools
 import hashlib
 import importlib.util
@@ -23,7 +24,7 @@ import logging
 import os
 import sys
 import tempfile
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from pathlib import Path
 
 import numpy as np
@@ -77,17 +78,31 @@ def cache_key(kind: str, parts: tuple) -> str:
     return f"{kind}-{h.hexdigest()[:32]}.npz"
 
 
-def in_startup() -> bool:
-    """True while the process has not imported scipy: the disk cache serves start-up.
+_BULK = 0  # how many bulk() blocks are open (threads of one process share it)
 
-    Reading a small form's ``.npz`` costs about 2.5 ms and computing it, once scipy is
-    loaded, about 0.5 ms (4 elements); a diagnosis or a design builds thousands of forms
-    (every fitted drive damping is a new one), which must neither be slowed down by the disk
-    nor fill it (it had grown to 120 000 files, 1.8 GB). So callers consult the disk only
-    before scipy is imported: the warm ``station step`` that never imports it, and the
-    cold one that computes and stores its form.
+
+@contextlib.contextmanager
+def bulk() -> Iterator[None]:
+    """Within: forms are computed, never read from or written to the disk cache.
+
+    The disk cache serves start-up (a warm ``station step`` reads its model's form instead
+    of importing scipy). A diagnosis builds thousands of forms (every fitted drive damping
+    is a new one): reading a small form's ``.npz`` costs about 2.5 ms where computing it,
+    scipy loaded, costs about 0.5 ms (4 elements), and storing them all filled the disk (it
+    had grown to 120 000 files, 1.8 GB). The diagnosis (:func:`station.diagnosis.diagnose`,
+    the sessions) runs inside this block.
     """
-    return "scipy.linalg" not in sys.modules
+    global _BULK
+    _BULK += 1
+    try:
+        yield
+    finally:
+        _BULK -= 1
+
+
+def use_disk() -> bool:
+    """False inside :func:`bulk`: the caller computes instead of consulting the disk cache."""
+    return _BULK == 0
 
 
 def cached_arrays(kind: str, parts: tuple, compute: Callable[[], dict[str, np.ndarray]]) -> dict[str, np.ndarray]:

@@ -21,7 +21,7 @@ import numpy as np
 # scipy.linalg / scipy.signal / scipy.optimize / python-control are imported where used:
 # they cost seconds, and a run's first tick does not need them (start-up time).
 
-from station.plant.diskcache import cached_arrays, in_startup
+from station.plant.diskcache import cached_arrays, use_disk
 from station.plant.discrete import DiscretePlant
 from station.plant.fem import modal_basis, state_matrices
 from station.plant.parameters import Params
@@ -87,8 +87,8 @@ def sampled_form(plant: DiscretePlant) -> LinearForm:
 def linear_form(params: Params, n_elements: int, dt: float, substeps: int) -> LinearForm:
     """The (cached) :class:`LinearForm` of a parameter set.
 
-    Cached in memory and, before scipy is imported (start-up,
-    :func:`station.plant.diskcache.in_startup`), on disk (keyed by the parameter values,
+    Cached in memory and, outside a :func:`station.plant.diskcache.bulk` block (a
+    diagnosis), on disk (keyed by the parameter values,
     the element count, dt, the sub-steps and the plant's code): a warm start neither
     imports scipy nor decomposes anything, and gets the same bits.
 
@@ -107,7 +107,7 @@ def linear_form(params: Params, n_elements: int, dt: float, substeps: int) -> Li
     def compute():
         return _form_arrays(_linear_form(params, n_elements, dt, substeps))
 
-    arrays = cached_arrays("linear-form", parts, compute) if in_startup() else compute()
+    arrays = cached_arrays("linear-form", parts, compute) if use_disk() else compute()
     return LinearForm(*(arrays[name] if arrays[name].ndim else arrays[name].item() for name in LinearForm._fields))
 
 
