@@ -406,8 +406,11 @@ class Session:
         """
         if self._ahead is None:
             if not self._pending:
-                if self._bytes_waiting() < self.sample_bytes:
-                    return None
+                try:  # inline: this look at the port is inside every tick's compute latency
+                    if self.port.in_waiting < self.sample_bytes:
+                        return None
+                except (serial.SerialException, OSError) as exc:
+                    raise LinkFault(f"{self.url}: {exc}") from None
                 self._receive_waiting()
             self._ahead = self._next_pending()
             if self._ahead is None:
