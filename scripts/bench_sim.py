@@ -38,7 +38,6 @@ from __future__ import annotations
 import argparse
 import json
 import statistics
-import subprocess
 import sys
 import tempfile
 import time
@@ -196,16 +195,6 @@ def bench_effects(repeats: int = 20, out=sys.stdout) -> list[dict]:
 
 # run ROOT/scripts/bench_sim.py on ROOT's own station package: the editable install's
 # import hook (if any) would otherwise hand this checkout's package to the other script
-_OTHER = """import runpy, sys
-root = sys.argv[1]
-sys.meta_path[:] = [f for f in sys.meta_path if "editable" not in repr(f)]
-sys.path.insert(0, root)
-import station
-assert station.__file__.startswith(root), station.__file__
-runpy.run_path(root + "/scripts/bench_sim.py")["main"](sys.argv[2:])
-"""
-
-
 def _labelled(result: dict) -> dict[str, float]:
     """{case label: seconds} of a bench JSON (element count / controller, and the effects)."""
     rows = {f"n={c['n_elements']} {c['controller']}": c["seconds"] for c in result.get("cases", [])}
@@ -232,15 +221,15 @@ def compare(other: Path, argv: list[str], rounds: int = 3, out=sys.stdout) -> li
     list of dict
         ``{"case", "seconds", "other_seconds", "ratio"}`` for the cases both report.
     """
+    from checkout import run_on  # scripts/ is on sys.path in the parent only
+
     here = Path(__file__).resolve().parents[1]
     runs: dict[str, list[dict]] = {"this": [], "other": []}
     with tempfile.TemporaryDirectory() as tmp:
         for k in range(rounds):
             for side, root in (("this", here), ("other", Path(other).resolve())):
-                path = Path(tmp) / f"{side}{k}.json"
-                subprocess.run([sys.executable, "-c", _OTHER, str(root), *argv, "--json", str(path)], check=True,
-                               stdout=subprocess.DEVNULL)
-                runs[side].append(_labelled(json.loads(path.read_text())))
+                result = run_on(root, root / "scripts" / "bench_sim.py", argv, Path(tmp) / f"{side}{k}.json")
+                runs[side].append(_labelled(result))
     rows = []
     for case in runs["this"][0]:
         if all(case in r for r in runs["other"]):
