@@ -28,8 +28,8 @@ from station.diagnosis.cost import Evaluator, calibrate_noise
 from station.diagnosis.experiment_design import Design, choose_experiment
 from station.diagnosis.experiments import THESIS_EXPERIMENTS, Experiment, candidate_experiments, write_reference
 from station.diagnosis.pipeline import diagnose
-from station.diagnosis.rivals import describe, rivals
-from station.diagnosis.selection import accept, effect_axes, fit_set
+from station.diagnosis.rivals import describe, explanation, rivals
+from station.diagnosis.selection import accept, effect_axes, refit_explanation
 from station.errors import StationError
 from station.experiment import run_step
 from station.logged.device import command_quantization
@@ -357,7 +357,9 @@ def prefer(old, new, runs: Sequence[str | Path], base) -> Preference:
     (from its values) and both are judged by the diagnosis's cost on all of them; the earlier
     one is kept when it fits better with no more effects, or, with more, when it pays for
     them as forward selection's acceptance demands
-    (:func:`station.diagnosis.selection.accept`).
+    (:func:`station.diagnosis.selection.accept`). An explanation is its causes with what they
+    hold (:func:`station.diagnosis.rivals.explanation`: a static_friction's sliding level),
+    refitted as the search fits it (:func:`station.diagnosis.selection.refit_explanation`).
 
     Parameters
     ----------
@@ -368,19 +370,16 @@ def prefer(old, new, runs: Sequence[str | Path], base) -> Preference:
     base : station.plant.model.Model
         The nominal model.
     """
-    old_values = {e.name: e.value for e in old.effects if e.accepted}
-    new_values = {e.name: e.value for e in new.effects if e.accepted}
-    if not old_values or set(old_values) == set(new_values):
+    if not old.causes or set(old.causes) == set(new.causes):
         return Preference(False, {}, math.nan, math.nan, "")
+    old_values, new_values = explanation(old), explanation(new)
     ev = Evaluator([load_case(p) for p in runs], base)
     calibrate_noise(ev)
     idx = list(range(len(ev.cases)))
-    axes = effect_axes()
-    names = list(old_values)
-    refit = fit_set(ev, [axes[n] for n in names], idx, old_values) if names else {}
+    refit = refit_explanation(ev, old.causes, idx, old_values, effect_axes())
     terms = ev.terms(idx)
     c_old, c_new = ev.cost(refit, idx), ev.cost(new_values, idx)
-    if len(old_values) <= len(new_values):
+    if len(old.causes) <= len(new.causes):
         keep = c_old < c_new
     else:
         keep = accept(c_new * terms, c_old * terms, terms)
