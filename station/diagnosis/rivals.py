@@ -151,17 +151,22 @@ def _alternatives(diag, accepted: list) -> tuple[list[dict], str]:
         for a in alts:
             values = dict(_get(a, "values") or {})
             causes = list(_get(a, "causes") or values)
-            held = [k for n in causes if n in NESTED for k in (NESTED[n], SHAPE) if k not in causes]
+            held = [k for n in causes for k in _holds(n) if k not in causes]
             found.append({n: float(values[n]) for n in causes + held if n in values})
         return found, "the diagnosis's alternatives"
     first = accepted[0]
-    rest = {e.name: e.value for e in accepted[1:]}
+    rest = {n: v for n, v in explanation(diag).items() if n != first.name and n not in _holds(first.name)}
     found = [{**{n: v for n, v in rest.items() if n != e.name}, e.name: e.value}
              for e in diag.effects
              if not e.accepted and e.cost_gain_pct > 0 and e.cost_gain_pct >= RUNNER_UP_FRACTION * first.cost_gain_pct
              and math.isfinite(e.value)]
     return found, (f"candidates that alone gained at least {RUNNER_UP_FRACTION:.0%} of {first.name}'s gain "
                    "(the diagnosis gave no alternatives)")
+
+
+def _holds(name: str) -> tuple:
+    """The values an effect brings along: a static_friction's sliding level and shape."""
+    return (NESTED[name], SHAPE) if name in NESTED else ()
 
 
 def _accepted(diag) -> list:
@@ -187,7 +192,7 @@ def explanation(diag) -> dict:
     ext = _get(diag, "extended_model")
     ext = ext.effect_dict() if hasattr(ext, "effect_dict") else dict(_get(ext, "effects") or {}) if ext else {}
     for n in list(chosen):
-        for k in ((NESTED[n], SHAPE) if n in NESTED else ()):
+        for k in _holds(n):
             if k in ext and k not in chosen:
                 chosen[k] = float(ext[k])
     return chosen
