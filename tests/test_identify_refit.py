@@ -56,6 +56,9 @@ def test_explanation_holds_the_sliding_level():
     rv = rivals(_diag(BREAKAWAY, ["static_friction"], iv))
     assert rv.chosen == BREAKAWAY
     assert [r.effects for r in rv.rivals] == [{**BREAKAWAY, "static_friction": 5.0}, {**BREAKAWAY, "static_friction": 20.0}]
+    d = _diag({"coulomb_friction": 9.0}, ["coulomb_friction"])  # an alternative breakaway, as doubt refits it
+    d.alternatives = [{"causes": ["static_friction"], "values": {**BREAKAWAY, "viscous_friction": 1.0}}]
+    assert rivals(d).rivals[0].effects == BREAKAWAY
 
 
 def test_refit_from_the_truth_is_no_worse_than_the_truth(blind):
