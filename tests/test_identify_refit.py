@@ -14,6 +14,7 @@ import pytest
 
 from station.diagnosis.cases import load_case
 from station.diagnosis.cost import Evaluator, calibrate_noise
+from station.diagnosis.doubt import profile_interval
 from station.diagnosis.identify import prefer
 from station.diagnosis.rivals import explanation, rivals
 from station.diagnosis.selection import effect_axes, refit_explanation
@@ -97,3 +98,11 @@ def test_prefer_judges_breakaway_friction_with_its_sliding_level(blind):
     assert pref.old_cost < 5.0, pref.note  # noise-normalised: near the floor, not hundreds
     assert pref.values["coulomb_friction"] == pytest.approx(5.0, rel=0.25) and \
         pref.values["static_friction"] == pytest.approx(12.0, rel=0.25), pref.values
+
+
+def test_a_profile_of_the_breakaway_level_keeps_it_above_the_sliding_level(blind):
+    """Profiling v_s down past v_c lowers v_c with it: a model with v_s < v_c is refused (an
+    infinite cost), which stopped the profile at the fitted v_c whatever the data allowed."""
+    values = {**blind.hidden, "static_friction": blind.hidden["coulomb_friction"] + 0.05}
+    iv = profile_interval(blind.ev, effect_axes(), "static_friction", values, blind.runs, n_eff=20.0)
+    assert iv.lo < blind.hidden["coulomb_friction"] and values["static_friction"] <= iv.hi, iv
