@@ -56,7 +56,8 @@ def test_explanation_holds_the_sliding_level():
     iv = SimpleNamespace(lo=2.0, hi=20.0)  # a lower end below v_c: the rival keeps v_s >= v_c
     rv = rivals(_diag(BREAKAWAY, ["static_friction"], iv))
     assert rv.chosen == BREAKAWAY
-    assert [r.effects for r in rv.rivals] == [{**BREAKAWAY, "static_friction": 5.0}, {**BREAKAWAY, "static_friction": 20.0}]
+    assert [r.effects for r in rv.rivals] == [{**BREAKAWAY, "static_friction": 5.0},
+                                              {**BREAKAWAY, "static_friction": 20.0}]
     d = _diag({"coulomb_friction": 9.0}, ["coulomb_friction"])  # an alternative breakaway, as doubt refits it
     d.alternatives = [{"causes": ["static_friction"], "values": {**BREAKAWAY, "viscous_friction": 1.0}}]
     assert rivals(d).rivals[0].effects == BREAKAWAY

@@ -42,7 +42,7 @@ import scipy.optimize
 
 from station.analysis.fitting import Axis
 from station.diagnosis.cost import Evaluator, pooled, rms_gain
-from station.diagnosis.selection import NESTED, SHAPE, Search, Selection, Trial, fit_set, null_floor, set_axes, trial
+from station.diagnosis.selection import NESTED, SHAPE, Search, Selection, Trial, null_floor, refit_explanation, trial
 
 CHI2_95 = 3.841458820694124
 """χ²₁ at 95 %: the likelihood-ratio threshold of one parameter."""
@@ -412,8 +412,9 @@ def alternatives(search: Search, sel: Selection, nominal: Trial, n_eff: float) -
         held = set(others) | {NESTED[n] for n in others if n in NESTED}  # a static_friction's sliding level
         if c in held:  # coulomb_friction beside a static_friction that holds it
             continue
-        values = fit_set(ev, set_axes(others + [c], axes), search.fit_runs,
-                         {n: v for n, v in sel.values.items() if n in held})
+        shape = {SHAPE} if any(n in NESTED for n in others) else set()  # an accepted breakaway's, held
+        values = refit_explanation(ev, others + [c], search.fit_runs,
+                                   {n: v for n, v in sel.values.items() if n in held | shape}, axes)
         gain = rms_gain(pooled(ev, tr.val_sse).rms_theta, rms_nom)
         kept = names + [NESTED[n] for n in names if n in NESTED and NESTED[n] not in names]  # v_c of a v_s
         result.append(Alternative(names, {n: float(values[n]) for n in kept if n in values}, float(gain),

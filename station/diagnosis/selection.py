@@ -280,7 +280,8 @@ def refit_explanation(ev: Evaluator, names: Sequence[str], runs: Sequence[int], 
     """An explanation's effects refitted on runs from its values, as the search fits them: the
     named effects on :func:`set_axes` (a static_friction as its sliding level coulomb_friction
     and breakaway excess, both refitted), every other value (a static_friction's
-    stribeck_speed) held; never worse than ``values`` (returned when they fit better). The
+    stribeck_speed) held; never worse than ``values`` when they hold every named effect
+    (returned when they fit better). The
     one way to refit an explanation outside the search: fitting
     ``[axes[n] for n in values]`` would refit v_s without its sliding level, or v_c past v_s.
 
@@ -313,7 +314,9 @@ def refit_explanation(ev: Evaluator, names: Sequence[str], runs: Sequence[int], 
     refit = {**held, **fit_set(_Holding(), set_axes(names, axes), runs, start)}
     # the grid brackets the last axis afresh and may leave the start's valley: never worse than the start
     holding = _Holding()
-    return refit if holding.cost(refit, runs) <= holding.cost(dict(values), runs) else dict(values)
+    if set(names) <= set(values) and holding.cost(dict(values), runs) < holding.cost(refit, runs):
+        return dict(values)
+    return refit
 
 
 def _sliding_start(ev: Evaluator, axes: Sequence[Axis], runs: Sequence[int], coords: Mapping[str, float]) -> float:
