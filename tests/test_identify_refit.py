@@ -99,6 +99,8 @@ def test_prefer_judges_breakaway_friction_with_its_sliding_level(blind):
     assert pref.old_cost < 5.0, pref.note  # noise-normalised: near the floor, not hundreds
     assert pref.values["coulomb_friction"] == pytest.approx(5.0, rel=0.25) and \
         pref.values["static_friction"] == pytest.approx(12.0, rel=0.25), pref.values
+    swapped = prefer(new, old, blind.paths, NOMINAL)  # the breakaway is the re-diagnosis: judged whole
+    assert not swapped.keep_old and swapped.new_cost < 5.0, swapped.note
 
 
 def test_a_profile_of_the_breakaway_level_keeps_it_above_the_sliding_level(blind):
