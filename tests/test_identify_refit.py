@@ -15,7 +15,7 @@ import pytest
 from station.diagnosis.cases import load_case
 from station.diagnosis.cost import Evaluator, calibrate_noise
 from station.diagnosis.doubt import profile_interval
-from station.diagnosis.identify import prefer
+from station.diagnosis.identify import Preference, _kept_view, prefer
 from station.diagnosis.rivals import explanation, rivals
 from station.diagnosis.selection import effect_axes, refit_explanation
 from station.plant.model import as_model
@@ -99,6 +99,9 @@ def test_prefer_judges_breakaway_friction_with_its_sliding_level(blind):
     assert pref.old_cost < 5.0, pref.note  # noise-normalised: near the floor, not hundreds
     assert pref.values["coulomb_friction"] == pytest.approx(5.0, rel=0.25) and \
         pref.values["static_friction"] == pytest.approx(12.0, rel=0.25), pref.values
+    for name, (lo, hi) in pref.intervals.items():  # on all the runs, around the refit: the next design's rivals
+        assert lo <= pref.values[name] <= hi and hi - lo < 0.5 * abs(pref.values[name]), (name, lo, hi)
+    assert set(pref.intervals) == set(causes)
     swapped = prefer(new, old, blind.paths, NOMINAL)  # the breakaway is the re-diagnosis: judged whole
     assert not swapped.keep_old and swapped.new_cost < 5.0, swapped.note
 
@@ -109,3 +112,20 @@ def test_a_profile_of_the_breakaway_level_keeps_it_above_the_sliding_level(blind
     values = {**blind.hidden, "static_friction": blind.hidden["coulomb_friction"] + 0.05}
     iv = profile_interval(blind.ev, effect_axes(), "static_friction", values, blind.runs, n_eff=20.0)
     assert iv.lo < blind.hidden["coulomb_friction"] and values["static_friction"] <= iv.hi, iv
+
+
+def test_a_kept_explanation_is_what_the_next_design_separates():
+    """After a re-diagnosis is set aside, the rivals are the kept explanation's on all the runs:
+    its refitted values with the sliding level, its intervals there, and the set-aside one only
+    when the kept one does not pay over it as selection's acceptance demands."""
+    old = _diag({"coulomb_friction": 9.0, "amp_offset": -2.0}, ["coulomb_friction", "amp_offset"])
+    new = _diag({**BREAKAWAY, "viscous_friction": 1.0}, ["static_friction", "viscous_friction"])
+    values = {**BREAKAWAY, "amp_offset": -3.0}
+    pref = Preference(True, values, 1.2, 70.0, "", {"static_friction": (11.5, 12.5), "amp_offset": (-3.5, -2.5)})
+    model = NOMINAL.with_effects(values)
+    old.causes, old.effects = ["static_friction", "amp_offset"], []
+    rv = rivals(_kept_view(old, new, pref, model))
+    assert rv.chosen == {"static_friction": 12.0, "amp_offset": -3.0, "coulomb_friction": 5.0}
+    assert [r.kind for r in rv.rivals] == ["interval", "interval"]  # amp_offset's is wide; the other apart
+    close = rivals(_kept_view(old, new, pref._replace(new_cost=1.21), model))
+    assert [r.effects for r in close.rivals if r.kind == "alternative"] == [{**BREAKAWAY, "viscous_friction": 1.0}]

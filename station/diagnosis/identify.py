@@ -10,7 +10,11 @@ watchdog trip) is reported and not used; a SIGINT or SIGTERM ends the identifica
 
 The first diagnosis tries the whole vocabulary (or the ``candidates`` given); each later one
 only the effects the first found worth a look (:func:`recheck_candidates`), which keeps a
-re-diagnosis of up to twelve runs by leave-one-run-out affordable.
+re-diagnosis of up to twelve runs by leave-one-run-out affordable. A re-diagnosis that fits
+every run worse than the earlier explanation is set aside (:func:`prefer`); the next design
+then separates the kept explanation's rivals on all the runs (its intervals there, and the
+set-aside one unless the kept one pays over it), not the earlier diagnosis's of fewer runs,
+so a settled answer stops the loop.
 """
 
 from __future__ import annotations
@@ -21,10 +25,12 @@ import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
+from types import SimpleNamespace
 from typing import Any, NamedTuple
 
 from station.diagnosis.cases import load_case
 from station.diagnosis.cost import Evaluator, calibrate_noise
+from station.diagnosis.doubt import effect_interval, effective_terms
 from station.diagnosis.experiment_design import Design, choose_experiment
 from station.diagnosis.experiments import THESIS_EXPERIMENTS, Experiment, candidate_experiments, write_reference
 from station.diagnosis.pipeline import diagnose
@@ -298,7 +304,7 @@ def identify(port: str = "sim://", model=None, budget: int = DEFAULT_BUDGET, out
     tried = set(THESIS_EXPERIMENTS)
     designed = 0
     while True:
-        rv = rivals(diag)
+        rv = rivals(loop.view or diag)
         if not rv.rivals:
             stopped = ("the diagnosis accepted no effect: nothing to tell apart" if not diag.causes else
                        f"settled: {describe(rv.chosen)}, no alternatives and every interval narrow")
@@ -338,6 +344,9 @@ class Preference(NamedTuple):
         Noise-normalised cost per error term on all the runs (1 ≈ the noise floor).
     note : str
         The comparison in words.
+    intervals : dict of str to (float, float)
+        When the earlier explanation is kept: each cause's 95 % interval on all the runs
+        (:func:`station.diagnosis.doubt.effect_interval`, around the refitted values).
     """
 
     keep_old: bool
@@ -345,6 +354,7 @@ class Preference(NamedTuple):
     old_cost: float
     new_cost: float
     note: str
+    intervals: dict = {}
 
 
 def prefer(old, new, runs: Sequence[str | Path], base) -> Preference:
@@ -376,7 +386,8 @@ def prefer(old, new, runs: Sequence[str | Path], base) -> Preference:
     ev = Evaluator([load_case(p) for p in runs], base)
     calibrate_noise(ev)
     idx = list(range(len(ev.cases)))
-    refit = refit_explanation(ev, old.causes, idx, old_values, effect_axes())
+    axes = effect_axes()
+    refit = refit_explanation(ev, old.causes, idx, old_values, axes)
     terms = ev.terms(idx)
     c_old, c_new = ev.cost(refit, idx), ev.cost(new_values, idx)
     if len(old.causes) <= len(new.causes):
@@ -386,7 +397,28 @@ def prefer(old, new, runs: Sequence[str | Path], base) -> Preference:
     note = (f"{describe(refit)} (the earlier explanation, refitted on all {len(idx)} runs) fits them "
             f"{'better' if keep else 'no better'}: cost {c_old:.3g} against {c_new:.3g} per term for "
             f"{describe(new_values)}")
-    return Preference(keep, refit, c_old, c_new, note)
+    intervals = {}
+    if keep:  # what the runs now allow around it: the next design's rivals (the earlier diagnosis's are stale)
+        n_eff = effective_terms(ev, {i: ev.predict(refit, i) for i in idx}, idx)
+        for name in old.causes:
+            iv = effect_interval(ev, axes, name, refit, idx, n_eff, [refit[name]])
+            if iv is not None:
+                intervals[name] = (iv.lo, iv.hi)
+    return Preference(keep, refit, c_old, c_new, note, intervals)
+
+
+def _kept_view(old, new, pref: Preference, model) -> SimpleNamespace:
+    """The kept explanation as :func:`station.diagnosis.rivals.rivals` reads a diagnosis: its
+    causes at the values refitted on every run with their intervals there, and the set-aside
+    re-diagnosis as an alternative unless the kept one pays over it as selection's acceptance
+    demands (the earlier diagnosis's own intervals and alternatives are of fewer runs)."""
+    effects = [SimpleNamespace(name=n, value=pref.values[n], accepted=True, cost_gain_pct=0.0,
+                               interval=pref.intervals.get(n)) for n in old.causes]
+    terms = 1000.0  # the costs are per term: accept judges the relative gain and the gain per term
+    apart = accept(pref.new_cost * terms, pref.old_cost * terms, terms)
+    alts = [] if apart else [{"causes": list(new.causes), "values": explanation(new)}]
+    return SimpleNamespace(effects=effects, causes=list(old.causes), folds=[], alternatives=alts,
+                           extended_model=model)
 
 
 class _Loop:
@@ -400,6 +432,7 @@ class _Loop:
         self.diagnoses = 0
         self.kept: list[str] = []
         self.model = None  # the kept explanation refitted on every completed run
+        self.view = None  # ... as the rivals see it (_kept_view)
         self.command = "round"
         self.t0 = time.perf_counter()
 
@@ -453,8 +486,11 @@ class _Loop:
         if pref.keep_old:
             self.kept.append(pref.note)
             self.model = self.base.with_effects(pref.values, name=f"{self.base.name} + {' + '.join(pref.values)}")
+            self.view = _kept_view(old, new, pref, self.model)
+            self.say(f"diagnosis {self.diagnoses}: the kept explanation's 95 % intervals on all {len(runs)} runs: "
+                     + (", ".join(f"{n} {lo:.4g} .. {hi:.4g}" for n, (lo, hi) in pref.intervals.items()) or "none"))
         else:
-            self.model = None
+            self.model = self.view = None
         return old if pref.keep_old else new
 
     def result(self, diag, stopped: str, budget: int, code: int) -> Identification:
