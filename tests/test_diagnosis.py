@@ -88,6 +88,16 @@ def test_ringing_mode_frequency_and_decay():
     assert m.decay_per_s == pytest.approx(1.5, rel=0.2)
 
 
+def test_ringing_mode_of_noise_falling_through_the_band_stays_in_it():
+    """Noise whose spectrum falls through the band's lower edge (a motor that never broke away):
+    the peak's parabolic interpolation put it at -0.16 Hz and the band-pass raised (identify's
+    open-loop ramp to 20 DAC counts, issue 17)."""
+    b, a = scipy.signal.butter(1, 2.0, fs=500.0)
+    x = np.round(scipy.signal.lfilter(b, a, np.random.default_rng(55).normal(0.0, 3.0, 1000)))
+    m = ringing_mode(x)
+    assert m is not None and 1.0 <= m.frequency_hz <= 6.0
+
+
 # --- fitting on piecewise-constant objectives ---------------------------------------------
 
 def staircase(x, x0, width):

@@ -325,18 +325,22 @@ def test_a_silent_device_leaves_nothing_to_diagnose(tmp_path, capsys):
 
 @pytest.mark.slow
 @pytest.mark.parametrize("hidden", [{"coulomb_friction": 4.0, "param:J_base": 1.5},
-                                    {"backlash": 6.0, "coulomb_friction": 6.0}], ids=lambda h: "+".join(h))
+                                    {"backlash": 6.0, "coulomb_friction": 6.0},
+                                    {"static_friction": 12.0, "coulomb_friction": 5.0, "viscous_friction": 3.0}],
+                         ids=lambda h: "+".join(h))
 def test_identify_names_hidden_effects_on_the_simulated_rig(tmp_path, capsys, hidden):
-    """DESIGN.md "Identifying a rig", done when: two hidden effects named within 25 % in at most
-    8 designed experiments. The model file is served by the simulated rig; the diagnosis sees
-    only the logs."""
+    """DESIGN.md "Identifying a rig", done when: two or three hidden effects named within 25 % in
+    at most 8 designed experiments (issue 17's breakaway case: static_friction with its sliding
+    level, which the thesis's four cannot tell from viscous plus Coulomb friction). The model
+    file is served by the simulated rig; the diagnosis sees only the logs."""
     model = _hidden_model(tmp_path, hidden)
     out, saved, report = tmp_path / "id.json", tmp_path / "found.toml", tmp_path / "report"
     code = cli.main(["identify", "--port", f"sim://?model={model}", "--out-dir", str(tmp_path / "runs"),
                      "--json", str(out), "--save-model", str(saved), "--report", str(report), "--quiet"])
     assert code == 0
     doc = json.loads(out.read_text())
-    assert set(hidden) <= set(doc["causes"]), doc["causes"]
+    held = {"coulomb_friction"} if "static_friction" in hidden else set()  # breakaway's sliding level: no cause
+    assert set(hidden) - held <= set(doc["causes"]), doc["causes"]
     found = doc["identify"]["model"]["effects"]  # the identified model, as --save-model writes it
     for name, value in hidden.items():
         assert found[name] == pytest.approx(value, rel=0.25), (name, found)

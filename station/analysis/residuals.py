@@ -385,8 +385,9 @@ def ringing_mode(x, fs: float = 500.0, band_hz: tuple = (1.0, 6.0), start: int =
     if 0 < i < f.size - 1:
         a, b, c = np.log(p[i - 1:i + 2] + 1e-300)
         den = a - 2 * b + c
-        if den != 0:
-            fpk = f[i] + 0.5 * (a - c) / den * (f[1] - f[0])
+        delta = 0.5 * (a - c) / den if den < 0 else 0.0  # a true peak only: within half a bin
+        if abs(delta) <= 0.5:  # (noise alone, a flat spectrum, sent it below 0 Hz: issue 17)
+            fpk = f[i] + delta * (f[1] - f[0])
     sos = scipy.signal.butter(2, (0.6 * fpk, min(1.4 * fpk, 0.45 * fs)), "bandpass", fs=fs, output="sos")
     env = np.abs(scipy.signal.hilbert(scipy.signal.sosfiltfilt(sos, x)))
     trim = int(fs / fpk)  # one period at each end: filter and Hilbert edge effects

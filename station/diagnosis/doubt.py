@@ -42,7 +42,7 @@ import scipy.optimize
 
 from station.analysis.fitting import Axis
 from station.diagnosis.cost import Evaluator, pooled, rms_gain
-from station.diagnosis.selection import NESTED, Search, Selection, Trial, fit_set, null_floor, set_axes, trial
+from station.diagnosis.selection import NESTED, SHAPE, Search, Selection, Trial, null_floor, refit_explanation, trial
 
 CHI2_95 = 3.841458820694124
 """χ²₁ at 95 %: the likelihood-ratio threshold of one parameter."""
@@ -163,6 +163,16 @@ def _local_refit(cost: Callable[[dict], float], axes: Sequence[Axis], start: Map
     return best[0], best[1]
 
 
+def _sliding_below(values: Mapping[str, float]) -> dict:
+    """Values with each breakaway level's sliding level no higher than it (v_c <= v_s, what a
+    model holds): a profile of v_s refits v_c, and of another effect refits both."""
+    out = dict(values)
+    for n, sliding in NESTED.items():
+        if n in out and sliding in out and out[sliding] > out[n]:
+            out[sliding] = out[n]
+    return out
+
+
 def profile_interval(ev: Evaluator, axes: Mapping[str, Axis], name: str, values: Mapping[str, float],
                      runs: Sequence[int], n_eff: float) -> Interval | None:
     """The 95 % profile-likelihood interval of one accepted effect (module docstring).
@@ -186,7 +196,7 @@ def profile_interval(ev: Evaluator, axes: Mapping[str, Axis], name: str, values:
         None when the fit's cost is not finite.
     """
     ax = axes[name]
-    others = [axes[n] for n in values if n != name]
+    others = [axes[n] for n in values if n not in (name, SHAPE)]  # the shape is held, as the search holds it
     j_min = [ev.cost(values, runs)]
     if not math.isfinite(j_min[0]) or j_min[0] <= 0:
         return None
@@ -195,8 +205,9 @@ def profile_interval(ev: Evaluator, axes: Mapping[str, Axis], name: str, values:
         if not others:
             j, w = ev.cost({**warm, name: x}, runs), dict(warm)
         else:
-            j, w = _local_refit(lambda vals: ev.cost({**vals, name: x}, runs), others,
+            j, w = _local_refit(lambda vals: ev.cost(_sliding_below({**vals, name: x}), runs), others,
                                 {k: v for k, v in warm.items() if k != name})
+            w = _sliding_below({**w, name: x})
         j_min[0] = min(j_min[0], j)
         return j, {**w, name: x}
 
@@ -401,9 +412,11 @@ def alternatives(search: Search, sel: Selection, nominal: Trial, n_eff: float) -
         held = set(others) | {NESTED[n] for n in others if n in NESTED}  # a static_friction's sliding level
         if c in held:  # coulomb_friction beside a static_friction that holds it
             continue
-        values = fit_set(ev, set_axes(others + [c], axes), search.fit_runs,
-                         {n: v for n, v in sel.values.items() if n in held})
+        shape = {SHAPE} if any(n in NESTED for n in others) else set()  # an accepted breakaway's, held
+        values = refit_explanation(ev, others + [c], search.fit_runs,
+                                   {n: v for n, v in sel.values.items() if n in held | shape}, axes)
         gain = rms_gain(pooled(ev, tr.val_sse).rms_theta, rms_nom)
-        result.append(Alternative(names, {n: float(values[n]) for n in names}, float(gain),
+        kept = names + [NESTED[n] for n in names if n in NESTED and NESTED[n] not in names]  # v_c of a v_s
+        result.append(Alternative(names, {n: float(values[n]) for n in kept if n in values}, float(gain),
                                   float(tr.val_weighted / final.val_weighted), instead))
     return sorted(result, key=lambda a: a.cost_ratio)

@@ -10,7 +10,11 @@ watchdog trip) is reported and not used; a SIGINT or SIGTERM ends the identifica
 
 The first diagnosis tries the whole vocabulary (or the ``candidates`` given); each later one
 only the effects the first found worth a look (:func:`recheck_candidates`), which keeps a
-re-diagnosis of up to twelve runs by leave-one-run-out affordable.
+re-diagnosis of up to twelve runs by leave-one-run-out affordable. A re-diagnosis that fits
+every run worse than the earlier explanation is set aside (:func:`prefer`); the next design
+then separates the kept explanation's rivals on all the runs (its intervals there, and the
+set-aside one unless the kept one pays over it), not the earlier diagnosis's of fewer runs,
+so a settled answer stops the loop.
 """
 
 from __future__ import annotations
@@ -21,15 +25,17 @@ import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
+from types import SimpleNamespace
 from typing import Any, NamedTuple
 
 from station.diagnosis.cases import load_case
 from station.diagnosis.cost import Evaluator, calibrate_noise
+from station.diagnosis.doubt import effect_interval, effective_terms
 from station.diagnosis.experiment_design import Design, choose_experiment
 from station.diagnosis.experiments import THESIS_EXPERIMENTS, Experiment, candidate_experiments, write_reference
 from station.diagnosis.pipeline import diagnose
-from station.diagnosis.rivals import describe, rivals
-from station.diagnosis.selection import accept, effect_axes, fit_set
+from station.diagnosis.rivals import describe, explanation, rivals
+from station.diagnosis.selection import accept, effect_axes, refit_explanation
 from station.errors import StationError
 from station.experiment import run_step
 from station.logged.device import command_quantization
@@ -298,7 +304,7 @@ def identify(port: str = "sim://", model=None, budget: int = DEFAULT_BUDGET, out
     tried = set(THESIS_EXPERIMENTS)
     designed = 0
     while True:
-        rv = rivals(diag)
+        rv = rivals(loop.view or diag)
         if not rv.rivals:
             stopped = ("the diagnosis accepted no effect: nothing to tell apart" if not diag.causes else
                        f"settled: {describe(rv.chosen)}, no alternatives and every interval narrow")
@@ -338,6 +344,9 @@ class Preference(NamedTuple):
         Noise-normalised cost per error term on all the runs (1 ≈ the noise floor).
     note : str
         The comparison in words.
+    intervals : dict of str to (float, float)
+        When the earlier explanation is kept: each cause's 95 % interval on all the runs
+        (:func:`station.diagnosis.doubt.effect_interval`, around the refitted values).
     """
 
     keep_old: bool
@@ -345,6 +354,7 @@ class Preference(NamedTuple):
     old_cost: float
     new_cost: float
     note: str
+    intervals: dict = {}
 
 
 def prefer(old, new, runs: Sequence[str | Path], base) -> Preference:
@@ -357,7 +367,9 @@ def prefer(old, new, runs: Sequence[str | Path], base) -> Preference:
     (from its values) and both are judged by the diagnosis's cost on all of them; the earlier
     one is kept when it fits better with no more effects, or, with more, when it pays for
     them as forward selection's acceptance demands
-    (:func:`station.diagnosis.selection.accept`).
+    (:func:`station.diagnosis.selection.accept`). An explanation is its causes with what they
+    hold (:func:`station.diagnosis.rivals.explanation`: a static_friction's sliding level),
+    refitted as the search fits it (:func:`station.diagnosis.selection.refit_explanation`).
 
     Parameters
     ----------
@@ -368,26 +380,45 @@ def prefer(old, new, runs: Sequence[str | Path], base) -> Preference:
     base : station.plant.model.Model
         The nominal model.
     """
-    old_values = {e.name: e.value for e in old.effects if e.accepted}
-    new_values = {e.name: e.value for e in new.effects if e.accepted}
-    if not old_values or set(old_values) == set(new_values):
+    if not old.causes or set(old.causes) == set(new.causes):
         return Preference(False, {}, math.nan, math.nan, "")
+    old_values, new_values = explanation(old), explanation(new)
     ev = Evaluator([load_case(p) for p in runs], base)
     calibrate_noise(ev)
     idx = list(range(len(ev.cases)))
     axes = effect_axes()
-    names = list(old_values)
-    refit = fit_set(ev, [axes[n] for n in names], idx, old_values) if names else {}
+    refit = refit_explanation(ev, old.causes, idx, old_values, axes)
     terms = ev.terms(idx)
     c_old, c_new = ev.cost(refit, idx), ev.cost(new_values, idx)
-    if len(old_values) <= len(new_values):
+    if len(old.causes) <= len(new.causes):
         keep = c_old < c_new
     else:
         keep = accept(c_new * terms, c_old * terms, terms)
     note = (f"{describe(refit)} (the earlier explanation, refitted on all {len(idx)} runs) fits them "
             f"{'better' if keep else 'no better'}: cost {c_old:.3g} against {c_new:.3g} per term for "
             f"{describe(new_values)}")
-    return Preference(keep, refit, c_old, c_new, note)
+    intervals = {}
+    if keep:  # what the runs now allow around it: the next design's rivals (the earlier diagnosis's are stale)
+        n_eff = effective_terms(ev, {i: ev.predict(refit, i) for i in idx}, idx)
+        for name in old.causes:
+            iv = effect_interval(ev, axes, name, refit, idx, n_eff, [refit[name]])
+            if iv is not None:
+                intervals[name] = (iv.lo, iv.hi)
+    return Preference(keep, refit, c_old, c_new, note, intervals)
+
+
+def _kept_view(old, new, pref: Preference, model) -> SimpleNamespace:
+    """The kept explanation as :func:`station.diagnosis.rivals.rivals` reads a diagnosis: its
+    causes at the values refitted on every run with their intervals there, and the set-aside
+    re-diagnosis as an alternative unless the kept one pays over it as selection's acceptance
+    demands (the earlier diagnosis's own intervals and alternatives are of fewer runs)."""
+    effects = [SimpleNamespace(name=n, value=pref.values[n], accepted=True, cost_gain_pct=0.0,
+                               interval=pref.intervals.get(n)) for n in old.causes]
+    terms = 1000.0  # the costs are per term: accept judges the relative gain and the gain per term
+    apart = accept(pref.new_cost * terms, pref.old_cost * terms, terms)
+    alts = [] if apart else [{"causes": list(new.causes), "values": explanation(new)}]
+    return SimpleNamespace(effects=effects, causes=list(old.causes), folds=[], alternatives=alts,
+                           extended_model=model)
 
 
 class _Loop:
@@ -401,6 +432,7 @@ class _Loop:
         self.diagnoses = 0
         self.kept: list[str] = []
         self.model = None  # the kept explanation refitted on every completed run
+        self.view = None  # ... as the rivals see it (_kept_view)
         self.command = "round"
         self.t0 = time.perf_counter()
 
@@ -454,8 +486,11 @@ class _Loop:
         if pref.keep_old:
             self.kept.append(pref.note)
             self.model = self.base.with_effects(pref.values, name=f"{self.base.name} + {' + '.join(pref.values)}")
+            self.view = _kept_view(old, new, pref, self.model)
+            self.say(f"diagnosis {self.diagnoses}: the kept explanation's 95 % intervals on all {len(runs)} runs: "
+                     + (", ".join(f"{n} {lo:.4g} .. {hi:.4g}" for n, (lo, hi) in pref.intervals.items()) or "none"))
         else:
-            self.model = None
+            self.model = self.view = None
         return old if pref.keep_old else new
 
     def result(self, diag, stopped: str, budget: int, code: int) -> Identification:

@@ -23,6 +23,7 @@ from collections.abc import Mapping
 from typing import Any, NamedTuple
 
 from station.diagnosis.prose import format_value
+from station.diagnosis.selection import NESTED, SHAPE
 from station.plant.effects import EFFECTS
 
 WIDE_INTERVAL = 0.1
@@ -116,9 +117,10 @@ def jackknife_interval(value: float, fold_values: list[float]) -> tuple[float, f
     return value - JACKKNIFE_Z * sigma, value + JACKKNIFE_Z * sigma
 
 
-def _clip(name: str, x: float) -> float:
+def _clip(name: str, x: float, chosen: Mapping[str, float]) -> float:
+    """x within the effect's range (a breakaway level no lower than its sliding level)."""
     spec = EFFECTS[name]
-    x = min(max(x, spec.lower), spec.upper)
+    x = min(max(x, spec.lower, chosen.get(NESTED.get(name, ""), spec.lower)), spec.upper)
     return float(round(x)) if spec.unit == "samples" else x
 
 
@@ -149,16 +151,51 @@ def _alternatives(diag, accepted: list) -> tuple[list[dict], str]:
         for a in alts:
             values = dict(_get(a, "values") or {})
             causes = list(_get(a, "causes") or values)
-            found.append({n: float(values[n]) for n in causes if n in values})
+            held = [k for n in causes for k in _holds(n) if k not in causes]
+            found.append({n: float(values[n]) for n in causes + held if n in values})
         return found, "the diagnosis's alternatives"
     first = accepted[0]
-    rest = {e.name: e.value for e in accepted[1:]}
+    rest = {n: v for n, v in explanation(diag).items() if n != first.name and n not in _holds(first.name)}
     found = [{**{n: v for n, v in rest.items() if n != e.name}, e.name: e.value}
              for e in diag.effects
              if not e.accepted and e.cost_gain_pct > 0 and e.cost_gain_pct >= RUNNER_UP_FRACTION * first.cost_gain_pct
              and math.isfinite(e.value)]
     return found, (f"candidates that alone gained at least {RUNNER_UP_FRACTION:.0%} of {first.name}'s gain "
                    "(the diagnosis gave no alternatives)")
+
+
+def _holds(name: str) -> tuple:
+    """The values an effect brings along: a static_friction's sliding level and shape."""
+    return (NESTED[name], SHAPE) if name in NESTED else ()
+
+
+def _accepted(diag) -> list:
+    """The accepted effects' records, in the order they were added."""
+    accepted = [e for e in diag.effects if e.accepted]
+    accepted.sort(key=lambda e: diag.causes.index(e.name) if e.name in diag.causes else len(diag.causes))
+    return accepted
+
+
+def explanation(diag) -> dict:
+    """The chosen explanation's values: the accepted effects, in the order they were added, with
+    what they hold (a static_friction's sliding level coulomb_friction and stribeck_speed:
+    :data:`station.diagnosis.selection.NESTED`, :data:`~station.diagnosis.selection.SHAPE`),
+    from the diagnosis's extended model. Simulating, refitting or comparing the accepted
+    effects without them would be another model (a breakaway with no sliding level).
+
+    Parameters
+    ----------
+    diag : Diagnosis
+        What :func:`station.diagnosis.diagnose` returned (or its JSON form).
+    """
+    chosen = {e.name: float(e.value) for e in _accepted(diag)}
+    ext = _get(diag, "extended_model")
+    ext = ext.effect_dict() if hasattr(ext, "effect_dict") else dict(_get(ext, "effects") or {}) if ext else {}
+    for n in list(chosen):
+        for k in _holds(n):
+            if k in ext and k not in chosen:
+                chosen[k] = float(ext[k])
+    return chosen
 
 
 def rivals(diag, wide: float = WIDE_INTERVAL) -> Rivals:
@@ -178,9 +215,8 @@ def rivals(diag, wide: float = WIDE_INTERVAL) -> Rivals:
         No rivals when the diagnosis accepted nothing (nothing to tell apart) or singled out
         one explanation with narrow intervals.
     """
-    accepted = [e for e in diag.effects if e.accepted]
-    accepted.sort(key=lambda e: diag.causes.index(e.name) if e.name in diag.causes else len(diag.causes))
-    chosen = {e.name: float(e.value) for e in accepted}
+    accepted = _accepted(diag)
+    chosen = explanation(diag)
     label = describe(chosen)
     if not accepted:
         return Rivals({}, label, [], [], [])
@@ -197,7 +233,7 @@ def rivals(diag, wide: float = WIDE_INTERVAL) -> Rivals:
             continue
         wide_names.append(name)
         for end, x in (("lower", lo), ("upper", hi)):
-            x = _clip(name, x)
+            x = _clip(name, x, chosen)
             if x != value:
                 effects = {**chosen, name: x}
                 found.append(Rival(effects, f"{name} {format_value(x, EFFECTS[name].unit)} "

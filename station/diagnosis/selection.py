@@ -275,6 +275,50 @@ def fit_set(ev: Evaluator, axes: Sequence[Axis], runs: Sequence[int], start: Map
     return _as_effects(res.values)
 
 
+def refit_explanation(ev: Evaluator, names: Sequence[str], runs: Sequence[int], values: Mapping[str, float],
+                      axes: Mapping[str, Axis]) -> dict:
+    """An explanation's effects refitted on runs from its values, as the search fits them: the
+    named effects on :func:`set_axes` (a static_friction as its sliding level coulomb_friction
+    and breakaway excess, both refitted), every other value (a static_friction's
+    stribeck_speed) held; never worse than ``values`` when they hold every named effect
+    (returned when they fit better). The
+    one way to refit an explanation outside the search: fitting
+    ``[axes[n] for n in values]`` would refit v_s without its sliding level, or v_c past v_s.
+
+    Parameters
+    ----------
+    ev : Evaluator
+    names : sequence of str
+        The explanation's effects (a diagnosis's ``causes``).
+    runs : sequence of int
+        The runs fitted on.
+    values : mapping of str to float
+        Where the fit starts: the explanation's values with what they hold (a diagnosis's
+        ``extended_model.effect_dict()``); those not fitted are held.
+    axes : mapping of str to Axis
+        Every effect's axis (:func:`effect_axes`).
+
+    Returns
+    -------
+    dict of str to float
+        The fitted effects with the held values.
+    """
+    fitted = set(names) | {NESTED[n] for n in names if n in NESTED}
+    held = {k: v for k, v in values.items() if k not in fitted}
+
+    class _Holding:  # the cost with the held values applied (all fit_set asks of an Evaluator)
+        def cost(self, vals, rs):
+            return ev.cost({**held, **vals}, rs)
+
+    start = {k: v for k, v in values.items() if k in fitted}
+    refit = {**held, **fit_set(_Holding(), set_axes(names, axes), runs, start)}
+    # the grid brackets the last axis afresh and may leave the start's valley: never worse than the start
+    holding = _Holding()
+    if set(names) <= set(values) and holding.cost(dict(values), runs) < holding.cost(refit, runs):
+        return dict(values)
+    return refit
+
+
 def _sliding_start(ev: Evaluator, axes: Sequence[Axis], runs: Sequence[int], coords: Mapping[str, float]) -> float:
     """The sliding level a breakaway excess is bracketed at: the start's, or a fraction of it
     (:data:`SLIDING_STARTS`), whichever reaches the lowest cost on the excess grid."""
