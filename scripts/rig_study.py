@@ -27,7 +27,7 @@ import numpy as np
 
 from station.analysis.metrics import step_metrics
 from station.diagnosis.cases import load_case
-from station.diagnosis.cost import Evaluator, calibrate_noise
+from station.diagnosis.cost import Evaluator, LikelihoodEvaluator, calibrate_noise
 from station.diagnosis.folds import make_folds
 from station.diagnosis.selection import effect_axes, fit_set, set_axes, trial
 from station.plant.model import as_model
@@ -46,7 +46,7 @@ RIG_OVERSHOOT = {THESIS[1]: 24.0, THESIS[2]: 10.0, THESIS[3]: 21.5}
 """The thesis's measured step overshoots, % (DESIGN.md)."""
 
 START = {"param:drive_c": 2.0, "coulomb_friction": 8.0, "static_friction": 14.0, "amp_offset": -1.0,
-         "viscous_friction": 0.5}
+         "viscous_friction": 0.5, "param:act_K": 0.8}
 """Where each fold's fit starts (the last effect of a structure is bracketed on its grid)."""
 
 STRUCTURES = [
@@ -134,8 +134,10 @@ def main(argv=None) -> int:
                    help="fit on the four thesis logs (2014) or the 2009 session's four")
     p.add_argument("--effects", action="append",
                    help="a structure, comma-separated effect names (repeatable; default: three)")
-    p.add_argument("--weight", choices=["noise", "theta"], default="noise",
-                   help="cost: θ and a each by its noise level (the diagnosis's), or θ alone")
+    p.add_argument("--weight", choices=["noise", "theta", "ml", "ml-theta"], default="noise",
+                   help="cost: θ and a each by its noise level (the diagnosis's), θ alone, or "
+                        "maximum likelihood with an unknown error variance per run and signal "
+                        "(station.diagnosis.cost.likelihood_cost; ml-theta: θ alone so)")
     p.add_argument("--fit-samples", type=int, default=0,
                    help="fit on the first N samples of each fit log (0: whole logs); the "
                         "logs not fitted are always judged whole")
@@ -146,9 +148,9 @@ def main(argv=None) -> int:
     tmp = tempfile.TemporaryDirectory()
     cases = [load_case(head(RIG / f, args.fit_samples, Path(tmp.name))) for f in fit_paths]
     cases += [load_case(RIG / f) for f in other]
-    ev = Evaluator(cases, as_model("tmm-fit"))
+    ev = (LikelihoodEvaluator if args.weight.startswith("ml") else Evaluator)(cases, as_model("tmm-fit"))
     calibrate_noise(ev)
-    if args.weight == "theta":
+    if args.weight in ("theta", "ml-theta"):
         for c in ev.cases:
             c.sigma_a = math.inf
     fit_idx = list(range(len(fit_paths)))
