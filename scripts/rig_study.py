@@ -1,13 +1,14 @@
 """The real-rig study behind the built-in ``rig`` models (docs/diagnosis.md): fixed effect
 structures fitted on a session's logs with the diagnosis's own fitting
 (:func:`station.diagnosis.selection.trial`), judged leave-one-run-out and on logs they were
-not fitted to, with either cost weighting (θ + a each by its noise level, or θ alone), and
+not fitted to, with the diagnosis's cost (maximum likelihood, θ + a; or, for comparison, θ alone or the
+noise-weighted sum the diagnosis used before), and
 the step overshoots of the model refitted on all fit logs.
 
     python scripts/rig_study.py                      # the four thesis logs (2013-14)
     python scripts/rig_study.py --session 2009       # the 2009 session's four logs
     python scripts/rig_study.py --effects param:drive_c,coulomb_friction,amp_offset \\
-        --weight theta --save-model rig.toml
+        --weight ml-theta --save-model rig.toml
 
 Prints, per structure: the values refitted per fold, the held-out θ RMS gain per run and
 pooled, the values refitted on all fit logs, the θ RMS gain on the other logs (both eras)
@@ -27,7 +28,7 @@ import numpy as np
 
 from station.analysis.metrics import step_metrics
 from station.diagnosis.cases import load_case
-from station.diagnosis.cost import Evaluator, LikelihoodEvaluator, calibrate_noise
+from station.diagnosis.cost import Evaluator, calibrate_noise
 from station.diagnosis.folds import make_folds
 from station.diagnosis.selection import effect_axes, fit_set, set_axes, trial
 from station.plant.model import as_model
@@ -134,10 +135,11 @@ def main(argv=None) -> int:
                    help="fit on the four thesis logs (2014) or the 2009 session's four")
     p.add_argument("--effects", action="append",
                    help="a structure, comma-separated effect names (repeatable; default: three)")
-    p.add_argument("--weight", choices=["noise", "theta", "ml", "ml-theta"], default="noise",
-                   help="cost: θ and a each by its noise level (the diagnosis's), θ alone, or "
-                        "maximum likelihood with an unknown error variance per run and signal "
-                        "(station.diagnosis.cost.likelihood_cost; ml-theta: θ alone so)")
+    p.add_argument("--weight", choices=["ml", "ml-theta", "noise", "theta"], default="ml",
+                   help="the fits' cost: maximum likelihood with an unknown error variance per "
+                        "run and signal (the diagnosis's, station.diagnosis.cost), the same on θ "
+                        "alone, or the sum of θ's and a's errors each by its noise level (the "
+                        "diagnosis's before), or that on θ alone")
     p.add_argument("--fit-samples", type=int, default=0,
                    help="fit on the first N samples of each fit log (0: whole logs); the "
                         "logs not fitted are always judged whole")
@@ -148,7 +150,7 @@ def main(argv=None) -> int:
     tmp = tempfile.TemporaryDirectory()
     cases = [load_case(head(RIG / f, args.fit_samples, Path(tmp.name))) for f in fit_paths]
     cases += [load_case(RIG / f) for f in other]
-    ev = (LikelihoodEvaluator if args.weight.startswith("ml") else Evaluator)(cases, as_model("tmm-fit"))
+    ev = Evaluator(cases, as_model("tmm-fit"), likelihood=args.weight.startswith("ml"))
     calibrate_noise(ev)
     if args.weight in ("theta", "ml-theta"):
         for c in ev.cases:

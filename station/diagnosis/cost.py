@@ -2,19 +2,19 @@
 effects and counted as simulations; the noise levels that normalise them; pooled fits and
 gains over validation runs.
 
-J = Σ_runs (‖e_θ‖²/σ_θ² + ‖e_a‖²/σ_a²) / Σ 2N, with σ_θ the encoder's quantization
-(1/√12 counts) or more and σ_a ≥ 0.3 counts, both estimated from the high-frequency part of
-the nominal model's residual (:func:`calibrate_noise`). A perfect model has J ≈ 1.
+Each run's errors are normalised by its noise levels: J_θ = ‖e_θ‖²/(N σ_θ²) and
+J_a = ‖e_a‖²/(N σ_a²), with σ_θ the encoder's quantization (1/√12 counts) or more and
+σ_a ≥ 0.3 counts, both estimated from the high-frequency part of the nominal model's residual
+(:func:`calibrate_noise`). A perfect model has J ≈ 1.
 
-Where the best model still leaves structure far above the noise (the real rig), the noise
-levels weight each run by how badly the model misses it, not by what it says: on the rig's
-four thesis logs the open-loop pulses carry 93 % of θ's cost. :func:`likelihood_cost` is the
-maximum-likelihood cost with an unknown error variance per run and signal,
-Σ N·(ln SSR_θ + ln SSR_a) (iteratively reweighted least squares with each run's levels set
-to the model's residual there converges to its minimum): every run counts by its samples,
-however badly the model misses it. It is an option of the rig study (scripts/rig_study.py
-``--weight ml``, :class:`LikelihoodEvaluator`), not the diagnosis's default: the acceptance
-rule's units are noise variances.
+Fits minimise the maximum-likelihood cost with an unknown error variance per run and signal
+(:meth:`Evaluator.cost`): J = exp(Σ N·ln J_s / Σ N) over runs and signals, the geometric mean
+of the runs' normalised costs, i.e. Σ N·ln SSR_s up to constants. Every run and signal counts
+by its samples however badly a model misses it; the arithmetic mean Σ SSR/σ² / Σ N lets the
+run with the largest model error decide (on the rig's four thesis logs the open-loop pulses
+carried 93 % of θ's cost, and the fit followed them: docs/diagnosis.md). The two agree where
+a model reaches the noise floor on every run. Held-out judgement stays in noise variances
+(:meth:`Evaluator.weighted`, summed over validation runs).
 """
 
 from __future__ import annotations
@@ -30,6 +30,10 @@ from station.analysis.residuals import ACCEL_NOISE_STD, THETA_QUANTIZATION_STD, 
 from station.diagnosis.cases import RunCase, Simulator, simulate_case
 from station.signals import check_stop
 from station.errors import StationError
+
+
+TINY = 1e-12
+"""The lowest per-run normalised cost taken into the likelihood's logarithm (an exact fit)."""
 
 
 def _key(effects: Mapping[str, float]) -> tuple:
@@ -50,6 +54,9 @@ class Evaluator:
         ``run_effects(effects, i) -> effects``: the effects run i is simulated with, given
         the effects asked for (default: the same for every run). Sessions give each run
         its session's values of the effects that drift (:class:`station.diagnosis.drift.PerSession`).
+    likelihood : bool
+        :meth:`cost` is the maximum-likelihood cost (default) or, False, the noise-weighted
+        mean Σ ‖e‖²/σ² / Σ N (module docstring).
 
     Attributes
     ----------
@@ -58,8 +65,10 @@ class Evaluator:
     """
 
     def __init__(self, cases: Sequence[RunCase], model, simulate: Simulator | None = None,
-                 run_effects: Callable[[Mapping[str, float], int], Mapping[str, float]] | None = None):
+                 run_effects: Callable[[Mapping[str, float], int], Mapping[str, float]] | None = None,
+                 likelihood: bool = True):
         self.cases = list(cases)
+        self.likelihood = likelihood
         self.model = model
         self.simulate = simulate or simulate_case
         self.run_effects = run_effects
@@ -171,7 +180,10 @@ class Evaluator:
         return sum(2 * self.cases[i].n for i in runs)
 
     def cost(self, effects: Mapping[str, float], runs: Sequence[int]) -> float:
-        """Normalised cost J over runs (1 ≈ the noise floor).
+        """Normalised cost J over runs that fits minimise (1 ≈ the noise floor): the
+        geometric mean of each run's and signal's ‖e‖²/(N σ²), weighted by N (maximum
+        likelihood with an unknown error variance per run and signal; a signal with an
+        infinite σ is left out), or with ``likelihood`` False their arithmetic mean.
 
         Parameters
         ----------
@@ -180,8 +192,18 @@ class Evaluator:
         runs : sequence of int
             Indices of the runs in ``cases``.
         """
-        total = sum(self.weighted(effects, i) for i in runs)
-        return total / self.terms(runs)
+        if not self.likelihood:
+            return sum(self.weighted(effects, i) for i in runs) / self.terms(runs)
+        total, terms = 0.0, 0
+        for i in runs:
+            c = self.cases[i]
+            for sse, sigma in zip(self.sse(effects, i), (c.sigma_theta, c.sigma_a)):
+                if math.isfinite(sigma):
+                    if not math.isfinite(sse):
+                        return math.inf
+                    total += c.n * math.log(max(sse / (c.n * sigma ** 2), TINY))
+                    terms += c.n
+        return math.exp(total / terms) if terms else math.nan
 
 
 def calibrate_noise(ev: Evaluator) -> dict[int, tuple[np.ndarray, np.ndarray]]:
@@ -205,55 +227,6 @@ def calibrate_noise(ev: Evaluator) -> dict[int, tuple[np.ndarray, np.ndarray]]:
         c.sigma_theta = noise_std(c.theta - theta, THETA_QUANTIZATION_STD)
         c.sigma_a = noise_std(c.a - a, ACCEL_NOISE_STD)
     return nominal
-
-
-def likelihood_cost(ev: Evaluator, effects: Mapping[str, float], runs: Sequence[int]) -> float:
-    """The maximum-likelihood cost with an unknown error variance per run and signal,
-    Σ_runs N·(ln(SSR_θ/N + σ_θ²) + ln(SSR_a/N + σ_a²)) / Σ 2N (module docstring); the
-    noise levels σ floor each variance (a model at the noise floor is not rewarded for
-    fitting the noise), an infinite σ_a leaves a out.
-
-    Parameters
-    ----------
-    ev : Evaluator
-        Holds the runs and their noise levels (:func:`calibrate_noise`).
-    effects : mapping of str to float
-        Effect name -> value, applied to the base model.
-    runs : sequence of int
-        Indices of the runs in ``ev.cases``.
-
-    Returns
-    -------
-    float
-        Mean log variance per error term, ln(counts²) (inf when the model diverged).
-    """
-    total, terms = 0.0, 0
-    for i in runs:
-        st, sa = ev.sse(effects, i)
-        c = ev.cases[i]
-        total += c.n * math.log(st / c.n + c.sigma_theta ** 2)
-        terms += c.n
-        if math.isfinite(c.sigma_a):
-            total += c.n * math.log(sa / c.n + c.sigma_a ** 2)
-            terms += c.n
-    return total / terms if terms else math.nan
-
-
-class LikelihoodEvaluator(Evaluator):
-    """An :class:`Evaluator` whose :meth:`cost` is :func:`likelihood_cost`: every run and
-    signal weighted by what the model leaves there, not by its noise level."""
-
-    def cost(self, effects: Mapping[str, float], runs: Sequence[int]) -> float:
-        """:func:`likelihood_cost` over runs.
-
-        Parameters
-        ----------
-        effects : mapping of str to float
-            Effect name -> value, applied to the base model.
-        runs : sequence of int
-            Indices of the runs in ``cases``.
-        """
-        return likelihood_cost(self, effects, runs)
 
 
 class PooledFit(NamedTuple):
