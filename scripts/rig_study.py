@@ -105,7 +105,10 @@ def study(ev: Evaluator, fit_idx: list[int], other_idx: list[int], names: tuple,
             f" -> {math.sqrt(st / ev.cases[i].n):6.2f}  gain {100 * (1 - math.sqrt(st / s0)):5.1f} %")
     loo = 100 * (1 - math.sqrt(num / den))
     out(f"  leave-one-run-out θ RMS gain (pooled): {loo:.1f} %")
-    final = fit_set(ev, set_axes(names, axes), fit_idx, tr.fold_values[0])
+    # the refit starts from the folds' median values: the cost is piecewise constant and its
+    # valley flat, and any one fold's values would pull the refit towards that fold's end
+    middle = {k: float(np.median([fv[k] for fv in tr.fold_values])) for k in tr.fold_values[0]}
+    final = fit_set(ev, set_axes(names, axes), fit_idx, middle)
     out("  refitted on all: " + ", ".join(f"{k} = {v:.4g}" for k, v in final.items()))
     fin_num = sum(ev.sse(final, i)[0] for i in fit_idx)
     fin_den = sum(ev.sse({}, i)[0] for i in fit_idx)

@@ -45,6 +45,17 @@ def test_rig_model_beats_the_nominal_on_logs_it_was_not_fitted_to(rig_data, log)
     assert _theta_rms(case, load_model("rig")) < _theta_rms(case, load_model("tmm-fit"))
 
 
+def test_rig_model_pooled_gain_on_logs_it_was_not_fitted_to(rig_data):
+    """Pooled over the six unseen logs of both eras, θ RMS 29.5 % below tmm-fit's (the
+    noise-weighted fit's drive_c 2.0 + Coulomb 15.9 was 5.4 % worse than tmm-fit there)."""
+    num = den = 0.0
+    for log in NOT_FITTED_2014 + SESSION_2009:
+        case = load_case(rig_data / log)
+        num += _theta_rms(case, load_model("rig")) ** 2 * case.n
+        den += _theta_rms(case, load_model("tmm-fit")) ** 2 * case.n
+    assert 1 - math.sqrt(num / den) >= 0.25
+
+
 @pytest.mark.parametrize("log", SESSION_2009)
 def test_rig_2009_fits_its_session_better_than_the_2014_rig(rig_data, log):
     """The rig drifted: the 2009 logs want far less friction than the 2013-14 runs."""
