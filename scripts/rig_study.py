@@ -1,13 +1,14 @@
 """The real-rig study behind the built-in ``rig`` models (docs/diagnosis.md): fixed effect
 structures fitted on a session's logs with the diagnosis's own fitting
 (:func:`station.diagnosis.selection.trial`), judged leave-one-run-out and on logs they were
-not fitted to, with either cost weighting (θ + a each by its noise level, or θ alone), and
+not fitted to, with the diagnosis's cost (maximum likelihood, θ + a; or, for comparison, θ alone or the
+noise-weighted sum the diagnosis used before), and
 the step overshoots of the model refitted on all fit logs.
 
     python scripts/rig_study.py                      # the four thesis logs (2013-14)
     python scripts/rig_study.py --session 2009       # the 2009 session's four logs
     python scripts/rig_study.py --effects param:drive_c,coulomb_friction,amp_offset \\
-        --weight theta --save-model rig.toml
+        --weight ml-theta --save-model rig.toml
 
 Prints, per structure: the values refitted per fold, the held-out θ RMS gain per run and
 pooled, the values refitted on all fit logs, the θ RMS gain on the other logs (both eras)
@@ -46,7 +47,7 @@ RIG_OVERSHOOT = {THESIS[1]: 24.0, THESIS[2]: 10.0, THESIS[3]: 21.5}
 """The thesis's measured step overshoots, % (DESIGN.md)."""
 
 START = {"param:drive_c": 2.0, "coulomb_friction": 8.0, "static_friction": 14.0, "amp_offset": -1.0,
-         "viscous_friction": 0.5}
+         "viscous_friction": 0.5, "param:act_K": 0.8}
 """Where each fold's fit starts (the last effect of a structure is bracketed on its grid)."""
 
 STRUCTURES = [
@@ -104,7 +105,10 @@ def study(ev: Evaluator, fit_idx: list[int], other_idx: list[int], names: tuple,
             f" -> {math.sqrt(st / ev.cases[i].n):6.2f}  gain {100 * (1 - math.sqrt(st / s0)):5.1f} %")
     loo = 100 * (1 - math.sqrt(num / den))
     out(f"  leave-one-run-out θ RMS gain (pooled): {loo:.1f} %")
-    final = fit_set(ev, set_axes(names, axes), fit_idx, tr.fold_values[0])
+    # the refit starts from the folds' median values: the cost is piecewise constant and its
+    # valley flat, and any one fold's values would pull the refit towards that fold's end
+    middle = {k: float(np.median([fv[k] for fv in tr.fold_values])) for k in tr.fold_values[0]}
+    final = fit_set(ev, set_axes(names, axes), fit_idx, middle)
     out("  refitted on all: " + ", ".join(f"{k} = {v:.4g}" for k, v in final.items()))
     fin_num = sum(ev.sse(final, i)[0] for i in fit_idx)
     fin_den = sum(ev.sse({}, i)[0] for i in fit_idx)
@@ -134,8 +138,11 @@ def main(argv=None) -> int:
                    help="fit on the four thesis logs (2014) or the 2009 session's four")
     p.add_argument("--effects", action="append",
                    help="a structure, comma-separated effect names (repeatable; default: three)")
-    p.add_argument("--weight", choices=["noise", "theta"], default="noise",
-                   help="cost: θ and a each by its noise level (the diagnosis's), or θ alone")
+    p.add_argument("--weight", choices=["ml", "ml-theta", "noise", "theta"], default="ml",
+                   help="the fits' cost: maximum likelihood with an unknown error variance per "
+                        "run and signal (the diagnosis's, station.diagnosis.cost), the same on θ "
+                        "alone, or the sum of θ's and a's errors each by its noise level (the "
+                        "diagnosis's before), or that on θ alone")
     p.add_argument("--fit-samples", type=int, default=0,
                    help="fit on the first N samples of each fit log (0: whole logs); the "
                         "logs not fitted are always judged whole")
@@ -146,9 +153,9 @@ def main(argv=None) -> int:
     tmp = tempfile.TemporaryDirectory()
     cases = [load_case(head(RIG / f, args.fit_samples, Path(tmp.name))) for f in fit_paths]
     cases += [load_case(RIG / f) for f in other]
-    ev = Evaluator(cases, as_model("tmm-fit"))
+    ev = Evaluator(cases, as_model("tmm-fit"), likelihood=args.weight.startswith("ml"))
     calibrate_noise(ev)
-    if args.weight == "theta":
+    if args.weight in ("theta", "ml-theta"):
         for c in ev.cases:
             c.sigma_a = math.inf
     fit_idx = list(range(len(fit_paths)))

@@ -29,13 +29,13 @@ def _theta_rms(case, model) -> float:
 
 @pytest.mark.parametrize("log", sorted(THESIS_STEPS))
 def test_rig_model_step_overshoots_near_the_rig(rig_data, log):
-    """The thesis's FEM misses the P step by 14 points; the rig model is within 4 of every step
-    (20.0 / 10.0 / 18.5 % against 24.0 / 10.0 / 21.5 %)."""
+    """The thesis's FEM misses the P step by 14 points; the rig model is within 3 of every step
+    (issue 17's target: 24.0 / 12.0 / 19.5 % against 24.0 / 10.0 / 21.5 %)."""
     case = load_case(rig_data / log)
     theta, _ = simulate_case(case, load_model("rig"))
     u = np.asarray(case.run.data["u"], float)
     got = step_metrics(np.arange(case.n) * case.run.dt, theta, float(u[-1])).overshoot_pct
-    assert abs(got - THESIS_STEPS[log]) <= 4.0
+    assert abs(got - THESIS_STEPS[log]) <= 3.0
 
 
 @pytest.mark.parametrize("log", NOT_FITTED_2014 + SESSION_2009)
@@ -43,6 +43,17 @@ def test_rig_model_beats_the_nominal_on_logs_it_was_not_fitted_to(rig_data, log)
     """Fitted on the four thesis logs; better than tmm-fit on every other rig log of both eras."""
     case = load_case(rig_data / log)
     assert _theta_rms(case, load_model("rig")) < _theta_rms(case, load_model("tmm-fit"))
+
+
+def test_rig_model_pooled_gain_on_logs_it_was_not_fitted_to(rig_data):
+    """Pooled over the six unseen logs of both eras, θ RMS 29.5 % below tmm-fit's (the
+    noise-weighted fit's drive_c 2.0 + Coulomb 15.9 was 5.4 % worse than tmm-fit there)."""
+    num = den = 0.0
+    for log in NOT_FITTED_2014 + SESSION_2009:
+        case = load_case(rig_data / log)
+        num += _theta_rms(case, load_model("rig")) ** 2 * case.n
+        den += _theta_rms(case, load_model("tmm-fit")) ** 2 * case.n
+    assert 1 - math.sqrt(num / den) >= 0.25
 
 
 @pytest.mark.parametrize("log", SESSION_2009)
@@ -54,4 +65,4 @@ def test_rig_2009_fits_its_session_better_than_the_2014_rig(rig_data, log):
 
 def test_rig_2009_has_less_friction_than_2014():
     old, new = load_model("rig-2009").effect_dict(), load_model("rig").effect_dict()
-    assert old["coulomb_friction"] < 3.0 < new["static_friction"]
+    assert old["coulomb_friction"] < 3.0 < new["coulomb_friction"]

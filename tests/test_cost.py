@@ -1,0 +1,85 @@
+"""The diagnosis's cost against hand-computed values: the maximum-likelihood cost with an
+unknown error variance per run and signal, at least its noise level (above the noise floor
+the geometric mean of the runs' normalised costs, below it least squares), and the
+noise-weighted mean it replaced as the fits' cost (station/diagnosis/cost.py)."""
+
+import math
+
+import numpy as np
+import pytest
+
+from station.diagnosis.cases import RunCase
+from station.diagnosis.cost import Evaluator
+
+N = 400
+T = np.arange(N) / N
+SINE = np.sin(2 * np.pi * 4 * T)  # whole periods: mean square 1/2, orthogonal to a constant
+
+
+class _Line:
+    """A stand-in model: one effect "x" (default 0), as ``with_effects`` carries it."""
+
+    def __init__(self, x=0.0):
+        self.x = x
+
+    def with_effects(self, effects):
+        return _Line(effects.get("x", self.x))
+
+
+def _case(name, scale, target, sigma_theta=1.0, sigma_a=math.inf):
+    c = RunCase(name, None, None, None, True, np.zeros(N), np.zeros(N), sigma_theta, sigma_a)
+    c.scale, c.target = scale, target
+    return c
+
+
+def _simulate(case, model):
+    # θ error (x − target) + 2·sin, scaled: SSR/N = scale² ((x − target)² + 2); a error scale·1
+    theta = case.scale * ((model.x - case.target) + 2.0 * SINE)
+    return theta, np.full(N, case.scale)
+
+
+def _argmin(ev, runs):
+    xs = np.linspace(0.0, 4.0, 401)
+    return float(xs[int(np.argmin([ev.cost({"x": float(x)}, runs) for x in xs]))])
+
+
+def test_likelihood_cost_is_the_geometric_mean_of_the_runs_normalised_costs():
+    ev = Evaluator([_case("a", 1.0, 1.0, sigma_theta=0.5), _case("b", 3.0, 3.0, sigma_a=2.0)], _Line(), _simulate,
+                   likelihood=True)
+    x = 2.0
+    j = [(1 + 2) / 0.25, 9 * (1 + 2) / 1.0, 9 / 4.0]  # run a θ; run b θ and a
+    assert ev.cost({"x": x}, [0, 1]) == pytest.approx((j[0] * j[1] * j[2]) ** (1 / 3))
+    arithmetic = Evaluator(ev.cases, _Line(), _simulate)  # the default
+    # a's term with an infinite σ is 0 but counted: Σ‖e‖²/σ² / Σ 2N
+    assert arithmetic.cost({"x": x}, [0, 1]) == pytest.approx(sum(j) / 4)
+
+
+def test_likelihood_fit_does_not_follow_the_run_the_model_misses_most():
+    """Scaling all of one run's errors by 100 does not move the maximum-likelihood fit (each
+    run counts by its samples); the noise-weighted sum then fits that run alone."""
+    even = [_case("a", 1.0, 1.0), _case("b", 1.0, 3.0)]
+    lopsided = [_case("a", 100.0, 1.0), _case("b", 1.0, 3.0)]
+    assert _argmin(Evaluator(even, _Line(), _simulate, likelihood=True), [0, 1]) == pytest.approx(2.0, abs=0.011)
+    assert _argmin(Evaluator(lopsided, _Line(), _simulate, likelihood=True), [0, 1]) == pytest.approx(2.0, abs=0.011)
+    assert _argmin(Evaluator(even, _Line(), _simulate), [0, 1]) == pytest.approx(2.0, abs=0.011)
+    assert _argmin(Evaluator(lopsided, _Line(), _simulate), [0, 1]) == pytest.approx(1.0, abs=0.011)
+
+
+def test_likelihood_cost_gives_no_reward_for_fitting_a_run_below_its_noise():
+    """A run fitted exactly costs what least squares says (0), not ln 0: the profile
+    likelihood with the error variance at least σ² is N·J below the floor, N·(ln J + 1) above."""
+    ev = Evaluator([_case("exact", 0.0, 1.0), _case("b", 1.0, 3.0)], _Line(), _simulate, likelihood=True)
+    j_b = (1.0 - 3.0) ** 2 + 2.0  # x = 1
+    assert ev.cost({"x": 1.0}, [0, 1]) == pytest.approx(math.exp((0.0 + math.log(j_b) + 1.0) / 2 - 1.0))
+    half = Evaluator([_case("a", math.sqrt(0.5 / 2.0), 1.0)], _Line(), _simulate, likelihood=True)  # J = 0.5 at x = 1
+    assert half.cost({"x": 1.0}, [0]) == pytest.approx(math.exp(0.5 - 1.0))
+
+
+def test_likelihood_cost_is_infinite_when_a_run_diverges():
+    def diverging(case, model):
+        theta, a = _simulate(case, model)
+        return (np.full(N, np.inf) if case.target == 3.0 else theta), a
+
+    ev = Evaluator([_case("a", 1.0, 1.0), _case("b", 1.0, 3.0)], _Line(), diverging, likelihood=True)
+    assert ev.cost({"x": 1.0}, [0]) == pytest.approx(2.0)
+    assert ev.cost({"x": 1.0}, [0, 1]) == math.inf
