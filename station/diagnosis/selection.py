@@ -270,16 +270,21 @@ def fit_set(ev: Evaluator, axes: Sequence[Axis], runs: Sequence[int], start: Map
         fixed = {a.name: start[a.name] for a in axes if a.name in start}
         start.update(fit(lambda vals: ev.cost(vals, runs), sliding, fixed=fixed).values)
     coords = _as_coords(start)
-    starts = ([coords] if EXCESS.name not in names or EXCESS.name in coords
-              else [{**coords, "coulomb_friction": v_c} for v_c in _sliding_starts(ev, axes, runs, coords)])
-    best = None
-    for c in starts:  # another start only while the excess is too small to name (MIN_EXCESS): stuck
-        if best is not None and _excess_of(_as_effects(best.values)) >= MIN_EXCESS:
-            break
-        res = _fit_from(ev, axes, runs, c)
-        if best is None or res.cost < best.cost:
-            best = res
+    best = _fit_from(ev, axes, runs, coords) if EXCESS.name not in names or EXCESS.name in coords else None
+    if EXCESS.name in names and (best is None or _stuck(best.values)):
+        # from the best sliding levels on the excess grid, while stuck (EXCESS_STARTS)
+        for point in _sliding_starts(ev, axes, runs, {k: v for k, v in coords.items() if k != EXCESS.name}):
+            if best is not None and not _stuck(best.values):
+                break
+            res = _fit_from(ev, axes, runs, point)
+            if best is None or res.cost < best.cost:
+                best = res
     return _as_effects(best.values)
+
+
+def _stuck(coords: Mapping[str, float]) -> bool:
+    """A breakaway fit ended at an excess too small to name (:data:`MIN_EXCESS`)."""
+    return _excess_of(_as_effects(coords)) < MIN_EXCESS
 
 
 def _excess_of(values: Mapping[str, float]) -> float:
@@ -303,16 +308,17 @@ def _fit_from(ev: Evaluator, axes: Sequence[Axis], runs: Sequence[int], coords: 
     return res
 
 
-def _sliding_starts(ev: Evaluator, axes: Sequence[Axis], runs: Sequence[int], coords: Mapping[str, float]) -> list[float]:
-    """The sliding levels a breakaway excess is bracketed and refined at: the start's
-    coulomb_friction times each of :data:`SLIDING_STARTS`, the :data:`EXCESS_STARTS` that
-    reach the lowest cost on the excess grid, best first."""
+def _sliding_starts(ev: Evaluator, axes: Sequence[Axis], runs: Sequence[int], coords: Mapping[str, float]) -> list[dict]:
+    """Starts (axis coordinates) for a breakaway excess: the sliding level of ``coords``
+    times each of :data:`SLIDING_STARTS` with the excess of :data:`EXCESS`'s grid that costs
+    least there, the :data:`EXCESS_STARTS` lowest, best first."""
     base = {a.name: coords[a.name] for a in axes if a.name in coords}
     sliding = next(a for a in axes if a.name == "coulomb_friction")
-    levels = {min(f * base["coulomb_friction"], sliding.upper) for f in SLIDING_STARTS}
-    best = {v: min(ev.cost(_as_effects({**base, "coulomb_friction": v, EXCESS.name: float(e)}), runs)
-                   for e in EXCESS.grid()) for v in levels}
-    return sorted(best, key=best.get)[:EXCESS_STARTS]
+    points = []
+    for v_c in sorted({min(f * base["coulomb_friction"], sliding.upper) for f in SLIDING_STARTS}):
+        grid = [{**base, "coulomb_friction": v_c, EXCESS.name: float(e)} for e in EXCESS.grid()]
+        points.append(min((ev.cost(_as_effects(p), runs), k, p) for k, p in enumerate(grid))[::2])
+    return [p for _, p in sorted(points, key=lambda cp: cp[0])[:EXCESS_STARTS]]
 
 
 def trial(ev: Evaluator, folds: Sequence[Fold], names: tuple, axes: Mapping[str, Axis],

@@ -59,6 +59,11 @@ hides lower the in-sample cost by far more than the coarser grid misses, e.g. 14
 98 for viscous friction + backlash; every fourth point, a factor 3 apart on a ratio's
 axis, lost drive damping beside breakaway friction)."""
 
+NEUTRAL = 0.01
+"""An accepted effect whose joint value ends this close to its neutral one (a fraction of
+the neutral value, or of the range when that is 0) is tested for dropping at the end: blind
+static_friction + param:drive_c seed 3 ended with param:act_K = 1.000 beside them."""
+
 LOOKAHEAD_TRIALS = 2
 """Pairs from the lookahead fitted per fold: those with the lowest screened cost, if below
 the best pair beside the chosen first effect."""
@@ -181,6 +186,22 @@ def _refit_start(values: Mapping[str, float], current: Trial) -> dict:
     return start
 
 
+def _refit(search: Search, current: Trial, start: Mapping[str, float]) -> dict:
+    """The accepted effects fitted jointly on all fit runs from ``start``; when a fold's
+    values fit all of them better (a stuck refit: blind static_friction + param:drive_c
+    seed 3 refitted param:act_K to 1.000 and v_s to 8.7 where its folds held 16-23), fitted
+    again from those and the lower cost kept. The folds' costs are the cached ones."""
+    ev, runs, axes = search.ev, search.fit_runs, set_axes(current.names, search.axes)
+    values = fit_set(ev, axes, runs, start)
+    best_fold = min(current.fold_values, key=lambda fv: ev.cost(fv, runs))
+    if ev.cost(best_fold, runs) < ev.cost(values, runs):
+        again = fit_set(ev, axes, runs, best_fold)
+        if ev.cost(again, runs) < ev.cost(values, runs):
+            search.say("the joint refit from the accepted values was stuck: fitted again from a fold's values")
+            values = again
+    return values
+
+
 def _downgrade(search: Search, accepted: list[str], current: Trial, terms: int) -> tuple[list[str], Trial]:
     """After an effect joined an accepted static_friction: the simpler effect in its place
     when the breakaway excess no longer pays beside the others (:func:`credible`)."""
@@ -262,7 +283,7 @@ def forward_select(search: Search, names: Sequence[str], singles: Singles, nomin
         if step == 0:
             values = dict(singles.values[best])
         else:
-            values = fit_set(ev, set_axes(current.names, search.axes), search.fit_runs, _refit_start(values, current))
+            values = _refit(search, current, _refit_start(values, current))
         search.say(f"accepted {best} (step {step + 1}): "
                    + ", ".join(f"{n} = {format_value(v, EFFECTS[n].unit)}" for n, v in values.items()))
         if new_first is not None and ok:  # the first effect the lookahead brought: does it pay beside the others?
@@ -276,9 +297,28 @@ def forward_select(search: Search, names: Sequence[str], singles: Singles, nomin
                 current = dropped
                 values = fit_set(ev, set_axes(current.names, search.axes), search.fit_runs,
                                  {k: v for k, v in values.items() if k in _held(accepted)})
+    for name in [n for n in accepted if len(accepted) > 1 and _near_neutral(n, values)]:
+        dropped = _drop(search, name, current, terms)
+        if dropped is not None:
+            accepted.remove(name)
+            steps = [st for st in steps if st.chosen != name]
+            for st in steps:
+                st.before = [n for n in st.before if n != name]
+            current = dropped
+            values = fit_set(ev, set_axes(current.names, search.axes), search.fit_runs,
+                             {k: v for k, v in values.items() if k in _held(accepted)})
     if "static_friction" in accepted:
         current, values = _fit_shape(search, current, values, terms)
     return Selection(accepted, current, values, steps)
+
+
+def _near_neutral(name: str, values: Mapping[str, float]) -> bool:
+    """An accepted effect refitted jointly to within :data:`NEUTRAL` of no effect at all
+    (e.g. an actuator gain the lookahead brought that breakaway friction made 1.000 again):
+    worth the test whether it still pays (:func:`_drop`)."""
+    spec = EFFECTS[name]
+    width = abs(spec.neutral) if spec.neutral else spec.upper - spec.lower
+    return abs(values.get(name, spec.neutral) - spec.neutral) <= NEUTRAL * width
 
 
 def _fit_shape(search: Search, current: Trial, values: dict, terms: int) -> tuple[Trial, dict]:
