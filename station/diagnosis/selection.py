@@ -24,6 +24,13 @@ a later effect joins it, static_friction is judged again against coulomb_frictio
 place (a downgrade when the excess no longer pays). An accepted static_friction's
 stribeck_speed is fitted last with the accepted values fixed and kept only when it pays on
 the validation runs (:func:`station.diagnosis.stepwise.forward_select`); else it stays the model's (default 0.05 rad/s).
+
+The cost of stick-slip has several valleys in (v_c, v_s): a broad one of plain Coulomb
+friction (excess near 0) and the true one, under a count wide in v_c. A breakaway fit that
+ends with an excess below :data:`MIN_EXCESS` is stuck: it is fitted again from the best
+sliding levels of :data:`SLIDING_STARTS` on the excess grid (:data:`EXCESS_STARTS`), and
+in a trial a fold stuck while another fold is not starts again from that fold's values
+(folds share most runs). Only stuck fits pay for the extra starts.
 """
 
 from __future__ import annotations

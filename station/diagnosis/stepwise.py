@@ -23,7 +23,14 @@ is accepted by the same rule against the chosen first effect alone. A pair from 
 lookahead replaces the first choice; its first effect is then dropped when it does not pay
 beside the second (SFFS's conditional exclusion, :func:`_drop`) and selection goes on.
 The lookahead is not repeated at the third step: it did not reach the hidden triples of
-the blind set and costs a tenth of a diagnosis of the rig's four logs.
+the blind set and costs a tenth of a diagnosis of the rig's four logs (tried again for
+amp_offset + coulomb_friction + param:drive_c seed 0, issue 17: still nothing below the
+dead-zone's best).
+
+Stuck refits. The accepted effects' joint values on all fit runs are fitted again from a
+fold's values when those fit all runs better (:func:`_refit`: the folds' costs are cached),
+and an accepted effect refitted to within :data:`NEUTRAL` of no effect is tested for
+dropping at the end (:func:`_drop`).
 """
 
 from __future__ import annotations
