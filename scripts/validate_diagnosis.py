@@ -19,8 +19,8 @@ judged value is v_s (v_c's error is shown, not judged). A stribeck_speed part se
 hidden curve only: it is never a cause and not judged. Found values are the extended
 model's (the joint values) where it holds the effect, else the value fitted alone.
 
-Usage: ``python scripts/validate_diagnosis.py [--seeds 10] [--effects NAME ...]
-[--out docs/diagnosis_validation.md] [--jobs 1]``. ``--effects`` also takes ``clean``,
+Usage: ``python scripts/validate_diagnosis.py [--seeds 10] [--seed-list SEED ...]
+[--effects NAME ...] [--out docs/diagnosis_validation.md] [--jobs 1]``. ``--effects`` also takes ``clean``,
 ``two``, the ``oov:`` cases and the pairs and triples by name (e.g. ``coulomb_friction+amp_offset``), and
 ``new`` for the three new effects with their pairs and triples. Progress goes to stderr,
 one line per case; the table is printed and written.
@@ -153,7 +153,7 @@ def _fmt_hidden(d: dict) -> str:
     return ", ".join(f"{k} = {v:.4g}" for k, v in d.items()) or "-"
 
 
-def table(outcomes: list[Outcome], seeds: int, elapsed: float) -> str:
+def table(outcomes: list[Outcome], seeds: str, elapsed: float) -> str:
     """The Markdown report: summary per effect, then every case."""
     by_case: dict[str, list[Outcome]] = {}
     for o in outcomes:
@@ -161,7 +161,7 @@ def table(outcomes: list[Outcome], seeds: int, elapsed: float) -> str:
     lines = [
         "# Blind validation of the model diagnosis",
         "",
-        f"Written by `scripts/validate_diagnosis.py --seeds {seeds}`: {len(outcomes)} cases in "
+        f"Written by `scripts/validate_diagnosis.py {seeds}`: {len(outcomes)} cases in "
         f"{elapsed / 60:.1f} min. Each case is four 2 s rig-format logs (P kp = 2 step 50, lead step 100, "
         "lead + accelerometer step 200, open-loop ±100 pulses) written by the independent generator "
         "`tests/blind` (its own FEM, stick-slip friction with breakaway and Stribeck curve, backlash on a "
@@ -229,6 +229,8 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--effects", nargs="+", default=list(KNOWN),
                         help="cases to hide (effects of tests/blind/cases.MAGNITUDES and NEW_MAGNITUDES, its PAIRS "
                              "and TRIPLES, 'two', 'clean', 'new' for issue 17's; default all)")
+    parser.add_argument("--seed-list", type=int, nargs="+", metavar="SEED",
+                        help="run only these seeds (instead of 0..N-1 of --seeds; e.g. a case's misses)")
     parser.add_argument("--out", type=Path, default=REPO / "docs" / "diagnosis_validation.md",
                         help="Markdown table to write (default docs/diagnosis_validation.md)")
     parser.add_argument("--jobs", type=int, default=1, help="cases diagnosed in parallel (default 1)")
@@ -239,7 +241,10 @@ def main(argv: list[str] | None = None) -> int:
             parser.error(f"--effects: unknown '{name}' (known: {', '.join(KNOWN)}, new)")
     if args.seeds < 1:
         parser.error("--seeds: expected a positive integer")
-    jobs = [(case, seed) for case in effects for seed in range(args.seeds)]
+    if args.seed_list and min(args.seed_list) < 0:
+        parser.error("--seed-list: expected non-negative integers")
+    seeds = args.seed_list or list(range(args.seeds))
+    jobs = [(case, seed) for case in effects for seed in seeds]
     t0 = time.perf_counter()
     outcomes: list[Outcome] = []
 
@@ -257,7 +262,8 @@ def main(argv: list[str] | None = None) -> int:
     else:
         for case, seed in jobs:
             report(run_case(case, seed))
-    text = table(outcomes, args.seeds, time.perf_counter() - t0)
+    label = (f"--seed-list {' '.join(map(str, seeds))}" if args.seed_list else f"--seeds {args.seeds}")
+    text = table(outcomes, label, time.perf_counter() - t0)
     print(text)
     args.out.parent.mkdir(parents=True, exist_ok=True)
     args.out.write_text(text)

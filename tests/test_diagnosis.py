@@ -135,6 +135,27 @@ def test_joint_fit_refines_both_and_never_loses_its_grid_point():
     assert res.cost <= grid_best
 
 
+class _TwoValleys:
+    """A breakaway cost with a broad valley of plain Coulomb friction (v_s = v_c = 3.9, cost
+    2) and the true stick-slip one, narrow in v_c (v_c = 5, v_s = 11.4, cost 0.5): the
+    shape of blind static_friction + param:drive_c seed 2, where a fit started from the
+    Coulomb friction fitted alone (3.9) stuck in the broad one."""
+
+    def cost(self, values, runs):
+        vc, vs = values.get("coulomb_friction", 0.0), values.get("static_friction", 0.0)
+        broad = 2.0 + ((vc - 3.9) / 2.0) ** 2 + (vs - vc) ** 2
+        true = 0.5 + ((vc - 5.0) / 0.4) ** 2 + ((vs - 11.4) / 2.0) ** 2
+        return min(broad, true)
+
+
+def test_breakaway_fit_leaves_the_plain_coulomb_valley():
+    from station.diagnosis.selection import effect_axes, fit_set, set_axes
+
+    values = fit_set(_TwoValleys(), set_axes(("static_friction",), effect_axes()), (0,), {"coulomb_friction": 3.9})
+    assert values["coulomb_friction"] == pytest.approx(5.0, rel=0.05)
+    assert values["static_friction"] == pytest.approx(11.4, rel=0.05)
+
+
 # --- diagnose with a plugged-in simulator -------------------------------------------------
 
 @pytest.fixture(scope="module")
