@@ -97,8 +97,8 @@ def test_step_figures_are_the_stations_metrics(rig):
     assert fig[0] == thesis.overshoot_pct and fig[2] == thesis.settling_time_s
     assert fig[1] == info.settling_time_2pct_s and fig[4] == pytest.approx(info.saturation_time_s)
     assert fig[3] == np.max(np.abs(run.v)) and fig[5]  # at rest at the end
-    # DESIGN.md: on the rig's model the thesis's lead + accelerometer overshoots 18.5 %
-    assert fig[0] == pytest.approx(18.5)
+    # the rig model's header (and docs/diagnosis.md): the thesis's lead + accelerometer overshoots 19.5 %
+    assert fig[0] == pytest.approx(19.5)
 
 
 def test_a_limit_cycle_and_an_unstable_loop_are_caught(rig):
