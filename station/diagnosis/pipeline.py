@@ -17,6 +17,7 @@ from station.diagnosis.inputs import refuse_repeated_runs, set_aside_beam_tests
 from station.diagnosis.records import effect_results, model_predictions, run_reports
 from station.diagnosis.result import Diagnosis
 from station.diagnosis.selection import Search, Trial, effect_axes, fit_each_alone
+from station.diagnosis.estimator import choose_estimator
 from station.diagnosis.stepwise import forward_select
 from station.diagnosis.unexplained import check_unexplained
 from station.errors import StationError
@@ -167,6 +168,9 @@ def _diagnose(runs, validate, model, progress, candidates, simulate, workers) ->
     nominal = _nominal(search, how)
     singles = fit_each_alone(search, names, nominal.trial)
     sel = forward_select(search, names, singles, nominal.trial)
+    estimate = choose_estimator(search, sel)
+    sel = estimate.selection
+    notes = notes + ([estimate.note] if estimate.note else [])
     accepted = sel.accepted
     extended = base.with_effects(sel.values, name=f"{base.name} + {' + '.join(accepted)}" if accepted else None)
     fit_nom, fit_ext = pooled(ev, nominal.trial.val_sse), pooled(ev, sel.current.val_sse)

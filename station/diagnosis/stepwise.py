@@ -193,12 +193,23 @@ def _refit_start(values: Mapping[str, float], current: Trial) -> dict:
     return start
 
 
-def _refit(search: Search, current: Trial, start: Mapping[str, float], values: dict | None = None) -> dict:
+def refit_accepted(search: Search, current: Trial, start: Mapping[str, float], values: dict | None = None) -> dict:
     """The accepted effects fitted jointly on all fit runs from ``start`` (or ``values``
     already so fitted); when a fold's values fit all of them better (a stuck refit: blind
     static_friction + param:drive_c seed 3 refitted param:act_K to 1.000 and v_s to 8.7
     where its folds held 16-23), fitted again from those and the lower cost kept. The
-    folds' costs are the cached ones."""
+    folds' costs are the cached ones.
+
+    Parameters
+    ----------
+    search : Search
+    current : Trial
+        The accepted set as fitted per fold.
+    start : mapping of str to float
+        Where the joint fit starts.
+    values : dict, optional
+        Values already fitted jointly (then only the fold check runs).
+    """
     ev, runs, axes = search.ev, search.fit_runs, set_axes(current.names, search.axes)
     values = fit_set(ev, axes, runs, start) if values is None else values
     best_fold = min(current.fold_values, key=lambda fv: ev.cost(fv, runs))
@@ -289,9 +300,9 @@ def forward_select(search: Search, names: Sequence[str], singles: Singles, nomin
         if step > 0 and best not in NESTED:
             accepted, current = _downgrade(search, accepted, current, terms)
         if step == 0:
-            values = _refit(search, current, {}, dict(singles.values[best]))
+            values = refit_accepted(search, current, {}, dict(singles.values[best]))
         else:
-            values = _refit(search, current, _refit_start(values, current))
+            values = refit_accepted(search, current, _refit_start(values, current))
         search.say(f"accepted {best} (step {step + 1}): "
                    + ", ".join(f"{n} = {format_value(v, EFFECTS[n].unit)}" for n, v in values.items()))
         if new_first is not None and ok:  # the first effect the lookahead brought: does it pay beside the others?
