@@ -11,7 +11,7 @@ logs — least squares lets the worst-fitted run decide and the others are outvo
 likelihood counts every run and signal by its samples. Near the noise floor both are least
 squares. The estimate whose fold fits predict the held-out runs better (the same noise-
 weighted validation cost that judged the structure) is kept, and the rest of the diagnosis
-(intervals, alternatives) uses that cost; the choice is said in the progress and the notes.
+(intervals, alternatives) uses that cost; the choice is said in the progress.
 """
 
 from __future__ import annotations

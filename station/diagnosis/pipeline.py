@@ -168,9 +168,7 @@ def _diagnose(runs, validate, model, progress, candidates, simulate, workers) ->
     nominal = _nominal(search, how)
     singles = fit_each_alone(search, names, nominal.trial)
     sel = forward_select(search, names, singles, nominal.trial)
-    estimate = choose_estimator(search, sel)
-    sel = estimate.selection
-    notes = notes + ([estimate.note] if estimate.note else [])
+    sel = choose_estimator(search, sel).selection  # (its choice is said in the progress)
     accepted = sel.accepted
     extended = base.with_effects(sel.values, name=f"{base.name} + {' + '.join(accepted)}" if accepted else None)
     fit_nom, fit_ext = pooled(ev, nominal.trial.val_sse), pooled(ev, sel.current.val_sse)
