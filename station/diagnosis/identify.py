@@ -460,7 +460,7 @@ class _Loop:
         n = self.diagnoses
         self.say(f"diagnosis {n}: {len(runs)} runs, {len(names)} candidate effects")
         t = time.perf_counter()
-        diag = diagnose(runs, model=self.base, candidates=names,
+        diag = diagnose(runs, model=self.base, candidates=names, likelihood_values=False,
                         progress=lambda msg: self.say(f"diagnosis {n}: {msg}"))
         self.timings["diagnosis"] += time.perf_counter() - t
         return diag

@@ -27,7 +27,8 @@ from station.plant.model import as_model
 
 def diagnose(runs: Sequence[str | Path], validate: Sequence[str | Path] = (), model=None,
              progress: Callable[[str], None] | None = None, candidates: Sequence[str] | None = None,
-             simulate: Simulator | None = None, workers: int | None = None) -> Diagnosis:
+             simulate: Simulator | None = None, workers: int | None = None,
+             likelihood_values: bool = True) -> Diagnosis:
     """Find what the model gets wrong on measured runs, name the cause and measure the gain.
 
     Parameters
@@ -50,6 +51,11 @@ def diagnose(runs: Sequence[str | Path], validate: Sequence[str | Path] = (), mo
         the GIL but building models and scoring runs hold it: on 2 shared cores two
         threads were slower (the rig's four logs: 10.7 s with one, 17.0 s with two,
         scripts/bench_diagnose.py at load average 3).
+    likelihood_values : bool
+        Also estimate the accepted effects' values by maximum likelihood and keep that
+        estimate when the held-out runs prefer it (:mod:`station.diagnosis.estimator`);
+        False: least squares only (``station identify``, whose designs separate structures
+        by the least-squares folds' spread).
 
     Returns
     -------
@@ -68,7 +74,7 @@ def diagnose(runs: Sequence[str | Path], validate: Sequence[str | Path] = (), mo
     # the matrices are tiny (22 x 22): BLAS threads only contend with each other and the
     # compiled sample loop (measured 3x slower on a loaded 2-core machine)
     with threadpool_limits(limits=1, user_api="blas"), bulk():  # thousands of forms: not via the disk
-        return _diagnose(runs, validate, model, progress, candidates, simulate, workers)
+        return _diagnose(runs, validate, model, progress, candidates, simulate, workers, likelihood_values)
 
 
 def _check_runs(runs: list, validate: list) -> None:
@@ -132,9 +138,10 @@ class _Doubt(NamedTuple):
     alternatives: list  # of Alternative
 
 
-def _doubt(search: Search, sel, nominal: Trial, judged: dict, final: dict) -> _Doubt:
-    """Intervals of the accepted effects (profile likelihood on the fit runs) and the
-    alternatives the validation data cannot tell apart."""
+def _doubt(search: Search, sel, searched, nominal: Trial, judged: dict, final: dict) -> _Doubt:
+    """Intervals of the accepted effects (profile likelihood on the fit runs, with the kept
+    estimate's cost) and the alternatives the validation data cannot tell apart (the search's
+    least-squares answer against the search's other sets: the same estimator on both sides)."""
     if not sel.accepted:
         return _Doubt({}, "", [])
     ev = search.ev
@@ -147,11 +154,15 @@ def _doubt(search: Search, sel, nominal: Trial, judged: dict, final: dict) -> _D
             intervals[name] = iv
             search.say(f"95 % interval of {name}: {iv.lo:.4g} .. {iv.hi:.4g} ({ev.simulations} simulations)")
     n_val = effective_terms(ev, judged, validation_runs(search.folds))
-    alts = alternatives(search, sel, nominal, n_val)
+    likelihood, ev.likelihood = ev.likelihood, False
+    try:
+        alts = alternatives(search, searched, nominal, n_val)
+    finally:
+        ev.likelihood = likelihood
     return _Doubt(intervals, interval_method(n_fit, ev.terms(search.fit_runs), len(search.folds)), alts)
 
 
-def _diagnose(runs, validate, model, progress, candidates, simulate, workers) -> Diagnosis:
+def _diagnose(runs, validate, model, progress, candidates, simulate, workers, likelihood_values) -> Diagnosis:
     t0 = time.perf_counter()
     runs, validate = list(runs), list(validate)
     _check_runs(runs, validate)
@@ -168,14 +179,16 @@ def _diagnose(runs, validate, model, progress, candidates, simulate, workers) ->
     nominal = _nominal(search, how)
     singles = fit_each_alone(search, names, nominal.trial)
     sel = forward_select(search, names, singles, nominal.trial)
-    sel = choose_estimator(search, sel).selection  # (its choice is said in the progress)
+    searched = sel
+    if likelihood_values:
+        sel = choose_estimator(search, sel).selection  # (its choice is said in the progress)
     accepted = sel.accepted
     extended = base.with_effects(sel.values, name=f"{base.name} + {' + '.join(accepted)}" if accepted else None)
     fit_nom, fit_ext = pooled(ev, nominal.trial.val_sse), pooled(ev, sel.current.val_sse)
     gain = rms_gain(fit_ext.rms_theta, fit_nom.rms_theta) if accepted else 0.0
     cost_gain = relative_gain(sel.current.val_weighted, nominal.trial.val_weighted) if accepted else 0.0
     judged, final = model_predictions(ev, folds, nominal.predictions, sel)
-    doubt = _doubt(search, sel, nominal.trial, judged, final)
+    doubt = _doubt(search, sel, searched, nominal.trial, judged, final)
     unexplained = check_unexplained(ev, sel.values, final)
     search.say("unexplained: " + (unexplained.evidence if unexplained.flag else
                                   "no; the residuals are what encoder rounding and accelerometer noise produce"))
