@@ -223,6 +223,7 @@ def run_loop(session: Session, controller, reference: np.ndarray, writer, soft_l
     pending = None  # the row of a sample received but not yet logged
     read_sample, poll_sample, send_command = session.read_sample, session.poll_sample, session.send_command
     step, append = controller.step, writer.append
+    new_row = tuple.__new__  # a LogRow without its Python-level __new__: 0.2 µs less inside the compute latency
     lim, neg = float(limit), -float(limit)
     stop_ok = True
     first_at = first_cpu = NAN
@@ -248,8 +249,8 @@ def run_loop(session: Session, controller, reference: np.ndarray, writer, soft_l
                         break
                     # sample n is in: its row is complete (v[n] was sent on sample n-1) and must be
                     # logged whatever happens next (a signal, a controller fault, a failed write)
-                    pending = LogRow(n * dt, n, u[n], v_k, theta, accel, dhat_k,
-                                     NAN if v_applied is None else v_applied, status, lat_k)
+                    pending = new_row(LogRow, (n * dt, n, u[n], v_k, theta, accel, dhat_k,
+                                               NAN if v_applied is None else v_applied, status, lat_k))
                     if signals.signum is not None:
                         raise _Signalled()
                     if abs(theta) > soft_limit:
@@ -257,7 +258,7 @@ def run_loop(session: Session, controller, reference: np.ndarray, writer, soft_l
                                              f"at tick {n}")
                     if n == last:
                         break
-                    newer = poll_sample()  # None on a healthy link: one look at the port
+                    newer = poll_sample()  # None on a healthy link (the read that brought this sample was the look)
                     if newer is None:
                         break
                     append(pending._replace(status=status | SKIPPED))  # not answered: v held

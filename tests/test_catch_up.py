@@ -64,6 +64,39 @@ def test_ten_samples_at_once_are_all_handed_over_and_only_the_newest_answered():
     assert session.late_seen == 0
 
 
+class _CountingPort(MemoryPort):
+    """Counts the looks at the port (``in_waiting``)."""
+
+    looks = 0
+
+    @property
+    def in_waiting(self):
+        self.looks += 1
+        return super().in_waiting
+
+
+def test_a_read_that_emptied_the_port_is_the_look_but_catching_up_looks_again():
+    port = _CountingPort()
+    session = V1Session(port, "fake://", LinkLimits(timeout=0.05, check_rate=False))
+    session.start(0)
+    _samples(port, [0])
+    assert session.read_sample().n == 0
+    looks = port.looks
+    _samples(port, [1])  # came after the read had taken everything: this tick answers sample 0
+    assert session.poll_sample() is None and port.looks == looks  # no second system call
+    session.send_command(0, 0.0)
+    assert session.late_seen == 1  # the command's own look saw sample 1 waiting: late, counted
+    # catching up: two samples in one read, a third arrives while the second is handed over
+    assert session.read_sample().n == 1
+    session.send_command(1, 0.0)
+    _samples(port, [2, 3])
+    assert session.read_sample().n == 2
+    assert session.poll_sample().n == 3
+    _samples(port, [4])
+    assert session.poll_sample().n == 4  # the port was looked at again
+    assert session.poll_sample() is None
+
+
 def test_late_bits_of_skipped_ticks_are_not_counted_twice():
     # a v1 device reports the ticks it held as LATE: the same ticks the station skipped
     port, session = _v1()

@@ -27,6 +27,7 @@ class LegacySession(Session):
         As :class:`Session`.
     """
 
+    __slots__ = ("accel_offset",)
     protocol = "legacy"
     sample_bytes = 6
 

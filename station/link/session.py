@@ -21,7 +21,7 @@ latency timer and its fix (:mod:`station.link.bursts`).
 from __future__ import annotations
 
 import logging
-import time
+from time import perf_counter
 from collections import deque
 from collections.abc import Callable
 from typing import NamedTuple
@@ -95,6 +95,13 @@ class Session:
         The fail-safe bounds; ``limits.timeout`` is the sample timeout.
     """
 
+    # slots: over 30 instance attributes, CPython 3.11 gives up its fast attribute access
+    # (shared-key dicts), and every tick reads a dozen of them (about a µs a tick)
+    __slots__ = ("port", "url", "limits", "timeout", "info", "stop_requested", "lockstep", "_debug", "_pending",
+                 "_deadline", "bursts", "_decoder", "dropped", "stale", "duplicates", "late", "late_seen", "rx_errors",
+                 "watchdog_trips", "skipped", "held", "max_lag_seen", "_n", "_answered", "_ahead", "_n_handed",
+                 "_drained", "_stop_seen", "_theta", "_misses", "_held_window", "_held_ticks", "_grace", "_watchdog",
+                 "_arrivals", "_waited", "_t_first", "_t_ready")
     protocol = ""
     alignment = 1
     """Computational delay d of this protocol (DESIGN.md): v[k] is computed from sample k−1."""
@@ -124,6 +131,7 @@ class Session:
         self._answered = -1  # tick number of the last sample answered (its command written)
         self._ahead: Sample | None = None  # a newer sample taken by poll_sample, not yet handed over
         self._n_handed = -1  # tick number of the sample in the loop's hand
+        self._drained = False  # that sample's read emptied the port (poll_sample need not look again)
         self._stop_seen: list = []  # messages read while stopping (v1: until STOPPED)
         self._theta = None  # its encoder count (plausibility check)
         self._misses: deque = deque()  # ticks dropped, stale or duplicated in the window (MISS_WINDOW)
@@ -183,18 +191,18 @@ class Session:
         blocked: nothing had been there) feeds the burst meter; one that was already
         waiting (the station was busy) does not."""
         self._check_wait(waiting_for)
-        t0 = time.perf_counter()
+        t0 = perf_counter()
         got = self._receive()
         if got:
-            now = time.perf_counter()
+            now = perf_counter()
             if now - t0 > IDLE_S:
                 self.bursts.record(got, now)
 
-    def _send(self, data: bytes, *what) -> None:
+    def _send(self, data: bytes, what: tuple = ()) -> None:
         """Write ``data``; a failed write is a :class:`LinkFault` naming the port.
 
         ``what``: the DEBUG line's format and arguments after "<url> tx " (default: the
-        bytes in hex).
+        bytes in hex). A tuple, not ``*what``: a variadic call costs ~0.1 µs a tick.
         """
         if self._debug:
             if what:
@@ -294,7 +302,7 @@ class Session:
                 f"(a busy CPU?); no command was computed from an older sample than the newest")
 
     def _check_rate(self) -> None:
-        now = time.perf_counter()
+        now = perf_counter()
         if self._t_first is None:
             self._t_first = now
             self._t_ready = now
@@ -337,10 +345,6 @@ class Session:
         they run out; the protocol sessions define it."""
         raise NotImplementedError
 
-    def _hand(self, sample: Sample) -> Sample:
-        self._n_handed = sample.n
-        return sample
-
     def _lenient(self, msgs: list) -> list[Sample]:
         """The new samples among decoded messages, without any check that could raise (after a
         stop); the protocol sessions define it."""
@@ -373,14 +377,23 @@ class Session:
         LinkFault
             The port failed.
         """
-        if self._ahead is not None:
-            sample, self._ahead = self._ahead, None
-            return self._hand(sample)
+        ahead = self._ahead
+        if ahead is not None:
+            self._ahead = None
+            self._drained = False
+            self._n_handed = ahead.n
+            return ahead
+        pending = self._pending
+        drained = False
         while True:
-            sample = self._next_pending()
-            if sample is not None:
-                return self._hand(sample)
+            if pending:
+                sample = self._next_pending()
+                if sample is not None:
+                    self._drained = drained
+                    self._n_handed = sample.n
+                    return sample
             self._wait("new valid sample")
+            drained = True  # that read looked at the port and took everything waiting
 
     def poll_sample(self) -> Sample | None:
         """A newer sample than the one in hand if it has already arrived (never blocks), else None.
@@ -389,7 +402,9 @@ class Session:
         (counted in ``skipped``; its next tick runs on the held command, counted once in
         the miss window), and the lag is checked: the samples skipped in a row plus those
         still waiting must be within ``max_lag`` of the device's time. (A lockstep device
-        holds nothing: neither is checked.)
+        holds nothing: neither is checked.) When the sample in hand came from a read that
+        took everything the port held a moment ago, that read was the look: no second
+        look at the port (one system call less inside the compute latency).
 
         Returns
         -------
@@ -406,7 +421,10 @@ class Session:
         """
         if self._ahead is None:
             if not self._pending:
-                try:  # inline: this look at the port is inside every tick's compute latency
+                if self._drained:  # read_sample's read just took all the port held: that was the look
+                    self._drained = False
+                    return None
+                try:  # inline: this look at the port is inside the tick's compute latency
                     if self.port.in_waiting < self.sample_bytes:
                         return None
                 except (serial.SerialException, OSError) as exc:
@@ -415,11 +433,13 @@ class Session:
             self._ahead = self._next_pending()
             if self._ahead is None:
                 return None
+        self._drained = False  # catching up: every later look goes to the port
         skipped = self._n_handed
         self.skipped += 1
         if self.lockstep:  # a device that waits for each command holds nothing
             sample, self._ahead = self._ahead, None
-            return self._hand(sample)
+            self._n_handed = sample.n
+            return sample
         self._hold(skipped + 1)
         behind = self._ahead.n + len(self._pending) + self._bytes_waiting() // self.sample_bytes - self._answered - 1
         if behind * DT > self.max_lag_seen:
@@ -429,9 +449,10 @@ class Session:
                                                  f"time) to catch up, more than --max-lag "
                                                  f"{1000 * self.limits.max_lag:g} ms"))
         sample, self._ahead = self._ahead, None
-        return self._hand(sample)
+        self._n_handed = sample.n
+        return sample
 
-    def _command(self, n: int, data: bytes, *what) -> None:
+    def _command(self, n: int, data: bytes, what: tuple = ()) -> None:
         """Write the command answering sample n (``data``, ``what`` as :meth:`_send`).
 
         First the lag, in the device's time (its samples, 2 ms each: the OS does not say
@@ -443,19 +464,21 @@ class Session:
         """
         if not self.lockstep:
             waiting = self._samples_waiting()
-            lag = (n - self._answered - 1 + waiting) * DT
-            if lag > self.max_lag_seen:
-                self.max_lag_seen = lag
-            if lag > self.limits.max_lag:
-                raise LagError(self._behind(n, f"the command for it would go out {1000 * lag:.0f} ms of the "
-                                               f"device's time behind, more than --max-lag "
-                                               f"{1000 * self.limits.max_lag:g} ms"))
-            if waiting:
-                self.late_seen += 1  # the next sample is already here: this command is late
-                self._hold(n + 1)
-        self._send(data, *what)
+            behind = n - self._answered - 1 + waiting  # ≥ 0; 0 on a healthy link: nothing to check
+            if behind:
+                lag = behind * DT
+                if lag > self.max_lag_seen:
+                    self.max_lag_seen = lag
+                if lag > self.limits.max_lag:
+                    raise LagError(self._behind(n, f"the command for it would go out {1000 * lag:.0f} ms of the "
+                                                   f"device's time behind, more than --max-lag "
+                                                   f"{1000 * self.limits.max_lag:g} ms"))
+                if waiting:
+                    self.late_seen += 1  # the next sample is already here: this command is late
+                    self._hold(n + 1)
+        self._send(data, what)
         self._answered = n
-        self._t_ready = time.perf_counter()
+        self._t_ready = perf_counter()
 
     def unread_samples(self) -> list[Sample]:
         """Samples that arrived but never reached the loop (taken ahead, decoded, waiting in

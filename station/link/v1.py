@@ -27,6 +27,7 @@ class V1Session(Session):
         As :class:`Session`.
     """
 
+    __slots__ = ("_last_seq",)
     protocol = "v1"
     sample_bytes = 16
 
@@ -36,7 +37,7 @@ class V1Session(Session):
         self._last_seq = -1
 
     def _write(self, msg) -> None:
-        self._send(v1.encode(msg), "%s", msg)
+        self._send(v1.encode(msg), ("%s", msg))
 
     def _next_message(self, deadline: Timeout):
         """The next decoded message, or None when ``deadline`` expires first (whatever arrives)."""
@@ -160,7 +161,7 @@ class V1Session(Session):
             The command, DAC counts.
         """
         seq = n & 0xFFFF
-        self._command(n, v1.encode(v1.Command(seq, v1.round_command(v))), "COMMAND seq %d v %r", seq, v)
+        self._command(n, v1.encode(v1.Command(seq, v1.round_command(v))), ("COMMAND seq %d v %r", seq, v))
 
     def stop(self) -> dict | None:
         """Command 0 for the last sample, then STOP; wait for STOPPED. Returns its fields or None

@@ -182,7 +182,9 @@ _LAYOUT: dict[int, tuple[type, struct.Struct]] = {
     0x06: (Stop, struct.Struct("<")),
     0x07: (Stopped, struct.Struct("<BIHHH")),
 }
-_TYPE_OF = {cls: (code, layout) for code, (cls, layout) in _LAYOUT.items()}
+# per class: type byte, layout, field names (dataclasses.fields() per message costs a µs
+# on the loop's hot path: every COMMAND)
+_TYPE_OF = {cls: (code, layout, tuple(f.name for f in fields(cls))) for code, (cls, layout) in _LAYOUT.items()}
 
 
 def crc16(data: bytes) -> int:
@@ -222,10 +224,10 @@ def encode(msg: Message) -> bytes:
         A field is out of its wire range (e.g. COMMAND v outside int16).
     """
     try:
-        code, layout = _TYPE_OF[type(msg)]
+        code, layout, names = _TYPE_OF[type(msg)]
     except KeyError:
         raise TypeError(f"not a protocol v1 message: {msg!r}") from None
-    values = [getattr(msg, f.name) for f in fields(msg)]
+    values = [getattr(msg, name) for name in names]
     if isinstance(msg, Info):
         values[-1] = msg.name.encode("ascii")[:8]  # struct pads '8s' with NULs
     payload = bytes([code]) + layout.pack(*values)
