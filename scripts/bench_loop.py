@@ -32,6 +32,7 @@ from contextlib import contextmanager
 from pathlib import Path
 
 from station.experiment import run_step
+from station.ranges import number
 from station.link import LinkLimits
 from station.protocol import PROTOCOLS
 
@@ -92,13 +93,14 @@ def one_run(protocol: str, seconds: float, lean: bool, workdir: Path, max_lag: f
 
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("--seconds", type=float, default=60.0)
-    parser.add_argument("--repeat", type=int, default=1, help="runs of each case (default 1)")
-    parser.add_argument("--burn", type=int, default=0, metavar="N", help="CPU burners beside the loop (default 0)")
+    parser.add_argument("--seconds", type=number(1, 3600, unit="s"), default=60.0)
+    parser.add_argument("--repeat", type=number(1, 100, integer=True), default=1, help="runs of each case (default 1)")
+    parser.add_argument("--burn", type=number(0, 64, integer=True), default=0, metavar="N",
+                        help="CPU burners beside the loop (default 0)")
     parser.add_argument("--protocols", nargs="+", default=list(PROTOCOLS), choices=PROTOCOLS)
     parser.add_argument("--no-baseline", action="store_true", help="skip the plain-loop baseline runs")
     parser.add_argument("--json", type=Path, default=None)
-    parser.add_argument("--max-lag", type=float, default=1000 * LinkLimits.max_lag, metavar="MS",
+    parser.add_argument("--max-lag", type=number(0, 1000, unit="ms"), default=1000 * LinkLimits.max_lag, metavar="MS",
                         help="the station's --max-lag (default 20 ms, the station's own)")
     args = parser.parse_args(argv)
     cases = []

@@ -226,12 +226,20 @@ def compare(other: Path, argv: list[str], rounds: int) -> list[dict]:
 
 
 def main(argv=None) -> int:
+    try:
+        from station.ranges import number
+    except ImportError:  # the child of --against on an older checkout (no station.ranges): the parent checked
+        def number(low, high, integer=False, unit=""):
+            return int if integer else float
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--seconds", type=float, default=10.0, help="run length, s (default 10)")
-    ap.add_argument("--runs", type=int, default=5, help="replays per protocol (median; default 5)")
+    ap.add_argument("--seconds", type=number(2 * SHORT_S, 3600, unit="s"), default=10.0,
+                    help="run length, s (default 10; longer than the 1 s run taken off)")
+    ap.add_argument("--runs", type=number(1, 100, integer=True), default=5,
+                    help="replays per protocol (median; default 5)")
     ap.add_argument("--protocols", nargs="+", default=["v1", "legacy"], choices=["v1", "legacy"])
     ap.add_argument("--against", type=Path, metavar="DIR", help="another checkout to compare with")
-    ap.add_argument("--rounds", type=int, default=3, help="alternating rounds with --against (median)")
+    ap.add_argument("--rounds", type=number(1, 100, integer=True), default=3,
+                    help="alternating rounds with --against (median)")
     ap.add_argument("--json", type=Path, default=None)
     args = ap.parse_args(argv)
     same = ["--seconds", str(args.seconds), "--runs", str(args.runs), "--protocols", *args.protocols]

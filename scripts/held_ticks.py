@@ -22,6 +22,7 @@ import numpy as np
 from station.analysis.metrics import step_metrics
 from station.plant.model import as_model
 from station.plant.simulate import simulate
+from station.ranges import number
 from station.runsetup import choose_controller
 
 STEPS = (("p", 50), ("lead", 100), ("lead-accel", 200))  # the thesis's step tests (controller, counts)
@@ -67,8 +68,9 @@ class HeldTicks:
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--model", default="rig", help="built-in model name or model file (default rig)")
-    ap.add_argument("--fractions", type=float, nargs="+", default=[0.0, 0.1, 0.2, 0.3, 0.5])
-    ap.add_argument("--seeds", type=int, default=5)
+    ap.add_argument("--fractions", type=number(0.0, 0.9), nargs="+", default=[0.0, 0.1, 0.2, 0.3, 0.5],
+                    help="fractions of the ticks held (default 0 0.1 0.2 0.3 0.5)")
+    ap.add_argument("--seeds", type=number(1, 1000, integer=True), default=5, help="seeds per fraction (default 5)")
     args = ap.parse_args(argv)
     model = as_model(args.model)
     n = 1000

@@ -42,6 +42,7 @@ sys.path.insert(0, str(REPO))  # tests.blind is not installed with the package
 
 from tests.blind.cases import (MAGNITUDES, NEW_MAGNITUDES, OOV_CASES, PAIRS, SETTING_MAGNITUDES,  # noqa: E402
                                TOLERANCE, TRIPLES, TWO_EFFECTS, case_effects, value_error)
+from station.ranges import number  # noqa: E402
 
 RANGES = {**MAGNITUDES, **NEW_MAGNITUDES, **SETTING_MAGNITUDES}
 NEW_CASES = (*NEW_MAGNITUDES, *PAIRS, *TRIPLES)
@@ -225,15 +226,15 @@ def table(outcomes: list[Outcome], seeds: str, elapsed: float) -> str:
 
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("--seeds", type=int, default=10, help="seeds per effect (default 10)")
+    parser.add_argument("--seeds", type=number(1, 1000, integer=True), default=10, help="seeds per effect (default 10)")
     parser.add_argument("--effects", nargs="+", default=list(KNOWN),
                         help="cases to hide (effects of tests/blind/cases.MAGNITUDES and NEW_MAGNITUDES, its PAIRS "
                              "and TRIPLES, 'two', 'clean', 'new' for issue 17's; default all)")
-    parser.add_argument("--seed-list", type=int, nargs="+", metavar="SEED",
+    parser.add_argument("--seed-list", type=number(0, 2**32 - 1, integer=True), nargs="+", metavar="SEED",
                         help="run only these seeds (instead of 0..N-1 of --seeds; e.g. a case's misses)")
     parser.add_argument("--out", type=Path, default=REPO / "docs" / "diagnosis_validation.md",
                         help="Markdown table to write (default docs/diagnosis_validation.md)")
-    parser.add_argument("--jobs", type=int, default=1, help="cases diagnosed in parallel (default 1)")
+    parser.add_argument("--jobs", type=number(1, 64, integer=True), default=1, help="cases diagnosed in parallel (default 1)")
     args = parser.parse_args(argv)
     effects = [c for name in args.effects for c in (NEW_CASES if name == "new" else (name,))]
     for name in effects:
