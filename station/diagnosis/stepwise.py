@@ -307,28 +307,31 @@ def forward_select(search: Search, names: Sequence[str], singles: Singles, nomin
                    + ", ".join(f"{n} = {format_value(v, EFFECTS[n].unit)}" for n, v in values.items()))
         if new_first is not None and ok:  # the first effect the lookahead brought: does it pay beside the others?
             first = accepted[0]  # new_first, or breakaway/plain friction in its place after a downgrade
-            dropped = _drop(search, first, current, terms)
-            if dropped is not None:
-                accepted.remove(first)
-                steps = [st for st in steps if st.chosen not in _family(first)]
-                for st in steps:
-                    st.before = [n for n in st.before if n not in _family(first)]
-                current = dropped
-                values = fit_set(ev, set_axes(current.names, search.axes), search.fit_runs,
-                                 {k: v for k, v in values.items() if k in _held(accepted)})
+            accepted, current, values, steps = _drop_if_unpaid(search, first, _family(first), accepted, current,
+                                                               values, steps, terms)
     for name in [n for n in accepted if len(accepted) > 1 and _near_neutral(n, values)]:
-        dropped = _drop(search, name, current, terms)
-        if dropped is not None:
-            accepted.remove(name)
-            steps = [st for st in steps if st.chosen != name]
-            for st in steps:
-                st.before = [n for n in st.before if n != name]
-            current = dropped
-            values = fit_set(ev, set_axes(current.names, search.axes), search.fit_runs,
-                             {k: v for k, v in values.items() if k in _held(accepted)})
+        accepted, current, values, steps = _drop_if_unpaid(search, name, {name}, accepted, current, values, steps,
+                                                           terms)
     if "static_friction" in accepted:
         current, values = _fit_shape(search, current, values, terms)
     return Selection(accepted, current, values, steps)
+
+
+def _drop_if_unpaid(search: Search, name: str, family: set[str], accepted: list[str], current: Trial,
+                    values: dict, steps: list, terms: int) -> tuple[list[str], Trial, dict, list]:
+    """``accepted``, ``current``, ``values`` and ``steps`` without ``name`` when it no longer
+    pays beside the others (:func:`_drop`): the steps that chose one of ``family`` are
+    forgotten, and the rest refitted jointly on all fit runs; else all as they were."""
+    dropped = _drop(search, name, current, terms)
+    if dropped is None:
+        return accepted, current, values, steps
+    accepted = [n for n in accepted if n != name]
+    steps = [st for st in steps if st.chosen not in family]
+    for st in steps:
+        st.before = [n for n in st.before if n not in family]
+    values = fit_set(search.ev, set_axes(dropped.names, search.axes), search.fit_runs,
+                     {k: v for k, v in values.items() if k in _held(accepted)})
+    return accepted, dropped, values, steps
 
 
 def _near_neutral(name: str, values: Mapping[str, float]) -> bool:
