@@ -19,7 +19,9 @@ import sys
 
 import numpy as np
 
+from station import DT
 from station.analysis.metrics import step_metrics
+from station.control import step_reference
 from station.plant.model import as_model
 from station.plant.simulate import simulate
 from station.ranges import number
@@ -73,17 +75,16 @@ def main(argv=None) -> int:
     ap.add_argument("--seeds", type=number(1, 1000, integer=True), default=5, help="seeds per fraction (default 5)")
     args = ap.parse_args(argv)
     model = as_model(args.model)
-    n = 1000
-    t = np.arange(n) * 0.002
+    n = 1000  # 2 s, as station step
+    t = np.arange(n) * DT
     print(f"model {model.name}: step tests with a fraction of the ticks held at random, mean (spread) over "
           f"{args.seeds} seeds")
     for name, amplitude in STEPS:
-        u = np.zeros(n)
-        u[10:] = amplitude
+        u = step_reference(amplitude, n)
         for fraction in args.fractions:
             over, settle = [], []
             for seed in range(args.seeds):
-                chosen = choose_controller(name, kp=2.0 if name == "p" else None, limit=200).controller
+                chosen = choose_controller(name).controller
                 m = step_metrics(t, simulate(model, HeldTicks(chosen, fraction, seed), u).theta, amplitude)
                 over.append(m.overshoot_pct)
                 settle.append(np.nan if m.settling_time_s is None else m.settling_time_s)

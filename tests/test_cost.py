@@ -83,3 +83,16 @@ def test_likelihood_cost_is_infinite_when_a_run_diverges():
     ev = Evaluator([_case("a", 1.0, 1.0), _case("b", 1.0, 3.0)], _Line(), diverging, likelihood=True)
     assert ev.cost({"x": 1.0}, [0]) == pytest.approx(2.0)
     assert ev.cost({"x": 1.0}, [0, 1]) == math.inf
+
+
+def test_costed_switches_the_cost_inside_the_block_only():
+    ev = Evaluator([_case("a", 1.0, 1.0, sigma_theta=0.5), _case("b", 3.0, 3.0, sigma_a=2.0)], _Line(), _simulate)
+    least_squares = ev.cost({"x": 1.0}, [0, 1])
+    likelihood = Evaluator(ev.cases, _Line(), _simulate, likelihood=True).cost({"x": 1.0}, [0, 1])
+    assert likelihood != pytest.approx(least_squares)
+    with ev.costed(likelihood=True):
+        assert ev.cost({"x": 1.0}, [0, 1]) == pytest.approx(likelihood)
+    assert ev.cost({"x": 1.0}, [0, 1]) == pytest.approx(least_squares)
+    with pytest.raises(RuntimeError), ev.costed(likelihood=True):
+        raise RuntimeError("a fit that fails")
+    assert not ev.likelihood  # restored on the way out of a failure too

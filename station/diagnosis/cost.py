@@ -27,6 +27,7 @@ from __future__ import annotations
 
 import math
 import threading
+from contextlib import contextmanager
 from collections.abc import Callable, Mapping, Sequence
 from typing import NamedTuple
 
@@ -180,6 +181,22 @@ class Evaluator:
             Indices of the runs in ``cases``.
         """
         return sum(2 * self.cases[i].n for i in runs)
+
+    @contextmanager
+    def costed(self, likelihood: bool):
+        """:meth:`cost` by the maximum likelihood (True) or least squares (False) inside the
+        block, as before after it (the simulations' cache holds errors, not costs: it serves both).
+
+        Parameters
+        ----------
+        likelihood : bool
+            The cost inside the block (as the constructor's ``likelihood``).
+        """
+        before, self.likelihood = self.likelihood, likelihood
+        try:
+            yield self
+        finally:
+            self.likelihood = before
 
     def cost(self, effects: Mapping[str, float], runs: Sequence[int]) -> float:
         """Normalised cost J over runs that fits minimise (1 ≈ the noise floor): the

@@ -58,14 +58,14 @@ def choose_estimator(search: Search, sel: Selection) -> Estimate:
     names = sel.current.names
     if not sel.accepted or ev.likelihood or set(sel.values) - set(names) - {"coulomb_friction"}:
         return Estimate(sel, ev.likelihood, "")  # (a fitted Stribeck shape is held: least squares' own)
-    ev.likelihood = True
-    ml = trial(ev, search.folds, names, search.axes, sel.current.fold_values)
+    with ev.costed(likelihood=True):
+        ml = trial(ev, search.folds, names, search.axes, sel.current.fold_values)
     if ml.val_weighted >= sel.current.val_weighted:
-        ev.likelihood = False
         note = (f"values by least squares: the maximum-likelihood fits predict the held-out runs no better "
                 f"(validation cost {ml.val_weighted / sel.current.val_weighted:.3f}x)")
         search.say(note)
         return Estimate(sel, False, note)
+    ev.likelihood = True  # kept: the rest of the diagnosis uses this cost
     values = refit_accepted(search, ml, dict(sel.values))
     note = (f"values by maximum likelihood (an unknown error variance per run and signal): its fold fits "
             f"predict the held-out runs better than least squares (validation cost "

@@ -154,11 +154,8 @@ def _doubt(search: Search, sel, searched, nominal: Trial, judged: dict, final: d
             intervals[name] = iv
             search.say(f"95 % interval of {name}: {iv.lo:.4g} .. {iv.hi:.4g} ({ev.simulations} simulations)")
     n_val = effective_terms(ev, judged, validation_runs(search.folds))
-    likelihood, ev.likelihood = ev.likelihood, False
-    try:
+    with ev.costed(likelihood=False):
         alts = alternatives(search, searched, nominal, n_val)
-    finally:
-        ev.likelihood = likelihood
     return _Doubt(intervals, interval_method(n_fit, ev.terms(search.fit_runs), len(search.folds)), alts)
 
 
