@@ -223,6 +223,21 @@ def test_a_lockstep_v1_device_is_never_too_fast(device, tmp_path):
     assert report.result.ok, report.result.message
 
 
+def test_a_lockstep_v1_device_held_up_by_the_host_is_not_too_slow(device, tmp_path):
+    # A lockstep device answers when asked: a wait is the host's (a VM stalled 0.5 s while a
+    # fresh checkout wrote its caches), not a tick rate, so only the timeout bounds it.
+    dev = device(period=lambda k: 0.45 if k == 100 else 0.002, rate_hz=0)
+    report, _ = _run(dev, tmp_path, duration=1.0, limits=LinkLimits(timeout=1.0, max_lag=50))
+    assert report.result.ok, report.result.message
+
+
+def test_a_self_paced_v1_device_that_stalls_stops_on_rate(device, tmp_path):
+    # the same stall on a device that declares 500 Hz is a rate fault
+    dev = device(period=lambda k: 0.45 if k == 100 else 0.002)
+    report, path = _run(dev, tmp_path, duration=1.0, limits=LinkLimits(timeout=1.0, max_lag=50))
+    assert report.result.outcome.reason == "rate", report.result.outcome.message
+
+
 # --- legacy: stale samples, byte slips, late commands --------------------------------------
 
 class _SlowController:

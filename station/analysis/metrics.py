@@ -43,10 +43,41 @@ class StepMetrics:
         return asdict(self)
 
     def summary(self) -> str:
-        """``overshoot 10.00 %, settling 0.608 s`` (or "not settled within the run")."""
-        settle = NOT_SETTLED if self.settling_time_s is None else f"settling {self.settling_time_s:.3f} s"
-        return f"overshoot {self.overshoot_pct:.2f} %, {settle}"
+        """``overshoot 10.00 %, settling (1 %) 0.608 s`` (or "... settling (1 %) not settled within the run")."""
+        label = settling_label(THESIS_BAND_PCT)
+        settle = NOT_SETTLED if self.settling_time_s is None else f"{self.settling_time_s:.3f} s"
+        return f"overshoot {self.overshoot_pct:.2f} %, {label} {settle}"
 
+
+def settling_label(band_pct: float) -> str:
+    """The one name of a settling time, with its band: ``settling (1 %)``, ``settling (2 %)``.
+
+    Every place that prints a settling time names its band with this, so the thesis's 1 %
+    time (:func:`step_metrics`) and the 2 % time (:func:`step_info`, ``station tune``) are
+    never both called "settling".
+
+    Parameters
+    ----------
+    band_pct : float
+        The band's half-width, percent of the step (the thesis's band is 1 %, at least one
+        encoder count: :func:`settling_band`).
+
+    Returns
+    -------
+    str
+
+    Examples
+    --------
+    >>> settling_label(1)
+    'settling (1 %)'
+    >>> settling_label(2.0)
+    'settling (2 %)'
+    """
+    return f"settling ({band_pct:g} %)"
+
+
+THESIS_BAND_PCT = 1.0
+"""The thesis's settling band, percent of the step (at least one count: :func:`settling_band`)."""
 
 NOT_SETTLED = "not settled within the run"
 """What a report says when θ has not settled (:func:`settled_index`): outside the band at the

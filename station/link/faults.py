@@ -54,8 +54,9 @@ class LinkLimits:
     check_rate : bool
         Check the device's tick rate (reason "rate"): samples more than 1.5× the
         nominal period apart on average over 0.5 s (time the station spent on a sample
-        is not counted, so a lockstep device never trips it); a self-paced v1 device
-        (INFO rate_hz ≠ 0) more than 20 % fast.
+        is not counted); a self-paced v1 device (INFO rate_hz ≠ 0) more than 20 % fast.
+        A lockstep device (v1 INFO rate_hz = 0) ticks when asked and is not checked: a
+        wait on it is the host's, bounded by ``timeout``.
     """
 
     timeout: float = 0.1

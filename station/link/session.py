@@ -251,7 +251,8 @@ class Session:
             self._watchdog = wd
         elif self._watchdog:
             self._watchdog = False
-        if self.limits.check_rate:
+        if self.limits.check_rate and not self.lockstep:
+            # a lockstep device ticks when asked: its waits are the host's, bounded by the timeout
             self._check_rate()
 
     def _miss(self, n: int, count: int = 1) -> None:
@@ -308,7 +309,7 @@ class Session:
             self._t_ready = now
             return
         # time spent waiting for this sample: since the last sample or since our command,
-        # whichever is later (a lockstep device answers at once: it never looks slow)
+        # whichever is later
         waited = now - self._t_ready
         self._t_ready = now
         arrivals = self._arrivals
@@ -324,7 +325,7 @@ class Session:
             raise RateError(f"device {self.url} ticks too slowly: {count} samples in the last {RATE_WINDOW_S:g} s, "
                             f"one every {1000 * self._waited / count:.1f} ms on average (nominal {1000 * DT:g} ms) "
                             f"at tick {self._n}")
-        if not self.lockstep and self.protocol == "v1" and count > RATE_FAST * RATE_WINDOW_S / DT:
+        if self.protocol == "v1" and count > RATE_FAST * RATE_WINDOW_S / DT:
             raise RateError(f"device {self.url} ticks too fast: {count} samples in the last {RATE_WINDOW_S:g} s "
                             f"(nominal {RATE_WINDOW_S / DT:.0f}) at tick {self._n}")
 

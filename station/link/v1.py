@@ -50,7 +50,8 @@ class V1Session(Session):
     def hello(self) -> dict:
         """Send HELLO and wait for INFO; returns INFO's fields as a dict.
 
-        INFO rate_hz = 0 declares a lockstep device (no rate check then).
+        INFO rate_hz = 0 declares a lockstep device: it ticks when asked, so it has no rate to
+        check (a wait is the host's, bounded by the sample timeout).
 
         Raises StationError when no INFO arrives within 1 s, whatever else arrives
         (not a v1 device?).
