@@ -8,10 +8,17 @@ a compensator file's ``[shaper]``) the reference is shaped first: theta_d_hat = 
 
 from __future__ import annotations
 
+import math
 from typing import Any
 
 from station.control.shaper import ReferenceShaper
 from station.control.tf import DiscreteTF
+from station.rounding import half_away
+
+RECURSIONS = {"none": None, "trunc": lambda v: float(math.trunc(v)), "round": half_away}
+"""What a compensator's recursion remembers of its command: "none" the float; "trunc" or
+"round" the whole DAC count the software stored (toward zero; halves away from zero), which
+is then the command itself."""
 
 
 def saturate(v: float, limit: float | None) -> float:
@@ -46,12 +53,25 @@ class Compensator:
         JSON-able description for log headers (kind, designs, z coefficients, limit, shaper).
     shaper : ReferenceShaper or None
         Shapes the reference before anything else (None: u as given).
+    recursion : {"none", "trunc", "round"}
+        The command the Gth recursion remembers (:data:`RECURSIONS`): the float, or the whole
+        DAC count lab software stored (the command is then that integer).
+
+    Raises
+    ------
+    ValueError
+        A limit that is not positive, an unknown ``recursion``.
     """
 
     def __init__(self, gth: DiscreteTF, ga: DiscreteTF | None = None, limit: float | None = 200.0,
-                 name: str = "", spec: dict[str, Any] | None = None, shaper: ReferenceShaper | None = None):
+                 name: str = "", spec: dict[str, Any] | None = None, shaper: ReferenceShaper | None = None,
+                 recursion: str = "none"):
         if limit is not None and not limit > 0:
             raise ValueError(f"limit must be positive or None, got {limit}")
+        if recursion not in RECURSIONS:
+            raise ValueError(f"recursion must be one of {', '.join(RECURSIONS)}, got {recursion!r}")
+        self.recursion = recursion
+        self._store = RECURSIONS[recursion]
         self.gth = gth
         self.ga = ga
         self.limit = None if limit is None else float(limit)
@@ -82,7 +102,7 @@ class Compensator:
         Returns
         -------
         v : float
-            Command, DAC counts, within +-limit.
+            Command, DAC counts, within +-limit (a whole count with a quantized ``recursion``).
         theta_d_hat : float
             The reference after the shaper and accelerometer feedback, encoder counts.
         """
@@ -92,13 +112,18 @@ class Compensator:
         theta_d_hat = u - ga.step(a) if ga is not None else u
         e = theta_d_hat - theta
         gth = self.gth
-        v = saturate(gth.output(e), self.limit)
+        v = gth.output(e)
+        if self._store is not None:  # the integer the lab's software stored, then its clamp
+            v = self._store(v)
+        v = saturate(v, self.limit)
         gth.commit(e, v)
         return v, theta_d_hat
 
     def __repr__(self) -> str:
         shaped = "" if self.shaper is None else f", shaper={self.shaper!r}"
-        return f"Compensator(name={self.name!r}, gth={self.gth!r}, ga={self.ga!r}, limit={self.limit}{shaped})"
+        stored = "" if self.recursion == "none" else f", recursion={self.recursion!r}"
+        return (f"Compensator(name={self.name!r}, gth={self.gth!r}, ga={self.ga!r}, limit={self.limit}"
+                f"{shaped}{stored})")
 
 
 class OpenLoop:

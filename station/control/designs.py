@@ -141,8 +141,9 @@ def lead_controller(limit: float | None = 200.0, dt: float = 0.002, accel: bool 
 def controller_from_spec(spec: dict[str, Any]) -> Compensator | OpenLoop:
     """Rebuild a controller from the ``spec`` a log header holds (our format).
 
-    Uses the z coefficients as recorded (JSON floats round-trip exactly), and the
-    reference shaper's delays and amplitudes when the spec has a ``shaper``.
+    Uses the z coefficients as recorded (JSON floats round-trip exactly), the reference
+    shaper's delays and amplitudes when the spec has a ``shaper``, and the integer the
+    recursion stored when it has a ``recursion`` ("trunc" or "round").
 
     Parameters
     ----------
@@ -175,7 +176,7 @@ def controller_from_spec(spec: dict[str, Any]) -> Compensator | OpenLoop:
         shaper = spec.get("shaper")
         shaping = None if shaper is None else shaper_from_spec(shaper, float(spec.get("dt", 0.002)))
         return Compensator(stages[0], stages[1], limit=limit, name=str(spec.get("name", kind)), spec=spec,
-                           shaper=shaping)
+                           shaper=shaping, recursion=str(spec.get("recursion", "none")))
     except (KeyError, TypeError, ValueError, AttributeError) as exc:
         raise StationError(f"controller spec in log header: bad or missing field {str(exc)[:200]}") from None
 

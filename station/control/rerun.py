@@ -3,7 +3,7 @@
 DESIGN.md "Timing and log rows": v[k] = C(u[k], theta[k-d], a[k-d]) with the computational
 delay d (the alignment), which the rig's headers do not state: :func:`detect_alignment`
 finds it from the data. Arrays in, arrays out, no log reading: the controller
-identification (:mod:`station.analysis.identify`) and the logged-run reader
+identification (:mod:`station.analysis.controller_id`) and the logged-run reader
 (:mod:`station.logged`) both build on it.
 """
 

@@ -1,0 +1,599 @@
+"""Which controller made a log: identified from the data when the header does not say, or
+when what it says does not reproduce the logged commands.
+
+A log holds u, θ and the command v the controller produced. Candidate laws, simplest first,
+each for both alignments d (DESIGN.md "Timing and log rows": v[k] = C(u[k], θ[k-d])):
+
+- open loop, v = u;
+- proportional, v = sat(kp·(u[k] - θ[k-d])), any kp;
+- linear compensators e -> v of order 1 to 3 (a direct-form recursion in z^-1).
+
+Each at the rig's clamp (±200, or the DAC's when v exceeds it) or the log's own (a level
+|v| sits at on several rows), and with the recursion as lab software ran it
+(:data:`station.control.compensator.RECURSIONS`): on the float command, or, when every
+logged v is a whole count, on the stored integer (truncated toward zero or rounded), the
+integer then being the command: v[k] = sat(Q(Σ b_i e[k-i] - Σ a_j v[k-j])).
+
+Coefficients: for a float recursion, linear least squares over the unclamped rows (the
+recursion runs on the clamped v, so the regression is exact there). For an integer
+recursion least squares only comes within the quantization; since the recursion's history
+is the logged integer itself, reproducing every logged v is a set of linear inequalities on
+the coefficients (Q(x) = v ⇔ v ≤ x < v + 1 for a truncated positive v, ...), and a linear
+program (scipy's HiGHS) finds the coefficients deepest inside them. Then the numbers a
+person typed: a P gain with the fewest digits, a law's continuous design
+(:func:`station.analysis.continuous_design.recognize`: Tustin, ZOH, backward or forward
+Euler of a design with round numbers) whose discretization still reproduces the log. A law
+is accepted only when, run as the rig ran it (:func:`station.control.rerun.replay_commands`),
+it reproduces every logged v: to ``tolerance`` (1e-6 DAC counts), the logged integer
+exactly for an integer recursion. The identification claims nothing the data do not prove.
+
+A PID header with ki or kd != 0 does not say how the rig discretized it;
+:func:`pid_controllers` gives the standard choices (integral by backward Euler, forward
+Euler or Tustin; derivative by backward difference; Franklin, Powell & Workman, Digital
+Control of Dynamic Systems, ch. 6) to try against the data.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from station.analysis.continuous_design import ContinuousDesign, nicest_between, recognize
+from station.control import DAC_LIMIT, Compensator, DiscreteTF, OpenLoop  # DAC_LIMIT: the clamp assumed when v exceeds the rig's ±200
+from station.control.rerun import ALIGNMENTS, AlignmentFit, detect_alignment
+
+TOLERANCE = 1e-6
+"""max |v_replayed - v_logged| (DAC counts) a law must meet to be accepted."""
+
+MAX_ORDER = 3
+"""Highest order of the linear compensators tried."""
+
+BOUNDARY = 1e-9
+"""How close (counts) x may come to an integer recursion's interval and still count as in
+it while a continuous design is recognised: the lab's discretization and ours may differ in
+the last bit, and a row whose x falls on a whole count is decided by that bit."""
+
+STORED = {"trunc": "truncated", "round": "rounded"}
+"""How a recursion's stored integer is named in reports."""
+
+
+@dataclass(frozen=True)
+class IdentifiedController:
+    """A control law that reproduces a log's commands (:func:`infer_controller`,
+    :func:`match_pid`).
+
+    Attributes
+    ----------
+    controller : Compensator or OpenLoop
+    alignment : int
+        The computational delay d it needs, samples.
+    max_abs_dv : float
+        max |v_replayed - v_logged| with it, DAC counts.
+    v_replayed : numpy.ndarray, shape (N,)
+    law : str
+        One line for reports, e.g. "P, kp = 1" or "lead 3(s+13)/(s+20) (Tustin, 0.002 s),
+        its recursion on the truncated integer command".
+    design : ContinuousDesign or None
+        The continuous design recognised behind a linear law.
+    alignments : tuple of int
+        Every alignment at which it reproduces the logged v (more than one: the data cannot
+        tell them apart, and ``alignment`` is the preferred one).
+    """
+
+    controller: Compensator | OpenLoop
+    alignment: int
+    max_abs_dv: float
+    v_replayed: np.ndarray
+    law: str
+    design: ContinuousDesign | None = None
+    alignments: tuple[int, ...] = ()
+
+    @property
+    def recursion(self) -> str:
+        """What the law's recursion remembers: "none", "trunc" or "round"."""
+        return getattr(self.controller, "recursion", "none")
+
+
+def _limits(v: np.ndarray, rig_limit: float) -> list[float]:
+    """The clamps worth trying: the rig's (the DAC's when v exceeds it), then the log's own
+    largest |v| (a clamp the law hit, perhaps on one row only: a law that reproduces the log
+    at the first never gets to it)."""
+    vmax = float(np.max(np.abs(v))) if v.size else 0.0
+    first = rig_limit if vmax <= rig_limit else max(DAC_LIMIT, vmax)
+    return [first, vmax] if 0 < vmax < first else [first]
+
+
+def _compensator(num, den, limit: float | None, dt: float, kind: str, extra: dict | None = None,
+                 recursion: str = "none", name: str | None = None) -> Compensator:
+    tf = DiscreteTF(num, den)
+    spec = {"kind": kind, "name": name or kind, "dt": dt, "limit": limit, "source": "inferred from the data",
+            "gth": {"num_z": tf.num.tolist(), "den_z": tf.den.tolist()}, "ga": None, **(extra or {})}
+    if recursion != "none":
+        spec["recursion"] = recursion
+    return Compensator(tf, None, limit=limit, name=name or kind, spec=spec, recursion=recursion)
+
+
+def with_recursion(controller: Compensator, recursion: str) -> Compensator:
+    """The same compensator (fresh filters) with its recursion on ``recursion``'s command.
+
+    Parameters
+    ----------
+    controller : Compensator
+    recursion : {"none", "trunc", "round"}
+    """
+    spec = {**controller.spec, "recursion": recursion}
+    if recursion == "none":
+        spec.pop("recursion")
+    ga = None if controller.ga is None else DiscreteTF(controller.ga.num, controller.ga.den)
+    return Compensator(DiscreteTF(controller.gth.num, controller.gth.den), ga, limit=controller.limit,
+                       name=controller.name, spec=spec, shaper=controller.shaper, recursion=recursion)
+
+
+PREFERRED_ALIGNMENT = 1
+"""The alignment chosen when several reproduce a log (the rig's later logs, protocol v1)."""
+
+
+def fit_alignments(controller, u, theta, a, v, alignments=ALIGNMENTS, skipped=None,
+                   prefer: int | None = PREFERRED_ALIGNMENT) -> tuple[AlignmentFit | None, tuple[int, ...]]:
+    """A controller replayed over a log at each alignment: the best fit, and every alignment
+    at which it reproduces every logged v (to :data:`TOLERANCE`).
+
+    Parameters
+    ----------
+    controller : Compensator or OpenLoop
+    u, theta, a, v : array_like, shape (N,)
+    alignments : sequence of int
+    skipped : array_like of bool, optional
+        The samples the station did not answer (:func:`station.control.rerun.replay_commands`).
+    prefer : int or None
+        The alignment chosen when several reproduce the log (a log whose θ seldom changes
+        between rows cannot tell them apart); None: the first.
+
+    Returns
+    -------
+    (AlignmentFit or None, tuple of int)
+        The preferred reproducing alignment's fit, else the closest (the first on a tie);
+        None when no alignment was tried.
+    """
+    fits = [f for d in alignments if (f := detect_alignment(controller, u, theta, a, v, (d,), skipped)) is not None]
+    if not fits:
+        return None, ()
+    exact = tuple(f.alignment for f in fits if f.max_abs_dv <= TOLERANCE)
+    if len(exact) > 1 and prefer in exact:
+        return next(f for f in fits if f.alignment == prefer), exact
+    return min(fits, key=lambda f: f.max_abs_dv), exact
+
+
+def _check(controller, u, theta, a, v, law: str, alignments, design=None,
+           prefer: int | None = PREFERRED_ALIGNMENT) -> IdentifiedController | None:
+    """``controller`` at its best alignment (:func:`fit_alignments`)."""
+    fit, exact = fit_alignments(controller, u, theta, a, v, alignments, prefer=prefer)
+    return None if fit is None else IdentifiedController(controller, *fit, law, design, exact)  # None: no alignment tried
+
+
+def whole_counts(v) -> bool:
+    """Whether every logged command is a whole DAC count (an integer recursion is possible).
+
+    Parameters
+    ----------
+    v : array_like, shape (N,)
+        The logged commands, DAC counts.
+    """
+    v = np.asarray(v, dtype=float)
+    return bool(v.size) and bool(np.all(v == np.round(v)))
+
+
+def _variants(controller, v):
+    yield controller
+    if isinstance(controller, Compensator) and getattr(controller, "recursion", "none") == "none" and whole_counts(v):
+        for q in STORED:
+            yield with_recursion(controller, q)
+
+
+def variant_of(controller, u, theta, a, v, alignments=ALIGNMENTS, skipped=None,
+               prefer: int | None = PREFERRED_ALIGNMENT):
+    """The variant of ``controller`` that reproduces a log best, its fit and every alignment
+    at which it reproduces the log (:func:`fit_alignments`).
+
+    Parameters
+    ----------
+    controller : Compensator or OpenLoop
+    u, theta, a, v : array_like, shape (N,)
+    alignments : sequence of int
+    skipped : array_like of bool, optional
+    prefer : int or None
+        As :func:`fit_alignments`.
+
+    Returns
+    -------
+    (controller, AlignmentFit or None, tuple of int)
+        The controller itself or, when every logged v is a whole count and it does not
+        reproduce them as it is, a copy with its recursion on the stored integer
+        (:func:`with_recursion`: truncated, then rounded): the first that reproduces every v
+        (to :data:`TOLERANCE`), else the closest; the fit is None without rows.
+    """
+    best = None
+    for candidate in _variants(controller, v):
+        fit, exact = fit_alignments(candidate, u, theta, a, v, alignments, skipped, prefer)
+        if fit is not None and (best is None or fit.max_abs_dv < best[1].max_abs_dv):
+            best = (candidate, fit, exact)
+        if best is not None and best[1].max_abs_dv <= TOLERANCE:
+            break
+    return best if best is not None else (controller, None, ())
+
+
+class LawRows:
+    """The rows of a log as one candidate law sees them: x[k] = Σ b_i e[k-i] − Σ a_j v[k-j]
+    with the logged v as the recursion's history (exact for an integer recursion, whose
+    history is the logged integer; one step ahead for a float one).
+
+    Parameters
+    ----------
+    e, v : numpy.ndarray, shape (N,)
+        The error u[k] − θ[k-d] (0 for k < d) and the logged command, DAC counts.
+    d : int
+        The alignment (rows k >= d are the controller's).
+    order : int
+        0 (P) to :data:`MAX_ORDER`.
+    limit : float
+        The clamp, DAC counts.
+    """
+
+    def __init__(self, e: np.ndarray, v: np.ndarray, d: int, order: int, limit: float):
+        rows = np.arange(d, v.size)
+        lag = lambda x, j: np.where(rows - j >= 0, x[np.maximum(rows - j, 0)], 0.0)  # noqa: E731
+        cols = [lag(e, i) for i in range(order + 1)] + [-lag(v, j) for j in range(1, order + 1)]
+        self.X = np.column_stack(cols)
+        self.v = v[rows]
+        self.order, self.limit = order, float(limit)
+        self.clamped = np.abs(self.v) >= self.limit
+
+    def predict(self, c: np.ndarray, recursion: str) -> np.ndarray:
+        """The commands the law gives, row by row (its history the logged v).
+
+        Parameters
+        ----------
+        c : numpy.ndarray, shape (2·order + 1,)
+            [b_0..b_m, a_1..a_m].
+        recursion : {"none", "trunc", "round"}
+        """
+        x = self.X @ c
+        if recursion == "trunc":
+            x = np.trunc(x)
+        elif recursion == "round":  # halves away from zero, exactly (station.rounding's rule)
+            mag = np.abs(x)
+            whole = np.floor(mag)
+            x = np.copysign(whole + (mag - whole >= 0.5), x)
+        return np.clip(x, -self.limit, self.limit)
+
+    def reproduces(self, c: np.ndarray, recursion: str, slack: float = 0.0) -> bool:
+        """Whether ``c`` gives every logged v: exactly for an integer recursion, to
+        :data:`TOLERANCE` for a float one.
+
+        Parameters
+        ----------
+        c : numpy.ndarray, shape (2·order + 1,)
+            [b_0..b_m, a_1..a_m].
+        recursion : {"none", "trunc", "round"}
+        slack : float
+            > 0: an integer recursion's x may also sit within ``slack`` counts of its
+            interval (where the lab's floating-point arithmetic, not the law, decided which
+            integer it stored).
+        """
+        if recursion != "none" and slack > 0:
+            x = self.X @ c
+            lo, hi = self.bounds(recursion)
+            return bool(np.all((x >= lo - slack) & (x <= hi + slack)))
+        dv = np.abs(self.predict(c, recursion) - self.v)
+        return bool(np.all(dv == 0.0)) if recursion != "none" else bool(np.all(dv <= TOLERANCE))
+
+    def least_squares(self, recursion: str) -> np.ndarray | None:
+        """Coefficients by least squares over the unclamped rows (for a truncated integer,
+        against v + sign(v)/2, the middle of its interval); None with too few rows.
+
+        Parameters
+        ----------
+        recursion : {"none", "trunc", "round"}
+        """
+        keep = ~self.clamped
+        if np.count_nonzero(keep) < 4 * (2 * self.order + 1) or not np.any(self.X[keep]):
+            return None
+        target = self.v[keep]
+        if recursion == "trunc":
+            target = target + 0.5 * np.sign(target)
+        c, *_ = np.linalg.lstsq(self.X[keep], target, rcond=None)
+        return c if np.all(np.isfinite(c)) else None
+
+    def gain_interval(self, num: np.ndarray, den: np.ndarray, recursion: str,
+                      slack: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
+        """The gains K with which laws K·num[i]/den[i] reproduce every row
+        (:data:`station.analysis.continuous_design.GainInterval`).
+
+        Parameters
+        ----------
+        num, den : numpy.ndarray, shape (L, order+1)
+            Unit-gain laws, ascending powers of z⁻¹, ``den[:, 0] = 1``.
+        recursion : {"none", "trunc", "round"}
+        slack : float
+            As :meth:`reproduces`.
+
+        Returns
+        -------
+        lo, hi : numpy.ndarray, shape (L,)
+            lo > hi where no gain does.
+        """
+        m = self.order + 1
+        if recursion == "none":
+            lo = np.where(self.clamped & (self.v > 0), self.limit, self.v - TOLERANCE)
+            hi = np.where(self.clamped & (self.v < 0), -self.limit, self.v + TOLERANCE)
+            lo = np.where(self.clamped & (self.v < 0), -np.inf, lo)
+            hi = np.where(self.clamped & (self.v > 0), np.inf, hi)
+        else:
+            lo, hi = self.bounds(recursion)
+            lo, hi = lo - slack, hi + slack
+        out_lo, out_hi = np.empty(num.shape[0]), np.empty(num.shape[0])
+        for start in range(0, num.shape[0], 256):  # rows x laws at a time: bounded memory
+            a = self.X[:, :m] @ num[start:start + 256].T
+            w = self.X[:, m:] @ den[start:start + 256, 1:].T if m > 1 else np.zeros_like(a)
+            with np.errstate(divide="ignore", invalid="ignore"):
+                k1, k2 = (lo[:, None] - w) / a, (hi[:, None] - w) / a
+            low = np.where(a > 0, k1, np.where(a < 0, k2, -np.inf))
+            high = np.where(a > 0, k2, np.where(a < 0, k1, np.inf))
+            dead = (a == 0) & ((w < lo[:, None]) | (w > hi[:, None]))  # no gain moves such a row
+            low = np.where(np.isnan(low), -np.inf, low)
+            high = np.where(np.isnan(high), np.inf, high)
+            out_lo[start:start + 256] = np.max(low, axis=0)
+            out_hi[start:start + 256] = np.where(np.any(dead, axis=0), -np.inf, np.min(high, axis=0))
+        return out_lo, out_hi
+
+    def bounds(self, recursion: str) -> tuple[np.ndarray, np.ndarray]:
+        """(lo, hi) of x per row for the logged integer: Q(x) = v, or x beyond the clamp.
+
+        Parameters
+        ----------
+        recursion : {"trunc", "round"}
+        """
+        v, lim = self.v, self.limit
+        if recursion == "trunc":
+            lo = np.where(v > 0, v, np.where(v < 0, v - 1.0, -1.0))
+            hi = np.where(v > 0, v + 1.0, np.where(v < 0, v, 1.0))
+            edge = 0.0
+        else:
+            lo, hi = v - 0.5, v + 0.5
+            edge = 0.5
+        lo = np.where(v >= lim, lim - edge, np.where(v <= -lim, -np.inf, lo))
+        hi = np.where(v <= -lim, -lim + edge, np.where(v >= lim, np.inf, hi))
+        return lo, hi
+
+    def integer_fit(self, recursion: str) -> np.ndarray | None:
+        """Coefficients deepest inside the inequalities the logged integers set (a linear
+        program: maximise the margin t with lo + t <= x <= hi - t), None when there are none.
+
+        Parameters
+        ----------
+        recursion : {"trunc", "round"}
+        """
+        from scipy.optimize import linprog  # loaded when an integer recursion is looked for
+
+        guess = self.least_squares(recursion)  # the scale of the coefficients (its bias can be several counts)
+        if guess is None:
+            return None
+        lo, hi = self.bounds(recursion)
+        p = self.X.shape[1]
+        rows_up, rows_lo = np.isfinite(hi), np.isfinite(lo)
+        a_ub = np.vstack([np.column_stack([self.X[rows_up], np.ones(rows_up.sum())]),
+                          np.column_stack([-self.X[rows_lo], np.ones(rows_lo.sum())])])
+        b_ub = np.concatenate([hi[rows_up], -lo[rows_lo]])
+        cost = np.zeros(p + 1)
+        cost[-1] = -1.0
+        bound = 1e3 * max(1.0, float(np.max(np.abs(guess))))
+        res = linprog(cost, A_ub=a_ub, b_ub=b_ub, bounds=[(-bound, bound)] * p + [(None, 0.25)], method="highs")
+        if res.status != 0 or -res.fun <= 1e-9:
+            return None
+        return res.x[:p]
+
+
+def _errors(u: np.ndarray, theta: np.ndarray, d: int) -> np.ndarray:
+    e = np.zeros(u.size)
+    e[d:] = u[d:] - theta[:u.size - d]
+    return e
+
+
+def _law_text(order: int, c: np.ndarray, design: ContinuousDesign | None, dt: float, recursion: str,
+              limit: float, rig_limit: float) -> str:
+    if order == 0:
+        text = f"P, kp = {c[0]:g}"
+    elif design is not None:
+        text = f"{design.text} ({design.method}, {dt:g} s)"
+    else:
+        fmt = lambda x: "[" + ", ".join(f"{y:.8g}" for y in x) + "]"  # noqa: E731
+        text = (f"linear compensator e -> v of order {order}, num {fmt(c[:order + 1])}, "
+                f"den {fmt(np.concatenate(([1.0], c[order + 1:])))} (z^-1)")
+    if recursion != "none":
+        text += f", its recursion on the {STORED[recursion]} integer command"
+    if limit != rig_limit:
+        text += f", clamp ±{limit:g}"
+    return text
+
+
+def _law(rows: LawRows, recursion: str, dt: float) -> tuple[np.ndarray, ContinuousDesign | None] | None:
+    """A law's coefficients (the nicest numbers that still reproduce every row), and its design."""
+    c = rows.least_squares("none") if recursion == "none" else rows.integer_fit(recursion)
+    if c is None or not rows.reproduces(c, recursion):
+        return None
+    order = rows.order
+    if order == 0:  # the gain with the fewest digits among those that reproduce the log
+        lo, hi = rows.gain_interval(np.ones((1, 1)), np.ones((1, 1)), recursion)
+        nice = nicest_between(float(lo[0]), float(hi[0]), 9)
+        if nice is not None and rows.reproduces(np.array([nice[0]]), recursion):
+            return np.array([nice[0]]), None
+        return c, None
+
+    def interval(num, den):
+        return rows.gain_interval(num, den, recursion, BOUNDARY)
+
+    design = recognize(c[:order + 1], np.concatenate(([1.0], c[order + 1:])), dt, interval)
+    if design is None:
+        return c, None
+    num_z, den_z = design.discretize(dt)
+    exact = np.concatenate([num_z, den_z[1:]])
+    # a row on the boundary: our discretization's last bit differs from the lab's; step
+    # towards the law deepest inside the inequalities (convex: every row keeps its side)
+    for step in [0.0] + [10.0 ** -k for k in range(13, 0, -1)]:
+        nudged = exact + step * (c - exact)
+        if rows.reproduces(nudged, recursion):
+            return nudged, design
+    return c, None
+
+
+def infer_controller(u, theta, v, a=None, dt: float = 0.002, rig_limit: float = 200.0,
+                     alignments=(0, 1), prefer: int | None = PREFERRED_ALIGNMENT) -> IdentifiedController | None:
+    """Identify the controller that produced a log's commands from u, θ and v.
+
+    Parameters
+    ----------
+    u, theta, v : array_like, shape (N,)
+        Logged reference (encoder counts), encoder counts and command (DAC counts).
+    a : array_like, shape (N,), optional
+        Accelerometer counts (unused by the laws tried; passed to the replay).
+    dt : float
+        Sample time, s (recorded in the controller's spec; the continuous design's).
+    rig_limit : float
+        The clamp assumed when |v| never exceeds it (the rig's 200 DAC counts); else
+        the DAC's 255 (or max |v|). The log's own clamp is tried too (:func:`_limits`).
+    alignments : sequence of int
+        Computational delays tried, samples.
+    prefer : int or None
+        The alignment chosen when the law reproduces the log at several (:func:`fit_alignments`).
+
+    Returns
+    -------
+    IdentifiedController or None
+        The simplest law (open loop, P, then linear of order 1..3; a float recursion before
+        an integer one) that reproduces every logged v (to :data:`TOLERANCE`; exactly for an
+        integer recursion); None when none does, or the log lacks u, θ or v (NaN) or never
+        commands anything.
+    """
+    u = np.asarray(u, dtype=float)
+    theta = np.asarray(theta, dtype=float)
+    v = np.asarray(v, dtype=float)
+    a = np.zeros_like(v) if a is None else np.asarray(a, dtype=float)
+    if v.size < 8 or not all(np.all(np.isfinite(x)) for x in (u, theta, v)) or not np.any(v):
+        return None
+    a = np.where(np.isfinite(a), a, 0.0)
+
+    if np.array_equal(v, u) or np.array_equal(v[1:], u[1:]) and v[0] == 0:
+        ol = OpenLoop(limit=None)
+        return _check(ol, u, theta, a, v, "open loop, v = u", alignments, prefer=prefer)
+
+    recursions = ("none", *STORED) if whole_counts(v) else ("none",)
+    for order in range(MAX_ORDER + 1):
+        for d in alignments:
+            if d < 0 or np.any(v[:d] != 0):  # nothing was computed before the first sample
+                continue
+            e = _errors(u, theta, d)
+            for limit in _limits(v, rig_limit):
+                rows = LawRows(e, v, d, order, limit)
+                for recursion in recursions:
+                    found = _law(rows, recursion, dt)
+                    if found is None:
+                        continue
+                    c, design = found
+                    kind = "p" if order == 0 else f"linear-{order}"
+                    extra = {"kp": float(c[0])} if order == 0 else {}
+                    if design is not None:
+                        extra["design"] = design.to_json()
+                    name = design.text if design is not None else kind
+                    try:
+                        ctl = _compensator(c[:order + 1], np.concatenate(([1.0], c[order + 1:])), limit, dt, kind,
+                                           extra, recursion, name)
+                    except ValueError:
+                        continue
+                    hit = _check(ctl, u, theta, a, v, _law_text(order, c, design, dt, recursion, limit, rig_limit),
+                                 alignments, design, prefer)
+                    if hit is not None and hit.max_abs_dv <= TOLERANCE:
+                        return hit
+    return None
+
+
+PID_INTEGRALS = {
+    "backward Euler": lambda ki, dt: ([ki * dt, 0.0], [1.0, -1.0]),
+    "forward Euler": lambda ki, dt: ([0.0, ki * dt], [1.0, -1.0]),
+    "Tustin": lambda ki, dt: ([ki * dt / 2, ki * dt / 2], [1.0, -1.0]),
+}
+"""Integral term ki/s discretized three standard ways: (num, den) in z^-1."""
+
+
+def pid_controllers(kp: float, ki: float, kd: float, dt: float = 0.002,
+                    limit: float | None = 200.0) -> list[tuple[str, Compensator]]:
+    """The standard discretizations of a PID law v = kp e + ki ∫e + kd de/dt.
+
+    Parameters
+    ----------
+    kp, ki, kd : float
+        Gains (DAC counts per encoder count, per count·s, per count/s).
+    dt : float
+        Sample time, s.
+    limit : float or None
+        Clamp of v, DAC counts.
+
+    Returns
+    -------
+    list of (str, Compensator)
+        One per integral rule (backward Euler, forward Euler, Tustin; one entry when
+        ki = 0), the derivative always by backward difference kd (1 - z^-1)/dt; the name
+        says which.
+    """
+    deriv = np.array([kd / dt, -kd / dt])
+    out = []
+    rules = PID_INTEGRALS.items() if ki != 0 else [("none", None)]
+    for rule, make in rules:
+        if make is None:
+            num = np.array([kp, 0.0]) + deriv
+            den = np.array([1.0])
+        else:
+            inum, den = make(ki, dt)
+            # common denominator (1 - z^-1): kp (1 - z^-1) + I + kd/dt (1 - z^-1)^2
+            num = np.zeros(3)
+            num[:2] += kp * np.array([1.0, -1.0]) + np.asarray(inum)
+            num += (kd / dt) * np.array([1.0, -2.0, 1.0])
+            den = np.asarray(den)
+        what = ("derivative by backward difference" if make is None
+                else f"integral by {rule}" + (", derivative by backward difference" if kd else ""))
+        extra = {"kp": kp, "ki": ki, "kd": kd, "discretization": what}
+        ctl = _compensator(num, den, limit, dt, "pid", extra)
+        ctl.spec["source"] = "rig header"
+        out.append((what, ctl))
+    return out
+
+
+def match_pid(kp: float, ki: float, kd: float, u, theta, v, a=None, dt: float = 0.002,
+              limit: float | None = 200.0, alignments=(0, 1)) -> tuple[IdentifiedController | None, float]:
+    """The standard PID discretization that reproduces the logged v, if one does.
+
+    Parameters
+    ----------
+    kp, ki, kd : float
+        The header's gains.
+    u, theta, v, a : array_like, shape (N,)
+    dt, limit, alignments
+        As :func:`infer_controller`.
+
+    Returns
+    -------
+    (IdentifiedController or None, float)
+        The first of :func:`pid_controllers` that reproduces v to :data:`TOLERANCE`
+        (None if none does) and the smallest max |dv| seen, DAC counts.
+    """
+    u, theta, v = (np.asarray(x, dtype=float) for x in (u, theta, v))
+    a = np.zeros_like(v) if a is None else np.where(np.isfinite(a), np.asarray(a, dtype=float), 0.0)
+    best_err = float("inf")
+    for what, ctl in pid_controllers(kp, ki, kd, dt, limit):
+        hit = _check(ctl, u, theta, a, v, what, alignments)
+        if hit is None:
+            continue
+        best_err = min(best_err, hit.max_abs_dv)
+        if hit.max_abs_dv <= TOLERANCE:
+            return hit, best_err
+    return None, best_err

@@ -1,0 +1,136 @@
+"""Controller identification as lab software ran it: recursions on the stored integer
+(truncated or rounded), both alignments, the clamp, P with any gain, and the continuous
+design behind a law (Tustin, ZOH, backward Euler) recognised with its round numbers.
+
+The truth comes from code that is not the station's: the blind generator's lab recursion
+(tests/blind/audit.py ``LabController``) and scipy's discretizations."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from scipy.signal import cont2discrete
+
+from station.analysis.continuous_design import METHODS, discretize, nicest_between, to_continuous
+from station.analysis.controller_id import TOLERANCE, infer_controller, with_recursion
+from station.control import make_controller
+from station.control.compensator import Compensator
+from station.control.tf import DiscreteTF
+from tests.blind.audit import LabController
+
+
+def _scipy_law(num_s, den_s, dt, method):
+    """The z-law by scipy (ascending z^-1, den[0] = 1)."""
+    how = {"Tustin": ("bilinear", None), "ZOH": ("zoh", None), "backward Euler": ("gbt", 1.0),
+           "forward Euler": ("gbt", 0.0)}[method]
+    num, den, _ = cont2discrete((num_s, den_s), dt, method=how[0], alpha=how[1])
+    num = np.atleast_1d(np.squeeze(num))
+    num = np.concatenate([np.zeros(len(den) - num.size), num])
+    return num / den[0], np.asarray(den) / den[0]
+
+
+def _closed_loop(step, d, n=2000, seed=0):
+    """u, theta, v of a law closed around a crude integrator plant (rounded θ); the
+    reference a random staircase."""
+    rng = np.random.default_rng(seed)
+    u = np.repeat(rng.integers(-120, 120, n // 100 + 1).astype(float), 100)[:n]
+    theta, v = np.zeros(n), np.zeros(n)
+    for k in range(n):
+        if k >= d:
+            v[k] = step(u[k] - theta[k - d])
+        if k + 1 < n:
+            theta[k + 1] = np.round(theta[k] + 0.02 * v[k] - 0.001 * theta[k])
+    return u, theta, v
+
+
+@pytest.mark.parametrize("method", ["Tustin", "ZOH", "backward Euler"])
+@pytest.mark.parametrize("recursion", ["trunc", "round"])
+@pytest.mark.parametrize("d", [0, 1])
+def test_integer_recursion_reproduced_exactly_and_its_design_recognised(method, recursion, d):
+    num, den = _scipy_law([3.0, 39.0], [1.0, 20.0], 0.002, method)  # 3(s+13)/(s+20)
+    lab = LabController(num, den, 200.0, recursion)
+    u, theta, v = _closed_loop(lab.step, d)
+    assert np.all(v == np.round(v)) and np.max(np.abs(v)) == 200.0  # whole counts, clamped somewhere
+    hit = infer_controller(u, theta, v)
+    assert hit is not None and hit.alignment == d and hit.max_abs_dv == 0.0
+    assert hit.controller.recursion == recursion and hit.recursion == recursion
+    assert hit.design is not None and hit.design.method == method and hit.design.text == "3(s+13)/(s+20)"
+    np.testing.assert_allclose(hit.design.num_s, [3.0, 39.0], rtol=1e-12)
+    np.testing.assert_allclose(hit.design.den_s, [1.0, 20.0], rtol=1e-12)
+    assert "truncated" in hit.law if recursion == "trunc" else "rounded" in hit.law
+
+
+@pytest.mark.parametrize("kp, recursion, d", [(0.5, "trunc", 1), (1.2, "round", 0), (2.5, "trunc", 0), (0.37, "none", 1)])
+def test_p_with_any_gain(kp, recursion, d):
+    lab = LabController([kp], [1.0], 200.0, recursion)
+    u, theta, v = _closed_loop(lab.step, d)
+    hit = infer_controller(u, theta, v)
+    assert hit is not None and hit.controller.spec["kp"] == kp and hit.max_abs_dv == 0.0
+    assert hit.alignment == d or d in hit.alignments
+
+
+def test_the_logs_own_clamp():
+    num, den = _scipy_law([2.5, 42.5], [1.0, 63.0], 0.002, "Tustin")
+    lab = LabController(num, den, 150.0, "none")
+    u, theta, v = _closed_loop(lab.step, 1)
+    assert np.max(np.abs(v)) == 150.0
+    hit = infer_controller(u, theta, v)
+    assert hit is not None and hit.controller.limit == 150.0 and hit.max_abs_dv <= TOLERANCE
+    assert hit.design.text == "2.5(s+17)/(s+63)" and "clamp ±150" in hit.law
+
+
+def test_thesis_lead_recognised_in_hz():
+    lead = make_controller("lead")
+    u, theta, v = _closed_loop(lambda e: lead.step(e, 0.0, 0.0)[0], 1)
+    hit = infer_controller(u, theta, v)
+    assert hit is not None and hit.design is not None and hit.design.text == "20(s+2π·5)/(s+2π·20)"
+    np.testing.assert_allclose(hit.controller.gth.num, lead.gth.num, rtol=1e-12)
+
+
+def test_compensator_recursion_is_the_lab_recursion():
+    num, den = _scipy_law([3.0, 39.0], [1.0, 20.0], 0.002, "Tustin")
+    rng = np.random.default_rng(1)
+    errors = rng.normal(0, 60, 3000)
+    for recursion in ("trunc", "round"):
+        lab = LabController(num, den, 200.0, recursion)
+        comp = Compensator(DiscreteTF(num, den), None, limit=200.0, recursion=recursion)
+        ours = [comp.step(e, 0.0, 0.0)[0] for e in errors]
+        assert ours == [lab.step(e) for e in errors]
+        again = with_recursion(Compensator(DiscreteTF(num, den), None, limit=200.0), recursion)
+        assert [again.step(e, 0.0, 0.0)[0] for e in errors] == ours
+    with pytest.raises(ValueError, match="recursion"):
+        Compensator(DiscreteTF(num, den), recursion="floor")
+
+
+def test_a_law_nobody_typed_is_reproduced_without_a_design():
+    num, den = [2.41234567, -2.31234567], [1.0, -0.9213456]
+    lab = LabController(num, den, 200.0, "none")
+    u, theta, v = _closed_loop(lab.step, 1)
+    hit = infer_controller(u, theta, v)
+    assert hit is not None and hit.design is None and hit.max_abs_dv <= TOLERANCE
+    np.testing.assert_allclose(hit.controller.gth.num, num, rtol=1e-9)
+
+
+@pytest.mark.parametrize("method", METHODS)
+def test_discretize_is_scipys_and_to_continuous_inverts_it(method):
+    rng = np.random.default_rng(7)
+    for _ in range(20):
+        k, z, p = rng.uniform(0.5, 5), rng.uniform(1, 80), rng.uniform(1, 300)
+        num_s, den_s = [k, k * z], [1.0, p]
+        nz, dz = discretize(num_s, den_s, 0.002, method)
+        snz, sdz = _scipy_law(num_s, den_s, 0.002, method)
+        np.testing.assert_allclose(nz, snz, rtol=1e-9, atol=1e-12)
+        np.testing.assert_allclose(dz, sdz, rtol=1e-9, atol=1e-12)
+        back = to_continuous(nz, dz, 0.002, method)
+        np.testing.assert_allclose(back[0], num_s, rtol=1e-6)
+        np.testing.assert_allclose(back[1], den_s, rtol=1e-6)
+
+
+@pytest.mark.parametrize("lo, hi, value, digits", [(2.97, 3.02, 3.0, 1), (12.91, 13.04, 13.0, 2), (-0.52, -0.48, -0.5, 1),
+                                                    (0.999999, 1.000001, 1.0, 1), (31.41, 31.42, 31.42, 4)])
+def test_nicest_between(lo, hi, value, digits):
+    assert nicest_between(lo, hi) == (value, digits)
+    assert nicest_between(hi, lo) is None and nicest_between(math.pi, math.pi + 1e-12) is None
+    assert abs(nicest_between(-1.0, 1.0)[0]) == 1.0  # never a gain of 0
