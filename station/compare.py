@@ -20,6 +20,7 @@ from pathlib import Path
 from station.analysis.metrics import SETTLE_HOLD_S, StepMetrics
 from station.errors import StationError
 from station.logged import LoggedRun
+from station.logged.audit import Audit
 from station.plots import source_label
 
 THESIS_TABLE = {
@@ -63,6 +64,11 @@ class RunComparison:
         The log's columns and the simulation's output (t, u, v, theta, a, theta_d_hat);
         ``prediction`` is None for a hub-held beam test.
     notes : list of str
+    controller_source : str or None
+        Where the controller came from (DESIGN.md "Log audit": "header", "inferred",
+        "inferred (header contradicted)").
+    audit : station.logged.audit.Audit or None
+        The log's claims checked against its data.
     """
 
     file: str
@@ -78,13 +84,16 @@ class RunComparison:
     notes: list = field(default_factory=list)
     source: str = "rig"
     outcome: dict | None = None
+    controller_source: str | None = None
+    audit: Audit | None = field(default=None, repr=False)
 
     def to_json(self) -> dict:
         """JSON-able summary (metrics as {overshoot_pct, settling_time_s} or null). ``rig``
         holds the log's own metrics whatever its ``source`` (rig / simulated / station)."""
         j = lambda m: None if m is None else m.to_json()  # noqa: E731
         return {"file": self.file, "source": self.source, "outcome": self.outcome,
-                "controller": self.controller, "step": self.step, "rig": j(self.rig),
+                "controller": self.controller, "controller_source": self.controller_source,
+                "audit": [] if self.audit is None else self.audit.to_json(), "step": self.step, "rig": j(self.rig),
                 "model": j(self.model), "thesis_experiment": j(self.thesis_experiment),
                 "thesis_fem": j(self.thesis_fem), "fit_pct": dict(self.fit_pct), "notes": list(self.notes)}
 
@@ -126,7 +135,8 @@ def compare_run(path, plant) -> RunComparison:
     if run.held is not None:
         notes.append(f"{run.held_note}; `station replay` analyzes the beam's free vibration after the release")
         return RunComparison(str(path), controller.name, step, run.step_metrics(), None, None, None,
-                             {"theta": None, "accel": None}, data, None, notes, source=source, outcome=log.outcome)
+                             {"theta": None, "accel": None}, data, None, notes, source=source, outcome=log.outcome,
+                             controller_source=run.source, audit=run.audit)
     sim = run.simulate(plant)
     pred, fits = sim.prediction, sim.fit_pct
     notes.append(f"model: driven by {sim.how}")
@@ -139,7 +149,7 @@ def compare_run(path, plant) -> RunComparison:
             (eo, es), (fo, fs) = THESIS_TABLE[controller.name]
             exp, fem = StepMetrics(eo, es), StepMetrics(fo, fs)
     return RunComparison(str(path), controller.name, step, rig, model, exp, fem, fits, data, pred, notes,
-                         source=source, outcome=log.outcome)
+                         source=source, outcome=log.outcome, controller_source=run.source, audit=run.audit)
 
 
 def format_comparison(c: RunComparison) -> str:
@@ -152,8 +162,9 @@ def format_comparison(c: RunComparison) -> str:
     Returns
     -------
     str
-        Rows rig / thesis experiment / thesis FEM / model with overshoot %, settling
-        time s ("> 2 s" / "not settled" for None) and the model's NRMSE fits.
+        First each claim of the log its data contradicted (``NAME: header: ...; data:
+        ...``), then rows rig / thesis experiment / thesis FEM / model with overshoot %,
+        settling time s ("> 2 s" / "not settled" for None) and the model's NRMSE fits.
     """
     def fmt(m: StepMetrics | None) -> str:
         if m is None:
@@ -165,7 +176,8 @@ def format_comparison(c: RunComparison) -> str:
         return "-" if x is None else f"{x:.1f}"
 
     outcome = "" if c.outcome is None else f", outcome {c.outcome.get('reason')}"
-    lines = [f"{Path(c.file).name} ({c.source} log): controller {c.controller}"
+    lines = [] if c.audit is None else [f"{Path(c.file).name}: {line}" for line in c.audit.lines()]
+    lines += [f"{Path(c.file).name} ({c.source} log): controller {c.controller}"
              + ("" if c.step is None else f", step {c.step:g} counts") + outcome,
              f"  {'':<20} {'overshoot %':>12} {'settling s':>12} {'fit θ %':>8} {'fit a %':>8}",
              f"  {c.source + ' (this log)':<20} {fmt(c.rig)}"]

@@ -20,9 +20,15 @@ from station.analysis.beam import BeamTestReport, analyze_beam_test, model_first
 from station.analysis.metrics import StepMetrics
 from station.errors import StationError
 from station.logged import REPRODUCED_TOLERANCE, LoggedRun
+from station.logged.audit import Audit
 from station.logged.reference import Reference
 from station.runlog import RunLog
 
+
+
+SOURCE_WORDS = {"header": "named by the log", "inferred": "inferred from the data",
+                "inferred (header contradicted)": "inferred from the data: the log's header is contradicted"}
+"""How a report words each ``controller_source``."""
 
 
 @dataclass
@@ -55,9 +61,11 @@ class ReplayReport:
         FEM element count of the model that ran (None when none did).
     notes : list of str
         What was assumed or could not be done.
-    controller_source : {"header", "inferred"} or None
+    controller_source : {"header", "inferred", "inferred (header contradicted)"} or None
         Where the replayed controller came from
         (:func:`station.logged.controller.identify_controller`).
+    audit : station.logged.audit.Audit or None
+        Every claim of the log checked against its data (DESIGN.md "Log audit").
     layout : str
         The file's layout (:attr:`station.runlog.RunLog.layout`).
     sample_time : float or None
@@ -92,6 +100,7 @@ class ReplayReport:
     sample_time: float | None = None
     beam_test: BeamTestReport | None = None
     outcome: dict[str, Any] | None = None
+    audit: Audit | None = None
     v_replayed: np.ndarray | None = field(default=None, repr=False)
     prediction: dict[str, np.ndarray] | None = field(default=None, repr=False)
     log: RunLog | None = field(default=None, repr=False)
@@ -106,7 +115,8 @@ class ReplayReport:
         """The report as JSON-able dict (``station replay --json``).
 
         Keys: file, format, layout, sample_time_s, controller, controller_source
-        ("header" | "inferred" | null), controller_spec, alignment, samples, max_abs_dv,
+        ("header" | "inferred" | "inferred (header contradicted)" | null), audit (DESIGN.md
+        "Log audit": [{claim, header, data, verdict, evidence}]), controller_spec, alignment, samples, max_abs_dv,
         reproduced, reference, metrics {overshoot_pct, settling_time_s} (nulls when not a
         closed-loop step), model {fit_pct {theta, accel}, n_elements} or null, beam_test
         {f1_hz, f1_hz_std, zeta1, zeta1_std, f1_model_hz, zeta1_model, ...} or null,
@@ -120,6 +130,7 @@ class ReplayReport:
             "sample_time_s": self.sample_time,
             "controller": self.controller,
             "controller_source": self.controller_source,
+            "audit": [] if self.audit is None else self.audit.to_json(),
             "controller_spec": self.controller_spec,
             "alignment": self.alignment,
             "samples": self.samples,
@@ -187,6 +198,7 @@ def replay(path: str | Path, model=True, n_elements: int | None = None) -> Repla
             report.metrics = run.step_metrics()
     if not len(run):
         report.notes.append("the log has no rows")
+    report.audit = run.audit
     want_model = model is not False and model is not None
     if want_model and run.held is None and len(run):
         run.check_columns(run.model_columns, "simulating it on a model (--no-model: the commands only)")
@@ -240,17 +252,19 @@ def format_report(report: ReplayReport) -> str:
     Returns
     -------
     str
-        Several lines: file, format, sample time, controller and its source, replay
-        verdict with max |dv| (DAC counts) and alignment, reference, overshoot / settling
-        time, NRMSE fits or the beam test, outcome, notes.
+        Several lines: first each claim of the log its data contradicted (``header: ...;
+        data: ...``, DESIGN.md "Log audit"), then file, format, sample time, controller and
+        its source, replay verdict with max |dv| (DAC counts) and alignment, reference,
+        overshoot / settling time, NRMSE fits or the beam test, outcome, notes.
     """
     layout = f" ({report.layout})" if report.layout and report.layout != report.format else ""
     dt = "" if report.sample_time is None else f", sample time {report.sample_time:g} s"
-    lines = [f"{report.file}", f"  format {report.format}{layout}, {report.samples} samples{dt}"]
+    lines = [] if report.audit is None else report.audit.lines()
+    lines += [f"{report.file}", f"  format {report.format}{layout}, {report.samples} samples{dt}"]
     if report.controller is None:
         lines.append("  controller: none replayed (see the notes)")
     else:
-        source = {"header": "named by the log", "inferred": "inferred from the data"}.get(report.controller_source, "")
+        source = SOURCE_WORDS.get(report.controller_source, "")
         lines.append(f"  controller: {report.controller}" + (f" ({source})" if source else ""))
     if report.max_abs_dv is not None:
         verdict = "reproduces" if report.reproduced else "does NOT reproduce"

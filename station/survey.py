@@ -58,7 +58,7 @@ class SurveyRow:
     controller : str
         The replayed controller's name ("" when none).
     controller_source : str
-        "header", "inferred" or "" (none).
+        "header", "inferred", "inferred (header contradicted)" or "" (none).
     alignment : int or None
         Computational delay detected by the replay, samples.
     max_abs_dv : float or None
@@ -75,7 +75,11 @@ class SurveyRow:
         Empty for a usable file, else one line saying why it could not be used, or what
         the file is when it is not a log.
     report : dict or None
-        The replay's JSON (:meth:`station.replay.ReplayReport.to_json`); not a CSV column.
+        The replay's JSON (:meth:`station.replay.ReplayReport.to_json`, its ``audit``
+        included); not a CSV column.
+    contradictions : list of str
+        The log's claims its data contradicted, one line each (DESIGN.md "Log audit"); not a
+        CSV column.
     """
 
     file: str
@@ -97,6 +101,7 @@ class SurveyRow:
     zeta1_model: float | None = None
     reason: str = ""
     report: dict[str, Any] | None = field(default=None, repr=False)
+    contradictions: list[str] = field(default_factory=list, repr=False)
 
     def __post_init__(self) -> None:
         if self.reason and self.status == "ok":
@@ -199,6 +204,7 @@ def survey_one(path: str | Path, model: bool = True) -> SurveyRow:
                          reason=f"replay failed: {type(exc).__name__}: {exc}".splitlines()[0])
     run = rep.run
     row.report = rep.to_json()
+    row.contradictions = [] if rep.audit is None else rep.audit.lines()
     row.format = run.log.layout or run.log.format
     row.rows = len(run)
     row.sample_time_s = run.log.sample_time
@@ -315,7 +321,8 @@ def format_table(rows: Sequence[SurveyRow], root: str | Path | None = None) -> s
     Returns
     -------
     str
-        Columns: file, format, rows, dt (s), controller (name and h = named by the
+        First each log's claims its data contradicted (``FILE: header: ...; data: ...``), then
+        columns: file, format, rows, dt (s), controller (name and h = named by the
         header / i = inferred), d (alignment), max|dv| (DAC counts), overshoot (%),
         settling (s), fit θ / a (%) or, for beam tests, f1 (Hz) and ζ1 with the model's;
         an unusable file shows its reason instead. Files that are not logs are counted
@@ -323,6 +330,7 @@ def format_table(rows: Sequence[SurveyRow], root: str | Path | None = None) -> s
     """
     head = ["file", "format", "rows", "dt s", "controller", "d", "max|dv|", "OS %", "Ts s", "model / beam test"]
     lines = []
+    first = []  # the audit's contradictions, said before the table
     others: dict[str, int] = {}
     for r in rows:
         if r.status == "not a log":
@@ -334,10 +342,12 @@ def format_table(rows: Sequence[SurveyRow], root: str | Path | None = None) -> s
                 name = str(Path(r.file).relative_to(root))
             except ValueError:
                 pass
+        first += [f"{name}: {line}" for line in r.contradictions]
         if not r.usable:
             lines.append([name, "-", "-", "-", "-", "-", "-", "-", "-", f"UNUSABLE: {r.reason}"])
             continue
-        src = {"header": "", "inferred": " (inferred)"}.get(r.controller_source, "")
+        src = {"header": "", "inferred": " (inferred)",
+               "inferred (header contradicted)": " (inferred; header contradicted)"}.get(r.controller_source, "")
         ctl = (r.controller + src) if r.controller else "none"
         if r.f1_hz is not None or r.zeta1 is not None or r.f1_model_hz is not None:
             last = (f"beam: f1 {_cell(r.f1_hz, '.3f')} Hz, zeta {_cell(r.zeta1, '.4f')} "
@@ -353,7 +363,7 @@ def format_table(rows: Sequence[SurveyRow], root: str | Path | None = None) -> s
               for i in range(len(head) - 1)]
     fmt_line = lambda cells: "  ".join(c.ljust(w) for c, w in zip(cells, widths)) + "  " + cells[-1]  # noqa: E731
     used, bad = sum(r.usable for r in rows), sum(r.status == "unusable" for r in rows)
-    out = [fmt_line(head), fmt_line(["-" * w for w in widths] + ["-" * 17])]
+    out = first + [fmt_line(head), fmt_line(["-" * w for w in widths] + ["-" * 17])]
     out += [fmt_line(line) for line in lines]
     summary = f"{len(rows)} files: {used} replayed, {bad} unusable"
     if others:

@@ -1,12 +1,16 @@
-"""Which controller ran a logged run: named by its header, matched, or inferred from the data.
+"""Which controller ran a logged run: named by its header and confirmed by its data, matched,
+or inferred from the data (when the header names none, or what it names does not reproduce
+the logged commands).
 
 Our logs record the controller's spec; the rig's headers print P gains, PID gains or the
 compensators' z coefficients to 8 decimals. When those equal the Tustin coefficients of
 the known continuous designs to the printed digits, the unrounded designs are used
 (DESIGN.md: the printed Ga alone replays the accelerometer run only to 0.03 counts). A
 PID header is matched against the standard discretizations, and a log that names no
-controller gets one identified from u, θ and v (:mod:`station.analysis.identify`),
-accepted only when it reproduces every logged v.
+controller gets one identified from u, θ and v (:mod:`station.analysis.controller_id`),
+accepted only when it reproduces every logged v. A named controller is replayed over the
+log first: the audit's controller row (DESIGN.md "Log audit") says whether the data confirm
+or contradict it, and a contradicted header gives way to the data's law.
 """
 
 from __future__ import annotations
@@ -15,10 +19,19 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
-from station.analysis.identify import infer_controller, match_pid
+from station.analysis.controller_id import (
+    PREFERRED_ALIGNMENT,
+    STORED,
+    TOLERANCE,
+    infer_controller,
+    match_pid,
+    variant_of,
+)
 from station.control import Compensator, DiscreteTF, OpenLoop, controller_from_spec, lead_controller, p_controller
 from station.control.designs import MAX_ORDER, z_problem
+from station.control.rerun import ALIGNMENTS, AlignmentFit, is_closed_loop
 from station.errors import StationError
+from station.logged.audit import AuditClaim
 from station.runlog import RIG_DT, RunLog  # RIG_DT: the rig's sample time, its compensators ran at it
 
 RIG_LIMIT = 200.0
@@ -108,27 +121,81 @@ def rig_controller(meta: dict[str, Any], dt: float = 0.002) -> tuple[Compensator
 
 
 class ControllerId(NamedTuple):
-    """Which controller ran a log and where that came from (:func:`identify_controller`).
+    """Which controller ran a log, where that came from, and its audit (:func:`identify_controller`).
 
     Attributes
     ----------
     controller : Compensator, OpenLoop or None
         None when no controller is known: commands not replayed, the model driven by the
         logged v.
-    source : {"header", "inferred"} or None
+    source : {"header", "inferred", "inferred (header contradicted)"} or None
         "header": named by the log (including a PID header matched to a standard
-        discretization); "inferred": identified from the data.
+        discretization); "inferred": identified from the data, the log naming none;
+        "inferred (header contradicted)": the log's named controller does not reproduce its
+        commands and the data's law does.
     notes : list of str
         One line each on what was assumed or could not be done.
+    fit : AlignmentFit or None
+        The controller replayed over the log at its best alignment (None when not replayed).
+    claim : AuditClaim or None
+        The controller's audit row (None for a log without rows).
+    alignments : tuple of int
+        Every alignment at which the controller reproduces the logged v (more than one: the
+        data cannot tell them apart; ``fit`` holds the preferred).
     """
 
     controller: Compensator | OpenLoop | None
     source: str | None
     notes: list[str]
+    fit: AlignmentFit | None = None
+    claim: AuditClaim | None = None
+    alignments: tuple[int, ...] = ()
+
+
+def describe_controller(controller) -> str:
+    """A controller in a few words, for the audit: "open loop", "P, kp = 2", "lead Gth
+    (the thesis's)", "3(s+13)/(s+20) (Tustin, 0.002 s)", with its integer recursion.
+
+    Parameters
+    ----------
+    controller : Compensator, OpenLoop or None
+    """
+    if controller is None:
+        return "none"
+    if not is_closed_loop(controller):
+        return "open loop"
+    spec = getattr(controller, "spec", None) or {}
+    name = getattr(controller, "name", "") or spec.get("kind", "")
+    design = spec.get("design")
+    if spec.get("kind") == "p" and isinstance(spec.get("kp"), (int, float)):
+        text = f"P, kp = {spec['kp']:g}"
+    elif isinstance(design, dict) and design.get("text"):
+        text = f"{design['text']} ({design.get('method', '?')}, {spec.get('dt', RIG_DT):g} s)"
+    elif name in ("lead", "lead-accel"):
+        text = "lead Gth (the thesis's 20(s+2π·5)/(s+2π·20))" + (" with accelerometer feedback Ga"
+                                                                 if name == "lead-accel" else "")
+    elif spec.get("kind") == "pid":
+        text = (f"PID kp = {spec.get('kp', 0):g}, ki = {spec.get('ki', 0):g}, kd = {spec.get('kd', 0):g} "
+                f"({spec.get('discretization', '?')})")
+    else:
+        fmt = lambda c: "[" + ", ".join(f"{x:.8g}" for x in c) + "]"  # noqa: E731
+        gth = controller.gth
+        text = f"{name}: Gth num {fmt(gth.num)}, den {fmt(gth.den)} (z^-1)"
+        if getattr(controller, "ga", None) is not None:
+            text += f", Ga num {fmt(controller.ga.num)}, den {fmt(controller.ga.den)}"
+    recursion = getattr(controller, "recursion", "none")
+    if recursion != "none":
+        text += f", its recursion on the {STORED[recursion]} integer command"
+    return text
+
+
+def _how_close(dv: float) -> str:
+    return "exactly" if dv == 0 else f"to {dv:.2g} counts"
 
 
 def log_controller(log: RunLog) -> tuple[Compensator | OpenLoop | None, list[str]]:
-    """The controller that ran a log: named by its header, else identified from the data.
+    """The controller that ran a log: named by its header and confirmed by its data, else
+    identified from the data.
 
     Parameters
     ----------
@@ -153,20 +220,29 @@ def log_controller(log: RunLog) -> tuple[Compensator | OpenLoop | None, list[str
     return cid.controller, cid.notes
 
 
-def identify_controller(log: RunLog) -> ControllerId:
-    """The controller that ran a log, and whether the header named it or the data did.
+def identify_controller(log: RunLog, skipped=None) -> ControllerId:
+    """The controller that ran a log, whether the header named it or the data did, and the
+    audit of the header's claim.
 
-    Order: the header's controller; a PID header with ki or kd != 0 matched against the
-    standard discretizations (:func:`station.analysis.identify.match_pid`); else a law
-    identified from u, θ and v (:func:`station.analysis.identify.infer_controller`:
-    open loop, P, linear e -> v up to order 3), accepted only when it reproduces every
-    logged v to 1e-6 DAC counts. A rig log sampled at another rate than the rig's
-    0.002 s cannot be replayed with a closed-loop controller (the rows it ran on are
+    The header's controller (a PID header with ki or kd != 0 matched against the standard
+    discretizations, :func:`station.analysis.controller_id.match_pid`) is replayed over the
+    log (:func:`station.analysis.controller_id.variant_of`: as it is, or with its recursion on
+    the stored integer when every logged v is a whole count). It is confirmed when it
+    reproduces every logged v (to 1e-6 DAC counts; exactly for an integer recursion). When it
+    does not, or the log names none, a law is identified from u, θ and v
+    (:func:`station.analysis.controller_id.infer_controller`: open loop, P, linear e -> v up
+    to order 3, float or integer recursion, both alignments, the clamp) and, when one
+    reproduces every v, it is used: "inferred", or "inferred (header contradicted)". A
+    header law that misses by a count or more with no law found is contradicted but kept;
+    one that misses by less stays unchecked. A rig log sampled at another rate than the
+    rig's 0.002 s cannot be replayed with a closed-loop controller (the rows it ran on are
     missing): one note says so and the model is driven by the logged v.
 
     Parameters
     ----------
     log : RunLog
+    skipped : array_like of bool, optional
+        Rows whose sample the station did not answer (:attr:`station.logged.LoggedRun.skipped`).
 
     Returns
     -------
@@ -179,46 +255,96 @@ def identify_controller(log: RunLog) -> ControllerId:
     """
     custom = _custom_controller(log)
     if custom is not None:  # a Python controller of the user's: its law is not in the log
-        return ControllerId(None, None, [f"the log's controller is a custom Python controller ({custom}): its "
-                                         f"commands cannot be replayed; the model is driven by the logged v"])
+        note = (f"the log's controller is a custom Python controller ({custom}): its commands cannot be "
+                f"replayed; the model is driven by the logged v")
+        return ControllerId(None, None, [note], None, AuditClaim(
+            "controller", f"custom Python controller {custom}", "not replayable", "unchecked", note))
     controller, notes = _named_controller(log)
     dt = log.dt
     data = log.data
     u, theta, v, a = data["u"], data["theta"], data["v"], data["a"]
+    a = np.where(np.isfinite(a), a, 0.0)
+    pid = _header_pid(log)
+    stated_d = log.meta.get("alignment") if log.format == "station" else None
+    prefer = stated_d if isinstance(stated_d, int) and not isinstance(stated_d, bool) else PREFERRED_ALIGNMENT
+    said = (describe_controller(controller) if controller is not None else
+            f"PID kp = {pid[0]:g}, ki = {pid[1]:g}, kd = {pid[2]:g}" if pid is not None else "not stated")
     if log.format == "rig" and abs(dt - RIG_DT) > 1e-9 and not isinstance(controller, OpenLoop):
         notes.append(f"sampled at {dt:g} s, not the rig's {RIG_DT:g} s: closed-loop commands cannot be "
                      f"replayed or inferred (the rig's controllers ran at {RIG_DT:g} s, on rows this log "
                      f"lacks); the model is driven by the logged v at {dt:g} s")
-        return ControllerId(None, None, notes)
-    if controller is not None:
-        return ControllerId(controller, "header", notes)
-    missing = [name for name in ("u", "theta", "v") if not np.all(np.isfinite(data[name]))]
-    pid = _header_pid(log)
-    if pid is not None and not missing:
+        return ControllerId(None, None, notes, None, AuditClaim("controller", said, "not replayable", "unchecked",
+                                                                notes[-1]))
+    missing = [name for name in ("u", "v") + (("theta",) if is_closed_loop(controller) or controller is None
+                                              else ()) if not np.all(np.isfinite(data[name]))]
+    header_dv = None
+    if pid is not None and controller is None and not missing:
         hit, best = match_pid(*pid, u, theta, v, a, dt, RIG_LIMIT)
         gains = f"kp = {pid[0]:g}, ki = {pid[1]:g}, kd = {pid[2]:g}"
         if hit is not None:
             notes.append(f"PID header ({gains}) replayed with the {hit.law}")
-            return ControllerId(hit.controller, "header", notes)
-        notes.append(f"PID header ({gains}): no standard discretization (integral by backward Euler, "
-                     f"forward Euler or Tustin; derivative by backward difference) reproduces the logged v "
-                     f"(best max |dv| = {best:.3g} counts)")
-    elif pid is not None:
+            controller = hit.controller
+        else:
+            header_dv = best
+            notes.append(f"PID header ({gains}): no standard discretization (integral by backward Euler, "
+                         f"forward Euler or Tustin; derivative by backward difference) reproduces the logged v "
+                         f"(best max |dv| = {best:.3g} counts)")
+    elif pid is not None and missing:
         notes.append(f"PID header, but the log has no usable {', '.join(missing)}: commands not replayed")
+    if controller is not None:
+        if missing:  # LoggedRun.replayed names the column
+            return ControllerId(controller, "header", notes, None, AuditClaim(
+                "controller", said, "not replayable", "unchecked", f"the log has no usable {', '.join(missing)}"))
+        used, fit, exact = variant_of(controller, u, theta, a, v, ALIGNMENTS, skipped, prefer)
+        if fit.max_abs_dv <= TOLERANCE:
+            at = f" at alignment {fit.alignment}" if is_closed_loop(used) else ""
+            if used is not controller:
+                notes.append(f"the header's controller reproduces the logged v with its recursion on the "
+                             f"{STORED[used.recursion]} integer command (the lab's software stored it)")
+            return ControllerId(used, "header", notes, fit, AuditClaim(
+                "controller", said, describe_controller(used) + at, "confirmed",
+                f"replays every logged v {_how_close(fit.max_abs_dv)}{at}"), exact)
+        header_dv = fit.max_abs_dv
     if missing:
-        if pid is None:
+        if pid is None and controller is None:
             notes.append(f"the log names no controller and has no usable {', '.join(missing)} column to "
                          f"infer one from: commands not replayed, model driven by the logged v")
-        return ControllerId(None, None, notes)
-    hit = infer_controller(u, theta, v, a, dt, RIG_LIMIT)
+        return ControllerId(None, None, notes, None, AuditClaim(
+            "controller", said, "not replayable", "unchecked", f"the log has no usable {', '.join(missing)}"))
+    hit = infer_controller(u, theta, v, a, dt, RIG_LIMIT, prefer=prefer)
+    stated = controller is not None or pid is not None
     if hit is not None:
+        fit = AlignmentFit(hit.alignment, hit.max_abs_dv, hit.v_replayed)
+        at = f" at alignment {hit.alignment}" if is_closed_loop(hit.controller) else ""
+        data_says = f"{hit.law}{at}, reproduces every logged v {_how_close(hit.max_abs_dv)}"
+        if stated:
+            notes.append(f"the header's controller ({said}) does not reproduce the logged v (max |dv| = "
+                         f"{header_dv:.3g} counts); the data's is used: {data_says}")
+            return ControllerId(hit.controller, "inferred (header contradicted)", notes, fit, AuditClaim(
+                "controller", said, data_says, "contradicted",
+                f"the header's controller replays v to max |dv| = {header_dv:.3g} counts at best; the data's law "
+                f"reproduces every logged v {_how_close(hit.max_abs_dv)}{at}"), hit.alignments)
         notes.append(f"controller inferred from the data: {hit.law}, alignment {hit.alignment} "
-                     f"(reproduces the logged v to {hit.max_abs_dv:.2g} counts)")
-        return ControllerId(hit.controller, "inferred", notes)
-    if pid is None:
-        notes.append("the log names no controller and none could be inferred from the data (open loop, "
-                     "P, linear e -> v up to order 3): commands not replayed, model driven by the logged v")
-    return ControllerId(None, None, notes)
+                     f"(reproduces the logged v {_how_close(hit.max_abs_dv)})")
+        return ControllerId(hit.controller, "inferred", notes, fit, AuditClaim(
+            "controller", said, data_says, "unchecked", "the log names no controller; inferred from the data"),
+            hit.alignments)
+    tried = ("open loop, P, linear e -> v up to order 3, on the float or the stored integer command, "
+             "alignments 0 and 1")
+    if not stated:
+        notes.append(f"the log names no controller and none could be inferred from the data ({tried}): "
+                     f"commands not replayed, model driven by the logged v")
+        return ControllerId(None, None, notes, None, AuditClaim(
+            "controller", said, "no law found", "unchecked", f"none reproduces the logged v ({tried})"))
+    verdict = "contradicted" if header_dv >= 1.0 else "unchecked"
+    evidence = (f"the header's controller replays v to max |dv| = {header_dv:.3g} counts at best, and no law "
+                f"tried ({tried}) reproduces it")
+    if verdict == "contradicted":
+        notes.append(f"{evidence}: the header's controller is used, but the data contradict it")
+    return ControllerId(controller, "header" if controller is not None else None, notes,
+                        None if controller is None else fit, AuditClaim(
+                            "controller", said, f"not this law (max |dv| = {header_dv:.3g} counts); no law found",
+                            verdict, evidence))
 
 
 def _header_pid(log: RunLog) -> tuple[float, float, float] | None:

@@ -11,7 +11,8 @@ from station.analysis.beam import HELD_MIN_V, HubHeld, hub_held
 from station.analysis.metrics import StepMetrics, step_metrics
 from station.control.rerun import AlignmentFit, detect_alignment, is_closed_loop
 from station.errors import StationError
-from station.logged.controller import ControllerId, identify_controller
+from station.logged.audit import Audit, TimeBase, alignment_claim, file_kp_claims, reference_claims, time_base
+from station.logged.controller import ControllerId, describe_controller, identify_controller
 from station.logged.simulate import ModelRun, compared_theta, simulate_log
 from station.logged.reference import Reference, classify_reference
 from station.runlog import SKIPPED, RunLog, read_log
@@ -29,7 +30,11 @@ class LoggedRun:
 
     Each question is answered once, when first asked (the controller identification and
     the alignment search replay the whole log), from the definitions of DESIGN.md "Timing
-    and log rows" and "Compensators".
+    and log rows" and "Compensators". Every claim the log makes is checked against its
+    data first (DESIGN.md "Log audit", :attr:`audit`), and where the data contradict it
+    their answer is what this class gives: the columns' units and the sample time
+    (:func:`station.logged.audit.time_base`), the controller, whether it was closed loop
+    and its alignment (:func:`station.logged.controller.identify_controller`).
 
     Parameters
     ----------
@@ -39,11 +44,16 @@ class LoggedRun:
     Attributes
     ----------
     log : RunLog
-        The log.
+        The log as its data say it is: ``raw_log`` itself, or a copy with t in s and θ in
+        encoder counts when the audit found them in other units.
+    raw_log : RunLog
+        The log as read.
     """
 
     def __init__(self, log: RunLog):
-        self.log = log
+        self.raw_log = log
+        self._time_base: TimeBase = time_base(log)
+        self.log = self._time_base.log
 
     @classmethod
     def from_path(cls, path: str | Path) -> LoggedRun:
@@ -81,7 +91,7 @@ class LoggedRun:
 
     @cached_property
     def identified(self) -> ControllerId:
-        """Which controller ran the log and where that came from
+        """Which controller ran the log, where that came from and its audit row
         (:func:`station.logged.controller.identify_controller`; none for a log without rows).
 
         Raises
@@ -89,7 +99,38 @@ class LoggedRun:
         StationError
             Our header's controller spec is malformed, or a rig header's gain is not a number.
         """
-        return identify_controller(self.log) if len(self) else ControllerId(None, None, [])
+        return identify_controller(self.log, self.skipped) if len(self) else ControllerId(None, None, [])
+
+    @cached_property
+    def audit(self) -> Audit:
+        """Every claim of the log checked against its data (DESIGN.md "Log audit"):
+        controller, alignment, reference, sample time, columns; and where the controller
+        came from. ``audit.lines()`` are the contradictions, one line each, to say first.
+
+        Raises
+        ------
+        StationError
+            As :attr:`identified`, or the log lacks a column replaying its controller needs.
+        """
+        cid = self.identified
+        claims = [] if cid.claim is None else [cid.claim]
+        if len(self):
+            spec = getattr(self.controller, "spec", None) or {}
+            kp = spec.get("kp") if spec.get("kind") == "p" else None
+            claims += file_kp_claims(self.log.path, describe_controller(self.controller), kp)
+        if self.closed and self.replayed is not None:
+            row = alignment_claim(self.header_alignment, self.alignment, self.reproduced, self.log.format,
+                                  cid.alignments)
+            if row is not None:
+                claims.append(row)
+        claims += reference_claims(self.log, self.reference)
+        claims += self._time_base.claims
+        return Audit(tuple(claims), cid.source)
+
+    @property
+    def audit_lines(self) -> list[str]:
+        """The contradicted claims, one line each (``header: ...; data: ...``), to say before anything else."""
+        return self.audit.lines()
 
     @property
     def controller(self):
@@ -98,7 +139,8 @@ class LoggedRun:
 
     @property
     def source(self) -> str | None:
-        """Where the controller came from: "header", "inferred" or None."""
+        """Where the controller came from: "header", "inferred", "inferred (header
+        contradicted)" or None (DESIGN.md's ``controller_source``)."""
         return self.identified.source
 
     @property
@@ -182,6 +224,8 @@ class LoggedRun:
         if self.controller is None or not len(self):
             return None
         self.check_columns(self.replay_columns, f"replaying its controller ({self.controller.name})")
+        if self.identified.fit is not None:  # replayed when the audit checked it
+            return self.identified.fit
         d = self.data
         return detect_alignment(self.controller, d["u"], d["theta"], d["a"], d["v"], skipped=self.skipped)
 

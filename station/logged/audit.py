@@ -1,0 +1,391 @@
+"""The log audit: every claim a log makes, checked against its data before it is used.
+
+DESIGN.md "Log audit": a log claims a controller (its header, or its file name's kp), an
+alignment (our header), a reference (a step amplitude or a final u its file name or header
+states, a run length), a sample time (our header's dt, the rig's 0.002 s) and the units of
+its columns (t in s, θ in encoder counts). Each claim becomes an :class:`AuditClaim` with
+what the header says, what the data say, a verdict ("confirmed", "contradicted", "unchecked"
+when the log states nothing the data could check or the data cannot decide) and the
+evidence in numbers; an :class:`Audit` holds them and where the controller came from.
+A contradicted claim is said in one line before anything else (:meth:`Audit.lines`), and
+the data's answer is what :class:`station.logged.LoggedRun` uses.
+
+This module checks the claims that need no controller (:func:`reference_claims`,
+:func:`time_base`, :func:`alignment_claim`); the controller's claim is
+:func:`station.logged.controller.identify_controller`'s, since only replaying a law over
+the log decides it.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import re
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from station.runlog import RIG_DT, RunLog
+
+CLAIMS = ("controller", "alignment", "reference", "sample_time", "columns")
+"""What a log can claim (DESIGN.md "Log audit")."""
+
+VERDICTS = ("confirmed", "contradicted", "unchecked")
+"""An audit's verdicts: the data agree, the data say otherwise, nothing the data could decide."""
+
+SOURCES = ("header", "inferred", "inferred (header contradicted)")
+"""Where a log's controller came from (``controller_source``; None: no controller)."""
+
+ENCODER_COUNTS = 1024
+"""Encoder counts per revolution (DESIGN.md "The rig")."""
+
+THETA_UNITS = {"radians": 2.0 * math.pi / ENCODER_COUNTS, "degrees": 360.0 / ENCODER_COUNTS}
+"""θ columns in another unit than counts, by one encoder count in that unit."""
+
+QUANTUM_TOLERANCE = 1e-3
+"""How far (in counts) a θ value may sit from a whole count of a unit and still be one
+(values printed to a few decimals)."""
+
+
+@dataclass(frozen=True)
+class AuditClaim:
+    """One claim of a log, checked against its data.
+
+    Attributes
+    ----------
+    claim : str
+        One of :data:`CLAIMS`.
+    header : str
+        What the log says (its header or file name; "not stated" when it says nothing).
+    data : str
+        What its data say.
+    verdict : str
+        One of :data:`VERDICTS`.
+    evidence : str
+        Words with numbers.
+    """
+
+    claim: str
+    header: str
+    data: str
+    verdict: str
+    evidence: str
+
+    def __post_init__(self) -> None:
+        if self.claim not in CLAIMS or self.verdict not in VERDICTS:
+            raise ValueError(f"claim {self.claim!r} / verdict {self.verdict!r}: expected one of {CLAIMS} / {VERDICTS}")
+
+    @property
+    def line(self) -> str:
+        """The one line a contradiction is said in: ``header: ...; data: ...``."""
+        return f"header: {self.header}; data: {self.data}"
+
+    def to_json(self) -> dict[str, str]:
+        """``{"claim", "header", "data", "verdict", "evidence"}``."""
+        return dataclasses.asdict(self)
+
+
+@dataclass(frozen=True)
+class Audit:
+    """A log's claims checked against its data (:attr:`station.logged.LoggedRun.audit`).
+
+    Attributes
+    ----------
+    claims : tuple of AuditClaim
+        Controller first, then alignment, reference, sample time and columns.
+    controller_source : str or None
+        One of :data:`SOURCES`; None when no controller is known.
+    """
+
+    claims: tuple[AuditClaim, ...]
+    controller_source: str | None
+
+    @property
+    def contradicted(self) -> tuple[AuditClaim, ...]:
+        """The claims the data contradicted, in order."""
+        return tuple(c for c in self.claims if c.verdict == "contradicted")
+
+    def lines(self) -> list[str]:
+        """One line per contradicted claim, e.g. ``"header: open loop; data: a lead
+        3(s+13)/(s+20) ... at alignment 0, reproduces every logged v exactly"``."""
+        return [c.line for c in self.contradicted]
+
+    def to_json(self) -> list[dict[str, str]]:
+        """DESIGN.md's ``"audit"`` list."""
+        return [c.to_json() for c in self.claims]
+
+
+# --- the file name's claims --------------------------------------------------------------
+
+_NUMBER = r"(-?\d+(?:\.\d+)?)"
+_FILE_CLAIMS = {
+    "amp": re.compile(r"(?:^|_)amp[_=]" + _NUMBER + r"(?=_|$)"),
+    "kp": re.compile(r"(?:^|_)kp[_=]" + _NUMBER + r"(?=_|$)"),
+    "uend": re.compile(r"(?:^|_)uend=" + _NUMBER + r"(?=_|$)"),
+    "stopn": re.compile(r"(?:^|_)stopn=" + _NUMBER + r"(?=_|$)"),
+}
+
+
+def file_name_claims(path: str | Path) -> dict[str, list[float]]:
+    """What a lab's file name states, by the rig's naming (``..._kp_2_...``, ``amp=100``,
+    ``uend=77``, ``stopn=20000``).
+
+    Parameters
+    ----------
+    path : str or Path
+        The log's path (its stem is read).
+
+    Returns
+    -------
+    dict
+        "amp" (reference amplitude, counts), "kp" (P gain), "uend" (the last u), "stopn" (the
+        run's samples) -> the distinct values stated, in order; absent keys are not stated.
+    """
+    stem = Path(path).name
+    stem = stem[:-4] if stem.lower().endswith(".txt") else stem
+    out: dict[str, list[float]] = {}
+    for key, pattern in _FILE_CLAIMS.items():
+        values = list(dict.fromkeys(float(m.group(1)) for m in pattern.finditer(stem)))
+        if values:
+            out[key] = values
+    return out
+
+
+# --- the reference -----------------------------------------------------------------------
+
+def reference_claims(log: RunLog, reference) -> list[AuditClaim]:
+    """The reference's claims (a step or sine amplitude, the final u, the run's length) against u.
+
+    Parameters
+    ----------
+    log : RunLog
+    reference : station.logged.reference.Reference
+        What u is (:func:`station.logged.reference.classify_reference`).
+
+    Returns
+    -------
+    list of AuditClaim
+        One per claim the file name or our header makes ([] when none).
+    """
+    u = np.asarray(log.data["u"], dtype=float)
+    if not u.size or not np.all(np.isfinite(u)):
+        return []
+    out = []
+    stated = file_name_claims(log.path)
+    meta_ref = log.meta.get("reference") if log.format == "station" else None
+    amps = [("file name", a) for a in stated.get("amp", [])]
+    if isinstance(meta_ref, dict) and isinstance(meta_ref.get("amplitude"), (int, float)):
+        amps.append((f"{meta_ref.get('kind', 'reference')} of the header", float(meta_ref["amplitude"])))
+    peak = float(np.max(np.abs(u)))
+    for where, amp in amps:
+        if reference.is_step:
+            ok = reference.amplitude == amp
+            data = f"a step of {reference.amplitude:g} at tick {reference.step_tick}"
+        else:  # a sine or pulse: its peak (a truncated sine's is up to one count lower)
+            ok = abs(amp) - 1.0 - 0.03 * abs(amp) <= peak <= abs(amp) * (1 + 1e-9)
+            data = f"{reference.kind} reference, max |u| = {peak:g}"
+        out.append(AuditClaim("reference", f"{where}: amplitude {amp:g}", data,
+                              "confirmed" if ok else "contradicted",
+                              f"u {'matches' if ok else 'does not match'} the stated amplitude {amp:g} "
+                              f"(max |u| = {peak:g}, last u = {u[-1]:g})"))
+    if isinstance(meta_ref, dict) and reference.is_step and isinstance(meta_ref.get("step_tick"), int):
+        tick = meta_ref["step_tick"]
+        ok = tick == reference.step_tick
+        out.append(AuditClaim("reference", f"header: step at tick {tick}", f"step at tick {reference.step_tick}",
+                              "confirmed" if ok else "contradicted", f"u first reaches its final value at tick "
+                              f"{reference.step_tick}"))
+    for uend in stated.get("uend", []):
+        ok = u[-1] == uend
+        out.append(AuditClaim("reference", f"file name: last u = {uend:g}", f"last u = {u[-1]:g}",
+                              "confirmed" if ok else "contradicted", f"u[{u.size - 1}] = {u[-1]:g}"))
+    for stopn in stated.get("stopn", []):
+        ok = u.size == stopn
+        out.append(AuditClaim("reference", f"file name: {stopn:g} samples", f"{u.size} samples",
+                              "confirmed" if ok else "contradicted", f"the log holds {u.size} rows"))
+    return out
+
+
+def file_kp_claims(path: str | Path, controller_text: str, kp: float | None) -> list[AuditClaim]:
+    """The P gain a lab's file name states (``..._kp_2_...``, ``kp=1.0``) against the
+    controller the data confirmed or gave.
+
+    Parameters
+    ----------
+    path : str or Path
+    controller_text : str
+        The controller used, in words (:func:`station.logged.controller.describe_controller`).
+    kp : float or None
+        Its gain when it is a P law, else None.
+
+    Returns
+    -------
+    list of AuditClaim
+        One per distinct kp the name states ([] when none).
+    """
+    out = []
+    for value in file_name_claims(path).get("kp", []):
+        ok = kp is not None and kp == value
+        out.append(AuditClaim("controller", f"file name: kp = {value:g}", controller_text,
+                              "confirmed" if ok else "contradicted",
+                              f"the controller that reproduces the logged v is {controller_text}"))
+    return out
+
+
+# --- time base and units -----------------------------------------------------------------
+
+@dataclass(frozen=True)
+class TimeBase:
+    """The sample-time and column-unit claims of a log and the log its data say it is
+    (:func:`time_base`).
+
+    Attributes
+    ----------
+    claims : tuple of AuditClaim
+    log : RunLog
+        The log itself when every claim holds or is unchecked; else a copy with the data's
+        answer (t in s, θ and u in encoder counts, the header's dt replaced) and a note.
+    """
+
+    claims: tuple[AuditClaim, ...]
+    log: RunLog
+
+
+def _quantum_fits(x: np.ndarray, quantum: float) -> bool:
+    q = x / quantum
+    return bool(np.all(np.abs(q - np.round(q)) <= QUANTUM_TOLERANCE))
+
+
+def _whole(x: np.ndarray) -> bool:
+    return bool(np.all(x == np.round(x)))
+
+
+def time_base(log: RunLog) -> TimeBase:
+    """Check a log's sample time (our header's ``dt``, else the rig's 0.002 s with t in s)
+    against its t column, and its θ column's unit (encoder counts) against θ's quantization.
+
+    Parameters
+    ----------
+    log : RunLog
+
+    Returns
+    -------
+    TimeBase
+        A t column in ms (steps 1000 times the claimed sample time) and a θ column in
+        radians or degrees (multiples of one encoder count in that unit, not whole) are
+        contradicted and converted; a header dt the t column contradicts is replaced by t's.
+    """
+    claims: list[AuditClaim] = []
+    data = log.data
+    changes: dict[str, np.ndarray] = {}
+    meta = log.meta
+    notes: list[str] = []
+    sample_time = log.sample_time
+    header_dt = meta.get("dt") if log.format == "station" else None
+    stated = header_dt if isinstance(header_dt, (int, float)) and not isinstance(header_dt, bool) else None
+    claimed = float(stated) if stated is not None else RIG_DT
+    where = f"dt = {claimed:g} s" if stated is not None else f"{claimed:g} s (the rig's rate; t in s)"
+    t = np.asarray(data["t"], dtype=float)
+    has_t = sample_time is not None and not any("no time column" in n for n in log.notes)
+    new_meta = None
+    if has_t:
+        steps = np.diff(t)
+        spread = f"steps {np.min(steps):.6g} .. {np.max(steps):.6g} s, median {sample_time:.6g} s"
+        if math.isclose(sample_time, claimed, rel_tol=1e-6):
+            claims.append(AuditClaim("sample_time", where, f"{sample_time:g} s", "confirmed", f"t {spread}"))
+        elif math.isclose(sample_time, 1000.0 * claimed, rel_tol=1e-6):
+            claims.append(AuditClaim("columns", "t in s", "t in ms", "contradicted",
+                                     f"t steps by {sample_time:g} per row, {claimed:g} s in ms"))
+            changes["t"] = t / 1000.0
+            sample_time = round(sample_time / 1000.0, 9)
+            notes.append("the t column is in ms (the audit): divided by 1000")
+        else:
+            claims.append(AuditClaim("sample_time", where, f"{sample_time:g} s", "contradicted",
+                                     f"t {spread}; the data's {sample_time:g} s is used"))
+            if stated is not None:
+                new_meta = {**meta, "dt": sample_time}
+        n = np.asarray(data["n"], dtype=float)
+        if n.size > 1 and np.all(np.isfinite(n)) and not np.all(np.diff(n) == 1):
+            gaps = int(np.count_nonzero(np.diff(n) != 1))
+            claims.append(AuditClaim("sample_time", "one row per tick", f"n jumps at {gaps} rows", "contradicted",
+                                     f"n steps {np.min(np.diff(n)):g} .. {np.max(np.diff(n)):g}: rows are missing "
+                                     f"or repeated"))
+    theta = np.asarray(data["theta"], dtype=float)
+    if theta.size and np.all(np.isfinite(theta)) and np.any(theta):
+        if _whole(theta):
+            claims.append(AuditClaim("columns", "θ in encoder counts", "θ in encoder counts", "confirmed",
+                                     "every θ is a whole count"))
+        else:
+            unit = next((name for name, q in THETA_UNITS.items() if _quantum_fits(theta, q)), None)
+            if unit is None:
+                claims.append(AuditClaim("columns", "θ in encoder counts", "θ not quantized", "unchecked",
+                                         f"θ is not whole counts (e.g. {theta[np.flatnonzero(theta != np.round(theta))[0]]:.6g})"
+                                         f" nor whole counts of radians or degrees: its unit is not decided"))
+            else:
+                q = THETA_UNITS[unit]
+                changes["theta"] = np.round(theta / q)
+                u = np.asarray(data["u"], dtype=float)
+                also = ""
+                if u.size and np.all(np.isfinite(u)) and not _whole(u):
+                    changes["u"] = u / q
+                    also = "; u, not whole counts, taken in the same unit"
+                claims.append(AuditClaim("columns", "θ in encoder counts", f"θ in {unit}", "contradicted",
+                                         f"every θ is a multiple of {q:.6g} ({unit} per encoder count of "
+                                         f"{ENCODER_COUNTS}/rev), none of 1{also}"))
+                notes.append(f"θ is in {unit} (the audit): converted to encoder counts{also}")
+    if not changes and new_meta is None:
+        return TimeBase(tuple(claims), log)
+    fixed = dict(data)
+    fixed.update(changes)
+    corrected = dataclasses.replace(log, data=fixed, sample_time=sample_time, meta=new_meta or meta,
+                                    notes=list(log.notes) + notes)
+    return TimeBase(tuple(claims), corrected)
+
+
+# --- the alignment ------------------------------------------------------------------------
+
+def alignment_claim(header: int | None, found: int | None, reproduced: bool, fmt: str,
+                    tied: tuple[int, ...] = ()) -> AuditClaim | None:
+    """Our header's alignment (the rig's headers state none) against the one the replay found.
+
+    Parameters
+    ----------
+    header : int or None
+        The alignment our header states.
+    found : int or None
+        The computational delay with which the controller reproduces the log (None: open
+        loop or not replayed).
+    reproduced : bool
+        Whether the controller reproduces every logged v at ``found``.
+    fmt : str
+        The log's format ("station" or "rig").
+    tied : tuple of int
+        Every alignment at which the controller reproduces the log (several: the data cannot
+        tell them apart, e.g. θ seldom changes between rows).
+
+    Returns
+    -------
+    AuditClaim or None
+        None when no closed-loop controller was replayed.
+    """
+    if found is None:
+        return None
+    said = "not stated" if header is None else f"alignment {header}"
+    data = f"alignment {found} (v[k] from θ[k-{found}])" if found else "alignment 0 (v[k] from θ[k])"
+    if not reproduced:
+        return AuditClaim("alignment", said, data, "unchecked",
+                          f"the controller does not reproduce the logged v at any alignment; {found} comes closest")
+    if len(tied) > 1:
+        alts = " and ".join(str(d) for d in tied)
+        return AuditClaim("alignment", said, f"alignment {alts} alike", "unchecked",
+                          f"the controller reproduces every logged v at alignments {alts}: the data cannot tell "
+                          f"them apart (θ seldom changes between rows); {found} is used"
+                          + ("" if header is None else f", as the header states" if header == found else ""))
+    if header is None:
+        why = "the rig's headers do not state it" if fmt == "rig" else "the header does not state it"
+        return AuditClaim("alignment", said, data, "unchecked",
+                          f"{why}; the data decide: the controller reproduces every logged v only at d = {found}")
+    ok = header == found
+    return AuditClaim("alignment", said, data, "confirmed" if ok else "contradicted",
+                      f"the controller reproduces every logged v at d = {found}")
+

@@ -1,0 +1,295 @@
+"""Logs for the log audit: headers that lie, and commands from a lab's integer recursions.
+
+From DESIGN.md ("Log audit", "Compensators", "Timing and log rows") and issue 26 alone,
+importing nothing from the station. Each case is one rig-format run of 2000 samples (4 s,
+like the lab's third session) on the blind rig (:mod:`tests.blind.rig`: its FEM, amplifier,
+friction and sensors), with a controller the lab could have run:
+
+- a P law v = Q(sat(kp·e)) or a lead Gth(s) = K(s+z)/(s+p) discretized by Tustin (the
+  generator's own, scipy's ``bilinear``), its recursion on the float command or on the
+  integer the lab's software stored, v[k] = sat(Q(Σ b_i e[k-i] − Σ a_j v[k-j])) with Q
+  truncation toward zero or rounding (halves away from zero);
+- at alignment 0 (v[k] from θ[k], the 2009 software) or 1 (from θ[k-1]);
+- the rig's clamp ±200, or ±150 on some seeds;
+- a step (at tick 10), a 5 Hz sine or a 0-10 Hz sweep reference.
+
+Classes (:data:`CLASSES`): headers that lie ("lie:open_loop": an open-loop header on
+closed-loop data; "lie:p_kp": a P header with the wrong kp; "lie:lead_pole": the thesis's
+lead printed in the header, another pole in the data); integer recursions with no header
+(the 2014 layout, "int:trunc_d0" ... "int:round_d1"); the lab's third session ("session":
+an open-loop header on a lead run on the truncated integer at alignment 0); truthful headers
+the audit must confirm ("honest:p", "honest:lead_int"). A class joined with "+" to
+"coulomb_friction" hides that friction too (drawn as :func:`tests.blind.cases.draw` draws it).
+"""
+
+from __future__ import annotations
+
+import math
+import zlib
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from tests.blind.cases import draw
+from tests.blind.generator import COLUMNS, COLUMNS_ACCEL, _coeffs, _num
+from tests.blind.rig import DT, Amplifier, Effects, Run, encoder, gth_design, make_plant, tustin
+
+N = 2000
+"""Samples per run (4 s at 500 Hz)."""
+
+CLASSES = ("lie:open_loop", "lie:p_kp", "lie:lead_pole", "int:trunc_d0", "int:trunc_d1", "int:round_d0",
+           "int:round_d1", "session", "honest:p", "honest:lead_int")
+"""The audit's blind classes, in the validation table's order."""
+
+PHYSICAL = ("coulomb_friction",)
+"""Physical effects a class may be joined with ("lie:p_kp+coulomb_friction")."""
+
+LEAD_GAINS = (1.0, 1.5, 2.0, 2.5, 3.0, 4.0)
+P_GAINS = (0.5, 0.8, 1.0, 1.2, 1.5, 2.5, 3.0)
+OTHER_POLES_HZ = (8.0, 10.0, 12.0, 15.0, 25.0, 30.0, 40.0)
+"""The lead-pole lie's pole frequencies, Hz (the thesis's is 20)."""
+
+HEADER_KP = 2.0
+"""The gain a lying P header states."""
+
+
+@dataclass(frozen=True)
+class AuditCase:
+    """What one audit case hides and what its header says.
+
+    Attributes
+    ----------
+    name : str
+        Its class (and "+coulomb_friction").
+    law : {"p", "lead"}
+    kp : float or None
+        The P gain.
+    num_s, den_s : tuple of float or None
+        The lead's continuous design (descending powers of s), Tustin at 0.002 s.
+    design_text : str
+        The design as a person writes it, e.g. "3(s+13)/(s+20)".
+    recursion : {"none", "trunc", "round"}
+    alignment : int
+    limit : float
+        The clamp, DAC counts.
+    header : {"open-loop", "p", "lead", "none"}
+        What the header names ("none": the 2014 layout, no header).
+    header_kp : float or None
+    reference : {"step", "sine", "sweep"}
+    amplitude : float
+    effects : dict
+        Hidden physical effects.
+    """
+
+    name: str
+    law: str
+    kp: float | None
+    num_s: tuple | None
+    den_s: tuple | None
+    design_text: str
+    recursion: str
+    alignment: int
+    limit: float
+    header: str
+    header_kp: float | None
+    reference: str
+    amplitude: float
+    effects: dict = field(default_factory=dict)
+
+    @property
+    def lies(self) -> bool:
+        """Whether the header names another controller than the data's."""
+        return self.name.split("+")[0] in ("lie:open_loop", "lie:p_kp", "lie:lead_pole", "session")
+
+
+def _rng(name: str, seed: int) -> np.random.Generator:
+    return np.random.default_rng([zlib.crc32(("audit/" + name).encode()), seed])
+
+
+def _lead_text(k: float, z: float, p: float, hz: bool = False) -> str:
+    if hz:
+        return f"{k:g}(s+2π·{z / (2 * math.pi):g})/(s+2π·{p / (2 * math.pi):g})"
+    return f"{k:g}(s+{z:g})/(s+{p:g})"
+
+
+def draw_case(name: str, seed: int) -> AuditCase:
+    """The hidden controller, header and reference of a class for a seed (deterministic).
+
+    Parameters
+    ----------
+    name : str
+        A class of :data:`CLASSES`, optionally "+coulomb_friction".
+    seed : int
+
+    Raises
+    ------
+    ValueError
+        An unknown class or physical effect.
+    """
+    base, *extra = name.split("+")
+    if base not in CLASSES or any(e not in PHYSICAL for e in extra):
+        raise ValueError(f"unknown audit case {name!r}; classes: {', '.join(CLASSES)}, joined with "
+                         f"{', '.join(PHYSICAL)}")
+    rng = _rng(base, seed)
+    effects = {e: draw(e, seed) for e in extra}
+    reference = str(rng.choice(["step", "step", "sine", "sweep"]))
+    amplitude = float(rng.integers(30, 151)) if reference == "step" else float(rng.integers(20, 61))
+    limit = 150.0 if rng.random() < 0.3 else 200.0
+    k, z = float(rng.choice(LEAD_GAINS)), float(rng.integers(5, 31))
+    p = z + float(rng.integers(5, 61))
+    kp = float(rng.choice(P_GAINS))
+    lead = dict(law="lead", kp=None, num_s=(k, k * z), den_s=(1.0, p), design_text=_lead_text(k, z, p))
+    p_law = dict(law="p", kp=kp, num_s=None, den_s=None, design_text=f"P, kp = {kp:g}")
+    common = dict(name=name, limit=limit, reference=reference, amplitude=amplitude, effects=effects,
+                  header_kp=None)
+    if base == "lie:open_loop":
+        return AuditCase(**common, **lead, recursion="none", alignment=1, header="open-loop")
+    if base == "lie:p_kp":
+        kp = float(rng.choice([g for g in P_GAINS if g != HEADER_KP]))
+        p_law.update(kp=kp, design_text=f"P, kp = {kp:g}")
+        return AuditCase(**{**common, "header_kp": HEADER_KP}, **p_law, recursion="none", alignment=1, header="p")
+    if base == "lie:lead_pole":
+        zz, pp = 2 * math.pi * 5, 2 * math.pi * float(rng.choice(OTHER_POLES_HZ))
+        kk = 5.0 * pp / zz
+        return AuditCase(**common, law="lead", kp=None, num_s=(kk, kk * zz), den_s=(1.0, pp),
+                         design_text=_lead_text(kk, zz, pp, hz=True), recursion="none", alignment=1, header="lead")
+    if base.startswith("int:"):
+        recursion, d = base[4:].split("_d")
+        return AuditCase(**common, **lead, recursion=recursion, alignment=int(d), header="none")
+    if base == "session":
+        return AuditCase(**common, **lead, recursion="trunc", alignment=0, header="open-loop")
+    if base == "honest:p":
+        return AuditCase(**{**common, "header_kp": kp}, **p_law, recursion=str(rng.choice(["none", "trunc"])),
+                         alignment=int(rng.integers(0, 2)), header="p")
+    return AuditCase(**common, **lead, recursion=str(rng.choice(["trunc", "round"])),
+                     alignment=int(rng.integers(0, 2)), header="lead")  # honest:lead_int
+
+
+def _quantize(x: float, recursion: str) -> float:
+    if recursion == "trunc":
+        return float(math.trunc(x))
+    if recursion == "round":
+        mag = abs(x)
+        whole = math.floor(mag)
+        whole += 1.0 if mag - whole >= 0.5 else 0.0
+        return math.copysign(whole, x)
+    return x
+
+
+class LabController:
+    """The lab's recursion: y = sat(Q(Σ b x − Σ a y)), its history the stored y."""
+
+    def __init__(self, num, den, limit: float, recursion: str):
+        self.b, self.a = [float(c) for c in num], [float(c) for c in den]
+        self.limit, self.recursion = limit, recursion
+        self.x = [0.0] * len(self.b)
+        self.y = [0.0] * (len(self.a) - 1)
+
+    def step(self, e: float) -> float:
+        self.x = [e] + self.x[:-1]
+        acc = sum(b * x for b, x in zip(self.b, self.x)) - sum(a * y for a, y in zip(self.a[1:], self.y))
+        y = min(max(_quantize(acc, self.recursion), -self.limit), self.limit)
+        if self.y:
+            self.y = [y] + self.y[:-1]
+        return y
+
+
+def reference(case: AuditCase, n: int = N) -> np.ndarray:
+    """u[k] of a case, encoder counts: a step at tick 10, a 5 Hz sine or a 0-10 Hz sweep
+    (from 0.02 s), the sines truncated to whole counts as the lab's software did."""
+    t = np.arange(n) * DT
+    u = np.zeros(n)
+    on = t >= 10 * DT
+    if case.reference == "step":
+        u[on] = case.amplitude
+    elif case.reference == "sine":
+        u[on] = np.trunc(case.amplitude * np.sin(2 * math.pi * 5.0 * (t[on] - t[on][0])))
+    else:
+        tt = t[on] - t[on][0]
+        u[on] = np.trunc(case.amplitude * np.sin(2 * math.pi * (10.0 / (2 * tt[-1])) * tt ** 2))
+    return u
+
+
+def simulate_audit_case(case: AuditCase, seed: int, substeps: int = 100, accel_noise: float = 0.3) -> Run:
+    """One run of the case on the blind rig, as the lab's software ran it (its alignment)."""
+    eff = Effects.parse(case.effects)
+    plant, a_gain = make_plant(eff, 4, substeps)
+    amp = Amplifier(eff.saturation, eff.deadzone, eff.delay, eff.amp_offset)
+    if case.law == "p":
+        ctrl = LabController([case.kp], [1.0], case.limit, case.recursion)
+    else:
+        ctrl = LabController(*tustin(list(case.num_s), list(case.den_s), DT), case.limit, case.recursion)
+    u = reference(case)
+    rng = np.random.default_rng([seed, 26])
+    noise = rng.normal(0.0, accel_noise, N)
+    out = np.zeros((8, N))
+    d = case.alignment
+    for k in range(N):
+        th, acc = plant.outputs()
+        theta = encoder(th)
+        a = math.floor(a_gain * acc + noise[k] + 0.5)
+        out[2, k], out[3, k] = theta, a
+        v = 0.0 if k < d else ctrl.step(float(u[k]) - out[2, k - d])
+        applied = amp(v)
+        out[:, k] = (u[k], v, theta, a, u[k], applied, th, plant.motor())
+        plant.advance(applied)
+    return Run(*out)
+
+
+def header(case: AuditCase) -> list[str]:
+    """The header lines the lab's software wrote (without newlines), the column line last."""
+    if case.header == "open-loop":
+        return ["#SLFR RTP OL_Test", COLUMNS]
+    if case.header == "p":
+        return ["#SLFR RTP P_control_Test", f"#kp={case.header_kp!r}", COLUMNS]
+    if case.header == "lead":
+        if case.name.startswith("lie:lead_pole"):
+            num, den = gth_design()  # the thesis's lead; the data's has another pole
+        else:
+            num, den = tustin(list(case.num_s), list(case.den_s), DT)
+        return ["#SLFR RTP Motor_Comp_w_accel_fb", f"#Gth num={_coeffs(num)}", f"#Gth den={_coeffs(den)}",
+                "#Ga num=[]", "#Ga den=[]", COLUMNS_ACCEL]
+    return []
+
+
+def format_audit_run(case: AuditCase, sim: Run) -> str:
+    """The log text: the rig's ``#`` layout, or the 2014 layout (no header, columns
+    ``Time (sec.) u theta accel v``) when the header names nothing."""
+    lines = header(case)
+    if case.header == "none":
+        lines = ["Time (sec.)\tu\ttheta\taccel\tv"]
+        rows = ([k * DT, sim.u[k], sim.theta[k], sim.a[k], sim.v[k]] for k in range(N))
+    else:
+        accel = case.header == "lead"
+        rows = ([k * DT, k, sim.u[k], sim.v[k], sim.theta[k], sim.a[k]] + ([sim.theta_d_hat[k]] if accel else [])
+                for k in range(N))
+    lines += ["\t".join(_num(float(x)) for x in row) for row in rows]
+    return "\n".join(lines) + "\n"
+
+
+def write_audit_case(folder: Path, name: str, seed: int) -> tuple[Path, AuditCase]:
+    """Write one audit case's log (:func:`draw_case`, :func:`simulate_audit_case`).
+
+    Parameters
+    ----------
+    folder : Path
+        Created if missing.
+    name : str
+        A class of :data:`CLASSES`, optionally "+coulomb_friction".
+    seed : int
+
+    Returns
+    -------
+    (Path, AuditCase)
+        The file, named like the lab's (``audit_<class>_<seed>_SLFR_RTP_<test>.txt``; no
+        kp, amplitude or other claim in the name), and what it hides.
+    """
+    case = draw_case(name, seed)
+    folder = Path(folder)
+    folder.mkdir(parents=True, exist_ok=True)
+    test = {"open-loop": "OL_Test", "p": "P_control_Test", "lead": "Motor_Comp_Gth", "none": "run"}[case.header]
+    tag = name.replace(":", "-").replace("+", "-").replace("_", "-")  # no "kp_", "amp_" claims in the name
+    path = folder / f"audit_{tag}_{seed}_SLFR_RTP_{test}.txt"
+    path.write_text(format_audit_run(case, simulate_audit_case(case, seed)))
+    return path, case

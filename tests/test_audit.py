@@ -1,0 +1,178 @@
+"""The log audit (DESIGN.md "Log audit"): every claim a log makes checked against its data,
+the contradictions said first, and the data's answer used by replay, compare, survey and
+the model run.
+
+Truth: the rig's real logs (nothing there may be contradicted), and logs written by the
+blind generator (tests/blind/audit.py: lying headers, the lab's integer recursions) with
+what they hide known."""
+
+from __future__ import annotations
+
+import json
+import math
+
+import numpy as np
+import pytest
+
+from station.compare import compare_run, format_comparison
+from station.logged import LoggedRun
+from station.logged.audit import CLAIMS, SOURCES, VERDICTS, file_name_claims
+from station.plant import DiscretePlant
+from station.replay import format_report, replay
+from station.survey import format_table, survey
+from tests.blind.audit import LabController, draw_case, reference, write_audit_case
+from tests.blind.rig import tustin
+
+RIG_LOGS = [
+    "OL_pulse_test_sys_check_SLFR_RTP_OL_Test_uend=0.txt",
+    "SFLR_P_control_step_kp_2_SLFR_RTP_P_control_kp=2.0.txt",
+    "log_dec_hold_and_release_1_SLFR_RTP_OL_Test_uend=77.txt",
+    "step_response_Gth_comp_Ga_opt_amp_200_duration_1000_opt_case43_SLFR_RTP_Motor_Comp_Gth.txt",
+    "step_response_Gth_comp_no_accel_FB_amp_100_duration_1000_SLFR_RTP_Motor_Comp_Gth.txt",
+    "swept_sine_kp_1_amp_50.txt",
+    "without_accel_01_28_14_test_2.txt",
+    "2009/step_response_amp=100_SLFR_RTP_P_control_kp=1.0.txt",
+    "2009/swept_sine_no_sat_amp=25_stopn=20000_test_1_SLFR_RTP_P_control_kp=1.0.txt",
+    "2009/swept_sine_no_sat_amp=50_stopn=10000_test_1_SLFR_RTP_P_control_kp=1.0.txt",
+    "2009/swept_sine_no_sat_amp=75_stopn=10000_test_1_SLFR_RTP_P_control_kp=1.0.txt",
+]
+
+
+@pytest.mark.parametrize("name", RIG_LOGS)
+def test_real_logs_contradict_nothing(rig_data, name):
+    run = LoggedRun.from_path(rig_data / name)
+    audit = run.audit
+    assert not audit.contradicted, audit.lines()
+    assert run.reproduced
+    rows = audit.to_json()
+    assert rows[0]["claim"] == "controller" and all(set(r) == {"claim", "header", "data", "verdict", "evidence"}
+                                                    for r in rows)
+    assert all(r["claim"] in CLAIMS and r["verdict"] in VERDICTS for r in rows)
+    assert audit.controller_source in SOURCES
+    named = name != "without_accel_01_28_14_test_2.txt"
+    assert rows[0]["verdict"] == ("confirmed" if named else "unchecked")
+    stated = file_name_claims(name)
+    confirmed = {r["header"] for r in rows if r["verdict"] == "confirmed"}
+    for kp in stated.get("kp", []):
+        assert f"file name: kp = {kp:g}" in confirmed
+    for amp in stated.get("amp", []):
+        assert f"file name: amplitude {amp:g}" in confirmed
+
+
+def test_file_name_claims():
+    assert file_name_claims("SFLR_P_control_step_kp_2_SLFR_RTP_P_control_kp=2.0.txt") == {"kp": [2.0]}
+    assert file_name_claims("swept_sine_no_sat_amp=25_stopn=20000_test_1_SLFR_RTP_P_control_kp=1.0.txt") == {
+        "amp": [25.0], "kp": [1.0], "stopn": [20000.0]}
+    assert file_name_claims("log_dec_hold_and_release_1_SLFR_RTP_OL_Test_uend=77.txt") == {"uend": [77.0]}
+    assert file_name_claims("audit_lie-p-kp_0_SLFR_RTP_P_control_Test.txt") == {}
+
+
+BLIND = [("lie:open_loop", 0), ("lie:open_loop", 1), ("lie:p_kp", 0), ("lie:lead_pole", 2), ("int:trunc_d0", 1),
+         ("int:round_d1", 2), ("session", 0), ("session+coulomb_friction", 1), ("honest:p", 3),
+         ("honest:lead_int", 0)]
+
+
+@pytest.mark.parametrize("case, seed", BLIND)
+def test_blind_headers_and_recursions(tmp_path, case, seed):
+    path, hidden = write_audit_case(tmp_path, case, seed)
+    run = LoggedRun.from_path(path)
+    audit = run.audit
+    controller_rows = [c for c in audit.claims if c.claim == "controller"]
+    assert (controller_rows[0].verdict == "contradicted") is hidden.lies
+    assert audit.controller_source == ("inferred (header contradicted)" if hidden.lies else
+                                       "inferred" if hidden.header == "none" else "header")
+    assert run.reproduced and run.closed
+    assert run.alignment == hidden.alignment or hidden.alignment in run.identified.alignments
+    if hidden.lies:
+        assert audit.lines()[0].startswith("header: ") and "; data: " in audit.lines()[0]
+    if run.source != "header":
+        spec = run.controller.spec
+        if hidden.law == "p":
+            assert spec["kp"] == hidden.kp
+        else:
+            assert spec["design"]["method"] == "Tustin"
+            np.testing.assert_allclose(spec["design"]["num_s"], hidden.num_s, rtol=1e-9)
+            np.testing.assert_allclose(spec["design"]["den_s"], hidden.den_s, rtol=1e-9)
+        assert run.controller.recursion == hidden.recursion or hidden.law == "p"
+
+
+def test_session_said_first_everywhere(tmp_path):
+    path, hidden = write_audit_case(tmp_path / "logs", "session", 0)
+    report = replay(path, model=False)
+    text = format_report(report).splitlines()
+    assert text[0] == report.audit.lines()[0]
+    assert text[0].startswith("header: open loop; data: 1.5(s+12)/(s+48) (Tustin, 0.002 s)") and "exactly" in text[0]
+    j = report.to_json()
+    assert j["controller_source"] == "inferred (header contradicted)"
+    assert j["audit"][0]["verdict"] == "contradicted" and j["audit"][0]["header"] == "open loop"
+    json.dumps(j)
+    comp = compare_run(path, DiscretePlant())
+    assert format_comparison(comp).splitlines()[0] == f"{path.name}: {text[0]}"
+    assert comp.to_json()["controller_source"] == "inferred (header contradicted)"
+    rows = survey([tmp_path / "logs"], model=False, workers=1)
+    assert format_table(rows, tmp_path / "logs").splitlines()[0] == f"{path.name}: {text[0]}"
+
+
+def test_integer_recursion_simulated_as_the_lab_ran_it(tmp_path):
+    """The model run of a log whose recursion stored integers equals a closed loop stepped
+    by hand: the plant, the generator's lab recursion, the device's truncation."""
+    path, hidden = write_audit_case(tmp_path, "int:trunc_d0", 1)
+    run = LoggedRun.from_path(path)
+    pred = run.simulate(DiscretePlant()).prediction
+    plant = DiscretePlant()
+    plant.reset()
+    lab = LabController(*tustin(list(hidden.num_s), list(hidden.den_s)), hidden.limit, "trunc")
+    u = reference(hidden)
+    theta = np.zeros(u.size)
+    v = np.zeros(u.size)
+    for k in range(u.size):
+        theta[k] = np.round(plant.outputs()[0])
+        v[k] = lab.step(u[k] - theta[k])  # alignment 0
+        plant.advance(float(math.trunc(v[k])))
+    np.testing.assert_array_equal(pred["v"], v)
+    np.testing.assert_array_equal(pred["theta"], theta)
+
+
+def _rewrite(src, dst, column, scale, digits=None):
+    lines = src.read_text().splitlines()
+    head = [x for x in lines if x.startswith("#")]
+    names = head[-1][1:].split("\t")
+    col = names.index(column)
+    out = []
+    for line in lines[len(head):]:
+        cells = line.split("\t")
+        x = float(cells[col]) * scale
+        cells[col] = repr(x) if digits is None else f"{x:.{digits}f}"
+        out.append("\t".join(cells))
+    dst.write_text("\n".join(head + out) + "\n")
+    return dst
+
+
+def test_t_in_ms_and_theta_in_radians_are_found_and_converted(rig_data, tmp_path):
+    src = rig_data / RIG_LOGS[1]
+    truth = LoggedRun.from_path(src)
+    ms = LoggedRun.from_path(_rewrite(src, tmp_path / "p_step_ms.txt", "t", 1000.0))
+    rows = {(c.claim, c.data): c.verdict for c in ms.audit.claims}
+    assert rows[("columns", "t in ms")] == "contradicted"
+    assert ms.dt == 0.002 and ms.reproduced and ms.alignment == 1
+    assert ms.step_metrics() == truth.step_metrics()
+    rad = LoggedRun.from_path(_rewrite(src, tmp_path / "p_step_rad.txt", "$\\theta$", 2 * math.pi / 1024, 6))
+    rows = {(c.claim, c.data): c.verdict for c in rad.audit.claims}
+    assert rows[("columns", "θ in radians")] == "contradicted"
+    np.testing.assert_array_equal(rad.data["theta"], truth.data["theta"])
+    assert rad.reproduced and rad.source == "header"
+
+
+def test_a_stated_amplitude_the_data_contradict(rig_data, tmp_path):
+    src = rig_data / RIG_LOGS[1]  # a step of 50
+    path = tmp_path / "step_amp_100_SLFR_RTP_P_control_kp=2.0.txt"
+    path.write_text(src.read_text())
+    audit = LoggedRun.from_path(path).audit
+    ref = [c for c in audit.claims if c.claim == "reference"]
+    assert [c.verdict for c in ref] == ["contradicted"] and "a step of 50" in ref[0].data
+    assert audit.lines() == ["header: file name: amplitude 100; data: a step of 50 at tick 50"]
+
+
+def test_draws_are_deterministic():
+    assert draw_case("session", 4) == draw_case("session", 4)
+    assert draw_case("lie:p_kp", 0).kp != 2.0
