@@ -70,8 +70,13 @@ class Hardware:
     def restart(self) -> None:
         """A run starts (v1 START, legacy 'q'): the plant at rest and the sensors' noise
         restarted from its seed, so identical runs give identical readings whatever ran
-        before. The firmware's zero offsets are the firmware's (START's flags set them)."""
+        before. The encoder zero moves with the plant: the real device does not move the hub
+        on START, so the encoder reads at rest what it read just before (a legacy client's
+        '7' then 'q' sees θ0 = 0 on every run). The firmware's other zero offsets are the
+        firmware's (START's flags set them)."""
+        before = self.read().theta
         self.plant.reset()
+        self.encoder_zero = self.read().theta + self.encoder_zero - before
         if self._noise_state is not None:
             self.sensors.rng.bit_generator.state = self._noise_state
 
