@@ -149,7 +149,7 @@ def run_on_file_systems(root: Path, full: Path, ro: Path) -> list[dict]:
     import station.diagnosis.pipeline as pipeline
     from station.cli import main
 
-    import station.diagnosis.sessions as sessions
+    import station.diagnosis.sessions.diagnose as sessions
 
     pipeline.CANDIDATES = sessions.CANDIDATES = ("coulomb_friction",)  # the writing is tested, not the search
     with open(full / "filler", "wb", buffering=0) as fh:  # take every page of the tmpfs

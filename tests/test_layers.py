@@ -116,6 +116,6 @@ def test_no_circle_between_units():
     assert not circles, f"units that import each other (directly or through others): {circles}"
 
 
-@pytest.mark.parametrize("name", ["station.plant.kernel", "station.diagnosis.selection"])
+@pytest.mark.parametrize("name", ["station.plant.kernel", "station.diagnosis.search.selection"])
 def test_unit_of(name):
     assert unit_of(name) == name.split(".")[1]

@@ -190,7 +190,7 @@ def ws(template, tmp_path, monkeypatch):
     shutil.copytree(template / "in", tmp_path / "in")
     monkeypatch.chdir(tmp_path)
     monkeypatch.setattr("station.diagnosis.pipeline.CANDIDATES", ("coulomb_friction",))
-    monkeypatch.setattr("station.diagnosis.sessions.CANDIDATES", ("coulomb_friction",))
+    monkeypatch.setattr("station.diagnosis.sessions.diagnose.CANDIDATES", ("coulomb_friction",))
     return tmp_path
 
 

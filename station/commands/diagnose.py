@@ -192,7 +192,7 @@ def outputs(args: argparse.Namespace) -> list[Output]:
         ``runs``, ``--validate`` (the report names its figures after them), ``--json``,
         ``--save-model``, ``--report``.
     """
-    from station.diagnosis.report import report_files
+    from station.diagnosis.answer.report import report_files
 
     report = [] if args.report is None else [
         Output("--report", args.report / name) for name in report_files([p.name for p in args.runs + args.validate])]
@@ -238,7 +238,7 @@ def run(args: argparse.Namespace) -> int:
     print(format_diagnosis(diag))
     with Transaction() as tx:
         if args.report is not None:
-            from station.diagnosis.report import write_report
+            from station.diagnosis.answer.report import write_report
 
             page = write_report(diag, args.report, tx)
         if args.json is not None:

@@ -19,7 +19,7 @@ HELP = ("replay every log of a folder (or the files given) on all cores and prin
         "into sessions, one model structure on all of them, and the effects that drift between sessions")
 
 MAX_SAMPLES = 20_000
-"""``--max-samples``' default (:data:`station.diagnosis.sessions.MAX_SAMPLES`; not imported here:
+"""``--max-samples``' default (:data:`station.diagnosis.sessions.diagnose.MAX_SAMPLES`; not imported here:
 the parser loads no diagnosis)."""
 
 DIAGNOSE_ONLY = ("json", "save_models", "max_samples")
@@ -138,7 +138,7 @@ def _diagnose_checks(args: argparse.Namespace) -> None:
 
 def run_diagnose(args: argparse.Namespace) -> int:
     """``station survey DIR... --diagnose``: the logs grouped into sessions, one model structure on
-    all of them and the effects that drift between sessions (:mod:`station.diagnosis.sessions`).
+    all of them and the effects that drift between sessions (:mod:`station.diagnosis.sessions.diagnose`).
 
     Parameters
     ----------
@@ -158,8 +158,8 @@ def run_diagnose(args: argparse.Namespace) -> int:
         ``--diagnose``, a bad ``--model``; an output that is an input or another output,
         exists (without ``--force``) or cannot be written; no usable run, or only one.
     """
-    from station.diagnosis.sessions import diagnose_sessions, group_sessions, model_file_names
-    from station.diagnosis.sessions_report import REPORT_FILES, format_sessions
+    from station.diagnosis.sessions.diagnose import diagnose_sessions, group_sessions, model_file_names
+    from station.diagnosis.sessions.report import REPORT_FILES, format_sessions
     from station.errors import StationError
     from station.plant.model import as_model
     from station.survey import find_logs, not_a_log
@@ -192,7 +192,7 @@ def run_diagnose(args: argparse.Namespace) -> int:
     print(format_sessions(result, models))
     with Transaction() as tx:
         if args.report is not None:
-            from station.diagnosis.sessions_report import write_report
+            from station.diagnosis.sessions.report import write_report
 
             page = write_report(result, args.report, tx, models)
         if args.json is not None:

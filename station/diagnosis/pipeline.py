@@ -9,17 +9,17 @@ from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import NamedTuple
 
-from station.diagnosis.cases import Simulator, load_case
-from station.diagnosis.cost import Evaluator, calibrate_noise, pooled, relative_gain, rms_gain
-from station.diagnosis.folds import fold_records, make_folds, validation_runs
-from station.diagnosis.doubt import alternatives, effective_terms, effect_interval, interval_method
-from station.diagnosis.inputs import refuse_repeated_runs, set_aside_beam_tests
-from station.diagnosis.records import effect_results, model_predictions, run_reports
-from station.diagnosis.result import Diagnosis
-from station.diagnosis.selection import Search, Trial, effect_axes, fit_each_alone
-from station.diagnosis.estimator import choose_estimator
-from station.diagnosis.stepwise import forward_select
-from station.diagnosis.unexplained import check_unexplained
+from station.diagnosis.runs.cases import Simulator, load_case
+from station.diagnosis.runs.cost import Evaluator, calibrate_noise, pooled, relative_gain, rms_gain
+from station.diagnosis.runs.folds import fold_records, make_folds, validation_runs
+from station.diagnosis.honesty.doubt import alternatives, effective_terms, effect_interval, interval_method
+from station.diagnosis.runs.inputs import refuse_repeated_runs, set_aside_beam_tests
+from station.diagnosis.answer.records import effect_results, model_predictions, run_reports
+from station.diagnosis.answer.result import Diagnosis
+from station.diagnosis.search.selection import Search, Trial, effect_axes, fit_each_alone
+from station.diagnosis.search.estimator import choose_estimator
+from station.diagnosis.search.stepwise import forward_select
+from station.diagnosis.honesty.unexplained import check_unexplained
 from station.errors import StationError
 from station.plant.effects import CANDIDATES, EFFECTS
 from station.plant.model import as_model
@@ -45,7 +45,7 @@ def diagnose(runs: Sequence[str | Path], validate: Sequence[str | Path] = (), mo
         Effect names to try (default :data:`station.plant.effects.CANDIDATES`).
     simulate : callable, optional
         ``simulate(case, model) -> (theta, a)`` (default:
-        :func:`station.diagnosis.cases.simulate_case`); tests plug in their own.
+        :func:`station.diagnosis.runs.cases.simulate_case`); tests plug in their own.
     workers : int, optional
         Threads fitting candidates at once (default 1). The compiled sample loop releases
         the GIL but building models and scoring runs hold it: on 2 shared cores two
@@ -53,7 +53,7 @@ def diagnose(runs: Sequence[str | Path], validate: Sequence[str | Path] = (), mo
         scripts/bench_diagnose.py at load average 3).
     likelihood_values : bool
         Also estimate the accepted effects' values by maximum likelihood and keep that
-        estimate when the held-out runs prefer it (:mod:`station.diagnosis.estimator`);
+        estimate when the held-out runs prefer it (:mod:`station.diagnosis.search.estimator`);
         False: least squares only (``station identify``, whose designs separate structures
         by the least-squares folds' spread).
 

@@ -1,12 +1,12 @@
 """Stepwise selection of the effects the runs call for: forward selection from the single
-effects (:func:`station.diagnosis.selection.fit_each_alone`), with a lookahead over its
+effects (:func:`station.diagnosis.search.selection.fit_each_alone`), with a lookahead over its
 first step.
 
-Forward selection adds the best effect while it pays (:func:`~station.diagnosis.selection.accept`:
-the null floor, parsimony and noise), at most :data:`~station.diagnosis.selection.MAX_EFFECTS`,
+Forward selection adds the best effect while it pays (:func:`~station.diagnosis.search.selection.accept`:
+the null floor, parsimony and noise), at most :data:`~station.diagnosis.search.selection.MAX_EFFECTS`,
 refitting the accepted effects jointly on all fit runs after each; static_friction may
 replace an accepted coulomb_friction in place and be downgraded again
-(:mod:`station.diagnosis.selection`, breakaway friction).
+(:mod:`station.diagnosis.search.selection`, breakaway friction).
 
 Lookahead (a beam of width 1 + :data:`LOOKAHEAD` over the first step). Greedy forward
 selection keeps its first choice, and with two effects hidden the best single effect is
@@ -15,7 +15,7 @@ viscous friction plus backlash: backlash beside it does not pay, beside viscous 
 takes the cost to the noise floor; a dead-zone for breakaway friction plus drive damping).
 So at the second step the next :data:`LOOKAHEAD` single effects (by their in-sample cost
 fitted alone) are tried as first effects too: every other candidate is scanned beside each
-on all fit runs on a coarse grid (:func:`~station.diagnosis.selection.screen_costs`), the
+on all fit runs on a coarse grid (:func:`~station.diagnosis.search.selection.screen_costs`), the
 :data:`LOOKAHEAD_TRIALS` pairs whose in-sample cost is below the best pair's beside the
 chosen first effect by the parsimony margin (MIN_RELATIVE_GAIN) are fitted per fold and
 judged on the validation runs like every second-step candidate, and the best of them all
@@ -40,11 +40,11 @@ from concurrent.futures import ThreadPoolExecutor
 
 import numpy as np
 
-from station.analysis.fitting import fit
-from station.diagnosis.cost import relative_gain
-from station.diagnosis.folds import validation_runs
-from station.diagnosis.prose import format_value
-from station.diagnosis.selection import (MAX_EFFECTS, MIN_RELATIVE_GAIN, NESTED, SECOND_STEP_CANDIDATES, SHAPE,
+from station.diagnosis.search.bounded import fit
+from station.diagnosis.runs.cost import relative_gain
+from station.diagnosis.runs.folds import validation_runs
+from station.diagnosis.answer.prose import format_value
+from station.diagnosis.search.selection import (MAX_EFFECTS, MIN_RELATIVE_GAIN, NESTED, SECOND_STEP_CANDIDATES, SHAPE,
                                          Search, Selection, Singles, Step, Trial, accept, credible, fit_set,
                                          null_floor, screen_costs, set_axes, trial)
 from station.plant.effects import EFFECTS

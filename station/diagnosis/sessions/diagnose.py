@@ -1,9 +1,9 @@
 """Sessions and drift (DESIGN.md "Sessions and drift"): logs grouped into sessions, one model
 structure fitted on all of them, and the effects that drift between sessions with a value
-per session (``station survey DIR... --diagnose``; the search is :mod:`station.diagnosis.drift`).
+per session (``station survey DIR... --diagnose``; the search is :mod:`station.diagnosis.sessions.drift`).
 
 A session is the folder a log is in, or the ``session`` our log header names. Before any
-work each session's logs are read as diagnosis cases (:func:`station.diagnosis.cases.load_case`;
+work each session's logs are read as diagnosis cases (:func:`station.diagnosis.runs.cases.load_case`;
 the caller leaves out files that are no logs); set aside, each with a note: logs the diagnosis
 cannot use (the one-line reason), hub-held beam tests, a run whose data rows repeat another's, and the
 accelerometer of a run whose a channel drifts (:func:`accel_drift`: its θ is used, its a is
@@ -23,9 +23,9 @@ from pathlib import Path
 
 import numpy as np
 
-from station.diagnosis.cases import RunCase, Simulator, load_case
-from station.diagnosis.cost import Evaluator, calibrate_noise, pooled, rms_gain
-from station.diagnosis.drift import (
+from station.diagnosis.runs.cases import RunCase, Simulator, load_case
+from station.diagnosis.runs.cost import Evaluator, calibrate_noise, pooled, rms_gain
+from station.diagnosis.sessions.drift import (
     DriftResult,
     Layout,
     PerSession,
@@ -36,9 +36,9 @@ from station.diagnosis.drift import (
     select_structure,
     session_axes,
 )
-from station.diagnosis.folds import LEAVE_ONE_OUT, make_folds
-from station.diagnosis.inputs import data_digest, set_aside_beam_tests
-from station.diagnosis.selection import Search, effect_axes
+from station.diagnosis.runs.folds import LEAVE_ONE_OUT, make_folds
+from station.diagnosis.runs.inputs import data_digest, set_aside_beam_tests
+from station.diagnosis.search.selection import Search, effect_axes
 from station.errors import StationError
 from station.logged.simulate import simulate_log
 from station.outputs import unique_names
@@ -349,7 +349,7 @@ class SessionsDiagnosis:
         Its effects with a value per session.
     accepted : list of str
         The structure's effects in the order they were added.
-    decisions : list of station.diagnosis.drift.Decision
+    decisions : list of station.diagnosis.sessions.drift.Decision
         Per accepted effect, whether it drifts and by how much per-session values pay.
     nominal_model : Model
     gain_pct : float

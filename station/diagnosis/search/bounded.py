@@ -9,7 +9,7 @@ parameter, Nelder-Mead for several (whole-number ones by enumeration around thei
 The best value *seen* is returned, so a refinement never makes a fit worse than its grid.
 
 The objective is any callable ``cost(effects: dict[str, float]) -> float``; see
-:mod:`station.diagnosis.cost` for the one the diagnosis uses.
+:mod:`station.diagnosis.runs.cost` for the one the diagnosis uses.
 """
 
 from __future__ import annotations

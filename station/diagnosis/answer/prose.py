@@ -141,7 +141,7 @@ OVERSHOOT_POINTS = 3.0
 
 def at_range_end(name: str, value: float) -> bool:
     """The value sits at an end of the effect's search range, within the fit's resolution
-    (:data:`station.diagnosis.doubt.RESOLUTION_STEPS` grid steps): the fit wanted further.
+    (:data:`station.diagnosis.honesty.doubt.RESOLUTION_STEPS` grid steps): the fit wanted further.
     The neutral value ("no effect", e.g. no friction at 0) does not count.
 
     Parameters
@@ -151,8 +151,8 @@ def at_range_end(name: str, value: float) -> bool:
     value : float
         Its value, in its unit.
     """
-    from station.analysis.fitting import axis_for
-    from station.diagnosis.doubt import RESOLUTION_STEPS
+    from station.diagnosis.search.bounded import axis_for
+    from station.diagnosis.honesty.doubt import RESOLUTION_STEPS
     from station.plant.effects import EFFECTS
 
     spec = EFFECTS.get(name)
@@ -208,7 +208,7 @@ def interval_words(name: str, interval, unit: str) -> str:
     name : str
         The effect's code name.
     interval : Interval or None
-        :class:`station.diagnosis.doubt.Interval`.
+        :class:`station.diagnosis.honesty.doubt.Interval`.
     unit : str
         The effect's unit.
     """
