@@ -40,7 +40,7 @@ from typing import NamedTuple
 import numpy as np
 import scipy.optimize
 
-from station.diagnosis.search.bounded import Axis
+from station.diagnosis.search.bounded import RESOLUTION_STEPS, Axis
 from station.diagnosis.runs.cost import Evaluator, pooled, rms_gain
 from station.diagnosis.search.selection import NESTED, SHAPE, Search, Selection, Trial, null_floor, refit_explanation, trial
 
@@ -55,10 +55,6 @@ MAX_ALTERNATIVES = 3
 
 BISECTIONS = 3
 """Bisections of the bracket where the profile crosses the threshold (1/8 of it left)."""
-
-RESOLUTION_STEPS = 1.0 / 16.0
-"""An interval is at least ± this many grid steps of the effect's search coordinate: the
-fit's own resolution (refinement to 0.02 grid step on a piecewise-constant cost)."""
 
 
 def integrated_time(e: np.ndarray) -> float:

@@ -22,7 +22,7 @@ import math
 from collections.abc import Mapping
 from typing import Any, NamedTuple
 
-from station.diagnosis.answer.prose import format_value
+from station.diagnosis.units import format_quantity
 from station.diagnosis.search.selection import NESTED, SHAPE
 from station.plant.effects import EFFECTS
 
@@ -96,7 +96,7 @@ def describe(effects: Mapping[str, float]) -> str:
     """
     if not effects:
         return "the nominal model"
-    return " + ".join(f"{n} {format_value(v, EFFECTS[n].unit)}" for n, v in effects.items())
+    return " + ".join(f"{n} {format_quantity(v, EFFECTS[n].unit)}" for n, v in effects.items())
 
 
 def jackknife_interval(value: float, fold_values: list[float]) -> tuple[float, float] | None:
@@ -236,7 +236,7 @@ def rivals(diag, wide: float = WIDE_INTERVAL) -> Rivals:
             x = _clip(name, x, chosen)
             if x != value:
                 effects = {**chosen, name: x}
-                found.append(Rival(effects, f"{name} {format_value(x, EFFECTS[name].unit)} "
+                found.append(Rival(effects, f"{name} {format_quantity(x, EFFECTS[name].unit)} "
                                             f"(the 95 % interval's {end} end)", "interval"))
     sources = [how_alt] if alts else []
     if intervals:

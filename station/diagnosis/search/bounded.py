@@ -31,6 +31,10 @@ the folds of a cross-validation, refining near the same grid point, share simula
 REFINE_ITERATIONS = 12
 """Bounded scalar refinement: at most this many evaluations inside the bracket."""
 
+RESOLUTION_STEPS = 1.0 / 16.0
+"""An interval is at least ± this many grid steps of the effect's search coordinate: the
+fit's own resolution (refinement to 0.02 grid step on a piecewise-constant cost)."""
+
 
 @dataclass(frozen=True)
 class Axis:

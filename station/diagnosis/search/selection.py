@@ -45,7 +45,7 @@ import numpy as np
 from station.diagnosis.search.bounded import Axis, axis_for, fit
 from station.diagnosis.runs.cost import Evaluator, pooled, relative_gain, rms_gain
 from station.diagnosis.runs.folds import Fold
-from station.diagnosis.answer.prose import format_value
+from station.diagnosis.units import format_quantity
 from station.plant.effects import EFFECTS
 
 MIN_RELATIVE_GAIN = 0.05
@@ -559,7 +559,7 @@ def fit_each_alone(search: Search, names: Sequence[str], nominal: Trial) -> Sing
             trials[name], values[name] = tr, vals
             g = rms_gain(pooled(ev, tr.val_sse).rms_theta, rms_nom)
             cg = relative_gain(tr.val_weighted, nominal.val_weighted)
-            search.say(f"[{k}/{len(names)}] {name} = {format_value(vals[name], EFFECTS[name].unit)}: "
+            search.say(f"[{k}/{len(names)}] {name} = {format_quantity(vals[name], EFFECTS[name].unit)}: "
                        f"validation θ gain {g:.1f} %, cost gain {cg:.1f} % ({ev.simulations} simulations)")
     return Singles(trials, values)
 

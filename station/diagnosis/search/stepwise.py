@@ -43,7 +43,7 @@ import numpy as np
 from station.diagnosis.search.bounded import fit
 from station.diagnosis.runs.cost import relative_gain
 from station.diagnosis.runs.folds import validation_runs
-from station.diagnosis.answer.prose import format_value
+from station.diagnosis.units import format_quantity
 from station.diagnosis.search.selection import (MAX_EFFECTS, MIN_RELATIVE_GAIN, NESTED, SECOND_STEP_CANDIDATES, SHAPE,
                                          Search, Selection, Singles, Step, Trial, accept, credible, fit_set,
                                          null_floor, screen_costs, set_axes, trial)
@@ -304,7 +304,7 @@ def forward_select(search: Search, names: Sequence[str], singles: Singles, nomin
         else:
             values = refit_accepted(search, current, _refit_start(values, current))
         search.say(f"accepted {best} (step {step + 1}): "
-                   + ", ".join(f"{n} = {format_value(v, EFFECTS[n].unit)}" for n, v in values.items()))
+                   + ", ".join(f"{n} = {format_quantity(v, EFFECTS[n].unit)}" for n, v in values.items()))
         if new_first is not None and ok:  # the first effect the lookahead brought: does it pay beside the others?
             first = accepted[0]  # new_first, or breakaway/plain friction in its place after a downgrade
             accepted, current, values, steps = _drop_if_unpaid(search, first, _family(first), accepted, current,
@@ -360,6 +360,6 @@ def _fit_shape(search: Search, current: Trial, values: dict, terms: int) -> tupl
         search.say(f"{SHAPE}: left at the model's (a fitted one gains {relative_gain(total, current.val_weighted):.1f} %)")
         return current, values
     values = fit(lambda vals: ev.cost(vals, search.fit_runs), [axis], fixed=values).values
-    search.say(f"{SHAPE} = {format_value(values[SHAPE], EFFECTS[SHAPE].unit)} (validation cost gain "
+    search.say(f"{SHAPE} = {format_quantity(values[SHAPE], EFFECTS[SHAPE].unit)} (validation cost gain "
                f"{relative_gain(total, current.val_weighted):.1f} %)")
     return shaped, values

@@ -39,7 +39,7 @@ from dataclasses import dataclass
 from station.diagnosis.search.bounded import fit
 from station.diagnosis.runs.cost import Evaluator, pooled, relative_gain, rms_gain
 from station.diagnosis.runs.folds import Fold, validation_runs
-from station.diagnosis.answer.prose import format_value
+from station.diagnosis.units import format_quantity
 from station.diagnosis.search.selection import (
     MAX_EFFECTS,
     SECOND_STEP_CANDIDATES,
@@ -384,9 +384,9 @@ def _values_text(values: Mapping[str, float], names: Sequence[str], session_name
     for n in names:
         unit = EFFECTS[n].unit
         if n in values:
-            parts.append(f"{n} = {format_value(values[n], unit)}")
+            parts.append(f"{n} = {format_quantity(values[n], unit)}")
         else:
-            parts.append(f"{n} = " + ", ".join(f"{format_value(values[key(n, s)], unit)} ({name})"
+            parts.append(f"{n} = " + ", ".join(f"{format_quantity(values[key(n, s)], unit)} ({name})"
                                                for s, name in enumerate(session_names) if key(n, s) in values))
     return "; ".join(parts)
 
@@ -497,9 +497,9 @@ def decide_drift(search: Search, layout: Layout, structure: Structure, nominal: 
                      max(0.0, relative_gain(floor, tr.val_weighted)), shared_value, ranges, apart)
         decisions.append(d)
         search.say(f"drift of {n}: per-session values lower the held-out cost by {d.cost_gain_pct:.1f} % "
-                   f"against one shared value ({format_value(shared_value, EFFECTS[n].unit)}), luck alone by "
+                   f"against one shared value ({format_quantity(shared_value, EFFECTS[n].unit)}), luck alone by "
                    f"{d.luck_gain_pct:.1f} %; leave-one-run-out refits "
-                   + ", ".join(f"{format_value(lo, EFFECTS[n].unit)}..{format_value(hi, EFFECTS[n].unit)} ({name})"
+                   + ", ".join(f"{format_quantity(lo, EFFECTS[n].unit)}..{format_quantity(hi, EFFECTS[n].unit)} ({name})"
                                for (lo, hi), name in zip(ranges, session_names))
                    + f"{'' if apart else ' overlap'}: {'drifts' if drifts else 'shared'} ({ev.simulations} simulations)")
     shared = [d.name for d in decisions if not d.drifts]

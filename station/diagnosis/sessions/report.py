@@ -19,7 +19,8 @@ from collections.abc import Mapping
 from pathlib import Path
 
 from station.diagnosis.sessions.drift import Decision
-from station.diagnosis.answer.prose import format_value, plain_name
+from station.diagnosis.answer.prose import plain_name
+from station.diagnosis.units import format_quantity
 from station.diagnosis.search.selection import MIN_NOISE_GAIN, MIN_RELATIVE_GAIN
 from station.outputs import Transaction
 from station.plant.effects import EFFECTS
@@ -31,7 +32,7 @@ REPORT_FILES = (PAGE, FIGURE)
 
 
 def _value(name: str, x: float) -> str:
-    return format_value(x, EFFECTS[name].unit)
+    return format_quantity(x, EFFECTS[name].unit)
 
 
 def decision_words(result, d: Decision) -> str:
