@@ -32,17 +32,15 @@ from station.diagnosis.sessions.drift import (
     decide_drift,
     finite,
     key,
-    nominal_trial,
     select_structure,
     session_axes,
 )
 from station.diagnosis.runs.folds import LEAVE_ONE_OUT, make_folds
 from station.diagnosis.runs.inputs import data_digest, set_aside_beam_tests
-from station.diagnosis.search.selection import Search, effect_axes
+from station.diagnosis.search.workbench import Bench, nominal_trial, workbench
 from station.errors import StationError
 from station.logged.simulate import simulate_log
 from station.outputs import unique_names
-from station.plant.effects import CANDIDATES, EFFECTS
 from station.signals import check_stop
 from station.plant.model import as_model
 from station.runlog.schema import MAGIC
@@ -462,20 +460,13 @@ def diagnose_sessions(sessions: Sequence[SessionLogs], model=None, progress: Cal
     StationError
         An unknown candidate, a bad model, no usable run, or fewer than two usable runs.
     """
-    from threadpoolctl import threadpool_limits
-
-    from station.plant.diskcache import bulk
-
-    with threadpool_limits(limits=1, user_api="blas"), bulk():  # tiny matrices; forms not via the disk (see diagnose)
-        return _diagnose_sessions(sessions, model, progress or (lambda msg: None), candidates, max_samples, simulate)
+    with workbench("survey --diagnose", candidates) as bench:
+        return _diagnose_sessions(sessions, model, progress or (lambda msg: None), bench, max_samples, simulate)
 
 
-def _diagnose_sessions(sessions, model, say, candidates, max_samples, simulate) -> SessionsDiagnosis:
+def _diagnose_sessions(sessions, model, say, bench: Bench, max_samples, simulate) -> SessionsDiagnosis:
     t0 = time.perf_counter()
-    names = list(CANDIDATES if candidates is None else candidates)
-    for n in names:
-        if n not in EFFECTS:
-            raise StationError(f"survey --diagnose: unknown candidate effect '{n}' (known: {', '.join(EFFECTS)})")
+    names = bench.names
     base = as_model(model)
     loaded = load_sessions(sessions, max_samples, say)
     cases = loaded.cases
@@ -486,7 +477,7 @@ def _diagnose_sessions(sessions, model, say, candidates, max_samples, simulate) 
     layout = Layout(tuple(loaded.groups))
     ev = Evaluator(cases, base, simulate or simulate_cut, run_effects=PerSession(layout.session_of()))
     folds, how = make_folds(len(cases), 0)
-    search = Search(ev, folds, tuple(range(len(cases))), effect_axes(), 1, say)
+    search = bench.search(ev, folds, range(len(cases)), say)
     session_axes(search, names, layout.sessions)
     calibrate_noise(ev)
     notes = list(loaded.notes)

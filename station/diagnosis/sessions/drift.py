@@ -525,18 +525,6 @@ def decide_drift(search: Search, layout: Layout, structure: Structure, nominal: 
     return DriftResult(accepted, shared, drifting, decisions, values, nominal, final, dict(structure.values), refits)
 
 
-def nominal_trial(ev: Evaluator, folds: Sequence[Fold]) -> Trial:
-    """The nominal model's held-out errors (no effects in any fold).
-
-    Parameters
-    ----------
-    ev : Evaluator
-    folds : sequence of Fold
-    """
-    val = validation_runs(folds)
-    return Trial((), [{} for _ in folds], {i: ev.sse({}, i) for i in val}, sum(ev.weighted({}, i) for i in val))
-
-
 def finite(x: float) -> float | None:
     """``x``, or None when it is not finite (for JSON).
 
