@@ -24,6 +24,7 @@ from station.diagnosis.units import format_quantity
 from station.diagnosis.search.selection import MIN_NOISE_GAIN, MIN_RELATIVE_GAIN
 from station.outputs import Transaction
 from station.plant.effects import EFFECTS
+from station.plots import new_figure
 
 PAGE = "report.html"
 FIGURE = "drift.png"
@@ -121,8 +122,6 @@ def drift_figure(result):
     -------
     matplotlib.figure.Figure
     """
-    from station.plots import new_figure
-
     names = list(result.accepted)
     fig = new_figure(8.0, 2.6 * max(1, len(names)) + 0.6)
     x = list(range(len(result.sessions)))
