@@ -140,8 +140,8 @@ def run_case(case: str, seed: int) -> Outcome:
 def _costs(paths, hidden: dict, found: dict) -> tuple[float, float]:
     """The diagnosis's in-sample cost J (noise-normalised θ and a errors over all runs, 1 at
     the noise floor) of the hidden effects and of the found ones."""
-    from station.diagnosis.cases import load_case
-    from station.diagnosis.cost import Evaluator, calibrate_noise
+    from station.diagnosis.runs.cases import load_case
+    from station.diagnosis.runs.cost import Evaluator, calibrate_noise
     from station.plant.model import load_model
 
     ev = Evaluator([load_case(p) for p in paths], load_model())
@@ -211,7 +211,7 @@ def table(outcomes: list[Outcome], seeds: str, elapsed: float) -> str:
                       "the four runs better than the answer (in-sample cost J, the diagnosis's own: noise-normalised "
                       "θ and a errors, 1 at the noise floor; columns J hidden / J found below): the search did not "
                       "reach the better explanation (a friction-like proxy such as deadzone often comes first; the "
-                      "lookahead of station.diagnosis.stepwise replaces it at the second step only), rather than the "
+                      "lookahead of station.diagnosis.search.stepwise replaces it at the second step only), rather than the "
                       "runs failing to tell the explanations apart."]
     lines += ["", "## Every case", "",
               "| case | seed | hidden | causes found | values found | θ gain % | J hidden | J found | unexplained | s |",

@@ -24,6 +24,8 @@ from station.link import LinkLimits, open_session
 from station.protocol import check_ticks
 from station.loop import RunResult, run_loop
 from station.outputs import Input, Output, check_outputs, is_device
+from station.plots import plot_runs, run_title, save_figure
+from station.progress import ProgressSink
 from station.runlog import RunLogError, RunLogWriter, read_log
 from station.runsetup import DEFAULT_LIMIT, choose_controller, log_tag, make_reference, reference_path, run_url
 from station.signals import StopSignals
@@ -76,7 +78,7 @@ class StepReport:
     def to_pandas(self):
         """The logged run as a :class:`pandas.DataFrame` (one row per tick, the log's columns;
         pandas is imported here, not with the package)."""
-        import pandas as pd
+        import pandas as pd  # lazy: start-up time (pandas)
 
         log = read_log(self.log_path)
         return pd.DataFrame({name: col for name, col in log.data.items()})
@@ -84,8 +86,6 @@ class StepReport:
     def plot(self):
         """The run's figure (θ and u, v and v_applied, a; outcome and metrics in the title),
         a :class:`matplotlib.figure.Figure` (no pyplot state: display it in a notebook or save it)."""
-        from station.plots import plot_runs, run_title
-
         log = read_log(self.log_path)
         return plot_runs([log], title=run_title(log, "" if self.metrics is None else self.metrics.summary()))
 
@@ -294,8 +294,6 @@ def run_step(port: str = DEFAULT_PORT, protocol: str = "v1", controller: str = D
         sinks = list(sinks)
         bar = None
         if progress:
-            from station.progress import ProgressSink
-
             bar = ProgressSink(u.size * dt)
             sinks.append(bar)
         try:
@@ -357,8 +355,6 @@ def _write_figure(report: StepReport) -> Path | None:
     """``<log stem>.png`` beside the log; a warning (not an error) when it cannot be drawn."""
     png = figure_path(report.log_path)
     try:
-        from station.plots import save_figure
-
         save_figure(report.plot(), png)
     except Exception as exc:  # noqa: BLE001 - a figure must never cost the run's report
         warnings.warn(f"{png}: the run's figure was not written ({exc}); the log is complete",

@@ -11,6 +11,7 @@ from pathlib import Path
 from typing import Any, NamedTuple
 
 import numpy as np
+from serial import SerialException
 
 from station import DT
 from station.control import (KINDS, file_reference, make_controller, pulse_reference, step_reference,
@@ -246,8 +247,8 @@ def run_url(port: str, model, n_elements: int | None,
         model = path
     url = sim_port(port, model, n_elements, seed)
     if url.lower().startswith("sim://"):  # the URL's options and model checked before anything starts
-        from serial import SerialException
 
+        # lazy: start-up time (the simulator, only for sim:// ports)
         from station.sim.protocol_sim import OptionError, parse_url
 
         try:

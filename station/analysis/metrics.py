@@ -211,7 +211,7 @@ def step_info(t, theta, u_final: float, step_time: float = 0.0, v=None, limit: f
     of 2 % of ``|u_final|``: python-control counts a sample exactly on the band's edge as
     outside and has no hold.
     """
-    import control
+    import control  # lazy: start-up time (python-control)
 
     t, theta, u_final = _step_response(t, theta, u_final)
     after = t >= step_time - 1e-12

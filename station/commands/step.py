@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import shutil
 import sys
 from pathlib import Path
 
@@ -17,7 +18,7 @@ from station.link import LinkLimits
 from station.outputs import Input, Output, check_folder, check_outputs, is_device, write_json
 from station.protocol import check_ticks
 from station.signals import noting
-from station.viz import RRD_BYTES_PER_TICK
+from station.viz import RRD_BYTES_PER_TICK, RerunSink
 
 MAX_DURATION_S = (2**32 - 1) * DT
 """Longest run v1 can count (START's n_ticks is a u32), s."""
@@ -192,8 +193,6 @@ def _check_resources(duration: float, folder: Path, rrd: bool = False) -> None:
     StationError
         Naming --duration, what the run needs and what there is.
     """
-    import shutil
-
     ticks = round(duration / DT)
     need_mem, need_disk = ticks * (BYTES_PER_TICK_MEMORY + RRD_BYTES_PER_TICK * rrd), ticks * BYTES_PER_TICK_DISK
     available = _available_memory()
@@ -238,8 +237,6 @@ def run(args) -> int:
         warn(f"settings from {args._config} (options given on the command line win)")
     sinks = []
     if args.rrd is not None or args.spawn:
-        from station.viz import RerunSink
-
         sinks.append(RerunSink(rrd_path=args.rrd, spawn=args.spawn, name="station step"))
     report = None
     try:

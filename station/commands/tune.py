@@ -5,11 +5,15 @@ compensator on a model")."""
 from __future__ import annotations
 
 import argparse
+import os
 import sys
 import tempfile
+import warnings
 from pathlib import Path
 
 from station.commands.options import add_model_options, add_report_options, model_inputs, number
+from station.design.robust import DEFAULT_SAMPLES
+from station.design.space import SHAPERS, STRUCTURES
 from station.outputs import FORCE_HELP, Input, Output, Transaction, check_outputs
 
 NAME = "tune"
@@ -32,8 +36,6 @@ def configure(parser: argparse.ArgumentParser) -> None:
     """
     # light modules only: every command's parser is built at start-up (the design's
     # evaluation imports scipy.signal and python-control, most of a second)
-    from station.design.robust import DEFAULT_SAMPLES
-    from station.design.space import SHAPERS, STRUCTURES
 
     add_model_options(parser, "the model the compensator is designed on (its effects included), or a diagnosis "
                       "JSON (its extended model); without it, "
@@ -80,7 +82,7 @@ def outputs(args: argparse.Namespace) -> list[Output]:
     args : argparse.Namespace
         ``out``, ``json``, ``report``.
     """
-    from station.design.report import REPORT_FILES
+    from station.design.report import REPORT_FILES  # lazy: start-up time (the design: scipy)
 
     report = [] if args.report is None else [Output("--report", args.report / name) for name in REPORT_FILES]
     return [Output("--out", args.out), Output("--json", args.json), *report]
@@ -106,7 +108,7 @@ def format_result(result) -> str:
     def settle(x):
         return "not settled" if x is None else f"{x:.3f} s"
 
-    from station.design.hold import held_summary
+    from station.design.hold import held_summary  # lazy: start-up time (the design: scipy)
 
     d = result.design_json()
     lines = [f"{result.space.structure} on {result.nominal.name!r}, step {result.amplitude:g}, "
@@ -156,9 +158,7 @@ def run(args: argparse.Namespace) -> int:
         JSON with no model, an output that exists (without ``--force``), repeats another or is
         an input; an unreachable scheduler.
     """
-    import os
-    import warnings
-
+    # lazy: start-up time (the design: scipy, python-control)
     from station.design.tuning import DEFAULT_AMPLITUDE, check_request, tune
     from station.design.verify import verify
 
@@ -187,7 +187,7 @@ def run(args: argparse.Namespace) -> int:
         if out is not None:
             tx.write(out, result.file.to_toml(), "the compensator file")
         if args.report is not None:
-            from station.design.report import write_report
+            from station.design.report import write_report  # lazy: start-up time (matplotlib)
 
             page = write_report(result, args.report, tx, verify_log)
         if args.json is not None:

@@ -138,7 +138,7 @@ class LoopModel:
         ----------
         compensator : station.control.Compensator
         """
-        import control
+        import control  # lazy: start-up time (python-control)
 
         gm, pm, _, _, wp, _ = control.stability_margins(control.frd(self.loop(compensator), self.omega, dt=self.dt),
                                                        returnall=True)

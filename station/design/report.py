@@ -14,6 +14,7 @@ from pathlib import Path
 from station.design.figures import bode_figure, robust_figure, steps_figure
 from station.design.space import thesis_compensator
 from station.outputs import Transaction
+from station.design.hold import held_summary
 
 _STYLE = ("body{font-family:sans-serif;max-width:1100px;margin:auto}table{border-collapse:collapse}"
           "td,th{border:1px solid #ccc;padding:2px 6px;font-size:90%}img{max-width:100%}")
@@ -32,8 +33,6 @@ def _fmt(x, unit: str = "", digits: int = 3) -> str:
 
 
 def _tables(result) -> list[str]:
-    from station.design.hold import held_summary
-
     esc = html.escape
     d = result.design_json()
     rows = [f"<h1>Compensator design: {esc(result.space.structure)} on {esc(result.nominal.name)}</h1>",

@@ -20,6 +20,7 @@ file (a JSON with no model, a model that does not load, an unstable plant).
 
 from __future__ import annotations
 
+import itertools
 import json
 import math
 from pathlib import Path
@@ -205,7 +206,7 @@ def sample_models(model: Model, intervals: dict, n: int, seed: int = SEED) -> li
     seed : int
         The sample's seed.
     """
-    from scipy.stats import qmc
+    from scipy.stats import qmc  # lazy: start-up time (scipy.stats: the tune command's parser imports this module)
 
     if n <= 0 or not intervals:
         return []
@@ -224,8 +225,6 @@ def corner_models(model: Model, intervals: dict) -> list[Model]:
     intervals : dict
         Effect -> (low, high).
     """
-    import itertools
-
     if not intervals or len(intervals) > MAX_CORNER_EFFECTS:
         return []
     return [_model_at(model, intervals, np.array(row, dtype=float), f"{model.name} corner {k + 1}")

@@ -40,6 +40,8 @@ from collections.abc import Callable
 from typing import NamedTuple
 
 import numpy as np
+from scipy.optimize import minimize
+from scipy.stats import qmc
 
 from station.design.evaluate import RUN_S, Figures, Requirements, cost, judge
 from station.design.linear import loop_model
@@ -290,8 +292,6 @@ def refine(problem: Problem, x0, which, maxfev: int) -> tuple[np.ndarray, int]:
     evaluations : int
         Designs judged on models.
     """
-    from scipy.optimize import minimize
-
     x0 = np.clip(np.asarray(x0, dtype=float), 0.0, 1.0)
     d = x0.size
     simplex = [x0]
@@ -331,8 +331,6 @@ def search(problem: Problem, runner, budget: Budget = Budget(), seed: int = 0,
     progress : callable, optional
         Called with one line per stage.
     """
-    from scipy.stats import qmc
-
     say = progress or (lambda msg: None)
     space, n_models = problem.space, len(problem.models)
     screen = screening_set(problem.models, budget.screen)

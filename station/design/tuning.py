@@ -17,6 +17,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+from threadpoolctl import threadpool_limits
+
 from station.control.designs import CompensatorFile
 from station.design.evaluate import Figures, Requirements, friction_held, held_error, judge, violations
 from station.design.executor import open_runner
@@ -26,6 +28,7 @@ from station.design.robust import DEFAULT_SAMPLES, SEED, RobustSet, robust_set
 from station.design.search import Budget, Problem, judge_points, search
 from station.design.space import SHAPERS, STRUCTURES, DesignSpace, thesis_compensator
 from station.errors import StationError
+from station.plant.modes import modal_summary
 
 DEFAULT_AMPLITUDE = {"p": 50.0, "lead": 100.0, "lead-accel": 200.0}
 """Default step height per structure, encoder counts: the rig's three experiments (thesis)."""
@@ -80,8 +83,6 @@ def first_mode(model) -> tuple[float, float]:
     ----------
     model : station.plant.model.Model
     """
-    from station.plant.modes import modal_summary
-
     ms = modal_summary(model.linear_params(), model.n_elements)
     return float(ms.antiresonances_hz[0]), float(ms.antiresonance_damping[0])
 
@@ -292,8 +293,6 @@ def tune(model=None, structure: str = "lead-accel", amplitude: float | None = No
         amplitude, limit or overshoot, an unreadable or unstable model, a JSON with no model,
         an unreachable scheduler.
     """
-    from threadpoolctl import threadpool_limits
-
     t0 = time.perf_counter()
     amplitude = DEFAULT_AMPLITUDE.get(structure, 100.0) if amplitude is None else amplitude
     check_request(structure, amplitude, limit, overshoot, shaper, samples, jobs)

@@ -18,6 +18,8 @@ import numpy as np
 
 from station.control.designs import read_compensator_file
 from station.design.evaluate import RUN_S, STEP_TICK, step_figures, step_run
+from station.experiment import run_step
+from station.runlog import read_log
 
 
 class Verification(NamedTuple):
@@ -83,9 +85,6 @@ def verify(model, compensator_file: str | Path, amplitude: float, log: str | Pat
     StationError
         The file cannot be read, or the run cannot start.
     """
-    from station.experiment import run_step
-    from station.runlog import read_log
-
     with tempfile.TemporaryDirectory(prefix="station-tune-") as tmp:
         path = Path(log) if log is not None else Path(tmp) / "verify-step.tsv"
         report = run_step(port="sim://?noise=0", controller=str(compensator_file), amplitude=amplitude,

@@ -232,10 +232,11 @@ def _compile() -> None:
     if _compiled_loop is not None:
         return
     try:
-        import numba
+        import numba  # lazy: start-up time (numba)
     except ImportError:  # pragma: no cover - exercised only without numba
         _compiled_loop = _loop
         return
+    # lazy: start-up time (numba compiles these on first use)
     from station.rounding import half_away_compiled, sensor_count_compiled
 
     jit = numba.njit(cache=True, nogil=True)

@@ -125,7 +125,7 @@ class SimResult(NamedTuple):
 
     def to_pandas(self):
         """The run as a ``pandas.DataFrame``, one column per field (pandas imported here)."""
-        import pandas as pd
+        import pandas as pd  # lazy: start-up time (pandas)
 
         return pd.DataFrame(self._asdict())
 
