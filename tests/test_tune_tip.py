@@ -223,3 +223,19 @@ def test_tune_prints_each_settling_time_with_its_band(quiet):
     text = format_result(quiet)
     assert settling_label(2) in text and "tip residual RMS" in text
     assert "2 % settling" not in text and "settling time" not in text
+
+
+@pytest.mark.parametrize("script, option, value", [
+    ("heldout_tune.py", "--seeds", "0"), ("heldout_tune.py", "--seeds", "nan"), ("heldout_tune.py", "--jobs", "inf"),
+    ("tuning_table.py", "--seeds", "nan"), ("tuning_table.py", "--unseen", "0"), ("tuning_table.py", "--jobs", "1.5"),
+])
+def test_the_tip_scripts_refuse_a_bad_number_in_one_line(script, option, value, capsys):
+    import runpy
+    from pathlib import Path
+
+    main = runpy.run_path(str(Path(__file__).resolve().parents[1] / "scripts" / script), run_name="options")["main"]
+    with pytest.raises(SystemExit) as exc:
+        main([option, value])
+    assert exc.value.code == 2
+    last = capsys.readouterr().err.strip().splitlines()[-1]
+    assert f"argument {option}: {value} is" in last and "expected range" in last

@@ -151,7 +151,8 @@ def format_result(result) -> str:
     v = result.verification
     if v is not None:
         lines.append(f"  station step on the simulated rig: {v.reason}, overshoot {v.overshoot_pct:.1f} %, hub {s2} "
-                     f"{settle(v.settling_2pct_s)}; log {'equals' if v.matches else 'DIFFERS from'} "
+                     f"{settle(v.settling_2pct_s)}, tip residual RMS {v.tip_residual_rms:.2f}; log "
+                     f"{'equals' if v.matches else 'DIFFERS from'} "
                      f"the simulation (max |Δθ| {v.max_abs_dtheta:g}, |Δv| {v.max_abs_dv:g})")
     lines.append(f"  {result.evaluations} evaluations (a design on a model) in {result.elapsed_s:.1f} s "
                  f"({result.executor})")

@@ -46,7 +46,7 @@ def steps_figure(model, tuned, thesis, amplitude: float, names=("thesis", "tuned
     ax = fig.subplots(3, 2, sharex=True, sharey="row")
     for col, (comp, name) in enumerate(((thesis, names[0]), (tuned, names[1]))):
         r = step_run(model, comp, amplitude)
-        ax[0, col].plot(r.t, tip_position(model, r.v), lw=0.8, color="C3", label="tip (θ + w_tip/L)")
+        ax[0, col].plot(r.t, tip_position(model, r.v), lw=0.8, color="C3", label="tip (hub + deflection / L)")
         ax[0, col].plot(r.t, r.theta, lw=1.0, color="C0", label="θ (hub)")
         ax[0, col].plot(r.t, r.u, "k--", lw=0.7, label="u")
         ax[0, col].axhspan(amplitude * 0.98, amplitude * 1.02, color="g", alpha=0.12, label="2 % band")
@@ -195,8 +195,13 @@ def tradeoff_figure(tradeoff, tip_rms: float | None = None):
     if tip_rms is not None:
         ax.axhline(tip_rms, color="C3", lw=0.7, ls="--", label=f"tip requirement (≤ {tip_rms:g}× the thesis's)")
     ax.axvline(0.6, color="C2", lw=0.7, ls=":", label="hub at 0.6× the thesis's")
+    from matplotlib.ticker import FormatStrFormatter
+
     ax.set_xscale("log")
     ax.set_yscale("log")
+    for axis in (ax.xaxis, ax.yaxis):
+        axis.set_major_formatter(FormatStrFormatter("%g"))
+        axis.set_minor_formatter(FormatStrFormatter("%g"))
     ax.set_xlabel(f"worst hub {settling_label(2)} / the thesis's, over the models (not settled: the run's length)")
     ax.set_ylabel("worst tip residual RMS / the thesis's, over the models")
     ax.set_title(f"{len(pts)} designs judged on every model of the set", fontsize=9)
