@@ -42,6 +42,11 @@ FRONT_DESIGNS = 12
 """Designs of the bracket's own trade-off front judged on every model besides the search's
 (:func:`tune`'s ``front``)."""
 
+FRONT_BOUNDS = (0.5, 0.75, 1.5, 2.0, 3.0, None)
+"""Other bounds on the tip (multiples of the thesis's residual RMS; None: none) the trade-off
+refines a design for, besides the one asked for: each a short Nelder–Mead from the best design
+so far under that bound, so the front reaches both ways from the chosen design."""
+
 
 def check_request(structure: str, amplitude: float, limit: float, overshoot: float, shaper: str,
                   samples: int, jobs: int, tip_rms: float | None = DEFAULT_TIP_RMS, filter: str = DEFAULT_FILTER) -> None:
@@ -418,7 +423,8 @@ def tune(model=None, structure: str = "lead-accel", amplitude: float | None = No
     filter : {"none", "notch", "rolloff"}
         What Gth holds beside the structure's gain (:mod:`station.design.space`).
     front : int
-        Designs of the bracket's trade-off front judged on every model for the trade-off (≥ 0).
+        Designs of the bracket's trade-off front judged on every model for the trade-off (≥ 0;
+        with any, one design more is refined for each other bound on the tip, :data:`FRONT_BOUNDS`).
 
     Returns
     -------
@@ -457,7 +463,7 @@ def tune(model=None, structure: str = "lead-accel", amplitude: float | None = No
         values = space.values(result.best.x)
         whole = problem._replace(requirements=None)
         final = runner.map(judge_points, [(whole, [result.best.x], everyone)])[0][0]
-        tradeoff = _tradeoff(problem, result, baseline, runner, front, say)
+        tradeoff = _tradeoff(problem, result, baseline, runner, front, say, budget, tip_rms)
         executor = runner.where
     file = space.compensator_file(values, name=f"tuned {structure}", path=out,
                                   design=design_record(model, nominal, robust, out))
@@ -467,9 +473,13 @@ def tune(model=None, structure: str = "lead-accel", amplitude: float | None = No
                       time.perf_counter() - t0, executor, seed, tip_rms, bounds, tradeoff)
 
 
-def _tradeoff(problem: Problem, result: SearchResult, baseline, runner, n: int, say) -> TradeOff:
-    """The trade-off: the search's designs judged on every model, and ``n`` more spread along
-    the bracket's own front on the screening set, judged on every model too."""
+def _tradeoff(problem: Problem, result: SearchResult, baseline, runner, n: int, say, budget: Budget = Budget(),
+              tip_rms: float | None = DEFAULT_TIP_RMS) -> TradeOff:
+    """The trade-off: the search's designs judged on every model; ``n`` more spread along the
+    bracket's own front on the screening set; and, with ``n`` > 0, one design refined for each
+    other bound on the tip (:data:`FRONT_BOUNDS`), all judged on every model."""
+    from station.design.search import objective, refine
+
     screen = list(result.screen)
     reqs_screen = problem.model_requirements(screen)
     base_screen = [baseline[i] for i in screen]
@@ -477,10 +487,24 @@ def _tradeoff(problem: Problem, result: SearchResult, baseline, runner, n: int, 
     bracket = [(x, trade_point(x, f, base_screen, reqs_screen, problem.run_s)) for x, f in result.bracket]
     front = pareto([p for _, p in bracket])
     picks = [bracket[front[k]][0] for k in spread_along([bracket[i][1].hub_ratio for i in front], n)]
-    picks = [x for x in picks if all(np.max(np.abs(x - y)) > 1e-9 for y in seen)]
     everyone = list(range(len(problem.models)))
-    if picks:
-        say(f"trade-off: {len(picks)} designs of the bracket's front on {len(everyone)} models")
+    others = [r for r in FRONT_BOUNDS if r != tip_rms] if n > 0 else []
+    if others:
+        say(f"trade-off: {len(others)} designs refined for other bounds on the tip, {len(picks)} of the bracket's "
+            f"front, on {len(everyone)} models")
+        tasks = []
+        for r in others:
+            bounded = problem._replace(tip_bounds=None if r is None else
+                                       tuple(tip_bound(r, b.tip_residual_rms) for b in baseline))
+            start = min(result.judged, key=lambda c: objective(c.figures, bounded.model_requirements(), bounded.run_s,
+                                                               bounded.bar_s))
+            tasks.append((bounded, start.x, list(result.working_set), max(20, budget.maxfev // 2)))
+        picks += [x for x, _ in runner.map(refine, tasks)]
+    kept = []
+    for x in picks:
+        if all(np.max(np.abs(x - y)) > 1e-9 for y in seen + kept):
+            kept.append(x)
+    picks = kept
     extra = runner.map(judge_points, [(problem, [x], everyone) for x in picks])
     reqs = problem.model_requirements()
     xs = seen + picks
