@@ -366,9 +366,9 @@ def main(argv: list[str] | None = None) -> int:
         f"{_s(f.tip_settling_2pct_s)} (the thesis's {_s(b.tip_settling_2pct_s)}). On every model of its set "
         f"({len(la.figures)}) it meets overshoot ≤ 5 % and the tip's bound on {sum(la.met())}; the hub is at most "
         f"0.6x the thesis's on {hub_ok} of them, and at worst {c.hub_ratio:.2f}x (tip {c.tip_ratio:.2f}x). "
-        "That is the limit the trade-off shows: on the models with no friction and an amplifier offset "
-        "pushing the hub past the target, a loop quiet enough for the tip creeps back into the band, and "
-        "a loop stiff enough to stop it rings the tip (below).",
+        "That is the limit the trade-off shows: on the doubt's corners with no friction, an amplifier "
+        "offset, a beam 10 % softer and the least drive damping, a loop quiet enough for the tip creeps "
+        "into the band, and a loop stiff enough to stop the hub sooner rings the tip (below).",
         "",
         "The former design (the hub alone: 0.266 s on `rig`) left the accelerometer swinging at the",
         "second mode for a second after the hub had stopped; what rings it after 0.6 s is the hub hunting",
