@@ -48,8 +48,10 @@ def _tables(result) -> list[str]:
             f"{result.requirements.phase_margin_deg:g}°, {esc(tip)}, no limit cycle, settled within the run. "
             f"{'All met on every model.' if d['feasible'] else 'NOT met on every model: see the table.'}</p>",
             f"<p>Gth: the structure's gain{'' if result.space.filter == 'none' else ' and a ' + result.space.filter}"
-            f"; shaper: {esc(result.space.shaper)}. Design model record: "
-            f"{esc(str(d['design_model']))}.</p>",
+            f"; shaper: {esc(result.space.shaper)}. The compensator file records its design model: "
+            + ("none" if result.file.design is None else
+               f"<code>model = {esc(result.file.design.model)}</code>, <code>model_sha256 = "
+               f"{esc(result.file.design.model_sha256)}</code>") + ".</p>",
             *[f"<p><b>Warning:</b> {esc(w)}.</p>" for w in d["warnings"]],
             *([f"<p>Friction: {esc(note)}.</p>"] if (note := held_summary(result.figures,
                                                                        result.model_requirements()[0])["note"])
