@@ -264,3 +264,89 @@ def run_url(port: str, model, n_elements: int | None,
     return url, folder
 
 
+
+
+class DesignModel(NamedTuple):
+    """The simulated rig's model for a compensator file that records its design model
+    (:func:`design_model_note`).
+
+    Attributes
+    ----------
+    model : str, Path or None
+        The model the run should use (None: the port's own, tmm-fit by default).
+    note : str or None
+        One line to show: which model runs and why, or that it is not the design model.
+    """
+
+    model: Any
+    note: str | None
+
+
+def design_model_note(controller, model, port: str, n_elements: int | None = None) -> DesignModel:
+    """The simulated rig's model for a run, given the compensator file's ``[design]`` record.
+
+    The choice (docs/tuning.md "Running a tuned compensator"): on a simulated rig (``sim://``),
+    a compensator file that records the model it was designed on runs on that model when no
+    model is given (``--model`` or ``sim://?model=``), if it is still the same model (a
+    built-in name, or the model file, its path relative to the compensator file's folder, as
+    long as it exists and its sha256 matches), and the note says so; when a model is given
+    and it is not the design model, that model runs and the note says so. A real port, a
+    built-in controller kind or a file without a record: no note, the model as given.
+
+    Parameters
+    ----------
+    controller : str, Path or controller object
+        ``--controller``.
+    model : str, Path or None
+        ``--model`` (None: not given).
+    port : str
+        ``--port``.
+    n_elements : int, optional
+        ``--elements`` (part of the model that runs).
+
+    Returns
+    -------
+    DesignModel
+
+    Raises
+    ------
+    StationError
+        A compensator file that cannot be read (as :func:`choose_controller`).
+    """
+    from station.plant.model import builtin_models, load_model
+
+    if (not isinstance(controller, (str, Path)) or str(controller) in KINDS or not exists(controller)
+            or not str(port).lower().startswith("sim://")):
+        return DesignModel(model, None)
+    record = read_compensator_file(controller).design
+    if record is None:
+        return DesignModel(model, None)
+    given = model if model is not None else dict(urllib.parse.parse_qsl(urllib.parse.urlsplit(str(port)).query)).get(
+        "model")
+    designed = f"{controller} was designed on model {record.model!r}"
+    if given is not None:
+        try:
+            ok = record.matches(load_model(given, n_elements).to_toml())
+        except StationError:  # a bad --model is refused where it is opened, with its own line
+            return DesignModel(model, None)
+        return DesignModel(model, None if ok else f"{designed}; the simulated rig runs {str(given)!r}, another model "
+                                                  f"(sha256 differs)")
+    path = Path(record.model)
+    if not path.is_absolute():
+        path = Path(controller).parent / path
+    found = str(path) if path.suffix.lower() == ".toml" and exists(path) else (
+        record.model if record.model in builtin_models() else None)
+    if found is None:
+        return DesignModel(None, f"{designed}, not a built-in model or a model file here: the simulated rig runs "
+                                 f"its default, tmm-fit")
+    try:
+        design = load_model(found)
+    except StationError as exc:
+        return DesignModel(None, f"{designed}, which cannot be read ({exc}): the simulated rig runs its default, "
+                                 f"tmm-fit")
+    if not record.matches(design.to_toml()):
+        return DesignModel(None, f"{designed}, which has changed since (sha256 differs): the simulated rig runs its "
+                                 f"default, tmm-fit")
+    other = "" if n_elements is None or n_elements == design.n_elements else \
+        f" (with --elements {n_elements}: another model than the {design.n_elements} elements it was designed on)"
+    return DesignModel(found, f"simulated rig: model {record.model}, from {controller}'s design record{other}")

@@ -233,6 +233,11 @@ def run(args) -> int:
     chosen = runsetup.choose_controller(args.controller, args.kp, args.limit)  # before anything starts, once
     if chosen.note is not None:
         warn(chosen.note)
+    design = runsetup.design_model_note(args.controller, args.model, args.port, args.elements)
+    if design.note is not None:
+        warn(design.note)
+    if args.model is None and str(design.model).endswith(".toml"):  # the file's design model file: an input too
+        check_outputs(outputs(args), [Input("--controller's design model", design.model)], force=args.force)
     if getattr(args, "_config", None):
         warn(f"settings from {args._config} (options given on the command line win)")
     sinks = []
@@ -249,7 +254,7 @@ def run(args) -> int:
                                  timeout=args.timeout, baudrate=args.baud, force=args.force,
                                  limits=LinkLimits(timeout=args.timeout, max_lag=args.max_lag / 1000,
                                                    max_miss=args.max_miss, max_step=args.max_step),
-                                 out_dir=args.out_dir, model=args.model, n_elements=args.elements, seed=args.seed,
+                                 out_dir=args.out_dir, model=design.model, n_elements=args.elements, seed=args.seed,
                                  progress=not args.quiet and sys.stderr.isatty(),
                                  announce=lambda line: print(line, flush=True))
     finally:

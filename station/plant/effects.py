@@ -93,7 +93,7 @@ EFFECTS: dict[str, EffectSpec] = {
     for spec in (
         EffectSpec("coulomb_friction", "DAC counts", 0.0, 0.0, 40.0, "plant"),
         # v_s: the sliding level's 0..40 plus a breakaway excess of up to 30 (a diagnosis
-        # fits static_friction as coulomb_friction + excess, station.diagnosis.selection)
+        # fits static_friction as coulomb_friction + excess, station.diagnosis.search.selection)
         EffectSpec("static_friction", "DAC counts", 0.0, 0.0, 70.0, "plant"),
         EffectSpec("stribeck_speed", "rad/s", STRIBECK_SPEED, 0.01, 1.0, "setting"),
         # the motor's own damping c_m/k_tau is 14.8 counts per rad/s (tmm-fit): up to 2.4x
