@@ -313,7 +313,7 @@ def design_model_note(controller, model, port: str, n_elements: int | None = Non
     StationError
         A compensator file that cannot be read (as :func:`choose_controller`).
     """
-    from station.plant.model import builtin_models, load_model
+    from station.plant.model import builtin_models, load_model  # lazy: start-up time (the plant: scipy)
 
     if (not isinstance(controller, (str, Path)) or str(controller) in KINDS or not exists(controller)
             or not str(port).lower().startswith("sim://")):

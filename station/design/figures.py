@@ -195,7 +195,7 @@ def tradeoff_figure(tradeoff, tip_rms: float | None = None):
     if tip_rms is not None:
         ax.axhline(tip_rms, color="C3", lw=0.7, ls="--", label=f"tip requirement (≤ {tip_rms:g}× the thesis's)")
     ax.axvline(0.6, color="C2", lw=0.7, ls=":", label="hub at 0.6× the thesis's")
-    from matplotlib.ticker import FormatStrFormatter
+    from matplotlib.ticker import FormatStrFormatter  # lazy: start-up time (matplotlib)
 
     ax.set_xscale("log")
     ax.set_yscale("log")

@@ -11,6 +11,7 @@ then runs it as a real ``station step`` on the simulated rig.
 from __future__ import annotations
 
 import math
+import os
 import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
@@ -27,7 +28,7 @@ from station.design.front import pareto, spread_along, trade_point
 from station.design.hold import design_model_warning, held_summary
 from station.design.linear import Margins, loop_model
 from station.design.robust import DEFAULT_SAMPLES, SEED, RobustSet, robust_set
-from station.design.search import Budget, Problem, SearchResult, judge_points, search
+from station.design.search import Budget, Problem, SearchResult, judge_points, objective, refine, search
 from station.design.space import (DEFAULT_FILTER, DEFAULT_SHAPER, DEFAULT_TIP_RMS, FILTERS, SHAPERS, STRUCTURES,
                                   DesignSpace, thesis_compensator)
 from station.errors import StationError
@@ -364,8 +365,6 @@ def design_record(model, nominal, robust=(), out: str | Path = "tuned.toml") -> 
     out : str or Path
         Where the compensator file goes.
     """
-    import os
-
     text = None if model is None else str(model) if isinstance(model, (str, Path)) else None
     if text is not None and text.lower().endswith(".toml"):
         name = os.path.relpath(Path(text).resolve(), Path(out).resolve().parent)
@@ -476,8 +475,6 @@ def _tradeoff(problem: Problem, result: SearchResult, baseline, runner, n: int, 
     """The trade-off: the search's designs judged on every model; ``n`` more spread along the
     bracket's own front on the screening set; and, with ``n`` > 0, one design refined for each
     other bound on the tip (:data:`FRONT_BOUNDS`), all judged on every model."""
-    from station.design.search import objective, refine
-
     screen = list(result.screen)
     reqs_screen = problem.model_requirements(screen)
     base_screen = [baseline[i] for i in screen]
