@@ -11,7 +11,7 @@ diagnose, ``Diagnosis.simulations``) and simulations per second.
 
 Target (issue 8): under 60 s on a 2-core machine.
 
-With ``--identify`` it then times ``station identify`` (:func:`station.diagnosis.identify.identify`)
+With ``--identify`` it then times ``station identify`` (:func:`station.diagnosis.identify.loop.identify`)
 on the lockstep simulated rig serving a model (default the built-in ``rig``: the thesis's four
 experiments, the diagnoses, the designed experiments): seconds in total and per phase (running
 experiments, diagnosing, designing), experiments run and used, diagnoses, and what it found.
@@ -98,7 +98,7 @@ def main(argv: list[str] | None = None) -> int:
 
 def bench_identify(model: str, budget: int, out_dir: Path) -> dict:
     """Time station identify on ``sim://?model=MODEL`` (lockstep) and print the numbers."""
-    from station.diagnosis.identify import identify
+    from station.diagnosis.identify.loop import identify
 
     t, cpu = time.perf_counter(), time.process_time()
     ident = identify(port=f"sim://?model={model}", budget=budget, out_dir=out_dir)

@@ -1,6 +1,6 @@
 """The real-rig study behind the built-in ``rig`` models (docs/diagnosis.md): fixed effect
 structures fitted on a session's logs with the diagnosis's own fitting
-(:func:`station.diagnosis.selection.trial`), judged leave-one-run-out and on logs they were
+(:func:`station.diagnosis.search.selection.trial`), judged leave-one-run-out and on logs they were
 not fitted to, with the diagnosis's cost (maximum likelihood, θ + a; or, for comparison, θ alone or the
 noise-weighted sum the diagnosis used before), and
 the step overshoots of the model refitted on all fit logs.
@@ -27,10 +27,10 @@ from pathlib import Path
 import numpy as np
 
 from station.analysis.metrics import step_metrics
-from station.diagnosis.cases import load_case
-from station.diagnosis.cost import Evaluator, calibrate_noise
-from station.diagnosis.folds import make_folds
-from station.diagnosis.selection import effect_axes, fit_set, set_axes, trial
+from station.diagnosis.runs.cases import load_case
+from station.diagnosis.runs.cost import Evaluator, calibrate_noise
+from station.diagnosis.runs.folds import make_folds
+from station.diagnosis.search.selection import effect_axes, fit_set, set_axes, trial
 from station.plant.model import as_model
 
 RIG = Path(__file__).resolve().parents[1] / ".." / "shared" / "data" / "rig"
@@ -140,7 +140,7 @@ def main(argv=None) -> int:
                    help="a structure, comma-separated effect names (repeatable; default: three)")
     p.add_argument("--weight", choices=["ml", "ml-theta", "noise", "theta"], default="ml",
                    help="the fits' cost: maximum likelihood with an unknown error variance per "
-                        "run and signal (the diagnosis's, station.diagnosis.cost), the same on θ "
+                        "run and signal (the diagnosis's, station.diagnosis.runs.cost), the same on θ "
                         "alone, or the sum of θ's and a's errors each by its noise level (the "
                         "diagnosis's before), or that on θ alone")
     p.add_argument("--fit-samples", type=int, default=0,

@@ -22,7 +22,11 @@ model's (the joint values) where it holds the effect, else the value fitted alon
 Usage: ``python scripts/validate_diagnosis.py [--seeds 10] [--seed-list SEED ...]
 [--effects NAME ...] [--out docs/diagnosis_validation.md] [--jobs 1]``. ``--effects`` also takes ``clean``,
 ``two``, the ``oov:`` cases and the pairs and triples by name (e.g. ``coulomb_friction+amp_offset``), and
-``new`` for the three new effects with their pairs and triples. Progress goes to stderr,
+``new`` for the three new effects with their pairs and triples, ``sensor`` for the sensor and wiring
+faults (``SENSOR_CASES``: accel_reversed, accel_offset, accel_drift, encoder_4096, encoder_reversed,
+motor_reversed) alone and beside a physical effect (``SENSOR_PAIRS``); a fault is judged as the
+effect its case part hides (accel_reversed: accel_gain; encoder_*: encoder_scale; motor_reversed:
+motor_polarity). Progress goes to stderr,
 one line per case; the table is printed and written.
 """
 
@@ -42,6 +46,7 @@ sys.path.insert(0, str(REPO))  # tests.blind is not installed with the package
 
 from tests.blind.cases import (MAGNITUDES, NEW_MAGNITUDES, OOV_CASES, PAIRS, SETTING_MAGNITUDES,  # noqa: E402
                                TOLERANCE, TRIPLES, TWO_EFFECTS, case_effects, value_error)
+from tests.blind.cases import SENSOR_CASES, SENSOR_MAGNITUDES, SENSOR_PAIRS  # noqa: E402
 from station.ranges import number  # noqa: E402
 
 RANGES = {**MAGNITUDES, **NEW_MAGNITUDES, **SETTING_MAGNITUDES}
@@ -49,6 +54,12 @@ NEW_CASES = (*NEW_MAGNITUDES, *PAIRS, *TRIPLES)
 """The cases of issue 17's effects (``--effects new``)."""
 KNOWN = (*MAGNITUDES, "two", *NEW_CASES, "clean", *OOV_CASES)
 """Every case this script runs (the default), in the table's order."""
+
+RANGES.update(SENSOR_MAGNITUDES)
+SENSOR = (*SENSOR_CASES, *SENSOR_PAIRS)
+"""The sensor and wiring fault cases, alone and beside a physical effect (``--effects sensor``);
+a case part (e.g. "encoder_4096") names the effect it hides (tests/blind/cases.SENSOR_CASES)."""
+KNOWN += SENSOR
 
 
 def judged(case: str) -> tuple[str, ...]:
@@ -63,7 +74,7 @@ def judged(case: str) -> tuple[str, ...]:
         return ()
     if case == "two":
         return TWO_EFFECTS
-    return tuple(part for part in case.split("+") if part not in SETTING_MAGNITUDES)
+    return tuple(SENSOR_CASES.get(part, part) for part in case.split("+") if part not in SETTING_MAGNITUDES)
 
 
 @dataclass
@@ -140,8 +151,8 @@ def run_case(case: str, seed: int) -> Outcome:
 def _costs(paths, hidden: dict, found: dict) -> tuple[float, float]:
     """The diagnosis's in-sample cost J (noise-normalised θ and a errors over all runs, 1 at
     the noise floor) of the hidden effects and of the found ones."""
-    from station.diagnosis.cases import load_case
-    from station.diagnosis.cost import Evaluator, calibrate_noise
+    from station.diagnosis.runs.cases import load_case
+    from station.diagnosis.runs.cost import Evaluator, calibrate_noise
     from station.plant.model import load_model
 
     ev = Evaluator([load_case(p) for p in paths], load_model())
@@ -211,7 +222,7 @@ def table(outcomes: list[Outcome], seeds: str, elapsed: float) -> str:
                       "the four runs better than the answer (in-sample cost J, the diagnosis's own: noise-normalised "
                       "θ and a errors, 1 at the noise floor; columns J hidden / J found below): the search did not "
                       "reach the better explanation (a friction-like proxy such as deadzone often comes first; the "
-                      "lookahead of station.diagnosis.stepwise replaces it at the second step only), rather than the "
+                      "lookahead of station.diagnosis.search.stepwise replaces it at the second step only), rather than the "
                       "runs failing to tell the explanations apart."]
     lines += ["", "## Every case", "",
               "| case | seed | hidden | causes found | values found | θ gain % | J hidden | J found | unexplained | s |",
@@ -229,17 +240,19 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--seeds", type=number(1, 1000, integer=True), default=10, help="seeds per effect (default 10)")
     parser.add_argument("--effects", nargs="+", default=list(KNOWN),
                         help="cases to hide (effects of tests/blind/cases.MAGNITUDES and NEW_MAGNITUDES, its PAIRS "
-                             "and TRIPLES, 'two', 'clean', 'new' for issue 17's; default all)")
+                             "and TRIPLES, 'two', 'clean', 'new' for issue 17's, 'sensor' for the sensor and "
+                             "wiring faults; default all)")
     parser.add_argument("--seed-list", type=number(0, 2**32 - 1, integer=True), nargs="+", metavar="SEED",
                         help="run only these seeds (instead of 0..N-1 of --seeds; e.g. a case's misses)")
     parser.add_argument("--out", type=Path, default=REPO / "docs" / "diagnosis_validation.md",
                         help="Markdown table to write (default docs/diagnosis_validation.md)")
     parser.add_argument("--jobs", type=number(1, 64, integer=True), default=1, help="cases diagnosed in parallel (default 1)")
     args = parser.parse_args(argv)
-    effects = [c for name in args.effects for c in (NEW_CASES if name == "new" else (name,))]
+    groups = {"new": NEW_CASES, "sensor": SENSOR}
+    effects = [c for name in args.effects for c in groups.get(name, (name,))]
     for name in effects:
         if name not in KNOWN:
-            parser.error(f"--effects: unknown '{name}' (known: {', '.join(KNOWN)}, new)")
+            parser.error(f"--effects: unknown '{name}' (known: {', '.join(KNOWN)}, new, sensor)")
     if args.seeds < 1:
         parser.error("--seeds: expected a positive integer")
     if args.seed_list and min(args.seed_list) < 0:

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import argparse
 import importlib
+import os
 import sys
 import warnings
 
@@ -103,7 +104,7 @@ def _configure_logging(verbose: int) -> None:
     """``-v``: INFO of the station's loggers on stderr; ``-vv``: DEBUG (every byte on the wire)."""
     if verbose <= 0:
         return
-    import logging
+    import logging  # lazy: start-up time (logging, only with -v)
 
     handler = logging.StreamHandler(sys.stderr)
     handler.setFormatter(logging.Formatter("%(relativeCreated)9.1f ms %(name)s: %(message)s"))
@@ -114,8 +115,6 @@ def _configure_logging(verbose: int) -> None:
 
 def _silence_stdout() -> None:
     """Point stdout at /dev/null so the interpreter's final flush cannot raise again."""
-    import os
-
     try:
         devnull = os.open(os.devnull, os.O_WRONLY)
         os.dup2(devnull, sys.stdout.fileno())

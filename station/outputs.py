@@ -105,7 +105,7 @@ def _probe_folder(folder: Path, what: str, probed: dict[Path, None]) -> None:
         return
     if _kind(existing) != "folder":
         raise StationError(f"{what}: {existing} is a file, not a folder")
-    import tempfile  # here: the CLI imports this module before it can answer a signal
+    import tempfile  # lazy: start-up time (the CLI imports this module before it can answer a signal)
 
     try:
         with tempfile.TemporaryFile(dir=existing):
@@ -262,7 +262,7 @@ def part_file(target: Path) -> tuple[int, Path]:
     OSError
         It cannot be created.
     """
-    import tempfile
+    import tempfile  # lazy: start-up time (tempfile)
 
     mode = stat.S_IMODE(os.stat(target).st_mode) if _kind(target) == "file" else _NEW_FILE_MODE
     fd, name = tempfile.mkstemp(prefix=f".{target.name}.", suffix=PART_SUFFIX, dir=target.parent)

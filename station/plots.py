@@ -18,6 +18,8 @@ from pathlib import Path
 import numpy as np
 
 from station.errors import StationError
+from station.outputs import Transaction
+from station.runlog import read_log
 
 
 def new_figure(width: float = 9.0, height: float = 8.0):
@@ -28,6 +30,7 @@ def new_figure(width: float = 9.0, height: float = 8.0):
     width, height : float
         Size, inches.
     """
+    # lazy: start-up time (matplotlib)
     from matplotlib.backends.backend_agg import FigureCanvasAgg
     from matplotlib.figure import Figure
 
@@ -56,8 +59,6 @@ def save_figure(fig, path: str | Path, dpi: int = 100, transaction=None) -> Path
     StationError
         The file cannot be written (names it); an existing file is unchanged then.
     """
-    from station.outputs import Transaction
-
     if transaction is None:
         with Transaction() as tx:
             return save_figure(fig, path, dpi, tx)
@@ -195,8 +196,6 @@ def plot_log_files(paths: Sequence[str | Path], out: str | Path, transaction=Non
     StationError
         An unreadable log (the reader's one-line error) or an unwritable ``out``.
     """
-    from station.runlog import read_log
-
     logs = [read_log(p) for p in paths]
     return save_figure(plot_runs(logs), out, transaction=transaction)
 
@@ -324,7 +323,7 @@ def diagnosis_run_figure(run, overshoot_points: float = 3.0):
     -------
     matplotlib.figure.Figure
     """
-    from station.analysis.residuals import sticking_spans
+    from station.analysis.residuals import sticking_spans  # lazy: start-up time (scipy)
 
     fig = new_figure(9, 5.2)
     fig.set_layout_engine("constrained")
@@ -375,9 +374,10 @@ def diagnosis_resid_figure(run, max_lag_s: float = 0.5):
     -------
     matplotlib.figure.Figure
     """
+    # lazy: start-up time (scipy)
     import scipy.signal
 
-    from station.analysis.residuals import resid_test
+    from station.analysis.residuals import resid_test  # lazy: start-up time (scipy)
 
     fig = new_figure(9, 6.4)
     fig.set_layout_engine("constrained")

@@ -203,7 +203,7 @@ def replay(path: str | Path, model=True, n_elements: int | None = None) -> Repla
     if want_model and run.held is None and len(run):
         run.check_columns(run.model_columns, "simulating it on a model (--no-model: the commands only)")
     if want_model or run.held is not None:
-        from station.plant.model import as_model  # the FEM: loaded only when a model runs
+        from station.plant.model import as_model  # lazy: start-up time (the FEM, loaded only when a model runs)
 
         the_model = as_model(None if model is True or not want_model else model, n_elements)
     if run.held is not None:

@@ -92,7 +92,7 @@ def __getattr__(name: str):
     if name not in ("half_away_compiled", "sensor_count_compiled"):
         raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
     try:
-        import numba
+        import numba  # lazy: start-up time (numba)
     except ImportError:  # pragma: no cover - numba is a dependency; plain Python without it
         compiled = {"half_away_compiled": half_away, "sensor_count_compiled": sensor_count}
     else:

@@ -1,6 +1,5 @@
 """How a step run is set up, before anything starts: its reference, its controller and clamp,
-and the simulated rig's port (:func:`station.experiment.run_step` uses them; the CLI checks
-its options with them).
+and the simulated rig's port (the parts :func:`station.plan.plan_step` settles a run from).
 """
 
 from __future__ import annotations
@@ -11,10 +10,12 @@ from pathlib import Path
 from typing import Any, NamedTuple
 
 import numpy as np
+from serial import SerialException
 
 from station import DT
 from station.control import (KINDS, file_reference, make_controller, pulse_reference, step_reference,
                              swept_sine_reference)
+from station.control.contract import wire_limit
 from station.control.designs import read_compensator_file
 from station.errors import StationError
 from station.inputs import exists
@@ -29,6 +30,24 @@ PULSE_WIDTH = 0.1
 """Width of the open-loop pulse, s (the rig's pulse test)."""
 SWEPT_SINE_DURATION = 22.0
 """Default length of a swept-sine run, s: the law spans 1 < t <= 21 s (DESIGN.md)."""
+
+
+def default_duration(kind: str) -> float | None:
+    """A run's length when none is asked for, s: 2 s (step, pulse), 22 s (swept sine), None
+    for a file reference (its own length).
+
+    Parameters
+    ----------
+    kind : str
+        The reference (:func:`make_reference`).
+
+    Returns
+    -------
+    float or None
+    """
+    if kind not in REFERENCES:
+        return None
+    return SWEPT_SINE_DURATION if kind == "swept-sine" else DEFAULT_DURATION
 
 
 def make_reference(kind: str, amplitude: float, duration: float | None, step_tick: int,
@@ -65,7 +84,7 @@ def make_reference(kind: str, amplitude: float, duration: float | None, step_tic
     """
     if kind in REFERENCES:
         if duration is None:
-            duration = SWEPT_SINE_DURATION if kind == "swept-sine" else DEFAULT_DURATION
+            duration = default_duration(kind)
         n_ticks = int(round(duration / dt))
         if n_ticks < 2:
             raise StationError(f"--duration {duration} s is shorter than two samples of {dt} s")
@@ -120,10 +139,16 @@ class ChosenController(NamedTuple):
     note : str or None
         Which clamp won when a compensator file's own ``limit`` overrides the one asked
         for (``--limit 100 is not used: c.toml sets limit = 150 (the file wins)``).
+    limit : float
+        The run's clamp, ±DAC counts: the controller's own (a compensator file's, an
+        object's finite ``limit``), else the one asked for, else 200; never above the
+        DAC's range (:func:`station.control.contract.wire_limit`). Every command is
+        clamped to it before the wire, and the log header's ``limit`` records it.
     """
 
     controller: Any
     note: str | None
+    limit: float
 
 
 def choose_controller(controller, kp: float | None = None, limit: float | None = None,
@@ -132,7 +157,7 @@ def choose_controller(controller, kp: float | None = None, limit: float | None =
 
     A compensator file's own ``limit`` wins over ``limit`` (the note says so); otherwise
     the controller clamps at ``limit`` (default 200). A controller object is used as
-    given (reset).
+    given (reset), its own finite ``limit`` winning too.
 
     Parameters
     ----------
@@ -146,23 +171,35 @@ def choose_controller(controller, kp: float | None = None, limit: float | None =
     dt : float
         Sample time, s.
 
+    Returns
+    -------
+    ChosenController
+        The controller, at rest; the note; the run's clamp.
+
     Raises
     ------
     StationError
-        An unknown kind, a bad compensator file, a bad kp or limit.
+        An unknown kind, a bad compensator file, a bad kp or limit, a kp for another
+        controller than "p".
     """
-    if not isinstance(controller, (str, Path)):
-        controller.reset()
-        return ChosenController(controller, None)
-    kind = str(controller)
+    is_object = not isinstance(controller, (str, Path))
+    if kp is not None and (is_object or str(controller) != "p"):
+        raise StationError(f"--kp: the P gain applies to --controller p only, not "
+                           f"{'a controller object' if is_object else controller}")
     clamp = DEFAULT_LIMIT if limit is None else limit
-    if kind in KINDS or not exists(kind):  # make_controller names what a kind may be (or refuses a folder)
-        return ChosenController(make_controller(kind, dt=dt, kp=2.0 if kp is None else kp, limit=clamp), None)
-    found = read_compensator_file(kind)
+    if is_object:
+        controller.reset()
+        return ChosenController(controller, None, wire_limit(controller, clamp))
+    kind = str(controller)
     note = None
-    if limit is not None and found.sets_limit:
-        note = f"--limit {limit:g} is not used: {kind} sets limit = {found.limit_text()} (the file wins)"
-    return ChosenController(found.compensator(dt, clamp), note)
+    if kind in KINDS or not exists(kind):  # make_controller names what a kind may be (or refuses a folder)
+        built = make_controller(kind, dt=dt, kp=2.0 if kp is None else kp, limit=clamp)
+    else:
+        found = read_compensator_file(kind)
+        if limit is not None and found.sets_limit:
+            note = f"--limit {limit:g} is not used: {kind} sets limit = {found.limit_text()} (the file wins)"
+        built = found.compensator(dt, clamp)
+    return ChosenController(built, note, wire_limit(built, clamp))
 
 
 def log_tag(controller) -> str:
@@ -246,8 +283,8 @@ def run_url(port: str, model, n_elements: int | None,
         model = path
     url = sim_port(port, model, n_elements, seed)
     if url.lower().startswith("sim://"):  # the URL's options and model checked before anything starts
-        from serial import SerialException
 
+        # lazy: start-up time (the simulator, only for sim:// ports)
         from station.sim.protocol_sim import OptionError, parse_url
 
         try:
@@ -263,3 +300,90 @@ def run_url(port: str, model, n_elements: int | None,
     return url, folder
 
 
+
+
+class DesignModel(NamedTuple):
+    """The simulated rig's model for a compensator file that records its design model
+    (:func:`design_model_note`).
+
+    Attributes
+    ----------
+    model : str, Path or None
+        The model the run should use (None: the port's own, tmm-fit by default).
+    note : str or None
+        One line to show: which model runs and why, or that it is not the design model.
+    """
+
+    model: Any
+    note: str | None
+
+
+def design_model_note(controller, model, port: str, n_elements: int | None = None) -> DesignModel:
+    """The simulated rig's model for a run, given the compensator file's ``[design]`` record.
+
+    The choice (docs/tuning.md "Running a tuned compensator"): on a simulated rig (``sim://``),
+    a compensator file that records the model it was designed on runs on that model when no
+    model is given (``--model`` or ``sim://?model=``), if it is still the same model (a
+    built-in name, or the model file, its path relative to the compensator file's folder, as
+    long as it exists and its sha256 matches), and the note says so; when a model is given
+    and it is not the design model, that model runs and the note says so. A real port, a
+    built-in controller kind or a file without a record: no note, the model as given.
+
+    Parameters
+    ----------
+    controller : str, Path or controller object
+        ``--controller``.
+    model : str, Path or None
+        ``--model`` (None: not given).
+    port : str
+        ``--port``.
+    n_elements : int, optional
+        ``--elements`` (part of the model that runs).
+
+    Returns
+    -------
+    DesignModel
+
+    Raises
+    ------
+    StationError
+        A compensator file that cannot be read (as :func:`choose_controller`).
+    """
+    from station.plant.model import Model, builtin_models, load_model  # lazy: start-up time (the plant: scipy)
+
+    if (not isinstance(controller, (str, Path)) or str(controller) in KINDS or not exists(controller)
+            or not str(port).lower().startswith("sim://")):
+        return DesignModel(model, None)
+    record = read_compensator_file(controller).design
+    if record is None:
+        return DesignModel(model, None)
+    given = model if model is not None else dict(urllib.parse.parse_qsl(urllib.parse.urlsplit(str(port)).query)).get(
+        "model")
+    designed = f"{controller} was designed on model {record.model!r}"
+    if given is not None:
+        try:
+            served = given if isinstance(given, Model) else load_model(given, n_elements)
+            ok = record.matches(served.to_toml())
+        except StationError:  # a bad --model is refused where it is opened, with its own line
+            return DesignModel(model, None)
+        return DesignModel(model, None if ok else f"{designed}; the simulated rig runs {str(given)!r}, another model "
+                                                  f"(sha256 differs)")
+    path = Path(record.model)
+    if not path.is_absolute():
+        path = Path(controller).parent / path
+    found = str(path) if path.suffix.lower() == ".toml" and exists(path) else (
+        record.model if record.model in builtin_models() else None)
+    if found is None:
+        return DesignModel(None, f"{designed}, not a built-in model or a model file here: the simulated rig runs "
+                                 f"its default, tmm-fit")
+    try:
+        design = load_model(found)
+    except StationError as exc:
+        return DesignModel(None, f"{designed}, which cannot be read ({exc}): the simulated rig runs its default, "
+                                 f"tmm-fit")
+    if not record.matches(design.to_toml()):
+        return DesignModel(None, f"{designed}, which has changed since (sha256 differs): the simulated rig runs its "
+                                 f"default, tmm-fit")
+    other = "" if n_elements is None or n_elements == design.n_elements else \
+        f" (with --elements {n_elements}: another model than the {design.n_elements} elements it was designed on)"
+    return DesignModel(found, f"simulated rig: model {record.model}, from {controller}'s design record{other}")

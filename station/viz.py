@@ -87,7 +87,7 @@ class RerunSink:
     """
 
     def __init__(self, rrd_path: str | Path | None = None, spawn: bool = False, name: str = "station"):
-        import rerun as rr
+        import rerun as rr  # lazy: start-up time (rerun)
 
         if rrd_path is not None and spawn:
             raise StationError("rerun: give either an .rrd file or --spawn, not both")

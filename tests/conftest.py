@@ -56,11 +56,20 @@ def pytest_configure(config):
 
 
 @pytest.fixture
+def stall_watch():
+    """Watch this try for a frozen machine (tests/stalls.py: the timing tests' rerun condition)."""
+    from tests.stalls import try_started
+
+    try_started()
+
+
+@pytest.fixture
 def device_factory():
     """Start scripted devices on ptys (tests/scripted_device.py): ``make(**options)``; all are
     closed after the test."""
-    from tests.scripted_device import ScriptedDevice
+    from tests.scripted_device import LIVE, ScriptedDevice
 
+    LIVE.clear()
     made = []
 
     def make(**kw):

@@ -146,12 +146,10 @@ def run_on_file_systems(root: Path, full: Path, ro: Path) -> list[dict]:
     import contextlib
     import io
 
-    import station.diagnosis.pipeline as pipeline
+    import station.diagnosis.search.workbench as workbench
     from station.cli import main
 
-    import station.diagnosis.sessions as sessions
-
-    pipeline.CANDIDATES = sessions.CANDIDATES = ("coulomb_friction",)  # the writing is tested, not the search
+    workbench.CANDIDATES = ("coulomb_friction",)  # the writing is tested, not the search (diagnose and sessions)
     with open(full / "filler", "wb", buffering=0) as fh:  # take every page of the tmpfs
         try:
             while fh.write(b"\0" * 4096):

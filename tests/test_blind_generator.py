@@ -428,3 +428,133 @@ def test_cases_are_deterministic_and_keep_their_values():
         cases.case_effects("static_friction+coulomb_friction", 0)
     with pytest.raises(ValueError):
         cases.case_effects("friction", 0)
+
+
+# --- (g) sensor and wiring faults ------------------------------------------------------------
+# Noise-free runs of one seed with and without the fault: the reading rule (round half up)
+# applied to the fault's own arithmetic on the clean run's true angle and acceleration.
+
+NO_ACCEL_FEEDBACK = ("p_step", "lead_step", "open_loop_pulses")
+
+
+@pytest.fixture(scope="module")
+def quiet():
+    return simulate_case({}, SEED, accel_noise=0.0)
+
+
+@pytest.mark.parametrize("gain", [-1.0, -1.2, -0.5, -2.0, 1.7])
+def test_a_reversed_accelerometer_reads_the_opposite_a_of_the_same_run(quiet, gain):
+    case = simulate_case({"accel_gain": gain}, SEED, accel_noise=0.0)
+    for run in NO_ACCEL_FEEDBACK:  # a does not feed back: the same motion
+        np.testing.assert_array_equal(case[run].theta, quiet[run].theta, err_msg=run)
+        a, a0 = case[run].a, quiet[run].a
+        assert np.max(np.abs(a - gain * a0)) <= 0.5 + 0.5 * abs(gain), run  # both rounded once
+        if gain == -1.0:  # round(-x) = -round(x) but at exact halves
+            assert np.mean(a == -a0) > 0.99, run
+        busy = np.abs(a0) > 3
+        ls = float(np.dot(a0[busy], a[busy]) / np.dot(a0[busy], a0[busy]))
+        assert ls == pytest.approx(gain, rel=0.05), run
+        assert np.corrcoef(a, a0)[0, 1] * np.sign(gain) > 0.98, run
+    # with the accelerometer in the loop the reversed feedback changes the motion itself
+    assert not np.array_equal(case["lead_accel_step"].theta, quiet["lead_accel_step"].theta)
+
+
+@pytest.mark.parametrize("offset, drift", [(4.0, 0.0), (0.0, -6.0), (-2.5, 3.0)])
+def test_an_accelerometer_bias_and_drift_add_b_plus_r_t_to_a(quiet, offset, drift):
+    case = simulate_case({"accel_offset": offset, "accel_drift": drift}, SEED, accel_noise=0.0)
+    t = np.arange(len(quiet["p_step"].a)) * 0.002
+    for run in NO_ACCEL_FEEDBACK:
+        np.testing.assert_array_equal(case[run].theta, quiet[run].theta, err_msg=run)
+        extra = case[run].a - quiet[run].a
+        assert np.max(np.abs(extra - (offset + drift * t))) <= 1.0, run  # two roundings
+        b, r = np.linalg.lstsq(np.column_stack([np.ones_like(t), t]), extra, rcond=None)[0]
+        assert b == pytest.approx(offset, abs=0.1) and r == pytest.approx(drift, abs=0.1), run
+
+
+def test_an_encoder_of_4096_counts_reads_four_times_the_angle(quiet):
+    case = simulate_case({"encoder_scale": 4.0}, SEED, accel_noise=0.0)
+    run = "open_loop_pulses"  # θ does not feed back: the same motion
+    np.testing.assert_array_equal(case[run].theta_true, quiet[run].theta_true)
+    assert np.max(np.abs(case[run].theta - 4 * quiet[run].theta)) <= 0.5 + 4 * 0.5
+    assert np.max(np.abs(case[run].theta - 4 * case[run].theta_true)) <= 0.5
+    assert np.max(np.abs(case[run].theta)) > 300
+    for run in ("p_step", "lead_step", "lead_accel_step"):  # in the loop: its own motion, read x4
+        assert np.max(np.abs(case[run].theta - 4 * case[run].theta_true)) <= 0.5, run
+        assert not np.array_equal(case[run].theta_true, quiet[run].theta_true), run
+
+
+def test_a_reversed_encoder_reads_minus_the_angle_and_runs_the_loops_away(quiet):
+    case = simulate_case({"encoder_scale": -1.0}, SEED, accel_noise=0.0)
+    run = "open_loop_pulses"
+    assert np.mean(case[run].theta == -quiet[run].theta) > 0.99
+    np.testing.assert_array_equal(case[run].a, quiet[run].a)
+    for run in ("p_step", "lead_step"):  # positive feedback: the command clamps, the angle runs
+        assert np.all(case[run].v[-100:] == 200.0), run
+        assert case[run].theta_true[-1] > 1000 and case[run].theta[-1] == -case[run].theta_true[-1].round(), run
+
+
+@pytest.mark.parametrize("effects", [{}, {"coulomb_friction": 10.0}, {"amp_offset": 4.0, "deadzone": 5.0}])
+def test_a_reversed_motor_turns_the_amplifiers_output_around(effects):
+    # torque -amp(v; o) = amp(-v; -o): every law of the plant is odd, so the reversed motor's
+    # open-loop run is the mirrored command's with the amplifier's offset mirrored too
+    u = reference("open_loop_pulses")
+    rng = lambda: np.random.default_rng(0)  # noqa: E731
+    mirrored = {**effects, "amp_offset": -effects.get("amp_offset", 0.0)}
+    rev = simulate("open-loop", u, {**effects, "motor_polarity": -1.0}, rng(), accel_noise=0.0)
+    mir = simulate("open-loop", -u, mirrored, rng(), accel_noise=0.0)
+    np.testing.assert_allclose(rev.theta_true, mir.theta_true, rtol=0, atol=1e-9)
+    np.testing.assert_array_equal(rev.v, u)  # the log keeps the command sent
+    straight = simulate("open-loop", u, effects, rng(), accel_noise=0.0)
+    assert rev.theta[690] < -20 < 20 < straight.theta[690]
+
+
+def test_a_reversed_motor_runs_the_closed_loops_away():
+    case = simulate_case({"motor_polarity": -1.0}, SEED, accel_noise=0.0)
+    for run in ("p_step", "lead_step", "lead_accel_step"):
+        assert np.all(case[run].v[-100:] == 200.0) and case[run].theta[-1] < -1000, run
+
+
+FAULTS = [{"accel_gain": -1.2, "accel_offset": 3.0, "accel_drift": -4.0},
+          {"encoder_scale": 4.0, "param:drive_c": 1.5},
+          {"motor_polarity": -1.0, "encoder_scale": -1.0, "amp_offset": 3.0},
+          {"motor_polarity": -1.0}]
+
+
+@pytest.mark.parametrize("effects", FAULTS)
+def test_the_station_model_with_the_same_faults_predicts_the_generators_logs(tmp_path, effects):
+    # two implementations written apart (the generator from DESIGN.md, the station's plant)
+    # agree on the faults' meaning: θ exactly, a within its rounding, runs away included
+    from station.plant.model import load_model
+
+    path = tmp_path / "faults.toml"
+    load_model().with_effects(effects, name="faults").save(path)
+    for log in write_case(tmp_path / "logs", effects, seed=0, accel_noise=0.0):
+        report = replay(log, model=path)
+        theta, a = report.log.data["theta"], report.log.data["a"]
+        assert np.mean(report.prediction["theta"] == theta) > 0.99, log.name
+        assert np.max(np.abs(report.prediction["theta"] - theta)) <= 1.0, log.name
+        assert np.max(np.abs(report.prediction["a"] - a)) <= 1.0, log.name
+
+
+def test_sensor_fault_cases_draw_in_their_ranges_and_both_signs():
+    gains, offsets, drifts = [], [], []
+    for seed in range(20):
+        gains.append(cases.case_effects("accel_reversed", seed)["accel_gain"])
+        offsets.append(cases.case_effects("accel_offset", seed)["accel_offset"])
+        drifts.append(cases.case_effects("accel_drift", seed)["accel_drift"])
+        assert cases.case_effects("encoder_4096", seed) == {"encoder_scale": 4.0}
+        assert cases.case_effects("encoder_reversed", seed) == {"encoder_scale": -1.0}
+        assert cases.case_effects("motor_reversed+coulomb_friction", seed) == {
+            "motor_polarity": -1.0, "coulomb_friction": cases.draw("coulomb_friction", seed)}
+    assert all(-2.0 <= g <= -0.5 for g in gains) and min(gains) < -1.2 < max(gains)
+    assert all(1.5 <= abs(o) <= 10 for o in offsets) and min(offsets) < 0 < max(offsets)
+    assert all(1.0 <= abs(d) <= 8 for d in drifts) and min(drifts) < 0 < max(drifts)
+    assert set(cases.SENSOR_PAIRS) <= set(cases.CASES) and set(cases.SENSOR_CASES) <= set(cases.CASES)
+    for pair in cases.SENSOR_PAIRS:  # each fault beside a physical effect of the vocabulary
+        fault, physical = pair.split("+")
+        assert fault in cases.SENSOR_CASES and physical in {**cases.MAGNITUDES, **cases.NEW_MAGNITUDES}
+    with pytest.raises(ValueError):
+        cases.case_effects("accel_reversed+accel_gain", 0)  # the same effect twice
+    for bad in ({"motor_polarity": 0.5}, {"encoder_scale": 0.0}, {"accel_gain": 0.0}):
+        with pytest.raises(ValueError):
+            simulate("open-loop", np.zeros(3), bad, np.random.default_rng(0))

@@ -1,15 +1,15 @@
 """The diagnosis's cost against hand-computed values: the maximum-likelihood cost with an
 unknown error variance per run and signal, at least its noise level (above the noise floor
 the geometric mean of the runs' normalised costs, below it least squares), and the
-noise-weighted mean it replaced as the fits' cost (station/diagnosis/cost.py)."""
+noise-weighted mean it replaced as the fits' cost (station/diagnosis/runs/cost.py)."""
 
 import math
 
 import numpy as np
 import pytest
 
-from station.diagnosis.cases import RunCase
-from station.diagnosis.cost import Evaluator
+from station.diagnosis.runs.cases import RunCase
+from station.diagnosis.runs.cost import Evaluator
 
 N = 400
 T = np.arange(N) / N

@@ -19,7 +19,7 @@ import scipy.signal
 
 from station import cli
 from station import diagnosis
-from station.analysis.fitting import Axis, axis_for, fit
+from station.diagnosis.search.bounded import Axis, axis_for, fit
 from station.analysis.residuals import band_response, hub_sticking, noise_std, resid_test, ringing_mode
 
 RIG_RUNS = (
@@ -149,7 +149,7 @@ class _TwoValleys:
 
 
 def test_breakaway_fit_leaves_the_plain_coulomb_valley():
-    from station.diagnosis.selection import effect_axes, fit_set, set_axes
+    from station.diagnosis.search.selection import effect_axes, fit_set, set_axes
 
     values = fit_set(_TwoValleys(), set_axes(("static_friction",), effect_axes()), (0,), {"coulomb_friction": 3.9})
     assert values["coulomb_friction"] == pytest.approx(5.0, rel=0.05)

@@ -84,7 +84,7 @@ def test_new_hidden_effect_is_named_with_its_value(tmp_path, effect, seed):
     # seed 0 of this triple is one of docs/diagnosis_validation.md's misses (a dead-zone is
     # taken first for Coulomb friction plus an offset, and forward selection never undoes it)
     ("amp_offset+coulomb_friction+param:drive_c", 1),
-    # before the lookahead (station.diagnosis.stepwise) 0 of 10: Coulomb friction came first
+    # before the lookahead (station.diagnosis.search.stepwise) 0 of 10: Coulomb friction came first
     # and backlash never paid beside it; seed 0 named coulomb_friction + param:drive_c
     ("viscous_friction+backlash", 0),
     # 5 of 10 before: a dead-zone came first; then the alternatives' refit failed on the

@@ -18,9 +18,9 @@ import numpy as np
 import pytest
 
 from station import cli, diagnosis
-from station.diagnosis.doubt import integrated_time
-from station.diagnosis.selection import NULL_PERTURBATIONS, perturbed
-from station.diagnosis.unexplained import follows
+from station.diagnosis.honesty.doubt import integrated_time
+from station.diagnosis.search.selection import NULL_PERTURBATIONS, perturbed
+from station.diagnosis.honesty.unexplained import follows
 from station.plant.effects import EFFECTS
 
 P_STEP = "SFLR_P_control_step_kp_2_SLFR_RTP_P_control_kp=2.0.txt"
@@ -82,7 +82,7 @@ def test_an_effect_fitted_on_its_range_end_runs_to_the_end_and_is_flagged(blind_
 def test_hub_held_beam_test_is_refused_before_work_with_one_line(rig_data, capsys, monkeypatch):
     """Defect 9a: the P step and the hold-and-release log died after 14 s; the held hub is a
     beam test the model cannot simulate: set aside, and one run cannot be cross-validated."""
-    monkeypatch.setattr("station.diagnosis.cases.simulate_case",
+    monkeypatch.setattr("station.diagnosis.runs.cases.simulate_case",
                         lambda *a: pytest.fail("simulated before refusing"))
     assert cli.main(["diagnose", str(rig_data / P_STEP), str(rig_data / HOLD_AND_RELEASE)]) == 2
     err = capsys.readouterr().err.strip()
@@ -102,7 +102,7 @@ def test_hub_held_beam_test_among_others_is_left_out_with_a_note(blind_logs, rig
                                  "RUN and --validate"])
 def test_a_run_judged_on_itself_is_refused_before_work(blind_logs, tmp_path, capsys, monkeypatch, how):
     """Defect 9b: the same run twice was "judged by leave-one-run-out" on itself (82 % gain)."""
-    monkeypatch.setattr("station.diagnosis.cases.simulate_case",
+    monkeypatch.setattr("station.diagnosis.runs.cases.simulate_case",
                         lambda *a: pytest.fail("simulated before refusing"))
     first = blind_logs[0]
     if how == "same path twice":
@@ -242,9 +242,9 @@ def test_cli_prints_and_writes_the_new_keys_and_the_report_leads_with_words(blin
 
 
 def test_plain_words_of_the_headline(rig_data):
-    from station.diagnosis.doubt import Interval
-    from station.diagnosis.prose import cause_words
-    from station.diagnosis.result import EffectResult
+    from station.diagnosis.honesty.doubt import Interval
+    from station.diagnosis.answer.prose import cause_words
+    from station.diagnosis.answer.result import EffectResult
 
     e = EffectResult("param:drive_c", 1.98, "1", 10.0, 19.0, True, "", interval=Interval(1.54, 3.16, False, False))
     assert cause_words(e) == "drive-train damping (param:drive_c) 1.98× nominal (95 % interval 1.54–3.16)"

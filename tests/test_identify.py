@@ -17,12 +17,12 @@ import pytest
 
 from station import DT, cli
 from station.control import file_reference
-from station.diagnosis import identify as identify_mod
-from station.diagnosis.experiment_design import MIN_SEPARATION, choose_experiment, predict
-from station.diagnosis.experiments import (PRBS_HOLD_TICKS, START_TICK, THESIS_EXPERIMENTS, Experiment,
+from station.diagnosis.identify import loop as identify_mod
+from station.diagnosis.identify.design import MIN_SEPARATION, choose_experiment, predict
+from station.diagnosis.identify.experiments import (PRBS_HOLD_TICKS, START_TICK, THESIS_EXPERIMENTS, Experiment,
                                            candidate_experiments, write_reference)
-from station.diagnosis.identify import ExperimentRun, identify, step_runner
-from station.diagnosis.rivals import JACKKNIFE_Z, Rival, Rivals, jackknife_interval, rivals
+from station.diagnosis.identify.loop import ExperimentRun, identify, step_runner
+from station.diagnosis.honesty.rivals import JACKKNIFE_Z, Rival, Rivals, jackknife_interval, rivals
 from station.plant.model import as_model
 from tests.blind.generator import RUNS, reference as blind_reference
 
@@ -290,7 +290,7 @@ def test_budget_help_names_the_loops_default():
     import subprocess
     import sys
 
-    from station.diagnosis.identify import DEFAULT_BUDGET
+    from station.diagnosis.identify.loop import DEFAULT_BUDGET
 
     sub = next(a for a in cli.build_parser()._actions if hasattr(a, "choices") and a.choices and "identify" in a.choices)
     budget = next(a for a in sub.choices["identify"]._actions if "--budget" in a.option_strings)

@@ -1,8 +1,8 @@
 """An explanation holding breakaway friction keeps its sliding level wherever it is simulated,
 refitted or compared (issue 17): the search fits static_friction as coulomb_friction plus a
 breakaway excess, and every place outside it goes through
-:func:`station.diagnosis.rivals.explanation` (the values) and
-:func:`station.diagnosis.selection.refit_explanation` (the refit). Judged on logs of the blind
+:func:`station.diagnosis.honesty.rivals.explanation` (the values) and
+:func:`station.diagnosis.search.selection.refit_explanation` (the refit). Judged on logs of the blind
 generator (tests/blind, never station.plant) with the hidden values known.
 """
 
@@ -12,12 +12,12 @@ from types import SimpleNamespace
 
 import pytest
 
-from station.diagnosis.cases import load_case
-from station.diagnosis.cost import Evaluator, calibrate_noise
-from station.diagnosis.doubt import profile_interval
-from station.diagnosis.identify import Preference, _kept_view, prefer
-from station.diagnosis.rivals import explanation, rivals
-from station.diagnosis.selection import effect_axes, refit_explanation
+from station.diagnosis.runs.cases import load_case
+from station.diagnosis.runs.cost import Evaluator, calibrate_noise
+from station.diagnosis.honesty.doubt import profile_interval
+from station.diagnosis.identify.loop import Preference, _kept_view, prefer
+from station.diagnosis.honesty.rivals import explanation, rivals
+from station.diagnosis.search.selection import effect_axes, refit_explanation
 from station.plant.model import as_model
 from tests.blind.generator import write_case
 

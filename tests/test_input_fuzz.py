@@ -231,7 +231,8 @@ def model_docs(draw, folder: Path) -> str:
         top["params"] = path.name
     if draw(st.booleans()):
         good_effects = st.sampled_from(sorted(EFFECTS)).flatmap(
-            lambda k: st.tuples(st.just(k), st.sampled_from([EFFECTS[k].lower, EFFECTS[k].upper, EFFECTS[k].neutral])))
+            lambda k: st.tuples(st.just(k), st.sampled_from([EFFECTS[k].lower, EFFECTS[k].upper, EFFECTS[k].neutral]
+                                                            + [-EFFECTS[k].lower, -EFFECTS[k].upper] * EFFECTS[k].signed)))
         bad_effects = st.tuples(st.one_of(st.sampled_from(sorted(EFFECTS)), TEXT),
                                 st.one_of(NUMBERS, VALUES))
         pairs = draw(st.lists(st.one_of(good_effects, good_effects, good_effects, bad_effects), max_size=4))
@@ -252,8 +253,7 @@ def check_model(path: Path) -> None:
         return
     assert 1 <= model.n_elements <= 100
     for name, value in model.effects:
-        spec = EFFECTS[name]
-        assert spec.lower <= value <= spec.upper
+        assert EFFECTS[name].admits(value), (name, value)
     for f, rng in PARAM_RANGES.items():
         assert rng.low <= getattr(model.params, f) <= rng.high
     form = model.linear_form()

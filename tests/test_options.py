@@ -132,10 +132,10 @@ def test_issue_cases_are_refused_before_anything_starts(argv, words, tmp_path, m
 
 
 def test_a_run_the_machine_cannot_hold_is_refused_before_it_starts(tmp_path, monkeypatch, capsys, no_port):
-    from station.commands import step
+    from station import plan
 
     monkeypatch.chdir(tmp_path)
-    monkeypatch.setattr(step, "_available_memory", lambda: 10**9)  # 1 GB
+    monkeypatch.setattr(plan, "_available_memory", lambda: 10**9)  # 1 GB
     assert main(["step", "--duration", "20000"]) == 2  # 10 million ticks: within what v1 counts
     err = capsys.readouterr().err
     assert "--duration 20000 s: 10000000 ticks need about 2.0 GB of memory; this machine has 1.0 GB" in err

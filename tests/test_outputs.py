@@ -189,8 +189,7 @@ def ws(template, tmp_path, monkeypatch):
     (its writing is what is tested here, not its search)."""
     shutil.copytree(template / "in", tmp_path / "in")
     monkeypatch.chdir(tmp_path)
-    monkeypatch.setattr("station.diagnosis.pipeline.CANDIDATES", ("coulomb_friction",))
-    monkeypatch.setattr("station.diagnosis.sessions.CANDIDATES", ("coulomb_friction",))
+    monkeypatch.setattr("station.diagnosis.search.workbench.CANDIDATES", ("coulomb_friction",))  # diagnose and sessions
     return tmp_path
 
 

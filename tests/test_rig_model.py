@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from station.analysis.metrics import step_metrics
-from station.diagnosis.cases import load_case, simulate_case
+from station.diagnosis.runs.cases import load_case, simulate_case
 from station.plant.model import load_model
 
 THESIS_STEPS = {  # log -> the rig's overshoot, % (DESIGN.md, the thesis's table)

@@ -1,4 +1,4 @@
-"""Breakaway friction in the diagnosis's search (station.diagnosis.selection): static_friction
+"""Breakaway friction in the diagnosis's search (station.diagnosis.search.selection): static_friction
 is fitted as coulomb_friction plus a breakaway excess (one step, v_s >= v_c by construction),
 named over plain Coulomb friction only when the excess pays for itself.
 
@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 from station import diagnosis
-from station.diagnosis.selection import (EXCESS, MIN_EXCESS, Trial, credible, effect_axes, excess_fraction,
+from station.diagnosis.search.selection import (EXCESS, MIN_EXCESS, Trial, credible, effect_axes, excess_fraction,
                                          fit_set, set_axes)
 
 

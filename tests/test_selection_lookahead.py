@@ -1,4 +1,4 @@
-"""The lookahead of the diagnosis's stepwise selection (station.diagnosis.stepwise): when the
+"""The lookahead of the diagnosis's stepwise selection (station.diagnosis.search.stepwise): when the
 best single effect is a proxy for two hidden ones, the pair is reached from another first
 effect and replaces the first choice; greedy forward selection would keep the proxy.
 

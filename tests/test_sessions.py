@@ -13,8 +13,8 @@ import math
 import pytest
 
 from station.cli import main
-from station.diagnosis.drift import PerSession, key
-from station.diagnosis.sessions import (
+from station.diagnosis.sessions.drift import PerSession, key
+from station.diagnosis.sessions.diagnose import (
     ACCEL_DRIFT_COUNTS,
     MAX_SAMPLES,
     cut_lengths,
@@ -88,8 +88,8 @@ def test_max_samples_default_is_the_diagnosis_one():
 
 
 def test_a_drifting_accelerometer_channel_is_not_used(rig_data):
-    from station.diagnosis.cases import load_case
-    from station.diagnosis.sessions import accel_drift
+    from station.diagnosis.runs.cases import load_case
+    from station.diagnosis.sessions.diagnose import accel_drift
 
     # the 2014 log's a creeps from -66 to -26 counts: no accelerometer behind it
     assert accel_drift(load_case(rig_data / "without_accel_01_28_14_test_2.txt")) > ACCEL_DRIFT_COUNTS

@@ -68,7 +68,7 @@ def test_closed_loop_poles_and_margins_agree_with_python_control(rig, kind, dela
 def test_the_thesis_point_is_the_thesis_compensator():
     space = DesignSpace("lead-accel")
     values = space.values(space.thesis_point())
-    assert values == pytest.approx({k: v for k, v in THESIS.items() if k != "kp"})  # each at the thesis's value
+    assert values == pytest.approx({k: THESIS[k] for k in ("k0", "z", "ratio", "ga_gain", "ga_freq")})
     comp = space.compensator_file(values).compensator()
     # DESIGN.md: the rig's lead is num [18.32547182, -17.20911971], den [1, -0.77672958] after Tustin
     assert np.allclose(comp.gth.num, [18.32547182, -17.20911971], atol=1e-7)
@@ -77,6 +77,11 @@ def test_the_thesis_point_is_the_thesis_compensator():
     assert np.allclose(comp.ga.num, thesis.ga.num, rtol=1e-12) and np.allclose(comp.ga.den, thesis.ga.den, rtol=1e-12)
     assert DesignSpace("p").compensator_file({"kp": 2.0}).compensator().gth.num.tolist() == \
         p_controller(2.0).gth.num.tolist()
+    # past the thesis's structure, its point is still its compensator: a notch of depth 1 is none
+    notched = DesignSpace("lead-accel", filter="notch")
+    comp = notched.compensator_file(notched.values(notched.thesis_point())).compensator()
+    assert np.allclose(np.polyval(comp.gth.num[::-1], 1 / np.exp(0.3j)) / np.polyval(comp.gth.den[::-1], 1 / np.exp(0.3j)),
+                       np.polyval(thesis.gth.num[::-1], 1 / np.exp(0.3j)) / np.polyval(thesis.gth.den[::-1], 1 / np.exp(0.3j)))
 
 
 @pytest.mark.parametrize("gain, freq", [(1.0, 1.0), (0.4, 1.7), (2.0, 0.5)])
@@ -114,8 +119,9 @@ def test_a_limit_cycle_and_an_unstable_loop_are_caught(rig):
 
 def test_default_doubt_samples_are_seeded_and_inside_their_intervals(rig):
     iv = default_intervals(rig)
-    assert iv["coulomb_friction"] == (5.0, 20.0)
-    assert iv["param:drive_c"] == pytest.approx((0.85 * rig.effect("param:drive_c"), 2.0 * rig.effect("param:drive_c")))
+    assert iv["coulomb_friction"] == (0.0, 16.0)  # from none (less friction than the estimate) to the pulses' ask
+    assert iv["param:drive_c"] == pytest.approx((0.6 * rig.effect("param:drive_c"), 1.4 * rig.effect("param:drive_c")))
+    assert iv["param:EI"] == pytest.approx((0.9, 1.1)) and "static_friction" not in iv  # rig has no breakaway
     assert {name for name, *_ in DEFAULT_DOUBT} >= set(iv)
     a, b = sample_models(rig, iv, 6, seed=3), sample_models(rig, iv, 6, seed=3)
     assert a == b and len(a) == 6 and a != sample_models(rig, iv, 6, seed=4)
@@ -144,8 +150,10 @@ def test_a_diagnosis_json_gives_model_alternatives_and_intervals(tmp_path, rig):
     assert doubt.intervals == {"coulomb_friction": (12.0, 19.0)}
     rs = robust_set(None, [path], samples=3)
     assert rs.models[0] == rig and rs.labels[1].endswith("alternative 1") and len(rs.models) == 2 + 2 + 3
-    assert [m.effect("coulomb_friction") for m in rs.models[2:4]] == [12.0, 19.0]  # the interval's ends
-    assert all(12.0 <= m.effect("coulomb_friction") <= 19.0 for m in rs.models[4:])
+    # the interval's ends, its lower end widened to none: a rig with less friction than the estimate
+    assert [m.effect("coulomb_friction") for m in rs.models[2:4]] == [0.0, 19.0]
+    assert rs.intervals == {"coulomb_friction": (0.0, 19.0)}
+    assert all(0.0 <= m.effect("coulomb_friction") <= 19.0 for m in rs.models[4:])
 
 
 def test_a_json_without_a_model_is_one_line(tmp_path):
@@ -229,6 +237,9 @@ def no_work(monkeypatch):
     (["tune", "--robust", "m.toml", "--out", "m.toml", "--force"], "is an input of this command (--robust)"),
     (["tune", "--model", "m.toml", "--json", "m.toml", "--force"], "is an input of this command (--model)"),
     (["tune", "--scheduler", "tcp://127.0.0.1:9", "--samples", "0"], "--scheduler"),
+    (["tune", "--tip-rms", "-1"], "argument --tip-rms"),
+    (["tune", "--tip-rms", "nan"], "argument --tip-rms"),
+    (["tune", "--controller", "lead", "--filter", "damper"], "lead-accel only"),
 ])
 def test_bad_input_is_one_line_and_exit_2_before_any_work(argv, words, tmp_path, monkeypatch, capsys, no_work, rig):
     monkeypatch.chdir(tmp_path)
@@ -249,7 +260,10 @@ def test_tune_writes_a_file_station_step_runs_with_the_designs_metrics(tmp_path,
     doc = json.loads((tmp_path / "p.json").read_text())
     assert doc["controller"] == "P.toml" and doc["verification"]["matches"]
     assert sorted(os.listdir(tmp_path / "rep")) == ["bode.png", "report.html", "robust.png", "steps.png",
-                                                   "verify-step.tsv"]
+                                                   "tradeoff.png", "verify-step.tsv"]
+    from station.control.designs import read_compensator_file
+
+    assert read_compensator_file(tmp_path / "P.toml").design.model == "tmm-fit"  # tune's default model, recorded
     capsys.readouterr()
     assert main(["step", "--controller", "P.toml", "--amplitude", "50", "--json", "s.json", "--quiet",
                  "--out", "run.tsv"]) == 0
@@ -263,8 +277,9 @@ def test_tune_writes_a_file_station_step_runs_with_the_designs_metrics(tmp_path,
 def test_help_lists_every_option_with_its_range(capsys):
     assert main(["tune", "--help"]) == 0
     out = capsys.readouterr().out
-    for option in ("--model", "--controller", "--amplitude", "--limit", "--overshoot", "--shaper", "--robust",
-                   "--samples", "--jobs", "--scheduler", "--out", "--json", "--report", "--force"):
+    for option in ("--model", "--controller", "--amplitude", "--limit", "--overshoot", "--shaper", "--filter",
+                   "--tip-rms", "--robust", "--samples", "--jobs", "--scheduler", "--out", "--json", "--report",
+                   "--force"):
         assert option in out
     assert "range 0..100 percent" in " ".join(out.split())
 

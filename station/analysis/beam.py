@@ -151,6 +151,7 @@ def band_pass(x, dt: float, band: tuple[float, float] = BAND_HZ, order: int = 4)
     -------
     numpy.ndarray, shape (N,)
     """
+    # lazy: start-up time (scipy.signal: station.logged imports this module for hub_held)
     from scipy.signal import butter, sosfiltfilt
 
     sos = butter(order, band, btype="bandpass", fs=1.0 / dt, output="sos")
@@ -166,7 +167,7 @@ def _damped_sine(p: np.ndarray, t: np.ndarray) -> np.ndarray:
 
 def _peaks(y: np.ndarray, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Times and values of the positive maxima, refined by a parabola through each."""
-    from scipy.signal import find_peaks
+    from scipy.signal import find_peaks  # lazy: start-up time (scipy.signal)
 
     idx, _ = find_peaks(y)
     idx = idx[(idx > 0) & (idx < y.size - 1) & (y[idx] > 0)]
@@ -179,7 +180,7 @@ def _peaks(y: np.ndarray, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 
 def _log_decrement(y: np.ndarray, t: np.ndarray, floor: float) -> tuple[float, float, float, float] | None:
     """(f, f_std, zeta, zeta_std) from the peaks above ``floor``, or None."""
-    from scipy.stats import linregress
+    from scipy.stats import linregress  # lazy: start-up time (scipy.stats)
 
     tp, yp = _peaks(y, t)
     keep = yp > floor
@@ -230,7 +231,7 @@ def analyze_beam_test(t, a, dt: float, band: tuple[float, float] = BAND_HZ) -> B
     δ = ln(x_k / x_{k+1}) from a straight-line fit of ln(peak) over the cycle number,
     ζ = δ / sqrt(4π² + δ²) (e.g. Inman, Engineering Vibration, sec. 1.6).
     """
-    from scipy.optimize import least_squares
+    from scipy.optimize import least_squares  # lazy: start-up time (scipy.optimize)
 
     t = np.asarray(t, dtype=float)
     a = np.asarray(a, dtype=float)
@@ -334,6 +335,7 @@ def model_first_mode(model=None, n_elements: int = 4) -> tuple[float, float]:
         From :func:`station.plant.modes.modal_summary` (the θ/v antiresonance, i.e. the
         base-held mode); tmm-fit, 4 elements: 2.55 Hz, ζ 0.0054.
     """
+    # lazy: start-up time (the FEM: station.logged imports this module for hub_held)
     from station.plant import load_params
     from station.plant.modes import modal_summary, with_beam_damping
 

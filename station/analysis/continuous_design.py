@@ -125,7 +125,7 @@ def discretize(num_s, den_s, dt: float, method: str) -> tuple[np.ndarray, np.nda
     if method == "Tustin":
         return tustin(num_s, den_s, dt)
     if method == "ZOH":
-        from scipy.signal import cont2discrete  # scipy.signal: loaded when a design is recognised
+        from scipy.signal import cont2discrete  # lazy: start-up time (scipy.signal), loaded when a design is recognised
 
         num_z, den_z, _ = cont2discrete((np.asarray(num_s, float), np.asarray(den_s, float)), dt, method="zoh")
         num_z, den_z = np.atleast_1d(np.squeeze(num_z)), np.asarray(den_z, float)
@@ -182,8 +182,8 @@ def to_continuous(num_z, den_z, dt: float, method: str) -> tuple[np.ndarray, np.
 
 
 def _zoh_inverse(num_z, den_z, dt):
-    from scipy.linalg import logm
-    from scipy.signal import ss2tf, tf2ss
+    from scipy.linalg import logm  # lazy: start-up time (scipy)
+    from scipy.signal import ss2tf, tf2ss  # lazy: start-up time (scipy)
 
     if num_z.size == 1:
         return None  # a gain: no dynamics to map

@@ -374,7 +374,7 @@ class LawRows:
         ----------
         recursion : {"trunc", "round"}
         """
-        from scipy.optimize import linprog  # loaded when an integer recursion is looked for
+        from scipy.optimize import linprog  # lazy: start-up time (scipy.optimize), loaded when an integer recursion is looked for
 
         guess = self.least_squares(recursion)  # the scale of the coefficients (its bias can be several counts)
         if guess is None:

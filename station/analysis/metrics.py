@@ -154,11 +154,23 @@ class StepInfo:
         """The fields as a dict (None for what is undefined)."""
         return asdict(self)
 
-    def summary(self) -> str:
-        """One line: rise, peak, 2 % settling, steady-state error, saturation."""
+    def summary(self, unsettled: str = NOT_SETTLED) -> str:
+        """One line: rise, peak, 2 % settling (named by :func:`settling_label`), steady-state
+        error, saturation.
+
+        Parameters
+        ----------
+        unsettled : str
+            What the 2 % settling time says when θ has not settled (a report that has just
+            said :data:`NOT_SETTLED` of the 1 % band says "not settled either").
+
+        Returns
+        -------
+        str
+        """
         f = lambda x: "n/a" if x is None else f"{x:.3f} s"  # noqa: E731
-        settle = (f"2 % band: {NOT_SETTLED}" if self.settling_time_2pct_s is None
-                  else f"2 % settling {f(self.settling_time_2pct_s)}")
+        settle = (f"{settling_label(2)} "
+                  f"{unsettled if self.settling_time_2pct_s is None else f(self.settling_time_2pct_s)}")
         sat = "" if self.saturation_time_s is None else f"   saturated {self.saturation_time_s:.3f} s"
         return (f"rise {f(self.rise_time_s)}   peak {f(self.peak_time_s)}   {settle}   "
                 f"steady-state error {self.steady_state_error:.1f} counts{sat}")
@@ -211,7 +223,7 @@ def step_info(t, theta, u_final: float, step_time: float = 0.0, v=None, limit: f
     of 2 % of ``|u_final|``: python-control counts a sample exactly on the band's edge as
     outside and has no hold.
     """
-    import control
+    import control  # lazy: start-up time (python-control)
 
     t, theta, u_final = _step_response(t, theta, u_final)
     after = t >= step_time - 1e-12

@@ -7,7 +7,10 @@ import argparse
 from pathlib import Path
 
 from station.commands.options import add_force_option, add_model_options, add_report_options, model_inputs, number
+from station.errors import StationError
 from station.outputs import Input, Output, Transaction, check_outputs
+from station.plant import DiscretePlant
+from station.plant.model import as_model
 
 NAME = "bode"
 HELP = "H1 frequency response (θ/v, a/v) of a swept-sine log against the FEM model; antiresonances"
@@ -53,11 +56,9 @@ def run(args: argparse.Namespace) -> int:
         element count; an output that is an input or another output, exists (without
         ``--force``) or cannot be written.
     """
+    # lazy: start-up time (every command's parser is built at start-up: scipy, python-control, matplotlib)
     from station.analysis.frequency import compare_bode
-    from station.errors import StationError
     from station.logged import LoggedRun
-    from station.plant import DiscretePlant
-    from station.plant.model import as_model
     from station.plots import plot_bode
 
     png = args.png if args.png is not None else Path(f"{args.file.stem}_bode.png")

@@ -8,6 +8,7 @@ from pathlib import Path
 
 from station.commands.options import add_force_option, add_model_options, add_report_options, model_inputs
 from station.outputs import Input, Output, Transaction, check_outputs, unique_names
+from station.plant.model import as_model
 from station.signals import noting
 
 NAME = "compare"
@@ -65,9 +66,9 @@ def run(args: argparse.Namespace) -> int:
         count; an output that is an input or another output, exists (without ``--force``) or
         cannot be written.
     """
+    # lazy: start-up time (every command's parser is built at start-up: the comparison and its figures)
     from station.compare import compare_run, format_comparison
     from station.plots import plot_comparison
-    from station.plant.model import as_model
 
     pngs = figure_paths(args.files, args.out_dir)
     check_outputs([Output("--json", args.json)] + [Output("--out-dir", p) for p in pngs],

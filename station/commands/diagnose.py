@@ -192,7 +192,7 @@ def outputs(args: argparse.Namespace) -> list[Output]:
         ``runs``, ``--validate`` (the report names its figures after them), ``--json``,
         ``--save-model``, ``--report``.
     """
-    from station.diagnosis.report import report_files
+    from station.diagnosis.answer.report import report_files  # lazy: start-up time (matplotlib)
 
     report = [] if args.report is None else [
         Output("--report", args.report / name) for name in report_files([p.name for p in args.runs + args.validate])]
@@ -220,7 +220,7 @@ def run(args: argparse.Namespace) -> int:
         --model, the same run given twice (or as a RUN and a --validate run); an output that is
         an input or another output, exists (without ``--force``) or cannot be written.
     """
-    from station.diagnosis import diagnose
+    from station.diagnosis import diagnose  # lazy: start-up time (the diagnosis: scipy)
 
     check_outputs(outputs(args), [Input("RUN", p) for p in args.runs] +
                   [Input("--validate", p) for p in args.validate] + model_inputs(args), force=args.force)
@@ -238,7 +238,7 @@ def run(args: argparse.Namespace) -> int:
     print(format_diagnosis(diag))
     with Transaction() as tx:
         if args.report is not None:
-            from station.diagnosis.report import write_report
+            from station.diagnosis.answer.report import write_report  # lazy: start-up time (matplotlib)
 
             page = write_report(diag, args.report, tx)
         if args.json is not None:

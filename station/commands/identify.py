@@ -10,7 +10,11 @@ from pathlib import Path
 
 from station.commands.options import (add_model_options, add_protocol_option, add_report_options, check_port,
                                       model_inputs, number)
+from station.commands.diagnose import format_diagnosis
+from station.errors import StationError
+from station.jsonio import to_jsonable
 from station.outputs import FORCE_HELP, Output, Transaction, check_folder, check_outputs
+from station.plant.model import as_model
 
 NAME = "identify"
 HELP = ("identify the rig on the device: the thesis's four experiments, a diagnosis, then the experiments that "
@@ -31,7 +35,7 @@ def configure(parser: argparse.ArgumentParser) -> None:
                              "sim://?model=FILE serves a model file)")
     add_protocol_option(parser)
     add_model_options(parser, subject="the nominal model the diagnoses extend", elements=None, params=False)
-    # the default is station.diagnosis.identify.DEFAULT_BUDGET, not imported here: the diagnosis
+    # the default is station.diagnosis.identify.loop.DEFAULT_BUDGET, not imported here: the diagnosis
     # loads scipy and numba, and every command's start-up builds this parser
     parser.add_argument("--budget", type=number(0, 100, integer=True), default=None, metavar="N",
                         help="designed experiments after the thesis's four, at most (default 8; 0: the four only)")
@@ -83,8 +87,7 @@ def experiments_folder(args: argparse.Namespace) -> Path:
     StationError
         The folder holds files (without ``--force``) or cannot be written.
     """
-    from station.diagnosis.identify import default_out_dir
-    from station.errors import StationError
+    from station.diagnosis.identify.loop import default_out_dir  # lazy: start-up time (the diagnosis: scipy)
 
     folder = args.out_dir if args.out_dir is not None else default_out_dir()
     if folder.is_dir() and any(folder.iterdir()) and not args.force:
@@ -99,10 +102,9 @@ def format_identification(ident) -> str:
     Parameters
     ----------
     ident : Identification
-        What :func:`station.diagnosis.identify.identify` returned.
+        What :func:`station.diagnosis.identify.loop.identify` returned.
     """
-    from station.commands.diagnose import format_diagnosis
-    from station.diagnosis.rivals import describe
+    from station.diagnosis.honesty.rivals import describe  # lazy: start-up time (the diagnosis: scipy)
 
     lines = []
     for k, r in enumerate(ident.experiments, 1):
@@ -144,8 +146,7 @@ def run(args: argparse.Namespace) -> int:
         Bad input (an unknown port, an unreadable model, an output that exists or cannot be
         written), before any run.
     """
-    from station.diagnosis.identify import DEFAULT_BUDGET, identify
-    from station.plant.model import as_model
+    from station.diagnosis.identify.loop import DEFAULT_BUDGET, identify  # lazy: start-up time (the diagnosis: scipy)
 
     check_port(args.port)
     model = as_model(args.model)  # an unreadable model is refused before any run
@@ -159,12 +160,10 @@ def run(args: argparse.Namespace) -> int:
     print(format_identification(ident))
     with Transaction() as tx:  # every file whole or none (station.outputs)
         if args.report is not None:
-            from station.diagnosis.identify_report import write_identify_report
+            from station.diagnosis.identify.report import write_identify_report  # lazy: start-up time (matplotlib)
 
             page = write_identify_report(ident, args.report, tx)
         if args.json is not None:
-            from station.jsonio import to_jsonable
-
             tx.write_json(args.json, to_jsonable(ident.to_json()))
         if args.save_model is not None and ident.model is not None:
             tx.write(args.save_model, ident.model.to_toml(), "the model")

@@ -7,6 +7,8 @@ import argparse
 from station.commands.options import add_force_option, add_model_options, add_report_options, model_inputs, number
 from station.errors import StationError
 from station.outputs import Output, check_outputs, write_json
+from station.plant import modal_summary
+from station.plant.model import as_model
 
 MAX_COUNT = 10
 """Most modes ``--count`` shows (beyond them the table is unreadable and the FEM far off the beam's)."""
@@ -51,9 +53,6 @@ def run(args: argparse.Namespace) -> int:
         Unknown parameter set or an element count outside 1..100; a --json that is an input,
         exists (without ``--force``) or cannot be written.
     """
-    from station.plant import modal_summary
-    from station.plant.model import as_model
-
     check_outputs([Output("--json", args.json)], model_inputs(args), force=args.force)
     model = as_model(args.model, None, args.params)
     label = model.params.name if not model.effects else f"{model.name} ({model.params.name}, " + \

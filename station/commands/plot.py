@@ -40,7 +40,7 @@ def run(args: argparse.Namespace) -> int:
         An unreadable log (file, line, field); an --out that is one of the logs, exists
         (without ``--force``) or cannot be written.
     """
-    from station.plots import plot_log_files
+    from station.plots import plot_log_files  # lazy: start-up time (matplotlib)
 
     out = args.out if args.out is not None else Path(args.files[0].stem + ".png")
     check_outputs([Output("--out", out)], [Input("LOG", f) for f in args.files], force=args.force)

@@ -5,6 +5,8 @@ from __future__ import annotations
 
 import argparse
 
+from serial.tools import list_ports as lp
+
 from station.link import PortInfo, latency_timer
 
 NAME = "ports"
@@ -24,8 +26,6 @@ def configure(parser: argparse.ArgumentParser) -> None:
 
 def list_ports() -> list[PortInfo]:
     """Every serial port pyserial finds, sorted by device, with its adapter and latency timer."""
-    from serial.tools import list_ports as lp
-
     found = []
     for p in lp.comports():
         adapter = p.description if p.description not in (None, "n/a") else ""

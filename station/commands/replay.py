@@ -30,7 +30,7 @@ def configure(parser: argparse.ArgumentParser) -> None:
 
 
 def _record(report, rrd: Path | None, spawn: bool, tx: Transaction) -> None:
-    from station.viz import RerunSink
+    from station.viz import RerunSink  # lazy: start-up time (rerun)
 
     sink = RerunSink(rrd_path=rrd, spawn=spawn, name="station replay")
     done = False
@@ -67,7 +67,7 @@ def run(args: argparse.Namespace) -> int:
         Unreadable log or model file, bad controller spec; an output that is an input or
         another output, exists (without ``--force``) or cannot be written.
     """
-    from station.replay import format_report, replay
+    from station.replay import format_report, replay  # lazy: start-up time (the replay and its model)
 
     model = chosen_model(args)
     check_outputs([Output("--json", args.json), Output("--rrd", args.rrd)],

@@ -49,7 +49,7 @@ def run(args: argparse.Namespace) -> int:
     if not args.pty:
         raise StationError("sim-device: only --pty is supported for out-of-process use "
                            "(in-process, open the port URL sim:// instead)")
-    from station.sim.pty_server import serve_pty
+    from station.sim.pty_server import serve_pty  # lazy: start-up time (the FEM plant)
 
     try:
         serve_pty(args.protocol, args.realtime, args.seed, args.elements, model=args.model)

@@ -2,27 +2,20 @@
 
 from __future__ import annotations
 
+import shutil
 import sys
 from pathlib import Path
 
-from station import DT
 from station import experiment as ex
-from station import runsetup
 from station.errors import StationError
-from station.inputs import exists
 from station.commands.options import (add_force_option, add_model_options, add_protocol_option, add_report_options,
-                                      add_seed_option, model_inputs, number, warn)
+                                      add_seed_option, number, warn)
 from station.config import apply_config
 from station.link import LinkLimits
-from station.outputs import Input, Output, check_folder, check_outputs, is_device, write_json
-from station.protocol import check_ticks
+from station.outputs import Input, Output, write_json
+from station.plan import RANGES, StepPlan, plan_step
 from station.signals import noting
-from station.viz import RRD_BYTES_PER_TICK
-
-MAX_DURATION_S = (2**32 - 1) * DT
-"""Longest run v1 can count (START's n_ticks is a u32), s."""
-MAX_AMPLITUDE = 32767.0
-"""Largest step height, counts (the legacy protocol's θ word is int16; the soft limit bounds it further)."""
+from station.viz import RerunSink
 
 SIM_ONLY = "simulated rig only (sim://?{key}=...)"
 """What the simulated rig's options say in ``--help``: a real port refuses them."""
@@ -43,30 +36,30 @@ def configure(parser) -> None:
     """
     parser.add_argument("--controller", default=ex.DEFAULT_CONTROLLER,
                         help="p, lead, lead-accel, open-loop or a compensator FILE.toml (default lead)")
-    parser.add_argument("--kp", type=number(1e-3, 100.0), default=None,
+    parser.add_argument("--kp", type=RANGES["kp"], default=None,
                         help="P gain for --controller p only, DAC counts per encoder count (default 2)")
-    parser.add_argument("--limit", type=number(1, 255, unit="DAC counts"), default=None,
+    parser.add_argument("--limit", type=RANGES["limit"], default=None,
                         help="controller clamp, ±DAC counts (default 200; a compensator file's own limit wins)")
-    parser.add_argument("--amplitude", type=number(-MAX_AMPLITUDE, MAX_AMPLITUDE, nonzero=True), default=None,
+    parser.add_argument("--amplitude", type=RANGES["amplitude"], default=None,
                         metavar="COUNTS", help="step height in encoder counts (open loop: DAC counts, at most "
                         "255); not with a file reference (default 100)")
-    parser.add_argument("--duration", type=number(2 * DT, MAX_DURATION_S, unit="s"), default=None, metavar="S",
+    parser.add_argument("--duration", type=RANGES["duration"], default=None, metavar="S",
                         help="run length (default 2 s; swept sine 22 s; a file reference: its length); at most "
                              "what v1 can count (2^32-1 ticks), legacy 32767 ticks (65.5 s)")
     parser.add_argument("--reference", default="step", metavar="KIND",
                         help="step (default), pulse (open loop, 0.1 s), swept-sine, or FILE[:COLUMN] "
                              "of a run log (e.g. a rig log's u)")
-    parser.add_argument("--step-time", type=number(0.0, MAX_DURATION_S, unit="s"), default=None,
+    parser.add_argument("--step-time", type=RANGES["step_time"], default=None,
                         metavar="S", help="when the step starts, before the run's end (default 0.02 s = tick 10)")
     parser.add_argument("--port", default=ex.DEFAULT_PORT, metavar="URL",
                         help="port path or pyserial URL (default sim://, the simulated rig)")
     add_protocol_option(parser)
     add_model_options(parser, subject="the simulated rig's model", params=False, note=SIM_ONLY)
     add_seed_option(parser, note=SIM_ONLY)
-    parser.add_argument("--baud", type=number(300, 12_000_000, integer=True), default=None, help="baud rate (default 921600 for v1, 115200 legacy)")
-    parser.add_argument("--timeout", type=number(1e-3, 60.0, unit="s"), default=ex.DEFAULT_TIMEOUT, metavar="S",
+    parser.add_argument("--baud", type=RANGES["baudrate"], default=None, help="baud rate (default 921600 for v1, 115200 legacy)")
+    parser.add_argument("--timeout", type=RANGES["timeout"], default=ex.DEFAULT_TIMEOUT, metavar="S",
                         help="longest wait for a sample before stopping safely (default 0.1 s)")
-    parser.add_argument("--soft-limit", type=number(1, 32767, unit="encoder counts"), default=ex.DEFAULT_SOFT_LIMIT,
+    parser.add_argument("--soft-limit", type=RANGES["soft_limit"], default=ex.DEFAULT_SOFT_LIMIT,
                         metavar="COUNTS",
                         help="stop safely when |θ| exceeds this (default 2048 = two revolutions)")
     parser.add_argument("--max-lag", type=number(0, 1000, unit="ms"), default=1000 * LinkLimits.max_lag,
@@ -92,133 +85,42 @@ def configure(parser) -> None:
     apply_config(parser)
 
 
-def check_args(args) -> None:
-    """Refuse options that do not apply or do not fit together, before anything starts.
+def plan(args) -> StepPlan:
+    """The step test the options ask for, settled and checked before anything starts: the
+    plan :func:`station.experiment.run_step` runs (:func:`station.plan.plan_step`, which
+    a notebook's ``run_step(...)`` goes through too).
 
-    Ranges of single options are argparse's (:mod:`station.commands.options`); this
-    checks what depends on the controller and the reference, and the output paths.
+    Ranges of single options are argparse's (:data:`station.plan.RANGES`); the plan checks
+    what depends on the controller, the reference and the protocol, and every output
+    against every input (``--controller``, ``--reference``, the simulated rig's model file,
+    ``station.toml``).
 
     Parameters
     ----------
     args : argparse.Namespace
-        What :func:`configure` added; ``step_time`` gets its default here.
+        What :func:`configure` added.
+
+    Returns
+    -------
+    station.plan.StepPlan
 
     Raises
     ------
     StationError
-        One line naming the option.
+        One line naming the option (or the settings file).
     """
     if getattr(args, "_config_error", None):
         raise StationError(args._config_error)
-    controller = str(args.controller)
-    builtin_ref = args.reference in runsetup.REFERENCES
-    port = str(args.port)
-    if "://" not in port and not exists(port):
-        raise StationError(f"--port {port}: no such device; `station ports` lists this machine's serial ports "
-                           f"(the simulated rig is sim://)")
-    if args.kp is not None and controller != "p":
-        raise StationError(f"--kp: the P gain applies to --controller p only, not {controller}")
-    if args.amplitude is not None and not builtin_ref:
-        raise StationError(f"--amplitude: not with a file reference ({args.reference}): the file's column is "
-                           f"the reference")
-    amplitude = ex.DEFAULT_AMPLITUDE if args.amplitude is None else args.amplitude
-    if controller == "open-loop" and builtin_ref and abs(amplitude) > 255:
-        raise StationError(f"--amplitude {amplitude:g}: open loop the reference is the command, at most 255 DAC counts")
-    if controller != "open-loop" and builtin_ref and abs(amplitude) >= args.soft_limit:
-        raise StationError(f"--amplitude {amplitude:g}: the step would pass --soft-limit {args.soft_limit:g} "
-                           f"encoder counts and stop the run")
-    if args.step_time is not None and (not builtin_ref or args.reference == "swept-sine"):
-        raise StationError(f"--step-time: not with the {args.reference} reference "
-                           f"({'its law starts at t = 1 s' if builtin_ref else 'the file gives the reference'})")
-    if args.step_time is None:
-        args.step_time = ex.DEFAULT_STEP_TICK * DT
-    if builtin_ref and args.reference != "swept-sine":
-        duration = runsetup.DEFAULT_DURATION if args.duration is None else args.duration
-        if args.step_time >= duration:
-            raise StationError(f"--step-time {args.step_time:g} s: the step must start before the run ends "
-                               f"({duration:g} s)")
-    check_outputs(outputs(args), inputs(args), force=args.force)
-    if args.out is None:
-        check_folder(args.out_dir, "--out-dir")
-    if args.duration is not None:
-        _check_resources(args.duration, args.out.parent if args.out is not None else args.out_dir,
-                         rrd=args.rrd is not None)
-    if args.duration is not None:
-        try:
-            check_ticks(args.protocol, round(args.duration / DT))
-        except StationError as exc:  # the same refusal as run_step's, naming the option
-            raise StationError(f"--duration {args.duration:g} s: {exc}") from None
-
-
-def outputs(args) -> list[Output]:
-    """The files ``station step`` writes: the log (--out), its figure beside it, --json, --rrd.
-
-    Parameters
-    ----------
-    args : argparse.Namespace
-        ``--out`` (None: a new default name, see :func:`station.experiment.default_log_path`),
-        ``--json``, ``--rrd``.
-    """
-    figure = None if args.out is None or is_device(args.out) else ex.figure_path(args.out)
-    return [Output("--out", args.out), Output("--out's figure", figure),
-            Output("--json", args.json), Output("--rrd", args.rrd)]
-
-
-def inputs(args) -> list[Input]:
-    """The files ``station step`` reads: a compensator file, a reference log, a model file, station.toml.
-
-    Parameters
-    ----------
-    args : argparse.Namespace
-        ``--controller``, ``--reference``, ``--model`` and the settings file in use.
-    """
-    return [Input("--controller", args.controller), Input("--reference", runsetup.reference_path(args.reference)),
-            *model_inputs(args), Input("station.toml", getattr(args, "_config", None))]
-
-
-BYTES_PER_TICK_MEMORY = 200
-"""Memory a run needs per tick, bytes, at its peak (the reference as floats for the loop,
-latencies, the log read back for metrics and the figure), rounded up."""
-BYTES_PER_TICK_DISK = 80
-"""Disk a run log takes per tick, bytes (a row of our format is ~60)."""
-
-
-def _check_resources(duration: float, folder: Path, rrd: bool = False) -> None:
-    """Refuse a run this machine cannot hold in memory (with an .rrd recording: that too) or
-    its log on disk (before it starts).
-
-    Raises
-    ------
-    StationError
-        Naming --duration, what the run needs and what there is.
-    """
-    import shutil
-
-    ticks = round(duration / DT)
-    need_mem, need_disk = ticks * (BYTES_PER_TICK_MEMORY + RRD_BYTES_PER_TICK * rrd), ticks * BYTES_PER_TICK_DISK
-    available = _available_memory()
-    if available is not None and need_mem > available:
-        raise StationError(f"--duration {duration:g} s: {ticks} ticks need about {need_mem / 1e9:.1f} GB of memory; "
-                           f"this machine has {available / 1e9:.1f} GB available")
-    existing = Path(folder)
-    while not existing.exists() and existing.parent != existing:
-        existing = existing.parent
-    free = shutil.disk_usage(existing).free
-    if need_disk > free:
-        raise StationError(f"--duration {duration:g} s: the run log would take about {need_disk / 1e9:.1f} GB; "
-                           f"{existing} has {free / 1e9:.1f} GB free")
-
-
-def _available_memory() -> int | None:
-    """MemAvailable of /proc/meminfo, bytes (None where there is none)."""
-    try:
-        with open("/proc/meminfo") as fh:
-            for line in fh:
-                if line.startswith("MemAvailable:"):
-                    return int(line.split()[1]) * 1024
-    except OSError:
-        return None
-    return None
+    return plan_step(port=args.port, protocol=args.protocol, controller=args.controller, amplitude=args.amplitude,
+                     duration=args.duration, step_time=args.step_time, reference=args.reference,
+                     kp=args.kp, limit=args.limit, soft_limit=args.soft_limit, timeout=args.timeout,
+                     limits=LinkLimits(timeout=args.timeout, max_lag=args.max_lag / 1000, max_miss=args.max_miss,
+                                       max_step=args.max_step),
+                     baudrate=args.baud, model=args.model, n_elements=args.elements, seed=args.seed,
+                     out=args.out, out_dir=args.out_dir, force=args.force,
+                     outputs=[Output("--json", args.json), Output("--rrd", args.rrd)],
+                     inputs=[Input("station.toml", getattr(args, "_config", None))],
+                     rrd=args.rrd is not None, notify=warn)
 
 
 def run(args) -> int:
@@ -228,32 +130,18 @@ def run(args) -> int:
     ----------
     args : argparse.Namespace
         The controller, reference, port, simulated rig, link bounds and outputs; checked by
-        :func:`check_args`.
+        :func:`plan`.
     """
-    check_args(args)
-    chosen = runsetup.choose_controller(args.controller, args.kp, args.limit)  # before anything starts, once
-    if chosen.note is not None:
-        warn(chosen.note)
+    step_plan = plan(args)  # every check, before anything starts
     if getattr(args, "_config", None):
         warn(f"settings from {args._config} (options given on the command line win)")
     sinks = []
     if args.rrd is not None or args.spawn:
-        from station.viz import RerunSink
-
         sinks.append(RerunSink(rrd_path=args.rrd, spawn=args.spawn, name="station step"))
     report = None
     try:
         with noting(lambda: "before the run started; nothing written"):  # in the loop, the run's outcome says it
-            report = ex.run_step(port=args.port, protocol=args.protocol, controller=chosen.controller,
-                                 amplitude=args.amplitude, duration=args.duration,
-                                 step_time=args.step_time, reference=args.reference,
-                                 out=args.out, sinks=sinks,
-                                 kp=args.kp, limit=args.limit, soft_limit=args.soft_limit,
-                                 timeout=args.timeout, baudrate=args.baud, force=args.force,
-                                 limits=LinkLimits(timeout=args.timeout, max_lag=args.max_lag / 1000,
-                                                   max_miss=args.max_miss, max_step=args.max_step),
-                                 out_dir=args.out_dir, model=args.model, n_elements=args.elements, seed=args.seed,
-                                 progress=not args.quiet and sys.stderr.isatty(),
+            report = ex.run_step(step_plan, sinks=sinks, progress=not args.quiet and sys.stderr.isatty(),
                                  announce=lambda line: print(line, flush=True))
     finally:
         failed = _close(sinks, keep=report is not None)  # no recording of a run that never started

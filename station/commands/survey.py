@@ -9,7 +9,9 @@ import sys
 from pathlib import Path
 
 from station.commands.options import add_force_option, add_model_options, chosen_model, model_inputs, number
+from station.errors import StationError
 from station.outputs import Input, Output, Transaction, check_outputs
+from station.plant.model import as_model
 from station.signals import noting
 
 NAME = "survey"
@@ -19,7 +21,7 @@ HELP = ("replay every log of a folder (or the files given) on all cores and prin
         "into sessions, one model structure on all of them, and the effects that drift between sessions")
 
 MAX_SAMPLES = 20_000
-"""``--max-samples``' default (:data:`station.diagnosis.sessions.MAX_SAMPLES`; not imported here:
+"""``--max-samples``' default (:data:`station.diagnosis.sessions.diagnose.MAX_SAMPLES`; not imported here:
 the parser loads no diagnosis)."""
 
 DIAGNOSE_ONLY = ("json", "save_models", "max_samples")
@@ -82,8 +84,7 @@ def run(args: argparse.Namespace) -> int:
         --elements (or either with --no-model); a --csv or --report file that is one of the
         surveyed files or another output, exists (without ``--force``) or cannot be written.
     """
-    from station.errors import StationError
-    from station.plant.model import as_model
+    # lazy: start-up time (every command's parser is built at start-up: the survey)
     from station.survey import find_logs, format_table, report_files, survey, to_csv, write_reports
 
     if args.diagnose:
@@ -127,8 +128,6 @@ def run(args: argparse.Namespace) -> int:
 
 def _diagnose_checks(args: argparse.Namespace) -> None:
     """Options that do not go with --diagnose (one line, before anything starts)."""
-    from station.errors import StationError
-
     if not args.model:
         raise StationError("--no-model: not with --diagnose (the diagnosis simulates every log on the model)")
     for option, value in (("--csv", args.csv), ("--jobs", args.jobs)):
@@ -138,7 +137,7 @@ def _diagnose_checks(args: argparse.Namespace) -> None:
 
 def run_diagnose(args: argparse.Namespace) -> int:
     """``station survey DIR... --diagnose``: the logs grouped into sessions, one model structure on
-    all of them and the effects that drift between sessions (:mod:`station.diagnosis.sessions`).
+    all of them and the effects that drift between sessions (:mod:`station.diagnosis.sessions.diagnose`).
 
     Parameters
     ----------
@@ -158,10 +157,9 @@ def run_diagnose(args: argparse.Namespace) -> int:
         ``--diagnose``, a bad ``--model``; an output that is an input or another output,
         exists (without ``--force``) or cannot be written; no usable run, or only one.
     """
-    from station.diagnosis.sessions import diagnose_sessions, group_sessions, model_file_names
-    from station.diagnosis.sessions_report import REPORT_FILES, format_sessions
-    from station.errors import StationError
-    from station.plant.model import as_model
+    # lazy: start-up time (the diagnosis: scipy)
+    from station.diagnosis.sessions.diagnose import diagnose_sessions, group_sessions, model_file_names
+    from station.diagnosis.sessions.report import REPORT_FILES, format_sessions
     from station.survey import find_logs, not_a_log
 
     _diagnose_checks(args)
@@ -192,7 +190,7 @@ def run_diagnose(args: argparse.Namespace) -> int:
     print(format_sessions(result, models))
     with Transaction() as tx:
         if args.report is not None:
-            from station.diagnosis.sessions_report import write_report
+            from station.diagnosis.sessions.report import write_report  # lazy: start-up time (matplotlib)
 
             page = write_report(result, args.report, tx, models)
         if args.json is not None:

@@ -5,11 +5,16 @@ compensator on a model")."""
 from __future__ import annotations
 
 import argparse
+import os
 import sys
 import tempfile
+import warnings
 from pathlib import Path
 
+from station.analysis.metrics import NOT_SETTLED, settling_label
 from station.commands.options import add_model_options, add_report_options, model_inputs, number
+from station.design.robust import DEFAULT_SAMPLES
+from station.design.space import DEFAULT_FILTER, DEFAULT_SHAPER, DEFAULT_TIP_RMS, FILTERS, SHAPERS, STRUCTURES
 from station.outputs import FORCE_HELP, Input, Output, Transaction, check_outputs
 
 NAME = "tune"
@@ -27,13 +32,11 @@ def configure(parser: argparse.ArgumentParser) -> None:
     ----------
     parser : argparse.ArgumentParser
         Gets ``--model``, ``--controller``, ``--amplitude``, ``--limit``, ``--overshoot``,
-        ``--shaper``, ``--robust``, ``--samples``, ``--jobs``, ``--scheduler``, ``--out``,
-        ``--json``, ``--report``, ``--force``, ``--quiet``.
+        ``--shaper``, ``--filter``, ``--tip-rms``, ``--robust``, ``--samples``, ``--jobs``,
+        ``--scheduler``, ``--out``, ``--json``, ``--report``, ``--force``, ``--quiet``.
     """
     # light modules only: every command's parser is built at start-up (the design's
     # evaluation imports scipy.signal and python-control, most of a second)
-    from station.design.robust import DEFAULT_SAMPLES
-    from station.design.space import SHAPERS, STRUCTURES
 
     add_model_options(parser, "the model the compensator is designed on (its effects included), or a diagnosis "
                       "JSON (its extended model); without it, "
@@ -49,9 +52,19 @@ def configure(parser: argparse.ArgumentParser) -> None:
                         help="the compensator's clamp, written into the file (default 200)")
     parser.add_argument("--overshoot", type=number(0, 100, unit="percent"), default=5.0, metavar="PCT",
                         help="largest overshoot on every model (default 5)")
-    parser.add_argument("--shaper", choices=SHAPERS, default="opt",
-                        help="reference shaper: none, ZV or ZVD of the model's first beam mode, or two impulses "
-                             "optimized with the rest (default opt)")
+    parser.add_argument("--shaper", choices=SHAPERS, default=DEFAULT_SHAPER,
+                        help=f"reference shaper: none, ZV or ZVD of the model's first beam mode, two impulses "
+                             f"optimized with the rest (opt), or those convolved with two more for the second beam "
+                             f"mode (opt2) (default {DEFAULT_SHAPER})")
+    parser.add_argument("--filter", choices=FILTERS, default=DEFAULT_FILTER,
+                        help=f"what Gth holds beside its gain, searched at the beam's second mode (about 18 Hz): none, "
+                             f"a notch or a second-order roll-off (default {DEFAULT_FILTER})")
+    parser.add_argument("--tip-rms", type=number(0, 100, unit="x the thesis's"), default=DEFAULT_TIP_RMS,
+                        metavar="RATIO",
+                        help=f"largest tip residual RMS (the accelerometer from 0.6 s after the step to the run's "
+                             f"end) on every model, as a multiple of the thesis's compensator's on the same model "
+                             f"(at least the accelerometer's noise, 0.3 counts); 0: no bound on the tip "
+                             f"(default {DEFAULT_TIP_RMS:g}: at least as quiet)")
     parser.add_argument("--robust", nargs="+", default=[], metavar="FILE",
                         help="model files (or built-in names) and diagnosis JSONs (extended model, alternatives, "
                              "intervals) the design is judged on too")
@@ -80,7 +93,7 @@ def outputs(args: argparse.Namespace) -> list[Output]:
     args : argparse.Namespace
         ``out``, ``json``, ``report``.
     """
-    from station.design.report import REPORT_FILES
+    from station.design.report import REPORT_FILES  # lazy: start-up time (the design: scipy)
 
     report = [] if args.report is None else [Output("--report", args.report / name) for name in REPORT_FILES]
     return [Output("--out", args.out), Output("--json", args.json), *report]
@@ -97,39 +110,51 @@ def inputs(args: argparse.Namespace) -> list[Input]:
     return model_inputs(args) + [Input("--robust", p) for p in args.robust]
 
 def format_result(result) -> str:
-    """What ``station tune`` prints: the design, its worst case over the set beside the thesis's.
+    """What ``station tune`` prints: the design, its hub and tip on the model and at worst over
+    the set beside the thesis's, every settling time named by its band.
 
     Parameters
     ----------
     result : station.design.tuning.TuneResult
     """
+    from station.design.hold import held_summary  # lazy: start-up time (the design: scipy)
+
     def settle(x):
-        return "not settled" if x is None else f"{x:.3f} s"
+        return NOT_SETTLED if x is None else f"{x:.3f} s"
 
-    from station.design.hold import held_summary
+    def worst(values):
+        return None if any(x is None for x in values) else max(values)
 
+    s2 = settling_label(2)
     d = result.design_json()
     lines = [f"{result.space.structure} on {result.nominal.name!r}, step {result.amplitude:g}, "
              f"{len(result.robust.models)} model(s): " + ", ".join(f"{k} {v['value']:.4g}"
                                                                   for k, v in d["parameters"].items())]
     for name, figs in (("tuned", result.figures), ("thesis", result.baseline)):
-        nominal = figs[0]
-        worst_os = max(f.overshoot_pct for f in figs)
-        settles = [f.settling_2pct_s for f in figs]
-        worst = None if any(s is None for s in settles) else max(settles)
-        lines.append(f"  {name:6s} model: overshoot {nominal.overshoot_pct:5.1f} %, 2 % settling "
-                     f"{settle(nominal.settling_2pct_s)};  worst over the set: overshoot {worst_os:5.1f} %, "
-                     f"2 % settling {settle(worst)}")
+        f = figs[0]
+        lines.append(f"  {name:6s} model: overshoot {f.overshoot_pct:5.1f} %, hub {s2} {settle(f.settling_2pct_s)}, "
+                     f"tip {s2} {settle(f.tip_settling_2pct_s)}, tip residual RMS {f.tip_residual_rms:.2f} "
+                     f"(peak {f.tip_residual_peak:.0f});  worst over the set: overshoot "
+                     f"{max(g.overshoot_pct for g in figs):5.1f} %, hub {s2} "
+                     f"{settle(worst([g.settling_2pct_s for g in figs]))}, tip residual RMS "
+                     f"{max(g.tip_residual_rms for g in figs):.2f}")
     m = result.margins
-    lines.append(f"  margins (model): gain {m.gain_margin_db:.1f} dB, phase {m.phase_margin_deg:.1f}°; requirements "
-                 f"{'met on every model' if d['feasible'] else 'NOT met on every model'}")
-    note = held_summary(result.figures, result.requirements)["note"]
+    tip = "" if result.tip_rms is None else f", the tip's residual RMS at most {result.tip_rms:g}x the thesis's"
+    lines.append(f"  margins (model): gain {m.gain_margin_db:.1f} dB, phase {m.phase_margin_deg:.1f}°; requirements"
+                 f"{tip}: {'met on every model' if d['feasible'] else f'met on {sum(result.met())} of {len(result.met())} models'}")
+    if result.tradeoff is not None:
+        c = result.tradeoff.points[result.tradeoff.chosen]
+        lines.append(f"  worst over the set against the thesis's on the same model: hub {s2} {c.hub_ratio:.2f}x, tip "
+                     f"residual RMS {c.tip_ratio:.2f}x; the trade-off front holds {len(result.tradeoff.front)} of "
+                     f"{len(result.tradeoff.points)} designs (--report draws it)")
+    note = held_summary(result.figures, result.model_requirements()[0])["note"]
     if note:
         lines.append(f"  {note}")
     v = result.verification
     if v is not None:
-        lines.append(f"  station step on the simulated rig: {v.reason}, overshoot {v.overshoot_pct:.1f} %, 2 % "
-                     f"settling {settle(v.settling_2pct_s)}; log {'equals' if v.matches else 'DIFFERS from'} "
+        lines.append(f"  station step on the simulated rig: {v.reason}, overshoot {v.overshoot_pct:.1f} %, hub {s2} "
+                     f"{settle(v.settling_2pct_s)}, tip residual RMS {v.tip_residual_rms:.2f}; log "
+                     f"{'equals' if v.matches else 'DIFFERS from'} "
                      f"the simulation (max |Δθ| {v.max_abs_dtheta:g}, |Δv| {v.max_abs_dv:g})")
     lines.append(f"  {result.evaluations} evaluations (a design on a model) in {result.elapsed_s:.1f} s "
                  f"({result.executor})")
@@ -156,22 +181,23 @@ def run(args: argparse.Namespace) -> int:
         JSON with no model, an output that exists (without ``--force``), repeats another or is
         an input; an unreachable scheduler.
     """
-    import os
-    import warnings
-
+    # lazy: start-up time (the design: scipy, python-control)
     from station.design.tuning import DEFAULT_AMPLITUDE, check_request, tune
     from station.design.verify import verify
 
     structure = args.controller
     jobs = args.jobs if args.jobs is not None else max(1, min(os.cpu_count() or 1, 64))
     amplitude = DEFAULT_AMPLITUDE[structure] if args.amplitude is None else args.amplitude
-    check_request(structure, amplitude, args.limit, args.overshoot, args.shaper, args.samples, jobs)
+    tip_rms = args.tip_rms or None  # 0: no bound on the tip
+    check_request(structure, amplitude, args.limit, args.overshoot, args.shaper, args.samples, jobs, tip_rms,
+                  args.filter)
     check_outputs(outputs(args), inputs(args), force=args.force)
     progress = None if args.quiet else (lambda msg: print(f"tune: {msg}", file=sys.stderr, flush=True))
     out = args.out
     result = tune(model=args.model, structure=structure, amplitude=amplitude, limit=args.limit,
                   overshoot=args.overshoot, shaper=args.shaper, robust=args.robust, samples=args.samples,
-                  jobs=jobs, scheduler=args.scheduler, out=out or Path("tuned.toml"), progress=progress)
+                  jobs=jobs, scheduler=args.scheduler, out=out or Path("tuned.toml"), progress=progress,
+                  tip_rms=tip_rms, filter=args.filter)
     with tempfile.TemporaryDirectory(prefix="station-tune-") as tmp:
         path = Path(tmp) / (out.name if out is not None else "tuned.toml")  # verified before it is written
         path.write_text(result.file.to_toml(), encoding="utf-8")
@@ -187,7 +213,7 @@ def run(args: argparse.Namespace) -> int:
         if out is not None:
             tx.write(out, result.file.to_toml(), "the compensator file")
         if args.report is not None:
-            from station.design.report import write_report
+            from station.design.report import write_report  # lazy: start-up time (matplotlib)
 
             page = write_report(result, args.report, tx, verify_log)
         if args.json is not None:

@@ -20,6 +20,9 @@ A compensator file is TOML::
     [shaper]                  # optional: reference shaper (station.control.shaper)
     times = [0.0, 0.196]      # s, rounded to whole samples
     amplitudes = [0.52, 0.48] # sum 1
+    [design]                  # optional: the model it was designed on (station tune writes it)
+    model = "rig"             # a built-in model's name, or a model file's path (relative to this file)
+    model_sha256 = "..."      # sha256 of that model's canonical TOML (Model.to_toml())
 
 It is read bounded (:func:`station.inputs.load_toml`: a regular UTF-8 file of at most
 1 MB) and checked before anything runs: each filter of order at most :data:`MAX_ORDER`,
@@ -31,8 +34,10 @@ is refused with one line naming it, the line and the field.
 
 from __future__ import annotations
 
+import hashlib
 import json
 import math
+import re
 import warnings
 from pathlib import Path
 from typing import Any, NamedTuple
@@ -276,6 +281,61 @@ def _check_discretizable(path: Path, table: str, stage: Stage, dt: float) -> Non
         raise StationError(f"{path}: [{table}]: {how}: {problem}", file=path, key=f"[{table}]")
 
 
+class DesignRecord(NamedTuple):
+    """What a compensator was designed on: a compensator file's ``[design]`` table (DESIGN.md
+    "Designing a compensator on a model").
+
+    Attributes
+    ----------
+    model : str
+        The design model: a built-in model's name, or a model file's path as written (relative
+        to the compensator file's folder), or a name that is neither (a diagnosis's extended model).
+    model_sha256 : str
+        64 lowercase hex digits: sha256 of the model's canonical TOML
+        (:meth:`station.plant.model.Model.to_toml`, UTF-8), its parameters and effects.
+    """
+
+    model: str
+    model_sha256: str
+
+    @classmethod
+    def of(cls, model: str, model_toml: str) -> DesignRecord:
+        """The record of a model: its name or path, and the sha256 of its canonical TOML.
+
+        Parameters
+        ----------
+        model : str
+            How the record names it (a built-in's name, a model file's path).
+        model_toml : str
+            The model's canonical TOML (:meth:`station.plant.model.Model.to_toml`).
+        """
+        return cls(str(model), digest(model_toml))
+
+    def matches(self, model_toml: str) -> bool:
+        """Whether a model (its canonical TOML) is the one this compensator was designed on.
+
+        Parameters
+        ----------
+        model_toml : str
+            :meth:`station.plant.model.Model.to_toml` of the model at hand.
+        """
+        return digest(model_toml) == self.model_sha256
+
+
+def digest(text: str) -> str:
+    """sha256 of a text's UTF-8 bytes, 64 lowercase hex digits (a ``[design]`` record's ``model_sha256``).
+
+    Parameters
+    ----------
+    text : str
+    """
+    return hashlib.sha256(text.encode("utf-8")).hexdigest()
+
+
+SHA256_HEX = re.compile(r"[0-9a-f]{64}")
+"""A sha256 digest as written in a ``[design]`` record: 64 lowercase hex digits."""
+
+
 class CompensatorFile(NamedTuple):
     """A compensator file as read and checked, not yet discretized (:func:`read_compensator_file`).
 
@@ -294,6 +354,8 @@ class CompensatorFile(NamedTuple):
     shaper : ShaperTimes or None
         The ``[shaper]``'s times (s, as written; rounded to whole samples when the
         compensator is built) and amplitudes (None without [shaper]).
+    design : DesignRecord or None
+        The ``[design]`` record: the model it was designed on (None without one).
     """
 
     path: Path
@@ -303,6 +365,7 @@ class CompensatorFile(NamedTuple):
     limit: float | None
     sets_limit: bool
     shaper: ShaperTimes | None = None
+    design: DesignRecord | None = None
 
     def clamp(self, limit: float | None) -> float | None:
         """The clamp the compensator runs with: the file's own ``limit`` wins over ``limit``.
@@ -353,7 +416,7 @@ class CompensatorFile(NamedTuple):
 
     def to_toml(self) -> str:
         """The file's text (TOML): what :func:`read_compensator_file` reads back to the same
-        stages, limit and shaper (floats written with ``repr``: they round-trip exactly)."""
+        stages, limit, shaper and design record (floats written with ``repr``: they round-trip exactly)."""
         lines = [f"name = {json.dumps(self.name)}"]
         if self.sets_limit:
             lines.append(f"limit = {'false' if self.limit is None else repr(float(self.limit))}")
@@ -364,6 +427,9 @@ class CompensatorFile(NamedTuple):
         if self.shaper is not None:
             lines += ["", "[shaper]", f"times = {_floats(self.shaper.times)}  # s",
                       f"amplitudes = {_floats(self.shaper.amplitudes)}"]
+        if self.design is not None:
+            lines += ["", "[design]", f"model = {json.dumps(self.design.model)}",
+                      f"model_sha256 = {json.dumps(self.design.model_sha256)}"]
         return "\n".join(lines) + "\n"
 
 
@@ -395,9 +461,9 @@ def read_compensator_file(path: str | Path) -> CompensatorFile:
     """
     doc = load_toml(path, "compensator file")
     path, data = doc.path, doc.data
-    unknown = sorted(set(data) - {"gth", "ga", "limit", "name", "shaper"})
+    unknown = sorted(set(data) - {"gth", "ga", "limit", "name", "shaper", "design"})
     if unknown:
-        raise doc.error(unknown[0], "unknown field (expected gth, ga, limit, name, shaper)")
+        raise doc.error(unknown[0], "unknown field (expected gth, ga, limit, name, shaper, design)")
     if "gth" not in data:
         raise StationError(f"{path}: [gth]: missing (the compensator from e to v)", file=path, key="gth")
     gth = _read_stage(doc, "gth")
@@ -411,7 +477,32 @@ def read_compensator_file(path: str | Path) -> CompensatorFile:
     name = data.get("name", path.stem)
     if not isinstance(name, str) or not name:
         raise doc.error("name", f"expected a non-empty string, got {shown(name)}")
-    return CompensatorFile(path, name, gth, ga, limit, "limit" in data, _read_shaper(doc))
+    return CompensatorFile(path, name, gth, ga, limit, "limit" in data, _read_shaper(doc), _read_design(doc))
+
+
+def _read_design(doc) -> DesignRecord | None:
+    """The file's [design] record (None without one), checked: a non-empty ``model`` string and
+    a ``model_sha256`` of 64 lowercase hex digits, nothing else."""
+    if "design" not in doc.data:
+        return None
+    table = doc.data["design"]
+    if not isinstance(table, dict):
+        line = doc.line_of("design", None)
+        raise StationError(f"{doc.path}:{f' line {line}:' if line else ''} [design]: expected a table with model "
+                           f"and model_sha256", file=doc.path, line=line, key="design")
+    unknown = sorted(set(table) - {"model", "model_sha256"})
+    if unknown:
+        raise doc.error(unknown[0], "unknown field (expected model, model_sha256)", table="design")
+    for key in ("model", "model_sha256"):
+        if key not in table:
+            raise doc.error(key, "missing", table="design")
+    model, digest = table["model"], table["model_sha256"]
+    if not isinstance(model, str) or not model.strip() or "\n" in model:
+        raise doc.error("model", f"expected a model's name or file path (one line), got {shown(model)}", table="design")
+    if not isinstance(digest, str) or not SHA256_HEX.fullmatch(digest):
+        raise doc.error("model_sha256", f"expected 64 lowercase hex digits (sha256), got {shown(digest)}",
+                        table="design")
+    return DesignRecord(model, digest)
 
 
 def _read_shaper(doc) -> ShaperTimes | None:

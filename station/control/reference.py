@@ -11,6 +11,7 @@ from pathlib import Path
 import numpy as np
 
 from station.errors import StationError
+from station.runlog import read_log
 
 
 def _check_n(n: int) -> int:
@@ -126,8 +127,6 @@ def file_reference(path: str | Path, column: str = "u") -> np.ndarray:
     StationError
         If the log cannot be read or has no such column (or it is empty there).
     """
-    from station.runlog import read_log
-
     log = read_log(path)
     if column not in log.data:
         raise StationError(f"{path}: no column {column!r} (columns: {', '.join(log.data)})")

@@ -1,7 +1,11 @@
 """Compensator design on a model (``station tune``, DESIGN.md "Designing a compensator on a model").
 
-- `space`: the rig's structures (p, lead, lead-accel) and the reference shaper as searched parameters.
-- `evaluate`: one design on one model: the step as ``station step`` runs it, figures, cost.
+- `space`: the rig's structures (p, lead, lead-accel), a filter at the second beam mode (notch,
+  roll-off, damper) and the reference shaper as searched parameters.
+- `tip`: the beam's tip in a simulated run: its position and its residual vibration.
+- `evaluate`: one design on one model: the step as ``station step`` runs it, figures (the hub's
+  and the tip's), cost.
+- `front`: the trade-off between the hub and the tip, the designs no other beats on both.
 - `linear`: the loop's linear part: margins and closed-loop poles.
 - `robust`: the set of models a design is judged on (model files, diagnosis JSONs, drawn doubt).
 - `search`: bracket (Sobol) and refine (Nelder-Mead, active set) the worst case.

@@ -10,11 +10,17 @@ Figures (DESIGN.md "Designing a compensator on a model"): overshoot_pct and
 settling_thesis_s (the thesis's, :func:`station.analysis.metrics.step_metrics`: 1 % band,
 from t = 0 of the run), settling_2pct_s (the 2 % band after the step, as
 :func:`station.analysis.metrics.step_info`: :func:`~station.analysis.metrics.settled_index`
-with its 0.1 s hold), peak_command (max |v|), saturated_s (time with |v| at the clamp).
+with its 0.1 s hold), peak_command (max |v|), saturated_s (time with |v| at the clamp); and
+the tip's (:mod:`station.design.tip`): tip_settling_2pct_s (the tip position, hub angle plus
+tip deflection / L in encoder counts, into the same 2 % band, the same definition),
+tip_residual_rms and tip_residual_peak (the accelerometer from 0.6 s after the step to the
+run's end, counts).
 
 Constraints (:class:`Requirements`): overshoot ≤ the bound; the closed loop's linear part
 stable with gain margin ≥ 6 dB and phase margin ≥ 30° (:mod:`station.design.linear`);
-settled into the 2 % band within the run; and at rest at its end — no limit cycle: over the
+the tip's residual RMS within its bound (given per model: ``station tune`` sets it to the
+thesis's compensator's on the same model, :func:`tip_bound`); settled into the 2 % band
+within the run; and at rest at its end — no limit cycle: over the
 run's last :data:`REST_WINDOW_S`, θ moves by at most 1 encoder count (one quantization step)
 and the command by at most :data:`REST_COMMAND` DAC counts. A loop still swinging there
 (a limit cycle of the clamp or the friction, a beam mode the hub no longer damps) is not at
@@ -47,6 +53,7 @@ from station import DT
 from station.analysis.metrics import settled_index, step_metrics
 from station.control.reference import step_reference
 from station.design.linear import ALIGNMENT, loop_model
+from station.design.tip import residual, tip_position
 from station.plant.simulate import simulate
 
 RUN_S = 2.0
@@ -60,6 +67,11 @@ STEP_TICK = 10
 
 REST_WINDOW_S = 0.5
 """The run's end over which the loop must be at rest, s."""
+
+TIP_RMS_FLOOR = 0.3
+"""Least bound on the tip's residual RMS, accelerometer counts: the simulated rig's
+accelerometer noise (0.3 counts std, DESIGN.md "FEM plant"), under which no run on it could
+show a difference (the design's own runs are noise-free)."""
 
 REST_COMMAND = 50.0
 """Largest peak-to-peak command over the rest window, DAC counts: a quarter of the rig's clamp.
@@ -78,11 +90,42 @@ class Requirements(NamedTuple):
         Least gain margin, dB.
     phase_margin_deg : float
         Least phase margin, degrees.
+    tip_rms : float or None
+        Largest tip residual RMS, accelerometer counts (None: no bound); per model
+        (:func:`tip_bound`).
     """
 
     overshoot_pct: float = 5.0
     gain_margin_db: float = 6.0
     phase_margin_deg: float = 30.0
+    tip_rms: float | None = None
+
+
+def tip_reference(thesis_rms: float) -> float:
+    """What a model's tip residual RMS is measured against: the thesis's compensator's there,
+    at least :data:`TIP_RMS_FLOOR`, accelerometer counts.
+
+    Parameters
+    ----------
+    thesis_rms : float
+        The thesis's compensator's tip residual RMS on the model, accelerometer counts.
+    """
+    return max(float(thesis_rms), TIP_RMS_FLOOR)
+
+
+def tip_bound(ratio: float | None, thesis_rms: float) -> float | None:
+    """The bound on a model's tip residual RMS: ``ratio`` times :func:`tip_reference` (None: no bound).
+
+    Parameters
+    ----------
+    ratio : float or None
+        The requirement, a multiple of the thesis's RMS (1: as quiet; None: none).
+    thesis_rms : float
+        The thesis's compensator's tip residual RMS on the model, accelerometer counts.
+    """
+    if ratio is None or not math.isfinite(thesis_rms):
+        return None
+    return float(ratio) * tip_reference(thesis_rms)
 
 
 class Figures(NamedTuple):
@@ -120,6 +163,12 @@ class Figures(NamedTuple):
     settling_rest_s : float or None
         Settling time into ``rest_band`` after the step, s (None: not settled within the run);
         the 2 % settling time when the hub rests inside the 2 % band.
+    tip_settling_2pct_s : float or None
+        The tip position's 2 % settling time after the step, s (None: not settled, or not
+        simulated).
+    tip_residual_rms, tip_residual_peak : float
+        RMS and largest |a| of the accelerometer from 0.6 s after the step to the run's end,
+        accelerometer counts (NaN: not simulated).
     """
 
     overshoot_pct: float
@@ -136,15 +185,21 @@ class Figures(NamedTuple):
     band: float = math.nan
     rest_band: float = math.nan
     settling_rest_s: float | None = None
+    tip_settling_2pct_s: float | None = None
+    tip_residual_rms: float = math.nan
+    tip_residual_peak: float = math.nan
 
     def to_json(self) -> dict:
         """The DESIGN.md metrics (overshoot_pct, settling_2pct_s, settling_thesis_s,
-        peak_command, saturated_s) and the checks (at_rest, margins, spectral radius)."""
+        peak_command, saturated_s, tip_settling_2pct_s, tip_residual_rms, tip_residual_peak)
+        and the checks (at_rest, margins, spectral radius)."""
         def num(x):
             return None if x is None or not math.isfinite(x) else round(float(x), 6)
         return {"overshoot_pct": num(self.overshoot_pct), "settling_2pct_s": num(self.settling_2pct_s),
                 "settling_thesis_s": num(self.settling_thesis_s), "peak_command": num(self.peak_command),
-                "saturated_s": num(self.saturated_s), "limit_cycle": not self.at_rest,
+                "saturated_s": num(self.saturated_s), "tip_settling_2pct_s": num(self.tip_settling_2pct_s),
+                "tip_residual_rms": num(self.tip_residual_rms), "tip_residual_peak": num(self.tip_residual_peak),
+                "limit_cycle": not self.at_rest,
                 "gain_margin_db": num(self.gain_margin_db), "phase_margin_deg": num(self.phase_margin_deg),
                 "spectral_radius": num(self.spectral_radius)}
 
@@ -171,19 +226,23 @@ def step_run(model, compensator, amplitude: float, run_s: float = RUN_S, dt: flo
     return simulate(model, compensator, u, alignment=ALIGNMENT, command="round", dt=dt)
 
 
-def step_figures(run, amplitude: float, limit: float | None) -> tuple:
+def step_figures(run, amplitude: float, limit: float | None, tip=None) -> tuple:
     """The step figures of a run: (overshoot_pct, settling_2pct_s, settling_thesis_s,
-    peak_command, saturated_s, at_rest, final_error, last_out_s, band, rest_band, settling_rest_s).
+    peak_command, saturated_s, at_rest, final_error, last_out_s, band, rest_band, settling_rest_s,
+    tip_settling_2pct_s, tip_residual_rms, tip_residual_peak).
 
     Parameters
     ----------
     run : SimResult or a logged run's columns
-        ``t`` (s), ``theta`` (encoder counts), ``v`` (DAC counts), the step at tick
-        :data:`STEP_TICK`.
+        ``t`` (s), ``theta`` (encoder counts), ``v`` (DAC counts), ``a`` (accelerometer
+        counts), the step at tick :data:`STEP_TICK`.
     amplitude : float
         Step height, encoder counts.
     limit : float or None
         The clamp, DAC counts (None: no time at the clamp).
+    tip : array_like, shape (N,), optional
+        The tip position, encoder counts (:func:`station.design.tip.tip_position`; None: its
+        settling time is None).
     """
     t, theta, v = np.asarray(run["t"]), np.asarray(run["theta"]), np.asarray(run["v"])
     dt = float(t[1] - t[0])
@@ -199,13 +258,42 @@ def step_figures(run, amplitude: float, limit: float | None) -> tuple:
     last_out = 0.0 if out.size == 0 else float(ts[-1] + dt if out[-1] == ys.size - 1 else ts[out[-1] + 1])
     rest_band = max(band, float(np.max(np.abs(amplitude - theta[-tail:]))))
     k_rest = k if rest_band == band else settled_index(ts, ys, amplitude, rest_band)
+    k_tip = None if tip is None else settled_index(ts, np.asarray(tip, dtype=float)[after], amplitude, band)
+    res = residual(run["a"], STEP_TICK, dt)
     return (thesis.overshoot_pct, None if k is None else float(ts[k]), thesis.settling_time_s,
             float(np.max(np.abs(v))), sat, at_rest, float(abs(amplitude - ys[-1])), last_out, band, rest_band,
-            None if k_rest is None else float(ts[k_rest]))
+            None if k_rest is None else float(ts[k_rest]), None if k_tip is None else float(ts[k_tip]),
+            res.rms, res.peak)
+
+
+def linear_key(model) -> tuple:
+    """What a model's linear checks depend on: its linear part's parameters, element count,
+    extra delay and accelerometer gain (friction, offsets and the like leave them alone).
+
+    Parameters
+    ----------
+    model : station.plant.model.Model
+    """
+    return model.linear_params(), model.n_elements, int(model.effect("delay")), float(model.effect("accel_gain"))
+
+
+def linear_checks(model, compensator, dt: float = DT) -> tuple[float, object]:
+    """(spectral radius, margins) of a compensator's loop on a model's linear part
+    (:mod:`station.design.linear`).
+
+    Parameters
+    ----------
+    model : station.plant.model.Model
+    compensator : station.control.Compensator
+    dt : float
+        Sample time, s.
+    """
+    lm = loop_model(model, dt)
+    return lm.spectral_radius(compensator), lm.margins(compensator)
 
 
 def judge(model, compensator, amplitude: float, run_s: float = RUN_S, dt: float = DT,
-          requirements: Requirements | None = None) -> Figures:
+          requirements: Requirements | None = None, linear: tuple | None = None, tip: bool = True) -> Figures:
     """A compensator's figures on a model: linear checks, then the step.
 
     The step is not simulated (its figures NaN, ``settling_2pct_s`` None) when the linear
@@ -224,17 +312,22 @@ def judge(model, compensator, amplitude: float, run_s: float = RUN_S, dt: float 
         Sample time, s.
     requirements : Requirements, optional
         Skip the step when the margins fail these.
+    linear : tuple, optional
+        :func:`linear_checks` of this compensator on a model with the same :func:`linear_key`
+        (computed here when not given).
+    tip : bool
+        Simulate the tip position too (its settling time; otherwise None: the search does not
+        use it).
     """
-    lm = loop_model(model, dt)
-    rho = lm.spectral_radius(compensator)
-    mg = lm.margins(compensator)
+    rho, mg = linear_checks(model, compensator, dt) if linear is None else linear
     failed = requirements is not None and (mg.gain_margin_db < requirements.gain_margin_db
                                            or mg.phase_margin_deg < requirements.phase_margin_deg)
     if not rho < 1.0 or failed:
         nan = math.nan
         return Figures(nan, None, None, nan, nan, False, mg.gain_margin_db, mg.phase_margin_deg, rho, nan, nan,
                        BAND * abs(amplitude))
-    fig = step_figures(step_run(model, compensator, amplitude, run_s, dt), amplitude, compensator.limit)
+    run = step_run(model, compensator, amplitude, run_s, dt)
+    fig = step_figures(run, amplitude, compensator.limit, tip_position(model, run.v, dt) if tip else None)
     return Figures(*fig[:6], mg.gain_margin_db, mg.phase_margin_deg, rho, *fig[6:])
 
 
@@ -259,6 +352,8 @@ def violations(f: Figures, req: Requirements) -> dict[str, float]:
         return out
     if f.overshoot_pct > req.overshoot_pct:
         out["overshoot"] = (f.overshoot_pct - req.overshoot_pct) / 5.0
+    if req.tip_rms is not None and f.tip_residual_rms > req.tip_rms:
+        out["tip"] = min((f.tip_residual_rms - req.tip_rms) / req.tip_rms, 100.0)
     if f.settling_2pct_s is None:
         out["not_settled"] = 0.2 + min(f.final_error, 1e3) / 100.0
     if not f.at_rest:

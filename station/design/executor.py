@@ -17,7 +17,10 @@ from __future__ import annotations
 
 import contextlib
 from collections.abc import Callable, Iterable, Iterator
+from concurrent.futures import ProcessPoolExecutor
 from typing import Any
+
+from threadpoolctl import threadpool_limits
 
 from station.errors import StationError
 
@@ -32,8 +35,6 @@ def one_thread(fn: Callable, *args) -> Any:
     *args
         Its arguments.
     """
-    from threadpoolctl import threadpool_limits
-
     with threadpool_limits(limits=1, user_api="blas"):
         return fn(*args)
 
@@ -88,7 +89,7 @@ def open_runner(jobs: int = 1, scheduler: str | None = None) -> Iterator[Runner]
     """
     if scheduler is not None:
         try:
-            from dask.distributed import Client
+            from dask.distributed import Client  # lazy: optional dependency (dask.distributed)
         except ImportError:
             raise StationError("--scheduler: needs Dask distributed (pip install 'station[dask]')") from None
         try:
@@ -103,7 +104,6 @@ def open_runner(jobs: int = 1, scheduler: str | None = None) -> Iterator[Runner]
     if jobs <= 1:
         yield Runner(None, "this process")
         return
-    from concurrent.futures import ProcessPoolExecutor
 
     with ProcessPoolExecutor(max_workers=int(jobs)) as pool:
         yield Runner(pool, f"{int(jobs)} local processes")

@@ -17,6 +17,7 @@ from __future__ import annotations
 
 from station.design.evaluate import Figures, Requirements, friction_held, held_error
 from station.plant.effects import EFFECTS
+from station.design.linear import loop_model
 
 HOLDING_EFFECTS = ("coulomb_friction", "static_friction", "deadzone")
 """Effects that hold a small command: the motor's dry (sliding, breakaway) friction and an
@@ -67,8 +68,6 @@ def design_model_warning(space, values: dict, model, figure: Figures, requiremen
     requirements : Requirements
         The margins a higher gain would have to keep.
     """
-    from station.design.linear import loop_model
-
     if not friction_held(figure, requirements):
         return None
     error, band = held_error(figure), figure.band

@@ -138,7 +138,7 @@ class LoopModel:
         ----------
         compensator : station.control.Compensator
         """
-        import control
+        import control  # lazy: start-up time (python-control)
 
         gm, pm, _, _, wp, _ = control.stability_margins(control.frd(self.loop(compensator), self.omega, dt=self.dt),
                                                        returnall=True)
@@ -160,7 +160,8 @@ class LoopModel:
         """
         return float(np.max(np.abs(np.linalg.eigvals(self.closed_loop_matrix(compensator)))))
 
-    def dominant_mode(self, compensator, band_hz: tuple[float, float] = (0.5, 10.0)) -> tuple[float, float] | None:
+    def dominant_mode(self, compensator, band_hz: tuple[float, float] = (0.5, 10.0),
+                      poles: np.ndarray | None = None) -> tuple[float, float] | None:
         """The closed loop's least damped oscillatory mode in a band: (f Hz, ζ), or None.
 
         The slowest-decaying complex pole pair with its damped frequency in ``band_hz`` (the
@@ -172,8 +173,10 @@ class LoopModel:
         compensator : station.control.Compensator
         band_hz : tuple of float
             (low, high) of the damped frequency, Hz.
+        poles : ndarray, optional
+            The closed loop's poles (z), when already known.
         """
-        lam = np.linalg.eigvals(self.closed_loop_matrix(compensator))
+        lam = np.linalg.eigvals(self.closed_loop_matrix(compensator)) if poles is None else np.asarray(poles)
         lam = lam[np.abs(lam) > 1e-12].astype(complex)
         s = np.log(lam) / self.dt
         s = s[(s.imag > 2 * math.pi * band_hz[0]) & (s.imag < 2 * math.pi * band_hz[1]) & (s.real < 0)]
@@ -244,7 +247,13 @@ def _ss(tf):
     """(A, B, C, D) of a DiscreteTF (B, C as 1-D, D a float); an absent filter is zero."""
     if tf is None:
         return np.zeros((0, 0)), np.zeros(0), np.zeros(0), 0.0
-    num, den = _tf_z(tf.num, tf.den)
+    return _ss_of(tuple(map(float, tf.num)), tuple(map(float, tf.den)))
+
+
+@functools.lru_cache(maxsize=256)
+def _ss_of(num: tuple, den: tuple):
+    # one compensator is checked on every model of a set: its realization once
+    num, den = _tf_z(num, den)
     A, B, C, D = scipy.signal.tf2ss(num, den)
     return A, B[:, 0], C[0], float(D[0, 0])
 

@@ -9,8 +9,8 @@ A design is robust to doubt when it meets its requirements on every model of the
    JSON (``station diagnose --json``) giving its ``extended_model`` and each of its
    ``alternatives`` (the nominal parameter set with the alternative's effect ``values``);
 3. with ``--samples N`` (N > 0), the intervals' box: the diagnosis JSONs' effect ``interval`` s
-   when they have any, around the design model, otherwise :data:`DEFAULT_DOUBT`, the rig's usual
-   doubt: its corners (every effect at an end of its interval, up to
+   when they have any (a dry friction's widened down to none: :data:`LESS_FRICTION`), around
+   the design model, otherwise :data:`DEFAULT_DOUBT`, the rig's usual doubt: its corners (every effect at an end of its interval, up to
    :data:`MAX_CORNER_EFFECTS` effects: a worst case often sits in a corner) and N models drawn
    inside it (a Latin hypercube sample, seeded).
 
@@ -20,6 +20,7 @@ file (a JSON with no model, a model that does not load, an unstable plant).
 
 from __future__ import annotations
 
+import itertools
 import json
 import math
 from pathlib import Path
@@ -33,18 +34,27 @@ from station.plant.model import Model, as_model, load_model
 from station.plant.parameters import params_from_dict
 
 DEFAULT_DOUBT = (
-    ("coulomb_friction", "absolute", 5.0, 20.0),
+    ("coulomb_friction", "absolute", 0.0, 16.0),
     ("static_friction", "ratio", 0.7, 1.5),
-    ("amp_offset", "absolute", -5.0, 5.0),
-    ("param:drive_c", "ratio", 0.85, 2.0),
+    ("amp_offset", "absolute", -3.0, 3.0),
+    ("param:drive_c", "ratio", 0.6, 1.4),
+    ("param:EI", "ratio", 0.9, 1.1),
 )
-"""The rig's usual doubt when no diagnosis gives intervals: (effect, how, low, high).
+"""The rig's usual doubt when no diagnosis gives intervals: (effect, how, low, high), what the
+diagnosis of the rig's four thesis logs leaves open (docs/diagnosis.md).
 
-"absolute": the effect's value drawn in [low, high] (dry friction 5-20 DAC counts, an
-amplifier offset of ±5 counts); "ratio": the model's own value times [low, high] (the drive
-train's damping 0.85-2x the model's: the rig's diagnoses found about 2x and 4x tmm-fit's,
-never less than it; breakaway friction only when the model has it). Effects the simulator does not know are
-left out."""
+"absolute": the effect's value drawn in [low, high]: dry friction from none (a rig with less
+friction than the estimate: the 2009 session had 1.2 counts) to 16 DAC counts (what the
+open-loop pulses alone ask for; the closed loops ask for about 5), an amplifier offset of ±3
+counts (the pulses' −2.7, the 2009 session's −1.5). "ratio": the model's own value times
+[low, high]: the drive train's damping 0.6-1.4x (the diagnosis's 95 % interval, 2.36-4.47x
+tmm-fit around 3.41x, and least squares' 1.98x), the beam's EI ±10 % (the rig model's first
+mode is 5 % high: EI x0.9 would close it, and did not pay held out), breakaway friction only
+when the model has it. Effects the simulator does not know are left out."""
+
+LESS_FRICTION = ("coulomb_friction", "static_friction")
+"""Dry-friction effects whose diagnosed interval is widened down to none: a rig can have less
+friction than the estimate (it drifts: docs/diagnosis.md), and a design must not need it."""
 
 SEED = 0
 """Seed of the drawn models."""
@@ -205,7 +215,7 @@ def sample_models(model: Model, intervals: dict, n: int, seed: int = SEED) -> li
     seed : int
         The sample's seed.
     """
-    from scipy.stats import qmc
+    from scipy.stats import qmc  # lazy: start-up time (scipy.stats: the tune command's parser imports this module)
 
     if n <= 0 or not intervals:
         return []
@@ -224,8 +234,6 @@ def corner_models(model: Model, intervals: dict) -> list[Model]:
     intervals : dict
         Effect -> (low, high).
     """
-    import itertools
-
     if not intervals or len(intervals) > MAX_CORNER_EFFECTS:
         return []
     return [_model_at(model, intervals, np.array(row, dtype=float), f"{model.name} corner {k + 1}")
@@ -324,6 +332,8 @@ def robust_set(model=None, robust=(), samples: int = 0, seed: int = SEED) -> Rob
     intervals = {}
     for _, doc in docs:
         intervals.update(doc.intervals)
+    # less friction than the estimate, and none
+    intervals = {k: ((0.0, hi) if k in LESS_FRICTION else (lo, hi)) for k, (lo, hi) in intervals.items()}
     if not intervals:
         intervals = default_intervals(nominal)
     corners = corner_models(nominal, intervals) if samples > 0 else []

@@ -40,9 +40,12 @@ from collections.abc import Callable
 from typing import NamedTuple
 
 import numpy as np
+from scipy.optimize import minimize
+from scipy.stats import qmc
 
-from station.design.evaluate import RUN_S, Figures, Requirements, cost, judge
+from station.design.evaluate import RUN_S, Figures, Requirements, cost, judge, linear_checks, linear_key
 from station.design.linear import loop_model
+from station.design.space import SECOND_MODE_HZ
 
 MEAN_WEIGHT = 0.01
 """Weight of the mean over the models in the robust objective (a tie-break)."""
@@ -95,6 +98,9 @@ class Problem(NamedTuple):
     bar_s : float or None
         The 2 % settling time to beat on the design model, s: the thesis's compensator's there
         (None: no bar, it does not settle).
+    tip_bounds : tuple of float or None
+        Per model, the bound on the tip's residual RMS, accelerometer counts
+        (:func:`station.design.evaluate.tip_bound`; None: no bound anywhere).
     """
 
     space: object
@@ -103,6 +109,20 @@ class Problem(NamedTuple):
     requirements: Requirements
     run_s: float = RUN_S
     bar_s: float | None = None
+    tip_bounds: tuple | None = None
+
+    def model_requirements(self, which=None) -> list[Requirements]:
+        """The requirements on each model (``which``: their indices; default all), the tip's bound its own.
+
+        Parameters
+        ----------
+        which : sequence of int, optional
+            Indices of the models.
+        """
+        which = range(len(self.models)) if which is None else which
+        if self.tip_bounds is None:
+            return [self.requirements] * len(which)
+        return [self.requirements._replace(tip_rms=self.tip_bounds[i]) for i in which]
 
 
 class Candidate(NamedTuple):
@@ -142,11 +162,20 @@ class SearchResult(NamedTuple):
         unless the margins already fail).
     working_set : tuple of int
         The models the last refinement ran on.
+    judged : tuple of Candidate
+        Every design judged on every model (the trade-off's candidates).
+    bracket : tuple of (ndarray, list of Figures)
+        The bracket's designs (unit-cube points) and their figures on the screening set.
+    screen : tuple of int
+        The screening set's model indices.
     """
 
     best: Candidate
     evaluations: int
     working_set: tuple
+    judged: tuple = ()
+    bracket: tuple = ()
+    screen: tuple = ()
 
 
 def robust_objective(costs, run_s: float = RUN_S, design_cost: float | None = None) -> float:
@@ -180,7 +209,7 @@ def robust_objective(costs, run_s: float = RUN_S, design_cost: float | None = No
     return float(min(worst_met + c[~met].sum() + tie, 0.5 * DESIGN_MODEL_FIRST))
 
 
-def objective(figures, requirements: Requirements, run_s: float = RUN_S, bar_s: float | None = None) -> float:
+def objective(figures, requirements, run_s: float = RUN_S, bar_s: float | None = None) -> float:
     """A design's objective from its figures on the models (:func:`robust_objective`).
 
     The design model's part: its cost against every requirement, the 2 % band included; a
@@ -191,20 +220,22 @@ def objective(figures, requirements: Requirements, run_s: float = RUN_S, bar_s: 
     ----------
     figures : sequence of Figures
         One per model, the design model's first.
-    requirements : Requirements
+    requirements : Requirements or sequence of Requirements
+        The same for every model, or one per model (the tip's bound is a model's own).
     run_s : float
         The run's length, s.
     bar_s : float, optional
         The 2 % settling time to beat on the design model, s.
     """
-    first = cost(figures[0], requirements, run_s, held=False)
+    reqs = [requirements] * len(figures) if isinstance(requirements, Requirements) else list(requirements)
+    first = cost(figures[0], reqs[0], run_s, held=False)
     if bar_s is not None and first < run_s and first > bar_s:
         first = run_s + (first - bar_s)
-    return robust_objective([cost(f, requirements, run_s) for f in figures], run_s, first)
+    return robust_objective([cost(f, r, run_s) for f, r in zip(figures, reqs)], run_s, first)
 
 
-def _objective(problem: Problem, figures) -> float:
-    return objective(figures, problem.requirements, problem.run_s, problem.bar_s)
+def _objective(problem: Problem, figures, which=None) -> float:
+    return objective(figures, problem.model_requirements(which), problem.run_s, problem.bar_s)
 
 
 def judge_point(problem: Problem, x, which) -> list[Figures]:
@@ -219,8 +250,16 @@ def judge_point(problem: Problem, x, which) -> list[Figures]:
         Indices of the models.
     """
     comp = problem.space.compensator_file(problem.space.values(x)).compensator()
-    return [judge(problem.models[i], comp, problem.amplitude, problem.run_s, requirements=problem.requirements)
-            for i in which]
+    checks = {}  # models that differ in friction or offsets alone share their linear checks
+    out = []
+    for i in which:
+        model = problem.models[i]
+        key = linear_key(model)
+        if key not in checks:
+            checks[key] = linear_checks(model, comp)
+        out.append(judge(model, comp, problem.amplitude, problem.run_s, requirements=problem.requirements,
+                         linear=checks[key], tip=problem.requirements is None))
+    return out
 
 
 def judge_points(problem: Problem, xs, which) -> list[list[Figures]]:
@@ -257,17 +296,20 @@ def bracket_points(problem: Problem, xs, which) -> list[tuple[np.ndarray, list[F
     space = problem.space
     out = []
     for x in xs:
-        mode = None
-        if space.shaper == "opt":
+        mode = second = None
+        if space.shaper in ("opt", "opt2"):
             bare = space.compensator_file(space.values(space.complete(x, None))).compensator()
-            mode = loop_model(problem.models[0]).dominant_mode(bare)
-        point = space.complete(x, mode)
+            lm = loop_model(problem.models[0])
+            poles = np.linalg.eigvals(lm.closed_loop_matrix(bare))
+            mode = lm.dominant_mode(bare, poles=poles)
+            second = lm.dominant_mode(bare, SECOND_MODE_HZ, poles) if space.shaper == "opt2" else None
+        point = space.complete(x, mode, second)
         out.append((point, judge_point(problem, point, which)))
     return out
 
 
-def _costs(problem: Problem, figs) -> list[float]:
-    return [cost(f, problem.requirements, problem.run_s) for f in figs]
+def _costs(problem: Problem, figs, which=None) -> list[float]:
+    return [cost(f, r, problem.run_s) for f, r in zip(figs, problem.model_requirements(which))]
 
 
 def refine(problem: Problem, x0, which, maxfev: int) -> tuple[np.ndarray, int]:
@@ -290,8 +332,6 @@ def refine(problem: Problem, x0, which, maxfev: int) -> tuple[np.ndarray, int]:
     evaluations : int
         Designs judged on models.
     """
-    from scipy.optimize import minimize
-
     x0 = np.clip(np.asarray(x0, dtype=float), 0.0, 1.0)
     d = x0.size
     simplex = [x0]
@@ -303,7 +343,7 @@ def refine(problem: Problem, x0, which, maxfev: int) -> tuple[np.ndarray, int]:
 
     def f(x):
         calls[0] += 1
-        return _objective(problem, judge_point(problem, x, which))
+        return _objective(problem, judge_point(problem, x, which), which)
 
     res = minimize(f, x0, method="Nelder-Mead", bounds=[(0.0, 1.0)] * d,
                    options={"maxfev": int(maxfev), "initial_simplex": np.array(simplex), "xatol": 1e-3,
@@ -331,8 +371,6 @@ def search(problem: Problem, runner, budget: Budget = Budget(), seed: int = 0,
     progress : callable, optional
         Called with one line per stage.
     """
-    from scipy.stats import qmc
-
     say = progress or (lambda msg: None)
     space, n_models = problem.space, len(problem.models)
     screen = screening_set(problem.models, budget.screen)
@@ -346,12 +384,12 @@ def search(problem: Problem, runner, budget: Budget = Budget(), seed: int = 0,
     judged = [pair for part in runner.map(bracket_points, tasks) for pair in part]
     points = [x for x, _ in judged]
     evaluations += len(points) * len(screen)
-    ranks = [_objective(problem, f) for _, f in judged]
+    ranks = [_objective(problem, f, screen) for _, f in judged]
     ranked = sorted(range(len(points)), key=lambda i: (ranks[i], i))[:budget.keep]
     # and the best on the design model alone: where the set's worst cases pull apart (P and dry
     # friction), the design that works on the model itself must still be among the candidates
-    alone = min(range(len(points)),
-                key=lambda i: (cost(judged[i][1][0], problem.requirements, problem.run_s, held=False), i))
+    first = problem.model_requirements([0])[0]
+    alone = min(range(len(points)), key=lambda i: (cost(judged[i][1][0], first, problem.run_s, held=False), i))
     if alone not in ranked:
         ranked.append(alone)
 
@@ -385,7 +423,7 @@ def search(problem: Problem, runner, budget: Budget = Budget(), seed: int = 0,
             break  # nothing new to learn: every worst model is in, and restarting did not pay
         working = sorted(set(working) | new)
     say(f"done: {_describe(best)}; {evaluations} evaluations")
-    return SearchResult(best, evaluations, tuple(working))
+    return SearchResult(best, evaluations, tuple(working), tuple(pool), tuple(judged), tuple(screen))
 
 
 def screening_set(models, extra: int) -> list[int]:

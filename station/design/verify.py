@@ -18,6 +18,8 @@ import numpy as np
 
 from station.control.designs import read_compensator_file
 from station.design.evaluate import RUN_S, STEP_TICK, step_figures, step_run
+from station.experiment import run_step
+from station.runlog import read_log
 
 
 class Verification(NamedTuple):
@@ -36,6 +38,8 @@ class Verification(NamedTuple):
         The logged step's overshoot, %.
     settling_2pct_s : float or None
         The logged step's 2 % settling time, s.
+    tip_residual_rms : float
+        The logged accelerometer's RMS from 0.6 s after the step to the run's end, counts.
     """
 
     log: Path | None
@@ -45,6 +49,7 @@ class Verification(NamedTuple):
     max_abs_dv: float
     overshoot_pct: float
     settling_2pct_s: float | None
+    tip_residual_rms: float = float("nan")
 
     @property
     def matches(self) -> bool:
@@ -57,7 +62,8 @@ class Verification(NamedTuple):
         return {"log": None if self.log is None else str(self.log), "reason": self.reason,
                 "max_abs_dtheta": self.max_abs_dtheta, "max_abs_da": self.max_abs_da,
                 "max_abs_dv": self.max_abs_dv, "overshoot_pct": self.overshoot_pct,
-                "settling_2pct_s": self.settling_2pct_s, "matches": self.matches}
+                "settling_2pct_s": self.settling_2pct_s, "tip_residual_rms": self.tip_residual_rms,
+                "matches": self.matches}
 
 
 def verify(model, compensator_file: str | Path, amplitude: float, log: str | Path | None = None,
@@ -83,9 +89,6 @@ def verify(model, compensator_file: str | Path, amplitude: float, log: str | Pat
     StationError
         The file cannot be read, or the run cannot start.
     """
-    from station.experiment import run_step
-    from station.runlog import read_log
-
     with tempfile.TemporaryDirectory(prefix="station-tune-") as tmp:
         path = Path(log) if log is not None else Path(tmp) / "verify-step.tsv"
         report = run_step(port="sim://?noise=0", controller=str(compensator_file), amplitude=amplitude,
@@ -100,4 +103,4 @@ def verify(model, compensator_file: str | Path, amplitude: float, log: str | Pat
 
         figs = step_figures(data, amplitude, None)
         return Verification(None if log is None else path, report.result.reason, dmax("theta"), dmax("a"),
-                            dmax("v"), float(figs[0]), figs[1])
+                            dmax("v"), float(figs[0]), figs[1], figs[12])

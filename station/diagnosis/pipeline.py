@@ -9,19 +9,19 @@ from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import NamedTuple
 
-from station.diagnosis.cases import Simulator, load_case
-from station.diagnosis.cost import Evaluator, calibrate_noise, pooled, relative_gain, rms_gain
-from station.diagnosis.folds import fold_records, make_folds, validation_runs
-from station.diagnosis.doubt import alternatives, effective_terms, effect_interval, interval_method
-from station.diagnosis.inputs import refuse_repeated_runs, set_aside_beam_tests
-from station.diagnosis.records import effect_results, model_predictions, run_reports
-from station.diagnosis.result import Diagnosis
-from station.diagnosis.selection import Search, Trial, effect_axes, fit_each_alone
-from station.diagnosis.estimator import choose_estimator
-from station.diagnosis.stepwise import forward_select
-from station.diagnosis.unexplained import check_unexplained
+from station.diagnosis.runs.cases import Simulator, load_case
+from station.diagnosis.runs.cost import Evaluator, calibrate_noise, pooled, relative_gain, rms_gain
+from station.diagnosis.runs.folds import fold_records, make_folds, validation_runs
+from station.diagnosis.honesty.doubt import alternatives, effective_terms, effect_interval, interval_method
+from station.diagnosis.runs.inputs import refuse_repeated_runs, set_aside_beam_tests
+from station.diagnosis.answer.records import effect_results, model_predictions, run_reports
+from station.diagnosis.answer.result import Diagnosis
+from station.diagnosis.search.selection import Search, Trial, fit_each_alone
+from station.diagnosis.search.estimator import choose_estimator
+from station.diagnosis.search.stepwise import forward_select
+from station.diagnosis.search.workbench import Bench, nominal_trial, workbench
+from station.diagnosis.honesty.unexplained import check_unexplained
 from station.errors import StationError
-from station.plant.effects import CANDIDATES, EFFECTS
 from station.plant.model import as_model
 
 
@@ -45,7 +45,7 @@ def diagnose(runs: Sequence[str | Path], validate: Sequence[str | Path] = (), mo
         Effect names to try (default :data:`station.plant.effects.CANDIDATES`).
     simulate : callable, optional
         ``simulate(case, model) -> (theta, a)`` (default:
-        :func:`station.diagnosis.cases.simulate_case`); tests plug in their own.
+        :func:`station.diagnosis.runs.cases.simulate_case`); tests plug in their own.
     workers : int, optional
         Threads fitting candidates at once (default 1). The compiled sample loop releases
         the GIL but building models and scoring runs hold it: on 2 shared cores two
@@ -53,7 +53,7 @@ def diagnose(runs: Sequence[str | Path], validate: Sequence[str | Path] = (), mo
         scripts/bench_diagnose.py at load average 3).
     likelihood_values : bool
         Also estimate the accepted effects' values by maximum likelihood and keep that
-        estimate when the held-out runs prefer it (:mod:`station.diagnosis.estimator`);
+        estimate when the held-out runs prefer it (:mod:`station.diagnosis.search.estimator`);
         False: least squares only (``station identify``, whose designs separate structures
         by the least-squares folds' spread).
 
@@ -67,14 +67,10 @@ def diagnose(runs: Sequence[str | Path], validate: Sequence[str | Path] = (), mo
         One run without ``validate``, an unreadable or empty log, a bad model, or an
         unknown candidate.
     """
-    from threadpoolctl import threadpool_limits
-
-    from station.plant.diskcache import bulk
-
-    # the matrices are tiny (22 x 22): BLAS threads only contend with each other and the
-    # compiled sample loop (measured 3x slower on a loaded 2-core machine)
-    with threadpool_limits(limits=1, user_api="blas"), bulk():  # thousands of forms: not via the disk
-        return _diagnose(runs, validate, model, progress, candidates, simulate, workers, likelihood_values)
+    runs, validate = list(runs), list(validate)
+    _check_runs(runs, validate)
+    with workbench("diagnose", candidates, workers) as bench:
+        return _diagnose(runs, validate, model, progress, bench, simulate, likelihood_values)
 
 
 def _check_runs(runs: list, validate: list) -> None:
@@ -83,14 +79,6 @@ def _check_runs(runs: list, validate: list) -> None:
     if not validate and len(runs) < 2:
         raise StationError(f"diagnose: leave-one-run-out needs at least two runs, got one ({runs[0]}); "
                            "give more runs or --validate RUN")
-
-
-def _candidates(candidates: Sequence[str] | None) -> list[str]:
-    names = list(CANDIDATES if candidates is None else candidates)
-    for n in names:
-        if n not in EFFECTS:
-            raise StationError(f"diagnose: unknown candidate effect '{n}' (known: {', '.join(EFFECTS)})")
-    return names
 
 
 class _Nominal(NamedTuple):
@@ -103,12 +91,10 @@ def _nominal(search: Search, how: str) -> _Nominal:
     validation errors."""
     ev, folds = search.ev, search.folds
     predictions = calibrate_noise(ev)
-    val_idx = validation_runs(folds)
-    sse = {i: ev.sse({}, i) for i in val_idx}
-    trial = Trial((), [{} for _ in folds], sse, sum(ev.weighted({}, i) for i in val_idx))
-    fit = pooled(ev, sse)
+    trial = nominal_trial(ev, folds)
+    fit = pooled(ev, trial.val_sse)
     search.say(f"nominal model {ev.model.name}: θ fit {fit.theta:.1f} %, θ RMS {fit.rms_theta:.2f} counts "
-               f"on {len(val_idx)} validation run(s) ({how})")
+               f"on {len(trial.val_sse)} validation run(s) ({how})")
     return _Nominal(predictions, trial)
 
 
@@ -159,17 +145,14 @@ def _doubt(search: Search, sel, searched, nominal: Trial, judged: dict, final: d
     return _Doubt(intervals, interval_method(n_fit, ev.terms(search.fit_runs), len(search.folds)), alts)
 
 
-def _diagnose(runs, validate, model, progress, candidates, simulate, workers, likelihood_values) -> Diagnosis:
+def _diagnose(runs, validate, model, progress, bench: Bench, simulate, likelihood_values) -> Diagnosis:
     t0 = time.perf_counter()
-    runs, validate = list(runs), list(validate)
-    _check_runs(runs, validate)
     base = as_model(model)
-    names = _candidates(candidates)
-    workers, axes = max(1, int(workers or 1)), effect_axes()
+    names = bench.names
     cases, n_fit, notes = _use_runs(runs, validate)
     folds, how = make_folds(n_fit, len(cases) - n_fit)
     ev = Evaluator(cases, base, simulate)
-    search = Search(ev, folds, tuple(range(n_fit)), axes, workers, progress or (lambda msg: None))
+    search = bench.search(ev, folds, range(n_fit), progress or (lambda msg: None))
     for note in notes:
         search.say(note)
 

@@ -54,7 +54,8 @@ class LinkLimits:
     check_rate : bool
         Check the device's tick rate (reason "rate"): samples more than 1.5× the
         nominal period apart on average over 0.5 s (time the station spent on a sample
-        is not counted); a self-paced v1 device (INFO rate_hz ≠ 0) more than 20 % fast.
+        is not counted, and a window in which the station waited on the device less than
+        a quarter of the time is no evidence: the host was held up); a self-paced v1 device (INFO rate_hz ≠ 0) more than 20 % fast.
         A lockstep device (v1 INFO rate_hz = 0) ticks when asked and is not checked: a
         wait on it is the host's, bounded by ``timeout``.
     """

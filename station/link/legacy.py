@@ -112,7 +112,7 @@ class LegacySession(Session):
         self._pending.clear()
         self._pending.extend(self._decoder.feed(data[2:]))
         self._theta = legacy.decode_word(data[:2])
-        self._deadline = Timeout(self.timeout)
+        self._listen(self.timeout)
 
     def start(self, n_ticks: int) -> None:
         """Start the run (see :meth:`_begin`); n_ticks is checked, not sent (the device runs until 's').

@@ -17,6 +17,7 @@ from typing import NamedTuple
 from urllib.parse import parse_qsl, urlencode, urlsplit
 
 import serial
+from serial.tools import list_ports
 
 from station.errors import StationError
 from station.protocol import legacy
@@ -130,7 +131,6 @@ def port_info(device: str, low_latency: bool | None = None) -> PortInfo:
         return PortInfo(device, "", "", None)
     if is_pty(device):
         return PortInfo(device, "pseudo-terminal", "", None)
-    from serial.tools import list_ports
 
     real = os.path.realpath(device)
     found = next((p for p in list_ports.comports() if os.path.realpath(p.device) == real), None)

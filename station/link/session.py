@@ -31,7 +31,7 @@ from serial.serialutil import Timeout
 
 from station import DT
 from station.link.bursts import BurstMeter, burst_line
-from station.link.faults import (MISS_WINDOW, RATE_FAST, RATE_SLOW, RATE_WINDOW_S, Interrupted, LagError, LinkFault,
+from station.link.faults import (MISS_WINDOW, POLL_S, RATE_FAST, RATE_SLOW, RATE_WINDOW_S, Interrupted, LagError, LinkFault,
                                  LinkLimits, LinkTimeout, RateError, SequenceError)
 from station.link.port import latency_timer
 from station.protocol import v1
@@ -42,6 +42,8 @@ logger = logging.getLogger("station.link")
 ZERO_ACCEL_TICKS = 16
 """Readings averaged for the accelerometer's zero (protocol v1, START bit1)."""
 IDLE_S = 0.25 * DT
+HELD_UP_S = 0.02
+"""A poll that overran the port's read timeout by more than this: the host was held up."""
 """A read that blocked this long found nothing waiting: the station was idle, the link late."""
 HANDSHAKE_TIMEOUT = 1.0
 """Seconds to wait for the device's answer to HELLO / θ0 / STOPPED."""
@@ -101,7 +103,7 @@ class Session:
                  "_deadline", "bursts", "_decoder", "dropped", "stale", "duplicates", "late", "late_seen", "rx_errors",
                  "watchdog_trips", "skipped", "held", "max_lag_seen", "_n", "_answered", "_ahead", "_n_handed",
                  "_drained", "_stop_seen", "_theta", "_misses", "_held_window", "_held_ticks", "_grace", "_watchdog",
-                 "_arrivals", "_waited", "_t_first", "_t_ready")
+                 "_arrivals", "_waited", "_t_first", "_t_ready", "held_up_s", "_t_listen", "_held_at_ready")
     protocol = ""
     alignment = 1
     """Computational delay d of this protocol (DESIGN.md): v[k] is computed from sample k−1."""
@@ -118,7 +120,7 @@ class Session:
         self.lockstep = False  # the device ticks on our commands (v1: INFO rate_hz = 0)
         self._debug = logger.isEnabledFor(logging.DEBUG)  # checked once: the hot path pays one test
         self._pending: deque = deque()
-        self._deadline = Timeout(limits.timeout)
+        self._listen(limits.timeout)
         self.bursts = BurstMeter()
         self._reset_run()
 
@@ -137,6 +139,7 @@ class Session:
         self._misses: deque = deque()  # ticks dropped, stale or duplicated in the window (MISS_WINDOW)
         self._held_window: deque = deque()  # ticks that ran on a held command in the window
         self._held_ticks: set = set()  # the same, to count each once
+        self.held_up_s = 0.0  # time the host was frozen while waiting for samples (not the device's)
         self._grace = False  # the deadline passed once with bytes waiting (the station was held up)
         self._watchdog = False
         self._arrivals: deque = deque()  # (arrival time, time spent waiting for it) over RATE_WINDOW_S
@@ -190,13 +193,29 @@ class Session:
         checking the deadline and stop signals. A chunk that ends a real wait (the read
         blocked: nothing had been there) feeds the burst meter; one that was already
         waiting (the station was busy) does not."""
-        self._check_wait(waiting_for)
         t0 = perf_counter()
+        self._credit_held_up(t0 - self._t_listen)  # since the last poll or the deadline's start
+        self._check_wait(waiting_for)
         got = self._receive()
-        if got:
-            now = perf_counter()
-            if now - t0 > IDLE_S:
-                self.bursts.record(got, now)
+        self._t_listen = now = perf_counter()
+        self._credit_held_up(now - t0)
+        if got and now - t0 > IDLE_S:
+            self.bursts.record(got, now)
+
+    def _credit_held_up(self, span: float) -> None:
+        """The deadline counts time the station listened: a span between two polls far longer
+        than the port's read timeout means the host was frozen (a stalled VM), when no device
+        could be heard, and it is added to the deadline. A real device's samples are waiting
+        after such a stall and end the wait; a silent one is still caught, that much later."""
+        held = span - POLL_S
+        if held > HELD_UP_S:
+            self._deadline.target_time += held
+            self.held_up_s += held
+
+    def _listen(self, timeout: float) -> None:
+        """A new sample deadline of ``timeout`` s, starting now."""
+        self._deadline = Timeout(timeout)
+        self._t_listen = perf_counter()
 
     def _send(self, data: bytes, what: tuple = ()) -> None:
         """Write ``data``; a failed write is a :class:`LinkFault` naming the port.
@@ -240,6 +259,7 @@ class Session:
                                 f"counts at tick {n} (more than --max-step {self.limits.max_step:g} per tick)")
         self._n, self._theta = n, theta
         self._deadline.restart(self.timeout)
+        self._t_listen = perf_counter()
         self._grace = False
         if status:
             if status & v1.LATE:
@@ -306,12 +326,12 @@ class Session:
         now = perf_counter()
         if self._t_first is None:
             self._t_first = now
-            self._t_ready = now
+            self._t_ready, self._held_at_ready = now, self.held_up_s
             return
         # time spent waiting for this sample: since the last sample or since our command,
         # whichever is later
-        waited = now - self._t_ready
-        self._t_ready = now
+        waited = now - self._t_ready - (self.held_up_s - self._held_at_ready)  # a frozen host is not the device
+        self._t_ready, self._held_at_ready = now, self.held_up_s
         arrivals = self._arrivals
         arrivals.append((now, waited))
         self._waited += waited
@@ -320,8 +340,12 @@ class Session:
         if now - self._t_first < RATE_WINDOW_S:
             return
         count = len(arrivals)
-        if self._waited > RATE_SLOW * DT * count and not self._samples_waiting():
-            # (with samples waiting it is the station that was held up, not the device: that is lag)
+        if (self._waited > RATE_SLOW * DT * count and self._waited >= RATE_WINDOW_S / 4
+                and not self._samples_waiting()):
+            # Judged only when the station spent a quarter of the window waiting on the device: a
+            # host held up (a stalled VM) leaves few samples and little waiting in the
+            # window, no evidence about the device. With samples waiting it is the station
+            # that was held up, not the device: that is lag.
             raise RateError(f"device {self.url} ticks too slowly: {count} samples in the last {RATE_WINDOW_S:g} s, "
                             f"one every {1000 * self._waited / count:.1f} ms on average (nominal {1000 * DT:g} ms) "
                             f"at tick {self._n}")
@@ -479,7 +503,7 @@ class Session:
                     self._hold(n + 1)
         self._send(data, what)
         self._answered = n
-        self._t_ready = perf_counter()
+        self._t_ready, self._held_at_ready = perf_counter(), self.held_up_s
 
     def unread_samples(self) -> list[Sample]:
         """Samples that arrived but never reached the loop (taken ahead, decoded, waiting in

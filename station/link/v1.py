@@ -94,7 +94,7 @@ class V1Session(Session):
         self._debug = logger.isEnabledFor(logging.DEBUG)
         logger.info("%s: START, %d ticks", self.url, n_ticks)
         self._write(v1.Start(v1.START_RESET_ENCODER | v1.START_ZERO_ACCEL, n_ticks))
-        self._deadline = Timeout(self.timeout + ZERO_ACCEL_TICKS * DT)
+        self._listen(self.timeout + ZERO_ACCEL_TICKS * DT)
 
     def _next_pending(self) -> Sample | None:
         """The next valid, new SAMPLE among the pending messages (hot path), or None.

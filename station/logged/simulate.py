@@ -128,7 +128,8 @@ def simulate_log(log: RunLog, controller, alignment: int | None, model) -> Model
     -------
     ModelRun
     """
-    from station.plant import DiscretePlant, simulate  # the FEM and its compiled kernels: loaded when used
+    # lazy: start-up time (the FEM and its compiled kernels, loaded when used)
+    from station.plant import DiscretePlant, simulate
 
     data = log.data
     u = data["u"]

@@ -50,7 +50,7 @@ class DiscretePlant:
         self.n_elements = n_elements
         self.dt = float(dt)
         A, B, C = state_matrices(self.params, n_elements)
-        import scipy.signal
+        import scipy.signal  # lazy: start-up time (scipy.signal)
         Ad, Bd, Cd, _, _ = scipy.signal.cont2discrete((A, B, C, np.zeros((2, 1))), self.dt, method="zoh")
         self.Ad = Ad
         self.Bd = Bd[:, 0].copy()
@@ -107,7 +107,7 @@ class DiscretePlant:
         if v.size == 0:
             return np.zeros(0), np.zeros(0)
         sys = (self.Ad, self.Bd[:, None], self.Cd, np.zeros((2, 1)), self.dt)
-        import scipy.signal
+        import scipy.signal  # lazy: start-up time (scipy.signal)
         _, y, xs = scipy.signal.dlsim(sys, np.append(v, 0.0), x0=self.x)
         self.x = xs[-1].copy()
         return y[:-1, 0].copy(), y[:-1, 1].copy()
@@ -127,7 +127,7 @@ class DiscretePlant:
             V⁻¹, to map a state into modal coordinates.
         """
         if self._modal is None:
-            import scipy.linalg
+            import scipy.linalg  # lazy: start-up time (scipy.linalg)
             lam, V = scipy.linalg.eig(self.Ad)
             lu = scipy.linalg.lu_factor(V)
             vinv = scipy.linalg.lu_solve(lu, np.eye(V.shape[0]))

@@ -9,10 +9,22 @@ Where each acts:
 - "plant" (inside the plant, integrated on a sub-step grid): coulomb_friction,
   static_friction, backlash;
 - "linear" (rebuild the linear FEM part): viscous_friction, beam_damping, param:NAME;
-- "output": accel_gain (on the accelerometer output, before its quantization);
+- "output": the sensors' faults, on the noise-free outputs before their quantization:
+  encoder_scale multiplies θ; a becomes accel_gain·a + accel_offset + accel_drift·t, t = k·dt
+  from the run's first sample (k = 0);
+- "wiring": motor_polarity, at the amplifier's output (after its offset, saturation,
+  dead-zone and delay): −1 turns the whole torque around (the amplifier's offset too; dry
+  friction is the motor's and still opposes its motion);
 - "setting": the shape of another effect, no effect alone: stribeck_speed (of
   static_friction). It is a key of a model file's ``[effects]`` like the others, but never a
   candidate cause; a diagnosis fits it only beside static_friction.
+
+Signed effects (accel_gain, encoder_scale, motor_polarity; :attr:`EffectSpec.signed`): the
+range is of the magnitude and either sign is allowed, a negative value meaning a sensor or
+motor wired the other way: accel_gain 0.3..3 either sign (a diagnosis never fits through
+0), encoder_scale 0.25..16 either sign (256- to 16384-count encoders against the model's
+1024), motor_polarity ±1 only (never between). A search over such an effect's range
+(``lower``..``upper``) covers the positive side; its sign is decided from the data.
 
 Dry friction: ``coulomb_friction`` v_c is the sliding level and, alone, also the static
 level; ``static_friction`` v_s >= v_c is the breakaway level, and the sliding friction falls
@@ -43,13 +55,16 @@ class EffectSpec(NamedTuple):
     name : str
         As in DESIGN.md ("coulomb_friction", ..., "param:drive_c").
     unit : str
-        "DAC counts", "samples", "encoder counts" or "1".
+        "DAC counts", "samples", "encoder counts", "accelerometer counts", "1", ... (DESIGN.md).
     neutral : float
         The value that means "no effect".
     lower, upper : float
-        The range a fit may search (and a model file may hold, besides ``neutral``).
-    kind : {"amplifier", "plant", "linear", "output", "setting"}
+        The range a fit may search (and a model file may hold, besides ``neutral``); of
+        the magnitude when ``signed``.
+    kind : {"amplifier", "plant", "linear", "output", "wiring", "setting"}
         Where it acts (module docstring).
+    signed : bool, default False
+        Either sign is allowed, ``lower <= |value| <= upper`` (a reversed sensor or motor).
     """
 
     name: str
@@ -58,6 +73,24 @@ class EffectSpec(NamedTuple):
     lower: float
     upper: float
     kind: str
+    signed: bool = False
+
+    def admits(self, value: float) -> bool:
+        """True when ``value`` (a float, not NaN) is the neutral value or in range.
+
+        Parameters
+        ----------
+        value : float
+            In the effect's unit.
+        """
+        size = abs(value) if self.signed else value
+        return value == self.neutral or self.lower <= size <= self.upper
+
+    def range_text(self) -> str:
+        """The range as an error message says it ("0..40", "±0.3..3", "±1")."""
+        if not self.signed:
+            return f"{self.lower:g}..{self.upper:g}"
+        return f"±{self.lower:g}" if self.lower == self.upper else f"±{self.lower:g}..{self.upper:g}"
 
 
 PARAM_NAMES = ("mu", "EI", "drive_k", "drive_c", "clamp_k", "clamp_c", "J_base", "m_accel", "J_accel",
@@ -65,7 +98,12 @@ PARAM_NAMES = ("mu", "EI", "drive_k", "drive_c", "clamp_k", "clamp_c", "J_base",
 """Parameters a param:NAME ratio may scale (all of the table but beam_beta, L, k_tau, a_gain)."""
 
 AMPLIFIER_ORDER = ("amp_offset", "saturation", "deadzone", "delay")
-"""DESIGN.md: after the device's command quantization, in this order."""
+"""DESIGN.md: after the device's command quantization, in this order (then motor_polarity
+at the amplifier's output)."""
+
+SENSOR_FAULTS = ("accel_gain", "accel_offset", "accel_drift", "encoder_scale", "motor_polarity")
+"""DESIGN.md's sensor and wiring faults: decided from the data where the data decide them
+(a sign from a correlation, a scale from a ratio), fitted like the others otherwise."""
 
 STRIBECK_SPEED = 0.05
 """Default Stribeck speed ω_s of static_friction, rad/s of the motor (DESIGN.md)."""
@@ -93,7 +131,7 @@ EFFECTS: dict[str, EffectSpec] = {
     for spec in (
         EffectSpec("coulomb_friction", "DAC counts", 0.0, 0.0, 40.0, "plant"),
         # v_s: the sliding level's 0..40 plus a breakaway excess of up to 30 (a diagnosis
-        # fits static_friction as coulomb_friction + excess, station.diagnosis.selection)
+        # fits static_friction as coulomb_friction + excess, station.diagnosis.search.selection)
         EffectSpec("static_friction", "DAC counts", 0.0, 0.0, 70.0, "plant"),
         EffectSpec("stribeck_speed", "rad/s", STRIBECK_SPEED, 0.01, 1.0, "setting"),
         # the motor's own damping c_m/k_tau is 14.8 counts per rad/s (tmm-fit): up to 2.4x
@@ -105,7 +143,13 @@ EFFECTS: dict[str, EffectSpec] = {
         EffectSpec("delay", "samples", 0.0, 0.0, 6.0, "amplifier"),
         EffectSpec("backlash", "encoder counts", 0.0, 0.0, 30.0, "plant"),
         EffectSpec("beam_damping", "1", BEAM_DAMPING_NOMINAL, BEAM_DAMPING_NOMINAL, 0.2, "linear"),
-        EffectSpec("accel_gain", "1", 1.0, 0.3, 3.0, "output"),
+        EffectSpec("accel_gain", "1", 1.0, 0.3, 3.0, "output", signed=True),
+        # beyond the rig's pre-test zeroing; the rig's a spans about ±125 counts
+        EffectSpec("accel_offset", "accelerometer counts", 0.0, -30.0, 30.0, "output"),
+        # a linear bias from the run's first sample: ±20 counts/s is ±40 counts over a 2 s run
+        EffectSpec("accel_drift", "accelerometer counts per s", 0.0, -20.0, 20.0, "output"),
+        EffectSpec("encoder_scale", "1", 1.0, 0.25, 16.0, "output", signed=True),
+        EffectSpec("motor_polarity", "1", 1.0, 1.0, 1.0, "wiring", signed=True),
         *(EffectSpec(f"param:{name}", "1", 1.0, PARAM_RATIO_RANGE[0], PARAM_RATIO_RANGE[1], "linear")
           for name in PARAM_NAMES),
     )
@@ -152,8 +196,8 @@ def check_effects(effects: Mapping[str, float], where: str = "") -> dict[str, fl
     Raises
     ------
     StationError
-        Unknown name, a value that is not a number, out of ``[lower, upper]`` (and not
-        the neutral value), a delay that is not a whole number of samples, or a
+        Unknown name, a value that is not a number, out of ``[lower, upper]`` (of its
+        magnitude for a signed effect; the neutral value is always allowed), a delay that is not a whole number of samples, or a
         static_friction below the coulomb_friction beside it. One line naming ``where``
         and the effect.
     """
@@ -166,9 +210,8 @@ def check_effects(effects: Mapping[str, float], where: str = "") -> dict[str, fl
         if isinstance(value, bool) or not isinstance(value, (int, float)) or math.isnan(value):
             raise StationError(f"{prefix}effect '{name}' must be a number ({spec.unit}), got {value!r}")
         value = float(value)
-        if value != spec.neutral and not spec.lower <= value <= spec.upper:
-            raise StationError(f"{prefix}effect '{name}' = {value:g} out of range "
-                               f"{spec.lower:g}..{spec.upper:g} {spec.unit}")
+        if not spec.admits(value):
+            raise StationError(f"{prefix}effect '{name}' = {value:g} out of range {spec.range_text()} {spec.unit}")
         if name == "delay" and value != int(value):
             raise StationError(f"{prefix}effect 'delay' must be a whole number of samples, got {value:g}")
         out[name] = value

@@ -143,7 +143,7 @@ def beam_modes(
     n = _check_n(n_elements)
     K, M = assemble_beam(n, EI, mu, L)
     free = _beam_free_dofs(n, bc)
-    import scipy.linalg
+    import scipy.linalg  # lazy: start-up time (scipy.linalg)
     lam, vec = scipy.linalg.eigh(K[np.ix_(free, free)], M[np.ix_(free, free)])
     rigid = {"pinned-free": 1, "cantilever": 0, "free-free": 2}[bc]
     lam, vec = lam[rigid:], vec[:, rigid:]
@@ -247,7 +247,7 @@ def modal_basis(params: Params, n_elements: int = 4) -> tuple[SecondOrderModel, 
         S = diag(scale): omega, 1 for the rigid-body mode.
     """
     m = SecondOrderModel(params, n_elements)
-    import scipy.linalg
+    import scipy.linalg  # lazy: start-up time (scipy.linalg)
     w2, Phi = scipy.linalg.eigh(m.K, m.M)
     omega = np.sqrt(np.clip(w2, 0.0, None))
     omega[0] = 0.0  # the single rigid-body mode (K r = 0 up to rounding)
@@ -323,5 +323,5 @@ def build_continuous(params: Params | None = None, n_elements: int = 4) -> contr
     if params is None:
         params = load_params()
     A, B, C = state_matrices(params, n_elements)
-    import control
+    import control  # lazy: start-up time (python-control)
     return control.ss(A, B, C, np.zeros((2, 1)), inputs=["v"], outputs=["theta", "a"])

@@ -16,7 +16,11 @@ outputs its offset); dry friction (Karnopp stick-slip: Coulomb, with a breakaway
 and the Stribeck curve when static_friction is above it) and backlash act inside the
 plant on a sub-step grid dt/M of the same exact ZOH (friction through the command's
 channel, backlash as a torque pair on motor and base); viscous friction, beam damping and
-param:NAME are in the linear part; accel_gain scales a before its quantization.
+param:NAME are in the linear part. motor_polarity multiplies the amplifier's output (after
+the delay: the whole torque turns around, dry friction still opposes the motion). The
+sensors' faults act on the noise-free outputs before their quantization: θ·encoder_scale,
+and accel_gain·a + accel_offset + accel_drift·k·dt at sample k of the run (k = 0 the run's
+first sample; :class:`Stepper` counts its samples since ``reset``).
 
 Imports the modal form, the rounding rule and the vocabulary's friction levels only; a
 Model is used through its methods (``linear_form``, ``linear_params``, ``effect_dict``),
@@ -56,18 +60,20 @@ def _commit(num, den, xs, ys, x, y):  # pragma: no cover - compiled by numba
     return acc
 
 
-def _outputs(z, cm, accel_gain):  # pragma: no cover - compiled by numba
-    """Noise-free (theta, a) at modal state z: Re(cm @ z), a scaled by accel_gain."""
+def _outputs(z, cm, encoder_scale, accel_gain, accel_bias):  # pragma: no cover - compiled by numba
+    """Noise-free (theta, a) at modal state z: Re(cm @ z), theta times encoder_scale, a
+    times accel_gain plus accel_bias (the accelerometer's offset and drift at this sample)."""
     y0 = 0.0
     y1 = 0.0
     for i in range(z.shape[0]):
         y0 += (cm[0, i] * z[i]).real
         y1 += (cm[1, i] * z[i]).real
-    return y0, y1 * accel_gain
+    return y0 * encoder_scale, y1 * accel_gain + accel_bias
 
 
 def _amplifier(vk, offset, saturation, deadzone):  # pragma: no cover - compiled by numba
-    """The amplifier's offset, saturation then dead-zone (DESIGN.md order), DAC counts."""
+    """The amplifier's offset, saturation then dead-zone (DESIGN.md order), DAC counts
+    (motor_polarity acts after the delay, at the amplifier's output)."""
     vk = vk + offset
     if vk > saturation:
         vk = saturation
@@ -150,7 +156,7 @@ def _advance(z, vk, lam, bm, bp, co, gw_v, gw_p, substeps, v_c, v_s, w_s, half_g
 
 def _loop(lam, bm, bp, cm, co, gw_v, gw_p, substeps, z0, u, v_open, use_v_open, closed, gnum, gden, anum, aden,
           use_ga, limit, d, quantize, cmd_mode, offset, saturation, deadzone, delay, accel_gain, v_c, v_s, w_s,
-          half_gap, k_d, c_d):  # pragma: no cover - compiled by numba
+          half_gap, k_d, c_d, encoder_scale, accel_offset, accel_drift, polarity):  # pragma: no cover - compiled by numba
     n = u.shape[0]
     theta = np.zeros(n)
     acc = np.zeros(n)
@@ -167,7 +173,7 @@ def _loop(lam, bm, bp, cm, co, gw_v, gw_p, substeps, z0, u, v_open, use_v_open, 
     g_acc = 0.0
     a_acc = 0.0
     for k in range(n):
-        y0, y1 = _outputs(z, cm, accel_gain)
+        y0, y1 = _outputs(z, cm, encoder_scale, accel_gain, accel_offset + accel_drift * k)
         if quantize:  # the sensors' reading (station.rounding.sensor_count)
             y0 = _sensor_count(y0)
             y1 = _sensor_count(y1)
@@ -210,7 +216,7 @@ def _loop(lam, bm, bp, cm, co, gw_v, gw_p, substeps, z0, u, v_open, use_v_open, 
             fifo[head] = vk
             head = (head + 1) % delay
             vk = out
-        _advance(z, vk, lam, bm, bp, co, gw_v, gw_p, substeps, v_c, v_s, w_s, half_gap, k_d, c_d)
+        _advance(z, vk * polarity, lam, bm, bp, co, gw_v, gw_p, substeps, v_c, v_s, w_s, half_gap, k_d, c_d)
     return theta, acc, v, thd
 
 
@@ -232,10 +238,11 @@ def _compile() -> None:
     if _compiled_loop is not None:
         return
     try:
-        import numba
+        import numba  # lazy: start-up time (numba)
     except ImportError:  # pragma: no cover - exercised only without numba
         _compiled_loop = _loop
         return
+    # lazy: start-up time (numba compiles these on first use)
     from station.rounding import half_away_compiled, sensor_count_compiled
 
     jit = numba.njit(cache=True, nogil=True)
@@ -300,7 +307,7 @@ class KernelEffects(NamedTuple):
     delay : int
         Extra samples between the command and the torque.
     accel_gain : float
-        Scale of a before its quantization.
+        Scale of a before its quantization (negative: a reversed accelerometer).
     v_c : float
         Sliding (Coulomb) friction, DAC counts.
     v_s : float
@@ -311,6 +318,15 @@ class KernelEffects(NamedTuple):
         Backlash / 2, rad.
     k_d, c_d : float
         Drive spring N·m/rad and damper N·m·s/rad of the linear part (backlash).
+    encoder_scale : float
+        Scale of θ before its quantization (measured / modelled counts).
+    accel_offset : float
+        Added to a before its quantization, accelerometer counts.
+    accel_drift : float
+        Added to a times the sample index k of the run, accelerometer counts per sample
+        (the model's counts per s times dt).
+    motor_polarity : float
+        ±1: the amplifier's output (after its delay) times this is the torque command.
     """
 
     amp_offset: float = 0.0
@@ -324,15 +340,21 @@ class KernelEffects(NamedTuple):
     half_gap: float = 0.0
     k_d: float = 0.0
     c_d: float = 0.0
+    encoder_scale: float = 1.0
+    accel_offset: float = 0.0
+    accel_drift: float = 0.0
+    motor_polarity: float = 1.0
 
 
-def effects_of(model) -> KernelEffects:
+def effects_of(model, dt: float = DT) -> KernelEffects:
     """A Model's effects as the kernel takes them.
 
     Parameters
     ----------
     model : station.plant.model.Model
         Read through ``effect_dict()`` and ``linear_params()`` (drive spring, damper, H).
+    dt : float, default 0.002
+        Sample time, s (the accelerometer's drift per sample).
     """
     fx = model.effect_dict()
     p = model.linear_params()
@@ -340,7 +362,11 @@ def effects_of(model) -> KernelEffects:
     return KernelEffects(amp_offset=float(fx.get("amp_offset", 0.0)), saturation=float(fx.get("saturation", math.inf)),
                          deadzone=float(fx.get("deadzone", 0.0)), delay=int(fx.get("delay", 0)),
                          accel_gain=float(fx.get("accel_gain", 1.0)), v_c=fr.v_c, v_s=fr.v_s, w_s=fr.w_s,
-                         half_gap=float(fx.get("backlash", 0.0)) / 2.0 / p.H, k_d=p.drive_k, c_d=p.drive_c)
+                         half_gap=float(fx.get("backlash", 0.0)) / 2.0 / p.H, k_d=p.drive_k, c_d=p.drive_c,
+                         encoder_scale=float(fx.get("encoder_scale", 1.0)),
+                         accel_offset=float(fx.get("accel_offset", 0.0)),
+                         accel_drift=float(fx.get("accel_drift", 0.0)) * float(dt),
+                         motor_polarity=float(fx.get("motor_polarity", 1.0)))
 
 
 def device_command(vk: float, cmd_mode: int) -> float:
@@ -407,20 +433,26 @@ class Stepper:
 
     def reset(self) -> None:
         """Back to the initial state (at rest for a model), the amplifier's delay line
-        holding what it made of the device's 0 before the run."""
+        holding what it made of the device's 0 before the run, the sample count at 0 (the
+        accelerometer's drift starts again)."""
         fx = self._fx
         self.z = self._z0.copy()
         self._fifo = [float(self._fns[1](0.0, fx.amp_offset, fx.saturation, fx.deadzone))] * fx.delay
         self._head = 0
+        self._k = 0
 
     def outputs(self) -> tuple[float, float]:
-        """Noise-free (theta, a): encoder counts, accelerometer counts (accel_gain applied)."""
-        y0, y1 = self._fns[0](self.z, self._form.cm, self._fx.accel_gain)
+        """Noise-free (theta, a) at the current sample: encoder counts, accelerometer counts
+        (the sensors' faults applied: encoder_scale; accel_gain, offset and drift)."""
+        fx = self._fx
+        y0, y1 = self._fns[0](self.z, self._form.cm, fx.encoder_scale, fx.accel_gain,
+                              fx.accel_offset + fx.accel_drift * self._k)
         return float(y0), float(y1)
 
     def advance(self, v: float) -> None:
         """One sample with the device's command v (DAC counts, already quantized by the
-        device) through the amplifier's offset, saturation, dead-zone and delay into the plant.
+        device) through the amplifier's offset, saturation, dead-zone, delay and the motor's
+        polarity into the plant.
 
         Parameters
         ----------
@@ -433,8 +465,9 @@ class Stepper:
         if fx.delay > 0:
             vk, self._fifo[self._head] = self._fifo[self._head], vk
             self._head = (self._head + 1) % fx.delay
-        advance(self.z, vk, f.lam, f.bm, f.bp, f.co, f.gw_v, f.gw_p, f.substeps, fx.v_c, fx.v_s, fx.w_s,
-                fx.half_gap, fx.k_d, fx.c_d)
+        advance(self.z, vk * fx.motor_polarity, f.lam, f.bm, f.bp, f.co, f.gw_v, f.gw_p, f.substeps, fx.v_c, fx.v_s,
+                fx.w_s, fx.half_gap, fx.k_d, fx.c_d)
+        self._k += 1
 
 
 class ModelPlant(Stepper):
@@ -443,8 +476,11 @@ class ModelPlant(Stepper):
     The interface of `DiscretePlant` that the simulated device uses (``reset``,
     ``outputs``, ``advance``); ``advance`` takes the command the device applies (after
     its own quantization and clamp) and passes it through the amplifier's offset,
-    saturation, dead-zone and delay; friction and backlash act inside the plant on the sub-step
-    grid; ``outputs`` applies accel_gain. Sample for sample equal to
+    saturation, dead-zone, delay and the motor's polarity; friction and backlash act inside
+    the plant on the sub-step grid; ``outputs`` applies the sensors' faults (encoder_scale,
+    accel_gain, accel_offset, accel_drift from the last ``reset``: on the simulated device
+    that is the run's start, v1 START or legacy 'q', so the station's zeroing before tick 0
+    reads the offset and removes it, as it would on the rig). Sample for sample equal to
     :func:`station.plant.simulate.simulate` with the same model (the same compiled
     functions do the arithmetic).
 
@@ -476,5 +512,5 @@ class ModelPlant(Stepper):
         form = model.linear_form(self.dt, substeps)
         if compiled is None:
             compiled = form.substeps > 0 or form.lam.size > PLAIN_MAX_STATES
-        super().__init__(form, effects_of(model), compiled=compiled)
+        super().__init__(form, effects_of(model, self.dt), compiled=compiled)
 

@@ -130,10 +130,10 @@ def _linear_form(params: Params, n_elements: int, dt: float, substeps: int) -> L
     rows[1, n_dof:] = Phi[0] - Phi[m.base]             # δ'
     rows[2, n_dof:] = Phi[0]                            # ω_m
     h = dt / substeps
-    import scipy.signal
+    import scipy.signal  # lazy: start-up time (scipy.signal)
     Ad, Bd, _, _, _ = scipy.signal.cont2discrete((A, np.column_stack([B[:, 0], Bp]), C, np.zeros((2, 2))),
                                                  h, method="zoh")
-    import scipy.linalg
+    import scipy.linalg  # lazy: start-up time (scipy.linalg)
     lam, V = scipy.linalg.eig(Ad)
     vinv = scipy.linalg.lu_solve(scipy.linalg.lu_factor(V), np.eye(V.shape[0]))
     # the state is real: keep one of each conjugate pair (LAPACK returns exact conjugates)

@@ -11,6 +11,7 @@ diagnosis) and one TOML file::
     static_friction = 9.0        # breakaway level (>= coulomb_friction)
     stribeck_speed = 0.05        # rad/s of the motor: static_friction's Stribeck curve
     "param:drive_c" = 2.0
+    accel_gain = -1.2            # a sensor fault: an accelerometer read with the opposite sign
 
 Built-in models live in ``station/plant/models/<name>.toml`` ("tmm-fit": the nominal
 4-element model). ``params`` may also be an inline table of the parameter set's fields

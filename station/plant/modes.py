@@ -73,7 +73,7 @@ def modal_summary(params: Params, n_elements: int = 4, max_hz: float = 200.0) ->
         generic invariant-zero solver (control.zeros) loses digits.
     """
     A, _, _ = state_matrices(params, n_elements)
-    import scipy.linalg
+    import scipy.linalg  # lazy: start-up time (scipy.linalg)
     f, z = _oscillatory(scipy.linalg.eigvals(A), max_hz)
     fz, zz = _oscillatory(scipy.linalg.eigvals(base_held_matrix(params, n_elements)), max_hz)
     return ModalSummary(int(n_elements), f, z, fz, zz)
@@ -142,6 +142,6 @@ def with_beam_damping(params: Params, zeta: float, n_elements: int = 4) -> Param
     hi = 1e-4
     while first_zeta(hi) < zeta:
         hi *= 4.0
-    import scipy.optimize
+    import scipy.optimize  # lazy: start-up time (scipy.optimize)
     beta = scipy.optimize.brentq(lambda b: first_zeta(b) - zeta, 0.0, hi, xtol=1e-14, rtol=1e-12)
     return dataclasses.replace(params, beam_beta=beta)

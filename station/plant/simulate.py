@@ -40,7 +40,7 @@ def _plant_parts(model, dt, substeps):
     """(linear form, effects, z0, dt) of a Model or a DiscretePlant."""
     if isinstance(model, Model):
         dt = DT if dt is None else float(dt)
-        return model.linear_form(dt, substeps), effects_of(model), None, dt
+        return model.linear_form(dt, substeps), effects_of(model, dt), None, dt
     if dt is not None and float(dt) != float(getattr(model, "dt", DT)):
         raise ValueError(f"dt={dt} differs from the plant's own dt={model.dt}")
     form = sampled_form(model)
@@ -125,7 +125,7 @@ class SimResult(NamedTuple):
 
     def to_pandas(self):
         """The run as a ``pandas.DataFrame``, one column per field (pandas imported here)."""
-        import pandas as pd
+        import pandas as pd  # lazy: start-up time (pandas)
 
         return pd.DataFrame(self._asdict())
 
@@ -144,10 +144,12 @@ def simulate(model, controller, u, alignment: int = 1, v_open=None, quantize: bo
         A Model is simulated with its effects (DESIGN.md "Model diagnosis contract"):
         the device's command quantization, then the amplifier's offset, saturation,
         dead-zone and extra delay on the command (before the first sample the device
-        outputs 0 and the amplifier its offset); dry friction (Coulomb, breakaway and
-        Stribeck: stick-slip) and backlash inside the plant on a grid of ``substeps``
-        per sample; accel_gain on the accelerometer before its quantization;
-        viscous_friction, beam_damping and param:NAME in the linear part. A Model
+        outputs 0 and the amplifier its offset), then motor_polarity on its output; dry
+        friction (Coulomb, breakaway and Stribeck: stick-slip) and backlash inside the
+        plant on a grid of ``substeps`` per sample; the sensors' faults before their
+        quantization (θ·encoder_scale; accel_gain·a + accel_offset + accel_drift·t, t =
+        k·dt from the run's first sample); viscous_friction, beam_damping and param:NAME
+        in the linear part. A Model
         without effects gives exactly the DiscretePlant's result.
         The linear part's modal form is cached per (parameters, elements, dt, substeps).
     controller : Compensator, OpenLoop, or a `station.control.Controller`

@@ -18,7 +18,7 @@ def _tf_z(tf, dt: float) -> control.TransferFunction:
     """A DiscreteTF (coefficients in z⁻¹) as a python-control transfer function in z."""
     num, den = list(tf.num), list(tf.den)
     m = max(len(num), len(den))
-    import control
+    import control  # lazy: start-up time (python-control)
     return control.tf(num + [0.0] * (m - len(num)), den + [0.0] * (m - len(den)), dt)
 
 
@@ -49,7 +49,7 @@ def closed_loop(plant, controller, alignment: int = 1) -> control.StateSpace:
     if getattr(controller, "gth", None) is None:
         raise ValueError("open loop: no feedback, no closed-loop poles")
     dt = plant.dt
-    import control
+    import control  # lazy: start-up time (python-control)
     P = control.ss(plant.Ad, plant.Bd[:, None], plant.Cd, np.zeros((2, 1)), dt)
     delay = control.tf([1.0], [1.0] + [0.0] * int(alignment), dt) if alignment > 0 else control.tf([1.0], [1.0], dt)
     forward = control.ss(_tf_z(controller.gth, dt) * delay)
@@ -74,5 +74,5 @@ def closed_loop_spectral_radius(plant, controller, alignment: int = 1) -> float:
     """
     if getattr(controller, "gth", None) is None:
         return float(np.abs(np.linalg.eigvals(plant.Ad)).max())
-    import control
+    import control  # lazy: start-up time (python-control)
     return float(np.abs(control.poles(closed_loop(plant, controller, alignment))).max())

@@ -17,6 +17,7 @@ from station.plant import Sensors
 from station.protocol import PROTOCOLS, legacy, v1
 from station.rounding import round_half_away
 from station.sim.hardware import ACCEL_OFFSET, ZERO_ACCEL_READINGS, Hardware
+from station.plant.model import as_model
 
 RATE_HZ = 500
 COUNTS_PER_REV = 1024
@@ -329,8 +330,6 @@ class SimDevice:
         if not 1 <= watchdog_ticks <= 255:
             raise ValueError(f"watchdog_ticks must be 1..255 (a u8 in INFO), got {watchdog_ticks}")
         if plant is None:
-            from station.plant.model import as_model
-
             plant = as_model(model, n_elements).plant()
         if sensors is None:
             sensors = Sensors(seed=seed, accel_noise_std=accel_noise_std)

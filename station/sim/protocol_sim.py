@@ -52,6 +52,8 @@ import urllib.parse
 
 from serial.serialutil import PortNotOpenError, SerialBase, SerialException, to_bytes
 
+from station.errors import StationError
+from station.plant.model import load_model
 from station.protocol import PROTOCOLS
 from station.ranges import SIM_RIG, shown
 from station.sim.device import RATE_HZ, SimDevice
@@ -144,9 +146,6 @@ def parse_url(url: str) -> dict:
         except ValueError as e:  # (a RangeError is one)
             raise OptionError(name, value, str(e)) from None
     if "model" in seen or "elements" in seen:
-        from station.errors import StationError
-        from station.plant.model import load_model
-
         try:  # bounded: a regular file of at most 1 MB, every field in its range, for this element count
             model = load_model(opts["model"], n_elements=opts["elements"] if "elements" in seen else None)
         except StationError as exc:
@@ -193,7 +192,6 @@ class Serial(SerialBase):
                 handler.setFormatter(logging.Formatter("%(name)s: %(message)s"))
                 logger.addHandler(handler)
         self._debug = logger.isEnabledFor(logging.DEBUG)
-        from station.plant.model import load_model
 
         self.model = load_model(o["model"], n_elements=o["elements"])
         device = SimDevice(o["protocol"], seed=o["seed"], model=self.model,

@@ -71,7 +71,8 @@ def serve_pty(protocol: str = "v1", realtime: bool = False, seed: int = 0, n_ele
         The summary printed at exit: ticks, late, watchdog_trips, rx_errors of the last
         run (all 0 when no run was started), tx_lost over the whole session.
     """
-    from station.sim.device import RATE_HZ, SimDevice  # the FEM plant: not needed to build the CLI
+    # lazy: start-up time (the FEM plant, not needed to build the CLI)
+    from station.sim.device import RATE_HZ, SimDevice
     from station.sim.driver import DeviceDriver
 
     out = out or sys.stdout

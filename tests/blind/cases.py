@@ -21,6 +21,18 @@ The effects added to the vocabulary later (:data:`NEW_MAGNITUDES`; kept apart fr
 Combinations ("A+B", "A+B+C": each effect drawn as it is alone, so the values of a
 combination equal its single cases' for the same seed): :data:`PAIRS`, :data:`TRIPLES`.
 
+Sensor and wiring faults (:data:`SENSOR_CASES`: a case part -> the effect it hides, drawn
+by :func:`draw_sensor`; :data:`SENSOR_PAIRS` beside a physical effect):
+
+- accel_reversed: accel_gain -(0.5-2), log-uniform magnitude (the real session's
+  accelerometer read about -1.2x the model's a);
+- accel_offset: 1.5-10 accelerometer counts in size, either sign (beyond the zeroing; the
+  rig's a spans about +-50 counts in these runs, its noise is 0.3 counts);
+- accel_drift: 1-8 accelerometer counts per s in size, either sign (2-16 counts over a run);
+- encoder_4096: encoder_scale 4 (a 4096-count encoder against the model's 1024);
+- encoder_reversed: encoder_scale -1; motor_reversed: motor_polarity -1 (each alone runs the
+  closed loops away to the clamp: positive feedback, as the rig would).
+
 Out-of-vocabulary cases (:data:`OOV_CASES`, :data:`OOV_MAGNITUDES`; semantics in
 ``tests.blind.rig.OOV``), which no vocabulary effect explains, for the diagnosis's
 "unexplained" flag:
@@ -117,6 +129,60 @@ CASES = ("clean", *MAGNITUDES, "two", *NEW_MAGNITUDES, *PAIRS, *TRIPLES, *OOV_CA
 TOLERANCE = 0.25
 """A named cause's value must be within this fraction of the hidden one."""
 
+SENSOR_CASES: dict[str, str] = {
+    "accel_reversed": "accel_gain",
+    "accel_offset": "accel_offset",
+    "accel_drift": "accel_drift",
+    "encoder_4096": "encoder_scale",
+    "encoder_reversed": "encoder_scale",
+    "motor_reversed": "motor_polarity",
+}
+"""Sensor and wiring fault cases: case part -> the effect it hides (module docstring)."""
+
+SENSOR_MAGNITUDES: dict[str, tuple[float, float]] = {
+    "accel_reversed": (-2.0, -0.5),
+    "accel_offset": (1.5, 10.0),
+    "accel_drift": (1.0, 8.0),
+    "encoder_4096": (4.0, 4.0),
+    "encoder_reversed": (-1.0, -1.0),
+    "motor_reversed": (-1.0, -1.0),
+}
+"""Sensor fault case part -> (lowest, highest) hidden value; accel_offset's and accel_drift's
+ranges are their sizes (either sign)."""
+
+SENSOR_PAIRS = (
+    "accel_reversed+coulomb_friction",
+    "accel_reversed+param:drive_c",
+    "accel_offset+coulomb_friction",
+    "accel_drift+param:drive_c",
+    "encoder_4096+coulomb_friction",
+    "encoder_reversed+param:drive_c",
+    "motor_reversed+coulomb_friction",
+    "motor_reversed+amp_offset",
+)
+"""Each sensor or wiring fault beside a physical effect."""
+
+CASES += (*SENSOR_CASES, *SENSOR_PAIRS)
+
+
+def draw_sensor(part: str, seed: int) -> float:
+    """The hidden value of a sensor fault case part for ``seed`` (deterministic).
+
+    Parameters
+    ----------
+    part : str
+        A key of :data:`SENSOR_CASES`.
+    seed : int
+    """
+    lo, hi = SENSOR_MAGNITUDES[part]
+    rng = _rng(part, seed)
+    if lo == hi:
+        return float(lo)
+    if part == "accel_reversed":
+        return -float(math.exp(rng.uniform(math.log(-hi), math.log(-lo))))
+    value = float(rng.uniform(lo, hi))
+    return value if rng.random() < 0.5 else -value
+
 
 def _rng(name: str, seed: int) -> np.random.Generator:
     return np.random.default_rng([zlib.crc32(name.encode()), seed])
@@ -158,6 +224,8 @@ def _single(name: str, seed: int) -> dict[str, float]:
         return {key: draw(key, seed) for key in OOV_CASES[name]}
     if name in MAGNITUDES or name in NEW_MAGNITUDES or name in SETTING_MAGNITUDES:
         return {name: draw(name, seed)}
+    if name in SENSOR_CASES:
+        return {SENSOR_CASES[name]: draw_sensor(name, seed)}
     raise ValueError(f"unknown case {name!r}; known: {', '.join(CASES)} (or effects joined by '+')")
 
 

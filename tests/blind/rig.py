@@ -15,6 +15,12 @@ From DESIGN.md alone ("Compensators", "Timing and log rows", "Model diagnosis co
   :mod:`tests.blind.substep`); without them one exact ZOH step per sample is the same;
 - theta = H * base angle (+ the cyclic error of oov:encoder_cyclic) rounded to whole
   counts; a = a_gain * tip lateral acceleration + Gaussian noise (0.3 counts std), rounded.
+- sensor and wiring faults (:data:`SENSOR_FAULTS`): the encoder reads encoder_scale * H *
+  base angle (4 for a 4096-count encoder, -1 counting the other way); the accelerometer
+  accel_gain (either sign) times its sensitivity, plus accel_offset + accel_drift * t
+  (counts, counts/s; t = k * DT from the run's first row) before its rounding; a reversed
+  motor (motor_polarity -1) turns the amplifier's whole output around, torque
+  -k_tau * amplifier output (dry friction still opposes the motion).
 
 Effects beyond DESIGN.md's vocabulary ("oov:" names) let tests check that a diagnosis does
 not pass them off as a vocabulary cause; see :data:`OOV`.
@@ -52,6 +58,10 @@ divided by the motor inertia, times the micro-step is at most this."""
 NAMED = ("coulomb_friction", "deadzone", "saturation", "delay", "backlash", "beam_damping", "accel_gain",
          "static_friction", "viscous_friction", "amp_offset")
 """The named effects of the vocabulary (besides param:NAME)."""
+
+SENSOR_FAULTS = ("accel_offset", "accel_drift", "encoder_scale", "motor_polarity")
+"""DESIGN.md's sensor and wiring faults besides accel_gain (one of :data:`NAMED`, which may be
+negative here): accelerometer counts, counts per s, measured/modelled encoder counts, +-1."""
 
 SETTINGS = ("stribeck_speed",)
 """Keys that set an effect's shape, not an effect: stribeck_speed (rad/s, default
@@ -152,6 +162,12 @@ class Effects:
         oov:cogging amplitude (DAC counts) and cycles per motor revolution.
     position_spring : float
         oov:position_spring, DAC counts per encoder count.
+    accel_offset, accel_drift : float
+        Accelerometer bias, counts, and its growth, counts per s from the run's first row.
+    encoder_scale : float
+        Measured / modelled encoder counts (either sign, not 0).
+    motor_polarity : float
+        +1, or -1 for a motor the amplifier drives the other way.
     """
 
     coulomb_friction: float = 0.0
@@ -171,6 +187,10 @@ class Effects:
     cogging: float = 0.0
     cogging_cycles: float = 16.0
     position_spring: float = 0.0
+    accel_offset: float = 0.0
+    accel_drift: float = 0.0
+    encoder_scale: float = 1.0
+    motor_polarity: float = 1.0
 
     @classmethod
     def parse(cls, effects: dict[str, float]) -> Effects:
@@ -189,7 +209,7 @@ class Effects:
                 if pname not in Params.__dataclass_fields__ or pname in ("L", "a_gain"):
                     raise ValueError(f"unknown parameter effect {name!r}")
                 ratios[pname] = float(value)
-            elif name in NAMED or name in SETTINGS:
+            elif name in NAMED or name in SETTINGS or name in SENSOR_FAULTS:
                 fields[name] = int(value) if name == "delay" else float(value)
             elif name in OOV:
                 fields[name.split(":", 1)[1]] = float(value)
@@ -201,6 +221,8 @@ class Effects:
                              f"{eff.coulomb_friction:g} (the breakaway level is v_s >= v_c)")
         if min(eff.stribeck_speed, eff.encoder_cyclic_period, eff.cogging_cycles) <= 0:
             raise ValueError("stribeck_speed, oov:encoder_cyclic_period and oov:cogging_cycles must be positive")
+        if eff.motor_polarity not in (1.0, -1.0) or eff.encoder_scale == 0 or eff.accel_gain == 0:
+            raise ValueError("motor_polarity must be +1 or -1, encoder_scale and accel_gain not 0")
         return eff
 
     @property
@@ -240,6 +262,11 @@ def encoder(counts: float, cyclic: float = 0.0, period: float = 128.0) -> float:
     if cyclic:
         counts += cyclic * math.sin(2 * math.pi * counts / period)
     return float(math.floor(counts + 0.5))
+
+
+def accel_bias(eff: Effects, k: int) -> float:
+    """The accelerometer's offset and drift at row k of a run, counts (0 without them)."""
+    return eff.accel_offset + eff.accel_drift * k * DT
 
 
 # --- plant -------------------------------------------------------------------------------
@@ -448,8 +475,8 @@ def simulate(kind: str, u: np.ndarray, effects: dict[str, float], rng: np.random
     noise = rng.normal(0.0, accel_noise, n) if accel_noise > 0 else np.zeros(n)
     for k in range(n):
         th, acc = plant.outputs()
-        theta = encoder(th, eff.encoder_cyclic, eff.encoder_cyclic_period)
-        a = math.floor(a_gain * acc + noise[k] + 0.5)
+        theta = encoder(eff.encoder_scale * th, eff.encoder_cyclic, eff.encoder_cyclic_period)
+        a = math.floor(a_gain * acc + accel_bias(eff, k) + noise[k] + 0.5)
         if ctrl is None:
             v, th_d = float(u[k]), float(u[k])
         elif k == 0:
@@ -458,5 +485,5 @@ def simulate(kind: str, u: np.ndarray, effects: dict[str, float], rng: np.random
             v, th_d = ctrl.step(float(u[k]), out[2, k - 1], out[3, k - 1])
         applied = amp(v)
         out[:, k] = (u[k], v, theta, a, th_d, applied, th, plant.motor())
-        plant.advance(applied)
+        plant.advance(eff.motor_polarity * applied)
     return Run(*out)

@@ -10,7 +10,7 @@ from collections.abc import Sequence
 import numpy as np
 
 from station.analysis.beam import HELD_COUNTS, HELD_MIN_S, HELD_MIN_V, hub_held
-from station.diagnosis.cases import RunCase
+from station.diagnosis.runs.cases import RunCase
 from station.errors import StationError
 
 DIGEST_COLUMNS = ("t", "u", "v", "theta", "a")
@@ -24,7 +24,7 @@ def data_digest(case: RunCase) -> str:
     Parameters
     ----------
     case : RunCase
-        The run as loaded (:func:`station.diagnosis.cases.load_case`).
+        The run as loaded (:func:`station.diagnosis.runs.cases.load_case`).
     """
     h = hashlib.sha256()
     for name in DIGEST_COLUMNS:

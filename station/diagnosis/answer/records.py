@@ -10,12 +10,12 @@ import numpy as np
 
 from station.analysis.fit import fit_pct
 from station.analysis.residuals import RunResiduals, run_residuals
-from station.diagnosis.cases import RunCase
-from station.diagnosis.cost import Evaluator, pooled, relative_gain, rms_gain
-from station.diagnosis.folds import Fold
-from station.diagnosis.prose import at_range_end, effect_evidence
-from station.diagnosis.result import EffectResult, RunReport
-from station.diagnosis.selection import Selection, Singles, Trial
+from station.diagnosis.runs.cases import RunCase
+from station.diagnosis.runs.cost import Evaluator, pooled, relative_gain, rms_gain
+from station.diagnosis.runs.folds import Fold
+from station.diagnosis.answer.prose import at_range_end, effect_evidence
+from station.diagnosis.answer.result import EffectResult, RunReport
+from station.diagnosis.search.selection import Selection, Singles, Trial
 from station.plant.effects import EFFECTS
 
 
@@ -95,7 +95,7 @@ def run_reports(ev: Evaluator, folds: Sequence[Fold], nominal: Mapping[int, tupl
     ev : Evaluator
     folds : sequence of Fold
     nominal : mapping of int to (ndarray, ndarray)
-        Run index -> the nominal model's θ and a (:func:`station.diagnosis.cost.calibrate_noise`).
+        Run index -> the nominal model's θ and a (:func:`station.diagnosis.runs.cost.calibrate_noise`).
     sel : Selection
         What forward selection accepted.
     judged, final : mapping of int to (ndarray, ndarray)
@@ -140,7 +140,7 @@ def effect_results(ev: Evaluator, how: str, names: Sequence[str], singles: Singl
     before : mapping of str to RunResiduals
         Run name -> residual analysis of the nominal model.
     intervals : mapping of str to Interval, optional
-        Accepted effect -> its 95 % interval (:func:`station.diagnosis.doubt.profile_interval`).
+        Accepted effect -> its 95 % interval (:func:`station.diagnosis.honesty.doubt.profile_interval`).
     """
     intervals = intervals or {}
     accepted = sel.accepted

@@ -9,7 +9,7 @@ parameter, Nelder-Mead for several (whole-number ones by enumeration around thei
 The best value *seen* is returned, so a refinement never makes a fit worse than its grid.
 
 The objective is any callable ``cost(effects: dict[str, float]) -> float``; see
-:mod:`station.diagnosis.cost` for the one the diagnosis uses.
+:mod:`station.diagnosis.runs.cost` for the one the diagnosis uses.
 """
 
 from __future__ import annotations
@@ -30,6 +30,10 @@ the folds of a cross-validation, refining near the same grid point, share simula
 
 REFINE_ITERATIONS = 12
 """Bounded scalar refinement: at most this many evaluations inside the bracket."""
+
+RESOLUTION_STEPS = 1.0 / 16.0
+"""An interval is at least ± this many grid steps of the effect's search coordinate: the
+fit's own resolution (refinement to 0.02 grid step on a piecewise-constant cost)."""
 
 
 @dataclass(frozen=True)

@@ -34,7 +34,7 @@ from typing import NamedTuple
 import numpy as np
 
 from station.analysis.residuals import ACCEL_NOISE_STD, THETA_QUANTIZATION_STD, noise_std
-from station.diagnosis.cases import RunCase, Simulator, simulate_case
+from station.diagnosis.runs.cases import RunCase, Simulator, simulate_case
 from station.signals import check_stop
 from station.errors import StationError
 
@@ -56,7 +56,7 @@ class Evaluator:
     run_effects : callable, optional
         ``run_effects(effects, i) -> effects``: the effects run i is simulated with, given
         the effects asked for (default: the same for every run). Sessions give each run
-        its session's values of the effects that drift (:class:`station.diagnosis.drift.PerSession`).
+        its session's values of the effects that drift (:class:`station.diagnosis.sessions.drift.PerSession`).
     likelihood : bool
         :meth:`cost` is the maximum-likelihood cost with an unknown error variance per run
         and signal, or (default) the noise-weighted mean Σ ‖e‖²/σ² / Σ N (module docstring).

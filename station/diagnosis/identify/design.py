@@ -1,7 +1,7 @@
 """Experiment design: of the candidate experiments, the one whose predicted outputs differ most
 between the chosen explanation and its rivals (:func:`choose_experiment`).
 
-Each candidate (:func:`station.diagnosis.experiments.candidate_experiments`) is simulated on
+Each candidate (:func:`station.diagnosis.identify.experiments.candidate_experiments`) is simulated on
 the chosen model and on every rival exactly as the device will run it
 (:func:`station.plant.simulate`: the experiment's controller with the rig's clamp, alignment
 1, the device's command quantization, θ and a rounded as the sensors do). A rival r is
@@ -28,8 +28,8 @@ from typing import NamedTuple
 import numpy as np
 
 from station.analysis.residuals import ACCEL_NOISE_STD, THETA_QUANTIZATION_STD
-from station.diagnosis.experiments import Experiment, candidate_experiments
-from station.diagnosis.rivals import Rivals
+from station.diagnosis.identify.experiments import Experiment, candidate_experiments
+from station.diagnosis.honesty.rivals import Rivals
 from station.plant import simulate
 
 SOFT_LIMIT_MARGIN = 0.8
@@ -200,9 +200,9 @@ def choose_experiment(base, rv: Rivals, candidates: Sequence[Experiment] | None 
     base : station.plant.model.Model
         The nominal model; the chosen explanation and each rival are its effects over it.
     rv : Rivals
-        What the diagnosis leaves open (:func:`station.diagnosis.rivals.rivals`).
+        What the diagnosis leaves open (:func:`station.diagnosis.honesty.rivals.rivals`).
     candidates : sequence of Experiment, optional
-        Default :func:`station.diagnosis.experiments.candidate_experiments`.
+        Default :func:`station.diagnosis.identify.experiments.candidate_experiments`.
     command : {"round", "trunc", "none"}
         The device's command quantization.
     soft_limit : float

@@ -1,12 +1,12 @@
 """Stepwise selection of the effects the runs call for: forward selection from the single
-effects (:func:`station.diagnosis.selection.fit_each_alone`), with a lookahead over its
+effects (:func:`station.diagnosis.search.selection.fit_each_alone`), with a lookahead over its
 first step.
 
-Forward selection adds the best effect while it pays (:func:`~station.diagnosis.selection.accept`:
-the null floor, parsimony and noise), at most :data:`~station.diagnosis.selection.MAX_EFFECTS`,
+Forward selection adds the best effect while it pays (:func:`~station.diagnosis.search.selection.accept`:
+the null floor, parsimony and noise), at most :data:`~station.diagnosis.search.selection.MAX_EFFECTS`,
 refitting the accepted effects jointly on all fit runs after each; static_friction may
 replace an accepted coulomb_friction in place and be downgraded again
-(:mod:`station.diagnosis.selection`, breakaway friction).
+(:mod:`station.diagnosis.search.selection`, breakaway friction).
 
 Lookahead (a beam of width 1 + :data:`LOOKAHEAD` over the first step). Greedy forward
 selection keeps its first choice, and with two effects hidden the best single effect is
@@ -15,7 +15,7 @@ viscous friction plus backlash: backlash beside it does not pay, beside viscous 
 takes the cost to the noise floor; a dead-zone for breakaway friction plus drive damping).
 So at the second step the next :data:`LOOKAHEAD` single effects (by their in-sample cost
 fitted alone) are tried as first effects too: every other candidate is scanned beside each
-on all fit runs on a coarse grid (:func:`~station.diagnosis.selection.screen_costs`), the
+on all fit runs on a coarse grid (:func:`~station.diagnosis.search.selection.screen_costs`), the
 :data:`LOOKAHEAD_TRIALS` pairs whose in-sample cost is below the best pair's beside the
 chosen first effect by the parsimony margin (MIN_RELATIVE_GAIN) are fitted per fold and
 judged on the validation runs like every second-step candidate, and the best of them all
@@ -40,11 +40,11 @@ from concurrent.futures import ThreadPoolExecutor
 
 import numpy as np
 
-from station.analysis.fitting import fit
-from station.diagnosis.cost import relative_gain
-from station.diagnosis.folds import validation_runs
-from station.diagnosis.prose import format_value
-from station.diagnosis.selection import (MAX_EFFECTS, MIN_RELATIVE_GAIN, NESTED, SECOND_STEP_CANDIDATES, SHAPE,
+from station.diagnosis.search.bounded import fit
+from station.diagnosis.runs.cost import relative_gain
+from station.diagnosis.runs.folds import validation_runs
+from station.diagnosis.units import format_quantity
+from station.diagnosis.search.selection import (MAX_EFFECTS, MIN_RELATIVE_GAIN, NESTED, SECOND_STEP_CANDIDATES, SHAPE,
                                          Search, Selection, Singles, Step, Trial, accept, credible, fit_set,
                                          null_floor, screen_costs, set_axes, trial)
 from station.plant.effects import EFFECTS
@@ -304,7 +304,7 @@ def forward_select(search: Search, names: Sequence[str], singles: Singles, nomin
         else:
             values = refit_accepted(search, current, _refit_start(values, current))
         search.say(f"accepted {best} (step {step + 1}): "
-                   + ", ".join(f"{n} = {format_value(v, EFFECTS[n].unit)}" for n, v in values.items()))
+                   + ", ".join(f"{n} = {format_quantity(v, EFFECTS[n].unit)}" for n, v in values.items()))
         if new_first is not None and ok:  # the first effect the lookahead brought: does it pay beside the others?
             first = accepted[0]  # new_first, or breakaway/plain friction in its place after a downgrade
             accepted, current, values, steps = _drop_if_unpaid(search, first, _family(first), accepted, current,
@@ -360,6 +360,6 @@ def _fit_shape(search: Search, current: Trial, values: dict, terms: int) -> tupl
         search.say(f"{SHAPE}: left at the model's (a fitted one gains {relative_gain(total, current.val_weighted):.1f} %)")
         return current, values
     values = fit(lambda vals: ev.cost(vals, search.fit_runs), [axis], fixed=values).values
-    search.say(f"{SHAPE} = {format_value(values[SHAPE], EFFECTS[SHAPE].unit)} (validation cost gain "
+    search.say(f"{SHAPE} = {format_quantity(values[SHAPE], EFFECTS[SHAPE].unit)} (validation cost gain "
                f"{relative_gain(total, current.val_weighted):.1f} %)")
     return shaped, values

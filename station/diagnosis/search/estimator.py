@@ -3,7 +3,7 @@ maximum likelihood with an unknown error variance per run and signal — chosen 
 each fold held out.
 
 Forward selection fits every candidate by the noise-weighted least-squares cost (blind, it
-names the effects of the vocabulary; :mod:`station.diagnosis.cost`). Once the structure is
+names the effects of the vocabulary; :mod:`station.diagnosis.runs.cost`). Once the structure is
 chosen, its values are also estimated with the maximum-likelihood cost
 (``Evaluator(likelihood=True)``): where the model's errors are far above the sensor noise —
 a real rig, whose open-loop pulses carry 93 % of θ's least-squares cost on the four thesis
@@ -18,8 +18,8 @@ from __future__ import annotations
 
 from typing import NamedTuple
 
-from station.diagnosis.selection import Search, Selection, trial
-from station.diagnosis.stepwise import refit_accepted
+from station.diagnosis.search.selection import Search, Selection, trial
+from station.diagnosis.search.stepwise import refit_accepted
 
 
 class Estimate(NamedTuple):

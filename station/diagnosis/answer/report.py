@@ -27,7 +27,7 @@ from pathlib import Path
 
 from matplotlib.figure import Figure
 
-from station.diagnosis.prose import (
+from station.diagnosis.answer.prose import (
     OVERSHOOT_POINTS,
     answer_points,
     at_range_end,

@@ -22,8 +22,8 @@ import math
 from collections.abc import Mapping
 from typing import Any, NamedTuple
 
-from station.diagnosis.prose import format_value
-from station.diagnosis.selection import NESTED, SHAPE
+from station.diagnosis.units import format_quantity
+from station.diagnosis.search.selection import NESTED, SHAPE
 from station.plant.effects import EFFECTS
 
 WIDE_INTERVAL = 0.1
@@ -96,7 +96,7 @@ def describe(effects: Mapping[str, float]) -> str:
     """
     if not effects:
         return "the nominal model"
-    return " + ".join(f"{n} {format_value(v, EFFECTS[n].unit)}" for n, v in effects.items())
+    return " + ".join(f"{n} {format_quantity(v, EFFECTS[n].unit)}" for n, v in effects.items())
 
 
 def jackknife_interval(value: float, fold_values: list[float]) -> tuple[float, float] | None:
@@ -179,7 +179,7 @@ def _accepted(diag) -> list:
 def explanation(diag) -> dict:
     """The chosen explanation's values: the accepted effects, in the order they were added, with
     what they hold (a static_friction's sliding level coulomb_friction and stribeck_speed:
-    :data:`station.diagnosis.selection.NESTED`, :data:`~station.diagnosis.selection.SHAPE`),
+    :data:`station.diagnosis.search.selection.NESTED`, :data:`~station.diagnosis.search.selection.SHAPE`),
     from the diagnosis's extended model. Simulating, refitting or comparing the accepted
     effects without them would be another model (a breakaway with no sliding level).
 
@@ -236,7 +236,7 @@ def rivals(diag, wide: float = WIDE_INTERVAL) -> Rivals:
             x = _clip(name, x, chosen)
             if x != value:
                 effects = {**chosen, name: x}
-                found.append(Rival(effects, f"{name} {format_value(x, EFFECTS[name].unit)} "
+                found.append(Rival(effects, f"{name} {format_quantity(x, EFFECTS[name].unit)} "
                                             f"(the 95 % interval's {end} end)", "interval"))
     sources = [how_alt] if alts else []
     if intervals:

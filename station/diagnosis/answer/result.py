@@ -35,7 +35,7 @@ class EffectResult:
     value_alone : float
         Fitted alone on all fit runs (equals ``value`` when not accepted).
     interval : Interval or None
-        95 % interval of an accepted effect's value (:mod:`station.diagnosis.doubt`), clipped
+        95 % interval of an accepted effect's value (:mod:`station.diagnosis.honesty.doubt`), clipped
         to its range; None for the others.
     at_range_end : bool
         ``value`` sits at an end of the effect's search range (the fit wanted further).
@@ -154,9 +154,9 @@ class Diagnosis:
         Per fold: fit and validation run names and the accepted effects' values.
     unexplained : Unexplained or None
         The extended model's residuals against the sensor model's null
-        (:mod:`station.diagnosis.unexplained`).
+        (:mod:`station.diagnosis.honesty.unexplained`).
     alternatives : list of Alternative
-        Other explanations the validation data cannot tell apart (:mod:`station.diagnosis.doubt`).
+        Other explanations the validation data cannot tell apart (:mod:`station.diagnosis.honesty.doubt`).
     interval_method : str
         How the effects' intervals were found.
     notes : list of str

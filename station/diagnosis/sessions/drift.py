@@ -3,14 +3,14 @@ between them (DESIGN.md "Sessions and drift").
 
 Every effect of a structure is either *shared* (one value for all sessions) or *drifting*
 (one value per session: the key ``NAME@k`` for session k, :func:`key`). The
-:class:`~station.diagnosis.cost.Evaluator` simulates each run with its own session's values
+:class:`~station.diagnosis.runs.cost.Evaluator` simulates each run with its own session's values
 (:class:`PerSession`), and caches per run: a session's value never costs another session's
 runs a simulation.
 
 1. **Structure** (:func:`select_structure`): the diagnosis's forward selection
-   (:mod:`station.diagnosis.selection`: at most :data:`~station.diagnosis.selection.MAX_EFFECTS`
+   (:mod:`station.diagnosis.search.selection`: at most :data:`~station.diagnosis.search.selection.MAX_EFFECTS`
    effects, each accepted only when it lowers the held-out cost beyond
-   :func:`~station.diagnosis.selection.accept`'s parsimony and what luck reaches) on all
+   :func:`~station.diagnosis.search.selection.accept`'s parsimony and what luck reaches) on all
    sessions' runs pooled, every candidate with a value per session. With every effect per
    session the fits are the sessions' own (:func:`fit_structure`), and the choice of
    effects is judged on all sessions' held-out runs together.
@@ -24,7 +24,7 @@ runs a simulation.
    tens of percent for value changes far below any drift). The others are shared; the
    final structure (shared + drifting) is judged once more and refitted on all runs.
 
-Folds: leave-one-run-out over all runs (:func:`station.diagnosis.folds.make_folds`). A
+Folds: leave-one-run-out over all runs (:func:`station.diagnosis.runs.folds.make_folds`). A
 session with no run left in a fold (a session of one run) gets, in that fold, the mean of
 the other sessions' values (in the search coordinate).
 """
@@ -36,11 +36,11 @@ import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 
-from station.analysis.fitting import fit
-from station.diagnosis.cost import Evaluator, pooled, relative_gain, rms_gain
-from station.diagnosis.folds import Fold, validation_runs
-from station.diagnosis.prose import format_value
-from station.diagnosis.selection import (
+from station.diagnosis.search.bounded import fit
+from station.diagnosis.runs.cost import Evaluator, pooled, relative_gain, rms_gain
+from station.diagnosis.runs.folds import Fold, validation_runs
+from station.diagnosis.units import format_quantity
+from station.diagnosis.search.selection import (
     MAX_EFFECTS,
     SECOND_STEP_CANDIDATES,
     Search,
@@ -82,7 +82,7 @@ def split_key(k: str) -> tuple[str, int | None]:
 
 class PerSession:
     """The effects each run is simulated with: the shared values, and its own session's
-    values of the per-session keys (:class:`station.diagnosis.cost.Evaluator`'s
+    values of the per-session keys (:class:`station.diagnosis.runs.cost.Evaluator`'s
     ``run_effects``).
 
     Parameters
@@ -259,7 +259,7 @@ def _mean_value(search: Search, name: str, values: Sequence[float]) -> float:
 
 def fit_structure(search: Search, layout: Layout, shared: Sequence[str], drifting: Sequence[str],
                   runs: Sequence[int], start: Mapping[str, float]) -> dict[str, float]:
-    """Values of a structure fitted on runs (:func:`station.analysis.fitting.fit`: the last
+    """Values of a structure fitted on runs (:func:`station.diagnosis.search.bounded.fit`: the last
     name of each fit bracketed on its grid, then refined).
 
     The shared effects are fitted on all runs with the per-session values fixed at their
@@ -348,7 +348,7 @@ def session_refits(search: Search, layout: Layout, trial: Trial, name: str) -> l
 
 def luck_floor(search: Search, trial: Trial) -> float:
     """What quantization and noise alone reach around a trial's held-out predictions
-    (:func:`station.diagnosis.selection.null_floor` on each run's own effects).
+    (:func:`station.diagnosis.search.selection.null_floor` on each run's own effects).
 
     Parameters
     ----------
@@ -384,9 +384,9 @@ def _values_text(values: Mapping[str, float], names: Sequence[str], session_name
     for n in names:
         unit = EFFECTS[n].unit
         if n in values:
-            parts.append(f"{n} = {format_value(values[n], unit)}")
+            parts.append(f"{n} = {format_quantity(values[n], unit)}")
         else:
-            parts.append(f"{n} = " + ", ".join(f"{format_value(values[key(n, s)], unit)} ({name})"
+            parts.append(f"{n} = " + ", ".join(f"{format_quantity(values[key(n, s)], unit)} ({name})"
                                                for s, name in enumerate(session_names) if key(n, s) in values))
     return "; ".join(parts)
 
@@ -497,9 +497,9 @@ def decide_drift(search: Search, layout: Layout, structure: Structure, nominal: 
                      max(0.0, relative_gain(floor, tr.val_weighted)), shared_value, ranges, apart)
         decisions.append(d)
         search.say(f"drift of {n}: per-session values lower the held-out cost by {d.cost_gain_pct:.1f} % "
-                   f"against one shared value ({format_value(shared_value, EFFECTS[n].unit)}), luck alone by "
+                   f"against one shared value ({format_quantity(shared_value, EFFECTS[n].unit)}), luck alone by "
                    f"{d.luck_gain_pct:.1f} %; leave-one-run-out refits "
-                   + ", ".join(f"{format_value(lo, EFFECTS[n].unit)}..{format_value(hi, EFFECTS[n].unit)} ({name})"
+                   + ", ".join(f"{format_quantity(lo, EFFECTS[n].unit)}..{format_quantity(hi, EFFECTS[n].unit)} ({name})"
                                for (lo, hi), name in zip(ranges, session_names))
                    + f"{'' if apart else ' overlap'}: {'drifts' if drifts else 'shared'} ({ev.simulations} simulations)")
     shared = [d.name for d in decisions if not d.drifts]
@@ -523,18 +523,6 @@ def decide_drift(search: Search, layout: Layout, structure: Structure, nominal: 
                f"({ev.simulations} simulations)")
     refits = {n: session_refits(search, layout, per_session, n) for n in accepted}
     return DriftResult(accepted, shared, drifting, decisions, values, nominal, final, dict(structure.values), refits)
-
-
-def nominal_trial(ev: Evaluator, folds: Sequence[Fold]) -> Trial:
-    """The nominal model's held-out errors (no effects in any fold).
-
-    Parameters
-    ----------
-    ev : Evaluator
-    folds : sequence of Fold
-    """
-    val = validation_runs(folds)
-    return Trial((), [{} for _ in folds], {i: ev.sse({}, i) for i in val}, sum(ev.weighted({}, i) for i in val))
 
 
 def finite(x: float) -> float | None:

@@ -1,4 +1,4 @@
-"""What a sessions diagnosis says (:mod:`station.diagnosis.sessions`): the text ``station
+"""What a sessions diagnosis says (:mod:`station.diagnosis.sessions.diagnose`): the text ``station
 survey --diagnose`` prints, the drift figure and ``report.html`` (``--report DIR``).
 
 The page leads with the answer in words (which effects drift, their value in each session,
@@ -18,11 +18,13 @@ import math
 from collections.abc import Mapping
 from pathlib import Path
 
-from station.diagnosis.drift import Decision
-from station.diagnosis.prose import format_value, plain_name
-from station.diagnosis.selection import MIN_NOISE_GAIN, MIN_RELATIVE_GAIN
+from station.diagnosis.sessions.drift import Decision
+from station.diagnosis.answer.prose import plain_name
+from station.diagnosis.units import format_quantity
+from station.diagnosis.search.selection import MIN_NOISE_GAIN, MIN_RELATIVE_GAIN
 from station.outputs import Transaction
 from station.plant.effects import EFFECTS
+from station.plots import new_figure
 
 PAGE = "report.html"
 FIGURE = "drift.png"
@@ -31,7 +33,7 @@ REPORT_FILES = (PAGE, FIGURE)
 
 
 def _value(name: str, x: float) -> str:
-    return format_value(x, EFFECTS[name].unit)
+    return format_quantity(x, EFFECTS[name].unit)
 
 
 def decision_words(result, d: Decision) -> str:
@@ -43,7 +45,7 @@ def decision_words(result, d: Decision) -> str:
     Parameters
     ----------
     result : SessionsDiagnosis
-    d : station.diagnosis.drift.Decision
+    d : station.diagnosis.sessions.drift.Decision
     """
     pay = (f"per-session values lower the held-out θ + a cost by {d.cost_gain_pct:.1f} % (θ RMS "
            f"{d.theta_gain_pct:.1f} %) against one shared value ({_value(d.name, d.shared_value)})"
@@ -120,8 +122,6 @@ def drift_figure(result):
     -------
     matplotlib.figure.Figure
     """
-    from station.plots import new_figure
-
     names = list(result.accepted)
     fig = new_figure(8.0, 2.6 * max(1, len(names)) + 0.6)
     x = list(range(len(result.sessions)))

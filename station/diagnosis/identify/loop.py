@@ -28,14 +28,14 @@ from pathlib import Path
 from types import SimpleNamespace
 from typing import Any, NamedTuple
 
-from station.diagnosis.cases import load_case
-from station.diagnosis.cost import Evaluator, calibrate_noise
-from station.diagnosis.doubt import effect_interval, effective_terms
-from station.diagnosis.experiment_design import Design, choose_experiment
-from station.diagnosis.experiments import THESIS_EXPERIMENTS, Experiment, candidate_experiments, write_reference
+from station.diagnosis.runs.cases import load_case
+from station.diagnosis.runs.cost import Evaluator, calibrate_noise
+from station.diagnosis.honesty.doubt import effect_interval, effective_terms
+from station.diagnosis.identify.design import Design, choose_experiment
+from station.diagnosis.identify.experiments import THESIS_EXPERIMENTS, Experiment, candidate_experiments, write_reference
 from station.diagnosis.pipeline import diagnose
-from station.diagnosis.rivals import describe, explanation, rivals
-from station.diagnosis.selection import accept, effect_axes, refit_explanation
+from station.diagnosis.honesty.rivals import describe, explanation, rivals
+from station.diagnosis.search.selection import accept, effect_axes, refit_explanation
 from station.errors import StationError
 from station.experiment import run_step
 from station.logged.device import command_quantization
@@ -52,7 +52,7 @@ and the best of the others alone."""
 
 THESIS_WHY = ("the thesis's P step", "the thesis's lead step", "the thesis's lead + accelerometer step",
               "the thesis's open-loop pulses")
-"""Why each of :data:`~station.diagnosis.experiments.THESIS_EXPERIMENTS` is run."""
+"""Why each of :data:`~station.diagnosis.identify.experiments.THESIS_EXPERIMENTS` is run."""
 
 
 class ExperimentRun(NamedTuple):
@@ -346,7 +346,7 @@ class Preference(NamedTuple):
         The comparison in words.
     intervals : dict of str to (float, float)
         When the earlier explanation is kept: each cause's 95 % interval on all the runs
-        (:func:`station.diagnosis.doubt.effect_interval`, around the refitted values).
+        (:func:`station.diagnosis.honesty.doubt.effect_interval`, around the refitted values).
     """
 
     keep_old: bool
@@ -367,9 +367,9 @@ def prefer(old, new, runs: Sequence[str | Path], base) -> Preference:
     (from its values) and both are judged by the diagnosis's cost on all of them; the earlier
     one is kept when it fits better with no more effects, or, with more, when it pays for
     them as forward selection's acceptance demands
-    (:func:`station.diagnosis.selection.accept`). An explanation is its causes with what they
-    hold (:func:`station.diagnosis.rivals.explanation`: a static_friction's sliding level),
-    refitted as the search fits it (:func:`station.diagnosis.selection.refit_explanation`).
+    (:func:`station.diagnosis.search.selection.accept`). An explanation is its causes with what they
+    hold (:func:`station.diagnosis.honesty.rivals.explanation`: a static_friction's sliding level),
+    refitted as the search fits it (:func:`station.diagnosis.search.selection.refit_explanation`).
 
     Parameters
     ----------
@@ -408,7 +408,7 @@ def prefer(old, new, runs: Sequence[str | Path], base) -> Preference:
 
 
 def _kept_view(old, new, pref: Preference, model) -> SimpleNamespace:
-    """The kept explanation as :func:`station.diagnosis.rivals.rivals` reads a diagnosis: its
+    """The kept explanation as :func:`station.diagnosis.honesty.rivals.rivals` reads a diagnosis: its
     causes at the values refitted on every run with their intervals there, and the set-aside
     re-diagnosis as an alternative unless the kept one pays over it as selection's acceptance
     demands (the earlier diagnosis's own intervals and alternatives are of fewer runs)."""
@@ -466,7 +466,7 @@ class _Loop:
         return diag
 
     def design(self, rv, candidates: Sequence[Experiment]) -> Design:
-        """The next experiment (:func:`station.diagnosis.experiment_design.choose_experiment`)."""
+        """The next experiment (:func:`station.diagnosis.identify.design.choose_experiment`)."""
         t = time.perf_counter()
         self.say(f"design: {len(rv.rivals)} rival(s) of {rv.label} ({'; '.join(rv.sources)}): "
                  + ", ".join(r.label for r in rv.rivals))

@@ -24,7 +24,7 @@ N_eff · ln(J/J_min) > χ²₁(0.95) = 3.84.
   touches it.
 - Alternatives: at each forward-selection step, a candidate whose validation cost is
   within the tolerance of the chosen one's — the larger of what luck reaches around the
-  chosen model (its :func:`station.diagnosis.selection.null_floor`) and the
+  chosen model (its :func:`station.diagnosis.search.selection.null_floor`) and the
   likelihood-ratio tolerance J·(exp(3.84/N_eff) − 1) of the held-out residuals — is another
   explanation: the accepted set with the chosen effect replaced by it, judged on the same
   folds (refitted per fold when the step was not the last), kept when still within the
@@ -40,9 +40,9 @@ from typing import NamedTuple
 import numpy as np
 import scipy.optimize
 
-from station.analysis.fitting import Axis
-from station.diagnosis.cost import Evaluator, pooled, rms_gain
-from station.diagnosis.selection import NESTED, SHAPE, Search, Selection, Trial, null_floor, refit_explanation, trial
+from station.diagnosis.search.bounded import RESOLUTION_STEPS, Axis
+from station.diagnosis.runs.cost import Evaluator, pooled, rms_gain
+from station.diagnosis.search.selection import NESTED, SHAPE, Search, Selection, Trial, null_floor, refit_explanation, trial
 
 CHI2_95 = 3.841458820694124
 """χ²₁ at 95 %: the likelihood-ratio threshold of one parameter."""
@@ -55,10 +55,6 @@ MAX_ALTERNATIVES = 3
 
 BISECTIONS = 3
 """Bisections of the bracket where the profile crosses the threshold (1/8 of it left)."""
-
-RESOLUTION_STEPS = 1.0 / 16.0
-"""An interval is at least ± this many grid steps of the effect's search coordinate: the
-fit's own resolution (refinement to 0.02 grid step on a piecewise-constant cost)."""
 
 
 def integrated_time(e: np.ndarray) -> float:
@@ -345,7 +341,7 @@ def tolerance(cost: float, floor: float, n_eff: float) -> float:
     cost : float
         The chosen explanation's validation cost.
     floor : float
-        What luck alone reaches around it (:func:`station.diagnosis.selection.null_floor`).
+        What luck alone reaches around it (:func:`station.diagnosis.search.selection.null_floor`).
     n_eff : float
         Effective number of error terms of the validation runs.
     """

@@ -6,7 +6,7 @@ The null is parametric: the extended model is simulated again as the rig would h
 if it were the truth, with the sensor model's realisations — accelerometer noise of the
 run's σ_a (rounded to counts as the rig's sensor does, and going round the loop where the
 controller feeds a back) and tiny perturbations of the model
-(:data:`station.diagnosis.selection.NULL_PERTURBATIONS`: where quantization sends a closed
+(:data:`station.diagnosis.search.selection.NULL_PERTURBATIONS`: where quantization sends a closed
 loop along another path) — and the same statistics are measured on those replicates:
 
 - θ: the fraction of samples where θ differs from the extended model by
@@ -37,8 +37,8 @@ from typing import NamedTuple
 import numpy as np
 import scipy.signal
 
-from station.diagnosis.cost import Evaluator
-from station.diagnosis.selection import NULL_PERTURBATIONS, perturbed
+from station.diagnosis.runs.cost import Evaluator
+from station.diagnosis.search.selection import NULL_PERTURBATIONS, perturbed
 
 THETA_COUNTS = 2.0
 """θ off by this many counts or more cannot be encoder rounding (at most one count)."""

@@ -1,5 +1,5 @@
 """The identification report (``station identify --report DIR``): the last diagnosis's
-``report.html`` (:func:`station.diagnosis.report.write_report`) and ``identify.html``: how the
+``report.html`` (:func:`station.diagnosis.answer.report.write_report`) and ``identify.html``: how the
 identification ended, every experiment with why it was run and its outcome, and for each
 designed one a figure of θ and a predicted on the chosen model and on its rivals beside what
 the device measured (also as ``experiment-NN.png``)."""
@@ -12,8 +12,8 @@ from pathlib import Path
 import numpy as np
 
 from station import DT
-from station.diagnosis.cases import load_case
-from station.diagnosis.report import write_report
+from station.diagnosis.runs.cases import load_case
+from station.diagnosis.answer.report import write_report
 from station.outputs import Transaction
 from station.plots import identify_design_figure, save_figure
 
@@ -35,7 +35,7 @@ def write_identify_report(ident, folder: str | Path, transaction: Transaction | 
     Parameters
     ----------
     ident : Identification
-        What :func:`station.diagnosis.identify.identify` returned.
+        What :func:`station.diagnosis.identify.loop.identify` returned.
     folder : str or Path
         Created if needed.
     transaction : station.outputs.Transaction, optional

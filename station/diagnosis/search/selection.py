@@ -3,14 +3,14 @@ fold, sets of effects fitted per fold and judged on held-out runs (:func:`trial`
 in-sample screen of candidates beside accepted effects, and the acceptance rule: a step is
 accepted only when it pays on held-out data beyond what quantization and noise reach by
 luck. The order of the search (forward selection, at most :data:`MAX_EFFECTS`, with a
-lookahead over its first effect) is :mod:`station.diagnosis.stepwise`'s.
+lookahead over its first effect) is :mod:`station.diagnosis.search.stepwise`'s.
 
 Acceptance: the pooled validation cost must fall by at least :data:`MIN_RELATIVE_GAIN`
 (parsimony: an effect must pay for itself) and by at least :data:`MIN_NOISE_GAIN` noise
 variances per sample, both measured from the lower of the current model's cost and the
 cost that tiny perturbations of it reach by luck (:data:`NULL_PERTURBATIONS`); otherwise the
 answer is "none". Fits are grid bracketing then local refinement
-(:func:`station.analysis.fitting.fit`).
+(:func:`station.diagnosis.search.bounded.fit`).
 
 Breakaway friction is one step: the static_friction candidate is fitted as its sliding
 level coulomb_friction plus a breakaway excess (:data:`EXCESS`), so it brings
@@ -23,7 +23,7 @@ no new place), and once static_friction is, coulomb_friction is no more a candid
 a later effect joins it, static_friction is judged again against coulomb_friction in its
 place (a downgrade when the excess no longer pays). An accepted static_friction's
 stribeck_speed is fitted last with the accepted values fixed and kept only when it pays on
-the validation runs (:func:`station.diagnosis.stepwise.forward_select`); else it stays the model's (default 0.05 rad/s).
+the validation runs (:func:`station.diagnosis.search.stepwise.forward_select`); else it stays the model's (default 0.05 rad/s).
 
 The cost of stick-slip has several valleys in (v_c, v_s): a broad one of plain Coulomb
 friction (excess near 0) and the true one, under a count wide in v_c. A breakaway fit that
@@ -42,10 +42,10 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from station.analysis.fitting import Axis, axis_for, fit
-from station.diagnosis.cost import Evaluator, pooled, relative_gain, rms_gain
-from station.diagnosis.folds import Fold
-from station.diagnosis.prose import format_value
+from station.diagnosis.search.bounded import Axis, axis_for, fit
+from station.diagnosis.runs.cost import Evaluator, pooled, relative_gain, rms_gain
+from station.diagnosis.runs.folds import Fold
+from station.diagnosis.units import format_quantity
 from station.plant.effects import EFFECTS
 
 MIN_RELATIVE_GAIN = 0.05
@@ -173,7 +173,7 @@ class Singles:
 @dataclass
 class Step:
     """One step of forward selection, kept for the alternatives
-    (:mod:`station.diagnosis.doubt`).
+    (:mod:`station.diagnosis.honesty.doubt`).
 
     Attributes
     ----------
@@ -559,7 +559,7 @@ def fit_each_alone(search: Search, names: Sequence[str], nominal: Trial) -> Sing
             trials[name], values[name] = tr, vals
             g = rms_gain(pooled(ev, tr.val_sse).rms_theta, rms_nom)
             cg = relative_gain(tr.val_weighted, nominal.val_weighted)
-            search.say(f"[{k}/{len(names)}] {name} = {format_value(vals[name], EFFECTS[name].unit)}: "
+            search.say(f"[{k}/{len(names)}] {name} = {format_quantity(vals[name], EFFECTS[name].unit)}: "
                        f"validation θ gain {g:.1f} %, cost gain {cg:.1f} % ({ev.simulations} simulations)")
     return Singles(trials, values)
 

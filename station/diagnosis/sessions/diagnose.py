@@ -1,9 +1,9 @@
 """Sessions and drift (DESIGN.md "Sessions and drift"): logs grouped into sessions, one model
 structure fitted on all of them, and the effects that drift between sessions with a value
-per session (``station survey DIR... --diagnose``; the search is :mod:`station.diagnosis.drift`).
+per session (``station survey DIR... --diagnose``; the search is :mod:`station.diagnosis.sessions.drift`).
 
 A session is the folder a log is in, or the ``session`` our log header names. Before any
-work each session's logs are read as diagnosis cases (:func:`station.diagnosis.cases.load_case`;
+work each session's logs are read as diagnosis cases (:func:`station.diagnosis.runs.cases.load_case`;
 the caller leaves out files that are no logs); set aside, each with a note: logs the diagnosis
 cannot use (the one-line reason), hub-held beam tests, a run whose data rows repeat another's, and the
 accelerometer of a run whose a channel drifts (:func:`accel_drift`: its θ is used, its a is
@@ -23,26 +23,24 @@ from pathlib import Path
 
 import numpy as np
 
-from station.diagnosis.cases import RunCase, Simulator, load_case
-from station.diagnosis.cost import Evaluator, calibrate_noise, pooled, rms_gain
-from station.diagnosis.drift import (
+from station.diagnosis.runs.cases import RunCase, Simulator, load_case
+from station.diagnosis.runs.cost import Evaluator, calibrate_noise, pooled, rms_gain
+from station.diagnosis.sessions.drift import (
     DriftResult,
     Layout,
     PerSession,
     decide_drift,
     finite,
     key,
-    nominal_trial,
     select_structure,
     session_axes,
 )
-from station.diagnosis.folds import LEAVE_ONE_OUT, make_folds
-from station.diagnosis.inputs import data_digest, set_aside_beam_tests
-from station.diagnosis.selection import Search, effect_axes
+from station.diagnosis.runs.folds import LEAVE_ONE_OUT, make_folds
+from station.diagnosis.runs.inputs import data_digest, set_aside_beam_tests
+from station.diagnosis.search.workbench import Bench, nominal_trial, workbench
 from station.errors import StationError
 from station.logged.simulate import simulate_log
 from station.outputs import unique_names
-from station.plant.effects import CANDIDATES, EFFECTS
 from station.signals import check_stop
 from station.plant.model import as_model
 from station.runlog.schema import MAGIC
@@ -349,7 +347,7 @@ class SessionsDiagnosis:
         Its effects with a value per session.
     accepted : list of str
         The structure's effects in the order they were added.
-    decisions : list of station.diagnosis.drift.Decision
+    decisions : list of station.diagnosis.sessions.drift.Decision
         Per accepted effect, whether it drifts and by how much per-session values pay.
     nominal_model : Model
     gain_pct : float
@@ -462,20 +460,13 @@ def diagnose_sessions(sessions: Sequence[SessionLogs], model=None, progress: Cal
     StationError
         An unknown candidate, a bad model, no usable run, or fewer than two usable runs.
     """
-    from threadpoolctl import threadpool_limits
-
-    from station.plant.diskcache import bulk
-
-    with threadpool_limits(limits=1, user_api="blas"), bulk():  # tiny matrices; forms not via the disk (see diagnose)
-        return _diagnose_sessions(sessions, model, progress or (lambda msg: None), candidates, max_samples, simulate)
+    with workbench("survey --diagnose", candidates) as bench:
+        return _diagnose_sessions(sessions, model, progress or (lambda msg: None), bench, max_samples, simulate)
 
 
-def _diagnose_sessions(sessions, model, say, candidates, max_samples, simulate) -> SessionsDiagnosis:
+def _diagnose_sessions(sessions, model, say, bench: Bench, max_samples, simulate) -> SessionsDiagnosis:
     t0 = time.perf_counter()
-    names = list(CANDIDATES if candidates is None else candidates)
-    for n in names:
-        if n not in EFFECTS:
-            raise StationError(f"survey --diagnose: unknown candidate effect '{n}' (known: {', '.join(EFFECTS)})")
+    names = bench.names
     base = as_model(model)
     loaded = load_sessions(sessions, max_samples, say)
     cases = loaded.cases
@@ -486,7 +477,7 @@ def _diagnose_sessions(sessions, model, say, candidates, max_samples, simulate) 
     layout = Layout(tuple(loaded.groups))
     ev = Evaluator(cases, base, simulate or simulate_cut, run_effects=PerSession(layout.session_of()))
     folds, how = make_folds(len(cases), 0)
-    search = Search(ev, folds, tuple(range(len(cases))), effect_axes(), 1, say)
+    search = bench.search(ev, folds, range(len(cases)), say)
     session_axes(search, names, layout.sessions)
     calibrate_noise(ev)
     notes = list(loaded.notes)

@@ -7,6 +7,9 @@ import math
 from collections.abc import Mapping, Sequence
 
 from station.analysis.residuals import RunResiduals
+from station.diagnosis.search.bounded import RESOLUTION_STEPS, axis_for
+from station.diagnosis.units import format_quantity
+from station.plant.effects import EFFECTS
 
 SIGNATURE_WORDS = {
     "coulomb_friction": ("sticks", "steady-state"),
@@ -19,23 +22,6 @@ SIGNATURE_WORDS = {
     "accel_gain": (),
 }
 """Which residual signatures speak for which effect (words of RunResiduals.signatures)."""
-
-
-def format_value(x: float, unit: str) -> str:
-    """An effect's value with its unit: whole samples, else 3 significant digits; "∞" when
-    infinite; no unit for ratios ("1").
-
-    Parameters
-    ----------
-    x : float
-        The value, in ``unit``.
-    unit : str
-        The effect's unit (:data:`station.plant.effects.EFFECTS`).
-    """
-    if not math.isfinite(x):
-        return "∞"
-    s = f"{x:.0f}" if unit == "samples" else f"{x:.3g}"
-    return s + ("" if unit == "1" else f" {unit}")
 
 
 def signature_evidence(name: str, before: Mapping[str, RunResiduals]) -> str:
@@ -85,14 +71,14 @@ def effect_evidence(name: str, unit: str, alone: float, fold_values: Sequence[fl
     before : mapping of str to RunResiduals
         Run name -> residual analysis of the nominal model.
     """
-    spread = (f" (folds {format_value(min(fold_values), unit)} to {format_value(max(fold_values), unit)})"
+    spread = (f" (folds {format_quantity(min(fold_values), unit)} to {format_quantity(max(fold_values), unit)})"
               if len(fold_values) > 1 else "")
-    words = [f"fitted alone {format_value(alone, unit)}{spread}; on {how} the nominal model plus it "
+    words = [f"fitted alone {format_quantity(alone, unit)}{spread}; on {how} the nominal model plus it "
              f"changes θ RMS {rms_nominal:.2f} -> {rms_alone:.2f} counts "
              f"({gain_pct:+.1f} %), the joint θ+a cost by {cost_gain_pct:+.1f} %"]
     if step is not None:
         words.append(f"accepted at step {step} of forward selection"
-                     + (f", {format_value(joint, unit)} in the joint model" if joint is not None else ""))
+                     + (f", {format_quantity(joint, unit)} in the joint model" if joint is not None else ""))
     else:
         words.append("not accepted (below the significance threshold or a better effect explains the same)")
     sig = signature_evidence(name, before)
@@ -141,7 +127,7 @@ OVERSHOOT_POINTS = 3.0
 
 def at_range_end(name: str, value: float) -> bool:
     """The value sits at an end of the effect's search range, within the fit's resolution
-    (:data:`station.diagnosis.doubt.RESOLUTION_STEPS` grid steps): the fit wanted further.
+    (:data:`station.diagnosis.search.bounded.RESOLUTION_STEPS` grid steps): the fit wanted further.
     The neutral value ("no effect", e.g. no friction at 0) does not count.
 
     Parameters
@@ -151,10 +137,6 @@ def at_range_end(name: str, value: float) -> bool:
     value : float
         Its value, in its unit.
     """
-    from station.analysis.fitting import axis_for
-    from station.diagnosis.doubt import RESOLUTION_STEPS
-    from station.plant.effects import EFFECTS
-
     spec = EFFECTS.get(name)
     if spec is None or not math.isfinite(value) or math.isclose(value, spec.neutral, rel_tol=1e-6, abs_tol=1e-9):
         return False
@@ -178,7 +160,7 @@ def plain_name(name: str) -> str:
 def plain_value(name: str, value: float, unit: str) -> str:
     """An effect's value as a person reads it: ratios as "1.98× nominal" (param:NAME) or
     "0.92× the model's" (accel_gain), the beam damping as "ζ = 0.021", the rest with their
-    unit (:func:`format_value`).
+    unit (:func:`format_quantity`).
 
     Parameters
     ----------
@@ -190,14 +172,14 @@ def plain_value(name: str, value: float, unit: str) -> str:
         Its unit (:data:`station.plant.effects.EFFECTS`).
     """
     if not math.isfinite(value):
-        return format_value(value, unit)
+        return format_quantity(value, unit)
     if name.startswith("param:"):
         return f"{value:.3g}× nominal"
     if name == "accel_gain":
         return f"{value:.3g}× the model's"
     if name == "beam_damping":
         return f"ζ = {value:.3g}"
-    return format_value(value, unit)
+    return format_quantity(value, unit)
 
 
 def interval_words(name: str, interval, unit: str) -> str:
@@ -208,7 +190,7 @@ def interval_words(name: str, interval, unit: str) -> str:
     name : str
         The effect's code name.
     interval : Interval or None
-        :class:`station.diagnosis.doubt.Interval`.
+        :class:`station.diagnosis.honesty.doubt.Interval`.
     unit : str
         The effect's unit.
     """
