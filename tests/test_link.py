@@ -124,3 +124,56 @@ def test_legacy_start_zeroes_a_command_left_over_from_a_dead_station():
         assert state is not None and not state.any()  # tick 0 applied 0: the plant is still at rest
     finally:
         session.close()
+
+
+class _FrozenHostPort(MemoryPort):
+    """A port whose reads block like a real one (``POLL_S``) and whose ``freeze``-th read
+    overruns by ``freeze_s``: the host was frozen (a stalled VM), the device too; after it
+    the device's next sample is there only if ``then`` holds bytes."""
+
+    def __init__(self, freeze_s, then=b""):
+        super().__init__()
+        self.freeze_s, self.then, self.reads = freeze_s, then, 0
+
+    def read(self, size=1):
+        if not self.data:
+            import time
+
+            self.reads += 1
+            time.sleep(self.freeze_s if self.reads == 2 else 0.01)
+            if self.reads == 3:
+                self.data += self.then
+        return super().read(size)
+
+
+def test_a_frozen_host_is_not_a_silent_device():
+    """The sample deadline counts listening time: a 0.3 s freeze of the host (the device was
+    frozen too and sends its next sample after it) does not stop a run with --timeout 0.1."""
+    from station.link import V1Session
+    from station.protocol import v1
+
+    port = _FrozenHostPort(0.3, then=v1.encode(v1.Sample(1, 0, 0, 0, 0)))
+    session = V1Session(port, "fake://", LinkLimits(timeout=0.1, check_rate=False))
+    session.start(0)
+    port.data += v1.encode(v1.Sample(0, 0, 0, 0, 0))
+    assert session.read_sample()[0] == 0
+    assert session.read_sample()[0] == 1
+    assert session.held_up_s > 0.25
+
+
+def test_a_silent_device_still_times_out_after_a_frozen_host():
+    """Credit is the freeze only: a device that stays silent is stopped one timeout later."""
+    import time
+
+    from station.link import LinkTimeout, V1Session
+    from station.protocol import v1
+
+    port = _FrozenHostPort(0.3)
+    session = V1Session(port, "fake://", LinkLimits(timeout=0.1, check_rate=False))
+    session.start(0)
+    port.data += v1.encode(v1.Sample(0, 0, 0, 0, 0))
+    assert session.read_sample()[0] == 0
+    t0 = time.perf_counter()
+    with pytest.raises(LinkTimeout):
+        session.read_sample()
+    assert time.perf_counter() - t0 >= 0.3 + 0.1 - 0.02  # the freeze, then a full timeout
