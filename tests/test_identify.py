@@ -9,10 +9,12 @@ from __future__ import annotations
 
 import json
 import re
+import signal
 from pathlib import Path
 from types import SimpleNamespace
 
 import numpy as np
+
 import pytest
 
 from station import DT, cli
@@ -269,6 +271,26 @@ def test_a_signal_ends_the_identification(tmp_path):
     ident = identify(out_dir=tmp_path / "runs", runner=runner)
     assert len(calls) == 2 and ident.exit_code == 130 and ident.diagnosis is None
     assert "sigint" in ident.stopped
+
+
+@pytest.mark.parametrize("signum, code", [(signal.SIGINT, 130), (signal.SIGTERM, 143)])
+def test_a_signal_between_experiments_starts_no_other(tmp_path, signum, code):
+    """A signal that arrives while the station diagnoses or designs (recorded by the CLI's
+    guard) keeps the next experiment from starting: the device never gets its START."""
+    from station.signals import StopSignals
+
+    calls = []
+    with StopSignals() as guard:
+        guard.defer()  # as after a run: signals are recorded, the work polls them
+
+        def runner(exp, log):
+            calls.append(exp)
+            guard.signum = signum  # came while the next experiment was being chosen
+            return ExperimentRun(log, "timeout", 1)
+
+        ident = identify(out_dir=tmp_path / "runs", runner=runner)
+    assert len(calls) == 1 and ident.exit_code == code
+    assert ident.stopped == f"stopped by {'sigint' if code == 130 else 'sigterm'} before experiment 2 started"
 
 
 # --- the command -------------------------------------------------------------------------------

@@ -42,6 +42,7 @@ from station.logged.device import command_quantization
 from station.plant.effects import CANDIDATES
 from station.plant.model import as_model
 from station.runlog import read_log
+from station.signals import StopSignal, StopSignals
 
 DEFAULT_BUDGET = 8
 """Designed experiments after the thesis's four, at most (``station identify --budget``)."""
@@ -296,7 +297,7 @@ def identify(port: str = "sim://", model=None, budget: int = DEFAULT_BUDGET, out
     for exp, why in zip(THESIS_EXPERIMENTS, THESIS_WHY):
         code = loop.run(exp, why)
         if code is not None:
-            return loop.result(None, f"stopped by {loop.records[-1].reason}", budget, code)
+            return loop.result(None, f"stopped by {loop.stopped_by}", budget, code)
     diag = loop.diagnose(names)
     if diag is None:
         return loop.result(None, "fewer than two of the thesis's experiments completed: nothing to diagnose", budget, 1)
@@ -320,7 +321,7 @@ def identify(port: str = "sim://", model=None, budget: int = DEFAULT_BUDGET, out
         designed += 1
         code = loop.run(design.experiment, design.why, design)
         if code is not None:
-            return loop.result(diag, f"stopped by {loop.records[-1].reason}", budget, code)
+            return loop.result(diag, f"stopped by {loop.stopped_by}", budget, code)
         if not loop.records[-1].used:
             continue
         if recheck is None:
@@ -435,13 +436,20 @@ class _Loop:
         self.view = None  # ... as the rivals see it (_kept_view)
         self.command = "round"
         self.t0 = time.perf_counter()
+        self.stopped_by = ""  # what stopped the last experiment (or kept the next from starting)
 
     def run(self, exp: Experiment, why: str, design: Design | None = None) -> int | None:
         """Run one experiment and record it; a signal's exit code when one stopped it, else None."""
         k = len(self.records) + 1
         log = self.folder / f"{k:02d}-{exp.slug}.tsv"
+        active = StopSignals._active
+        if active is not None and active.signum is not None:
+            # a signal came while the diagnosis or the design worked: no experiment starts
+            self.stopped_by = f"{active.reason} before experiment {k} started"
+            return StopSignal(active.signum).exit_code
         t = time.perf_counter()
         done = self.runner(exp, log)
+        self.stopped_by = done.reason
         self.timings["experiments"] += time.perf_counter() - t
         used = done.exit_code == 0
         self.records.append(ExperimentRecord(exp, done.log, why, done.reason, used, design))
