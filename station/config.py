@@ -78,7 +78,7 @@ def _read(path: str | Path) -> TomlDoc:
     return doc
 
 
-def apply_config(parser: argparse.ArgumentParser, cwd: str | Path | None = None) -> None:
+def apply_config(parser: argparse.ArgumentParser, cwd: str | Path | None = None, skip: tuple[str, ...] = ()) -> None:
     """Make the config file's settings ``parser``'s defaults, each checked by its option's own
     type (so the ranges are the options'); options given on the command line still win.
 
@@ -92,6 +92,10 @@ def apply_config(parser: argparse.ArgumentParser, cwd: str | Path | None = None)
         ``station step``'s parser, its options added (one per :data:`KEYS` entry).
     cwd : path, optional
         The working folder (default: the process's).
+    skip : tuple of str, optional
+        Keys of :data:`KEYS` that mean something else to this command (``station identify``'s
+        ``--out-dir`` is its experiments' folder, not the folder of step's log names): the
+        file's value is not applied (still checked as a known key).
     """
     path = None
     try:
@@ -100,6 +104,8 @@ def apply_config(parser: argparse.ArgumentParser, cwd: str | Path | None = None)
         actions = {a.dest: a for a in parser._actions}
         defaults = {}
         for key, value in ({} if doc is None else doc.data).items():
+            if key in skip:
+                continue
             action = actions[key]
             if isinstance(value, bool) or not isinstance(value, (str, int, float)):
                 raise doc.error(key, f"expected a string or a number, got {shown(value)}")

@@ -78,3 +78,29 @@ def test_custom_python_controller_log_is_replayed_for_the_model_only(tmp_path):
     j = rep.to_json()
     assert json.loads(json.dumps(j))["outcome"]["reason"] == "completed"
     assert np.isfinite(read_log(report.log_path).data["v"]).all()
+
+
+def test_identify_runs_its_experiments_with_the_folders_station_toml(tmp_path, monkeypatch, capsys):
+    """station identify takes station.toml's bounds as station step does (it ran with
+    200 / 2048 / 40 beside a file that said 50 / 300 / 5); its out_dir stays its own."""
+    from station.diagnosis.identify import loop
+
+    monkeypatch.chdir(tmp_path)
+    monkeypatch.setenv("XDG_CONFIG_HOME", str(tmp_path / "none"))
+    (tmp_path / "station.toml").write_text('soft_limit = 300\nlimit = 50\nmax_step = 5\nmax_lag = 40\n'
+                                           'out_dir = "lab"\n')
+    seen = {}
+
+    def fake_run_step(**kw):
+        seen.update(kw)
+        raise SystemExit(99)  # one experiment is enough to see what it was given
+
+    monkeypatch.setattr(loop, "run_step", fake_run_step)
+    try:
+        main(["identify", "--quiet"])
+    except SystemExit as exc:
+        assert exc.code == 99
+    assert (seen["limit"], seen["soft_limit"], seen["limits"].max_step, seen["limits"].max_lag) == (50.0, 300.0, 5.0,
+                                                                                                   0.04)
+    assert not (tmp_path / "lab").exists()  # the experiments' folder is identify's own default
+    assert "settings from station.toml" in capsys.readouterr().err

@@ -8,9 +8,10 @@ import argparse
 import sys
 from pathlib import Path
 
-from station.commands.options import (add_model_options, add_protocol_option, add_report_options, check_port,
-                                      model_inputs, number)
+from station.commands.options import (add_link_options, add_model_options, add_protocol_option, add_report_options,
+                                      check_port, link_limits, model_inputs, number, warn)
 from station.commands.diagnose import format_diagnosis
+from station.config import apply_config
 from station.errors import StationError
 from station.jsonio import to_jsonable
 from station.outputs import FORCE_HELP, Output, Transaction, check_folder, check_outputs
@@ -41,11 +42,7 @@ def configure(parser: argparse.ArgumentParser) -> None:
                         help="designed experiments after the thesis's four, at most (default 8; 0: the four only)")
     parser.add_argument("--limit", type=number(1, 255, unit="DAC counts"), default=200.0, metavar="COUNTS",
                         help="the controllers' clamp, ±DAC counts (default 200, the rig's)")
-    parser.add_argument("--soft-limit", type=number(1, 32767, unit="encoder counts"), default=2048.0,
-                        metavar="COUNTS", help="stop a run safely when |θ| exceeds this (default 2048); designed "
-                                               "experiments keep the predicted |θ| within 80 %% of it")
-    parser.add_argument("--timeout", type=number(1e-3, 60.0, unit="s"), default=0.1, metavar="S",
-                        help="longest wait for a sample before stopping a run safely (default 0.1 s)")
+    add_link_options(parser, soft_limit_help="; designed experiments keep the predicted |θ| within 80 %% of it")
     parser.add_argument("--out-dir", type=Path, default=None, metavar="DIR",
                         help="folder of the experiments' logs (default runs/identify-<UTC time>); a folder "
                              "that holds files needs --force")
@@ -57,6 +54,7 @@ def configure(parser: argparse.ArgumentParser) -> None:
                         help="write the identified model (nominal + accepted effects) as a model file")
     parser.add_argument("--force", action="store_true", help=FORCE_HELP + "; write into an --out-dir that holds files")
     parser.add_argument("--quiet", action="store_true", help="no progress lines on stderr")
+    apply_config(parser, skip=("out_dir",))  # station.toml's bounds, as station step's (its out_dir: step's logs)
 
 
 def outputs(args: argparse.Namespace) -> list[Output]:
@@ -148,6 +146,10 @@ def run(args: argparse.Namespace) -> int:
     """
     from station.diagnosis.identify.loop import DEFAULT_BUDGET, identify  # lazy: start-up time (the diagnosis: scipy)
 
+    if getattr(args, "_config_error", None):
+        raise StationError(args._config_error)
+    if getattr(args, "_config", None):
+        warn(f"settings from {args._config} (options given on the command line win)")
     check_port(args.port)
     model = as_model(args.model)  # an unreadable model is refused before any run
     check_outputs(outputs(args), model_inputs(args), force=args.force)
@@ -156,7 +158,7 @@ def run(args: argparse.Namespace) -> int:
     budget = DEFAULT_BUDGET if args.budget is None else args.budget
     ident = identify(port=args.port, model=model, budget=budget, out_dir=folder, protocol=args.protocol,
                      soft_limit=args.soft_limit, limit=args.limit, timeout=args.timeout, force=args.force,
-                     progress=progress)
+                     progress=progress, limits=link_limits(args), baudrate=args.baud)
     print(format_identification(ident))
     with Transaction() as tx:  # every file whole or none (station.outputs)
         if args.report is not None:

@@ -250,3 +250,57 @@ def model_inputs(args: argparse.Namespace) -> list[Input]:
     model = getattr(args, "model_spec", None) or getattr(args, "model", None)
     return [Input("--model", model if isinstance(model, (str, Path)) else None),
             Input("--params", getattr(args, "params", None))]
+
+
+def add_link_options(parser: argparse.ArgumentParser, soft_limit_help: str = "") -> None:
+    """Add the device's link and fail-safe bounds, one definition for every command that runs
+    the rig (``station step``, ``station identify``): ``--baud``, ``--timeout``,
+    ``--soft-limit``, ``--max-lag``, ``--max-miss``, ``--max-step``; ``station.toml`` may set
+    each (:data:`station.config.KEYS`). :func:`link_limits` turns them into the link's limits.
+
+    Parameters
+    ----------
+    parser : argparse.ArgumentParser
+        Gets the options.
+    soft_limit_help : str, optional
+        What the command adds to ``--soft-limit``'s help.
+    """
+    from station.link import LinkLimits  # lazy: start-up time (pyserial), every command builds its parser
+    from station.plan import DEFAULT_SOFT_LIMIT, DEFAULT_TIMEOUT, RANGES  # lazy: start-up time (numpy)
+
+    parser.add_argument("--baud", type=RANGES["baudrate"], default=None,
+                        help="baud rate (default 921600 for v1, 115200 legacy)")
+    parser.add_argument("--timeout", type=RANGES["timeout"], default=DEFAULT_TIMEOUT, metavar="S",
+                        help="longest wait for a sample before stopping safely (default 0.1 s)")
+    parser.add_argument("--soft-limit", type=RANGES["soft_limit"], default=DEFAULT_SOFT_LIMIT, metavar="COUNTS",
+                        help="stop safely when |θ| exceeds this (default 2048 = two revolutions)" + soft_limit_help)
+    parser.add_argument("--max-lag", type=number(0, 1000, unit="ms"), default=1000 * LinkLimits.max_lag,
+                        metavar="MS", help="how far the station may fall behind the device and catch up (skipped "
+                        "samples and those that arrive while it computes, × 2 ms); more stops the run (reason lag). "
+                        "A command is only ever computed from the newest sample (default 20 ms, the v1 watchdog's "
+                        "10 ticks)")
+    parser.add_argument("--max-miss", type=number(0, 99, integer=True), default=LinkLimits.max_miss, metavar="TICKS",
+                        help="stop when more of the last 100 ticks than this were dropped, stale or duplicated "
+                             "(reason sequence), or ran on a held command (late or skipped) beyond one catch-up of "
+                             "--max-lag (reason lag) (default 10)")
+    parser.add_argument("--max-step", type=number(1.0, 10000.0), default=LinkLimits.max_step, metavar="COUNTS",
+                        help="largest plausible encoder change per tick; more stops the run (reason sequence; "
+                             "default 40)")
+
+
+def link_limits(args: argparse.Namespace):
+    """The link's limits from the options of :func:`add_link_options`.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        ``--timeout``, ``--max-lag`` (ms), ``--max-miss``, ``--max-step``.
+
+    Returns
+    -------
+    station.link.LinkLimits
+    """
+    from station.link import LinkLimits  # lazy: start-up time (pyserial)
+
+    return LinkLimits(timeout=args.timeout, max_lag=args.max_lag / 1000, max_miss=args.max_miss,
+                      max_step=args.max_step)

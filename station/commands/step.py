@@ -8,10 +8,9 @@ from pathlib import Path
 
 from station import experiment as ex
 from station.errors import StationError
-from station.commands.options import (add_force_option, add_model_options, add_protocol_option, add_report_options,
-                                      add_seed_option, number, warn)
+from station.commands.options import (add_force_option, add_link_options, add_model_options, add_protocol_option,
+                                      add_report_options, add_seed_option, link_limits, warn)
 from station.config import apply_config
-from station.link import LinkLimits
 from station.outputs import Input, Output, write_json
 from station.plan import RANGES, StepPlan, plan_step
 from station.signals import noting
@@ -56,23 +55,7 @@ def configure(parser) -> None:
     add_protocol_option(parser)
     add_model_options(parser, subject="the simulated rig's model", params=False, note=SIM_ONLY)
     add_seed_option(parser, note=SIM_ONLY)
-    parser.add_argument("--baud", type=RANGES["baudrate"], default=None, help="baud rate (default 921600 for v1, 115200 legacy)")
-    parser.add_argument("--timeout", type=RANGES["timeout"], default=ex.DEFAULT_TIMEOUT, metavar="S",
-                        help="longest wait for a sample before stopping safely (default 0.1 s)")
-    parser.add_argument("--soft-limit", type=RANGES["soft_limit"], default=ex.DEFAULT_SOFT_LIMIT,
-                        metavar="COUNTS",
-                        help="stop safely when |θ| exceeds this (default 2048 = two revolutions)")
-    parser.add_argument("--max-lag", type=number(0, 1000, unit="ms"), default=1000 * LinkLimits.max_lag,
-                        metavar="MS", help="how far the station may fall behind the device and catch up (skipped "
-                        "samples and those that arrive while it computes, × 2 ms); more stops the run (reason lag). A command is "
-                        "only ever computed from the newest sample (default 20 ms, the v1 watchdog's 10 ticks)")
-    parser.add_argument("--max-miss", type=number(0, 99, integer=True), default=LinkLimits.max_miss, metavar="TICKS",
-                        help="stop when more of the last 100 ticks than this were dropped, stale or duplicated "
-                             "(reason sequence), or ran on a held command (late or skipped) beyond one catch-up of "
-                             "--max-lag (reason lag) (default 10)")
-    parser.add_argument("--max-step", type=number(1.0, 10000.0), default=LinkLimits.max_step, metavar="COUNTS",
-                        help="largest plausible encoder change per tick; more stops the run (reason sequence; "
-                             "default 40)")
+    add_link_options(parser)
     parser.add_argument("--out", type=Path, default=None, metavar="FILE",
                         help="run log (default runs/step-<controller>-<UTC time with ms>.tsv), streamed during the "
                              "run. The run's figure goes beside it as <log stem>.png")
@@ -114,8 +97,7 @@ def plan(args) -> StepPlan:
     return plan_step(port=args.port, protocol=args.protocol, controller=args.controller, amplitude=args.amplitude,
                      duration=args.duration, step_time=args.step_time, reference=args.reference,
                      kp=args.kp, limit=args.limit, soft_limit=args.soft_limit, timeout=args.timeout,
-                     limits=LinkLimits(timeout=args.timeout, max_lag=args.max_lag / 1000, max_miss=args.max_miss,
-                                       max_step=args.max_step),
+                     limits=link_limits(args),
                      baudrate=args.baud, model=args.model, n_elements=args.elements, seed=args.seed,
                      out=args.out, out_dir=args.out_dir, force=args.force,
                      outputs=[Output("--json", args.json), Output("--rrd", args.rrd)],

@@ -38,6 +38,7 @@ from station.diagnosis.honesty.rivals import describe, explanation, rivals
 from station.diagnosis.search.selection import accept, effect_axes, refit_explanation
 from station.errors import StationError
 from station.experiment import run_step
+from station.link import LinkLimits
 from station.logged.device import command_quantization
 from station.plant.effects import CANDIDATES
 from station.plant.model import as_model
@@ -79,7 +80,8 @@ Runner = Callable[[Experiment, Path], ExperimentRun]
 
 
 def step_runner(port: str, protocol: str = "v1", soft_limit: float = 2048.0, limit: float = 200.0,
-                timeout: float = 0.1, force: bool = False) -> Runner:
+                timeout: float = 0.1, force: bool = False, limits: LinkLimits | None = None,
+                baudrate: int | None = None) -> Runner:
     """A runner that runs each experiment as ``station step`` does (:func:`station.experiment.run_step`).
 
     Parameters
@@ -96,6 +98,16 @@ def step_runner(port: str, protocol: str = "v1", soft_limit: float = 2048.0, lim
         Longest wait for one sample, s.
     force : bool
         Overwrite an existing log (and reference file) of the same name.
+    limits : LinkLimits, optional
+        The link's fail-safe bounds (default: ``LinkLimits(timeout=timeout)``), as ``station
+        step`` takes them from its options and ``station.toml``.
+    baudrate : int, optional
+        The port's baud rate (default: the protocol's).
+
+    Returns
+    -------
+    Runner
+        ``run(experiment, log) -> ExperimentRun``.
     """
     def run(experiment: Experiment, log: Path) -> ExperimentRun:
         if experiment.reference == "step":
@@ -107,7 +119,7 @@ def step_runner(port: str, protocol: str = "v1", soft_limit: float = 2048.0, lim
             ref = {"reference": f"{write_reference(experiment, path)}:u"}
         report = run_step(port=port, protocol=protocol, controller=experiment.controller, kp=experiment.kp,
                           limit=limit, soft_limit=soft_limit, timeout=timeout, out=log, force=force,
-                          duration=experiment.duration, **ref)
+                          duration=experiment.duration, limits=limits, baudrate=baudrate, **ref)
         o = report.result.outcome
         return ExperimentRun(report.log_path, o.reason, o.exit_code)
 
@@ -240,7 +252,8 @@ def recheck_candidates(diag, rival_effects: Sequence[str], allowed: Sequence[str
 def identify(port: str = "sim://", model=None, budget: int = DEFAULT_BUDGET, out_dir: str | Path | None = None,
              protocol: str = "v1", candidates: Sequence[str] | None = None, soft_limit: float = 2048.0,
              limit: float = 200.0, timeout: float = 0.1, force: bool = False,
-             progress: Callable[[str], None] | None = None, runner: Runner | None = None) -> Identification:
+             progress: Callable[[str], None] | None = None, runner: Runner | None = None,
+             limits: LinkLimits | None = None, baudrate: int | None = None) -> Identification:
     """Identify a rig by experiments on the device (module docstring).
 
     Parameters
@@ -270,6 +283,11 @@ def identify(port: str = "sim://", model=None, budget: int = DEFAULT_BUDGET, out
     runner : callable, optional
         ``runner(experiment, log_path) -> ExperimentRun`` (default :func:`step_runner` on
         ``port``); tests plug in their own.
+    limits : LinkLimits, optional
+        The link's fail-safe bounds for every experiment (``station.toml`` and the options,
+        as ``station step``'s; default ``LinkLimits(timeout=timeout)``).
+    baudrate : int, optional
+        The port's baud rate (default: the protocol's).
 
     Returns
     -------
@@ -286,7 +304,7 @@ def identify(port: str = "sim://", model=None, budget: int = DEFAULT_BUDGET, out
     base = as_model(model)
     names = list(CANDIDATES if candidates is None else candidates)
     say = progress or (lambda msg: None)
-    run = runner or step_runner(port, protocol, soft_limit, limit, timeout, force)
+    run = runner or step_runner(port, protocol, soft_limit, limit, timeout, force, limits, baudrate)
     folder = Path(out_dir) if out_dir is not None else default_out_dir()
     try:
         folder.mkdir(parents=True, exist_ok=True)
