@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""What held ticks do to a step response: the basis of the held-tick budget (README, Safety).
+"""What held ticks do to a step response: the basis of the held-tick budget (docs/safety.md).
 
 A tick on a held command is one the station did not answer in time: the device kept its
 last output (v1 reports it LATE), or the station caught up and skipped the sample (its

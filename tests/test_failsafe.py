@@ -1,6 +1,6 @@
 """Fail safe under every device behaviour: the station against hostile scripted devices on a pty.
 
-Each case asserts what the station promises (README "Safety", DESIGN.md "Run outcome"):
+Each case asserts what the station promises (docs/safety.md, DESIGN.md "Run outcome"):
 the run ends within --timeout + 0.1 s of the fault (or at the --max-lag / --max-miss /
 rate bound), command 0 then STOP (legacy: v = 0 then 's') are the last bytes it sent,
 the log holds every answered sample and ends with the outcome, and the reason and exit
@@ -369,7 +369,7 @@ def test_legacy_commands_written_after_the_next_sample_count_as_late(device, tmp
     # each answer is written after the next sample is in. The device cannot report them; the
     # station counts what it sees. (The controller sleeps: a controller spinning at the
     # station's real-time priority holds up the pty's own delivery, and then the station
-    # sees the late sample only at its next read - a limit of what it can see, README Safety.)
+    # sees the late sample only at its next read - a limit of what it can see, docs/safety.md.)
     # (Now and then the next two are in: that sample is skipped, its tick held as well.)
     assert 15 <= o.late <= 30 and o.late == o.late_seen + o.skipped
 

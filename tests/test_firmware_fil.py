@@ -32,7 +32,7 @@ HOST = FIRMWARE / "build" / "sflr_host"
 WATCHDOG_TICKS = 10  # sflr_host's default, reported in INFO
 V_LIMIT = 255  # firmware clamp (INFO v_limit)
 LATE, WATCHDOG = 0x01, 0x02
-SKIPPED = 0x80  # the station's own status bit in its log (README "Run logs"), not the device's
+SKIPPED = 0x80  # the station's own status bit in its log (docs/logs.md "Run logs"), not the device's
 DT = 0.002
 
 

@@ -161,8 +161,8 @@ def test_readme_shaper_example_loads(tmp_path):
     import re
     from pathlib import Path
 
-    readme = (Path(__file__).resolve().parents[1] / "README.md").read_text()
-    block = next(b for b in re.findall(r"```toml\n(.*?)```", readme, re.S) if "[shaper]" in b)
+    page = (Path(__file__).resolve().parents[1] / "docs" / "compensator-files.md").read_text()
+    block = next(b for b in re.findall(r"```toml\n(.*?)```", page, re.S) if "[shaper]" in b)
     path = tmp_path / "c.toml"
     path.write_text(LEAD + block)
     comp = read_compensator_file(path).compensator()

@@ -1,7 +1,7 @@
 """Start-up stays light: building the CLI (every command's parser, as each run does before
 its first tick) and loading the default model import none of the heavy libraries.
 
-README "Benchmarks" (bench_startup.py) promises a warm ``station step`` that imports neither
+docs/benchmarks.md "Start-up" (bench_startup.py) promises a warm ``station step`` that imports neither
 scipy, python-control, matplotlib nor numba before the first tick; a command whose parser
 pulled in its own package's heavy modules once cost every command 1 s of CPU. Checked in
 a fresh interpreter (this test process has imported everything already).
