@@ -2,7 +2,7 @@
 
 Runs step tests on the rig or on a simulated rig (a FEM plant model behind a
 simulated serial device), logs every run without loss, and replays logged runs.
-See README.md for the command line and DESIGN.md (shared) for the rig's facts.
+See README.md and docs/ for the command line and DESIGN.md (shared) for the rig's facts.
 """
 
 __version__ = "0.1.0"

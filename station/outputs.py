@@ -1,5 +1,5 @@
 """Every file the station writes: one rule, checked before anything starts, and files that
-are written whole or not at all (README "Output files").
+are written whole or not at all (docs/logs.md "Output files").
 
 The rule, the same for every command:
 
