@@ -51,8 +51,23 @@ def _no_user_station_config(monkeypatch, tmp_path_factory):
     monkeypatch.setenv("XDG_CONFIG_HOME", str(tmp_path_factory.getbasetemp() / "no-user-config"))
 
 
+REALTIME_MODULES = {"test_failsafe.py", "test_catch_up.py", "test_faults.py", "test_bench_loop.py",
+                    "test_bench_tick.py", "test_sim_pty.py", "test_firmware_fil.py", "test_sim_reproducible.py",
+                    "test_loop.py", "test_link.py"}
+"""Modules whose tests time a real-time run over a pty or a simulated device: marked
+``realtime``, so the README's test command runs them alone after the others (which run on
+both cores, ``-n 2``): a second worker's load would be the machine, not the station."""
+
+
 def pytest_configure(config):
     config.addinivalue_line("markers", "slow: takes minutes (e.g. the blind diagnosis tests); still run in CI")
+    config.addinivalue_line("markers", "realtime: times a real-time run; run alone (tests/conftest.py)")
+
+
+def pytest_collection_modifyitems(config, items):
+    for item in items:
+        if item.path.name in REALTIME_MODULES:
+            item.add_marker(pytest.mark.realtime)
 
 
 @pytest.fixture

@@ -23,4 +23,6 @@ def test_readme_compensator_file_example_loads(tmp_path):
 def test_readme_starts_with_the_two_setup_commands():
     first_block = README.read_text().split("```")[1]
     lines = [line for line in first_block.splitlines() if line.strip() and not line.startswith("sh")]
-    assert lines[0].endswith(".venv/bin/station step") and lines[1].endswith(".venv/bin/python -m pytest")
+    assert lines[0].endswith(".venv/bin/station step")
+    assert ".venv/bin/python -m pytest -n 2 -m 'not realtime'" in lines[1]  # both cores for the rest,
+    assert lines[1].endswith(".venv/bin/python -m pytest -m realtime")     # then the real-time runs alone
