@@ -67,3 +67,21 @@ def machine_stalled(error=None) -> bool:
     from tests.scripted_device import device_clock_stalled
 
     return bool(watch().since(_TEST_START[0])) or device_clock_stalled()
+
+
+
+def timed_marks() -> list:
+    """The marks of a test that times a real-time run: ``realtime`` (the README's test
+    command runs it alone, after the rest), run again when the machine froze during a failed
+    try (:func:`machine_stalled`, at most ten times), with the stall watch on."""
+    import pytest
+
+    return [pytest.mark.realtime, pytest.mark.flaky(reruns=10, condition=machine_stalled),
+            pytest.mark.usefixtures("stall_watch")]
+
+
+def timed(test):
+    """Decorate one test with :func:`timed_marks` (a whole module: ``pytestmark = timed_marks()``)."""
+    for mark in timed_marks():
+        test = mark(test)
+    return test

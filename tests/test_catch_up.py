@@ -23,9 +23,9 @@ from station.progress import ProgressSink
 from station.protocol import legacy, v1
 from station.runlog import SKIPPED
 from tests.scripted_device import MemoryPort
-from tests.stalls import machine_stalled
+from tests.stalls import timed_marks
 
-pytestmark = [pytest.mark.flaky(reruns=10, condition=machine_stalled), pytest.mark.usefixtures("stall_watch")]
+pytestmark = timed_marks()
 """A try during which the test machine froze (or a scripted device missed its own clock) is no
 trial of the station's timing: it runs again, at most ten times. A failure on a machine that
 kept time stands (tests/stalls.py)."""

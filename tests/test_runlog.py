@@ -17,6 +17,7 @@ import pytest
 
 from station.errors import StationError
 from station.runlog import COLUMNS, MAGIC, RunLogError, RunLogWriter, read_log
+from tests.stalls import timed
 
 RIG_FILES = {
     "OL_pulse_test_sys_check_SLFR_RTP_OL_Test_uend=0.txt": ("OL_Test", 1000, False),
@@ -213,6 +214,7 @@ _CHILD = textwrap.dedent("""
 """)
 
 
+@timed
 def test_sigkill_loses_nothing_older_than_100ms(tmp_path):
     path = tmp_path / "killed.tsv"
     proc = subprocess.Popen([sys.executable, "-c", _CHILD, str(path)])

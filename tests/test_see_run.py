@@ -15,6 +15,7 @@ import numpy as np
 from station.cli import main
 from station.experiment import run_step
 from station.runlog import read_log
+from tests.stalls import timed
 
 THESIS_STEPS = ("SFLR_P_control_step_kp_2_SLFR_RTP_P_control_kp=2.0.txt",
                 "step_response_Gth_comp_no_accel_FB_amp_100_duration_1000_SLFR_RTP_Motor_Comp_Gth.txt",
@@ -118,6 +119,7 @@ def _stderr_of_run(tmp_path, *extra, terminal=True) -> bytes:
     return b"".join(chunks)
 
 
+@timed
 def test_progress_line_shows_on_a_terminal_only(tmp_path):
     shown = _stderr_of_run(tmp_path).decode()
     assert "\rstep: " in shown and "/ 1.00 s" in shown and "late 0" in shown and "dropped 0" in shown

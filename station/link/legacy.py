@@ -17,7 +17,8 @@ from station.protocol import check_ticks, legacy, v1
 class LegacySession(Session):
     """The rig's original PSoC protocol (``shared/spec/protocol.md``, "legacy").
 
-    The device cannot declare lockstep, so only the slow-rate check applies, and it
+    The device cannot declare lockstep: only a simulated port in lockstep pacing says so
+    itself (``paced_by_host``), and a real one gets the slow-rate check. It
     cannot report late commands: ``late`` counts the held ticks the station sees (its
     skipped samples and its commands written after the next sample had arrived).
 
@@ -54,6 +55,7 @@ class LegacySession(Session):
             raise StationError(f"no answer to 'r' from {self.url} within {HANDSHAKE_TIMEOUT} s: is it the legacy "
                                "firmware? (try --protocol v1)")
         self.info = {"protocol": "legacy", "theta": legacy.decode_word(word[:2])}
+        self.lockstep = bool(getattr(self.port, "paced_by_host", False))
         return self.info
 
     def zero_accel(self) -> dict:

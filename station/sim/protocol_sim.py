@@ -205,6 +205,12 @@ class Serial(SerialBase):
             self._clock = threading.Thread(target=self._run_clock, name="sim-clock", daemon=True)
             self._clock.start()
 
+    @property
+    def paced_by_host(self) -> bool:
+        """True in lockstep pacing: the device ticks when the station answers, so it has no
+        rate of its own to check (the legacy protocol cannot say so; v1 says it in INFO)."""
+        return self._driver is not None and self._driver.lockstep
+
     def from_url(self, url: str) -> None:
         """Parse ``url`` into :attr:`options` (the one place options are read); see :func:`parse_url`.
 
