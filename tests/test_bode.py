@@ -78,3 +78,21 @@ def test_bode_command_writes_figure_and_json(rig_data, tmp_path, capsys):
     rows = json.loads(out.read_text())["antiresonances"]
     assert len(rows) >= 2 and rows[0]["measured_hz"] == pytest.approx(2.5, abs=0.15)
     assert "measured Hz" in capsys.readouterr().out
+
+
+def test_measured_phase_is_drawn_on_the_models_branch():
+    # Across a lightly damped antiresonance the phase jumps by about +180° within one bin:
+    # the model by +170°, the noisy measurement by +195°, which np.unwrap takes as -165°.
+    # Unwrapped each on its own they end a whole turn apart; on the model's branch the gap
+    # is the true one (-20°, then +5°) and never above 180°.
+    from station.analysis.frequency import phase_beside
+
+    f = np.linspace(0.5, 40, 400)
+    notch = f > 20.0
+    model = np.exp(1j * np.radians(-12.0 * f + 170.0 * notch))
+    measured = np.exp(1j * np.radians(-12.0 * f - 20.0 + 195.0 * notch))
+    ref = np.degrees(np.unwrap(np.angle(model)))
+    assert np.max(np.abs(np.degrees(np.unwrap(np.angle(measured))) - ref)) > 300  # the old drawing
+    gap = phase_beside(measured, model) - ref
+    assert np.all(np.abs(gap) <= 180 + 1e-9)
+    np.testing.assert_allclose(gap, np.where(notch, 5.0, -20.0), atol=1e-9)

@@ -143,6 +143,29 @@ def notch_frequencies(f, H, near, rel_window: float = 0.25) -> np.ndarray:
     return np.array(out)
 
 
+def phase_beside(H, reference) -> np.ndarray:
+    """The phase of ``H`` in degrees, unwrapped onto the branch of ``reference``'s.
+
+    Unwrapping a measured and a model response each on its own can leave them a whole turn
+    (360°) apart where noise or a notch makes one jump: the plot then shows a gap that is no
+    error. Here the measured phase is the reference's unwrapped phase plus the wrapped
+    difference, so the two are never more than 180° apart and a real phase error shows as it is.
+
+    Parameters
+    ----------
+    H, reference : array_like of complex, shape (n,)
+        Responses at the same frequencies (e.g. the H1 estimate and the model's θ/v).
+
+    Returns
+    -------
+    numpy.ndarray, shape (n,)
+        ∠H in degrees, with ``|result - unwrap(∠reference)| <= 180``.
+    """
+    H = np.asarray(H, dtype=complex)
+    reference = np.asarray(reference, dtype=complex)
+    return np.degrees(np.unwrap(np.angle(reference)) + np.angle(H / reference))
+
+
 @dataclass(frozen=True)
 class BodeComparison:
     """Measured (H1) and modelled frequency responses of a run, and its antiresonances.
