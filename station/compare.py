@@ -17,7 +17,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 
-from station.analysis.metrics import SETTLE_HOLD_S, StepMetrics
+from station.analysis.metrics import SETTLE_HOLD_S, THESIS_BAND_PCT, StepMetrics, settling_label
 from station.errors import StationError
 from station.logged import LoggedRun
 from station.logged.audit import Audit
@@ -164,13 +164,13 @@ def format_comparison(c: RunComparison) -> str:
     str
         First each claim of the log its data contradicted (``NAME: header: ...; data:
         ...``), then rows rig / thesis experiment / thesis FEM / model with overshoot %,
-        settling time s ("> 2 s" / "not settled" for None) and the model's NRMSE fits.
+        settling (1 %) s ("not settled" for None) and the model's NRMSE fits.
     """
     def fmt(m: StepMetrics | None) -> str:
         if m is None:
-            return f"{'-':>12} {'-':>12}"
+            return f"{'-':>12} {'-':>14}"
         s = "not settled" if m.settling_time_s is None else f"{m.settling_time_s:.3f}"  # within the run
-        return f"{m.overshoot_pct:12.2f} {s:>12}"
+        return f"{m.overshoot_pct:12.2f} {s:>14}"
 
     def pct(x):
         return "-" if x is None else f"{x:.1f}"
@@ -179,7 +179,8 @@ def format_comparison(c: RunComparison) -> str:
     lines = [] if c.audit is None else [f"{Path(c.file).name}: {line}" for line in c.audit.lines()]
     lines += [f"{Path(c.file).name} ({c.source} log): controller {c.controller}"
              + ("" if c.step is None else f", step {c.step:g} counts") + outcome,
-             f"  {'':<20} {'overshoot %':>12} {'settling s':>12} {'fit θ %':>8} {'fit a %':>8}",
+             f"  {'':<20} {'overshoot %':>12} {settling_label(THESIS_BAND_PCT) + ' s':>14} {'fit θ %':>8} "
+             f"{'fit a %':>8}",
              f"  {c.source + ' (this log)':<20} {fmt(c.rig)}"]
     if c.thesis_experiment is not None:
         lines += [f"  {'thesis experiment':<20} {fmt(c.thesis_experiment)}",

@@ -274,9 +274,7 @@ def format_report(report: ReplayReport) -> str:
     if ref.is_step:
         lines.append(f"  reference: step of {ref.amplitude:g} at tick {ref.step_tick}")
     if report.metrics is not None:
-        m = report.metrics
-        settle = "not settled" if m.settling_time_s is None else f"{m.settling_time_s:.3f} s"
-        lines.append(f"  overshoot {m.overshoot_pct:.2f} %   settling time {settle}")
+        lines.append(f"  {report.metrics.summary()}")
     if report.fit_pct is not None:
         f = report.fit_pct
         fmt = lambda x: "n/a" if x is None else f"{x:.1f} %"  # noqa: E731

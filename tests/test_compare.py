@@ -93,3 +93,22 @@ def test_log_without_rows_is_a_station_error(tmp_path, plant):
     RunLogWriter(path, {"controller": make_controller("p").spec}).close()
     with pytest.raises(StationError, match="no rows"):
         compare_run(path, plant)
+
+
+def test_every_printed_settling_time_names_its_band(rig_data, tmp_path, capsys, monkeypatch):
+    # Two settling times (the thesis's 1 % band, step_info's 2 %) must never both be called
+    # plain "settling": every command that prints one names the band (metrics.settling_label).
+    import re
+
+    from station.cli import main
+
+    monkeypatch.chdir(tmp_path)
+    log = str(rig_data / "step_response_Gth_comp_no_accel_FB_amp_100_duration_1000_SLFR_RTP_Motor_Comp_Gth.txt")
+    for argv in (["replay", log], ["compare", log],
+                 ["step", "--port", "sim://", "--duration", "1", "--out", str(tmp_path / "s.tsv")]):
+        main(argv)
+        text = capsys.readouterr().out
+        said = re.findall(r"[^\n]{0,12}settling[^\n]{0,8}", text.replace(str(tmp_path), "").replace("not settled", ""))
+        assert said, (argv, text)
+        unnamed = [s for s in said if not re.search(r"settling \(\d+ %\)|\d+ % settling", s)]
+        assert not unnamed, (argv, unnamed)
