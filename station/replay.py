@@ -278,7 +278,8 @@ def format_report(report: ReplayReport) -> str:
     if report.fit_pct is not None:
         f = report.fit_pct
         fmt = lambda x: "n/a" if x is None else f"{x:.1f} %"  # noqa: E731
-        lines.append(f"  model fit (NRMSE): theta {fmt(f['theta'])}, accel {fmt(f['accel'])}")
+        why = "" if report.audit is None or report.audit.accel_is_tip else " (a is no tip acceleration: the audit)"
+        lines.append(f"  model fit (NRMSE): theta {fmt(f['theta'])}, accel {fmt(f['accel'])}{why}")
     if report.beam_test is not None:
         lines.extend("  " + line for line in format_beam_test(report.beam_test))
     if report.outcome is not None:

@@ -16,7 +16,7 @@ import pytest
 
 from station.compare import compare_run, format_comparison
 from station.logged import LoggedRun
-from station.logged.audit import CLAIMS, SOURCES, VERDICTS, file_name_claims
+from station.logged.audit import ACCEL_CLAIM, ACCEL_DRIFT_COUNTS, CLAIMS, SOURCES, VERDICTS, file_name_claims
 from station.plant import DiscretePlant
 from station.replay import format_report, replay
 from station.survey import format_table, survey
@@ -42,14 +42,17 @@ RIG_LOGS = [
 def test_real_logs_contradict_nothing(rig_data, name):
     run = LoggedRun.from_path(rig_data / name)
     audit = run.audit
-    assert not audit.contradicted, audit.lines()
+    named = name != "without_accel_01_28_14_test_2.txt"
+    # the 2014 log "without accel" has an a column with no accelerometer behind it: its one
+    # contradiction (the rig's README: the accelerometer was not connected)
+    assert [c.header for c in audit.contradicted] == ([] if named else [ACCEL_CLAIM]), audit.lines()
+    assert audit.accel_is_tip is named
     assert run.reproduced
     rows = audit.to_json()
     assert rows[0]["claim"] == "controller" and all(set(r) == {"claim", "header", "data", "verdict", "evidence"}
                                                     for r in rows)
     assert all(r["claim"] in CLAIMS and r["verdict"] in VERDICTS for r in rows)
     assert audit.controller_source in SOURCES
-    named = name != "without_accel_01_28_14_test_2.txt"
     assert rows[0]["verdict"] == ("confirmed" if named else "unchecked")
     stated = file_name_claims(name)
     confirmed = {r["header"] for r in rows if r["verdict"] == "confirmed"}
@@ -176,3 +179,30 @@ def test_a_stated_amplitude_the_data_contradict(rig_data, tmp_path):
 def test_draws_are_deterministic():
     assert draw_case("session", 4) == draw_case("session", 4)
     assert draw_case("lie:p_kp", 0).kp != 2.0
+
+
+@pytest.mark.parametrize("creep", [0.0, 5.0, 15.0, 40.0])
+def test_an_a_column_with_no_accelerometer_behind_it(rig_data, tmp_path, creep):
+    # A rig log whose a is replaced by a noisy channel creeping `creep` counts over the run
+    # (an unplugged input, as in the 2014 log): contradicted from ACCEL_DRIFT_COUNTS on, said
+    # first by replay beside its accel fit; a flat noisy channel decides nothing.
+    src = rig_data / "swept_sine_kp_1_amp_50.txt"  # 22 s, at rest for its first 0.5 s
+    lines = src.read_text().splitlines()
+    head = [x for x in lines if x.startswith("#")]
+    col = head[-1][1:].split("\t").index("a")
+    rows = lines[len(head):]
+    rng = np.random.default_rng(7)
+    out = []
+    for k, line in enumerate(rows):
+        cells = line.split("\t")
+        cells[col] = f"{-66 + creep * k / len(rows) + rng.normal(0, 3):.0f}"
+        out.append("\t".join(cells))
+    path = tmp_path / "swept_sine_unplugged_accel.txt"
+    path.write_text("\n".join(head + out) + "\n")
+    run = LoggedRun.from_path(path)
+    # the drift is the window mean's distance from rest: about creep × (1 - window / run)
+    flagged = creep * (1 - 2.0 / (len(rows) * 0.002)) >= ACCEL_DRIFT_COUNTS
+    assert run.audit.accel_is_tip is not flagged
+    text = format_report(replay(path))
+    assert ("a is no tip acceleration" in text.splitlines()[0]) is flagged
+    assert ("(a is no tip acceleration: the audit)" in text) is flagged

@@ -43,6 +43,19 @@ ENCODER_COUNTS = 1024
 THETA_UNITS = {"radians": 2.0 * math.pi / ENCODER_COUNTS, "degrees": 360.0 / ENCODER_COUNTS}
 """θ columns in another unit than counts, by one encoder count in that unit."""
 
+ACCEL_DRIFT_WINDOW_S = 2.0
+"""Window of :func:`accel_drift`, s."""
+
+ACCEL_DRIFT_COUNTS = 10.0
+"""A log's a column is no tip acceleration when its mean over some :data:`ACCEL_DRIFT_WINDOW_S`
+window moves this far from its rest value, counts. That mean is a_gain times the tip's change
+of speed over the window divided by its length: on the rig's logs at most 2.6 counts (a
+swept sine of 75 counts), and 41 on a 2014 log whose a channel creeps from -66 to -26
+counts with no accelerometer behind it."""
+
+ACCEL_CLAIM = "a: tip acceleration"
+"""What every log's a column claims (the header of its "columns" audit claim)."""
+
 QUANTUM_TOLERANCE = 1e-3
 """How far (in counts) a θ value may sit from a whole count of a unit and still be one
 (values printed to a few decimals)."""
@@ -105,6 +118,12 @@ class Audit:
     def contradicted(self) -> tuple[AuditClaim, ...]:
         """The claims the data contradicted, in order."""
         return tuple(c for c in self.claims if c.verdict == "contradicted")
+
+    @property
+    def accel_is_tip(self) -> bool:
+        """False when the data contradict the a column's claim to be a tip acceleration
+        (:func:`accel_claims`): its fit and its weight in a diagnosis mean nothing."""
+        return not any(c.header == ACCEL_CLAIM for c in self.contradicted)
 
     def lines(self) -> list[str]:
         """One line per contradicted claim, e.g. ``"header: open loop; data: a lead
@@ -258,6 +277,60 @@ def _quantum_fits(x: np.ndarray, quantum: float) -> bool:
 
 def _whole(x: np.ndarray) -> bool:
     return bool(np.all(x == np.round(x)))
+
+
+def accel_drift(a, dt: float, rest: float = 0.0) -> float:
+    """The largest |mean of a - rest| over any :data:`ACCEL_DRIFT_WINDOW_S` window, counts
+    (0.0 for a shorter or non-finite a).
+
+    Parameters
+    ----------
+    a : array_like, shape (N,)
+        Accelerometer samples, counts.
+    dt : float
+        Sample time, s.
+    rest : float
+        The accelerometer's value at rest, counts.
+
+    Returns
+    -------
+    float
+    """
+    w = int(round(ACCEL_DRIFT_WINDOW_S / dt))
+    a = np.asarray(a, float) - rest
+    if a.size < w or w < 1 or not np.all(np.isfinite(a)):
+        return 0.0
+    c = np.concatenate([[0.0], np.cumsum(a)])
+    return float(np.max(np.abs(c[w:] - c[:-w])) / w)
+
+
+def accel_claims(a, dt: float, rest: float) -> list[AuditClaim]:
+    """The a column's claim to be a tip acceleration, checked by its drift (:func:`accel_drift`):
+    a mean that moves :data:`ACCEL_DRIFT_COUNTS` or more from rest over a window contradicts
+    it (no tip acceleration does that); a smaller drift decides nothing, so no claim is listed.
+
+    Parameters
+    ----------
+    a : array_like, shape (N,)
+        The logged a, counts.
+    dt : float
+        Sample time, s.
+    rest : float
+        a at rest before the first command, counts.
+
+    Returns
+    -------
+    list of AuditClaim
+        Empty, or one contradicted "columns" claim with header :data:`ACCEL_CLAIM`.
+    """
+    drift = accel_drift(a, dt, rest)
+    if drift < ACCEL_DRIFT_COUNTS:
+        return []
+    return [AuditClaim("columns", ACCEL_CLAIM, "a is no tip acceleration (its accelerometer is not used)",
+                       "contradicted",
+                       f"a's mean over {ACCEL_DRIFT_WINDOW_S:g} s moves {drift:.0f} counts from rest: no tip "
+                       f"acceleration does that (at most 2.6 counts on the rig's logs; the bound is "
+                       f"{ACCEL_DRIFT_COUNTS:g})")]
 
 
 def time_base(log: RunLog) -> TimeBase:

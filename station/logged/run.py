@@ -11,7 +11,8 @@ from station.analysis.beam import HELD_MIN_V, HubHeld, hub_held
 from station.analysis.metrics import StepMetrics, step_metrics
 from station.control.rerun import AlignmentFit, detect_alignment, is_closed_loop
 from station.errors import StationError
-from station.logged.audit import Audit, TimeBase, alignment_claim, file_kp_claims, reference_claims, time_base
+from station.logged.audit import (Audit, TimeBase, accel_claims, alignment_claim, file_kp_claims, reference_claims,
+                                  time_base)
 from station.logged.controller import ControllerId, describe_controller, identify_controller
 from station.logged.simulate import ModelRun, compared_theta, simulate_log
 from station.logged.reference import Reference, classify_reference
@@ -125,6 +126,8 @@ class LoggedRun:
                 claims.append(row)
         claims += reference_claims(self.log, self.reference)
         claims += self._time_base.claims
+        if len(self):
+            claims += accel_claims(self.data["a"], self.log.dt, self.accel_rest_offset)
         return Audit(tuple(claims), cid.source)
 
     @property

@@ -39,6 +39,8 @@ from station.diagnosis.runs.folds import LEAVE_ONE_OUT, make_folds
 from station.diagnosis.runs.inputs import data_digest, set_aside_beam_tests
 from station.diagnosis.search.workbench import Bench, nominal_trial, workbench
 from station.errors import StationError
+from station.logged.audit import ACCEL_DRIFT_COUNTS, ACCEL_DRIFT_WINDOW_S
+from station.logged.audit import accel_drift as audit_accel_drift
 from station.logged.simulate import simulate_log
 from station.outputs import unique_names
 from station.signals import check_stop
@@ -52,16 +54,6 @@ MAX_SAMPLES = 20_000
 """Default bound of the samples of all runs together (40 s of the rig's data). The rig's
 folder (ten usable runs, 66 000 samples) then uses the first 3000 samples (6 s) of its five
 long runs."""
-
-ACCEL_DRIFT_WINDOW_S = 2.0
-"""Window of :func:`accel_drift`, s."""
-
-ACCEL_DRIFT_COUNTS = 10.0
-"""A run's accelerometer is not used when a's mean over some :data:`ACCEL_DRIFT_WINDOW_S`
-window moves this far from its rest value, counts. That mean is a_gain times the tip's change
-of speed over the window divided by its length: on the rig's logs at most 2.6 counts (a
-swept sine of 75 counts), and 41 on a 2014 log whose a channel creeps from -66 to -26
-counts with no accelerometer behind it."""
 
 IGNORED_SIGMA = 1e6
 """σ_a (counts) of a run whose accelerometer is not used: its a error weighs nothing."""
@@ -146,19 +138,19 @@ def model_file_names(sessions: Sequence[SessionLogs]) -> list[str]:
 
 
 def accel_drift(case: RunCase) -> float:
-    """The largest |mean of a| over any :data:`ACCEL_DRIFT_WINDOW_S` window of a run (its rest
-    offset removed), counts; 0 for a shorter run.
+    """The largest |mean of a| over any :data:`station.logged.audit.ACCEL_DRIFT_WINDOW_S`
+    window of a run (its rest offset removed), counts; 0 for a shorter run
+    (:func:`station.logged.audit.accel_drift`, the audit's one definition).
 
     Parameters
     ----------
     case : RunCase
+
+    Returns
+    -------
+    float
     """
-    w = int(round(ACCEL_DRIFT_WINDOW_S / case.log.dt))
-    a = np.asarray(case.a, float)
-    if a.size < w or w < 1 or not np.all(np.isfinite(a)):
-        return 0.0
-    c = np.concatenate([[0.0], np.cumsum(a)])
-    return float(np.max(np.abs(c[w:] - c[:-w])) / w)
+    return audit_accel_drift(case.a, case.log.dt)
 
 
 def cut_lengths(lengths: Sequence[int], max_samples: int) -> list[int]:
