@@ -19,6 +19,7 @@ import numpy as np
 
 from station.analysis.frequency import phase_beside
 from station.errors import StationError
+from station.logged.reference import classify_reference
 from station.outputs import Transaction
 from station.runlog import read_log
 
@@ -102,7 +103,28 @@ def outcome_text(log) -> str:
     return "completed" if o.get("reason") == "completed" else f"stopped: {o.get('reason')}"
 
 
-def plot_runs(logs: Sequence, title: str | None = None, titles: Sequence[str] | None = None):
+ALIGN = ("time", "step")
+"""How :func:`plot_runs` lines logs up on t: as logged, or each log's step at t = 0."""
+
+
+def step_offset(log) -> float:
+    """The t of a log's step (:func:`station.logged.reference.classify_reference`), s; 0.0
+    when its u is not a step (nothing to line up on).
+
+    Parameters
+    ----------
+    log : station.runlog.RunLog
+
+    Returns
+    -------
+    float
+    """
+    ref = classify_reference(log.data["u"])
+    return float(log.data["t"][ref.step_tick]) if ref.is_step else 0.0
+
+
+def plot_runs(logs: Sequence, title: str | None = None, titles: Sequence[str] | None = None,
+              align: str = "time"):
     """Figure of one or several run logs overlaid.
 
     Parameters
@@ -113,22 +135,32 @@ def plot_runs(logs: Sequence, title: str | None = None, titles: Sequence[str] | 
         Figure title (default: the file names with their source and outcome).
     titles : sequence of str, optional
         Legend label per log (default: file name and source).
+    align : {"time", "step"}
+        "time": t as logged; "step": each log's t shifted so its step is at t = 0
+        (:func:`step_offset`; the rig's logs step at 0.1 s, ``station step`` at 0.02 s).
 
     Returns
     -------
     matplotlib.figure.Figure
         Three panels sharing t (s): θ with u dashed; v with v_applied dotted; a.
         Columns a log lacks (all NaN) are left out.
+
+    Raises
+    ------
+    StationError
+        No log, or an ``align`` not in :data:`ALIGN`.
     """
     if not logs:
         raise StationError("nothing to plot: no run log given")
+    if align not in ALIGN:
+        raise StationError(f"align {align!r}: expected one of {', '.join(ALIGN)}")
     fig = new_figure()
     ax_theta, ax_v, ax_a = fig.subplots(3, 1, sharex=True)
     for i, log in enumerate(logs):
         d = log.data
         label = titles[i] if titles is not None else f"{log.path.name} ({source_label(log)})"
         color = f"C{i % 10}"
-        t = d["t"]
+        t = d["t"] - (step_offset(log) if align == "step" else 0.0)
         ax_theta.plot(t, d["theta"], color=color, lw=1.0, label=f"θ {label}")
         if np.isfinite(d["u"]).any():
             ax_theta.plot(t, d["u"], color=color, lw=0.8, ls="--", label=f"u {label}" if len(logs) == 1 else None)
@@ -175,7 +207,7 @@ def run_title(log, metrics_text: str = "") -> str:
     return " - ".join(parts)
 
 
-def plot_log_files(paths: Sequence[str | Path], out: str | Path, transaction=None) -> Path:
+def plot_log_files(paths: Sequence[str | Path], out: str | Path, transaction=None, align: str = "time") -> Path:
     """Read ``paths`` and write their overlay to ``out`` (``station plot``).
 
     Parameters
@@ -186,6 +218,8 @@ def plot_log_files(paths: Sequence[str | Path], out: str | Path, transaction=Non
         The PNG to write.
     transaction : station.outputs.Transaction, optional
         Write through it (see :func:`save_figure`).
+    align : {"time", "step"}
+        As :func:`plot_runs`.
 
     Returns
     -------
@@ -198,7 +232,7 @@ def plot_log_files(paths: Sequence[str | Path], out: str | Path, transaction=Non
         An unreadable log (the reader's one-line error) or an unwritable ``out``.
     """
     logs = [read_log(p) for p in paths]
-    return save_figure(plot_runs(logs), out, transaction=transaction)
+    return save_figure(plot_runs(logs, align=align), out, transaction=transaction)
 
 
 # --- model comparisons: station compare, station bode, station diagnose --------------------

@@ -59,6 +59,26 @@ def test_plot_overlays_the_rigs_three_thesis_step_logs(rig_data, tmp_path, capsy
     assert "3 run logs overlaid (rig)" in fig._suptitle.get_text()
 
 
+def test_plot_align_step_puts_every_step_at_t_0(rig_data, tmp_path, capsys):
+    # a rig log (step at 0.1 s) beside our own (station step's default 0.02 s): as logged
+    # their steps are 80 ms apart; --align step lines both up at t = 0
+    from station.plots import plot_runs
+
+    ours = tmp_path / "ours.tsv"
+    assert main(["step", "--port", "sim://", "--duration", "1", "--out", str(ours)]) == 0
+    logs = [read_log(rig_data / THESIS_STEPS[0]), read_log(ours)]
+    for align, expected in (("time", {0.1, 0.02}), ("step", {0.0})):
+        fig = plot_runs(logs, align=align)
+        refs = [ln for ln in fig.axes[0].get_lines() if ln.get_label().startswith("u ")] or \
+            [ln for ln in fig.axes[0].get_lines() if ln.get_linestyle() == "--"]
+        assert len(refs) == 2
+        first = {round(float(ln.get_xdata()[np.flatnonzero(ln.get_ydata())[0]]), 6) for ln in refs}
+        assert first == expected, (align, first)
+    out = tmp_path / "aligned.png"
+    assert main(["plot", str(rig_data / THESIS_STEPS[0]), str(ours), "--align", "step", "--out", str(out)]) == 0
+    assert out.read_bytes()[:8] == PNG_MAGIC
+
+
 def test_plot_refuses_a_bad_log_in_one_line(tmp_path, capsys):
     bad = tmp_path / "bad.tsv"
     bad.write_text("")

@@ -18,11 +18,14 @@ def configure(parser: argparse.ArgumentParser) -> None:
     Parameters
     ----------
     parser : argparse.ArgumentParser
-        Gets LOG..., ``--out`` and ``--force``.
+        Gets LOG..., ``--out``, ``--align`` and ``--force``.
     """
     parser.add_argument("files", type=Path, nargs="+", metavar="LOG", help="run logs (station or rig format)")
     parser.add_argument("--out", type=Path, default=None, metavar="PNG",
                         help="figure file (default: the first log's stem + .png in the current folder)")
+    parser.add_argument("--align", choices=("time", "step"), default="time",
+                        help="line the logs up on t as logged (time, the default) or with each log's step "
+                             "at t = 0 (step: the rig's logs step at 0.1 s, station step at 0.02 s)")
     add_force_option(parser)
 
 
@@ -32,7 +35,7 @@ def run(args: argparse.Namespace) -> int:
     Parameters
     ----------
     args : argparse.Namespace
-        The logs (``files``), ``--out`` and ``--force``.
+        The logs (``files``), ``--out``, ``--align`` and ``--force``.
 
     Raises
     ------
@@ -44,5 +47,5 @@ def run(args: argparse.Namespace) -> int:
 
     out = args.out if args.out is not None else Path(args.files[0].stem + ".png")
     check_outputs([Output("--out", out)], [Input("LOG", f) for f in args.files], force=args.force)
-    print(f"figure: {plot_log_files(args.files, out)}")
+    print(f"figure: {plot_log_files(args.files, out, align=args.align)}")
     return 0

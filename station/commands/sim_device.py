@@ -13,7 +13,7 @@ from station.errors import StationError
 
 NAME = "sim-device"
 HELP = ("run the simulated rig on a pseudo-terminal: prints the pty path, serves until SIGTERM/SIGINT, "
-        "then prints a JSON summary of the device's counters")
+        "then prints a JSON summary of the device's counters (those of its last run: every START resets them)")
 
 
 def configure(parser: argparse.ArgumentParser) -> None:
