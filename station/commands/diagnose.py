@@ -140,6 +140,49 @@ def _short(text: str, width: int = 240) -> str:
     return text if len(text) <= width else text[:width - 1] + "…"
 
 
+CANDIDATE_COLUMNS = ("effect", "value (alone)", "unit", "θ gain (alone)", "cost gain (alone)", "value (extended)",
+                     "95 % interval (extended)", "accepted")
+"""The candidates table's columns, as the HTML report's: "alone" is the nominal model plus this
+effect only (fitted on the fit runs, its gains judged on held-out data); "extended" is its value
+fitted jointly with the other accepted effects and that value's 95 % interval (accepted effects
+only)."""
+
+
+def _num(x: float, unit: str) -> str:
+    return "inf" if not math.isfinite(x) else (f"{x:.0f}" if unit == "samples" else f"{x:.4g}")
+
+
+def candidate_rows(diag) -> list[str]:
+    """The candidates table ``station diagnose`` and ``station identify`` print: a header of
+    :data:`CANDIDATE_COLUMNS`, then one line per effect, every cell read from its
+    :class:`~station.diagnosis.answer.result.EffectResult` (the alone fit's value and gains
+    beside the extended model's value and interval, never one as the other).
+
+    Parameters
+    ----------
+    diag : Diagnosis
+        Its ``effects``.
+
+    Returns
+    -------
+    list of str
+        The header and the rows, aligned.
+    """
+    w = (18, 13, 15, 14, 17, 16)
+    c = CANDIDATE_COLUMNS
+    rows = [f"{c[0]:<{w[0]}} {c[1]:>{w[1]}} {c[2]:<{w[2]}} {c[3]:>{w[3]}} {c[4]:>{w[4]}} {c[5]:>{w[5]}}  "
+            f"{c[6]}  {c[7]}"]
+    for e in diag.effects:
+        alone = e.value_alone if e.accepted and math.isfinite(e.value_alone) else e.value
+        ext = _num(e.value, e.unit) if e.accepted else "-"
+        iv = "-" if e.interval is None else f"{_num(e.interval.lo, e.unit)} .. {_num(e.interval.hi, e.unit)}"
+        end = "  (at the end of its search range)" if e.at_range_end else ""
+        rows.append(f"{e.name:<{w[0]}} {_num(alone, e.unit):>{w[1]}} {e.unit:<{w[2]}} {e.gain_pct:>{w[3] - 2}.1f} % "
+                    f"{e.cost_gain_pct:>{w[4] - 2}.1f} % {ext:>{w[5]}}  {iv:<{len(c[6])}}  "
+                    f"{'yes' if e.accepted else 'no'}{end}".rstrip())
+    return rows
+
+
 def format_diagnosis(diag) -> str:
     """What ``station diagnose`` prints: the cause, the gain, what is still unexplained, the
     alternatives, the candidates table (with the accepted effects' 95 % intervals) and the runs.
@@ -150,8 +193,6 @@ def format_diagnosis(diag) -> str:
         What :func:`station.diagnosis.diagnose` returned.
     """
     pct = lambda x: "n/a" if x is None else f"{x:.1f} %"  # noqa: E731
-    def num(x: float, unit: str) -> str:
-        return "inf" if not math.isfinite(x) else (f"{x:.0f}" if unit == "samples" else f"{x:.4g}")
 
     u = diag.unexplained
     lines = [f"model: {diag.nominal_model.name}; judged by {diag.validation}",
@@ -164,13 +205,7 @@ def format_diagnosis(diag) -> str:
         lines.append("alternatives: " + ("none" if not diag.alternatives else "; ".join(
             f"{' + '.join(a.causes)} (cost ratio {a.cost_ratio:.3f}, θ gain {a.gain_pct:.1f} %)"
             for a in diag.alternatives)))
-    lines.append(f"{'effect':<18} {'value':>12} {'unit':<15} {'θ gain':>8} {'cost gain':>9}  accepted  95 % interval")
-    for e in diag.effects:
-        iv = "" if e.interval is None else f"  {num(e.interval.lo, e.unit)} .. {num(e.interval.hi, e.unit)}"
-        end = "  (at the end of its search range)" if e.at_range_end else ""
-        lines.append(f"{e.name:<18} {num(e.value, e.unit):>12} {e.unit:<15} {e.gain_pct:>7.1f}% "
-                     f"{e.cost_gain_pct:>8.1f}%  "
-                     f"{'yes' if e.accepted else '   '}{iv}{end}".rstrip())
+    lines += candidate_rows(diag)
     for r in diag.runs:
         m = r.metrics
         ov = "" if m is None else ("   overshoot rig/nominal/extended " +
