@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import argparse
 import math
+import re
 import sys
 from pathlib import Path
 
@@ -136,8 +137,32 @@ def _json_safe(x):
     return x
 
 
-def _short(text: str, width: int = 240) -> str:
-    return text if len(text) <= width else text[:width - 1] + "…"
+SENTENCE_END = re.compile(r"(?<=[.!?])\s+(?=\S)")
+"""Where a sentence ends inside a text: after its full stop, before the next sentence."""
+
+
+def whole_sentences(text: str, width: int = 240) -> str:
+    """``text``, or as many of its first sentences as fit in ``width`` characters, never cut
+    inside one (the first is kept whole however long); " (…)" says that more followed.
+
+    Parameters
+    ----------
+    text : str
+        Prose: sentences ending in ".", "!" or "?".
+    width : int
+        Characters to aim for.
+
+    Returns
+    -------
+    str
+        A prefix of ``text`` ending at a sentence end (plus " (…)"), or ``text`` itself.
+    """
+    if len(text) <= width:
+        return text
+    ends = [m.start() for m in SENTENCE_END.finditer(text)]
+    fit = [e for e in ends if e <= width]
+    cut = fit[-1] if fit else (ends[0] if ends else len(text))
+    return text if cut >= len(text) else text[:cut] + " (…)"
 
 
 CANDIDATE_COLUMNS = ("effect", "value (alone)", "unit", "θ gain (alone)", "cost gain (alone)", "value (extended)",
@@ -200,7 +225,7 @@ def format_diagnosis(diag) -> str:
              f"θ fit {pct(diag.baseline_fit.get('theta'))} -> {pct(diag.extended_fit.get('theta'))}, "
              f"a fit {pct(diag.baseline_fit.get('accel'))} -> {pct(diag.extended_fit.get('accel'))}, "
              f"θ RMS gain {diag.gain_pct:.1f} %",
-             "unexplained: " + ("no" if u is None or not u.flag else "yes - " + _short(u.evidence))]
+             "unexplained: " + ("no" if u is None or not u.flag else "yes - " + whole_sentences(u.evidence))]
     if diag.causes:
         lines.append("alternatives: " + ("none" if not diag.alternatives else "; ".join(
             f"{' + '.join(a.causes)} (cost ratio {a.cost_ratio:.3f}, θ gain {a.gain_pct:.1f} %)"
