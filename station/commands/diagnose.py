@@ -23,16 +23,17 @@ HELP = ("diagnose the model on measured runs: residual tests, the missing effect
 MAX_SAMPLES = 100_000
 """Default ``--max-samples``: samples of all runs together (200 s of the rig's data at 500 Hz;
 four runs of 25 000 samples: about 1.5 min of computing here, more on a busy machine)."""
-SIMULATIONS_PER_FIT_RUN = 1000
-"""Simulations of one run per fold it is fitted in, about (the rig's four thesis logs with
-leave-one-run-out: 12 060 simulations = 1005 x 4 folds x 3 fit runs; two generated runs of
-20 000 samples: 2464 = 1232 x 2 folds x 1 fit run; scripts/bench_diagnose.py)."""
+SIMULATIONS_PER_FOLD_RUN = 1430
+"""Simulations of the whole vocabulary's diagnosis per run simulated in each fold (every
+evaluation simulates a fold's fit and validation runs): leave-one-run-out on n runs costs about
+this × n × n. Counted here on the rig's thesis logs: 2 runs 5676 (1419 × 4), 3 runs 12 934
+(1437 × 9), 4 runs 22 886 (1430 × 16); the count hardly depends on the runs' length."""
 SECONDS_PER_SIMULATION = 0.8e-3
 """CPU time of a simulation besides its samples (building the model with its effects), s."""
 SECONDS_PER_SAMPLE = 0.25e-6
 """CPU time of one sample of one simulation, s. Both measured here (2 cores, load 4-7):
 the rig's four thesis logs of 1000 samples, 12 060 simulations in 11.9 CPU s; two runs of
-20 000 samples, 2464 simulations in 12.7 CPU s."""
+20 000 samples, 2464 simulations in 12.7 CPU s; again (load 5): 22 886 in 24.5 s, 5676 in 5.5 s."""
 
 
 def configure(parser: argparse.ArgumentParser) -> None:
@@ -114,10 +115,8 @@ def plan(runs, validate, max_samples: int) -> str:
     counts = {p: count_samples(p) for p in list(runs) + list(validate)}
     total = sum(counts.values())
     folds = 1 if validate else len(runs)
-    fit_runs_per_fold = len(runs) if validate else max(1, len(runs) - 1)
-    fitted = sum(counts[p] for p in runs) * fit_runs_per_fold / max(1, len(runs))
-    simulations = SIMULATIONS_PER_FIT_RUN * folds * fit_runs_per_fold
-    seconds = simulations * SECONDS_PER_SIMULATION + SIMULATIONS_PER_FIT_RUN * folds * fitted * SECONDS_PER_SAMPLE
+    simulations = SIMULATIONS_PER_FOLD_RUN * folds * len(counts)  # each fold simulates all its runs
+    seconds = simulations * (SECONDS_PER_SIMULATION + total / max(1, len(counts)) * SECONDS_PER_SAMPLE)
     if total > max_samples:
         longest = max(counts, key=counts.get)
         raise StationError(f"--max-samples {max_samples}: {longest} holds about {counts[longest]} samples "
@@ -181,7 +180,9 @@ def candidate_rows(diag) -> list[str]:
     """The candidates table ``station diagnose`` and ``station identify`` print: a header of
     :data:`CANDIDATE_COLUMNS`, then one line per effect, every cell read from its
     :class:`~station.diagnosis.answer.result.EffectResult` (the alone fit's value and gains
-    beside the extended model's value and interval, never one as the other).
+    beside the extended model's value and interval, never one as the other); an effect that an
+    accepted one holds (a breakaway's sliding level) shows its value in the extended model and
+    "held" (the identified model lists it).
 
     Parameters
     ----------
@@ -197,14 +198,18 @@ def candidate_rows(diag) -> list[str]:
     c = CANDIDATE_COLUMNS
     rows = [f"{c[0]:<{w[0]}} {c[1]:>{w[1]}} {c[2]:<{w[2]}} {c[3]:>{w[3]}} {c[4]:>{w[4]}} {c[5]:>{w[5]}}  "
             f"{c[6]}  {c[7]}"]
+    held = diag.extended_model.effect_dict() if diag.extended_model is not None else {}
     for e in diag.effects:
         alone = e.value_alone if e.accepted and math.isfinite(e.value_alone) else e.value
-        ext = _num(e.value, e.unit) if e.accepted else "-"
-        iv = "-" if e.interval is None else f"{_num(e.interval.lo, e.unit)} .. {_num(e.interval.hi, e.unit)}"
+        # an effect an accepted one holds (a breakaway's sliding level) is in the model at its value there
+        ext = _num(e.value, e.unit) if e.accepted else _num(held[e.name], e.unit) if e.name in held else "-"
+        mark = "yes" if e.accepted else "held" if e.name in held else "no"
+        # an interval's ends as found, also in samples (rounded, 0.6 .. 1.4 would read 1 .. 1: narrow)
+        iv = "-" if e.interval is None else f"{_num(e.interval.lo, '')} .. {_num(e.interval.hi, '')}"
         end = "  (at the end of its search range)" if e.at_range_end else ""
         rows.append(f"{e.name:<{w[0]}} {_num(alone, e.unit):>{w[1]}} {e.unit:<{w[2]}} {e.gain_pct:>{w[3] - 2}.1f} % "
                     f"{e.cost_gain_pct:>{w[4] - 2}.1f} % {ext:>{w[5]}}  {iv:<{len(c[6])}}  "
-                    f"{'yes' if e.accepted else 'no'}{end}".rstrip())
+                    f"{mark}{end}".rstrip())
     return rows
 
 
