@@ -15,7 +15,10 @@ import pytest
 from station.diagnosis.runs.cases import load_case
 from station.diagnosis.runs.cost import Evaluator, calibrate_noise
 from station.diagnosis.honesty.doubt import profile_interval
-from station.diagnosis.identify.loop import Preference, _kept_view, prefer
+from station.diagnosis.answer.result import Diagnosis, EffectResult
+from station.diagnosis.honesty.doubt import Interval
+from station.diagnosis.identify.loop import Preference, kept_diagnosis, prefer
+from station.plant.effects import EFFECTS
 from station.diagnosis.honesty.rivals import explanation, rivals
 from station.diagnosis.search.selection import effect_axes, refit_explanation
 from station.plant.model import as_model
@@ -99,7 +102,7 @@ def test_prefer_judges_breakaway_friction_with_its_sliding_level(blind):
     assert pref.old_cost < 5.0, pref.note  # noise-normalised: near the floor, not hundreds
     assert pref.values["coulomb_friction"] == pytest.approx(5.0, rel=0.25) and \
         pref.values["static_friction"] == pytest.approx(12.0, rel=0.25), pref.values
-    for name, (lo, hi) in pref.intervals.items():  # on all the runs, around the refit: the next design's rivals
+    for name, (lo, hi, *_) in pref.intervals.items():  # on all the runs, around the refit: the next design's rivals
         assert lo <= pref.values[name] <= hi and hi - lo < 0.5 * abs(pref.values[name]), (name, lo, hi)
     assert set(pref.intervals) == set(causes)
     swapped = prefer(new, old, blind.paths, NOMINAL)  # the breakaway is the re-diagnosis: judged whole
@@ -114,18 +117,27 @@ def test_a_profile_of_the_breakaway_level_keeps_it_above_the_sliding_level(blind
     assert iv.lo < blind.hidden["coulomb_friction"] and values["static_friction"] <= iv.hi, iv
 
 
+def _record(values, causes):
+    """A typed diagnosis record of ``causes`` (what :func:`kept_diagnosis` rebuilds)."""
+    effects = [EffectResult(n, values[n], EFFECTS[n].unit, 10.0, 20.0, True, "", [], values[n]) for n in causes]
+    return Diagnosis(causes[0], list(causes), {}, {}, 30.0, effects, NOMINAL.with_effects(values), NOMINAL, [],
+                     "leave-one-run-out")
+
+
 def test_a_kept_explanation_is_what_the_next_design_separates():
     """After a re-diagnosis is set aside, the rivals are the kept explanation's on all the runs:
     its refitted values with the sliding level, its intervals there, and the set-aside one only
     when the kept one does not pay over it as selection's acceptance demands."""
-    old = _diag({"coulomb_friction": 9.0, "amp_offset": -2.0}, ["coulomb_friction", "amp_offset"])
+    old = _record({"static_friction": 11.0, "coulomb_friction": 6.0, "amp_offset": -2.0},
+                  ["static_friction", "amp_offset"])
     new = _diag({**BREAKAWAY, "viscous_friction": 1.0}, ["static_friction", "viscous_friction"])
+    new.gain_pct = 25.0
     values = {**BREAKAWAY, "amp_offset": -3.0}
-    pref = Preference(True, values, 1.2, 70.0, "", {"static_friction": (11.5, 12.5), "amp_offset": (-3.5, -2.5)})
+    pref = Preference(True, values, 1.2, 70.0, "", {"static_friction": Interval(11.5, 12.5, False, False),
+                                                    "amp_offset": Interval(-3.5, -2.5, False, False)})
     model = NOMINAL.with_effects(values)
-    old.causes, old.effects = ["static_friction", "amp_offset"], []
-    rv = rivals(_kept_view(old, new, pref, model))
+    rv = rivals(kept_diagnosis(old, new, pref, model, 5))
     assert rv.chosen == {"static_friction": 12.0, "amp_offset": -3.0, "coulomb_friction": 5.0}
     assert [r.kind for r in rv.rivals] == ["interval", "interval"]  # amp_offset's is wide; the other apart
-    close = rivals(_kept_view(old, new, pref._replace(new_cost=1.21), model))
+    close = rivals(kept_diagnosis(old, new, pref._replace(new_cost=1.21), model, 5))
     assert [r.effects for r in close.rivals if r.kind == "alternative"] == [{**BREAKAWAY, "viscous_friction": 1.0}]

@@ -13,6 +13,7 @@ import math
 import pytest
 
 from station.cli import main
+from station.plant.model import builtin_models
 from station.diagnosis.sessions.drift import PerSession, key
 from station.diagnosis.sessions.diagnose import (
     ACCEL_DRIFT_COUNTS,
@@ -58,8 +59,30 @@ def test_sessions_are_folders_or_our_header_session(tmp_path):
     _station_log(tmp_path / "c" / "ours.tsv", {"session": "bench-3", "dt": 0.002})
     _station_log(tmp_path / "a" / "2009" / "also.tsv", {"session": "bench-3"})
     groups = {s.name: sorted(p.name for p in s.paths) for s in group_sessions(sorted(tmp_path.rglob("*.t*")))}
-    assert groups == {"bench-3": ["also.tsv", "ours.tsv"], "c": ["z.txt"],
-                      str(tmp_path / "a" / "2009"): ["x.txt"], str(tmp_path / "b" / "2009"): ["y.txt"]}
+    assert groups == {"bench-3": ["also.tsv", "ours.tsv"], "c": ["z.txt"], "a/2009": ["x.txt"], "b/2009": ["y.txt"]}
+
+
+@pytest.mark.parametrize("folder, header, name, file", [
+    ("rig", None, "rig-session", "rig-session.toml"),            # the 2013-14 logs' folder: not the built-in
+    ("x", "tmm-fit", "tmm-fit-session", "tmm-fit-session.toml"),
+    ("x", "RIG-2009", "RIG-2009-session", "RIG-2009-session.toml"),
+    ("x", "..rig", "..rig", "rig-session.toml"),                 # its file stem would be the built-in's
+    ("x", "s" * 5000, "s" * 60, "s" * 60 + ".toml"),            # a header's long name: cut before any work
+    ("x", "bench\x00\n 3\t", "bench 3", "bench_3.toml"),
+    ("x", "rig2", "rig2", "rig2.toml"),
+])
+def test_session_names_are_short_and_not_a_built_in_models(tmp_path, folder, header, name, file):
+    path = tmp_path / folder / "run.tsv"
+    path.parent.mkdir(parents=True)
+    if header is None:
+        path.write_text("t\tv\ttheta\ta\n")
+    else:
+        _station_log(path, {"session": header, "dt": 0.002})
+    sessions = group_sessions([path])
+    assert [s.name for s in sessions] == [name]
+    assert model_file_names(sessions) == [file]
+    for n in [name, file]:
+        assert n.lower().removesuffix(".toml") not in builtin_models()
 
 
 def test_model_files_are_safe_unique_names(tmp_path):

@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import argparse
 import math
+import re
 import sys
 from pathlib import Path
 
@@ -22,16 +23,17 @@ HELP = ("diagnose the model on measured runs: residual tests, the missing effect
 MAX_SAMPLES = 100_000
 """Default ``--max-samples``: samples of all runs together (200 s of the rig's data at 500 Hz;
 four runs of 25 000 samples: about 1.5 min of computing here, more on a busy machine)."""
-SIMULATIONS_PER_FIT_RUN = 1000
-"""Simulations of one run per fold it is fitted in, about (the rig's four thesis logs with
-leave-one-run-out: 12 060 simulations = 1005 x 4 folds x 3 fit runs; two generated runs of
-20 000 samples: 2464 = 1232 x 2 folds x 1 fit run; scripts/bench_diagnose.py)."""
+SIMULATIONS_PER_FOLD_RUN = 1430
+"""Simulations of the whole vocabulary's diagnosis per run simulated in each fold (every
+evaluation simulates a fold's fit and validation runs): leave-one-run-out on n runs costs about
+this × n × n. Counted here on the rig's thesis logs: 2 runs 5676 (1419 × 4), 3 runs 12 934
+(1437 × 9), 4 runs 22 886 (1430 × 16); the count hardly depends on the runs' length."""
 SECONDS_PER_SIMULATION = 0.8e-3
 """CPU time of a simulation besides its samples (building the model with its effects), s."""
 SECONDS_PER_SAMPLE = 0.25e-6
 """CPU time of one sample of one simulation, s. Both measured here (2 cores, load 4-7):
 the rig's four thesis logs of 1000 samples, 12 060 simulations in 11.9 CPU s; two runs of
-20 000 samples, 2464 simulations in 12.7 CPU s."""
+20 000 samples, 2464 simulations in 12.7 CPU s; again (load 5): 22 886 in 24.5 s, 5676 in 5.5 s."""
 
 
 def configure(parser: argparse.ArgumentParser) -> None:
@@ -113,10 +115,8 @@ def plan(runs, validate, max_samples: int) -> str:
     counts = {p: count_samples(p) for p in list(runs) + list(validate)}
     total = sum(counts.values())
     folds = 1 if validate else len(runs)
-    fit_runs_per_fold = len(runs) if validate else max(1, len(runs) - 1)
-    fitted = sum(counts[p] for p in runs) * fit_runs_per_fold / max(1, len(runs))
-    simulations = SIMULATIONS_PER_FIT_RUN * folds * fit_runs_per_fold
-    seconds = simulations * SECONDS_PER_SIMULATION + SIMULATIONS_PER_FIT_RUN * folds * fitted * SECONDS_PER_SAMPLE
+    simulations = SIMULATIONS_PER_FOLD_RUN * folds * len(counts)  # each fold simulates all its runs
+    seconds = simulations * (SECONDS_PER_SIMULATION + total / max(1, len(counts)) * SECONDS_PER_SAMPLE)
     if total > max_samples:
         longest = max(counts, key=counts.get)
         raise StationError(f"--max-samples {max_samples}: {longest} holds about {counts[longest]} samples "
@@ -136,8 +136,81 @@ def _json_safe(x):
     return x
 
 
-def _short(text: str, width: int = 240) -> str:
-    return text if len(text) <= width else text[:width - 1] + "…"
+SENTENCE_END = re.compile(r"(?<=[.!?])\s+(?=\S)")
+"""Where a sentence ends inside a text: after its full stop, before the next sentence."""
+
+
+def whole_sentences(text: str, width: int = 240) -> str:
+    """``text``, or as many of its first sentences as fit in ``width`` characters, never cut
+    inside one (the first is kept whole however long); " (…)" says that more followed.
+
+    Parameters
+    ----------
+    text : str
+        Prose: sentences ending in ".", "!" or "?".
+    width : int
+        Characters to aim for.
+
+    Returns
+    -------
+    str
+        A prefix of ``text`` ending at a sentence end (plus " (…)"), or ``text`` itself.
+    """
+    if len(text) <= width:
+        return text
+    ends = [m.start() for m in SENTENCE_END.finditer(text)]
+    fit = [e for e in ends if e <= width]
+    cut = fit[-1] if fit else (ends[0] if ends else len(text))
+    return text if cut >= len(text) else text[:cut] + " (…)"
+
+
+CANDIDATE_COLUMNS = ("effect", "value (alone)", "unit", "θ gain (alone)", "cost gain (alone)", "value (extended)",
+                     "95 % interval (extended)", "accepted")
+"""The candidates table's columns, as the HTML report's: "alone" is the nominal model plus this
+effect only (fitted on the fit runs, its gains judged on held-out data); "extended" is its value
+fitted jointly with the other accepted effects and that value's 95 % interval (accepted effects
+only)."""
+
+
+def _num(x: float, unit: str) -> str:
+    return "inf" if not math.isfinite(x) else (f"{x:.0f}" if unit == "samples" else f"{x:.4g}")
+
+
+def candidate_rows(diag) -> list[str]:
+    """The candidates table ``station diagnose`` and ``station identify`` print: a header of
+    :data:`CANDIDATE_COLUMNS`, then one line per effect, every cell read from its
+    :class:`~station.diagnosis.answer.result.EffectResult` (the alone fit's value and gains
+    beside the extended model's value and interval, never one as the other); an effect that an
+    accepted one holds (a breakaway's sliding level) shows its value in the extended model and
+    "held" (the identified model lists it).
+
+    Parameters
+    ----------
+    diag : Diagnosis
+        Its ``effects``.
+
+    Returns
+    -------
+    list of str
+        The header and the rows, aligned.
+    """
+    w = (18, 13, 15, 14, 17, 16)
+    c = CANDIDATE_COLUMNS
+    rows = [f"{c[0]:<{w[0]}} {c[1]:>{w[1]}} {c[2]:<{w[2]}} {c[3]:>{w[3]}} {c[4]:>{w[4]}} {c[5]:>{w[5]}}  "
+            f"{c[6]}  {c[7]}"]
+    held = diag.extended_model.effect_dict() if diag.extended_model is not None else {}
+    for e in diag.effects:
+        alone = e.value_alone if e.accepted and math.isfinite(e.value_alone) else e.value
+        # an effect an accepted one holds (a breakaway's sliding level) is in the model at its value there
+        ext = _num(e.value, e.unit) if e.accepted else _num(held[e.name], e.unit) if e.name in held else "-"
+        mark = "yes" if e.accepted else "held" if e.name in held else "no"
+        # an interval's ends as found, also in samples (rounded, 0.6 .. 1.4 would read 1 .. 1: narrow)
+        iv = "-" if e.interval is None else f"{_num(e.interval.lo, '')} .. {_num(e.interval.hi, '')}"
+        end = "  (at the end of its search range)" if e.at_range_end else ""
+        rows.append(f"{e.name:<{w[0]}} {_num(alone, e.unit):>{w[1]}} {e.unit:<{w[2]}} {e.gain_pct:>{w[3] - 2}.1f} % "
+                    f"{e.cost_gain_pct:>{w[4] - 2}.1f} % {ext:>{w[5]}}  {iv:<{len(c[6])}}  "
+                    f"{mark}{end}".rstrip())
+    return rows
 
 
 def format_diagnosis(diag) -> str:
@@ -150,8 +223,6 @@ def format_diagnosis(diag) -> str:
         What :func:`station.diagnosis.diagnose` returned.
     """
     pct = lambda x: "n/a" if x is None else f"{x:.1f} %"  # noqa: E731
-    def num(x: float, unit: str) -> str:
-        return "inf" if not math.isfinite(x) else (f"{x:.0f}" if unit == "samples" else f"{x:.4g}")
 
     u = diag.unexplained
     lines = [f"model: {diag.nominal_model.name}; judged by {diag.validation}",
@@ -159,18 +230,12 @@ def format_diagnosis(diag) -> str:
              f"θ fit {pct(diag.baseline_fit.get('theta'))} -> {pct(diag.extended_fit.get('theta'))}, "
              f"a fit {pct(diag.baseline_fit.get('accel'))} -> {pct(diag.extended_fit.get('accel'))}, "
              f"θ RMS gain {diag.gain_pct:.1f} %",
-             "unexplained: " + ("no" if u is None or not u.flag else "yes - " + _short(u.evidence))]
+             "unexplained: " + ("no" if u is None or not u.flag else "yes - " + whole_sentences(u.evidence))]
     if diag.causes:
         lines.append("alternatives: " + ("none" if not diag.alternatives else "; ".join(
             f"{' + '.join(a.causes)} (cost ratio {a.cost_ratio:.3f}, θ gain {a.gain_pct:.1f} %)"
             for a in diag.alternatives)))
-    lines.append(f"{'effect':<18} {'value':>12} {'unit':<15} {'θ gain':>8} {'cost gain':>9}  accepted  95 % interval")
-    for e in diag.effects:
-        iv = "" if e.interval is None else f"  {num(e.interval.lo, e.unit)} .. {num(e.interval.hi, e.unit)}"
-        end = "  (at the end of its search range)" if e.at_range_end else ""
-        lines.append(f"{e.name:<18} {num(e.value, e.unit):>12} {e.unit:<15} {e.gain_pct:>7.1f}% "
-                     f"{e.cost_gain_pct:>8.1f}%  "
-                     f"{'yes' if e.accepted else '   '}{iv}{end}".rstrip())
+    lines += candidate_rows(diag)
     for r in diag.runs:
         m = r.metrics
         ov = "" if m is None else ("   overshoot rig/nominal/extended " +

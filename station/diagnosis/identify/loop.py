@@ -23,14 +23,15 @@ import datetime as _dt
 import math
 import time
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
-from types import SimpleNamespace
 from typing import Any, NamedTuple
 
 from station.diagnosis.runs.cases import load_case
 from station.diagnosis.runs.cost import Evaluator, calibrate_noise
-from station.diagnosis.honesty.doubt import effect_interval, effective_terms
+from station.diagnosis.answer.prose import at_range_end
+from station.diagnosis.honesty.doubt import Alternative, effect_interval, effective_terms
+from station.diagnosis.honesty.unexplained import Unexplained, check_unexplained
 from station.diagnosis.identify.design import Design, choose_experiment
 from station.diagnosis.identify.experiments import THESIS_EXPERIMENTS, Experiment, candidate_experiments, write_reference
 from station.diagnosis.pipeline import diagnose
@@ -323,10 +324,9 @@ def identify(port: str = "sim://", model=None, budget: int = DEFAULT_BUDGET, out
     tried = set(THESIS_EXPERIMENTS)
     designed = 0
     while True:
-        rv = rivals(loop.view or diag)
+        rv = rivals(diag)  # the record identify prints and writes: the verdict reads what the table shows
         if not rv.rivals:
-            stopped = ("the diagnosis accepted no effect: nothing to tell apart" if not diag.causes else
-                       f"settled: {describe(rv.chosen)}, no alternatives and every interval narrow")
+            stopped = settled(diag, rv)
             break
         if designed >= budget:
             stopped = f"budget of {budget} designed experiment(s) spent; {len(rv.rivals)} rival(s) remain"
@@ -363,9 +363,11 @@ class Preference(NamedTuple):
         Noise-normalised cost per error term on all the runs (1 ≈ the noise floor).
     note : str
         The comparison in words.
-    intervals : dict of str to (float, float)
+    intervals : dict of str to Interval
         When the earlier explanation is kept: each cause's 95 % interval on all the runs
         (:func:`station.diagnosis.honesty.doubt.effect_interval`, around the refitted values).
+    unexplained : Unexplained or None
+        When the earlier explanation is kept: its residual check on all the runs.
     """
 
     keep_old: bool
@@ -374,6 +376,7 @@ class Preference(NamedTuple):
     new_cost: float
     note: str
     intervals: dict = {}
+    unexplained: Unexplained | None = None
 
 
 def prefer(old, new, runs: Sequence[str | Path], base) -> Preference:
@@ -416,28 +419,78 @@ def prefer(old, new, runs: Sequence[str | Path], base) -> Preference:
     note = (f"{describe(refit)} (the earlier explanation, refitted on all {len(idx)} runs) fits them "
             f"{'better' if keep else 'no better'}: cost {c_old:.3g} against {c_new:.3g} per term for "
             f"{describe(new_values)}")
-    intervals = {}
+    intervals, unexplained = {}, None
     if keep:  # what the runs now allow around it: the next design's rivals (the earlier diagnosis's are stale)
-        n_eff = effective_terms(ev, {i: ev.predict(refit, i) for i in idx}, idx)
+        predictions = {i: ev.predict(refit, i) for i in idx}
+        n_eff = effective_terms(ev, predictions, idx)
         for name in old.causes:
             iv = effect_interval(ev, axes, name, refit, idx, n_eff, [refit[name]])
             if iv is not None:
-                intervals[name] = (iv.lo, iv.hi)
-    return Preference(keep, refit, c_old, c_new, note, intervals)
+                intervals[name] = iv
+        unexplained = check_unexplained(ev, refit, predictions)
+    return Preference(keep, refit, c_old, c_new, note, intervals, unexplained)
 
 
-def _kept_view(old, new, pref: Preference, model) -> SimpleNamespace:
-    """The kept explanation as :func:`station.diagnosis.honesty.rivals.rivals` reads a diagnosis: its
-    causes at the values refitted on every run with their intervals there, and the set-aside
-    re-diagnosis as an alternative unless the kept one pays over it as selection's acceptance
-    demands (the earlier diagnosis's own intervals and alternatives are of fewer runs)."""
-    effects = [SimpleNamespace(name=n, value=pref.values[n], accepted=True, cost_gain_pct=0.0,
-                               interval=pref.intervals.get(n)) for n in old.causes]
+def settled(diag, rv) -> str:
+    """How the loop ends when a diagnosis leaves no rivals, in words read from that diagnosis
+    (:func:`station.diagnosis.honesty.rivals.rivals` of it): an interval is called narrow only
+    when it is (half-width within :data:`~station.diagnosis.honesty.rivals.WIDE_INTERVAL` of
+    the value); a wide one whose ends no experiment can move (at its search range) is said.
+
+    Parameters
+    ----------
+    diag : Diagnosis
+        The record identify prints.
+    rv : Rivals
+        Its rivals (none).
+    """
+    if not diag.causes:
+        return "the diagnosis accepted no effect: nothing to tell apart"
+    if not rv.wide:
+        return f"settled: {describe(rv.chosen)}, no alternatives and every interval narrow"
+    return (f"settled: {describe(rv.chosen)}, no alternatives; the 95 % interval of {', '.join(rv.wide)} is wide "
+            "but reaches only past its search range, where no experiment can look")
+
+
+def kept_diagnosis(old, new, pref: Preference, model, runs: int):
+    """The identification's record when a re-diagnosis is set aside for the earlier
+    explanation: the earlier diagnosis with that explanation as refitted on every completed
+    run (:func:`prefer`) -- its values, 95 % intervals, extended model and residual check there,
+    and the set-aside re-diagnosis as its alternative unless the kept one pays over it as
+    selection's acceptance demands. The table, the verdict, the JSON and the identified model
+    all read this one record.
+
+    Parameters
+    ----------
+    old, new : Diagnosis
+        The kept and the set-aside diagnosis.
+    pref : Preference
+        ``keep_old`` true.
+    model : station.plant.model.Model
+        The nominal model with the refitted explanation.
+    runs : int
+        Completed runs it was refitted on.
+
+    Returns
+    -------
+    Diagnosis
+        Its fits and held-out gains stay the earlier diagnosis's (a note says so): a held-out
+        gain needs a re-diagnosis.
+    """
+    effects = [replace(e, value=float(pref.values[e.name]), interval=pref.intervals.get(e.name),
+                       at_range_end=at_range_end(e.name, pref.values[e.name]))
+               if e.accepted and e.name in pref.values else e for e in old.effects]
     terms = 1000.0  # the costs are per term: accept judges the relative gain and the gain per term
     apart = accept(pref.new_cost * terms, pref.old_cost * terms, terms)
-    alts = [] if apart else [{"causes": list(new.causes), "values": explanation(new)}]
-    return SimpleNamespace(effects=effects, causes=list(old.causes), folds=[], alternatives=alts,
-                           extended_model=model)
+    alts = [] if apart else [Alternative(list(new.causes), explanation(new), float(new.gain_pct),
+                                         float(pref.new_cost / pref.old_cost), "the kept explanation")]
+    n_old = len(old.runs) or "fewer"
+    note = (f"the earlier explanation, refitted on all {runs} runs, was kept over a re-diagnosis "
+            f"({pref.note}); its values, 95 % intervals, alternatives and residual check are on all {runs} runs, "
+            f"its fits and gains the earlier diagnosis's on {n_old} runs")
+    return replace(old, effects=effects, extended_model=model, alternatives=alts, folds=[],
+                   unexplained=pref.unexplained if pref.unexplained is not None else old.unexplained,
+                   notes=list(old.notes) + [note])
 
 
 class _Loop:
@@ -450,8 +503,6 @@ class _Loop:
         self.timings = {"experiments": 0.0, "diagnosis": 0.0, "design": 0.0}
         self.diagnoses = 0
         self.kept: list[str] = []
-        self.model = None  # the kept explanation refitted on every completed run
-        self.view = None  # ... as the rivals see it (_kept_view)
         self.command = "round"
         self.t0 = time.perf_counter()
         self.stopped_by = ""  # what stopped the last experiment (or kept the next from starting)
@@ -509,19 +560,21 @@ class _Loop:
         self.timings["diagnosis"] += time.perf_counter() - t
         if pref.note:
             self.say(f"diagnosis {self.diagnoses}: {pref.note}" + ("; kept the earlier diagnosis" if pref.keep_old else ""))
-        if pref.keep_old:
-            self.kept.append(pref.note)
-            self.model = self.base.with_effects(pref.values, name=f"{self.base.name} + {' + '.join(pref.values)}")
-            self.view = _kept_view(old, new, pref, self.model)
-            self.say(f"diagnosis {self.diagnoses}: the kept explanation's 95 % intervals on all {len(runs)} runs: "
-                     + (", ".join(f"{n} {lo:.4g} .. {hi:.4g}" for n, (lo, hi) in pref.intervals.items()) or "none"))
-        else:
-            self.model = self.view = None
-        return old if pref.keep_old else new
+        if not pref.keep_old:
+            return new
+        self.kept.append(pref.note)
+        model = self.base.with_effects(pref.values, name=f"{self.base.name} + {' + '.join(pref.values)}")
+        kept = kept_diagnosis(old, new, pref, model, len(runs))
+        self.say(f"diagnosis {self.diagnoses}: the kept explanation's 95 % intervals on all {len(runs)} runs: "
+                 + (", ".join(f"{n} {iv.lo:.4g} .. {iv.hi:.4g}" for n, iv in pref.intervals.items()) or "none"))
+        u = kept.unexplained
+        self.say(f"diagnosis {self.diagnoses}: the kept explanation on all {len(runs)} runs, unexplained: "
+                 + ("no" if u is None or not u.flag else u.evidence))
+        return kept
 
     def result(self, diag, stopped: str, budget: int, code: int) -> Identification:
         self.timings["total"] = time.perf_counter() - self.t0
         self.say(f"done: {stopped}")
-        model = self.model or (diag.extended_model if diag is not None else None)
+        model = diag.extended_model if diag is not None else None  # the record the table prints
         return Identification(diag, self.records, stopped, budget, self.diagnoses, dict(self.timings), code,
                               list(self.kept), model)

@@ -44,7 +44,7 @@ from station.logged.audit import accel_drift as audit_accel_drift
 from station.logged.simulate import simulate_log
 from station.outputs import unique_names
 from station.signals import check_stop
-from station.plant.model import as_model
+from station.plant.model import as_model, builtin_models
 from station.runlog.schema import MAGIC
 
 SESSION_KEY = "session"
@@ -94,6 +94,39 @@ def _header_session(path: Path) -> str | None:
     return s.strip() if isinstance(s, str) and s.strip() else None
 
 
+SESSION_NAME_CHARS = 60
+"""Longest session name: a header's ``session`` or a folder's path is cut to it (the end kept:
+it tells folders apart), before any work; its model file is named after it."""
+
+SESSION_SUFFIX = "-session"
+"""Added to a session name that is a built-in model's (``rig``: the 2013-14 logs' folder), so
+that ``--save-models DIR/rig-session.toml`` is not read as the built-in ``rig``."""
+
+
+def session_name(raw: str) -> str:
+    """A session's name as printed and as its model file's stem: control characters and runs of
+    white space made one space, at most :data:`SESSION_NAME_CHARS` characters (the end kept),
+    :data:`SESSION_SUFFIX` added to a built-in model's name.
+
+    Parameters
+    ----------
+    raw : str
+        A header's ``session`` or a folder's path (tail).
+
+    Returns
+    -------
+    str
+        Not empty ("session" when nothing printable is left).
+    """
+    name = " ".join(re.sub(r"[\x00-\x1f\x7f-\x9f]", " ", raw).split())
+    if len(name) > SESSION_NAME_CHARS:
+        name = name[-SESSION_NAME_CHARS:].strip(" /") or name[:SESSION_NAME_CHARS]
+    name = name or "session"
+    if name.lower() in builtin_models():
+        name += SESSION_SUFFIX
+    return name
+
+
 def group_sessions(files: Iterable[str | Path]) -> list[SessionLogs]:
     """Group log files into sessions: our header's ``session``, else the folder a file is in
     (named by the folder's name; by its path where two folders share a name).
@@ -111,15 +144,17 @@ def group_sessions(files: Iterable[str | Path]) -> list[SessionLogs]:
     groups: dict[tuple, list[Path]] = {}
     for f in map(Path, files):
         s = _header_session(f)
-        groups.setdefault(("header", s) if s else ("folder", str(f.parent)), []).append(f)
-    folder_names = [Path(k[1]).resolve().name or k[1] for k in groups if k[0] == "folder"]
+        groups.setdefault(("header", s) if s else ("folder", str(f.parent.resolve())), []).append(f)
+    folders = [Path(k[1]).parts for k in groups if k[0] == "folder"]
     out = []
     for (kind, what), paths in groups.items():
         name = what
-        if kind == "folder":
-            short = Path(what).resolve().name or what
-            name = short if folder_names.count(short) == 1 else what
-        out.append(SessionLogs(name, tuple(paths)))
+        if kind == "folder":  # the shortest tail of its path no other folder shares: "2009", else "a/2009"
+            parts = Path(what).parts
+            k = next((k for k in range(1, len(parts)) if [f[-k:] for f in folders].count(parts[-k:]) == 1),
+                     len(parts))
+            name = "/".join(parts[-k:]).lstrip("/") or what
+        out.append(SessionLogs(session_name(name), tuple(paths)))
     names = unique_names([s.name for s in out])
     out = [replace(s, name=n) for s, n in zip(out, names)]
     return sorted(out, key=lambda s: s.name)
@@ -127,14 +162,15 @@ def group_sessions(files: Iterable[str | Path]) -> list[SessionLogs]:
 
 def model_file_names(sessions: Sequence[SessionLogs]) -> list[str]:
     """The model file of each session in a ``--save-models`` folder: ``<session>.toml`` (its
-    name made safe for a file name, unique).
+    name, at most :data:`SESSION_NAME_CHARS` characters, made safe for a file name, unique).
 
     Parameters
     ----------
     sessions : sequence of SessionLogs
     """
-    return [f"{n}.toml" for n in unique_names([re.sub(r"[^A-Za-z0-9_.-]+", "_", s.name).strip(".") or "session"
-                                               for s in sessions])]
+    stems = [re.sub(r"[^A-Za-z0-9_.-]+", "_", s.name).strip(".") or "session" for s in sessions]
+    stems = [n + SESSION_SUFFIX if n.lower() in builtin_models() else n for n in stems]
+    return [f"{n}.toml" for n in unique_names(stems)]
 
 
 def accel_drift(case: RunCase) -> float:
@@ -480,7 +516,7 @@ def _diagnose_sessions(sessions, model, say, bench: Bench, max_samples, simulate
                 cases[i].sigma_a = IGNORED_SIGMA
                 notes.append(f"{s}: {cases[i].name}: its accelerometer is not used (a's mean over "
                              f"{ACCEL_DRIFT_WINDOW_S:g} s moves {drift:.0f} counts from rest: no tip acceleration "
-                             f"does that); its θ is")
+                             f"does that); its θ is still used")
                 say(notes[-1])
     for s, g in zip(loaded.names, layout.groups):
         if len(g) == 1 and layout.sessions > 1:

@@ -38,7 +38,7 @@ def _value(name: str, x: float) -> str:
 
 def decision_words(result, d: Decision) -> str:
     """One sentence on whether an effect drifts, with its values and numbers, e.g.
-    "coulomb_friction drifts: 2.09 DAC counts in 2009, 14.6 DAC counts in rig; per-session
+    "coulomb_friction drifts: 2.09 DAC counts in 2009, 14.6 DAC counts in rig-session; per-session
     values lower the held-out θ + a cost by 50.5 % (θ RMS 29.9 %) against one shared value
     (9.81 DAC counts); ...".
 

@@ -1,0 +1,208 @@
+"""What ``station diagnose`` and ``station identify`` print does not contradict itself: every
+column of the candidates table says which fit it belongs to, and the final verdict, the table and
+the JSON read one record (issue 24)."""
+
+from __future__ import annotations
+
+import math
+
+import pytest
+
+from station.commands.diagnose import CANDIDATE_COLUMNS, candidate_rows, format_diagnosis
+from station.diagnosis.answer.result import Diagnosis, EffectResult
+from station.diagnosis.honesty.doubt import Interval
+from station.diagnosis.honesty.unexplained import Unexplained
+from station.plant.model import as_model
+
+
+def _effect(name, value, unit, gain, cost_gain, accepted, alone, interval=None):
+    return EffectResult(name, value, unit, gain, cost_gain, accepted, f"{name} evidence", [alone, alone], alone,
+                        interval, False)
+
+
+def built_diagnosis(unexplained_flag: bool = False) -> Diagnosis:
+    """A diagnosis whose accepted effects sit far from where they were fitted alone, one of them
+    with a negative gain alone (the issue's `amp_offset -3.008 ... -144.2% -484.2% yes`)."""
+    nominal = as_model(None)
+    effects = [
+        _effect("coulomb_friction", 4.97, "DAC counts", 30.0, 40.0, True, 8.973, Interval(4.5, 5.4, False, False)),
+        _effect("amp_offset", -3.008, "DAC counts", -144.2, -484.2, True, 0.731, Interval(-3.1, -2.9, False, False)),
+        _effect("deadzone", 2.5, "DAC counts", 12.0, 9.0, False, 2.5),
+    ]
+    ext = nominal.with_effects({"coulomb_friction": 4.97, "amp_offset": -3.008}, name="tmm-fit + 2")
+    u = Unexplained(unexplained_flag, "4 of 5 runs keep structure" if unexplained_flag else "", [], [], 0)
+    return Diagnosis("coulomb_friction", ["coulomb_friction", "amp_offset"], {"theta": 80.0, "accel": 50.0},
+                     {"theta": 90.0, "accel": 60.0}, 35.0, effects, ext, nominal, [], "leave-one-run-out",
+                     simulations=100, elapsed_s=1.0, unexplained=u)
+
+
+def test_the_table_labels_the_alone_and_the_extended_columns_and_fills_each_from_its_own_fit():
+    diag = built_diagnosis()
+    header, *rows = candidate_rows(diag)
+    for col in ("value (alone)", "θ gain (alone)", "cost gain (alone)", "value (extended)", "95 % interval (extended)"):
+        assert col in header
+    by_name = {r.split()[0]: r for r in rows}
+    for e in diag.effects:
+        r = by_name[e.name]
+        words = r.split()
+        # value alone is the second cell, the extended value follows the two gains
+        assert float(words[1]) == pytest.approx(e.value_alone, rel=1e-3)
+        if e.accepted:
+            ext = float(words[words.index("%", words.index("%") + 1) + 1])
+            assert ext == pytest.approx(e.value, rel=1e-3)
+            assert f"{e.interval.lo:.4g} .. {e.interval.hi:.4g}" in r and r.endswith("yes")
+        else:
+            assert r.endswith("no")
+    assert "-3.008" in by_name["amp_offset"] and "0.731" in by_name["amp_offset"]
+    # the printed diagnosis uses these rows (diagnose and identify both print format_diagnosis)
+    printed = format_diagnosis(diag)
+    for line in candidate_rows(diag):
+        assert line in printed
+
+
+# --- identify: the verdict, the table, the identified model and the JSON read one record -----
+
+import re  # noqa: E402
+
+from station.commands.identify import format_identification  # noqa: E402
+from station.diagnosis.identify import loop  # noqa: E402
+from station.diagnosis.identify.design import Design  # noqa: E402
+from station.diagnosis.identify.experiments import candidate_experiments  # noqa: E402
+from station.diagnosis.identify.loop import ExperimentRun, Preference, identify  # noqa: E402
+from station.diagnosis.honesty.rivals import WIDE_INTERVAL  # noqa: E402
+from station.plant.effects import EFFECTS  # noqa: E402
+
+
+def parse_table(printed: str) -> dict:
+    """The printed candidates table: name -> (value alone, value extended, (lo, hi) or None, accepted)."""
+    lines = printed.splitlines()
+    start = next(i for i, line in enumerate(lines) if line.startswith("effect ") and "value (alone)" in line)
+    out = {}
+    for line in lines[start + 1:]:
+        name = line.split()[0]
+        if name not in EFFECTS:
+            break
+        left, _, right = line.partition(" % ")
+        _, _, right = right.partition(" % ")
+        words = right.split()
+        ext = None if words[0] == "-" else float(words[0])
+        iv = None if words[1] == "-" else (float(words[1]), float(words[3]))
+        out[name] = (float(left.split()[1]), ext, iv, words[-1] if iv is None else words[4])
+    return out
+
+
+def parse_model(printed: str) -> dict:
+    """The printed 'identified model: a 1.2 unit + b 3 unit' -> {name: value}."""
+    line = next(x for x in printed.splitlines() if x.startswith("identified model: "))
+    return {m.group(1): float(m.group(2))
+            for m in re.finditer(r"([\w:]+) (-?[\d.]+(?:e[-+]?\d+)?)", line.removeprefix("identified model: "))}
+
+
+def _record(values: dict, causes: list, intervals: dict, alone: dict, flag: bool = False) -> Diagnosis:
+    nominal = as_model(None)
+    effects = [EffectResult(n, values[n], EFFECTS[n].unit, 20.0, 30.0, True, "", [values[n]] * 2, alone[n],
+                            intervals.get(n)) for n in causes]
+    effects += [EffectResult(n, v, EFFECTS[n].unit, 5.0, 4.0, False, "", [v, v], v) for n, v in alone.items()
+                if n not in causes]
+    u = Unexplained(flag, "4 of 5 runs keep structure that encoder rounding cannot produce." if flag else "",
+                    [], [], 0)
+    return Diagnosis(causes[0], causes, {"theta": 80.0}, {"theta": 90.0}, 30.0, effects,
+                     nominal.with_effects(values), nominal, [], "leave-one-run-out", unexplained=u)
+
+
+def _identify(monkeypatch, tmp_path, diagnoses, preference=None, budget=1):
+    """identify() with the device, the diagnoses, the design and the comparison stubbed."""
+    queue = list(diagnoses)
+    monkeypatch.setattr(loop, "diagnose", lambda runs, **kw: queue.pop(0))
+    monkeypatch.setattr(loop, "read_log", lambda path: None)
+    monkeypatch.setattr(loop, "command_quantization", lambda log: "round")
+    monkeypatch.setattr(loop, "choose_experiment",
+                        lambda base, rv, cands, *a: Design(cands[0], "it separates them", [], {}))
+    if preference is not None:
+        monkeypatch.setattr(loop, "prefer", lambda old, new, runs, base: preference)
+    return identify(out_dir=tmp_path, budget=budget, candidates=["static_friction", "coulomb_friction"],
+                    runner=lambda exp, log: ExperimentRun(log, "completed", 0))
+
+
+def _agrees(ident) -> str:
+    """Check that what identify prints and writes reads one record; returns the printed text."""
+    printed = format_identification(ident)
+    doc = ident.to_json()
+    table = parse_table(printed)
+    model = parse_model(printed)
+    # the identified model is the table's extended column (accepted and held effects), and the JSON's
+    assert model == pytest.approx({n: ext for n, (_, ext, _, acc) in table.items() if acc in ("yes", "held")},
+                                  rel=1e-3)
+    assert model == pytest.approx(doc["identify"]["model"]["effects"], rel=1e-3)
+    for e in doc["effects"]:
+        if e["accepted"]:
+            assert table[e["name"]][1] == pytest.approx(e["value"], rel=1e-3)
+            assert table[e["name"]][2] == pytest.approx(e["interval"], rel=1e-3)
+    # the verdict says "narrow" only of intervals the table shows narrow
+    if "every interval narrow" in printed:
+        for name, (_, ext, iv, acc) in table.items():
+            if iv is not None:
+                assert (iv[1] - iv[0]) / 2 <= WIDE_INTERVAL * abs(ext) * 1.01, (name, iv, ext)
+    # the unexplained line is the JSON's
+    line = next(x for x in printed.splitlines() if x.startswith("unexplained: "))
+    assert line.startswith("unexplained: yes") == doc["unexplained"]
+    return printed
+
+
+def test_a_kept_explanation_is_the_record_identify_prints_and_writes(monkeypatch, tmp_path):
+    """The issue's contradiction: the earlier explanation kept over a re-diagnosis, refitted on
+    every run; the table showed the earlier diagnosis (a wide interval, 'unexplained: no', the
+    sliding level at its alone value) while the verdict and the model read the refit."""
+    old = _record({"static_friction": 9.0, "coulomb_friction": 6.0}, ["static_friction"],
+                  {"static_friction": Interval(5.999, 12.29, False, False)}, {"static_friction": 9.5,
+                                                                             "coulomb_friction": 8.973})
+    new = _record({"coulomb_friction": 7.0}, ["coulomb_friction"], {}, {"static_friction": 9.5,
+                                                                       "coulomb_friction": 7.0}, flag=True)
+    refit = {"static_friction": 12.0, "coulomb_friction": 4.97}
+    unexplained = Unexplained(True, "4 of 5 runs keep structure that encoder rounding cannot produce.", [], [], 0)
+    pref = Preference(True, refit, 1.0, 50.0, "the earlier explanation fits them better",
+                      {"static_friction": Interval(11.5, 12.6, False, False)}, unexplained)
+    ident = _identify(monkeypatch, tmp_path, [old, new], pref)
+    assert ident.stopped.startswith("settled") and ident.kept
+    printed = _agrees(ident)
+    assert parse_model(printed) == pytest.approx(refit, rel=1e-3)
+    assert "unexplained: yes" in printed and "5.999" not in printed
+
+
+def test_an_interval_wide_without_rivals_is_not_called_narrow(monkeypatch, tmp_path):
+    """A delay of 1 sample with 95 % interval 0.6 .. 1.4: both ends round to the value, so no
+    experiment can separate them; the verdict must not call the interval narrow."""
+    diag = _record({"delay": 1.0}, ["delay"], {"delay": Interval(0.6, 1.4, False, False)}, {"delay": 1.0})
+    ident = _identify(monkeypatch, tmp_path, [diag], budget=0)
+    assert ident.stopped.startswith("settled") and "narrow" not in ident.stopped, ident.stopped
+    _agrees(ident)
+
+
+def test_a_settled_diagnosis_reads_the_same_everywhere(monkeypatch, tmp_path):
+    diag = _record({"static_friction": 12.0, "coulomb_friction": 5.0}, ["static_friction"],
+                   {"static_friction": Interval(11.5, 12.5, False, False)},
+                   {"static_friction": 11.0, "coulomb_friction": 8.973}, flag=True)
+    ident = _identify(monkeypatch, tmp_path, [diag], budget=0)
+    assert "every interval narrow" in ident.stopped
+    printed = _agrees(ident)
+    assert parse_table(printed)["coulomb_friction"][1:] == (5.0, None, "held")
+
+
+# --- diagnose: the cost said up front is the cost it runs -----------------------------------
+
+def test_the_estimate_counts_the_simulations_the_diagnosis_runs(rig_data, tmp_path, capsys):
+    """Issue 24: 'about 12000 simulations' up front, '22886 simulations' at the end. On two of
+    the rig's logs (leave-one-run-out, the whole vocabulary; about 7 s) the estimate is within
+    0.67-1.5× of the count."""
+    import json
+
+    from station.cli import main
+
+    runs = [str(rig_data / "OL_pulse_test_sys_check_SLFR_RTP_OL_Test_uend=0.txt"),
+            str(rig_data / "SFLR_P_control_step_kp_2_SLFR_RTP_P_control_kp=2.0.txt")]
+    out = tmp_path / "d.json"
+    assert main(["diagnose", *runs, "--json", str(out)]) == 0
+    err = capsys.readouterr().err
+    estimate = int(re.search(r"about (\d+) simulations", err).group(1))
+    actual = json.loads(out.read_text())["simulations"]
+    assert 0.67 <= estimate / actual <= 1.5, (estimate, actual)
