@@ -17,7 +17,6 @@ from pathlib import Path
 
 import numpy as np
 
-from station.analysis.frequency import phase_beside
 from station.errors import StationError
 from station.logged.reference import classify_reference
 from station.outputs import Transaction
@@ -301,6 +300,8 @@ def plot_bode(cmp, path: Path, title: str, transaction=None) -> None:
         ax[row].semilogx(f[band], 20 * np.log10(np.abs(model[band])), label=f"model {label}, n = {cmp.n_elements}")
         ax[row].set_ylabel(f"|{label}| (dB, counts/count)")
         ax[row].legend(loc="lower left", fontsize=8)
+    from station.analysis.frequency import phase_beside  # lazy: start-up time (scipy via the plant)
+
     # the measured phase on the model's branch: unwrapped apart, they can sit 360° apart (no error)
     ax[2].semilogx(f[band], phase_beside(cmp.theta.H[band], cmp.model[0][band]), ".", ms=2, label="measured θ/v")
     ax[2].semilogx(f[band], np.degrees(np.unwrap(np.angle(cmp.model[0][band]))), label="model θ/v")
