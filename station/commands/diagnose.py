@@ -225,8 +225,13 @@ def format_diagnosis(diag) -> str:
     pct = lambda x: "n/a" if x is None else f"{x:.1f} %"  # noqa: E731
 
     u = diag.unexplained
-    lines = [f"model: {diag.nominal_model.name}; judged by {diag.validation}",
-             f"cause: {diag.cause}" + (f"   (all accepted: {', '.join(diag.causes)})" if len(diag.causes) > 1 else ""),
+    lines = diag.audit_lines()
+    faults = diag.decided_faults
+    lines += [f"model: {diag.nominal_model.name}" + (
+        " with the sensor faults decided from the data (" + ", ".join(f"{k} {v:g}" for k, v in faults.items()) + ")"
+        if faults else "") + f"; judged by {diag.validation}",
+             f"cause: {(diag.all_causes or ['none'])[0]}"
+             + (f"   (all accepted: {', '.join(diag.all_causes)})" if len(diag.all_causes) > 1 else ""),
              f"θ fit {pct(diag.baseline_fit.get('theta'))} -> {pct(diag.extended_fit.get('theta'))}, "
              f"a fit {pct(diag.baseline_fit.get('accel'))} -> {pct(diag.extended_fit.get('accel'))}, "
              f"θ RMS gain {diag.gain_pct:.1f} %",

@@ -140,6 +140,8 @@ def at_range_end(name: str, value: float) -> bool:
     spec = EFFECTS.get(name)
     if spec is None or not math.isfinite(value) or math.isclose(value, spec.neutral, rel_tol=1e-6, abs_tol=1e-9):
         return False
+    if spec.signed:  # a range of the magnitude, either sign (a reversed accelerometer)
+        value = abs(value)
     ax = axis_for(name, spec.lower, spec.upper, spec.neutral)
     return any(abs(ax.to_unit(value) - ax.to_unit(b)) <= RESOLUTION_STEPS * ax.step for b in (spec.lower, spec.upper))
 
@@ -252,8 +254,8 @@ def target_notes(diag) -> list[str]:
 
 
 def answer_points(diag) -> list[tuple[str, str]]:
-    """The answer, point by point: (label, sentence) for the cause, the gain on held-out
-    data, what is still unexplained, the alternatives, the targets missed and how the runs
+    """The answer, point by point: (label, sentence) for what the data contradicted (the log
+    audit and the sensor faults, first), the cause, the gain on held-out data, what is still unexplained, the alternatives, the targets missed and how the runs
     were treated.
 
     Parameters
@@ -262,7 +264,7 @@ def answer_points(diag) -> list[tuple[str, str]]:
         What :func:`station.diagnosis.diagnose` returned.
     """
     base = diag.nominal_model.name
-    points = []
+    points = [("Audit", line + ".") for line in diag.audit_lines()]
     if not diag.causes:
         best = diag.effects[0] if diag.effects else None
         extra = "" if best is None else (f" The best candidate, {plain_name(best.name)} "

@@ -89,15 +89,15 @@ def _answer(diag) -> list[str]:
             f"<h2>Answer</h2><ul class='answer'>{items}</ul>"]
 
 
-WARN_LABELS = ("Still unexplained", "Target missed", "Residuals", "Alternatives")
+WARN_LABELS = ("Audit", "Still unexplained", "Target missed", "Residuals", "Alternatives")
 
 
 def _result_table(diag) -> list[str]:
     esc, pct = html.escape, format_pct
     effects = ", ".join(f"{k} = {v:.4g}" for k, v in diag.extended_model.effect_dict().items()) or "no effects"
     return ["<h2>Evidence</h2><h3>Result</h3><table>",
-            f"<tr><th>cause</th><td>{esc(diag.cause)}</td></tr>",
-            f"<tr><th>causes</th><td>{esc(', '.join(diag.causes) or '[]')}</td></tr>",
+            f"<tr><th>cause</th><td>{esc((diag.all_causes or ['none'])[0])}</td></tr>",
+            f"<tr><th>causes</th><td>{esc(', '.join(diag.all_causes) or '[]')}</td></tr>",
             f"<tr><th>validation</th><td>{esc(diag.validation)}</td></tr>",
             f"<tr><th>θ fit nominal → extended</th><td>{pct(diag.baseline_fit.get('theta'))} → "
             f"{pct(diag.extended_fit.get('theta'))}</td></tr>",

@@ -161,6 +161,12 @@ class Diagnosis:
         How the effects' intervals were found.
     notes : list of str
         How the runs were treated (e.g. a hub-held beam test left out).
+    sensor_faults : SensorFaults or None
+        The sensor and wiring faults decided from the data before the search
+        (:func:`station.logged.sensors.decide_faults`); they are in the nominal and the
+        extended model both.
+    audit : list of dict
+        Per run: ``{"run", "audit", "controller_source", "contradicted"}`` (DESIGN.md "Log audit").
     """
 
     cause: str
@@ -181,15 +187,40 @@ class Diagnosis:
     alternatives: list = field(default_factory=list)
     interval_method: str = ""
     notes: list = field(default_factory=list)
+    sensor_faults: Any = None
+    audit: list = field(default_factory=list)
+
+    @property
+    def decided_faults(self) -> dict:
+        """The sensor and wiring faults decided from the data (effect -> value; empty: none)."""
+        return dict(self.sensor_faults.effects) if self.sensor_faults is not None else {}
+
+    @property
+    def all_causes(self) -> list:
+        """DESIGN.md's ``causes``: the decided faults first, then the accepted effects."""
+        faults = list(self.decided_faults)
+        return faults + [c for c in self.causes if c not in faults]
+
+    def audit_lines(self) -> list[str]:
+        """What the data contradicted, one line each, to say before anything else: each run's
+        contradicted claims, then the sensor faults (and the wiring that reads the same)."""
+        lines = [f"audit: {r['run']}: {line}" for r in self.audit for line in r["contradicted"]]
+        if self.sensor_faults is not None:
+            lines += [f"sensor fault, decided from the data: {line}" for line in self.sensor_faults.lines()]
+        return lines
 
     def to_json(self) -> dict:
-        """DESIGN.md's JSON: cause, causes, baseline, extended, gain_pct, effects (each with
-        its interval), unexplained, unexplained_evidence, alternatives (+ extras: validation,
+        """DESIGN.md's JSON: cause, causes (the decided sensor faults first), audit,
+        baseline, extended, gain_pct, effects (each with its interval), unexplained,
+        unexplained_evidence, alternatives (+ extras: sensor_faults, validation,
         interval_method, model, extended_model, runs, simulations, elapsed_s, notes)."""
         u = self.unexplained
+        causes = self.all_causes
         return {
-            "cause": self.cause,
-            "causes": list(self.causes),
+            "cause": causes[0] if causes else "none",
+            "causes": causes,
+            "audit": self.audit,
+            "sensor_faults": self.sensor_faults.to_json() if self.sensor_faults is not None else None,
             "baseline": {"fit_pct": dict(self.baseline_fit)},
             "extended": {"fit_pct": dict(self.extended_fit)},
             "gain_pct": round(self.gain_pct, 3),

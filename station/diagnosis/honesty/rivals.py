@@ -120,6 +120,8 @@ def jackknife_interval(value: float, fold_values: list[float]) -> tuple[float, f
 def _clip(name: str, x: float, chosen: Mapping[str, float]) -> float:
     """x within the effect's range (a breakaway level no lower than its sliding level)."""
     spec = EFFECTS[name]
+    if spec.signed and x < 0:  # a range of the magnitude (a reversed accelerometer)
+        return -min(max(-x, spec.lower), spec.upper)
     x = min(max(x, spec.lower, chosen.get(NESTED.get(name, ""), spec.lower)), spec.upper)
     return float(round(x)) if spec.unit == "samples" else x
 

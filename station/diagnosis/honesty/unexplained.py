@@ -241,7 +241,7 @@ def null_replicates(ev: Evaluator, values: Mapping[str, float], i: int, predicti
     sigma = float(c.sigma_a)
     out = []
     for name, factor in NULL_PERTURBATIONS:
-        theta, a = ev.predict({**values, name: perturbed(name, values, factor)}, i)
+        theta, a = ev.predict({**values, name: perturbed(name, {**ev.model.effect_dict(), **values}, factor)}, i)
         out.append((theta, np.floor(a + sigma * rng.standard_normal(a.size) + 0.5)))
     loop = _feeds_a_back(c)
     for _ in range(NOISE_REPLICATES):

@@ -408,7 +408,7 @@ def prefer(old, new, runs: Sequence[str | Path], base) -> Preference:
     ev = Evaluator([load_case(p) for p in runs], base)
     calibrate_noise(ev)
     idx = list(range(len(ev.cases)))
-    axes = effect_axes()
+    axes = effect_axes(ev.model)
     refit = refit_explanation(ev, old.causes, idx, old_values, axes)
     terms = ev.terms(idx)
     c_old, c_new = ev.cost(refit, idx), ev.cost(new_values, idx)

@@ -215,9 +215,26 @@ class Selection:
     steps: list = field(default_factory=list)
 
 
-def effect_axes() -> dict[str, Axis]:
-    """How every effect of the vocabulary is searched (its range and grid spacing)."""
-    return {name: axis_for(name, s.lower, s.upper, s.neutral) for name, s in EFFECTS.items()}
+def effect_axes(model=None) -> dict[str, Axis]:
+    """How every effect of the vocabulary is searched (its range and grid spacing).
+
+    Parameters
+    ----------
+    model : station.plant.model.Model, optional
+        The base model: a signed effect it holds negative (a reversed accelerometer decided
+        from the data, :mod:`station.logged.sensors`) is searched on its negative side.
+
+    Returns
+    -------
+    dict of str to Axis
+    """
+    held = model.effect_dict() if model is not None else {}
+    axes = {}
+    for name, s in EFFECTS.items():
+        flip = s.signed and held.get(name, s.neutral) < 0
+        axes[name] = (axis_for(name, -s.upper, -s.lower, -s.neutral) if flip else
+                      axis_for(name, s.lower, s.upper, s.neutral))
+    return axes
 
 
 def set_axes(names: Sequence[str], axes: Mapping[str, Axis]) -> list[Axis]:
@@ -480,14 +497,19 @@ def perturbed(name: str, values: Mapping[str, float], factor: float) -> float:
     name : str
         The effect (:data:`station.plant.effects.EFFECTS`).
     values : mapping of str to float
-        The current values (the effect's neutral value when absent).
+        The current values, the base model's own among them (the effect's neutral value
+        when absent from both).
     factor : float
         Close to 1 (:data:`NULL_PERTURBATIONS`).
+
+    Returns
+    -------
+    float
     """
     spec = EFFECTS[name]
     v = values.get(name, spec.neutral)
     for x in (v * factor, v / factor):
-        if spec.lower <= x <= spec.upper:
+        if spec.admits(x):
             return x
     return v
 
@@ -508,7 +530,7 @@ def null_floor(ev: Evaluator, folds: Sequence[Fold], fold_values: Sequence[Mappi
         for i in fold.val:
             best = ev.weighted(values, i)
             for name, factor in NULL_PERTURBATIONS:
-                best = min(best, ev.weighted({**values, name: perturbed(name, values, factor)}, i))
+                best = min(best, ev.weighted({**values, name: perturbed(name, {**ev.model.effect_dict(), **values}, factor)}, i))
             total += best
     return total
 

@@ -76,7 +76,7 @@ class Bench(NamedTuple):
         -------
         Search
         """
-        return Search(ev, folds, tuple(fit_runs), effect_axes(), self.workers, say)
+        return Search(ev, folds, tuple(fit_runs), effect_axes(ev.model), self.workers, say)
 
 
 @contextmanager

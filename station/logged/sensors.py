@@ -1,0 +1,272 @@
+"""The sensors' and the motor's signs and scales, decided from the data (DESIGN.md's sensor
+and wiring faults: "decided from the data first where the data decide them").
+
+A log claims, without saying so, that its θ counts 1024 per revolution in the model's
+direction, that its a reads the tip's acceleration with the model's sign, and that a
+positive command turns the motor the model's way. Driven open loop by the command the log
+applied (its own v, so a closed loop's own feedback, right or wrong, is in it), the nominal
+model moves as the rig moved if those claims hold. Two numbers per run test them:
+
+- θ: the cosine between the measured and the modelled θ's changes over
+  :data:`THETA_HORIZON_S` (short, so the model's drift without friction does not count), and
+  the least-squares ratio of the measured to the modelled changes;
+- a: the same between the measured and the modelled a band-passed to
+  :data:`ACCEL_BAND_HZ` (the accelerometer's offset and drift, and the beam's rigid motion,
+  removed).
+
+A cosine below −:data:`SIGN_COSINE` is a reversal, above +:data:`SIGN_COSINE` the model's
+sign, between them undecided. θ's sign is the encoder's times the motor's; a's the
+accelerometer's times the motor's. Of the three wirings that give the two signs seen, the
+one with fewest faults is decided (θ and a both reversed: the motor; θ alone: the encoder;
+a alone: the accelerometer), and the other is said as the alternative. The accelerometer's
+gain is the median ratio of a; an encoder of another resolution is decided when θ's ratio,
+and θ's over a's, are within :data:`SCALE_TOLERANCE` of one power of two other than 1 (a
+4096-count encoder reads 4; the motion itself, and so a, as the model's).
+
+On the rig's own logs (2009, 2013-14) every cosine is +0.74 or more where the channel
+moves (``tests/test_sensor_signs.py``); on the blind generator's reversed and rescaled
+sensors the decided cosines are −0.88 or less and the ratios within 30 % of the hidden
+values.
+"""
+
+from __future__ import annotations
+
+import math
+import statistics
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from station.control.rerun import OpenLoop
+from station.logged.audit import AuditClaim
+from station.logged.device import command_quantization
+
+THETA_HORIZON_S = 0.05
+"""Horizon of the θ changes compared, s."""
+
+ACCEL_BAND_HZ = (1.0, 40.0)
+"""Band a is compared in, Hz (second-order Butterworth, forward and backward)."""
+
+SIGN_COSINE = 0.5
+"""|cosine| at or above which a sign is decided."""
+
+SCALE_TOLERANCE = 1.2
+"""An encoder scale 2**k (k != 0) is decided when θ's ratio over a's is within this factor of it."""
+
+ENCODER_SCALES = (0.25, 0.5, 2.0, 4.0, 8.0, 16.0)
+"""Encoder resolutions decided, relative to the model's 1024 counts per revolution."""
+
+
+@dataclass(frozen=True)
+class SensorEvidence:
+    """One run's θ and a against the nominal model driven by the run's applied command.
+
+    Attributes
+    ----------
+    name : str
+        The run's file name.
+    theta_cosine, theta_ratio : float or None
+        Cosine and least-squares ratio (measured / model) of θ's changes over
+        :data:`THETA_HORIZON_S`; None when either did not move.
+    accel_cosine, accel_ratio : float or None
+        The same for a in :data:`ACCEL_BAND_HZ`; None when either is flat or the log's a is
+        no tip acceleration (its audit).
+    """
+
+    name: str
+    theta_cosine: float | None
+    theta_ratio: float | None
+    accel_cosine: float | None
+    accel_ratio: float | None
+
+
+def _compare(measured: np.ndarray, model: np.ndarray) -> tuple[float | None, float | None]:
+    nm, ns = float(np.linalg.norm(measured)), float(np.linalg.norm(model))
+    if not (nm > 0 and ns > 0 and math.isfinite(nm) and math.isfinite(ns)):
+        return None, None
+    dot = float(measured @ model)
+    return dot / (nm * ns), dot / (ns * ns)
+
+
+def sensor_evidence(run, model) -> SensorEvidence:
+    """Compare a run's θ and a with the model driven open loop by the run's applied command.
+
+    Parameters
+    ----------
+    run : station.logged.LoggedRun
+        With t, u, v, θ and a.
+    model : station.plant.model.Model
+        The nominal model (its effects apply).
+
+    Returns
+    -------
+    SensorEvidence
+    """
+    # lazy: start-up time (scipy's filters)
+    from scipy.signal import butter, sosfiltfilt
+
+    # lazy: start-up time (the FEM and its compiled kernels, loaded when used)
+    from station.plant import simulate
+
+    log, dt = run.log, run.log.dt
+    d = log.data
+    name = log.path.name if log.path is not None else "log"
+    if len(run) < 50:
+        return SensorEvidence(name, None, None, None, None)
+    applied = d["v_applied"]
+    if applied.size and np.all(np.isfinite(applied)):
+        pred = simulate(model, OpenLoop(), d["u"], alignment=0, v_open=applied, dt=dt)
+    else:
+        pred = simulate(model, OpenLoop(), d["u"], alignment=0, v_open=d["v"], command=command_quantization(log),
+                        dt=dt)
+    h = max(1, int(round(THETA_HORIZON_S / dt)))
+    theta, theta_m = np.asarray(d["theta"], float), np.asarray(pred["theta"], float)
+    th = _compare(theta[h:] - theta[:-h], theta_m[h:] - theta_m[:-h])
+    ac: tuple[float | None, float | None] = (None, None)
+    nyquist = 0.5 / dt
+    if run.audit.accel_is_tip and len(run) > 30 and ACCEL_BAND_HZ[1] < nyquist:
+        sos = butter(2, ACCEL_BAND_HZ, "bandpass", fs=1.0 / dt, output="sos")
+        a = np.asarray(d["a"], float) - run.accel_rest_offset
+        ac = _compare(sosfiltfilt(sos, a), sosfiltfilt(sos, np.asarray(pred["a"], float)))
+    return SensorEvidence(name, *th, *ac)
+
+
+def _sign(cosines: list[float]) -> int:
+    """+1, -1 or 0 (undecided) from the runs' cosines (their median)."""
+    if not cosines:
+        return 0
+    c = statistics.median(cosines)
+    return 1 if c >= SIGN_COSINE else -1 if c <= -SIGN_COSINE else 0
+
+
+@dataclass(frozen=True)
+class SensorFaults:
+    """The sensor and wiring faults the data decide, over one rig's runs.
+
+    Attributes
+    ----------
+    effects : dict of str to float
+        Decided effects (accel_gain, encoder_scale, motor_polarity) -> value; empty when
+        the data agree with the model's signs and scales.
+    claims : tuple of AuditClaim
+        "columns" claims: θ's and a's signs and scale, confirmed, contradicted or unchecked.
+    alternative : str
+        The other wiring that gives the same signs ("" when none).
+    evidence : tuple of SensorEvidence
+        Per run.
+    """
+
+    effects: dict = field(default_factory=dict)
+    claims: tuple = ()
+    alternative: str = ""
+    evidence: tuple = ()
+
+    def lines(self) -> list[str]:
+        """One line per contradicted claim, the alternative after them."""
+        out = [c.line for c in self.claims if c.verdict == "contradicted"]
+        return out + ([f"or: {self.alternative}"] if self.alternative and out else [])
+
+    def to_json(self) -> dict:
+        """``{"effects", "claims", "alternative", "runs"}``."""
+        return {"effects": dict(self.effects), "claims": [c.to_json() for c in self.claims],
+                "alternative": self.alternative,
+                "runs": [dict(vars(e)) for e in self.evidence]}
+
+
+def _fmt(values: list[float]) -> str:
+    return ", ".join(f"{v:+.2f}" for v in values)
+
+
+def decide_faults(evidence: Sequence[SensorEvidence]) -> SensorFaults:
+    """Decide the sensors' signs and scales from the runs' evidence (module docstring).
+
+    Parameters
+    ----------
+    evidence : sequence of SensorEvidence
+        One per run of one rig (one session).
+
+    Returns
+    -------
+    SensorFaults
+    """
+    ev = tuple(evidence)
+    th_cos = [e.theta_cosine for e in ev if e.theta_cosine is not None]
+    a_cos = [e.accel_cosine for e in ev if e.accel_cosine is not None]
+    s_th, s_a = _sign(th_cos), _sign(a_cos)
+    effects: dict[str, float] = {}
+    alternative = hint = ""
+    if s_th < 0 and s_a < 0:
+        effects["motor_polarity"] = -1.0
+        alternative = "the encoder and the accelerometer both reversed (encoder_scale -1, accel_gain -1)"
+    elif s_th < 0:
+        effects["encoder_scale"] = -1.0
+        alternative = ("the motor and the accelerometer reversed (motor_polarity -1, accel_gain -1)" if s_a > 0 else
+                       "the motor reversed (motor_polarity -1): θ alone cannot tell them apart")
+    elif s_th > 0 and s_a < 0:
+        effects["accel_gain"] = -1.0
+        alternative = "the encoder and the motor both reversed (encoder_scale -1, motor_polarity -1)"
+    # magnitudes: a's gain from its ratio, the encoder's from θ's ratio over a's
+    motor = effects.get("motor_polarity", 1.0)
+    a_ratio = [e.accel_ratio * motor for e in ev if e.accel_ratio is not None]
+    th_ratio = [e.theta_ratio * motor for e in ev if e.theta_ratio is not None]
+    if s_a != 0 and a_ratio:
+        g_a = statistics.median(a_ratio)
+        if effects.get("accel_gain", 1.0) < 0 and g_a < 0:
+            effects["accel_gain"] = float(f"{g_a:.3g}")
+        if s_th != 0 and th_ratio and g_a != 0:
+            g_th = abs(statistics.median(th_ratio))
+            scale = min(ENCODER_SCALES, key=lambda s: abs(math.log(g_th / s)))
+            # θ off by a power of two where a is not: the encoder's resolution, not the motion's
+            near = (abs(math.log(g_th / scale)) <= math.log(SCALE_TOLERANCE)
+                    and abs(math.log(g_th / abs(g_a) / scale)) <= math.log(SCALE_TOLERANCE))
+            q = g_th / abs(g_a)
+            if near:
+                effects["encoder_scale"] = scale * (-1.0 if effects.get("encoder_scale", 1.0) < 0 else 1.0)
+            elif q >= 2.0 / SCALE_TOLERANCE or q <= 0.5 * SCALE_TOLERANCE:
+                # θ off from a by a power of two, but the motion is off too: an encoder of another
+                # resolution beside friction or an actuator gain, or the accelerometer's gain
+                hint = (f"θ reads {q:.2f}× what a's motion gives (θ's ratio {g_th:.2f}, a's {abs(g_a):.2f}): "
+                        f"an encoder of {q * 1024:.0f} counts per revolution, or the accelerometer's gain; "
+                        f"the ratios do not decide it")
+    claims = [_theta_claim(s_th, th_cos, th_ratio, a_ratio, effects), _accel_claim(s_a, a_cos, effects)]
+    if hint:
+        claims.append(AuditClaim("columns", "θ: 1024 encoder counts per revolution", "undecided", "unchecked", hint))
+    return SensorFaults(effects, tuple(c for c in claims if c is not None), alternative, ev)
+
+
+def _theta_claim(sign: int, cosines, th_ratio, a_ratio, effects) -> AuditClaim | None:
+    if not cosines:
+        return None
+    header = "θ: encoder counts, 1024 per revolution, turning with the command as the model's"
+    evidence = (f"cosine of θ's {THETA_HORIZON_S * 1000:.0f} ms changes with the nominal model's, driven by the "
+                f"logged command: {_fmt(cosines)} over {len(cosines)} run(s)")
+    if th_ratio and a_ratio:
+        evidence += f"; θ's ratio {statistics.median(th_ratio):.2f}, a's {statistics.median(a_ratio):.2f}"
+    if sign == 0:
+        return AuditClaim("columns", header, "undecided", "unchecked", evidence)
+    if "motor_polarity" in effects:
+        data = "the motor turns against the command (motor_polarity -1): θ and a both reversed"
+    elif effects.get("encoder_scale", 1.0) != 1.0:
+        s = effects["encoder_scale"]
+        data = (f"the encoder counts {abs(s) * 1024:.0f} per revolution" if abs(s) != 1.0 else "the encoder") + \
+               (" the other way" if s < 0 else "") + f" (encoder_scale {s:g})"
+    else:
+        return AuditClaim("columns", header, "as claimed", "confirmed", evidence)
+    return AuditClaim("columns", header, data, "contradicted", evidence)
+
+
+def _accel_claim(sign: int, cosines, effects) -> AuditClaim | None:
+    if not cosines:
+        return None
+    header = "a: the tip's acceleration with the model's sign"
+    evidence = (f"cosine of a ({ACCEL_BAND_HZ[0]:g}-{ACCEL_BAND_HZ[1]:g} Hz) with the nominal model's: "
+                f"{_fmt(cosines)} over {len(cosines)} run(s)")
+    if sign == 0:
+        return AuditClaim("columns", header, "undecided", "unchecked", evidence)
+    g = effects.get("accel_gain", 1.0)
+    if g < 0:
+        return AuditClaim("columns", header, f"the accelerometer reads the other way (accel_gain {g:g})",
+                          "contradicted", evidence)
+    return AuditClaim("columns", header, "as claimed" + (" (the motor's reversal aside)" if
+                                                         "motor_polarity" in effects else ""), "confirmed", evidence)

@@ -1,0 +1,140 @@
+"""The sensors' and the motor's signs and scales decided from the data
+(:mod:`station.logged.sensors`, DESIGN.md's sensor and wiring faults).
+
+Truth: the blind generator (``tests.blind``: its own FEM, sub-stepped friction, the rig's
+rounding and noise) hides each fault alone and beside a physical effect; the rig's own logs
+of 2009 and 2013-14 have none. The decision table (fewest faults for the two signs seen) is
+checked on every combination of signs.
+"""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+
+import pytest
+
+from station.logged import LoggedRun
+from station.logged.sensors import SIGN_COSINE, SensorEvidence, decide_faults, sensor_evidence
+from station.plant.model import load_model
+from tests.blind.cases import case_effects
+from tests.blind.generator import write_case
+
+
+@pytest.fixture(scope="module")
+def nominal():
+    return load_model("tmm-fit")
+
+
+def _decide(paths, model):
+    return decide_faults([sensor_evidence(LoggedRun.from_path(p), model) for p in paths])
+
+
+@pytest.mark.parametrize("folder", ["", "2009"])
+def test_the_rigs_own_logs_have_no_sensor_fault(rig_data, nominal, folder):
+    paths = sorted((rig_data / folder).glob("*.txt"))
+    assert paths
+    faults = _decide(paths, nominal)
+    assert faults.effects == {}, faults.lines()
+    assert faults.lines() == []
+    assert {c.verdict for c in faults.claims} == {"confirmed"}
+    for e in faults.evidence:
+        for c in (e.theta_cosine, e.accel_cosine):
+            if c is not None and "hold_and_release" not in e.name:  # a held hub hardly moves
+                assert c >= 0.7, (e.name, c)
+
+
+CASES = [
+    # (case, seed, what must be decided)
+    ("accel_reversed", 0, "accel_gain"),
+    ("accel_reversed", 1, "accel_gain"),
+    ("accel_reversed+coulomb_friction", 1, "accel_gain"),
+    ("accel_reversed+param:drive_c", 0, "accel_gain"),
+    ("encoder_reversed", 0, "encoder_scale"),
+    ("encoder_reversed+param:drive_c", 1, "encoder_scale"),
+    ("encoder_4096", 0, "encoder_scale"),
+    ("encoder_4096+param:act_K", 0, None),  # the motion off too: the ratios do not decide (below)
+    ("motor_reversed", 0, "motor_polarity"),
+    ("motor_reversed+coulomb_friction", 1, "motor_polarity"),
+    ("motor_reversed+amp_offset", 0, "motor_polarity"),
+    ("coulomb_friction", 0, None),
+    ("param:act_K", 3, None),
+    ("accel_gain", 2, None),  # a positive gain is a fit, not a decision
+]
+
+
+@pytest.mark.parametrize("case, seed, fault", CASES)
+def test_a_hidden_fault_is_decided_with_its_sign_and_scale(tmp_path, nominal, case, seed, fault):
+    hidden = case_effects(case, seed)
+    faults = _decide(write_case(tmp_path, hidden, seed), nominal)
+    assert set(faults.effects) == ({fault} if fault else set()), (hidden, faults.effects)
+    if fault is None:
+        return
+    found, truth = faults.effects[fault], hidden[fault]
+    assert found * truth > 0, (found, truth)  # the right sign
+    tol = 0.3 if fault == "accel_gain" else 1e-9  # a gain from a ratio (friction shrinks it); a scale exact
+    assert abs(found - truth) <= tol * abs(truth), (found, truth)
+    said = " ".join(faults.lines())
+    assert fault in said and "contradicted" not in said  # the line names the effect and its value
+    assert f"{found:g}" in said
+
+
+def test_a_rescaled_encoder_beside_heavy_friction_is_left_undecided_and_said(tmp_path, nominal):
+    # Coulomb friction 28 DAC counts: θ reads 2.5x the model's, a 0.65x, θ over a 3.9x. A
+    # 4096-count encoder, or an accelerometer of gain 0.26 with the motion 2.5x: the ratios
+    # alone cannot tell; the claim says so rather than deciding
+    hidden = case_effects("encoder_4096+coulomb_friction", 2)
+    faults = _decide(write_case(tmp_path, hidden, 2), nominal)
+    assert faults.effects == {}
+    hint = [c for c in faults.claims if c.verdict == "unchecked" and "4096" not in c.header]
+    assert any("counts per revolution, or the accelerometer's gain" in c.evidence for c in hint)
+
+
+def _ev(th: float | None, a: float | None, th_ratio: float = 1.0, a_ratio: float = 1.0) -> SensorEvidence:
+    return SensorEvidence("x.txt", th, None if th is None else th * th_ratio, a, None if a is None else a * a_ratio)
+
+
+@pytest.mark.parametrize("th, a, decided", [
+    (0.9, 0.9, set()),
+    (0.9, -0.9, {"accel_gain"}),
+    (-0.9, 0.9, {"encoder_scale"}),
+    (-0.9, -0.9, {"motor_polarity"}),
+    (-0.9, None, {"encoder_scale"}),      # no accelerometer: θ alone (the motor the alternative)
+    (0.9, None, set()),
+    (0.2, -0.2, set()),                       # neither decided
+    (None, None, set()),
+])
+def test_the_fewest_faults_that_give_the_signs_seen(th, a, decided):
+    f = decide_faults([_ev(th, a)] * 3)
+    assert set(f.effects) == decided
+    assert all(v in (-1.0, 1.0) or k == "accel_gain" for k, v in f.effects.items())
+    if decided:
+        assert f.alternative and f.lines()[-1].startswith("or: ")
+    unchecked = [c for c in f.claims if c.verdict == "unchecked"]
+    assert len(unchecked) == sum(x is not None and abs(x) < SIGN_COSINE for x in (th, a))
+
+
+def test_a_majority_of_runs_decides_and_a_scale_needs_theta_and_a_to_agree():
+    runs = [_ev(0.95, -0.9, a_ratio=1.3), _ev(0.9, -0.8, a_ratio=1.2), _ev(0.9, 0.3)]
+    assert decide_faults(runs).effects == {"accel_gain": pytest.approx(-1.2 * 0.9, rel=0.2)}
+    # θ 4x where a is 1x: a 4096-count encoder; θ and a both 2x: the motion (act_K), no decision
+    assert decide_faults([_ev(0.99, 0.99, th_ratio=3.9)] * 2).effects == {"encoder_scale": 4.0}
+    assert decide_faults([_ev(0.99, 0.99, th_ratio=2.0, a_ratio=2.0)] * 2).effects == {}
+
+
+def test_diagnose_says_the_fault_first_and_fits_the_rest_on_its_side(tmp_path):
+    hidden = case_effects("accel_reversed", 1)
+    paths = write_case(tmp_path / "logs", hidden, 1)
+    out = subprocess.run([sys.executable, "-m", "station", "diagnose", *map(str, paths), "--json",
+                          str(tmp_path / "d.json")], capture_output=True, text=True, timeout=900)
+    assert out.returncode == 0, out.stderr[-2000:]
+    first = out.stdout.splitlines()
+    assert first[0].startswith("sensor fault, decided from the data: ") and "accel_gain" in first[0]
+    assert first[2].startswith("model: tmm-fit with the sensor faults decided from the data (accel_gain")
+    d = json.loads((tmp_path / "d.json").read_text())
+    assert d["causes"][0] == "accel_gain" and d["cause"] == "accel_gain"
+    assert d["sensor_faults"]["effects"]["accel_gain"] < 0
+    g = dict(d["extended_model"]["effects"])["accel_gain"]
+    assert abs(g - hidden["accel_gain"]) <= 0.25 * abs(hidden["accel_gain"]), (g, hidden)
+    assert [r["run"] for r in d["audit"]] == [p.name for p in paths]
