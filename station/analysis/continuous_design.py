@@ -265,7 +265,9 @@ def _forms(root: complex, digits: int, steps=NEIGHBOURS) -> list[tuple[complex, 
         ims = _near(root.imag / scale, digits, steps) if root.imag else [(0.0, 0)]
         for re, kre in _near(root.real / scale, digits, steps):
             for im, kim in ims:
-                out.append((complex(re * scale, im * scale), unit, re, im, digits, kre + kim))
+                # "2π·" counts as a digit: of two designs a log cannot tell apart, the one in
+                # rad/s is preferred unless the one in Hz is rounder (20(s+2π·5)/(s+2π·20))
+                out.append((complex(re * scale, im * scale), unit, re, im, digits + (unit != ""), kre + kim))
     return out
 
 

@@ -45,6 +45,45 @@ def _matches_printed(printed: list[float], exact: np.ndarray) -> bool:
     return len(printed) == exact.size and bool(np.all(np.abs(np.asarray(printed) - exact) <= PRINTED_TOLERANCE))
 
 
+SAME_LAW_RTOL = 1e-6
+"""Relative agreement of a header's coefficients with the data's law under which the header
+states that law (printed to 8 significant digits; a lying header is off by percent)."""
+
+
+def _coefficients(controller) -> list[np.ndarray] | None:
+    gth = getattr(controller, "gth", None)
+    if gth is None:
+        return None
+    out = []
+    for tf in (gth, getattr(controller, "ga", None)):
+        if tf is not None:
+            num, den = np.asarray(tf.num, float), np.asarray(tf.den, float)
+            out += [num / den[0], den / den[0]]
+    return out
+
+
+def same_law(stated, found) -> bool:
+    """Whether two closed-loop controllers run the same linear law (Gth and Ga coefficients
+    within :data:`SAME_LAW_RTOL`), whatever their clamps and integer recursions.
+
+    Parameters
+    ----------
+    stated, found : Compensator, OpenLoop or None
+        The header's controller and the data's.
+
+    Returns
+    -------
+    bool
+    """
+    if not (is_closed_loop(stated) and is_closed_loop(found)):
+        return False
+    a, b = _coefficients(stated), _coefficients(found)
+    if a is None or b is None or len(a) != len(b):
+        return False
+    return all(x.shape == y.shape and np.allclose(x, y, rtol=SAME_LAW_RTOL, atol=PRINTED_TOLERANCE)
+               for x, y in zip(a, b))
+
+
 def _rig_stage(meta: dict, key: str, design: DiscreteTF, notes: list[str]) -> tuple[DiscreteTF | None, bool]:
     """The filter printed in a rig header: the exact design when it matches, else as printed."""
     coeffs = meta.get(key)
@@ -317,6 +356,16 @@ def identify_controller(log: RunLog, skipped=None) -> ControllerId:
         fit = AlignmentFit(hit.alignment, hit.max_abs_dv, hit.v_replayed)
         at = f" at alignment {hit.alignment}" if is_closed_loop(hit.controller) else ""
         data_says = f"{hit.law}{at}, reproduces every logged v {_how_close(hit.max_abs_dv)}"
+        if controller is not None and same_law(controller, hit.controller):
+            # what the header states holds; the data complete what it does not (the clamp,
+            # the recursion on the stored integer, coefficients past their printed digits)
+            notes.append(f"the header's controller ({said}) is the data's law, completed from the data: "
+                         f"{data_says}")
+            return ControllerId(hit.controller, "header", notes, fit, AuditClaim(
+                "controller", said, data_says, "confirmed",
+                f"the data's law has the header's coefficients (to {SAME_LAW_RTOL:g} relative); as printed it "
+                f"replays v to max |dv| = {header_dv:.3g} counts, completed from the data "
+                f"{_how_close(hit.max_abs_dv)}{at}"), hit.alignments)
         if stated:
             notes.append(f"the header's controller ({said}) does not reproduce the logged v (max |dv| = "
                          f"{header_dv:.3g} counts); the data's is used: {data_says}")
