@@ -153,7 +153,8 @@ def _diagnose(runs, validate, model, progress, bench: Bench, simulate, likelihoo
     cases, n_fit, notes = _use_runs(runs, validate)
     # the sensors' signs and scales first (DESIGN.md): a decided fault is part of the base model
     faults = decide_faults([sensor_evidence(c.run, nominal_model) for c in cases])
-    base = nominal_model.with_effects(faults.effects) if faults.effects else nominal_model
+    base = nominal_model.with_effects(faults.in_fit) if faults.in_fit else nominal_model
+    names = names + [n for n in faults.to_fit if n not in names]  # pointed at, not decided: fitted
     folds, how = make_folds(n_fit, len(cases) - n_fit)
     ev = Evaluator(cases, base, simulate)
     search = bench.search(ev, folds, range(n_fit), progress or (lambda msg: None))
@@ -172,7 +173,8 @@ def _diagnose(runs, validate, model, progress, bench: Bench, simulate, likelihoo
     if likelihood_values:
         sel = choose_estimator(search, sel).selection  # (its choice is said in the progress)
     accepted = sel.accepted
-    extended = base.with_effects(sel.values, name=f"{base.name} + {' + '.join(accepted)}" if accepted else None)
+    extended = base.with_effects({**faults.effects, **sel.values},
+                                 name=f"{base.name} + {' + '.join(accepted)}" if accepted else None)
     fit_nom, fit_ext = pooled(ev, nominal.trial.val_sse), pooled(ev, sel.current.val_sse)
     gain = rms_gain(fit_ext.rms_theta, fit_nom.rms_theta) if accepted else 0.0
     cost_gain = relative_gain(sel.current.val_weighted, nominal.trial.val_weighted) if accepted else 0.0

@@ -19,6 +19,8 @@ sign, between them undecided. θ's sign is the encoder's times the motor's; a's 
 accelerometer's times the motor's. Of the three wirings that give the two signs seen, the
 one with fewest faults is decided (θ and a both reversed: the motor; θ alone: the encoder;
 a alone: the accelerometer), and the other is said as the alternative. The accelerometer's
+bias and drift are the least-squares fit of a on [1, t, the model's a]: decided when every
+run's has one sign and their median reaches :data:`OFFSET_COUNTS` / :data:`DRIFT_COUNTS_PER_S`. The accelerometer's
 gain is the median ratio of a; an encoder of another resolution is decided when θ's ratio,
 and θ's over a's, are within :data:`SCALE_TOLERANCE` of one power of two other than 1 (a
 4096-count encoder reads 4; the motion itself, and so a, as the model's).
@@ -54,6 +56,14 @@ SIGN_COSINE = 0.5
 SCALE_TOLERANCE = 1.2
 """An encoder scale 2**k (k != 0) is decided when θ's ratio over a's is within this factor of it."""
 
+OFFSET_COUNTS = 1.0
+"""An accelerometer bias is decided when every run's has one sign and their median is at least
+this large, counts (the noise is 0.3; the rig's 2013-14 runs' biases take both signs)."""
+
+DRIFT_COUNTS_PER_S = 0.75
+"""An accelerometer drift is decided when every run's has one sign and their median is at least
+this large, counts per s (the rig's runs: |median| under 0.1)."""
+
 ENCODER_SCALES = (0.25, 0.5, 2.0, 4.0, 8.0, 16.0)
 """Encoder resolutions decided, relative to the model's 1024 counts per revolution."""
 
@@ -72,6 +82,10 @@ class SensorEvidence:
     accel_cosine, accel_ratio : float or None
         The same for a in :data:`ACCEL_BAND_HZ`; None when either is flat or the log's a is
         no tip acceleration (its audit).
+    accel_bias, accel_slope : float or None
+        a's bias (counts: its rest value before the first command plus what remains) and its
+        drift (counts per s) beside the model's a: the least-squares fit of the measured a on
+        [1, t, the model's a] over the whole run; None as ``accel_cosine``.
     """
 
     name: str
@@ -79,6 +93,8 @@ class SensorEvidence:
     theta_ratio: float | None
     accel_cosine: float | None
     accel_ratio: float | None
+    accel_bias: float | None = None
+    accel_slope: float | None = None
 
 
 def _compare(measured: np.ndarray, model: np.ndarray) -> tuple[float | None, float | None]:
@@ -123,12 +139,18 @@ def sensor_evidence(run, model) -> SensorEvidence:
     h = max(1, int(round(THETA_HORIZON_S / dt)))
     theta, theta_m = np.asarray(d["theta"], float), np.asarray(pred["theta"], float)
     th = _compare(theta[h:] - theta[:-h], theta_m[h:] - theta_m[:-h])
-    ac: tuple[float | None, float | None] = (None, None)
+    ac: tuple[float | None, ...] = (None, None, None, None)
     nyquist = 0.5 / dt
-    if run.audit.accel_is_tip and len(run) > 30 and ACCEL_BAND_HZ[1] < nyquist:
+    a_raw = np.asarray(d["a"], float)
+    if run.audit.accel_is_tip and len(run) > 30 and ACCEL_BAND_HZ[1] < nyquist and np.all(np.isfinite(a_raw)):
         sos = butter(2, ACCEL_BAND_HZ, "bandpass", fs=1.0 / dt, output="sos")
-        a = np.asarray(d["a"], float) - run.accel_rest_offset
-        ac = _compare(sosfiltfilt(sos, a), sosfiltfilt(sos, np.asarray(pred["a"], float)))
+        rest = run.accel_rest_offset
+        a, a_m = a_raw - rest, np.asarray(pred["a"], float)
+        cos_ratio = _compare(sosfiltfilt(sos, a), sosfiltfilt(sos, a_m))
+        if cos_ratio[0] is not None:
+            t = np.arange(a.size) * dt  # the plant's drift runs from the run's first sample
+            (bias, slope, _), *_ = np.linalg.lstsq(np.column_stack([np.ones_like(t), t, a_m]), a, rcond=None)
+            ac = (*cos_ratio, float(rest + bias), float(slope))
     return SensorEvidence(name, *th, *ac)
 
 
@@ -147,20 +169,31 @@ class SensorFaults:
     Attributes
     ----------
     effects : dict of str to float
-        Decided effects (accel_gain, encoder_scale, motor_polarity) -> value; empty when
-        the data agree with the model's signs and scales.
+        Decided effects (accel_gain, accel_offset, accel_drift, encoder_scale,
+        motor_polarity) -> value; empty when the data agree with the model's signs and scales.
     claims : tuple of AuditClaim
         "columns" claims: θ's and a's signs and scale, confirmed, contradicted or unchecked.
     alternative : str
         The other wiring that gives the same signs ("" when none).
     evidence : tuple of SensorEvidence
         Per run.
+    to_fit : tuple of str
+        Faults the data point at but do not decide: a diagnosis fits them as candidates
+        (an encoder of another resolution beside a slower motion).
     """
 
     effects: dict = field(default_factory=dict)
     claims: tuple = ()
     alternative: str = ""
     evidence: tuple = ()
+    to_fit: tuple = ()
+
+    @property
+    def in_fit(self) -> dict:
+        """The decided effects a fit's base model holds: all but ``accel_offset`` (each run's a
+        is compared with its rest value removed, :func:`station.diagnosis.runs.cases.load_case`;
+        the bias goes into the model a diagnosis saves)."""
+        return {k: v for k, v in self.effects.items() if k != "accel_offset"}
 
     def lines(self) -> list[str]:
         """One line per contradicted claim, the alternative after them."""
@@ -168,9 +201,9 @@ class SensorFaults:
         return out + ([f"or: {self.alternative}"] if self.alternative and out else [])
 
     def to_json(self) -> dict:
-        """``{"effects", "claims", "alternative", "runs"}``."""
+        """``{"effects", "claims", "alternative", "to_fit", "runs"}``."""
         return {"effects": dict(self.effects), "claims": [c.to_json() for c in self.claims],
-                "alternative": self.alternative,
+                "alternative": self.alternative, "to_fit": list(self.to_fit),
                 "runs": [dict(vars(e)) for e in self.evidence]}
 
 
@@ -229,10 +262,31 @@ def decide_faults(evidence: Sequence[SensorEvidence]) -> SensorFaults:
                 hint = (f"θ reads {q:.2f}× what a's motion gives (θ's ratio {g_th:.2f}, a's {abs(g_a):.2f}): "
                         f"an encoder of {q * 1024:.0f} counts per revolution, or the accelerometer's gain; "
                         f"the ratios do not decide it")
-    claims = [_theta_claim(s_th, th_cos, th_ratio, a_ratio, effects), _accel_claim(s_a, a_cos, effects)]
+    bias_claim = _trend_claim("accel_offset", [e.accel_bias for e in ev], OFFSET_COUNTS, effects,
+                              "a: zero at rest (the rig zeroes it before a test)", "counts")
+    drift_claim = _trend_claim("accel_drift", [e.accel_slope for e in ev], DRIFT_COUNTS_PER_S, effects,
+                               "a: no drift over a run", "counts per s")
+    claims = [_theta_claim(s_th, th_cos, th_ratio, a_ratio, effects), _accel_claim(s_a, a_cos, effects),
+              bias_claim, drift_claim]
     if hint:
         claims.append(AuditClaim("columns", "θ: 1024 encoder counts per revolution", "undecided", "unchecked", hint))
-    return SensorFaults(effects, tuple(c for c in claims if c is not None), alternative, ev)
+    return SensorFaults(effects, tuple(c for c in claims if c is not None), alternative, ev,
+                        ("encoder_scale",) if hint else ())
+
+
+def _trend_claim(name: str, values, least: float, effects: dict, header: str, unit: str) -> AuditClaim | None:
+    """Decide an accelerometer bias or drift (into ``effects``) when every run's has one sign
+    and their median reaches ``least``."""
+    v = [x for x in values if x is not None and math.isfinite(x)]
+    if not v:
+        return None
+    med = statistics.median(v)
+    evidence = f"{name.split('_')[1]} per run beside the model's a: {_fmt(v)} {unit}"
+    if abs(med) >= least and (all(x > 0 for x in v) or all(x < 0 for x in v)):
+        effects[name] = float(f"{med:.3g}")
+        return AuditClaim("columns", header, f"{name} {effects[name]:g} {unit}", "contradicted", evidence)
+    return AuditClaim("columns", header, "as claimed", "confirmed",
+                      evidence + f" (decided at |median| >= {least:g} with one sign)")
 
 
 def _theta_claim(sign: int, cosines, th_ratio, a_ratio, effects) -> AuditClaim | None:
