@@ -206,3 +206,36 @@ def test_the_estimate_counts_the_simulations_the_diagnosis_runs(rig_data, tmp_pa
     estimate = int(re.search(r"about (\d+) simulations", err).group(1))
     actual = json.loads(out.read_text())["simulations"]
     assert 0.67 <= estimate / actual <= 1.5, (estimate, actual)
+
+
+# --- unexplained: does the extended model predict held-out runs better? (issue 26 item 4) ----
+
+@pytest.mark.parametrize("gain, word", [(35.0, "35.0 % better"), (-14.0, "14.0 % worse"), (0.0, "no better")])
+def test_unexplained_says_whether_the_extended_model_predicts_better_and_the_save_warns(tmp_path, gain, word):
+    import argparse
+    import contextlib
+    import io
+
+    from station.commands import diagnose as cmd
+
+    diag = built_diagnosis(unexplained_flag=True)
+    diag.gain_pct = gain
+    line = next(x for x in format_diagnosis(diag).splitlines() if x.startswith("unexplained: yes"))
+    assert word in line and "than the nominal model" in line
+    # --save-model warns exactly when the saved model predicts no better than nominal
+    args = argparse.Namespace(runs=["a.txt"], validate=[], max_samples=10**6, quiet=True, model=None,
+                              report=None, json=None, save_model=str(tmp_path / "m.toml"), force=False)
+    err = io.StringIO()
+    real = (cmd.check_outputs, cmd.plan)
+    cmd.check_outputs, cmd.plan = (lambda *a, **k: None), (lambda *a, **k: "")
+    try:
+        import station.diagnosis as pkg
+        saved, pkg.diagnose = pkg.diagnose, (lambda *a, **k: diag)
+        with contextlib.redirect_stderr(err), contextlib.redirect_stdout(io.StringIO()):
+            assert cmd.run(args) == 0
+    finally:
+        cmd.check_outputs, cmd.plan = real
+        pkg.diagnose = saved
+    warned = "warning: --save-model" in err.getvalue()
+    assert warned == (gain <= 0), err.getvalue()
+    assert (tmp_path / "m.toml").exists()

@@ -235,7 +235,8 @@ def format_diagnosis(diag) -> str:
              f"θ fit {pct(diag.baseline_fit.get('theta'))} -> {pct(diag.extended_fit.get('theta'))}, "
              f"a fit {pct(diag.baseline_fit.get('accel'))} -> {pct(diag.extended_fit.get('accel'))}, "
              f"θ RMS gain {diag.gain_pct:.1f} %",
-             "unexplained: " + ("no" if u is None or not u.flag else "yes - " + whole_sentences(u.evidence))]
+             "unexplained: " + ("no" if u is None or not u.flag else "yes - " + whole_sentences(u.evidence)
+                                + f" ({diag.prediction_words()})")]
     if diag.causes:
         lines.append("alternatives: " + ("none" if not diag.alternatives else "; ".join(
             f"{' + '.join(a.causes)} (cost ratio {a.cost_ratio:.3f}, θ gain {a.gain_pct:.1f} %)"
@@ -306,6 +307,9 @@ def run(args: argparse.Namespace) -> int:
     with noting(lambda: f"the diagnosis was at: {last[0]}; nothing written"):
         diag = diagnose(args.runs, validate=args.validate, model=args.model, progress=progress)
     print(format_diagnosis(diag))
+    if args.save_model is not None and diag.causes and diag.gain_pct <= 0:
+        print(f"diagnose: warning: --save-model {args.save_model}: {diag.prediction_words()}; "
+              f"simulate with it knowing that", file=sys.stderr)
     with Transaction() as tx:
         if args.report is not None:
             from station.diagnosis.answer.report import write_report  # lazy: start-up time (matplotlib)

@@ -284,7 +284,7 @@ def answer_points(diag) -> list[tuple[str, str]]:
                                f"{format_pct(diag.extended_fit.get('accel'))})."))
     u = diag.unexplained
     if u is not None:
-        points.append(("Still unexplained", u.evidence if u.flag else
+        points.append(("Still unexplained", f"{u.evidence} ({diag.prediction_words()})" if u.flag else
                        "nothing: the remaining θ and a residuals are what encoder rounding and accelerometer noise "
                        "produce around the model."))
     if diag.causes:

@@ -201,6 +201,18 @@ class Diagnosis:
         faults = list(self.decided_faults)
         return faults + [c for c in self.causes if c not in faults]
 
+    def prediction_words(self) -> str:
+        """Whether the extended model predicts the runs it was not fitted to better than the
+        nominal one (θ RMS, :attr:`gain_pct`), in words: said beside "unexplained" and when
+        the model is saved."""
+        if not self.causes:
+            return "no effect accepted: the extended model is the nominal one"
+        how = "better" if self.gain_pct > 0 else "no better" if self.gain_pct == 0 else "worse"
+        return (f"on runs it was not fitted to ({self.validation}) the extended model predicts θ "
+                f"{abs(self.gain_pct):.1f} % {how} than the nominal model (RMS)" if how != "no better" else
+                f"on runs it was not fitted to ({self.validation}) the extended model predicts θ no better "
+                f"than the nominal model")
+
     def audit_lines(self) -> list[str]:
         """What the data contradicted, one line each, to say before anything else: each run's
         contradicted claims, then the sensor faults (and the wiring that reads the same)."""
