@@ -138,3 +138,33 @@ def test_nan_is_a_controller_fault_in_simulate_and_in_the_loop_alike(tmp_path):
     assert report.result.reason == "controller-fault"
     assert str(caught.value) == "controller returned NaN at tick 29"  # sample 29 gave call 30
     assert report.result.message.startswith(str(caught.value))
+
+
+@pytest.mark.parametrize("recursion", ["trunc", "round"])
+@pytest.mark.parametrize("alignment", [0, 1])
+def test_an_integer_recursion_runs_compiled_as_its_own_step_runs_it(recursion, alignment):
+    # the lab's software stores the whole-count command and recurses on it; the compiled
+    # loop (store mode) and the compensator's own step() (Python loop) must agree bit for bit
+    from station.control import Compensator, DiscreteTF
+    from station.control.reference import step_reference
+    from station.plant import simulate
+    from station.plant.model import load_model
+    from tests.blind.rig import tustin
+
+    num, den = tustin([3.0, 39.0], [1.0, 20.0], 0.002)
+    make = lambda: Compensator(DiscreteTF(num, den), limit=200.0, recursion=recursion)  # noqa: E731
+    model = load_model("rig")
+    u = step_reference(100.0, 800, at_tick=10)
+    compiled = simulate(model, make(), u, alignment=alignment, command="trunc")
+
+    class Python(Compensator):  # a subclass runs in the Python loop, through step()
+        pass
+
+    slow = make()
+    slow.__class__ = Python
+    python = simulate(model, slow, u, alignment=alignment, command="trunc")
+    for key in ("theta", "a", "v", "theta_d_hat"):
+        assert np.array_equal(compiled[key], python[key]), key
+    assert np.all(compiled.v == np.round(compiled.v))  # every command a whole count
+    plain = simulate(model, Compensator(DiscreteTF(num, den), limit=200.0), u, alignment=alignment, command="trunc")
+    assert not np.array_equal(plain.v, compiled.v)  # the float recursion is another law

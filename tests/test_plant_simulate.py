@@ -98,7 +98,7 @@ def test_plain_python_kernel_matches_compiled():
     n = lam.size
     args = (lam, bm, np.zeros(n, complex), np.ascontiguousarray(cm), np.zeros((4, n), complex), 0.0, 0.0, 0,
             np.zeros(n, complex), u, np.zeros(1), False, True,
-            gnum, gden, anum, aden, True, 200.0, 1, True, 1,  # command quantization: round
+            gnum, gden, anum, aden, True, 200.0, 1, True, 1, 2,  # command quantization: round; recursion on the truncated integer
             *KernelEffects())  # no effects
     plain = kernel._compiled_loop.py_func(*args)
     compiled = simulate_module._kernel(*args)

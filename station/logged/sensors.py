@@ -8,8 +8,9 @@ applied (its own v, so a closed loop's own feedback, right or wrong, is in it), 
 model moves as the rig moved if those claims hold. Two numbers per run test them:
 
 - θ: the cosine between the measured and the modelled θ's changes over
-  :data:`THETA_HORIZON_S` (short, so the model's drift without friction does not count), and
-  the least-squares ratio of the measured to the modelled changes;
+  :data:`THETA_HORIZON_S` where the measured hub moved (short, and moving, so the model's
+  drift without friction does not count), and the least-squares ratio of the measured to
+  the modelled changes;
 - a: the same between the measured and the modelled a band-passed to
   :data:`ACCEL_BAND_HZ` (the accelerometer's offset and drift, and the beam's rigid motion,
   removed).
@@ -21,8 +22,8 @@ one with fewest faults is decided (θ and a both reversed: the motor; θ alone: 
 a alone: the accelerometer), and the other is said as the alternative. The accelerometer's
 bias and drift are the least-squares fit of a on [1, t, the model's a]: decided when every
 run's has one sign and their median reaches :data:`OFFSET_COUNTS` / :data:`DRIFT_COUNTS_PER_S`. The accelerometer's
-gain is the median ratio of a; an encoder of another resolution is decided when θ's ratio,
-and θ's over a's, are within :data:`SCALE_TOLERANCE` of one power of two other than 1 (a
+gain is the median ratio of a; an encoder of another resolution is decided when every run's
+θ ratio, and θ's over a's, are within :data:`SCALE_TOLERANCE` of one power of two other than 1 (a
 4096-count encoder reads 4; the motion itself, and so a, as the model's).
 
 On the rig's own logs (2009, 2013-14) every cosine is +0.74 or more where the channel
@@ -49,6 +50,14 @@ THETA_HORIZON_S = 0.05
 
 ACCEL_BAND_HZ = (1.0, 40.0)
 """Band a is compared in, Hz (second-order Butterworth, forward and backward)."""
+
+MOVING_COUNTS = 2.0
+"""θ changes are compared where the measured hub moved at least this many counts over
+:data:`THETA_HORIZON_S` (a sticking hub while the frictionless model drifts says nothing about
+the encoder)."""
+
+MIN_WINDOWS = 20
+"""Fewest moving windows a run's θ comparison needs."""
 
 SIGN_COSINE = 0.5
 """|cosine| at or above which a sign is decided."""
@@ -138,7 +147,9 @@ def sensor_evidence(run, model) -> SensorEvidence:
                         dt=dt)
     h = max(1, int(round(THETA_HORIZON_S / dt)))
     theta, theta_m = np.asarray(d["theta"], float), np.asarray(pred["theta"], float)
-    th = _compare(theta[h:] - theta[:-h], theta_m[h:] - theta_m[:-h])
+    dm, ds = theta[h:] - theta[:-h], theta_m[h:] - theta_m[:-h]
+    moving = np.abs(dm) >= MOVING_COUNTS  # a stuck hub is friction's, not the sensor's: not compared
+    th = _compare(dm[moving], ds[moving]) if np.count_nonzero(moving) >= MIN_WINDOWS else (None, None)
     ac: tuple[float | None, ...] = (None, None, None, None)
     nyquist = 0.5 / dt
     a_raw = np.asarray(d["a"], float)
@@ -251,7 +262,7 @@ def decide_faults(evidence: Sequence[SensorEvidence]) -> SensorFaults:
             g_th = abs(statistics.median(th_ratio))
             scale = min(ENCODER_SCALES, key=lambda s: abs(math.log(g_th / s)))
             # θ off by a power of two where a is not: the encoder's resolution, not the motion's
-            near = (abs(math.log(g_th / scale)) <= math.log(SCALE_TOLERANCE)
+            near = (all(r != 0 and abs(math.log(abs(r) / scale)) <= math.log(SCALE_TOLERANCE) for r in th_ratio)
                     and abs(math.log(g_th / abs(g_a) / scale)) <= math.log(SCALE_TOLERANCE))
             q = g_th / abs(g_a)
             if near:

@@ -19,50 +19,6 @@ from station.logged.device import command_quantization
 from station.runlog import RunLog
 
 
-class Stepwise:
-    """A controller seen only through ``step``/``reset`` (and its ``limit``, ``name``, ``spec``),
-    so that :func:`station.plant.simulate` runs it in its Python loop: the compiled kernel's
-    Gth recursion remembers the float command, not the integer a lab's software stored
-    (``Compensator(recursion="trunc" | "round")``).
-
-    Parameters
-    ----------
-    controller : Compensator
-        Stepped as it is (its own recursion).
-    """
-
-    def __init__(self, controller):
-        self.controller = controller
-        self.limit = getattr(controller, "limit", None)
-        self.name = getattr(controller, "name", "")
-        self.spec = getattr(controller, "spec", {})
-
-    def reset(self) -> None:
-        """Reset the wrapped controller."""
-        self.controller.reset()
-
-    def step(self, u: float, theta: float, a: float) -> tuple[float, float]:
-        """The wrapped controller's step (:meth:`station.control.Compensator.step`).
-
-        Parameters
-        ----------
-        u, theta, a : float
-            Reference, encoder and accelerometer counts.
-        """
-        return self.controller.step(u, theta, a)
-
-
-def simulable(controller):
-    """The controller as :func:`station.plant.simulate` runs it right: a compensator whose
-    recursion stores an integer wrapped in :class:`Stepwise`, any other as it is.
-
-    Parameters
-    ----------
-    controller : Compensator, OpenLoop, a Controller or None
-    """
-    return Stepwise(controller) if getattr(controller, "recursion", "none") != "none" else controller
-
-
 def compared_theta(theta, closed: bool) -> np.ndarray:
     """θ as a model is compared with it: relative to its first sample in open loop (the
     rig's encoder is not reset before an open-loop test), as logged in closed loop.
@@ -110,7 +66,7 @@ def simulate_log(log: RunLog, controller, alignment: int | None, model) -> Model
 
     Closed loop: the log's controller, reference, clamp and alignment, the device's
     command quantization (:func:`station.logged.device.command_quantization`); a
-    recursion on the stored integer runs step by step (:func:`simulable`). Open loop
+    recursion on the stored integer runs compiled as the lab's software ran it. Open loop
     (or no controller): the plant driven by what was applied: ``v_applied`` where the log
     has it (our logs), else the logged v quantized as the device did.
 
@@ -150,7 +106,7 @@ def simulate_log(log: RunLog, controller, alignment: int | None, model) -> Model
             how = f"the logged v (open loop), quantized as the device did ({command})"
     else:
         d = 1 if alignment is None else alignment
-        pred = simulate(model, simulable(controller), u, alignment=d, command=command, **kw)
+        pred = simulate(model, controller, u, alignment=d, command=command, **kw)
         how = f"the log's controller and reference, alignment {d}, commands quantized as the device did ({command})"
     theta = compared_theta(data["theta"], closed)
     return ModelRun(pred, theta, fit_pct(theta, pred["theta"], data["a"], pred["a"]), how)

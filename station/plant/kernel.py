@@ -155,7 +155,7 @@ def _advance(z, vk, lam, bm, bp, co, gw_v, gw_p, substeps, v_c, v_s, w_s, half_g
 
 
 def _loop(lam, bm, bp, cm, co, gw_v, gw_p, substeps, z0, u, v_open, use_v_open, closed, gnum, gden, anum, aden,
-          use_ga, limit, d, quantize, cmd_mode, offset, saturation, deadzone, delay, accel_gain, v_c, v_s, w_s,
+          use_ga, limit, d, quantize, cmd_mode, store_mode, offset, saturation, deadzone, delay, accel_gain, v_c, v_s, w_s,
           half_gap, k_d, c_d, encoder_scale, accel_offset, accel_drift, polarity):  # pragma: no cover - compiled by numba
     n = u.shape[0]
     theta = np.zeros(n)
@@ -195,6 +195,11 @@ def _loop(lam, bm, bp, cm, co, gw_v, gw_p, substeps, z0, u, v_open, use_v_open, 
                     td = uk - g
                 e = td - theta[j]
                 vk = gnum[0] * e + g_acc
+                # the integer a lab's software stored (Compensator recursion), then its clamp
+                if store_mode == 1:
+                    vk = _half_away(vk)
+                elif store_mode == 2:
+                    vk = float(math.trunc(vk))
             else:
                 vk = uk
             if vk > limit:

@@ -47,6 +47,11 @@ def _plant_parts(model, dt, substeps):
     return form, KernelEffects(), form.vinv @ model.x.astype(complex), getattr(model, "dt", DT)
 
 
+STORE_MODES = {"none": 0, "round": 1, "trunc": 2}
+"""A compensator's recursion (:data:`station.control.compensator.RECURSIONS`) as the compiled
+loop's store mode: the float, the whole count rounded half away from zero, or truncated."""
+
+
 def _python_loop(stepper, controller, u, d, v_open, quantize, cmd_mode, limit):
     """The kernel's sample loop in Python, for a controller object with step/reset; its
     commands guarded at ±limit as the loop guards them."""
@@ -243,6 +248,7 @@ def simulate(model, controller, u, alignment: int = 1, v_open=None, quantize: bo
             form.lam, form.bm, form.bp, form.cm, form.co, form.gw_v, form.gw_p, form.substeps,
             np.zeros(form.lam.size, complex) if z0 is None else z0, u_ctrl, v_open if use_v_open else np.zeros(1),
             use_v_open, gth is not None, gnum, gden, anum, aden, ga is not None,
-            math.inf if limit is None else float(limit), d, bool(quantize), cmd_mode, *fx,
+            math.inf if limit is None else float(limit), d, bool(quantize), cmd_mode,
+            STORE_MODES[getattr(controller, "recursion", "none")], *fx,
         )
     return SimResult(np.arange(u.size) * dt, u, v, theta, a, thd)
