@@ -149,3 +149,33 @@ def test_diagnose_says_the_fault_first_and_fits_the_rest_on_its_side(tmp_path):
     g = dict(d["extended_model"]["effects"])["accel_gain"]
     assert abs(g - hidden["accel_gain"]) <= 0.25 * abs(hidden["accel_gain"]), (g, hidden)
     assert [r["run"] for r in d["audit"]] == [p.name for p in paths]
+
+
+def test_the_labs_third_session_in_miniature(tmp_path):
+    """Issue 26's real session, blind: open-loop headers over a lead on the truncated integer
+    command at alignment 0, and an accelerometer read the other way (gain -1.2), beside
+    Coulomb friction. The answer leads with both, then names the friction."""
+    import dataclasses
+
+    from tests.blind.audit import draw_case, format_audit_run, simulate_audit_case
+
+    base = draw_case("session", 0)
+    paths = []
+    for seed in range(3):  # one controller, three references
+        c = dataclasses.replace(draw_case("session", seed), num_s=base.num_s, den_s=base.den_s,
+                                design_text=base.design_text, limit=base.limit,
+                                effects={"accel_gain": -1.2, "coulomb_friction": 6.0})
+        paths.append(tmp_path / f"session_{seed}_SLFR_RTP_OL_Test.txt")
+        paths[-1].write_text(format_audit_run(c, simulate_audit_case(c, seed)))
+    out = subprocess.run([sys.executable, "-m", "station", "diagnose", *map(str, paths), "--json",
+                          str(tmp_path / "d.json")], capture_output=True, text=True, timeout=900)
+    assert out.returncode == 0, out.stderr[-2000:]
+    lines = out.stdout.splitlines()
+    assert all(x.startswith("audit: session_") and "header: open loop; data: " in x for x in lines[:3])
+    assert lines[3].startswith("sensor fault, decided from the data: ") and "accel_gain -1." in lines[3]
+    d = json.loads((tmp_path / "d.json").read_text())
+    assert [r["controller_source"] for r in d["audit"]] == ["inferred (header contradicted)"] * 3
+    assert d["causes"][:2] == ["accel_gain", "coulomb_friction"], d["causes"]
+    found = dict(d["extended_model"]["effects"])
+    assert abs(found["accel_gain"] + 1.2) <= 0.25 * 1.2 and abs(found["coulomb_friction"] - 6.0) <= 0.25 * 6.0
+    assert d["gain_pct"] > 50.0
