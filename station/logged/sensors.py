@@ -19,7 +19,8 @@ A cosine below −:data:`SIGN_COSINE` is a reversal, above +:data:`SIGN_COSINE` 
 sign, between them undecided. θ's sign is the encoder's times the motor's; a's the
 accelerometer's times the motor's. Of the three wirings that give the two signs seen, the
 one with fewest faults is decided (θ and a both reversed: the motor; θ alone: the encoder;
-a alone: the accelerometer), and the other is said as the alternative. The accelerometer's
+a alone: the accelerometer, its gain the median of a's ratio over θ's, in which the motion's
+own scale cancels), and the other is said as the alternative. The accelerometer's
 bias and drift are the least-squares fit of a on [1, t, the model's a]: decided when every
 run's has one sign and their median reaches :data:`OFFSET_COUNTS` / :data:`DRIFT_COUNTS_PER_S`. The accelerometer's
 gain is the median ratio of a; an encoder of another resolution is decided when every run's
@@ -222,13 +223,16 @@ def _fmt(values: list[float]) -> str:
     return ", ".join(f"{v:+.2f}" for v in values)
 
 
-def decide_faults(evidence: Sequence[SensorEvidence]) -> SensorFaults:
+def decide_faults(evidence: Sequence[SensorEvidence], accel_gain: float | None = None) -> SensorFaults:
     """Decide the sensors' signs and scales from the runs' evidence (module docstring).
 
     Parameters
     ----------
     evidence : sequence of SensorEvidence
         One per run of one rig (one session).
+    accel_gain : float, optional
+        A reversed accelerometer's gain found otherwise (a diagnosis refits it beside the
+        effects it accepted); default: a's ratio over θ's, the median over the runs.
 
     Returns
     -------
@@ -257,7 +261,11 @@ def decide_faults(evidence: Sequence[SensorEvidence]) -> SensorFaults:
     if s_a != 0 and a_ratio:
         g_a = statistics.median(a_ratio)
         if effects.get("accel_gain", 1.0) < 0 and g_a < 0:
-            effects["accel_gain"] = float(f"{g_a:.3g}")
+            # a's ratio over θ's per run: the motion's own scale (friction, the actuator) cancels
+            per_run = [e.accel_ratio / abs(e.theta_ratio) for e in ev if e.accel_ratio is not None
+                       and e.theta_ratio is not None and abs(e.theta_ratio) >= 0.1]
+            g = accel_gain if accel_gain is not None else statistics.median(per_run) if per_run else g_a
+            effects["accel_gain"] = float(f"{min(g, -0.3):.3g}")
         if s_th != 0 and th_ratio and g_a != 0:
             g_th = abs(statistics.median(th_ratio))
             scale = min(ENCODER_SCALES, key=lambda s: abs(math.log(g_th / s)))
