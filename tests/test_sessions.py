@@ -222,3 +222,25 @@ def test_the_rig_had_less_friction_in_2009(rig_data, tmp_path, capsys):
     assert all(math.isfinite(v) for s in doc["sessions"] for v in s["effects"].values())
     # the hold-and-release beam test is set aside, the 2009 sweeps are cut
     assert not any("hold_and_release" in r for s in doc["sessions"] for r in s["runs"])
+
+
+def test_a_session_whose_accelerometer_reads_the_other_way(tmp_path, capsys):
+    # the accelerometer was remounted between sessions: its sign is decided from each
+    # session's own data, in that session's model only, and the friction still drifts
+    from station.plant.model import load_model
+
+    root = tmp_path / "lab"
+    write_case(root / "before", {"coulomb_friction": 6.0}, 1)
+    write_case(root / "after", {"coulomb_friction": 14.0, "accel_gain": -1.2}, 2)
+    out, models = tmp_path / "drift.json", tmp_path / "models"
+    assert main(["survey", str(root), "--diagnose", "--json", str(out), "--save-models", str(models)]) == 0
+    captured = capsys.readouterr()
+    assert "after: sensor fault, decided from the data: header: a: the tip's acceleration" in captured.err
+    assert "before: sensor fault" not in captured.err
+    doc = {s["name"]: s for s in json.loads(out.read_text())["sessions"]}
+    after, before = doc["after"]["effects"], doc["before"]["effects"]
+    assert after["accel_gain"] < 0 and value_error(-1.2, after["accel_gain"]) <= TOLERANCE, after
+    assert before.get("accel_gain", 1.0) > 0, before
+    for name, friction in (("before", 6.0), ("after", 14.0)):
+        assert value_error(friction, doc[name]["effects"]["coulomb_friction"]) <= TOLERANCE, doc[name]
+    assert load_model(doc["after"]["model"]).effect("accel_gain") == pytest.approx(after["accel_gain"])

@@ -41,6 +41,7 @@ from station.diagnosis.search.workbench import Bench, nominal_trial, workbench
 from station.errors import StationError
 from station.logged.audit import ACCEL_DRIFT_COUNTS, ACCEL_DRIFT_WINDOW_S
 from station.logged.audit import accel_drift as audit_accel_drift
+from station.logged.sensors import decide_faults, sensor_evidence
 from station.logged.simulate import simulate_log
 from station.outputs import unique_names
 from station.signals import check_stop
@@ -346,6 +347,9 @@ class SessionResult:
     refits : dict of str to list of float
         Per accepted effect, its value in this session refitted leaving each run out, with
         every effect per session.
+    faults : dict of str to float
+        The sensor and wiring faults decided from its runs' data
+        (:func:`station.logged.sensors.decide_faults`), in its model under ``effects``.
     """
 
     name: str
@@ -355,6 +359,7 @@ class SessionResult:
     fit_final: object
     separate: dict = field(default_factory=dict)
     refits: dict = field(default_factory=dict)
+    faults: dict = field(default_factory=dict)
 
     @property
     def gain_pct(self) -> float:
@@ -420,7 +425,7 @@ class SessionsDiagnosis:
         if s is None:
             raise KeyError(name)
         base = self.nominal_model
-        return base.with_effects(s.effects, name=f"{base.name} session {name}")
+        return base.with_effects({**s.faults, **s.effects}, name=f"{base.name} session {name}")
 
     def model_text(self, name: str) -> str:
         """A session's model file (``--save-models``): :meth:`session_model`'s TOML after comment
@@ -445,7 +450,8 @@ class SessionsDiagnosis:
         return "\n".join(line.replace("\n", " ") for line in head) + "\n" + model.to_toml()
 
     def to_json(self, models: Mapping[str, str] | None = None) -> dict:
-        """The JSON of DESIGN.md "Sessions and drift".
+        """The JSON of DESIGN.md "Sessions and drift" (a session's ``effects`` are its model's:
+        its sensor faults decided from the data first, then the effects fitted).
 
         Parameters
         ----------
@@ -453,7 +459,8 @@ class SessionsDiagnosis:
             Session name -> its saved model file (``--save-models``); null otherwise.
         """
         models, fin = models or {}, finite
-        return {"sessions": [{"name": s.name, "runs": list(s.runs), "effects": {k: fin(v) for k, v in s.effects.items()},
+        return {"sessions": [{"name": s.name, "runs": list(s.runs),
+                              "effects": {k: fin(v) for k, v in {**s.faults, **s.effects}.items()},
                               "model": models.get(s.name)} for s in self.sessions],
                 "shared": {k: fin(v) for k, v in self.shared.items()},
                 "drifting": list(self.drifting)}
@@ -503,7 +510,14 @@ def _diagnose_sessions(sessions, model, say, bench: Bench, max_samples, simulate
     for note in loaded.notes:
         say(note)
     layout = Layout(tuple(loaded.groups))
-    ev = Evaluator(cases, base, simulate or simulate_cut, run_effects=PerSession(layout.session_of()))
+    # each session's sensors decided from its own runs' data first (its accelerometer may be
+    # mounted the other way in one session only)
+    faults = [decide_faults([sensor_evidence(cases[i].run, base) for i in g]) for g in layout.groups]
+    for name, f in zip(loaded.names, faults):
+        for line in f.lines():
+            say(f"{name}: sensor fault, decided from the data: {line}")
+    ev = Evaluator(cases, base, simulate or simulate_cut,
+                   run_effects=PerSession(layout.session_of(), [f.in_fit for f in faults]))
     folds, how = make_folds(len(cases), 0)
     search = bench.search(ev, folds, range(len(cases)), say)
     session_axes(search, names, layout.sessions)
@@ -539,8 +553,10 @@ def _diagnose_sessions(sessions, model, say, bench: Bench, max_samples, simulate
         refits = {n: drift.refits(n, s) for n in drift.accepted}
         effects = drift.session_effects(s)
         effects = {n: effects[n] for n in drift.accepted}  # in the order they were accepted
+        effects = ev.run_effects(effects, g[0])  # a size searched beside a reversed sensor takes its sign
+        effects = {n: effects[n] for n in drift.accepted}
         results.append(SessionResult(name, [cases[i].path for i in g], effects, fit_nom, fit_fin,
-                                     separate, refits))
+                                     separate, refits, dict(faults[s].effects)))
     gain = rms_gain(pooled(ev, drift.final.val_sse).rms_theta, pooled(ev, nominal.val_sse).rms_theta) \
         if drift.accepted else 0.0
     shared = {n: drift.values[n] for n in drift.shared}

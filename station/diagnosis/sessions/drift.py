@@ -89,10 +89,15 @@ class PerSession:
     ----------
     session_of : sequence of int
         Per run index, its session's index.
+    fixed : sequence of mapping, optional
+        Per session index, the sensor and wiring faults decided from its data
+        (:func:`station.logged.sensors.decide_faults`): under every effect asked for; a signed
+        effect asked for as a size takes its session's sign.
     """
 
-    def __init__(self, session_of: Sequence[int]):
+    def __init__(self, session_of: Sequence[int], fixed: Sequence[Mapping[str, float]] = ()):
         self.session_of = tuple(session_of)
+        self.fixed = tuple(dict(f) for f in fixed)
 
     def __call__(self, effects: Mapping[str, float], i: int) -> dict[str, float]:
         """Run i's effects (plain names only).
@@ -105,9 +110,12 @@ class PerSession:
             The run's index.
         """
         s = self.session_of[i]
-        out, own = {}, {}
+        fixed = self.fixed[s] if s < len(self.fixed) else {}
+        out, own = dict(fixed), {}
         for k, v in effects.items():
             name, ks = split_key(k)
+            if name in fixed and EFFECTS[name].signed and fixed[name] < 0 < v:
+                v = -v  # searched as a size; this session's sensor reads the other way
             if ks is None:
                 out[name] = v
             elif ks == s:
