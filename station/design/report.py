@@ -17,9 +17,8 @@ from station.design.figures import bode_figure, robust_figure, steps_figure, tra
 from station.design.space import thesis_compensator
 from station.outputs import Transaction
 from station.design.hold import held_summary
+from station.htmlpage import html_page
 
-_STYLE = ("body{font-family:sans-serif;max-width:1100px;margin:auto}table{border-collapse:collapse}"
-          "td,th{border:1px solid #ccc;padding:2px 6px;font-size:90%}img{max-width:100%}")
 
 
 def _png(fig) -> bytes:
@@ -170,8 +169,7 @@ def write_report(result, folder: str | Path, transaction: Transaction | None = N
         transaction.write(folder / "verify-step.tsv", verify_log, "the verification run's log")
         body.append("<p>The verification run (<code>station step</code> on the simulated rig serving the model): "
                     "<a href='verify-step.tsv'>verify-step.tsv</a>.</p>")
-    page = ("<!doctype html><html><head><meta charset='utf-8'><title>Compensator design</title><style>"
-            + _STYLE + "</style></head><body>" + "\n".join(body) + "</body></html>")
+    page = html_page("Compensator design", body)
     out = folder / "report.html"
     transaction.write(out, page, "the report")
     return out

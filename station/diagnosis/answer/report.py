@@ -39,6 +39,7 @@ from station.diagnosis.answer.prose import (
 from station.outputs import Transaction, unique_names
 from station.plant.effects import EFFECTS
 from station.plots import diagnosis_resid_figure, diagnosis_run_figure, short_name
+from station.htmlpage import html_page
 
 
 PAGE = "report.html"
@@ -75,10 +76,6 @@ def _png(fig: Figure) -> bytes:
     return buf.getvalue()
 
 
-_STYLE = ("body{font-family:sans-serif;max-width:1000px;margin:auto}table{border-collapse:collapse}"
-          "td,th{border:1px solid #ccc;padding:2px 6px;font-size:90%;overflow-wrap:anywhere}td.ev{font-size:80%}"
-          "img{max-width:100%}.note{color:#666;font-size:85%}.answer li{margin:4px 0}.warn{color:#a40}"
-          "h3{overflow-wrap:anywhere}")
 
 
 def _answer(diag) -> list[str]:
@@ -244,8 +241,7 @@ def write_report(diag, folder: str | Path, transaction: Transaction | None = Non
             + _residual_table(diag) + _runs_table(diag) + ["<h3>Each run</h3>"])
     for r, slug in zip(diag.runs, _slugs([r.file for r in diag.runs])):
         body += _run_section(r, slug, folder, bool(diag.causes), transaction)
-    page = ("<!doctype html><html><head><meta charset='utf-8'><title>Model diagnosis</title><style>"
-            + _STYLE + "</style></head><body>" + "\n".join(body) + "</body></html>")
+    page = html_page("Model diagnosis", body)
     out = folder / PAGE
     transaction.write(out, page, "the report")
     return out

@@ -16,9 +16,8 @@ from station.diagnosis.runs.cases import load_case
 from station.diagnosis.answer.report import write_report
 from station.outputs import Transaction
 from station.plots import identify_design_figure, save_figure
+from station.htmlpage import html_page
 
-_STYLE = ("body{font-family:sans-serif;max-width:1000px;margin:auto}table{border-collapse:collapse}"
-          "td,th{border:1px solid #ccc;padding:2px 6px;font-size:85%}img{max-width:100%}")
 
 
 def _measured(record):
@@ -78,8 +77,7 @@ def write_identify_report(ident, folder: str | Path, transaction: Transaction | 
         png = save_figure(fig, folder / f"experiment-{k:02d}.png", transaction=transaction)
         body.append(f"<h2>Experiment {k}: {html.escape(r.experiment.label)}</h2><p>{html.escape(r.why)}</p>"
                     f"<img src='{png.name}' alt='experiment {k}'>")
-    page = ("<!doctype html><html><head><meta charset='utf-8'><title>Identifying the rig</title><style>" + _STYLE
-            + "</style></head><body>" + "\n".join(body) + "</body></html>")
+    page = html_page("Identifying the rig", body)
     out = folder / "identify.html"
     transaction.write(out, page, "the report")
     return out

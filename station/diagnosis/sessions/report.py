@@ -25,6 +25,7 @@ from station.diagnosis.search.selection import MIN_NOISE_GAIN, MIN_RELATIVE_GAIN
 from station.outputs import Transaction
 from station.plant.effects import EFFECTS
 from station.plots import new_figure
+from station.htmlpage import html_page
 
 PAGE = "report.html"
 FIGURE = "drift.png"
@@ -159,9 +160,6 @@ def drift_figure(result):
     return fig
 
 
-_STYLE = ("body{font-family:sans-serif;max-width:1000px;margin:auto}table{border-collapse:collapse}"
-          "td,th{border:1px solid #ccc;padding:2px 6px;font-size:90%;overflow-wrap:anywhere}"
-          "img{max-width:100%}.note{color:#666;font-size:85%}")
 
 
 def write_report(result, folder: str | Path, transaction: Transaction | None = None,
@@ -224,8 +222,7 @@ def write_report(result, folder: str | Path, transaction: Transaction | None = N
     if result.notes:
         body.append("<h2>Notes</h2>" + "".join(f"<p class='note'>{esc(n)}</p>" for n in result.notes))
     body.append(f"<p class='note'>{result.simulations} simulations in {result.elapsed_s:.1f} s</p>")
-    page = ("<!doctype html><html><head><meta charset='utf-8'><title>Sessions and drift</title><style>" + _STYLE
-            + "</style></head><body>" + "\n".join(body) + "</body></html>")
+    page = html_page("Sessions and drift", body)
     out = folder / PAGE
     transaction.write(out, page, "the report")
     return out
