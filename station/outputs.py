@@ -37,6 +37,7 @@ from pathlib import Path
 from typing import Any, BinaryIO, NamedTuple
 
 from station.errors import StationError
+from station.jsonio import to_jsonable
 
 FORCE_HELP = "replace output files that exist (never an input of the command)"
 """``--force``'s help, the same in every command that writes files."""
@@ -372,7 +373,9 @@ class Transaction:
             fh.write(data.encode("utf-8") if isinstance(data, str) else data)
 
     def write_json(self, path: str | Path, doc: Any, what: str = "the JSON", indent: int = 1) -> None:
-        """Write ``doc`` as JSON (one trailing newline) to ``path``.
+        """Write ``doc`` as JSON (one trailing newline) to ``path``: NaN and infinities as null,
+        numpy numbers and arrays as JSON numbers and lists (:func:`station.jsonio.to_jsonable`,
+        the one conversion), never the invalid ``NaN`` of ``json.dumps``.
 
         Parameters
         ----------
@@ -390,7 +393,7 @@ class Transaction:
         StationError
             The file cannot be written (see :meth:`open`).
         """
-        self.write(path, json.dumps(doc, indent=indent) + "\n", what)
+        self.write(path, json.dumps(to_jsonable(doc), indent=indent, allow_nan=False) + "\n", what)
 
     def _discard(self, tmp: Path | None) -> None:
         if tmp is None:

@@ -126,16 +126,6 @@ def plan(runs, validate, max_samples: int) -> str:
             f"about {simulations} simulations, {_human(seconds)} of computing here")
 
 
-def _json_safe(x):
-    if isinstance(x, float) and not math.isfinite(x):
-        return None
-    if isinstance(x, dict):
-        return {k: _json_safe(v) for k, v in x.items()}
-    if isinstance(x, list):
-        return [_json_safe(v) for v in x]
-    return x
-
-
 SENTENCE_END = re.compile(r"(?<=[.!?])\s+(?=\S)")
 """Where a sentence ends inside a text: after its full stop, before the next sentence."""
 
@@ -316,7 +306,7 @@ def run(args: argparse.Namespace) -> int:
 
             page = write_report(diag, args.report, tx)
         if args.json is not None:
-            tx.write_json(args.json, _json_safe(diag.to_json()))
+            tx.write_json(args.json, diag.to_json())
         if args.save_model is not None:
             tx.write(args.save_model, diag.extended_model.to_toml(), "the model")
     if args.report is not None:

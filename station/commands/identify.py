@@ -13,7 +13,6 @@ from station.commands.options import (add_link_options, add_model_options, add_p
 from station.commands.diagnose import format_diagnosis
 from station.config import apply_config
 from station.errors import StationError
-from station.jsonio import to_jsonable
 from station.outputs import FORCE_HELP, Output, Transaction, check_folder, check_outputs
 from station.plant.model import as_model
 
@@ -166,7 +165,7 @@ def run(args: argparse.Namespace) -> int:
 
             page = write_identify_report(ident, args.report, tx)
         if args.json is not None:
-            tx.write_json(args.json, to_jsonable(ident.to_json()))
+            tx.write_json(args.json, ident.to_json())
         if args.save_model is not None and ident.model is not None:
             tx.write(args.save_model, ident.model.to_toml(), "the model")
     if args.report is not None:
