@@ -144,5 +144,5 @@ def tip_position(model, v, dt: float = DT, command: str = "round") -> np.ndarray
     gnum, gden = coefficients(None)
     tip, _, _, _ = run_kernel(form.lam, form.bm, form.bp, form.cm, form.co, form.gw_v, form.gw_p, form.substeps,
                               np.zeros(form.lam.size, complex), v, v, True, False, gnum, gden, gnum, gden, False,
-                              math.inf, 0, False, COMMAND_QUANTIZATION[command], *effects_of(model))
+                              math.inf, 0, False, COMMAND_QUANTIZATION[command], 0, *effects_of(model))
     return tip
