@@ -9,7 +9,7 @@ from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import NamedTuple
 
-from station.diagnosis.runs.cases import Simulator, load_case
+from station.diagnosis.runs.cases import Simulator, load_case, keep_bias
 from station.diagnosis.runs.cost import Evaluator, calibrate_noise, pooled, relative_gain, rms_gain
 from station.diagnosis.runs.folds import fold_records, make_folds, validation_runs
 from station.diagnosis.honesty.doubt import alternatives, effective_terms, effect_interval, interval_method
@@ -153,7 +153,10 @@ def _diagnose(runs, validate, model, progress, bench: Bench, simulate, likelihoo
     cases, n_fit, notes = _use_runs(runs, validate)
     # the sensors' signs and scales first (DESIGN.md): a decided fault is part of the base model
     faults = decide_faults([sensor_evidence(c.run, nominal_model) for c in cases])
-    base = nominal_model.with_effects(faults.in_fit) if faults.in_fit else nominal_model
+    base = nominal_model.with_effects(faults.effects) if faults.effects else nominal_model
+    if "accel_offset" in faults.effects:
+        for c in cases:
+            keep_bias(c)
     names = names + [n for n in faults.to_fit if n not in names]  # pointed at, not decided: fitted
     folds, how = make_folds(n_fit, len(cases) - n_fit)
     ev = Evaluator(cases, base, simulate)
@@ -173,7 +176,7 @@ def _diagnose(runs, validate, model, progress, bench: Bench, simulate, likelihoo
     if likelihood_values:
         sel = choose_estimator(search, sel).selection  # (its choice is said in the progress)
     accepted = sel.accepted
-    extended = base.with_effects({**faults.effects, **sel.values},
+    extended = base.with_effects(sel.values,
                                  name=f"{base.name} + {' + '.join(accepted)}" if accepted else None)
     fit_nom, fit_ext = pooled(ev, nominal.trial.val_sse), pooled(ev, sel.current.val_sse)
     gain = rms_gain(fit_ext.rms_theta, fit_nom.rms_theta) if accepted else 0.0

@@ -295,12 +295,17 @@ class LoggedRun:
         return compared_theta(self.data["theta"], self.closed)
 
     @cached_property
+    def accel_rest_samples(self) -> int:
+        """Samples before the first non-zero command (all of them when v stays 0)."""
+        moving = np.flatnonzero(np.asarray(self.data["v"], dtype=float) != 0)
+        return int(moving[0]) if moving.size else len(self)
+
+    @cached_property
     def accel_rest_offset(self) -> float:
         """The accelerometer's mean before the first non-zero command, counts (0.0 with
         fewer than :data:`REST_MIN_SAMPLES` samples at rest)."""
         a = np.asarray(self.data["a"], dtype=float)
-        moving = np.flatnonzero(np.asarray(self.data["v"], dtype=float) != 0)
-        rest = int(moving[0]) if moving.size else a.size
+        rest = self.accel_rest_samples
         return float(np.mean(a[:rest])) if rest >= REST_MIN_SAMPLES else 0.0
 
     def step_metrics(self, theta=None, t=None) -> StepMetrics | None:

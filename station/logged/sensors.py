@@ -183,6 +183,8 @@ class SensorFaults:
     effects : dict of str to float
         Decided effects (accel_gain, accel_offset, accel_drift, encoder_scale,
         motor_polarity) -> value; empty when the data agree with the model's signs and scales.
+        A diagnosis holds them all in its base model (an accelerometer bias with each run's a
+        as logged: :func:`station.diagnosis.runs.cases.keep_bias`).
     claims : tuple of AuditClaim
         "columns" claims: θ's and a's signs and scale, confirmed, contradicted or unchecked.
     alternative : str
@@ -199,13 +201,6 @@ class SensorFaults:
     alternative: str = ""
     evidence: tuple = ()
     to_fit: tuple = ()
-
-    @property
-    def in_fit(self) -> dict:
-        """The decided effects a fit's base model holds: all but ``accel_offset`` (each run's a
-        is compared with its rest value removed, :func:`station.diagnosis.runs.cases.load_case`;
-        the bias goes into the model a diagnosis saves)."""
-        return {k: v for k, v in self.effects.items() if k != "accel_offset"}
 
     def lines(self) -> list[str]:
         """One line per contradicted claim, the alternative after them."""

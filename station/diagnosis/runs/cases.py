@@ -105,6 +105,23 @@ def load_case(path: str | Path) -> RunCase:
                    notes=notes, run=run)
 
 
+def keep_bias(case: RunCase) -> None:
+    """Give a run its accelerometer's a as logged, bias and all, where a bias decided over
+    the runs is in the model (:func:`station.logged.sensors.decide_faults`): the model then
+    adds the bias itself, and where a feeds back (Ga) the loop sees it as the rig's did.
+
+    Parameters
+    ----------
+    case : RunCase
+        Changed in place (its ``a``: the logged a, as many samples as it had).
+    """
+    if case.run is not None:
+        raw = np.asarray(case.run.data["a"], float)[:case.a.size]
+        if not np.array_equal(raw, case.a):
+            case.a = raw
+            case.notes.append("accelerometer bias kept in its a: the model holds the bias decided over the runs")
+
+
 REPRODUCED_DV = 1e-3
 """max |dv| (DAC counts) above which a diagnosis notes that the log's controller does not
 reproduce its commands (looser than replay's 1e-6: the model, not the replay, is judged)."""

@@ -23,7 +23,7 @@ from pathlib import Path
 
 import numpy as np
 
-from station.diagnosis.runs.cases import RunCase, Simulator, load_case
+from station.diagnosis.runs.cases import RunCase, Simulator, load_case, keep_bias
 from station.diagnosis.runs.cost import Evaluator, calibrate_noise, pooled, rms_gain
 from station.diagnosis.sessions.drift import (
     DriftResult,
@@ -513,11 +513,13 @@ def _diagnose_sessions(sessions, model, say, bench: Bench, max_samples, simulate
     # each session's sensors decided from its own runs' data first (its accelerometer may be
     # mounted the other way in one session only)
     faults = [decide_faults([sensor_evidence(cases[i].run, base) for i in g]) for g in layout.groups]
-    for name, f in zip(loaded.names, faults):
+    for name, f, g in zip(loaded.names, faults, layout.groups):
         for line in f.lines():
             say(f"{name}: sensor fault, decided from the data: {line}")
+        for i in g if "accel_offset" in f.effects else ():
+            keep_bias(cases[i])
     ev = Evaluator(cases, base, simulate or simulate_cut,
-                   run_effects=PerSession(layout.session_of(), [f.in_fit for f in faults]))
+                   run_effects=PerSession(layout.session_of(), [f.effects for f in faults]))
     folds, how = make_folds(len(cases), 0)
     search = bench.search(ev, folds, range(len(cases)), say)
     session_axes(search, names, layout.sessions)
