@@ -58,7 +58,7 @@ CASES = [
     ("encoder_reversed", 0, "encoder_scale"),
     ("encoder_reversed+param:drive_c", 1, "encoder_scale"),
     ("encoder_4096", 0, "encoder_scale"),
-    ("encoder_4096+param:act_K", 0, None),  # the motion off too: the ratios do not decide (below)
+    ("encoder_4096+coulomb_friction", 0, "encoder_scale"),
     ("motor_reversed", 0, "motor_polarity"),
     ("motor_reversed+coulomb_friction", 1, "motor_polarity"),
     ("motor_reversed+amp_offset", 0, "motor_polarity"),
@@ -91,15 +91,21 @@ def test_a_hidden_fault_is_decided_with_its_sign_and_scale(tmp_path, nominal, ca
     assert f"{found:g}" in said
 
 
-def test_a_rescaled_encoder_beside_heavy_friction_is_left_undecided_and_said(tmp_path, nominal):
-    # Coulomb friction 28 DAC counts: θ reads 2.5x the model's, a 0.65x, θ over a 3.9x. A
-    # 4096-count encoder, or an accelerometer of gain 0.26 with the motion 2.5x: the ratios
-    # alone cannot tell; the claim says so rather than deciding
+def test_a_rescaled_encoder_beside_heavy_friction_is_decided_by_theta_over_a(tmp_path, nominal):
+    # Coulomb friction 28 DAC counts: θ reads 2.5x the model's, a 0.65x; θ over a is 3.9x in
+    # every run (the motion's scale cancels), and an accelerometer of gain 1/4 is outside the
+    # vocabulary: a 4096-count encoder
     hidden = case_effects("encoder_4096+coulomb_friction", 2)
     faults = _decide(write_case(tmp_path, hidden, 2), nominal)
-    assert faults.effects == {}
-    hint = [c for c in faults.claims if c.verdict == "unchecked" and "4096" not in c.header]
-    assert any("counts per revolution, or the accelerometer's gain" in c.evidence for c in hint)
+    assert faults.effects == {"encoder_scale": 4.0}
+
+
+def test_theta_over_a_of_two_is_left_to_the_fit_and_said():
+    # θ 1.2x and a 0.6x the model's: a 2048-count encoder beside a slower motion, or an
+    # accelerometer of gain 0.5: the ratios do not decide; the fit gets encoder_scale
+    f = decide_faults([_ev(0.99, 0.99, th_ratio=1.2, a_ratio=0.6)] * 3)
+    assert f.effects == {} and f.to_fit == ("encoder_scale",)
+    assert any(c.verdict == "unchecked" and "or the accelerometer's gain" in c.evidence for c in f.claims)
 
 
 def _ev(th: float | None, a: float | None, th_ratio: float = 1.0, a_ratio: float = 1.0) -> SensorEvidence:

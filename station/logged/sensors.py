@@ -25,7 +25,9 @@ bias and drift are the least-squares fit of a on [1, t, the model's a]: decided 
 run's has one sign and their median reaches :data:`OFFSET_COUNTS` / :data:`DRIFT_COUNTS_PER_S`. The accelerometer's
 gain is the median ratio of a; an encoder of another resolution is decided when every run's
 θ ratio, and θ's over a's, are within :data:`SCALE_TOLERANCE` of one power of two other than 1 (a
-4096-count encoder reads 4; the motion itself, and so a, as the model's).
+4096-count encoder reads 4; the motion itself, and so a, as the model's), or when every run's
+θ ratio over its a ratio is (the motion's scale, friction's, cancels) and the inverse is no
+accelerometer gain of the vocabulary (0.3-3): 4 or more, 1/4 or less.
 
 On the rig's own logs (2009, 2013-14) every cosine is +0.74 or more where the channel
 moves (``tests/test_sensor_signs.py``); on the blind generator's reversed and rescaled
@@ -45,6 +47,7 @@ import numpy as np
 from station.control.rerun import OpenLoop
 from station.logged.audit import AuditClaim
 from station.logged.device import command_quantization
+from station.plant.effects import EFFECTS
 
 THETA_HORIZON_S = 0.05
 """Horizon of the θ changes compared, s."""
@@ -265,9 +268,20 @@ def decide_faults(evidence: Sequence[SensorEvidence], accel_gain: float | None =
             g_th = abs(statistics.median(th_ratio))
             scale = min(ENCODER_SCALES, key=lambda s: abs(math.log(g_th / s)))
             # θ off by a power of two where a is not: the encoder's resolution, not the motion's
-            near = (all(r != 0 and abs(math.log(abs(r) / scale)) <= math.log(SCALE_TOLERANCE) for r in th_ratio)
-                    and abs(math.log(g_th / abs(g_a) / scale)) <= math.log(SCALE_TOLERANCE))
+            tol = math.log(SCALE_TOLERANCE)
+            near = (all(r != 0 and abs(math.log(abs(r) / scale)) <= tol for r in th_ratio)
+                    and abs(math.log(g_th / abs(g_a) / scale)) <= tol)
             q = g_th / abs(g_a)
+            # θ over a per run, the motion's own scale (friction) cancelling: a power of two whose
+            # inverse no accelerometer gain of the vocabulary reaches is the encoder's
+            qs = [abs(e.theta_ratio / e.accel_ratio) for e in ev
+                  if e.theta_ratio is not None and e.accel_ratio not in (None, 0.0)]
+            if not near and qs:
+                by_q = min(ENCODER_SCALES, key=lambda s: abs(math.log(statistics.median(qs) / s)))
+                spec = EFFECTS["accel_gain"]
+                near = (all(abs(math.log(x / by_q)) <= tol for x in qs)
+                        and not spec.lower <= 1.0 / by_q <= spec.upper)
+                scale = by_q if near else scale
             if near:
                 effects["encoder_scale"] = scale * (-1.0 if effects.get("encoder_scale", 1.0) < 0 else 1.0)
             elif q >= 2.0 / SCALE_TOLERANCE or q <= 0.5 * SCALE_TOLERANCE:
