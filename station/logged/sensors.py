@@ -26,8 +26,8 @@ run's has one sign and their median reaches :data:`OFFSET_COUNTS` / :data:`DRIFT
 gain is the median ratio of a; an encoder of another resolution is decided when every run's
 θ ratio, and θ's over a's, are within :data:`SCALE_TOLERANCE` of one power of two other than 1 (a
 4096-count encoder reads 4; the motion itself, and so a, as the model's), or when every run's
-θ ratio over its a ratio is (the motion's scale, friction's, cancels) and the inverse is no
-accelerometer gain of the vocabulary (0.3-3): 4 or more, 1/4 or less.
+θ ratio over its a ratio is, within :data:`RATIO_TOLERANCE` (the motion's scale, friction's,
+cancels), and the inverse of their median is no accelerometer gain of the vocabulary (0.3-3).
 
 On the rig's own logs (2009, 2013-14) every cosine is +0.74 or more where the channel
 moves (``tests/test_sensor_signs.py``); on the blind generator's reversed and rescaled
@@ -76,6 +76,10 @@ this large, counts (the noise is 0.3; the rig's 2013-14 runs' biases take both s
 DRIFT_COUNTS_PER_S = 0.75
 """An accelerometer drift is decided when every run's has one sign and their median is at least
 this large, counts per s (the rig's runs: |median| under 0.1)."""
+
+RATIO_TOLERANCE = 1.3
+"""θ's ratio over a's may sit within this factor of the encoder's scale in each run: friction
+does not slow θ and a quite alike (3.2-4.2 for a 4096-count encoder beside 26-29 counts)."""
 
 ENCODER_SCALES = (0.25, 0.5, 2.0, 4.0, 8.0, 16.0)
 """Encoder resolutions decided, relative to the model's 1024 counts per revolution."""
@@ -279,8 +283,9 @@ def decide_faults(evidence: Sequence[SensorEvidence], accel_gain: float | None =
             if not near and qs:
                 by_q = min(ENCODER_SCALES, key=lambda s: abs(math.log(statistics.median(qs) / s)))
                 spec = EFFECTS["accel_gain"]
-                near = (all(abs(math.log(x / by_q)) <= tol for x in qs)
-                        and not spec.lower <= 1.0 / by_q <= spec.upper)
+                med = statistics.median(qs)
+                near = (all(abs(math.log(x / by_q)) <= math.log(RATIO_TOLERANCE) for x in qs)
+                        and not spec.lower <= 1.0 / med <= spec.upper)
                 scale = by_q if near else scale
             if near:
                 effects["encoder_scale"] = scale * (-1.0 if effects.get("encoder_scale", 1.0) < 0 else 1.0)
