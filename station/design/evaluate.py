@@ -109,6 +109,12 @@ def tip_reference(thesis_rms: float) -> float:
     ----------
     thesis_rms : float
         The thesis's compensator's tip residual RMS on the model, accelerometer counts.
+
+    Returns
+    -------
+    float
+        The reference RMS, accelerometer counts: ``thesis_rms``, or :data:`TIP_RMS_FLOOR` when
+        that is larger.
     """
     return max(float(thesis_rms), TIP_RMS_FLOOR)
 
@@ -122,6 +128,12 @@ def tip_bound(ratio: float | None, thesis_rms: float) -> float | None:
         The requirement, a multiple of the thesis's RMS (1: as quiet; None: none).
     thesis_rms : float
         The thesis's compensator's tip residual RMS on the model, accelerometer counts.
+
+    Returns
+    -------
+    float or None
+        The largest tip residual RMS a design may show on the model, accelerometer counts; None
+        when ``ratio`` is None or ``thesis_rms`` is not finite (no bound).
     """
     if ratio is None or not math.isfinite(thesis_rms):
         return None
@@ -192,7 +204,15 @@ class Figures(NamedTuple):
     def to_json(self) -> dict:
         """The DESIGN.md metrics (overshoot_pct, settling_2pct_s, settling_thesis_s,
         peak_command, saturated_s, tip_settling_2pct_s, tip_residual_rms, tip_residual_peak)
-        and the checks (at_rest, margins, spectral radius)."""
+        and the checks (at_rest, margins, spectral radius).
+
+        Returns
+        -------
+        dict
+            JSON-ready mapping of those names to floats rounded to 6 decimals (None where a figure
+            is None or not finite; units as the attributes), plus ``limit_cycle`` (bool, not
+            :attr:`at_rest`).
+        """
         def num(x):
             return None if x is None or not math.isfinite(x) else round(float(x), 6)
         return {"overshoot_pct": num(self.overshoot_pct), "settling_2pct_s": num(self.settling_2pct_s),
@@ -243,6 +263,19 @@ def step_figures(run, amplitude: float, limit: float | None, tip=None) -> tuple:
     tip : array_like, shape (N,), optional
         The tip position, encoder counts (:func:`station.design.tip.tip_position`; None: its
         settling time is None).
+
+    Returns
+    -------
+    tuple
+        The 14 figures in the order above, as the fields of :class:`Figures` of the same names
+        (units there): floats, with the settling times None when not settled within the run and
+        ``at_rest`` a bool.
+
+    Raises
+    ------
+    ValueError
+        A zero ``amplitude``, NaN in θ, or mismatched columns
+        (:func:`~station.analysis.metrics.step_metrics`).
     """
     t, theta, v = np.asarray(run["t"]), np.asarray(run["theta"]), np.asarray(run["v"])
     dt = float(t[1] - t[0])
@@ -273,6 +306,12 @@ def linear_key(model) -> tuple:
     Parameters
     ----------
     model : station.plant.model.Model
+
+    Returns
+    -------
+    tuple
+        ``(linear_params, n_elements, delay, accel_gain)``: hashable, equal for two models
+        whose :func:`linear_checks` agree; a cache key.
     """
     return model.linear_params(), model.n_elements, int(model.effect("delay")), float(model.effect("accel_gain"))
 
@@ -287,6 +326,13 @@ def linear_checks(model, compensator, dt: float = DT) -> tuple[float, object]:
     compensator : station.control.Compensator
     dt : float
         Sample time, s.
+
+    Returns
+    -------
+    tuple of (float, Margins)
+        The closed loop's spectral radius (largest pole magnitude, dimensionless; < 1: stable)
+        and its margins (:meth:`station.design.linear.LoopModel.margins`: gain margin dB, phase
+        margin degrees).
     """
     lm = loop_model(model, dt)
     return lm.spectral_radius(compensator), lm.margins(compensator)
@@ -318,6 +364,11 @@ def judge(model, compensator, amplitude: float, run_s: float = RUN_S, dt: float 
     tip : bool
         Simulate the tip position too (its settling time; otherwise None: the search does not
         use it).
+
+    Returns
+    -------
+    Figures
+        The linear checks and, unless skipped as above, the step's figures.
     """
     rho, mg = linear_checks(model, compensator, dt) if linear is None else linear
     failed = requirements is not None and (mg.gain_margin_db < requirements.gain_margin_db
@@ -338,6 +389,13 @@ def violations(f: Figures, req: Requirements) -> dict[str, float]:
     ----------
     f : Figures
     req : Requirements
+
+    Returns
+    -------
+    dict of str to float
+        Each broken constraint's name (``unstable``, ``gain_margin``, ``phase_margin``,
+        ``not_simulated``, ``overshoot``, ``tip``, ``not_settled``, ``limit_cycle``) to its
+        normalised violation (> 0, dimensionless); empty when the design is feasible on the model.
     """
     out = {}
     if not f.spectral_radius < 1.0:
@@ -369,6 +427,12 @@ def friction_held(f: Figures, req: Requirements) -> bool:
     ----------
     f : Figures
     req : Requirements
+
+    Returns
+    -------
+    bool
+        True when the only violation is ``not_settled`` while the loop is at rest and settled
+        into the band it holds (:attr:`Figures.settling_rest_s` not None).
     """
     return (f.at_rest and f.settling_2pct_s is None and f.settling_rest_s is not None
             and set(violations(f, req)) == {"not_settled"})
@@ -381,6 +445,11 @@ def held_error(f: Figures) -> int:
     Parameters
     ----------
     f : Figures
+
+    Returns
+    -------
+    int
+        :attr:`Figures.final_error` rounded to whole encoder counts.
     """
     return int(round(f.final_error))
 
@@ -405,6 +474,11 @@ def cost(f: Figures, req: Requirements, run_s: float = RUN_S, held: bool = True)
         The run's length, s.
     held : bool
         Grade a design held by friction as above (False: as infeasible).
+
+    Returns
+    -------
+    float
+        The cost, s: below ``run_s`` when feasible, at least ``run_s`` otherwise.
     """
     bad = violations(f, req)
     if not bad:

@@ -34,6 +34,11 @@ def one_thread(fn: Callable, *args) -> Any:
         A module-level function (it is pickled to the workers).
     *args
         Its arguments.
+
+    Returns
+    -------
+    object
+        What ``fn(*args)`` returns.
     """
     with threadpool_limits(limits=1, user_api="blas"):
         return fn(*args)
@@ -63,6 +68,11 @@ class Runner:
             A module-level function.
         tasks : iterable of tuple
             Its argument tuples.
+
+        Returns
+        -------
+        list
+            ``fn(*task)`` for each task, in the order of ``tasks`` whoever computed them.
         """
         tasks = list(tasks)
         if self.executor is None or len(tasks) <= 1:
@@ -81,6 +91,11 @@ def open_runner(jobs: int = 1, scheduler: str | None = None) -> Iterator[Runner]
     scheduler : str, optional
         A Dask distributed scheduler's address (``tcp://host:8786``, or a ``LocalCluster``'s
         ``scheduler_address``); wins over ``jobs``.
+
+    Yields
+    ------
+    Runner
+        The runner; its pool or Dask client is shut down when the ``with`` block ends.
 
     Raises
     ------

@@ -85,6 +85,12 @@ def bode_figure(model, tuned, thesis, margins, names=("thesis", "tuned")):
         The tuned loop's margins (written in the title).
     names : tuple of str
         Legend labels (thesis's first).
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        Two panels over frequency (Hz): |L| in dB and its unwrapped phase in degrees, both
+        compensators, the tuned loop's gain crossover marked.
     """
     lm = loop_model(model)
     f = lm.omega / (2 * np.pi)
@@ -127,6 +133,13 @@ def robust_figure(models, tuned, thesis, amplitude: float, figures, baseline, ov
         The requirement, % (a line).
     names : tuple of str
         Labels (thesis's first).
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        Four panels: θ (encoder counts) over t (s) on every model for the thesis's and the tuned
+        compensator, overshoot (%) against 2 % settling time (s) per model, and the tuned against
+        the thesis's tip residual RMS (accelerometer counts) per model.
     """
     fig = new_figure(16, 4.5)
     ax0, ax1, ax2, ax3 = fig.subplots(1, 4)

@@ -64,6 +64,14 @@ def ratios(figures, baseline, run_s: float = RUN_S) -> tuple[list[float], list[f
         The design and the thesis's compensator, one per model.
     run_s : float
         The run's length, s (stands for "not settled").
+
+    Returns
+    -------
+    tuple of (list of float, list of float)
+        ``(hub, tip)``, one per model, dimensionless: the design's 2 % settling time over the
+        thesis's (``run_s`` standing for "not settled" on either side), and its tip residual RMS
+        over :func:`~station.design.evaluate.tip_reference` of the thesis's (inf where the design
+        was not simulated).
     """
     def settle(f):
         return run_s if f.settling_2pct_s is None else f.settling_2pct_s
@@ -87,6 +95,13 @@ def trade_point(x, figures, baseline, requirements, run_s: float = RUN_S) -> Tra
         One per model (the tip's bound its own).
     run_s : float
         The run's length, s.
+
+    Returns
+    -------
+    TradePoint
+        The worst ratios and figures over the models (NaN where a model was not simulated)
+        and whether the requirements other than the tip and the band, and all of them, hold on
+        every model.
     """
     hub, tip = ratios(figures, baseline, run_s)
     broken = [set(violations(f, r)) for f, r in zip(figures, requirements)]
@@ -108,6 +123,12 @@ def pareto(points) -> list[int]:
     Parameters
     ----------
     points : sequence of TradePoint
+
+    Returns
+    -------
+    list of int
+        Indices into ``points`` of the front, sorted by hub_ratio then tip_ratio; empty when no
+        point meets the other requirements with finite ratios.
     """
     ok = [i for i, p in enumerate(points) if p.others_met and math.isfinite(p.hub_ratio) and math.isfinite(p.tip_ratio)]
     front = []
@@ -129,6 +150,12 @@ def spread_along(values, n: int) -> list[int]:
     ----------
     values : sequence of float
     n : int
+
+    Returns
+    -------
+    list of int
+        Distinct indices into ``values``, ordered from the smallest value to the largest; all of
+        them (sorted so) when there are at most ``n``.
     """
     order = sorted(range(len(values)), key=lambda i: (values[i], i))
     if len(order) <= n:

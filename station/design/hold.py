@@ -31,6 +31,11 @@ def holding_level(model) -> float:
     Parameters
     ----------
     model : station.plant.model.Model
+
+    Returns
+    -------
+    float
+        max(Coulomb friction, static friction) + dead zone, DAC counts (≥ 0).
     """
     def value(name):
         return float(model.effect(name)) if name in EFFECTS else 0.0
@@ -44,6 +49,11 @@ def dc_parameter(structure: str) -> str:
     Parameters
     ----------
     structure : {"p", "lead", "lead-accel"}
+
+    Returns
+    -------
+    str
+        ``"kp"`` for ``"p"``, ``"k0"`` otherwise.
     """
     return "kp" if structure == "p" else "k0"
 
@@ -67,6 +77,12 @@ def design_model_warning(space, values: dict, model, figure: Figures, requiremen
         The design on it.
     requirements : Requirements
         The margins a higher gain would have to keep.
+
+    Returns
+    -------
+    str or None
+        The warning, one line without a trailing newline; None when the design model does not
+        hold the hub off the band (:func:`~station.design.evaluate.friction_held` is false).
     """
     if not friction_held(figure, requirements):
         return None

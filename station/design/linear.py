@@ -116,6 +116,12 @@ class LoopModel:
         ----------
         compensator : station.control.Compensator
             Its ``gth`` and ``ga`` (DiscreteTF, z⁻¹; ``ga`` may be None).
+
+        Returns
+        -------
+        ndarray of complex, shape (W,)
+            The loop transfer function L = z^-delay Gth (Pθ + Ga Pa) at each frequency of
+            :attr:`omega`, dimensionless (counts per count).
         """
         zinv = self._zinv
         inner = self.p_theta + (_freq(compensator.ga, zinv) * self.p_accel if compensator.ga is not None else 0.0)
@@ -127,6 +133,12 @@ class LoopModel:
         Parameters
         ----------
         compensator : station.control.Compensator
+
+        Returns
+        -------
+        Margins
+            Gain margin (dB), phase margin (degrees), highest gain crossover (rad/s); inf/NaN
+            where L has no crossing of that kind on the grid.
         """
         return grid_margins(self.loop(compensator), self.omega)
 
@@ -137,6 +149,12 @@ class LoopModel:
         Parameters
         ----------
         compensator : station.control.Compensator
+
+        Returns
+        -------
+        Margins
+            As :meth:`margins`: gain margin (dB), phase margin (degrees), highest gain crossover
+            (rad/s); inf/NaN with no crossing.
         """
         import control  # lazy: start-up time (python-control)
 
@@ -157,6 +175,11 @@ class LoopModel:
         Parameters
         ----------
         compensator : station.control.Compensator
+
+        Returns
+        -------
+        float
+            max |λ| over the eigenvalues of :meth:`closed_loop_matrix`, dimensionless (< 1: stable).
         """
         return float(np.max(np.abs(np.linalg.eigvals(self.closed_loop_matrix(compensator)))))
 
@@ -175,6 +198,12 @@ class LoopModel:
             (low, high) of the damped frequency, Hz.
         poles : ndarray, optional
             The closed loop's poles (z), when already known.
+
+        Returns
+        -------
+        tuple of (float, float) or None
+            (natural frequency, Hz; damping ratio ζ, dimensionless) of that mode; None when no
+            decaying complex pole has its damped frequency in the band.
         """
         lam = np.linalg.eigvals(self.closed_loop_matrix(compensator)) if poles is None else np.asarray(poles)
         lam = lam[np.abs(lam) > 1e-12].astype(complex)
@@ -195,6 +224,12 @@ class LoopModel:
         Parameters
         ----------
         compensator : station.control.Compensator
+
+        Returns
+        -------
+        ndarray, shape (S, S)
+            The state matrix M of x[k+1] = M x[k], S = plant states + extra command delay + 2 d
+            + Ga's order + Gth's order.
         """
         A, B, C = self._A, self._B, self._C
         n = A.shape[0]
@@ -322,5 +357,10 @@ def loop_model(model, dt: float = DT, alignment: int = ALIGNMENT) -> LoopModel:
         Sample time, s.
     alignment : int
         Computational delay d, samples.
+
+    Returns
+    -------
+    LoopModel
+        The model's loop model; the same object for equal arguments (LRU cache, 64 entries).
     """
     return LoopModel(model, dt, alignment)

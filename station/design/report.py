@@ -91,6 +91,12 @@ def tradeoff_table(tradeoff, space) -> list[str]:
     ----------
     tradeoff : station.design.tuning.TradeOff
     space : station.design.space.DesignSpace
+
+    Returns
+    -------
+    list of str
+        HTML fragments, in order: a heading with a paragraph, the table's opening and header
+        row, one row per front design (and the chosen one when off the front), the table's close.
     """
     esc = html.escape
     s2 = esc(settling_label(2))

@@ -84,7 +84,14 @@ class RobustSet(NamedTuple):
     intervals: dict
 
     def to_json(self) -> list[dict]:
-        """Each model as ``{"label", "name", "effects"}``."""
+        """Each model as ``{"label", "name", "effects"}``.
+
+        Returns
+        -------
+        list of dict
+            One per model, in set order: ``label`` (str), ``name`` (str) and ``effects`` (effect
+            name to value, the effect's own units).
+        """
         return [{"label": lab, "name": m.name, "effects": m.effect_dict()} for m, lab in zip(self.models, self.labels)]
 
 
@@ -116,6 +123,12 @@ def model_from_json(doc, where: str) -> Model:
     where : str
         Named in errors (the file and key).
 
+    Returns
+    -------
+    Model
+        The model: its named parameter set with the given values, ``n_elements`` (4 when absent)
+        and effects.
+
     Raises
     ------
     StationError
@@ -141,6 +154,12 @@ def read_diagnosis(path: str | Path) -> DiagnosisDoubt:
     ----------
     path : str or Path
         ``station diagnose --json`` output (DESIGN.md "Model diagnosis contract").
+
+    Returns
+    -------
+    DiagnosisDoubt
+        The extended model, one model per alternative (the extended model's nominal parameters
+        with the alternative's effect values) and the effects' 95 % intervals.
 
     Raises
     ------
@@ -187,6 +206,12 @@ def default_intervals(model: Model) -> dict[str, tuple[float, float]]:
     ----------
     model : Model
         Its own values scale the "ratio" entries.
+
+    Returns
+    -------
+    dict of str to (float, float)
+        Effect name to (low, high), the effect's units; a "ratio" effect the model does not
+        have (neutral 0) is left out.
     """
     out = {}
     for name, how, lo, hi in DEFAULT_DOUBT:
@@ -214,6 +239,12 @@ def sample_models(model: Model, intervals: dict, n: int, seed: int = SEED) -> li
         How many, ≥ 0.
     seed : int
         The sample's seed.
+
+    Returns
+    -------
+    list of Model
+        ``n`` models named "``model.name`` sample k", k from 1; empty when ``n`` ≤ 0 or there
+        are no intervals.
     """
     from scipy.stats import qmc  # lazy: start-up time (scipy.stats: the tune command's parser imports this module)
 
@@ -233,6 +264,12 @@ def corner_models(model: Model, intervals: dict) -> list[Model]:
         The model the corner values replace their own in.
     intervals : dict
         Effect -> (low, high).
+
+    Returns
+    -------
+    list of Model
+        2**len(intervals) models named "``model.name`` corner k", k from 1; empty without
+        intervals or with more than :data:`MAX_CORNER_EFFECTS` effects.
     """
     if not intervals or len(intervals) > MAX_CORNER_EFFECTS:
         return []
@@ -300,6 +337,12 @@ def robust_set(model=None, robust=(), samples: int = 0, seed: int = SEED) -> Rob
         Models drawn from the intervals, ≥ 0 (with any, the box's corners join too).
     seed : int
         Their seed.
+
+    Returns
+    -------
+    RobustSet
+        The models in the order of the module docstring, each labelled, the design model first;
+        its ``intervals`` those the samples were drawn from (empty when none were drawn).
 
     Raises
     ------

@@ -118,6 +118,12 @@ class Problem(NamedTuple):
         ----------
         which : sequence of int, optional
             Indices of the models.
+
+        Returns
+        -------
+        list of Requirements
+            One per index in ``which``, in its order: :attr:`requirements` with ``tip_rms`` set to
+            that model's :attr:`tip_bounds` entry (unchanged when there are no tip bounds).
         """
         which = range(len(self.models)) if which is None else which
         if self.tip_bounds is None:
@@ -198,6 +204,13 @@ def robust_objective(costs, run_s: float = RUN_S, design_cost: float | None = No
     design_cost : float, optional
         The design model's cost against every requirement, the 2 % band included
         (``cost(..., held=False)``); default ``costs[0]``.
+
+    Returns
+    -------
+    float
+        The objective, s-like (smaller is better): below ``0.5 *`` :data:`DESIGN_MODEL_FIRST`
+        when every requirement holds on the design model, at least :data:`DESIGN_MODEL_FIRST`
+        otherwise.
     """
     c = np.asarray(costs, dtype=float)
     first = float(c[0]) if design_cost is None else float(design_cost)
@@ -226,6 +239,11 @@ def objective(figures, requirements, run_s: float = RUN_S, bar_s: float | None =
         The run's length, s.
     bar_s : float, optional
         The 2 % settling time to beat on the design model, s.
+
+    Returns
+    -------
+    float
+        :func:`robust_objective` of the models' costs, with the design model's part as above.
     """
     reqs = [requirements] * len(figures) if isinstance(requirements, Requirements) else list(requirements)
     first = cost(figures[0], reqs[0], run_s, held=False)
@@ -248,6 +266,11 @@ def judge_point(problem: Problem, x, which) -> list[Figures]:
         Unit-cube point.
     which : sequence of int
         Indices of the models.
+
+    Returns
+    -------
+    list of Figures
+        The design's figures on each model of ``which``, in its order.
     """
     comp = problem.space.compensator_file(problem.space.values(x)).compensator()
     checks = {}  # models that differ in friction or offsets alone share their linear checks
@@ -272,6 +295,11 @@ def judge_points(problem: Problem, xs, which) -> list[list[Figures]]:
         Unit-cube points.
     which : sequence of int
         Indices of the models.
+
+    Returns
+    -------
+    list of list of Figures
+        One :func:`judge_point` list per point, in the order of ``xs``.
     """
     return [judge_point(problem, x, which) for x in xs]
 
@@ -370,6 +398,12 @@ def search(problem: Problem, runner, budget: Budget = Budget(), seed: int = 0,
         The Sobol sample's seed.
     progress : callable, optional
         Called with one line per stage.
+
+    Returns
+    -------
+    SearchResult
+        The best candidate, the evaluation count, the last working set, every candidate judged
+        on all models, the bracket and the screening set.
     """
     say = progress or (lambda msg: None)
     space, n_models = problem.space, len(problem.models)
@@ -437,6 +471,11 @@ def screening_set(models, extra: int) -> list[int]:
     models : sequence of Model
     extra : int
         How many besides the nominal.
+
+    Returns
+    -------
+    list of int
+        Sorted model indices: 0 and up to ``extra`` others (fewer when there are fewer models).
     """
     names = sorted({k for m in models for k in m.effect_dict()})
     X = np.array([[m.effect(k) for k in names] for m in models], dtype=float).reshape(len(models), len(names))

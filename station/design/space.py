@@ -107,6 +107,12 @@ class Parameter:
         ----------
         x : float
             Coordinate, 0..1.
+
+        Returns
+        -------
+        float
+            The parameter's value in ``unit``, between ``low`` and ``high`` (geometric
+            interpolation when ``log``, linear otherwise).
         """
         x = min(max(float(x), 0.0), 1.0)
         if self.log:
@@ -120,6 +126,11 @@ class Parameter:
         ----------
         value : float
             In ``unit``.
+
+        Returns
+        -------
+        float
+            The coordinate in [0, 1] (the inverse of :meth:`value` inside the range).
         """
         if self.log:
             x = (math.log(value) - math.log(self.low)) / (math.log(self.high) - math.log(self.low))
@@ -236,6 +247,12 @@ def add_s(a, b) -> tuple[list[float], list[float]]:
     ----------
     a, b : tuple of sequence
         (num, den) each.
+
+    Returns
+    -------
+    tuple of (list of float, list of float)
+        (num, den) of a + b, descending powers of s: num = a_num·b_den + b_num·a_den,
+        den = a_den·b_den.
     """
     num = np.polyadd(np.polymul(a[0], b[1]), np.polymul(b[0], a[1]))
     return [float(c) for c in num], [float(c) for c in np.polymul(a[1], b[1])]
@@ -252,6 +269,12 @@ def convolve_shapers(a: ShaperTimes, b: ShaperTimes, dt: float = DT) -> ShaperTi
         Times (s) and amplitudes, each summing to 1.
     dt : float
         Sample time, s.
+
+    Returns
+    -------
+    ShaperTimes
+        The convolved shaper: times (s, increasing, on the ``dt`` grid) and amplitudes (summing
+        to 1).
     """
     pulses = sorted((round((ta + tb) / dt) * dt, aa * ab) for ta, aa in zip(a.times, a.amplitudes)
                     for tb, ab in zip(b.times, b.amplitudes))
@@ -276,6 +299,12 @@ def lead_s(k0: float, z: float, ratio: float) -> tuple[list[float], list[float]]
         Zero, rad/s.
     ratio : float
         p/z.
+
+    Returns
+    -------
+    tuple of (list of float, list of float)
+        (num, den) of Gth(s), descending powers of s: ``[k0·ratio, k0·ratio·z]`` and
+        ``[1, ratio·z]``; DAC counts per encoder count.
     """
     k = k0 * ratio
     return [k, k * z], [1.0, ratio * z]
@@ -354,6 +383,18 @@ class DesignSpace:
             (f Hz, ζ) of the mode the first pair starts at (None: no second impulse).
         second : tuple of float or None
             (f Hz, ζ) of the mode ``opt2``'s second pair starts at (None: none).
+
+        Returns
+        -------
+        ndarray, shape (dimension,)
+            The point: ``x_controller`` followed by each shaper pair's (time, amplitude)
+            coordinates; ``x_controller`` itself for the other shapers.
+
+        Raises
+        ------
+        ValueError
+            A ``mode`` or ``second`` whose frequency is not positive or whose damping ratio is
+            outside [0, 1) (:func:`~station.control.shaper.zv_shaper`).
         """
         x = np.asarray(x_controller, dtype=float)
         if self.shaper not in ("opt", "opt2"):
@@ -375,11 +416,22 @@ class DesignSpace:
         ----------
         x : array_like, shape (dimension,)
             Coordinates, each clipped to [0, 1].
+
+        Returns
+        -------
+        dict of str to float
+            Each parameter's name to its value in its ``unit``.
         """
         return {p.name: p.value(xi) for p, xi in zip(self.parameters, np.asarray(x, dtype=float))}
 
     def thesis_point(self) -> np.ndarray:
-        """The unit-cube coordinates of the thesis's compensator (its own parameters only)."""
+        """The unit-cube coordinates of the thesis's compensator (its own parameters only).
+
+        Returns
+        -------
+        ndarray, shape (controller_dimension,)
+            Coordinates in [0, 1] of the thesis's parameters (clipped to the ranges).
+        """
         return np.array([p.coordinate(THESIS[p.name]) for p in self.parameters[:self.controller_dimension]])
 
     def shaper_times(self, values: dict[str, float]) -> ShaperTimes | None:
@@ -389,6 +441,19 @@ class DesignSpace:
         ----------
         values : dict
             The design's parameters (``shaper_t2``, ``shaper_a2`` for "opt").
+
+        Returns
+        -------
+        ShaperTimes or None
+            Impulse times (s) and amplitudes (summing to 1): ZV or ZVD at :attr:`mode`, or the
+            searched pair (``opt``) or the convolution of the two searched pairs (``opt2``); None for
+            "none".
+
+        Raises
+        ------
+        ValueError
+            ``zv``/``zvd`` with a :attr:`mode` whose frequency is not positive or whose damping
+            ratio is outside [0, 1) (:func:`~station.control.shaper.zv_shaper`).
         """
         if self.shaper == "none":
             return None
@@ -417,6 +482,12 @@ class DesignSpace:
             Where it is (or will be) written.
         design : DesignRecord, optional
             The model it was designed on (the file's ``[design]`` record).
+
+        Returns
+        -------
+        station.control.files.CompensatorFile
+            The file's contents (not written): Gth and, for lead-accel, Ga as continuous
+            (num, den) in s (P: a constant in z), the clamp, the shaper and the design record.
         """
         if self.structure == "p":
             num, den = [values["kp"]], [1.0]
@@ -446,6 +517,12 @@ def thesis_compensator(structure: str, limit: float = 200.0, dt: float = 0.002):
         Clamp, ±DAC counts.
     dt : float
         Sample time, s.
+
+    Returns
+    -------
+    station.control.Compensator
+        P with kp = 2, or the thesis's lead (with accelerometer feedback for "lead-accel"),
+        clamped at ±``limit`` DAC counts.
     """
     if structure == "p":
         return p_controller(THESIS["kp"], limit, dt)

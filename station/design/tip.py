@@ -61,6 +61,12 @@ def residual(a, step_tick: int, dt: float = DT, after_s: float = RESIDUAL_AFTER_
         Sample time, s.
     after_s : float
         Start of the window, s after the step.
+
+    Returns
+    -------
+    Residual
+        RMS and peak |a| over the window, accelerometer counts; both NaN when the run ends
+        before the window starts.
     """
     a = np.asarray(a, dtype=float)
     tail = a[step_tick + int(round(after_s / dt)):]
@@ -102,6 +108,12 @@ def tip_form(form: LinearForm, row: np.ndarray) -> LinearForm:
     form : LinearForm
     row : ndarray, shape (n_x,)
         An output row over the state of :func:`station.plant.fem.state_matrices`.
+
+    Returns
+    -------
+    LinearForm
+        ``form`` with its output matrix ``cm`` (complex, shape (2, n_modes)) replaced: row 0 the
+        modal form of ``row``, row 1 the accelerometer's as before.
     """
     vinv = np.asarray(form.vinv)
     if form.substeps == 0:

@@ -107,6 +107,11 @@ def first_mode(model) -> tuple[float, float]:
     Parameters
     ----------
     model : station.plant.model.Model
+
+    Returns
+    -------
+    tuple of (float, float)
+        (frequency, Hz; damping ratio ζ, dimensionless) of the first antiresonance of θ/v.
     """
     ms = modal_summary(model.linear_params(), model.n_elements)
     return float(ms.antiresonances_hz[0]), float(ms.antiresonance_damping[0])
@@ -139,6 +144,14 @@ class TradeOff:
         ----------
         i : int
             Its index in :attr:`points`.
+
+        Returns
+        -------
+        dict
+            ``parameters`` (name to value, rounded to 6 decimals), ``hub_ratio`` and ``tip_ratio``
+            (dimensionless), ``overshoot_pct`` (%), ``settling_2pct_s`` (s), ``tip_residual_rms``
+            (accelerometer counts), each None when not finite; ``requirements_met``, ``others_met``,
+            ``chosen`` and ``on_front`` (bool).
         """
         p = self.points[i]
 
@@ -151,7 +164,14 @@ class TradeOff:
                 "on_front": i in self.front}
 
     def to_json(self) -> dict:
-        """``axes``, ``designs`` (how many were judged on every model), ``front`` (its points) and ``chosen``."""
+        """``axes``, ``designs`` (how many were judged on every model), ``front`` (its points) and ``chosen``.
+
+        Returns
+        -------
+        dict
+            ``axes`` (list of two str), ``designs`` (int), ``front`` (list of :meth:`point_json`
+            dicts, in front order) and ``chosen`` (a :meth:`point_json` dict).
+        """
         return {"axes": ["worst hub settling (2 %) / the thesis's", "worst tip residual RMS / the thesis's"],
                 "designs": len(self.points), "front": [self.point_json(i) for i in self.front],
                 "chosen": self.point_json(self.chosen)}
@@ -218,24 +238,52 @@ class TuneResult:
         return self.robust.models[0]
 
     def model_requirements(self) -> list[Requirements]:
-        """The requirements on each model, the tip's bound its own."""
+        """The requirements on each model, the tip's bound its own.
+
+        Returns
+        -------
+        list of Requirements
+            One per model of the set, in its order.
+        """
         if self.tip_bounds is None:
             return [self.requirements] * len(self.figures)
         return [self.requirements._replace(tip_rms=b) for b in self.tip_bounds]
 
     def met(self) -> list[bool]:
-        """Per model: every requirement met."""
+        """Per model: every requirement met.
+
+        Returns
+        -------
+        list of bool
+            One per model of the set, in its order.
+        """
         return [not violations(f, r) for f, r in zip(self.figures, self.model_requirements())]
 
     def warnings(self) -> list[str]:
         """One line each: what the user must know about the design beyond its figures (friction
-        holding the hub outside the 2 % band on the design model, :mod:`station.design.hold`)."""
+        holding the hub outside the 2 % band on the design model, :mod:`station.design.hold`).
+
+        Returns
+        -------
+        list of str
+            The warning lines, without trailing newlines; empty when there is nothing to say.
+        """
         held = design_model_warning(self.space, self.values, self.nominal, self.figures[0],
                                     self.model_requirements()[0])
         return [] if held is None else [held]
 
     def design_json(self) -> dict:
-        """The ``design`` block: structure, parameters, compensator, requirements, search, warnings."""
+        """The ``design`` block: structure, parameters, compensator, requirements, search, warnings.
+
+        Returns
+        -------
+        dict
+            JSON-ready: the structure, shaper, filter, amplitude (encoder counts) and clamp (DAC
+            counts); each parameter's ``value`` and ``unit``; the mode (Hz, ζ); the compensator's
+            spec; the requirements; the design model record; the objective in words; ``feasible``;
+            the margins (dB, degrees, rad/s); evaluations, ``elapsed_s`` (s), executor, seed and
+            :meth:`warnings`.
+        """
         comp = self.file.compensator()
         spec = {k: comp.spec[k] for k in ("gth", "ga", "limit") if k in comp.spec}
         if "shaper" in comp.spec:
@@ -268,6 +316,14 @@ class TuneResult:
         ----------
         controller : str or Path, optional
             The written compensator file (None: not written).
+
+        Returns
+        -------
+        dict
+            JSON-ready: ``controller`` (str or None), ``design`` (:meth:`design_json`), ``model``
+            (the design model's name, effects and figures), ``robust`` (:func:`robust_json`),
+            ``baseline`` (the thesis's compensator's figures, margins and spread), ``tradeoff``
+            (:meth:`TradeOff.to_json` or None), and ``verification`` when there is one.
         """
         nominal = self.nominal
         doc = {"controller": None if controller is None else str(controller),
@@ -321,6 +377,15 @@ def robust_json(rs: RobustSet, figures, baseline, req) -> dict:
         Tuned and thesis, one per model.
     req : Requirements or sequence of Requirements
         The same for every model, or one per model (the tip's bound its own).
+
+    Returns
+    -------
+    dict
+        ``worst``, ``spread`` ([min, max]), ``settled`` and ``models`` over the set's figures;
+        ``all_met`` (bool); ``friction_held`` (:func:`~station.design.hold.held_summary`);
+        ``settling_ratio_to_baseline`` and ``tip_rms_ratio_to_baseline`` ([min, max], None when
+        no model gives one); ``intervals`` (effect to [low, high]); and ``per_model``, one dict
+        per model in set order.
     """
     reqs = [req] * len(figures) if isinstance(req, Requirements) else list(req)
     per_model = []
@@ -364,6 +429,12 @@ def design_record(model, nominal, robust=(), out: str | Path = "tuned.toml") -> 
         The ``--robust`` files (without ``model``, a diagnosis JSON's extended model is the design model).
     out : str or Path
         Where the compensator file goes.
+
+    Returns
+    -------
+    DesignRecord
+        The design model's name or relative path (str) and the sha256 (hex) of the loaded
+        model's canonical TOML.
     """
     text = None if model is None else str(model) if isinstance(model, (str, Path)) else None
     if text is not None and text.lower().endswith(".toml"):

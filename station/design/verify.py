@@ -58,7 +58,14 @@ class Verification(NamedTuple):
             and self.max_abs_da == 0
 
     def to_json(self) -> dict:
-        """The fields and ``matches``."""
+        """The fields and ``matches``.
+
+        Returns
+        -------
+        dict
+            Every field by name (``log`` as a string or None; units as the attributes) and
+            ``matches`` (bool).
+        """
         return {"log": None if self.log is None else str(self.log), "reason": self.reason,
                 "max_abs_dtheta": self.max_abs_dtheta, "max_abs_da": self.max_abs_da,
                 "max_abs_dv": self.max_abs_dv, "overshoot_pct": self.overshoot_pct,
@@ -83,6 +90,12 @@ def verify(model, compensator_file: str | Path, amplitude: float, log: str | Pat
         Where to keep the run's log (overwritten); default: a temporary folder, removed.
     run_s : float
         The run's length, s.
+
+    Returns
+    -------
+    Verification
+        The run's outcome, the largest logged-minus-simulated differences of θ, a and v over
+        their common length, and the logged step's overshoot, 2 % settling time and tip residual.
 
     Raises
     ------
