@@ -33,6 +33,11 @@ def signature_evidence(name: str, before: Mapping[str, RunResiduals]) -> str:
         The effect (:data:`SIGNATURE_WORDS`; others: resonances and amplitude ratios).
     before : mapping of str to RunResiduals
         Run name -> residual analysis of the nominal model.
+
+    Returns
+    -------
+    str
+        Up to three "run: signature" phrases joined by "; "; empty when no signature matches.
     """
     words = SIGNATURE_WORDS.get(name, ("Hz", "× the model"))
     found = []
@@ -70,6 +75,12 @@ def effect_evidence(name: str, unit: str, alone: float, fold_values: Sequence[fl
         Its value in the joint model, when other effects were accepted beside it.
     before : mapping of str to RunResiduals
         Run name -> residual analysis of the nominal model.
+
+    Returns
+    -------
+    str
+        One sentence without a final period: the fit (with the folds' spread), the held-out
+        gains, the selection's verdict and any signatures, joined by "; ".
     """
     spread = (f" (folds {format_quantity(min(fold_values), unit)} to {format_quantity(max(fold_values), unit)})"
               if len(fold_values) > 1 else "")
@@ -94,6 +105,11 @@ def format_pct(x: float | None) -> str:
     ----------
     x : float or None
         The value, %.
+
+    Returns
+    -------
+    str
+        E.g. "12.3 %"; "n/a" when ``x`` is None or not finite.
     """
     return "n/a" if x is None or not math.isfinite(x) else f"{x:.1f} %"
 
@@ -136,6 +152,12 @@ def at_range_end(name: str, value: float) -> bool:
         An effect of :data:`station.plant.effects.EFFECTS`.
     value : float
         Its value, in its unit.
+
+    Returns
+    -------
+    bool
+        True at either end (a signed effect by its magnitude); False for an unknown effect, a
+        value that is not finite, or the neutral value.
     """
     spec = EFFECTS.get(name)
     if spec is None or not math.isfinite(value) or math.isclose(value, spec.neutral, rel_tol=1e-6, abs_tol=1e-9):
@@ -154,6 +176,11 @@ def plain_name(name: str) -> str:
     ----------
     name : str
         The effect's code name.
+
+    Returns
+    -------
+    str
+        "words (code name)", or ``name`` itself.
     """
     words = PARAMETER_WORDS.get(name[6:]) if name.startswith("param:") else EFFECT_WORDS.get(name)
     return f"{words} ({name})" if words else name
@@ -172,6 +199,11 @@ def plain_value(name: str, value: float, unit: str) -> str:
         Its value, in ``unit``.
     unit : str
         Its unit (:data:`station.plant.effects.EFFECTS`).
+
+    Returns
+    -------
+    str
+        The value in words, e.g. "1.98× nominal", "ζ = 0.021" or "12.5 DAC counts".
     """
     if not math.isfinite(value):
         return format_quantity(value, unit)
@@ -195,6 +227,12 @@ def interval_words(name: str, interval, unit: str) -> str:
         :class:`station.diagnosis.honesty.doubt.Interval`.
     unit : str
         The effect's unit.
+
+    Returns
+    -------
+    str
+        The phrase, with its unit (none for a dimensionless "1", whole numbers for samples);
+        empty when ``interval`` is None.
     """
     if interval is None:
         return ""
@@ -215,6 +253,12 @@ def cause_words(effect) -> str:
     Parameters
     ----------
     effect : EffectResult
+
+    Returns
+    -------
+    str
+        The phrase, e.g. "drive-train damping (param:drive_c) 1.98× nominal (95 % interval
+        1.54–3.16)", without a final period.
     """
     text = f"{plain_name(effect.name)} {plain_value(effect.name, effect.value, effect.unit)}"
     iv = interval_words(effect.name, effect.interval, effect.unit)
@@ -233,6 +277,13 @@ def target_notes(diag) -> list[str]:
     Parameters
     ----------
     diag : Diagnosis
+
+    Returns
+    -------
+    list of str
+        One note per run whose overshoot is missed (points of %), then one note for the runs
+        whose θ residual is far from white; each without a final period; empty when every
+        target is met.
     """
     notes = []
     for r in diag.runs:
@@ -262,6 +313,13 @@ def answer_points(diag) -> list[tuple[str, str]]:
     ----------
     diag : Diagnosis
         What :func:`station.diagnosis.diagnose` returned.
+
+    Returns
+    -------
+    list of tuple of (str, str)
+        (label, sentence) pairs in the order above; labels among "Audit", "Cause", "Gain",
+        "Still unexplained", "Alternatives", "Target missed", "Residuals", "Note"; each
+        sentence ends with a period.
     """
     base = diag.nominal_model.name
     points = [("Audit", line + ".") for line in diag.audit_lines()]
@@ -310,5 +368,10 @@ def summary_paragraph(diag) -> str:
     ----------
     diag : Diagnosis
         What :func:`station.diagnosis.diagnose` returned.
+
+    Returns
+    -------
+    str
+        "label: sentence" for each point, joined by spaces.
     """
     return " ".join(f"{label}: {text}" for label, text in answer_points(diag))

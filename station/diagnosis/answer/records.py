@@ -141,6 +141,13 @@ def effect_results(ev: Evaluator, how: str, names: Sequence[str], singles: Singl
         Run name -> residual analysis of the nominal model.
     intervals : mapping of str to Interval, optional
         Accepted effect -> its 95 % interval (:func:`station.diagnosis.honesty.doubt.profile_interval`).
+
+    Returns
+    -------
+    list of EffectResult
+        One per name of ``names``: the accepted ones first (their joint values, gains in %,
+        their intervals), then the rest by their validation cost alone (values fitted alone,
+        no interval).
     """
     intervals = intervals or {}
     accepted = sel.accepted

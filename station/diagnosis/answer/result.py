@@ -54,6 +54,16 @@ class EffectResult:
     at_range_end: bool = False
 
     def to_json(self) -> dict:
+        """The effect as DESIGN.md's ``effects`` entry.
+
+        Returns
+        -------
+        dict
+            ``name``, ``value``, ``unit``, ``gain_pct`` and ``cost_gain_pct`` (%, 3 decimals),
+            ``evidence``, ``accepted``, ``fold_values``, ``value_alone``, ``interval`` ([low, high]
+            or None), ``interval_at_range_end`` ([bool, bool] or None) and ``at_range_end``; values in
+            the effect's unit, None where not finite.
+        """
         fin = lambda x: x if math.isfinite(x) else None  # noqa: E731
         iv = self.interval
         return {"name": self.name, "value": fin(self.value), "unit": self.unit, "gain_pct": round(self.gain_pct, 3),
@@ -113,6 +123,16 @@ class RunReport:
     notes: list = field(default_factory=list)
 
     def to_json(self) -> dict:
+        """The run as DESIGN.md's ``runs`` entry (the arrays stay out).
+
+        Returns
+        -------
+        dict
+            ``file``, ``role``, ``controller``, ``alignment``, ``baseline`` and ``extended``
+            (``{"fit_pct": {"theta", "accel"}}``, %), ``gain_pct`` (%, 3 decimals), ``metrics`` (each
+            model's step metrics as JSON, or None), ``signatures_before``/``signatures_after`` (lists
+            of str) and ``notes``.
+        """
         m = None if self.metrics is None else {k: (None if v is None else v.to_json()) for k, v in self.metrics.items()}
         return {"file": self.file, "role": self.role, "controller": self.controller, "alignment": self.alignment,
                 "baseline": {"fit_pct": self.fit_nominal}, "extended": {"fit_pct": self.fit_extended},
@@ -204,7 +224,13 @@ class Diagnosis:
     def prediction_words(self) -> str:
         """Whether the extended model predicts the runs it was not fitted to better than the
         nominal one (θ RMS, :attr:`gain_pct`), in words: said beside "unexplained" and when
-        the model is saved."""
+        the model is saved.
+
+        Returns
+        -------
+        str
+            One clause without a final period, naming the validation and the θ RMS gain (%).
+        """
         if not self.causes:
             return "no effect accepted: the extended model is the nominal one"
         how = "better" if self.gain_pct > 0 else "no better" if self.gain_pct == 0 else "worse"
@@ -215,7 +241,15 @@ class Diagnosis:
 
     def audit_lines(self) -> list[str]:
         """What the data contradicted, one line each, to say before anything else: each run's
-        contradicted claims, then the sensor faults (and the wiring that reads the same)."""
+        contradicted claims, then the sensor faults (and the wiring that reads the same).
+
+        Returns
+        -------
+        list of str
+            The lines, without final periods: "audit: RUN: claim" per contradicted claim, then
+            "sensor fault, decided from the data: ..." per sensor fault; empty when nothing was
+            contradicted.
+        """
         lines = [f"audit: {r['run']}: {line}" for r in self.audit for line in r["contradicted"]]
         if self.sensor_faults is not None:
             lines += [f"sensor fault, decided from the data: {line}" for line in self.sensor_faults.lines()]
@@ -225,7 +259,13 @@ class Diagnosis:
         """DESIGN.md's JSON: cause, causes (the decided sensor faults first), audit,
         baseline, extended, gain_pct, effects (each with its interval), unexplained,
         unexplained_evidence, alternatives (+ extras: sensor_faults, validation,
-        interval_method, model, extended_model, runs, simulations, elapsed_s, notes)."""
+        interval_method, model, extended_model, runs, simulations, elapsed_s, notes).
+
+        Returns
+        -------
+        dict
+            JSON-ready mapping with those keys (percentages rounded to 3 decimals, ``elapsed_s`` in s).
+        """
         u = self.unexplained
         causes = self.all_causes
         return {

@@ -64,6 +64,12 @@ def integrated_time(e: np.ndarray) -> float:
     ----------
     e : ndarray, shape (N,)
         A residual (its mean is removed).
+
+    Returns
+    -------
+    float
+        The integrated autocorrelation time τ, samples (≥ 1; 1 for fewer than 4 samples or an
+        all-zero residual).
     """
     e = np.asarray(e, float) - np.mean(e)
     n = e.size
@@ -88,6 +94,12 @@ def effective_terms(ev: Evaluator, predictions: Mapping[int, tuple], runs: Seque
     predictions : mapping of int to (ndarray, ndarray)
         Run index -> the model's θ and a on it.
     runs : sequence of int
+
+    Returns
+    -------
+    float
+        N_eff, the effective number of independent error terms (≥ 1; 1 when a residual is not
+        finite).
     """
     shares, taus = [], []
     for i in runs:
@@ -267,6 +279,13 @@ def effect_interval(ev: Evaluator, axes: Mapping[str, Axis], name: str, values: 
         Effective number of error terms of the fit runs (:func:`effective_terms`).
     fold_values : sequence of float
         The effect's value fitted per fold (leave-one-run-out refits; one for --validate).
+
+    Returns
+    -------
+    Interval or None
+        The interval in the effect's unit, flagged where it reaches the search range, with the
+        refits' (low, high) when there was more than one fold; None when the fit's cost is not
+        finite (:func:`profile_interval`).
     """
     prof = profile_interval(ev, axes, name, values, runs, n_eff)
     if prof is None:
@@ -297,6 +316,11 @@ def interval_method(n_eff: float, terms: int, folds: int) -> str:
         Their error terms (2N per run).
     folds : int
         Leave-one-run-out refits (1: --validate, none).
+
+    Returns
+    -------
+    str
+        One sentence without a final period, naming the χ² threshold and N_eff of ``terms``.
     """
     refits = f", the range of the {folds} values refitted without each run" if folds > 1 else ""
     return (f"{INTERVAL_METHOD} on the fit runs (N_eff·ln(J/J_min) ≤ {CHI2_95:.2f}, N_eff = {n_eff:.0f} of "
@@ -328,6 +352,14 @@ class Alternative(NamedTuple):
     instead_of: str
 
     def to_json(self) -> dict:
+        """The alternative as DESIGN.md's ``alternatives`` entry.
+
+        Returns
+        -------
+        dict
+            ``causes`` (list of str), ``values`` (effect to value, its unit), ``gain_pct`` (%, 3
+            decimals), ``cost_ratio`` (4 decimals) and ``instead_of``.
+        """
         return {"causes": list(self.causes), "values": dict(self.values), "gain_pct": round(self.gain_pct, 3),
                 "cost_ratio": round(self.cost_ratio, 4), "instead_of": self.instead_of}
 
@@ -344,6 +376,12 @@ def tolerance(cost: float, floor: float, n_eff: float) -> float:
         What luck alone reaches around it (:func:`station.diagnosis.search.selection.null_floor`).
     n_eff : float
         Effective number of error terms of the validation runs.
+
+    Returns
+    -------
+    float
+        The tolerance, in the cost's units (Σ of noise-weighted squared errors), ≥ 0 when
+        ``cost`` ≥ ``floor``.
     """
     return max(cost - floor, cost * math.expm1(CHI2_95 / n_eff))
 

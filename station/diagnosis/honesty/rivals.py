@@ -93,6 +93,11 @@ def describe(effects: Mapping[str, float]) -> str:
     ----------
     effects : mapping of str to float
         Effect name -> value.
+
+    Returns
+    -------
+    str
+        "name value unit" per effect joined by " + "; "the nominal model" when there are none.
     """
     if not effects:
         return "the nominal model"
@@ -108,6 +113,11 @@ def jackknife_interval(value: float, fold_values: list[float]) -> tuple[float, f
         The value fitted on all runs.
     fold_values : list of float
         The value fitted in each fold (one run left out each).
+
+    Returns
+    -------
+    tuple of (float, float) or None
+        (low, high) in the value's unit; None with fewer than two finite fold values.
     """
     v = [x for x in fold_values if math.isfinite(x)]
     if len(v) < 2:
@@ -189,6 +199,12 @@ def explanation(diag) -> dict:
     ----------
     diag : Diagnosis
         What :func:`station.diagnosis.diagnose` returned (or its JSON form).
+
+    Returns
+    -------
+    dict of str to float
+        Effect name to value (its unit): the accepted effects in order, then the effects they
+        hold, as in the extended model.
     """
     chosen = {e.name: float(e.value) for e in _accepted(diag)}
     ext = _get(diag, "extended_model")

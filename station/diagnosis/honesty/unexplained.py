@@ -103,6 +103,14 @@ class SignalCheck:
         return bool(self.statistic >= self.threshold)
 
     def to_json(self) -> dict:
+        """The check as the report's JSON holds it.
+
+        Returns
+        -------
+        dict
+            ``signal``; ``rms``, ``noise``, ``statistic``, ``null`` and ``threshold`` rounded to 4
+            decimals (units as the attributes); ``structured`` (bool).
+        """
         return {"signal": self.signal, "rms": round(self.rms, 4), "noise": round(self.noise, 4),
                 "statistic": round(self.statistic, 4), "null": round(self.null, 4),
                 "threshold": round(self.threshold, 4), "structured": self.structured}
@@ -169,7 +177,15 @@ class Unexplained:
     replicates: int
 
     def to_json(self) -> dict:
-        """Per run checks and the followers (the report's details)."""
+        """Per run checks and the followers (the report's details).
+
+        Returns
+        -------
+        dict
+            ``runs`` (one ``{"run", "theta", "a"}`` per run, the checks as
+            :meth:`SignalCheck.to_json`), ``follows`` (``{"what", "share", "detail"}``, share a
+            fraction of the variance, 3 decimals) and ``replicates``.
+        """
         return {"runs": [{"run": r.run, "theta": r.theta.to_json(), "a": r.accel.to_json()} for r in self.runs],
                 "follows": [{"what": f.what, "share": round(f.share, 3), "detail": f.detail} for f in self.follows],
                 "replicates": self.replicates}
@@ -205,6 +221,12 @@ def lowpass(x: np.ndarray, fs: float) -> np.ndarray:
     x : ndarray, shape (N,)
     fs : float
         Sample rate, Hz.
+
+    Returns
+    -------
+    ndarray, shape (N,)
+        The filtered signal, in ``x``'s units; ``x`` itself when it has fewer than 30 samples
+        or the cut-off is not below Nyquist.
     """
     if x.size < 30 or LOWPASS_HZ >= 0.5 * fs:
         return x
@@ -236,6 +258,13 @@ def null_replicates(ev: Evaluator, values: Mapping[str, float], i: int, predicti
         The extended model's θ and a on run i.
     rng : numpy.random.Generator
         Draws the noise realisations.
+
+    Returns
+    -------
+    list of tuple of (ndarray, ndarray)
+        One (θ in encoder counts, a in accelerometer counts, rounded) pair per replicate, each
+        of shape (N,): first one per :data:`NULL_PERTURBATIONS` entry, then
+        :data:`NOISE_REPLICATES` noise realisations.
     """
     c = ev.cases[i]
     sigma = float(c.sigma_a)
@@ -269,6 +298,12 @@ def check_run(ev: Evaluator, values: Mapping[str, float], i: int, prediction: tu
     prediction : (ndarray, ndarray)
         The extended model's θ and a on run i.
     rng : numpy.random.Generator
+
+    Returns
+    -------
+    RunCheck
+        The run's name, kind and its θ and a :class:`SignalCheck` (statistic, the null's
+        largest and the threshold).
     """
     c = ev.cases[i]
     fs = 1.0 / c.log.dt
@@ -399,6 +434,11 @@ def describe(runs: Sequence[RunCheck], found: Sequence[Follower], signal: str) -
     found : sequence of Follower
     signal : {"theta", "a"}
         Which residual the followers describe.
+
+    Returns
+    -------
+    str
+        The sentence(s), ending with a period; empty when no run is structured.
     """
     bad = [r for r in runs if r.theta.structured or r.accel.structured]
     if not bad:

@@ -79,6 +79,12 @@ def load_case(path: str | Path) -> RunCase:
     path : str or Path
         A run log (any format :func:`station.runlog.read_log` reads).
 
+    Returns
+    -------
+    RunCase
+        The run: its log, controller, alignment, whether closed, θ (encoder counts) and a
+        (accelerometer counts) as above, shape (N,), N ≥ 50, and notes on what was adjusted.
+
     Raises
     ------
     StationError
@@ -136,6 +142,12 @@ def simulate_case(case: RunCase, model) -> tuple[np.ndarray, np.ndarray]:
         The run (:func:`load_case`).
     model : Model
         The model to simulate it on.
+
+    Returns
+    -------
+    tuple of (ndarray, ndarray)
+        Simulated θ (encoder counts) and a (accelerometer counts), each of shape (N,), on the
+        run's own scale (θ relative in open loop, as :func:`load_case`).
     """
     pred = case.run.simulate(model).prediction
     return pred["theta"], pred["a"]

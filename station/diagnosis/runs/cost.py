@@ -86,6 +86,16 @@ class Evaluator:
         ----------
         effects : mapping of str to float
             Effect name -> value (:data:`station.plant.effects.EFFECTS`).
+
+        Returns
+        -------
+        station.plant.model.Model
+            The base model with the effects applied.
+
+        Raises
+        ------
+        StationError
+            An unknown effect or a value out of its range (:meth:`station.plant.model.Model.with_effects`).
         """
         return self.model.with_effects(effects) if effects else self.model
 
@@ -98,6 +108,11 @@ class Evaluator:
             The effects asked for.
         i : int
             Index of the run in ``cases``.
+
+        Returns
+        -------
+        mapping of str to float
+            Effect name to value for run i.
         """
         return effects if self.run_effects is None else self.run_effects(effects, i)
 
@@ -110,6 +125,18 @@ class Evaluator:
             Effect name -> value, applied to the base model.
         i : int
             Index of the run in ``cases``.
+
+        Returns
+        -------
+        tuple of (ndarray, ndarray)
+            Simulated θ (encoder counts) and a (accelerometer counts) of run i, each of shape (N,).
+
+        Raises
+        ------
+        StopSignal
+            SIGINT or SIGTERM arrived (:func:`station.signals.check_stop`).
+        StationError
+            Effects the model cannot hold (:meth:`model_with`).
         """
         return self.predict_case(self.cases[i], self.effects_for(effects, i))
 
@@ -123,6 +150,18 @@ class Evaluator:
             The run.
         effects : mapping of str to float
             Effect name -> value, applied to the base model.
+
+        Returns
+        -------
+        tuple of (ndarray, ndarray)
+            Simulated θ (encoder counts) and a (accelerometer counts), each of shape (N,).
+
+        Raises
+        ------
+        StopSignal
+            SIGINT or SIGTERM arrived (:func:`station.signals.check_stop`).
+        StationError
+            Effects the model cannot hold (:meth:`model_with`).
         """
         check_stop()  # SIGINT / SIGTERM: every thread stops before its next simulation
         with self._lock:
@@ -139,6 +178,17 @@ class Evaluator:
             Effect name -> value, applied to the base model.
         i : int
             Index of the run in ``cases``.
+
+        Returns
+        -------
+        tuple of (float, float)
+            Σ(θ_measured − θ_simulated)² and Σ(a_measured − a_simulated)², counts² (each inf when
+            not finite).
+
+        Raises
+        ------
+        StopSignal
+            SIGINT or SIGTERM arrived before a simulation (:func:`station.signals.check_stop`).
         """
         effects = self.effects_for(effects, i)  # cached per run's own effects: other sessions' values never miss
         key = (_key(effects), i)
@@ -167,6 +217,16 @@ class Evaluator:
             Effect name -> value, applied to the base model.
         i : int
             Index of the run in ``cases``.
+
+        Returns
+        -------
+        float
+            The noise-weighted squared error, dimensionless (inf when the simulation diverged).
+
+        Raises
+        ------
+        StopSignal
+            SIGINT or SIGTERM arrived before a simulation (:func:`station.signals.check_stop`).
         """
         st, sa = self.sse(effects, i)
         c = self.cases[i]
@@ -179,6 +239,11 @@ class Evaluator:
         ----------
         runs : sequence of int
             Indices of the runs in ``cases``.
+
+        Returns
+        -------
+        int
+            Σ 2·N over the runs.
         """
         return sum(2 * self.cases[i].n for i in runs)
 
@@ -191,6 +256,11 @@ class Evaluator:
         ----------
         likelihood : bool
             The cost inside the block (as the constructor's ``likelihood``).
+
+        Yields
+        ------
+        Evaluator
+            This evaluator, its :attr:`likelihood` set to ``likelihood``.
         """
         before, self.likelihood = self.likelihood, likelihood
         try:
@@ -210,6 +280,17 @@ class Evaluator:
             Effect name -> value, applied to the base model.
         runs : sequence of int
             Indices of the runs in ``cases``.
+
+        Returns
+        -------
+        float
+            J, dimensionless (≈ 1 at the noise floor; inf when a simulation diverged; NaN with no
+            finite σ to weigh by).
+
+        Raises
+        ------
+        StopSignal
+            SIGINT or SIGTERM arrived before a simulation (:func:`station.signals.check_stop`).
         """
         if not self.likelihood:
             return sum(self.weighted(effects, i) for i in runs) / self.terms(runs)
@@ -265,7 +346,13 @@ class PooledFit(NamedTuple):
     accel: float | None
 
     def fit_pct(self) -> dict:
-        """``{"theta": F, "accel": F}``: the contract's fit_pct."""
+        """``{"theta": F, "accel": F}``: the contract's fit_pct.
+
+        Returns
+        -------
+        dict
+            ``theta`` and ``accel``: the NRMSE fits, % (None where undefined).
+        """
         return {"theta": self.theta, "accel": self.accel}
 
 
@@ -278,6 +365,12 @@ def pooled(ev: Evaluator, val_sse: Mapping[int, tuple]) -> PooledFit:
         Holds the measured runs.
     val_sse : mapping of int to (float, float)
         Run index -> squared θ and a errors of its held-out prediction, counts².
+
+    Returns
+    -------
+    PooledFit
+        θ RMS error over all the runs' samples (encoder counts; NaN with no runs) and the NRMSE
+        fits of θ and a, % (None when undefined or not finite).
     """
     idx = sorted(val_sse)
     n = sum(ev.cases[i].n for i in idx)
@@ -299,6 +392,11 @@ def rms_gain(rms_ext: float, rms_nom: float) -> float:
     ----------
     rms_ext, rms_nom : float
         RMS errors of the extended and the nominal model, counts.
+
+    Returns
+    -------
+    float
+        The gain, % (positive: the extended model's error is smaller).
     """
     if not (math.isfinite(rms_ext) and rms_nom > 0):
         return -math.inf if not math.isfinite(rms_ext) else 0.0
@@ -312,5 +410,10 @@ def relative_gain(v1: float, v0: float) -> float:
     ----------
     v1, v0 : float
         Cost with and without the change.
+
+    Returns
+    -------
+    float
+        The gain, % (positive: ``v1`` is smaller).
     """
     return 100.0 * (1.0 - v1 / v0) if v0 > 0 else 0.0

@@ -54,6 +54,11 @@ def validation_runs(folds: Sequence[Fold]) -> list[int]:
     Parameters
     ----------
     folds : sequence of Fold
+
+    Returns
+    -------
+    list of int
+        Sorted distinct run indices.
     """
     return sorted({i for f in folds for i in f.val})
 
@@ -68,6 +73,11 @@ def fold_records(folds: Sequence[Fold], names: Sequence[str], values: Sequence[M
         Run names by index.
     values : sequence of mapping
         Per fold, the accepted effects' values fitted on it.
+
+    Returns
+    -------
+    list of dict
+        One per fold, in order, as above (run names as given, values in each effect's unit).
     """
     return [{"fit": [names[i] for i in f.fit], "validate": [names[i] for i in f.val], "values": dict(v)}
             for f, v in zip(folds, values)]

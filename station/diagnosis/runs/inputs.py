@@ -25,6 +25,11 @@ def data_digest(case: RunCase) -> str:
     ----------
     case : RunCase
         The run as loaded (:func:`station.diagnosis.runs.cases.load_case`).
+
+    Returns
+    -------
+    str
+        The digest, 64 lowercase hex digits.
     """
     h = hashlib.sha256()
     for name in DIGEST_COLUMNS:

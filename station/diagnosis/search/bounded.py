@@ -62,6 +62,11 @@ class Axis:
         ----------
         x : float
             A value in the effect's unit.
+
+        Returns
+        -------
+        float
+            log x ("log"), √max(x, 0) ("sqrt"), or x itself ("linear", "int").
         """
         if self.scale == "log":
             return math.log(x)
@@ -76,6 +81,12 @@ class Axis:
         ----------
         t : float
             A search coordinate.
+
+        Returns
+        -------
+        float
+            The value in the effect's unit, in [lower, upper]: on a lattice of 1/64 grid step in
+            the coordinate, a whole number on an "int" axis.
         """
         lo, hi = self.to_unit(self.lower), self.to_unit(self.upper)
         t = min(max(t, lo), hi)
@@ -99,6 +110,12 @@ class Axis:
         ----------
         points : int, default GRID_POINTS
             Grid points (whole-number axes ignore it: every integer in range).
+
+        Returns
+        -------
+        ndarray, shape (G,)
+            Increasing values in [lower, upper]: ``points`` equally spaced in the coordinate (a
+            "sqrt" axis from 0 leaves 0 out), or every integer in range.
         """
         if self.scale == "int":
             return np.arange(math.ceil(self.lower), math.floor(self.upper) + 1, dtype=float)
@@ -131,6 +148,11 @@ def axis_for(name: str, lower: float, upper: float, neutral: float) -> Axis:
         Its search range, in its unit.
     neutral : float
         Its "no effect" value.
+
+    Returns
+    -------
+    Axis
+        The range with its scale: "int", "log", "sqrt" or "linear" as above.
     """
     if name == "delay":
         return Axis(name, lower, upper, "int")

@@ -247,6 +247,12 @@ def set_axes(names: Sequence[str], axes: Mapping[str, Axis]) -> list[Axis]:
         The effects fitted together (the one being added last).
     axes : mapping of str to Axis
         Every effect's axis (:func:`effect_axes`).
+
+    Returns
+    -------
+    list of Axis
+        The axes in the order of ``names``, static_friction contributing two
+        (coulomb_friction's and :data:`EXCESS`).
     """
     out = []
     for n in names:
@@ -285,6 +291,12 @@ def fit_set(ev: Evaluator, axes: Sequence[Axis], runs: Sequence[int], start: Map
         Starting effect values (others start at their grid's best point). A breakaway
         excess without a starting sliding level starts from coulomb_friction fitted with
         the others at their start.
+
+    Returns
+    -------
+    dict of str to float
+        Effect name to fitted value, each in its unit (a breakaway excess given back as
+        static_friction = coulomb_friction + excess, DAC counts).
     """
     axes = list(axes)
     start = dict(start)
@@ -402,6 +414,12 @@ def trial(ev: Evaluator, folds: Sequence[Fold], names: tuple, axes: Mapping[str,
     axes : mapping of str to Axis
     starts : sequence of mapping
         Per fold, starting values.
+
+    Returns
+    -------
+    Trial
+        ``names``, the values fitted per fold, each validation run's squared θ and a errors
+        (counts²) and their noise-weighted sum.
     """
     fold_values = [fit_set(ev, set_axes(names, axes), fold.fit, start) for fold, start in zip(folds, starts)]
     fold_values = _unstick(ev, folds, names, axes, fold_values)
@@ -449,6 +467,12 @@ def screen(ev: Evaluator, axes: Mapping[str, Axis], names: Sequence[str], fixed:
         The accepted effects' values.
     runs : sequence of int
         The fit runs.
+
+    Returns
+    -------
+    list of str
+        At most :data:`SECOND_STEP_CANDIDATES` effect names, lowest cost first; empty when none
+        lowers the cost.
     """
     return list(screen_costs(ev, axes, names, fixed, runs))[:SECOND_STEP_CANDIDATES]
 
@@ -470,6 +494,12 @@ def screen_costs(ev: Evaluator, axes: Mapping[str, Axis], names: Sequence[str], 
         The runs the cost is summed over.
     every : int, optional
         Scan every so many grid points (2: half the simulations, a coarser look).
+
+    Returns
+    -------
+    dict of str to float
+        Effect name to the lowest normalised cost J (dimensionless) it reaches, only those
+        below the cost of ``fixed`` alone, in increasing order of cost.
     """
     c0 = ev.cost(fixed, runs)
     best = {n: min(ev.cost(point, runs) for point in _screen_points(n, axes, fixed)[::every]) for n in names}
@@ -524,6 +554,12 @@ def null_floor(ev: Evaluator, folds: Sequence[Fold], fold_values: Sequence[Mappi
     folds : sequence of Fold
     fold_values : sequence of mapping
         Per fold, the current model's effect values.
+
+    Returns
+    -------
+    float
+        Σ over the validation runs of the lowest noise-weighted error, dimensionless (the units
+        of :attr:`Trial.val_weighted`).
     """
     total = 0.0
     for fold, values in zip(folds, fold_values):
@@ -547,6 +583,12 @@ def accept(v0: float, v1: float, terms: int, floor: float | None = None) -> bool
     floor : float, optional
         What luck alone reaches around the current model (:func:`null_floor`), the
         reference when lower than ``v0``.
+
+    Returns
+    -------
+    bool
+        True when ``v1`` is finite and lowers the reference by at least
+        :data:`MIN_RELATIVE_GAIN` relatively and :data:`MIN_NOISE_GAIN` per error term.
     """
     if not math.isfinite(v1) or v0 <= 0:
         return False
@@ -564,6 +606,12 @@ def fit_each_alone(search: Search, names: Sequence[str], nominal: Trial) -> Sing
         The candidates.
     nominal : Trial
         The nominal model's (no effects) validation errors.
+
+    Returns
+    -------
+    Singles
+        Per candidate, in the order of ``names``: its trial and its value fitted alone on all
+        fit runs.
     """
     ev, folds, fit_runs = search.ev, search.folds, search.fit_runs
     # a fold fitted on all fit runs (the --validate one) already holds the value on all of them
@@ -592,6 +640,11 @@ def excess_fraction(tr: Trial) -> float:
     Parameters
     ----------
     tr : Trial
+
+    Returns
+    -------
+    float
+        The median fraction, dimensionless, in [0, 1]; 0 when no fold has a static_friction.
     """
     fr = [_excess_of(v) for v in tr.fold_values if v.get("static_friction", 0.0) > 0]
     return float(np.median(fr)) if fr else 0.0
@@ -609,6 +662,11 @@ def credible(trials: Mapping[str, Trial], terms: int) -> dict[str, Trial]:
         Candidate -> its trial in this step.
     terms : int
         Error terms of the validation runs.
+
+    Returns
+    -------
+    dict of str to Trial
+        A copy of ``trials`` without the candidates that do not pay over the simpler one.
     """
     out = dict(trials)
     for name, tr in trials.items():

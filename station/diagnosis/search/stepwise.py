@@ -209,6 +209,11 @@ def refit_accepted(search: Search, current: Trial, start: Mapping[str, float], v
         Where the joint fit starts.
     values : dict, optional
         Values already fitted jointly (then only the fold check runs).
+
+    Returns
+    -------
+    dict of str to float
+        The accepted effects' joint values, each in its effect's unit.
     """
     ev, runs, axes = search.ev, search.fit_runs, set_axes(current.names, search.axes)
     values = fit_set(ev, axes, runs, start) if values is None else values
@@ -251,6 +256,12 @@ def forward_select(search: Search, names: Sequence[str], singles: Singles, nomin
         Step 1 (:func:`fit_each_alone`).
     nominal : Trial
         The nominal model's validation errors: where selection starts.
+
+    Returns
+    -------
+    Selection
+        The accepted effects in the order added (empty when none paid), their trial, their
+        joint values on all fit runs and every step tried.
     """
     ev, folds = search.ev, search.folds
     terms = ev.terms(validation_runs(folds))

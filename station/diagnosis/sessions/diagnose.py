@@ -168,6 +168,12 @@ def model_file_names(sessions: Sequence[SessionLogs]) -> list[str]:
     Parameters
     ----------
     sessions : sequence of SessionLogs
+
+    Returns
+    -------
+    list of str
+        One distinct file name per session, in their order, each ending in ".toml" (a name
+        that is also a built-in model's gets :data:`SESSION_SUFFIX`).
     """
     stems = [re.sub(r"[^A-Za-z0-9_.-]+", "_", s.name).strip(".") or "session" for s in sessions]
     stems = [n + SESSION_SUFFIX if n.lower() in builtin_models() else n for n in stems]
@@ -232,6 +238,12 @@ def simulate_cut(case: RunCase, model) -> tuple[np.ndarray, np.ndarray]:
     ----------
     case : RunCase
     model : Model
+
+    Returns
+    -------
+    tuple of (ndarray, ndarray)
+        Simulated θ (encoder counts) and a (accelerometer counts), each of shape (N,), N the
+        case's (possibly cut) length.
     """
     pred = simulate_log(case.log, case.controller, case.alignment, model).prediction
     return pred["theta"], pred["a"]
@@ -275,10 +287,18 @@ def load_sessions(sessions: Sequence[SessionLogs], max_samples: int = MAX_SAMPLE
     say : callable
         Called with one line per log read.
 
+    Returns
+    -------
+    Loaded
+        The cases session by session, their groups, the sessions kept, the notes and the
+        samples used against those available.
+
     Raises
     ------
     StationError
         No usable run in any session.
+    StopSignal
+        SIGINT or SIGTERM arrived between two logs (:func:`station.signals.check_stop`).
     """
     notes: list[str] = []
     per_session: list[tuple[str, list[RunCase]]] = []
@@ -416,6 +436,11 @@ class SessionsDiagnosis:
         name : str
             The session's name.
 
+        Returns
+        -------
+        station.plant.model.Model
+            Named "<nominal> session <name>": its sensor faults and effects applied.
+
         Raises
         ------
         KeyError
@@ -435,6 +460,11 @@ class SessionsDiagnosis:
         ----------
         name : str
             The session's name.
+
+        Returns
+        -------
+        str
+            Two comment lines and the model's TOML, ending with a newline.
 
         Raises
         ------
@@ -457,6 +487,13 @@ class SessionsDiagnosis:
         ----------
         models : mapping of str to str, optional
             Session name -> its saved model file (``--save-models``); null otherwise.
+
+        Returns
+        -------
+        dict
+            ``sessions`` (per session: ``name``, ``runs``, ``effects`` (effect to value, its unit;
+            None where not finite) and ``model``), ``shared`` (effect to value) and ``drifting``
+            (list of effect names).
         """
         models, fin = models or {}, finite
         return {"sessions": [{"name": s.name, "runs": list(s.runs),

@@ -64,6 +64,11 @@ def key(name: str, session: int) -> str:
         An effect (:data:`station.plant.effects.EFFECTS`).
     session : int
         The session's index.
+
+    Returns
+    -------
+    str
+        ``name`` + :data:`SEP` + the session's index.
     """
     return f"{name}{SEP}{session}"
 
@@ -75,6 +80,16 @@ def split_key(k: str) -> tuple[str, int | None]:
     ----------
     k : str
         A key of an effects mapping.
+
+    Returns
+    -------
+    tuple of (str, int or None)
+        The effect's name and the session's index (None for a shared key).
+
+    Raises
+    ------
+    ValueError
+        A key whose part after :data:`SEP` is not a whole number.
     """
     name, sep, s = k.rpartition(SEP)
     return (name, int(s)) if sep else (k, None)
@@ -142,7 +157,13 @@ class Layout:
         return len(self.groups)
 
     def session_of(self) -> list[int]:
-        """Per run index, its session's index."""
+        """Per run index, its session's index.
+
+        Returns
+        -------
+        list of int
+            Indexed by run, each run's session index.
+        """
         out = [0] * sum(len(g) for g in self.groups)
         for s, g in enumerate(self.groups):
             for i in g:
@@ -226,6 +247,11 @@ class DriftResult:
         ----------
         s : int
             The session's index.
+
+        Returns
+        -------
+        dict of str to float
+            Plain effect names (no session keys) to values, each in its unit.
         """
         return PerSession([s])(self.values, 0)
 
@@ -239,6 +265,16 @@ class DriftResult:
             An accepted effect.
         s : int
             The session's index.
+
+        Returns
+        -------
+        list of float
+            One value per fold whose fit runs hold runs of session s, in the effect's unit.
+
+        Raises
+        ------
+        KeyError
+            ``name`` is not an accepted effect.
         """
         return list(self.refit_values[name][s])
 
@@ -325,6 +361,13 @@ def structure_trial(search: Search, layout: Layout, shared: Sequence[str], drift
     shared, drifting : sequence of str
     starts : sequence of mapping
         Per fold, starting values (:func:`fit_structure`).
+
+    Returns
+    -------
+    Trial
+        ``shared + drifting`` as its names, the values fitted per fold (shared names and
+        per-session keys), each validation run's squared errors (counts²) and their
+        noise-weighted sum.
     """
     ev = search.ev
     fold_values, val_sse, total = [], {}, 0.0
@@ -349,6 +392,12 @@ def session_refits(search: Search, layout: Layout, trial: Trial, name: str) -> l
         Fitted with ``name`` per session.
     name : str
         The effect.
+
+    Returns
+    -------
+    list of list of float
+        Per session in layout order, the effect's values (its unit), one per fold whose fit
+        runs hold runs of that session.
     """
     return [[fv[key(name, s)] for fold, fv in zip(search.folds, trial.fold_values) if set(fold.fit) & set(g)]
             for s, g in enumerate(layout.groups)]
@@ -362,6 +411,12 @@ def luck_floor(search: Search, trial: Trial) -> float:
     ----------
     search : Search
     trial : Trial
+
+    Returns
+    -------
+    float
+        Σ over the held-out runs of the lowest noise-weighted error, dimensionless (the units
+        of :attr:`Trial.val_weighted`).
     """
     ev = search.ev
     folds, values = [], []
@@ -432,6 +487,12 @@ def select_structure(search: Search, layout: Layout, names: Sequence[str], nomin
         The nominal model's held-out errors: where selection starts.
     session_names : sequence of str
         For the progress lines.
+
+    Returns
+    -------
+    Structure
+        The accepted effects in order (empty when none pays), their per-session trial and
+        their per-session values on all runs.
     """
     ev, folds, all_runs = search.ev, search.folds, search.fit_runs
     terms = ev.terms(validation_runs(folds))
@@ -480,6 +541,13 @@ def decide_drift(search: Search, layout: Layout, structure: Structure, nominal: 
         The nominal model's held-out errors.
     session_names : sequence of str
         For the progress lines.
+
+    Returns
+    -------
+    DriftResult
+        The structure split into shared and drifting effects, one decision per accepted effect
+        (none with fewer than two sessions or no effect), the final values on all runs, the
+        trials and the leave-one-run-out refits.
     """
     ev, all_runs = search.ev, search.fit_runs
     accepted = list(structure.accepted)
@@ -539,5 +607,10 @@ def finite(x: float) -> float | None:
     Parameters
     ----------
     x : float
+
+    Returns
+    -------
+    float or None
+        ``float(x)`` when finite, else None.
     """
     return float(x) if math.isfinite(x) else None

@@ -47,6 +47,11 @@ def decision_words(result, d: Decision) -> str:
     ----------
     result : SessionsDiagnosis
     d : station.diagnosis.sessions.drift.Decision
+
+    Returns
+    -------
+    str
+        The sentence, without a final period: "NAME drifts: ..." or "NAME is shared: ...".
     """
     pay = (f"per-session values lower the held-out θ + a cost by {d.cost_gain_pct:.1f} % (θ RMS "
            f"{d.theta_gain_pct:.1f} %) against one shared value ({_value(d.name, d.shared_value)})"
@@ -72,6 +77,12 @@ def answer_lines(result) -> list[str]:
     Parameters
     ----------
     result : SessionsDiagnosis
+
+    Returns
+    -------
+    list of str
+        The lines, without newlines: the sessions and runs, the structure, then (when an
+        effect was accepted) what drifts and what is shared and one indented line per decision.
     """
     n_runs = sum(len(s.runs) for s in result.sessions)
     lines = [f"{len(result.sessions)} session(s), {n_runs} runs ({result.samples[0]} of {result.samples[1]} samples "
@@ -97,6 +108,12 @@ def format_sessions(result, models: Mapping[str, str] | None = None) -> str:
     result : SessionsDiagnosis
     models : mapping of str to str, optional
         Session name -> its saved model file.
+
+    Returns
+    -------
+    str
+        :func:`answer_lines`, one line per session, the notes and the simulations' count,
+        joined by newlines (no final newline).
     """
     models = models or {}
     lines = answer_lines(result)
