@@ -114,6 +114,12 @@ def predict(model, experiment: Experiment, command: str = "round", limit: float 
         The device's command quantization (v1 rounds, the legacy firmware truncates).
     limit : float
         The controller's clamp, ±DAC counts.
+
+    Returns
+    -------
+    Prediction
+        Simulated θ (encoder counts) and a (accelerometer counts), each of shape (N,), N the
+        experiment's ticks.
     """
     res = simulate(model, experiment.controller_object(limit), experiment.u(), alignment=1, command=command)
     return Prediction(np.asarray(res.theta, float), np.asarray(res.a, float))
@@ -128,6 +134,11 @@ def separation(p: Prediction, q: Prediction, sigma_theta: float = THETA_QUANTIZA
     p, q : Prediction
     sigma_theta, sigma_a : float
         Sensor noise levels, counts.
+
+    Returns
+    -------
+    float
+        S, in noise variances (dimensionless, ≥ 0; inf when not finite).
     """
     with np.errstate(all="ignore"):
         s = float(np.sum((p.theta - q.theta) ** 2) / sigma_theta ** 2 + np.sum((p.a - q.a) ** 2) / sigma_a ** 2)
@@ -166,6 +177,12 @@ def judge(experiment: Experiment, chosen: Prediction, others: Sequence[Predictio
         The clamp, ±DAC counts.
     sigma_theta, sigma_a : float
         Sensor noise levels, counts.
+
+    Returns
+    -------
+    Candidate
+        The experiment, whether feasible, S per rival (noise variances), the score
+        Σ ln(1 + S) (0 when infeasible) and the reason it is not feasible ("" when it is).
     """
     note = _feasible(experiment, [chosen, *others], soft_limit, limit)
     seps = [separation(chosen, q, sigma_theta, sigma_a) for q in others]

@@ -117,6 +117,16 @@ class Experiment:
         ----------
         dt : float
             Sample time, s.
+
+        Returns
+        -------
+        ndarray, shape (round(duration/dt),)
+            The reference (:func:`reference`), encoder counts closed loop, DAC counts open loop.
+
+        Raises
+        ------
+        ValueError
+            A run too short for the reference (:func:`reference`).
         """
         n = int(round(self.duration / dt))
         return reference(self.reference, self.amplitude, n, int(round(self.step_time / dt)), dt)
@@ -130,11 +140,29 @@ class Experiment:
             The clamp, ±DAC counts (the rig's 200).
         dt : float
             Sample time, s.
+
+        Returns
+        -------
+        Compensator or OpenLoop
+            What :func:`station.control.make_controller` makes of :attr:`controller`, with
+            :attr:`kp` (2 when None) and the clamp.
+
+        Raises
+        ------
+        StationError
+            A bad kp, limit or dt (:func:`station.control.make_controller`).
         """
         return make_controller(self.controller, dt=dt, kp=2.0 if self.kp is None else self.kp, limit=limit)
 
     def to_json(self) -> dict:
-        """``{"controller", "kp", "reference": {"kind", "amplitude", "step_time_s", "duration_s"}, "label"}``."""
+        """``{"controller", "kp", "reference": {"kind", "amplitude", "step_time_s", "duration_s"}, "label"}``.
+
+        Returns
+        -------
+        dict
+            As above: ``amplitude`` in counts, ``step_time_s`` and ``duration_s`` in s (a reference
+            other than a step gives its start, :data:`START_TICK` ticks).
+        """
         return {"controller": self.controller, "kp": self.kp,
                 "reference": {"kind": self.reference, "amplitude": self.amplitude,
                               "step_time_s": self.step_time if self.reference == "step" else START_TICK * DT,
@@ -157,6 +185,11 @@ def reference(kind: str, amplitude: float, n: int, step_tick: int = START_TICK, 
         First tick of a step.
     dt : float
         Sample time, s.
+
+    Returns
+    -------
+    ndarray, shape (n,)
+        u[k], in ``amplitude``'s counts: 0 before the reference starts, peak |u| ≤ |amplitude|.
 
     Raises
     ------
@@ -210,7 +243,13 @@ step of 100, lead + accelerometer step of 200 (both at 0.02 s), open-loop ±100 
 def candidate_experiments() -> list[Experiment]:
     """The experiments a design chooses from: each reference at a few amplitudes under each
     controller where it makes sense (open-loop ramps, triangles and small pulses for friction;
-    closed-loop steps, chirps, PRBS and multisines for the dynamics). About 40, all 2 s."""
+    closed-loop steps, chirps, PRBS and multisines for the dynamics). About 40, all 2 s.
+
+    Returns
+    -------
+    list of Experiment
+        The candidates, open-loop ones first, then per controller (P, lead, lead-accel).
+    """
     ol = [("ramp", (20, 40, 80)), ("triangle", (30, 60)), ("pulses", (30, 60, 150, 200)), ("prbs", (30, 60)),
           ("chirp", (30, 60)), ("multisine", (40, 80))]
     closed = {"p": [("step", (10, 25, 100, 200)), ("ramp", (100, 300)), ("chirp", (20, 50)), ("prbs", (20, 50))],
@@ -233,6 +272,18 @@ def write_reference(experiment: Experiment, path: str | Path, dt: float = DT) ->
         The file (its folder must exist).
     dt : float
         Sample time, s.
+
+    Returns
+    -------
+    Path
+        ``path``: tab-separated, a ``t u`` header and one row per tick (t in s, u in counts).
+
+    Raises
+    ------
+    ValueError
+        A run too short for the reference (:func:`reference`).
+    OSError
+        The file cannot be written (its folder missing, no permission).
     """
     u = experiment.u(dt)
     path = Path(path)

@@ -153,7 +153,14 @@ class ExperimentRecord:
     design: Design | None = field(default=None, repr=False)
 
     def to_json(self) -> dict:
-        """``{"log", "controller", "kp", "reference", "label", "why", "outcome", "used"}``."""
+        """``{"log", "controller", "kp", "reference", "label", "why", "outcome", "used"}``.
+
+        Returns
+        -------
+        dict
+            ``log`` (str), the experiment's :meth:`~station.diagnosis.identify.experiments.Experiment.to_json`
+            keys, ``why``, ``outcome`` (the reason) and ``used`` (bool).
+        """
         return {"log": str(self.log), **self.experiment.to_json(), "why": self.why, "outcome": self.reason,
                 "used": self.used}
 
@@ -197,7 +204,16 @@ class Identification:
 
     def to_json(self) -> dict:
         """The diagnosis's JSON (DESIGN.md) plus ``"experiments"`` and ``"identify"`` (how it
-        ended, the budget, the diagnoses made, the timings)."""
+        ended, the budget, the diagnoses made, the timings).
+
+        Returns
+        -------
+        dict
+            :meth:`Diagnosis.to_json` (``{"cause": None, "causes": []}`` without a diagnosis) with
+            ``experiments`` (one :meth:`ExperimentRecord.to_json` each) and ``identify``
+            (``stopped``, ``budget``, ``diagnoses``, ``kept_earlier``, ``model``, the experiments
+            run and used, ``timings_s`` in s to 3 decimals).
+        """
         doc = self.diagnosis.to_json() if self.diagnosis is not None else {"cause": None, "causes": []}
         doc["experiments"] = [e.to_json() for e in self.experiments]
         doc["identify"] = {"stopped": self.stopped, "budget": self.budget, "diagnoses": self.diagnoses,
@@ -218,6 +234,11 @@ def default_out_dir(when: _dt.datetime | None = None, folder: str | Path = "runs
         The time in the name (default now, UTC).
     folder : str or Path
         Where the folder goes.
+
+    Returns
+    -------
+    Path
+        ``folder/identify-YYYYmmdd-HHMMSS-mmm`` (a suffix when taken); not created.
     """
     when = when or _dt.datetime.now(_dt.UTC)
     stem = f"identify-{when:%Y%m%d-%H%M%S}-{when.microsecond // 1000:03d}"
@@ -240,6 +261,12 @@ def recheck_candidates(diag, rival_effects: Sequence[str], allowed: Sequence[str
         Effects named by its rivals.
     allowed : sequence of str
         The candidates of the first diagnosis.
+
+    Returns
+    -------
+    list of str
+        Distinct effect names from ``allowed`` in that order, at most
+        :data:`RECHECK_CANDIDATES` (or as many as the causes); ``allowed`` itself when none.
     """
     order = list(diag.causes) + list(rival_effects)
     order += [e.name for e in sorted(diag.effects, key=lambda e: -e.cost_gain_pct) if e.cost_gain_pct > 0]
@@ -401,6 +428,19 @@ def prefer(old, new, runs: Sequence[str | Path], base) -> Preference:
         Every completed run.
     base : station.plant.model.Model
         The nominal model.
+
+    Returns
+    -------
+    Preference
+        Whether to keep the earlier explanation, its values refitted on all runs, both costs
+        per error term (dimensionless, ≈ 1 at the noise floor), the comparison in words and,
+        when kept, its intervals and residual check; ``keep_old`` False with empty values and
+        NaN costs when ``old`` accepted nothing or names the same causes.
+
+    Raises
+    ------
+    StationError
+        A run that cannot be read as a diagnosis case (:func:`station.diagnosis.runs.cases.load_case`).
     """
     if not old.causes or set(old.causes) == set(new.causes):
         return Preference(False, {}, math.nan, math.nan, "")
@@ -443,6 +483,11 @@ def settled(diag, rv) -> str:
         The record identify prints.
     rv : Rivals
         Its rivals (none).
+
+    Returns
+    -------
+    str
+        One sentence without a final period.
     """
     if not diag.causes:
         return "the diagnosis accepted no effect: nothing to tell apart"
