@@ -10,10 +10,13 @@ exempt; ``*args``/``**kwargs`` are documented as such.
 
 from __future__ import annotations
 
+import ast
 import dataclasses
 import importlib
 import inspect
+import pathlib
 import pkgutil
+import re
 import warnings
 
 import pytest
@@ -89,3 +92,60 @@ def test_parameters_are_documented(qualname, func, doc, skip_first, record):
     if not record:
         stale = [d for d in _names(parsed["Parameters"]) + _names(parsed["Other Parameters"]) if d not in params]
         assert not stale, f"{qualname}: documented but not parameters: {', '.join(stale)}"
+
+
+def _own_nodes(func):
+    """The nodes of ``func``'s body, not descending into nested functions, lambdas or classes."""
+    stack = list(func.body)
+    while stack:
+        node = stack.pop()
+        yield node
+        if not isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef, ast.Lambda, ast.ClassDef)):
+            stack.extend(ast.iter_child_nodes(node))
+
+
+def _public_functions(tree):
+    """(qualified name, node) of each public function and method of a module: no part of its
+    name starts with "_", and it is not local to another function (a closure is no API)."""
+    def visit(node, prefix):
+        for child in ast.iter_child_nodes(node):
+            if isinstance(child, ast.ClassDef):
+                yield from visit(child, f"{prefix}{child.name}.")
+            elif isinstance(child, (ast.FunctionDef, ast.AsyncFunctionDef)):
+                name = f"{prefix}{child.name}"
+                if not any(part.startswith("_") for part in name.split(".")):
+                    yield name, child
+            else:
+                yield from visit(child, prefix)
+    yield from visit(tree, "")
+
+
+def _returns_a_value(func) -> bool:
+    return any(isinstance(n, ast.Return) and n.value is not None or isinstance(n, (ast.Yield, ast.YieldFrom))
+               for n in _own_nodes(func))
+
+
+def _is_property(func) -> bool:
+    """A property describes its value in its summary line."""
+    return any(ast.unparse(d).split(".")[-1] in ("property", "cached_property") for d in func.decorator_list)
+
+
+def _value_returning(package: str):
+    """``(where, docstring)`` of each public value-returning function of ``station.<package>``
+    (properties aside), ``where`` as ``path:line qualified.name``."""
+    root = pathlib.Path(station.__file__).parent
+    for path in sorted((root / package).rglob("*.py")):
+        for name, node in _public_functions(ast.parse(path.read_text(encoding="utf-8"))):
+            if _returns_a_value(node) and not _is_property(node):
+                yield f"{path.relative_to(root.parent)}:{node.lineno} {name}", ast.get_docstring(node) or ""
+
+
+@pytest.mark.parametrize("package", ["diagnosis", "design"])
+def test_value_returning_functions_document_what_they_return(package):
+    """Every public function of the package that returns (or yields) a value says what in a
+    numpydoc Returns (or Yields) section: its type, shape and units."""
+    found = list(_value_returning(package))
+    assert len(found) > 60  # the walk reaches the package
+    missing = [where for where, doc in found if not re.search(r"^(Returns|Yields)\n-+$", doc, re.M)]
+    assert not missing, (f"{len(missing)} of {len(found)} public functions return a value but document no "
+                         f"Returns/Yields section:\n" + "\n".join(missing))
