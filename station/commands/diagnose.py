@@ -22,7 +22,7 @@ HELP = ("diagnose the model on measured runs: residual tests, the missing effect
 
 MAX_SAMPLES = 100_000
 """Default ``--max-samples``: samples of all runs together (200 s of the rig's data at 500 Hz;
-four runs of 25 000 samples: about 1.5 min of computing here, more on a busy machine)."""
+what four runs of 25 000 samples cost: docs/benchmarks.md, "The diagnosis")."""
 SIMULATIONS_PER_FOLD_RUN = 1430
 """Simulations of the whole vocabulary's diagnosis per run simulated in each fold (every
 evaluation simulates a fold's fit and validation runs): leave-one-run-out on n runs costs about
@@ -31,9 +31,8 @@ this × n × n. Counted here on the rig's thesis logs: 2 runs 5676 (1419 × 4), 
 SECONDS_PER_SIMULATION = 0.8e-3
 """CPU time of a simulation besides its samples (building the model with its effects), s."""
 SECONDS_PER_SAMPLE = 0.25e-6
-"""CPU time of one sample of one simulation, s. Both measured here (2 cores, load 4-7):
-the rig's four thesis logs of 1000 samples, 12 060 simulations in 11.9 CPU s; two runs of
-20 000 samples, 2464 simulations in 12.7 CPU s; again (load 5): 22 886 in 24.5 s, 5676 in 5.5 s."""
+"""CPU time of one sample of one simulation, s. This and :data:`SECONDS_PER_SIMULATION`
+are fitted to the diagnosis's timings (docs/benchmarks.md, "The diagnosis")."""
 
 
 def configure(parser: argparse.ArgumentParser) -> None:

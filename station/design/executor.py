@@ -9,8 +9,8 @@ function of its arguments (no shared state, no clock, no unseeded randomness), s
 is the same whichever runs it.
 
 BLAS is held to one thread inside each task: the matrices are tiny (the 4-element plant is
-22 × 22) and BLAS threads only contend with each other and the compiled sample loop (×10
-slower measured on the loaded 2-core machine).
+22 × 22) and BLAS threads only contend with each other and the compiled sample loop
+(docs/benchmarks.md, "Threads").
 """
 
 from __future__ import annotations

@@ -49,9 +49,8 @@ def diagnose(runs: Sequence[str | Path], validate: Sequence[str | Path] = (), mo
         :func:`station.diagnosis.runs.cases.simulate_case`); tests plug in their own.
     workers : int, optional
         Threads fitting candidates at once (default 1). The compiled sample loop releases
-        the GIL but building models and scoring runs hold it: on 2 shared cores two
-        threads were slower (the rig's four logs: 10.7 s with one, 17.0 s with two,
-        scripts/bench_diagnose.py at load average 3).
+        the GIL but building models and scoring runs hold it, so on a machine with few
+        cores more threads can be slower (docs/benchmarks.md, "Threads").
     likelihood_values : bool
         Also estimate the accepted effects' values by maximum likelihood and keep that
         estimate when the held-out runs prefer it (:mod:`station.diagnosis.search.estimator`);

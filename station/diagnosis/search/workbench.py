@@ -85,7 +85,7 @@ def workbench(command: str, candidates: Sequence[str] | None, workers: int | Non
     in memory (:func:`station.plant.diskcache.bulk`: thousands of forms, not via the disk).
 
     The matrices are tiny (22 x 22): BLAS threads only contend with each other and the
-    compiled sample loop (3x slower on a loaded 2-core machine).
+    compiled sample loop (docs/benchmarks.md, "Threads").
 
     Parameters
     ----------
