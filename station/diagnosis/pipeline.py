@@ -60,12 +60,40 @@ def diagnose(runs: Sequence[str | Path], validate: Sequence[str | Path] = (), mo
     Returns
     -------
     Diagnosis
+        The cause and causes (effect names, "none" when nothing pays), every candidate's
+        value, gains (%) and evidence, the extended model, the fits before and after (%),
+        the θ RMS gain on held-out runs (%), the intervals, alternatives and what stays
+        unexplained, and each run side by side with the models.
 
     Raises
     ------
     StationError
         One run without ``validate``, an unreadable or empty log, a bad model, or an
         unknown candidate.
+
+    Examples
+    --------
+    Two short steps on a simulated rig whose motor has 10 DAC counts of Coulomb friction that
+    the nominal model lacks, diagnosed with that one candidate (a few seconds; the whole
+    vocabulary takes minutes):
+
+    >>> import tempfile
+    >>> from pathlib import Path
+    >>> from station.diagnosis import diagnose
+    >>> from station.experiment import run_step
+    >>> from station.plant import load_model
+    >>> rig = load_model("tmm-fit").with_effects({"coulomb_friction": 10.0}, name="rig")
+    >>> folder = Path(tempfile.mkdtemp())
+    >>> logs = [run_step(controller=c, amplitude=a, duration=0.5, model=rig, out=folder / f"{c}.tsv",
+    ...                  figure=False, progress=False).log_path for c, a in (("p", 50), ("lead", 100))]
+    >>> diag = diagnose(logs, candidates=["coulomb_friction"], likelihood_values=False)
+    >>> diag.causes, diag.validation
+    (['coulomb_friction'], 'leave-one-run-out')
+    >>> friction = diag.effects[0]
+    >>> round(friction.value), friction.unit, friction.interval.lo < 10 < friction.interval.hi
+    (10, 'DAC counts', True)
+    >>> diag.gain_pct > 50                                        # θ RMS error on held-out runs, %
+    True
     """
     runs, validate = list(runs), list(validate)
     _check_runs(runs, validate)

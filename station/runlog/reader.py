@@ -65,6 +65,31 @@ def read_log(path: str | Path) -> RunLog:
     -----
     RuntimeWarning
         When a torn last line (interrupted write) is skipped.
+
+    Examples
+    --------
+    A cut-down copy of a rig log, a first line of column names and three rows:
+
+    >>> import tempfile
+    >>> from pathlib import Path
+    >>> import numpy as np
+    >>> from station.runlog import read_log
+    >>> path = Path(tempfile.mkdtemp()) / "step.csv"
+    >>> rows = [[0.000, 0, 0, 0, 0], [0.002, 50, 100, 0, 2], [0.004, 50, 100, 3, 5]]
+    >>> np.savetxt(path, rows, fmt="%g", delimiter=",", header="t,u,v,theta,a", comments="")
+    >>> log = read_log(path)
+    >>> log.data["theta"].tolist(), log.dt
+    ([0.0, 0.0, 3.0], 0.002)
+    >>> log.notes                                                 # what was derived
+    ['no sample column: n derived from t (sample time 0.002 s)']
+    >>> bool(np.isnan(log.data["v_applied"]).all())               # not in the rig's logs
+    True
+    >>> from station.runlog import RunLogError
+    >>> try:
+    ...     read_log(path.with_name("missing.tsv"))
+    ... except RunLogError as exc:                            # a StationError: one line
+    ...     print(exc)
+    /.../missing.tsv: cannot read run log: No such file or directory
     """
     path = Path(path)
     try:  # a folder, a FIFO (opening it would block) or a device (/dev/zero never ends) is no log
