@@ -6,6 +6,9 @@ signature must appear in its Parameters (or Other Parameters) section, and every
 must be a parameter. A class documents its constructor's parameters in its own docstring;
 a dataclass or NamedTuple may list its fields as Attributes instead. ``self``/``cls`` are
 exempt; ``*args``/``**kwargs`` are documented as such.
+
+Every public function of ``station.diagnosis`` and ``station.design`` that returns or yields a
+value says what in a Returns (or Yields) section, and the entry points' Examples run.
 """
 
 from __future__ import annotations
@@ -149,3 +152,24 @@ def test_value_returning_functions_document_what_they_return(package):
     missing = [where for where, doc in found if not re.search(r"^(Returns|Yields)\n-+$", doc, re.M)]
     assert not missing, (f"{len(missing)} of {len(found)} public functions return a value but document no "
                          f"Returns/Yields section:\n" + "\n".join(missing))
+
+
+EXAMPLES = ["station.plant.simulate.simulate", "station.analysis.metrics.step_metrics", "station.runlog.reader.read_log",
+            "station.diagnosis.pipeline.diagnose", "station.design.tuning.tune"]
+"""The entry points whose Examples are doctested here (``run_step`` and ``plan_step``: tests/test_step.py)."""
+
+
+@pytest.mark.parametrize("name", EXAMPLES)
+def test_the_examples_run(name, tmp_path, monkeypatch):
+    """Each entry point's Examples section runs and prints what it shows (in a scratch folder)."""
+    import doctest
+    import io
+
+    module, attr = name.rsplit(".", 1)
+    func = getattr(importlib.import_module(module), attr)
+    monkeypatch.chdir(tmp_path)
+    runner = doctest.DocTestRunner(optionflags=doctest.ELLIPSIS)
+    out = io.StringIO()
+    for test in doctest.DocTestFinder().find(func, attr, globs={}):
+        runner.run(test, out=out.write)
+    assert runner.tries >= 4 and runner.failures == 0, out.getvalue()
