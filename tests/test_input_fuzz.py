@@ -696,3 +696,18 @@ def test_cli_log_headers(folder, text):
     path = folder / "cli-rig.txt"
     path.write_text(text)
     cli_refuses_in_one_line(["replay", "--no-model", str(path)], folder, allow=(0, 1))  # 1: not reproduced
+
+
+def test_a_beam_damping_past_the_modes_overdamping_is_refused_in_one_line(tmp_path):
+    # found by the fuzzer: a tiny beam whose hub-held mode overdamps before the asked first-mode
+    # damping ratio (the bisection looked for a mode that was gone: IndexError)
+    path = tmp_path / "model.toml"
+    path.write_text('"n_elements" = 1\n["params"]\n"mu" = 0.001\n"L" = 0.05\n"EI" = 0.001\n"drive_k" = 0.001\n'
+                    '"drive_c" = 0.0\n"clamp_k" = 0.01\n"clamp_c" = 0.0\n"J_base" = 1e-06\n"m_accel" = 0.0\n'
+                    '"J_accel" = 0.0\n"act_K" = 0.0001\n"act_p" = 0.1\n"a_gain" = 0.001\n"k_tau" = 1e-05\n'
+                    '"beam_beta" = 0.0\n["effects"]\n"beam_damping" = 0.2\n')
+    from station.plant.model import load_model
+
+    with pytest.raises(StationError) as err:
+        load_model(path)
+    refused_in_one_line(err.value, str(path))

@@ -257,7 +257,7 @@ def test_the_plain_python_kernel_equals_the_compiled_one_with_the_faults(nominal
     u = step_reference(200.0, 300, at_tick=10)
     args = (form.lam, form.bm, form.bp, form.cm, form.co, form.gw_v, form.gw_p, form.substeps,
             np.zeros(form.lam.size, complex), u, np.zeros(1), False, True, gnum, gden, anum, aden, True, 200.0, 1,
-            True, 1, *fx)
+            True, 1, 0, *fx)
     plain = kernel._compiled_loop.py_func(*args)
     compiled = kernel.run_kernel(*args)
     for x, y in zip(plain, compiled):

@@ -128,12 +128,17 @@ def with_beam_damping(params: Params, zeta: float, n_elements: int = 4) -> Param
     Raises
     ------
     ValueError
-        zeta below the clamp damper's own contribution or above 0.5.
+        zeta below the clamp damper's own contribution or above 0.5, or no oscillating
+        hub-held mode at all.
     """
     def first_zeta(beta: float) -> float:
         p = dataclasses.replace(params, beam_beta=beta)
-        return float(modal_summary(p, n_elements).antiresonance_damping[0])
+        zetas = modal_summary(p, n_elements).antiresonance_damping
+        return float(zetas[0]) if zetas.size else 1.0  # no oscillating mode left: overdamped
 
+    if modal_summary(params if params.beam_beta == 0 else dataclasses.replace(params, beam_beta=0.0),
+                     n_elements).antiresonance_damping.size == 0:
+        raise ValueError("no oscillating hub-held beam mode in this parameter set: no beam damping to set")
     floor = first_zeta(0.0)
     if not floor <= zeta <= 0.5:
         raise ValueError(f"first-mode damping ratio {zeta} out of reach: {floor:.4g} (no beam damping) .. 0.5")
