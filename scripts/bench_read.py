@@ -59,6 +59,7 @@ def generate(path: Path, mb: float) -> int:
     import numpy as np
 
     from station.experiment import run_step
+    from station.rig import DT
     from station.runlog import COLUMNS, END_PREFIX, MAGIC, format_lines
 
     with tempfile.TemporaryDirectory() as tmp:
@@ -78,7 +79,7 @@ def generate(path: Path, mb: float) -> int:
         while size < target:
             chunk = block.copy()
             chunk[:, COLUMNS.index("n")] += k * len(block)
-            chunk[:, COLUMNS.index("t")] = chunk[:, COLUMNS.index("n")] * 0.002
+            chunk[:, COLUMNS.index("t")] = chunk[:, COLUMNS.index("n")] * DT
             chunk[:, COLUMNS.index("latency_us")] = np.round(rng.uniform(15, 80, len(block)), 1)
             out = []
             for row in chunk:

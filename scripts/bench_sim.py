@@ -48,13 +48,11 @@ import scipy.integrate
 
 from station.control import make_controller, pulse_reference, step_reference
 from station.plant import DiscretePlant, closed_loop_spectral_radius, simulate
+from station.rig import DEFAULT_DURATION, DEFAULT_SOFT_LIMIT, DEFAULT_STEP_TICK, DT
 
-DURATION_S = 2.0
-DT = 0.002
-SOFT_LIMIT = 2048.0  # encoder soft limit, counts (DESIGN.md station defaults)
 CASES = {  # controller -> reference of one 2 s run
-    "lead-accel": lambda n: step_reference(200.0, n, at_tick=10),
-    "p": lambda n: step_reference(50.0, n, at_tick=10),
+    "lead-accel": lambda n: step_reference(200.0, n, at_tick=DEFAULT_STEP_TICK),
+    "p": lambda n: step_reference(50.0, n, at_tick=DEFAULT_STEP_TICK),
     "open-loop": lambda n: pulse_reference(100.0, n, 20, 50, return_tick=700),
 }
 
@@ -122,7 +120,7 @@ def bench(elements=(1, 4, 10, 100), controllers=tuple(CASES), baseline_max: int 
     out : file or None
         Where to print the table.
     """
-    n_ticks = int(round(DURATION_S / DT))
+    n_ticks = int(round(DEFAULT_DURATION / DT))
     cases = []
     if out:
         print(f"{'n':>4} {'controller':<11} {'seconds':>10} {'x real time':>12} {'baseline s':>11} "
@@ -134,7 +132,7 @@ def bench(elements=(1, 4, 10, 100), controllers=tuple(CASES), baseline_max: int 
             u = CASES[kind](n_ticks)
             run = simulate(plant, controller, u)  # compiles once, caches the modal form
             seconds = _best_time(lambda: simulate(plant, controller, u), repeats)
-            bounded = bool(np.all(np.isfinite(run["theta"])) and np.abs(run["theta"]).max() < SOFT_LIMIT)
+            bounded = bool(np.all(np.isfinite(run["theta"])) and np.abs(run["theta"]).max() < DEFAULT_SOFT_LIMIT)
             radius = closed_loop_spectral_radius(plant, controller)
             stable = bounded and (radius < 1.0 if controller.gth is not None else radius <= 1.0 + 1e-12)
             base = None
@@ -144,14 +142,14 @@ def bench(elements=(1, 4, 10, 100), controllers=tuple(CASES), baseline_max: int 
                 base = time.perf_counter() - t0
             case = {
                 "n_elements": n, "controller": kind, "seconds": seconds,
-                "baseline_seconds": base, "realtime_factor": DURATION_S / seconds,
+                "baseline_seconds": base, "realtime_factor": DEFAULT_DURATION / seconds,
                 "baseline_ratio": None if base is None else base / seconds, "stable": stable,
             }
             cases.append(case)
             if out:
                 b = "-" if base is None else f"{base:11.3f}"
                 r = "-" if base is None else f"{base / seconds:11.0f}"
-                print(f"{n:>4} {kind:<11} {seconds:10.2e} {DURATION_S / seconds:12.0f} {b:>11} {r:>11} "
+                print(f"{n:>4} {kind:<11} {seconds:10.2e} {DEFAULT_DURATION / seconds:12.0f} {b:>11} {r:>11} "
                       f"{str(stable):>7}", file=out, flush=True)
     return {"cases": cases}
 
@@ -178,7 +176,7 @@ def bench_effects(repeats: int = 20, out=sys.stdout) -> list[dict]:
 
     nominal = load_model()
     controller = make_controller("lead-accel")
-    u = step_reference(200.0, 1000, at_tick=10)
+    u = step_reference(200.0, 1000, at_tick=DEFAULT_STEP_TICK)
     rows = []
     for label, effects in EFFECT_CASES.items():
         model = nominal.with_effects(effects)

@@ -65,7 +65,9 @@ class RecordedPort(serial.SerialBase):
         self.buffer = bytearray()
         self.k = 0
         self.mismatches = 0
-        super().__init__(None, timeout=0.1)
+        from station.link import LinkLimits  # the sample timeout, in any checkout (station.rig is recent)
+
+        super().__init__(None, timeout=LinkLimits.timeout)
         self.is_open = True
 
     def open(self):  # noqa: D102 - pyserial's interface

@@ -64,12 +64,12 @@ def main(argv: list[str] | None = None) -> int:
     one = _design(0, args.jobs)
     ratio = robust["seconds"] / one["seconds"]
     load = os.getloadavg()[0]
-    from station.analysis.metrics import settling_label
+    from station.analysis.metrics import STEP_INFO_BAND_PCT, settling_label
 
     print(f"station tune --model rig --controller lead-accel --amplitude 200, {args.jobs} local processes:")
     for name, d in ((f"{robust['models']} models", robust), ("1 model", one)):
         print(f"  {name:10s} {d['seconds']:6.1f} s, {d['runs']:6d} evaluations ({d['runs'] / d['seconds']:.0f}/s); "
-              f"worst hub {settling_label(2)} {_s(d['worst_settling_2pct_s'])} (thesis "
+              f"worst hub {settling_label(STEP_INFO_BAND_PCT)} {_s(d['worst_settling_2pct_s'])} (thesis "
               f"{_s(d['thesis_worst_settling_2pct_s'])}), worst tip residual RMS {d['worst_tip_residual_rms']:.2f} "
               f"(thesis {d['thesis_worst_tip_residual_rms']:.2f}), worst overshoot {d['worst_overshoot_pct']:.1f} %, "
               f"requirements {'met' if d['all_met'] else 'NOT met'}")

@@ -19,7 +19,7 @@ import sys
 
 import numpy as np
 
-from station import DT
+from station.rig import DT
 from station.analysis.metrics import step_metrics
 from station.control import step_reference
 from station.plant.model import as_model

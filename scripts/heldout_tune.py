@@ -55,14 +55,14 @@ def _measure(log_path: Path) -> dict:
     import numpy as np
 
     from station.analysis.metrics import step_info, step_metrics
-    from station.design.evaluate import STEP_TICK
+    from station.rig import DEFAULT_STEP_TICK
     from station.design.tip import residual
     from station.runlog import read_log
 
     log = read_log(log_path)
     t, theta, a = (np.asarray(log.data[k], dtype=float) for k in ("t", "theta", "a"))
-    info = step_info(t, theta, AMPLITUDE, t[STEP_TICK])
-    res = residual(a, STEP_TICK, float(t[1] - t[0]))
+    info = step_info(t, theta, AMPLITUDE, t[DEFAULT_STEP_TICK])
+    res = residual(a, DEFAULT_STEP_TICK, float(t[1] - t[0]))
     return {"overshoot_pct": step_metrics(t, theta, AMPLITUDE).overshoot_pct,
             "settling_2pct_s": info.settling_time_2pct_s, "tip_residual_rms": res.rms,
             "tip_residual_peak": res.peak}

@@ -32,6 +32,7 @@ from station.diagnosis.runs.cost import Evaluator, calibrate_noise
 from station.diagnosis.runs.folds import make_folds
 from station.diagnosis.search.selection import effect_axes, fit_set, set_axes, trial
 from station.plant.model import as_model
+from station.rig import DT
 
 RIG = Path(__file__).resolve().parents[1] / ".." / "shared" / "data" / "rig"
 THESIS = ["OL_pulse_test_sys_check_SLFR_RTP_OL_Test_uend=0.txt",
@@ -82,7 +83,7 @@ def overshoot(ev: Evaluator, effects: dict, i: int) -> float | None:
     if not c.closed or u[-1] == 0:
         return None
     theta, _ = ev.predict(effects, i)
-    t = np.arange(c.n) * 0.002
+    t = np.arange(c.n) * DT
     return step_metrics(t, theta, float(u[-1])).overshoot_pct
 
 

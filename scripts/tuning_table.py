@@ -121,6 +121,7 @@ def _notch_probe(rig) -> list[str]:
     from station.design.space import DesignSpace, filter_s, ga_s, lead_s
     from station.design.tip import residual
     from station.plant.simulate import simulate
+    from station.rig import CLAMP, DEFAULT_STEP_TICK, DT
 
     notch = {"notch_hz": 18.3, "notch_depth": 0.1, "notch_width": 0.1}
     base = DesignSpace("lead-accel", "opt").compensator_file(FORMER).compensator()
@@ -143,12 +144,12 @@ def _notch_probe(rig) -> list[str]:
     class Separate:
         """v = sat(lead(notch(e))), the notch with a state of its own (not a station compensator)."""
 
-        limit = 200.0
+        limit = CLAMP
 
         def __init__(self):
-            self.lead = Filter(*tustin(*lead_s(FORMER["k0"], FORMER["z"], FORMER["ratio"]), 0.002))
-            self.ga = Filter(*tustin(*ga_s(FORMER["ga_gain"], FORMER["ga_freq"]), 0.002))
-            self.notch = Filter(*tustin(*filter_s("notch", notch), 0.002))
+            self.lead = Filter(*tustin(*lead_s(FORMER["k0"], FORMER["z"], FORMER["ratio"]), DT))
+            self.ga = Filter(*tustin(*ga_s(FORMER["ga_gain"], FORMER["ga_freq"]), DT))
+            self.notch = Filter(*tustin(*filter_s("notch", notch), DT))
             self.shaper = base.shaper
 
         def reset(self):
@@ -159,16 +160,16 @@ def _notch_probe(rig) -> list[str]:
             r = self.shaper.step(u) - self.ga(a)
             return self.lead(self.notch(r - theta), self.limit), r
 
-    u = step_reference(200.0, 1000, at_tick=10)
+    u = step_reference(200.0, 1000, at_tick=DEFAULT_STEP_TICK)
     rows = []
     for label, comp in (("the former design (hub only)", base), ("with the notch in Gth (as the station runs it)", inside)):
         f = judge(rig, comp, 200.0)
         rows.append(f"| {label} | {f.gain_margin_db:.1f} dB / {f.phase_margin_deg:.1f}° | {_one(f)} |")
     run = simulate(rig, Separate(), u, alignment=1, command="round")
-    info = step_info(run.t, run.theta, 200.0, run.t[10])
+    info = step_info(run.t, run.theta, 200.0, run.t[DEFAULT_STEP_TICK])
     rows.append(f"| with the notch on e, a state of its own (not a station compensator) | same as in Gth | "
                 f"{step_metrics(run.t, run.theta, 200.0).overshoot_pct:.1f} % / {_s(info.settling_time_2pct_s)} / "
-                f"{residual(run.a, 10).rms:.2f} |")
+                f"{residual(run.a, DEFAULT_STEP_TICK).rms:.2f} |")
     return rows
 
 
@@ -188,7 +189,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--out", type=Path, default=REPO / "docs" / "tuning.md", help="the Markdown file")
     args = parser.parse_args(argv)
 
-    from station.analysis.metrics import settling_label
+    from station.analysis.metrics import STEP_INFO_BAND_PCT, THESIS_BAND_PCT, settling_label
     from station.design import tune
     from station.design.evaluate import judge, violations
     from station.design.hold import held_summary
@@ -197,7 +198,7 @@ def main(argv: list[str] | None = None) -> int:
     from station.design.tuning import DEFAULT_SAMPLES
     from station.plant import load_model
 
-    s1, s2 = settling_label(1), settling_label(2)
+    s1, s2 = settling_label(THESIS_BAND_PCT), settling_label(STEP_INFO_BAND_PCT)
     folder = args.out.parent / "figures"
     folder.mkdir(parents=True, exist_ok=True)
     rig = load_model("rig")

@@ -7,5 +7,4 @@ See README.md and docs/ for the command line and DESIGN.md (shared) for the rig'
 
 __version__ = "0.1.0"
 
-DT = 0.002
-"""Sample time of the rig's interrupt, s (500 Hz)."""
+from station.rig import DT  # noqa: E402,F401  (re-exported for users: the rig's sample time, s)

@@ -22,6 +22,7 @@ from station.errors import StationError
 from station.logged import LoggedRun
 from station.logged.audit import Audit
 from station.plots import source_label
+from station.rig import THESIS_STEPS  # the thesis rows are shown for those step logs only
 
 THESIS_TABLE = {
     # controller: (experiment (overshoot %, settling s), thesis FEM (overshoot %, settling s));
@@ -30,11 +31,6 @@ THESIS_TABLE = {
     "lead": ((10.00, None), (18.85, 1.980)),
     "lead-accel": ((21.50, 0.608), (20.74, 0.708)),
 }
-
-THESIS_STEPS = {"p": 50.0, "lead": 100.0, "lead-accel": 200.0}
-"""Step height of the thesis's run per controller, encoder counts (the rig's three step
-logs, ../shared/data/README.md); the thesis rows are shown for those logs only."""
-
 
 @dataclass
 class RunComparison:

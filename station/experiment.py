@@ -28,8 +28,9 @@ from station.loop import RunResult, run_loop
 from station.outputs import is_device
 from station.plots import plot_runs, run_title, save_figure
 from station.progress import ProgressSink
-from station.plan import (DEFAULT_AMPLITUDE, DEFAULT_CONTROLLER, DEFAULT_PORT, DEFAULT_SOFT_LIMIT,  # noqa: F401
-                          DEFAULT_STEP_TICK, DEFAULT_TIMEOUT, StepPlan, default_log_path, figure_path, plan_step)
+from station.plan import (DEFAULT_CONTROLLER, DEFAULT_PORT, StepPlan, default_log_path, figure_path,  # noqa: F401
+                          plan_step)
+from station.rig import DEFAULT_AMPLITUDE, DEFAULT_SOFT_LIMIT, DEFAULT_STEP_TICK, DEFAULT_TIMEOUT  # noqa: F401
 from station.runlog import RunLog, RunLogError, RunLogWriter, read_log
 from station.runsetup import log_tag
 from station.signals import StopSignals

@@ -37,7 +37,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from station import DT
+from station.rig import CLAMP, DEFAULT_SOFT_LIMIT, DT
 from station.control.contract import ControllerFault, guard_command
 from station.link import DeviceStopped, LinkFault, Session
 from station.outcome import Outcome
@@ -156,8 +156,8 @@ class _Signalled(Exception):
     pass
 
 
-def run_loop(session: Session, controller, reference: np.ndarray, writer, soft_limit: float = 2048.0,
-             dt: float = DT, lean: bool = True, limit: float = 200.0, signals: StopSignals | None = None) -> RunResult:
+def run_loop(session: Session, controller, reference: np.ndarray, writer, soft_limit: float = DEFAULT_SOFT_LIMIT,
+             dt: float = DT, lean: bool = True, limit: float = CLAMP, signals: StopSignals | None = None) -> RunResult:
     """Run one test: start the device, answer every sample, stop it safely.
 
     Parameters

@@ -37,7 +37,6 @@ from typing import Any
 
 import numpy as np
 
-from station import DT
 from station.control.contract import DAC_LIMIT
 from station.control.rerun import is_closed_loop
 from station.control.shaper import ReferenceShaper
@@ -47,16 +46,13 @@ from station.link import LinkLimits
 from station.outputs import Input, Output, check_folder, check_outputs, is_device
 from station.protocol import check_ticks
 from station.ranges import TICKS, RangeError, number
+from station.rig import DEFAULT_AMPLITUDE, DEFAULT_SOFT_LIMIT, DEFAULT_STEP_TICK, DEFAULT_TIMEOUT, DT
 from station.runsetup import (REFERENCES, choose_controller, default_duration, design_model_note, log_tag,
                               make_reference, reference_path, run_url)
 from station.viz import RRD_BYTES_PER_TICK
 
 DEFAULT_PORT = "sim://"
 DEFAULT_CONTROLLER = "lead"
-DEFAULT_AMPLITUDE = 100.0
-DEFAULT_STEP_TICK = 10
-DEFAULT_SOFT_LIMIT = 2048.0
-DEFAULT_TIMEOUT = 0.1
 
 MAX_DURATION_S = TICKS * DT
 """Longest run v1 can count (START's n_ticks is a u32), s."""
@@ -69,7 +65,7 @@ RANGES = {
     "step_time": number(0.0, MAX_DURATION_S, unit="s"),
     "step_tick": number(0, TICKS, integer=True, unit="ticks"),
     "kp": number(1e-3, 100.0),
-    "limit": number(1, 255, unit="DAC counts"),
+    "limit": number(1, DAC_LIMIT, unit="DAC counts"),
     "soft_limit": number(1, 32767, unit="encoder counts"),
     "timeout": number(1e-3, 60.0, unit="s"),
     "baudrate": number(300, 12_000_000, integer=True),

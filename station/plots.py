@@ -20,6 +20,7 @@ import numpy as np
 from station.errors import StationError
 from station.logged.reference import classify_reference
 from station.outputs import Transaction
+from station.rig import DT
 from station.runlog import read_log
 
 
@@ -420,7 +421,7 @@ def diagnosis_resid_figure(run, max_lag_s: float = 0.5):
     fig.set_layout_engine("constrained")
     (ax1, ax2), (ax3, ax4) = fig.subplots(2, 2)
     t = run.t
-    dt = float(np.median(np.diff(t))) if t.size > 1 else 0.002
+    dt = float(np.median(np.diff(t))) if t.size > 1 else DT
     lag = int(max(1, min(max_lag_s / dt, t.size // 2)))
     outside = {}
     for pred, color, name in ((run.nominal, "tab:red", "nominal"), (run.extended, "tab:blue", "extended")):

@@ -12,18 +12,14 @@ from typing import Any, NamedTuple
 import numpy as np
 from serial import SerialException
 
-from station import DT
 from station.control import (KINDS, file_reference, make_controller, pulse_reference, step_reference,
                              swept_sine_reference)
 from station.control.contract import wire_limit
 from station.control.designs import read_compensator_file
 from station.errors import StationError
 from station.inputs import exists
+from station.rig import CLAMP, DEFAULT_DURATION, DT
 
-DEFAULT_DURATION = 2.0
-"""A step run's length, s."""
-DEFAULT_LIMIT = 200.0
-"""The controller's clamp, ±DAC counts (the rig's software clamps at ±200)."""
 REFERENCES = ("step", "pulse", "swept-sine")
 """Built-in reference laws; a run log's column (``FILE[:COLUMN]``) is the other kind."""
 PULSE_WIDTH = 0.1
@@ -186,7 +182,7 @@ def choose_controller(controller, kp: float | None = None, limit: float | None =
     if kp is not None and (is_object or str(controller) != "p"):
         raise StationError(f"--kp: the P gain applies to --controller p only, not "
                            f"{'a controller object' if is_object else controller}")
-    clamp = DEFAULT_LIMIT if limit is None else limit
+    clamp = CLAMP if limit is None else limit
     if is_object:
         controller.reset()
         return ChosenController(controller, None, wire_limit(controller, clamp))

@@ -21,11 +21,12 @@ from station import DT, cli
 from station.control import file_reference
 from station.diagnosis.identify import loop as identify_mod
 from station.diagnosis.identify.design import MIN_SEPARATION, choose_experiment, predict
-from station.diagnosis.identify.experiments import (PRBS_HOLD_TICKS, START_TICK, THESIS_EXPERIMENTS, Experiment,
+from station.diagnosis.identify.experiments import (PRBS_HOLD_TICKS, THESIS_EXPERIMENTS, Experiment,
                                            candidate_experiments, write_reference)
 from station.diagnosis.identify.loop import ExperimentRun, identify, step_runner
 from station.diagnosis.honesty.rivals import JACKKNIFE_Z, Rival, Rivals, jackknife_interval, rivals
 from station.plant.model import as_model
+from station.rig import DEFAULT_STEP_TICK
 from tests.blind.generator import RUNS, reference as blind_reference
 
 NOMINAL = as_model(None)
@@ -43,16 +44,16 @@ def test_thesis_experiments_are_the_blind_generators_runs():
 @pytest.mark.parametrize("exp", candidate_experiments(), ids=lambda e: e.slug)
 def test_candidate_references_have_their_shape(exp):
     u, a = exp.u(), exp.amplitude
-    assert u.size == 1000 and not np.any(u[:START_TICK])
+    assert u.size == 1000 and not np.any(u[:DEFAULT_STEP_TICK])
     assert np.max(np.abs(u)) == pytest.approx(a, rel=1e-9) or exp.reference in ("chirp", "triangle")
     assert np.max(np.abs(u)) <= a * (1 + 1e-12)
     if exp.reference == "ramp":
-        assert np.all(np.diff(u[START_TICK:]) > 0) and u[-1] == pytest.approx(a)
+        assert np.all(np.diff(u[DEFAULT_STEP_TICK:]) > 0) and u[-1] == pytest.approx(a)
     if exp.reference == "triangle":
         assert u.max() == pytest.approx(a, rel=0.01) and u.min() == pytest.approx(-a, rel=0.01) and abs(u[-1]) < 0.02 * a
     if exp.reference == "prbs":
-        assert set(np.unique(u[START_TICK:])) == {-a, a}
-        runs = np.diff(np.flatnonzero(np.diff(u[START_TICK:]) != 0))
+        assert set(np.unique(u[DEFAULT_STEP_TICK:])) == {-a, a}
+        runs = np.diff(np.flatnonzero(np.diff(u[DEFAULT_STEP_TICK:]) != 0))
         assert np.all(runs % PRBS_HOLD_TICKS == 0)
     if not exp.closed:
         assert a <= 200  # the rig's clamp

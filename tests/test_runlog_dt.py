@@ -13,7 +13,8 @@ import pytest
 
 import station
 from station.jsonio import to_jsonable
-from station.runlog import RIG_DT, RunLogWriter, read_log
+from station.rig import DT as RIG_DT
+from station.runlog import RunLogWriter, read_log
 
 RIG_HEAD = "#SLFR RTP P_control_Test\n{extra}#t\tn\tu\tv\t$\\theta$\ta\n"
 

@@ -17,7 +17,6 @@ from station.plant.model import builtin_models
 from station.diagnosis.sessions.drift import PerSession, key
 from station.diagnosis.sessions.diagnose import (
     ACCEL_DRIFT_COUNTS,
-    MAX_SAMPLES,
     cut_lengths,
     diagnose_sessions,
     group_sessions,
@@ -105,9 +104,13 @@ def test_each_run_gets_its_own_sessions_values():
 
 
 def test_max_samples_default_is_the_diagnosis_one():
-    from station.commands import survey
+    import inspect
 
-    assert survey.MAX_SAMPLES == MAX_SAMPLES
+    from station.commands import survey
+    from station.rig import SESSIONS_MAX_SAMPLES
+
+    default = inspect.signature(diagnose_sessions).parameters["max_samples"].default
+    assert survey.SESSIONS_MAX_SAMPLES == default == SESSIONS_MAX_SAMPLES
 
 
 def test_a_drifting_accelerometer_channel_is_not_used(rig_data):

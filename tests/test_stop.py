@@ -64,7 +64,7 @@ def _long_log(path: Path, n: int, seed: int = 0) -> Path:
 
 
 def test_a_50_mb_log_is_refused_before_it_is_read(tmp_path, monkeypatch, capsys):
-    from station.commands.diagnose import MAX_SAMPLES
+    from station.rig import DIAGNOSE_MAX_SAMPLES as MAX_SAMPLES
 
     small = _long_log(tmp_path / "small.txt", 1000)
     block = "".join(small.read_text().splitlines(keepends=True)[3:])  # 1000 data rows

@@ -42,6 +42,7 @@ import numpy as np
 from station.analysis.continuous_design import ContinuousDesign, nicest_between, recognize
 from station.control import DAC_LIMIT, Compensator, DiscreteTF, OpenLoop  # DAC_LIMIT: the clamp assumed when v exceeds the rig's ±200
 from station.control.rerun import ALIGNMENTS, AlignmentFit, detect_alignment
+from station.rig import CLAMP, DT
 
 TOLERANCE = 1e-6
 """max |v_replayed - v_logged| (DAC counts) a law must meet to be accepted."""
@@ -447,7 +448,7 @@ def _law(rows: LawRows, recursion: str, dt: float) -> tuple[np.ndarray, Continuo
     return c, None
 
 
-def infer_controller(u, theta, v, a=None, dt: float = 0.002, rig_limit: float = 200.0,
+def infer_controller(u, theta, v, a=None, dt: float = DT, rig_limit: float = CLAMP,
                      alignments=(0, 1), prefer: int | None = PREFERRED_ALIGNMENT) -> IdentifiedController | None:
     """Identify the controller that produced a log's commands from u, θ and v.
 
@@ -525,8 +526,8 @@ PID_INTEGRALS = {
 """Integral term ki/s discretized three standard ways: (num, den) in z^-1."""
 
 
-def pid_controllers(kp: float, ki: float, kd: float, dt: float = 0.002,
-                    limit: float | None = 200.0) -> list[tuple[str, Compensator]]:
+def pid_controllers(kp: float, ki: float, kd: float, dt: float = DT,
+                    limit: float | None = CLAMP) -> list[tuple[str, Compensator]]:
     """The standard discretizations of a PID law v = kp e + ki ∫e + kd de/dt.
 
     Parameters
@@ -568,8 +569,8 @@ def pid_controllers(kp: float, ki: float, kd: float, dt: float = 0.002,
     return out
 
 
-def match_pid(kp: float, ki: float, kd: float, u, theta, v, a=None, dt: float = 0.002,
-              limit: float | None = 200.0, alignments=(0, 1)) -> tuple[IdentifiedController | None, float]:
+def match_pid(kp: float, ki: float, kd: float, u, theta, v, a=None, dt: float = DT,
+              limit: float | None = CLAMP, alignments=(0, 1)) -> tuple[IdentifiedController | None, float]:
     """The standard PID discretization that reproduces the logged v, if one does.
 
     Parameters

@@ -22,6 +22,8 @@ from dataclasses import asdict, dataclass
 
 import numpy as np
 
+from station.rig import STEP_INFO_BAND, THESIS_BAND, THESIS_BAND_FLOOR
+
 
 @dataclass(frozen=True)
 class StepMetrics:
@@ -76,8 +78,11 @@ def settling_label(band_pct: float) -> str:
     return f"settling ({band_pct:g} %)"
 
 
-THESIS_BAND_PCT = 1.0
+THESIS_BAND_PCT = 100 * THESIS_BAND
 """The thesis's settling band, percent of the step (at least one count: :func:`settling_band`)."""
+
+STEP_INFO_BAND_PCT = 100 * STEP_INFO_BAND
+"""The 2 % settling band, percent of the step (:func:`step_info`)."""
 
 NOT_SETTLED = "not settled within the run"
 """What a report says when θ has not settled (:func:`settled_index`): outside the band at the
@@ -169,7 +174,7 @@ class StepInfo:
         str
         """
         f = lambda x: "n/a" if x is None else f"{x:.3f} s"  # noqa: E731
-        settle = (f"{settling_label(2)} "
+        settle = (f"{settling_label(STEP_INFO_BAND_PCT)} "
                   f"{unsettled if self.settling_time_2pct_s is None else f(self.settling_time_2pct_s)}")
         sat = "" if self.saturation_time_s is None else f"   saturated {self.saturation_time_s:.3f} s"
         return (f"rise {f(self.rise_time_s)}   peak {f(self.peak_time_s)}   {settle}   "
@@ -240,12 +245,10 @@ def step_info(t, theta, u_final: float, step_time: float = 0.0, v=None, limit: f
         x = info[key]
         return None if not np.isfinite(x) else float(x)
 
-    settled = settled_index(ts, ys, u_final, 0.02 * abs(u_final))
+    settled = settled_index(ts, ys, u_final, step_info_band(u_final))
     sat = None
     if v is not None and limit is not None and np.isfinite(limit):
-        v = np.asarray(v, dtype=float)
-        dt = float(np.median(np.diff(t))) if t.size > 1 else 0.0
-        sat = float(np.count_nonzero(np.abs(v) >= limit) * dt)
+        sat = time_at_clamp(v, limit, float(np.median(np.diff(t))) if t.size > 1 else 0.0)
     peak = float(ts[np.argmax(np.abs(ys))])
     return StepInfo(rise_time_s=value("RiseTime"), peak_time_s=peak,
                     settling_time_2pct_s=None if settled is None else float(ts[settled]),
@@ -259,8 +262,49 @@ def settling_band(u_final: float) -> float:
     ----------
     u_final : float
         The step's final value, encoder counts.
+
+    Returns
+    -------
+    float
+        max(:data:`station.rig.THESIS_BAND` × |u_final|, :data:`station.rig.THESIS_BAND_FLOOR`).
     """
-    return max(0.01 * abs(u_final), 1.0)
+    return max(THESIS_BAND * abs(u_final), THESIS_BAND_FLOOR)
+
+
+def step_info_band(u_final: float) -> float:
+    """Half-width of the 2 % settling band, encoder counts: 2 % of |u_final| (no floor).
+
+    Parameters
+    ----------
+    u_final : float
+        The step's final value, encoder counts.
+
+    Returns
+    -------
+    float
+        :data:`station.rig.STEP_INFO_BAND` × |u_final|.
+    """
+    return STEP_INFO_BAND * abs(u_final)
+
+
+def time_at_clamp(v, limit: float, dt: float) -> float:
+    """Time the command spent at the clamp: the samples with |v| ≥ ``limit``, times ``dt``.
+
+    Parameters
+    ----------
+    v : array_like, shape (N,)
+        Commands, DAC counts.
+    limit : float
+        The controller's clamp, DAC counts.
+    dt : float
+        Sample time, s.
+
+    Returns
+    -------
+    float
+        Seconds at the clamp.
+    """
+    return float(np.count_nonzero(np.abs(np.asarray(v, dtype=float)) >= limit) * dt)
 
 
 def step_metrics(t, theta, u_final: float) -> StepMetrics:
@@ -299,6 +343,8 @@ def step_metrics(t, theta, u_final: float) -> StepMetrics:
     A 100-count step answered by a 2 Hz ring that decays at 8 /s, in whole encoder counts:
 
     >>> import numpy as np
+
+from station.rig import STEP_INFO_BAND, THESIS_BAND, THESIS_BAND_FLOOR
     >>> from station.analysis.metrics import step_metrics
     >>> t = np.arange(1000) * 0.002
     >>> theta = np.round(100 * (1 - np.exp(-8 * t) * np.cos(2 * np.pi * 2 * t)))

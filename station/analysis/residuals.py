@@ -24,6 +24,8 @@ import numpy as np
 import scipy.signal
 import scipy.stats
 
+from station.rig import DT, RATE_HZ
+
 THETA_QUANTIZATION_STD = 1.0 / np.sqrt(12.0)
 """Standard deviation of the encoder's rounding error, counts (uniform on ±0.5)."""
 
@@ -138,7 +140,7 @@ def resid_test(e, u, max_lag: int = 25, confidence: float = 0.99) -> ResidTest:
     return ResidTest(lags, auto, cross_lags, cross, z / np.sqrt(n), confidence)
 
 
-def noise_std(x, floor: float = 0.0, fs: float = 500.0, cutoff_hz: float = 60.0) -> float:
+def noise_std(x, floor: float = 0.0, fs: float = RATE_HZ, cutoff_hz: float = 60.0) -> float:
     """Robust noise level of a signal from its high-frequency part.
 
     The signal is high-passed (4th-order Butterworth above ``cutoff_hz``, zero phase) and
@@ -220,7 +222,7 @@ def sticking_spans(theta, a, min_samples: int = 25, a_threshold: float = 3.0) ->
             if e - s >= min_samples and float(np.max(np.abs(a[s:e]))) > a_threshold]
 
 
-def hub_sticking(theta, a, dt: float = 0.002, min_samples: int = 25, a_threshold: float = 3.0) -> Sticking:
+def hub_sticking(theta, a, dt: float = DT, min_samples: int = 25, a_threshold: float = 3.0) -> Sticking:
     """Find where θ is constant for many samples while |a| is large.
 
     Parameters
@@ -285,7 +287,7 @@ class BandResponse:
     coherence: float
 
 
-def band_response(measured, model, fs: float = 500.0, bands=BANDS_HZ) -> list[BandResponse]:
+def band_response(measured, model, fs: float = RATE_HZ, bands=BANDS_HZ) -> list[BandResponse]:
     """Amplitude ratio and phase lag of a measured signal against the model's, per band.
 
     The ratio H(f) = P_ŷy(f)/P_ŷŷ(f) (Welch cross spectrum of model output ŷ and
@@ -347,7 +349,7 @@ class Mode:
         return float(self.decay_per_s / (2 * np.pi * self.frequency_hz)) if self.frequency_hz > 0 else float("nan")
 
 
-def ringing_mode(x, fs: float = 500.0, band_hz: tuple = (1.0, 6.0), start: int = 0) -> Mode | None:
+def ringing_mode(x, fs: float = RATE_HZ, band_hz: tuple = (1.0, 6.0), start: int = 0) -> Mode | None:
     """Frequency and decay rate of the strongest oscillation of x in a band.
 
     The frequency is the Welch spectral peak in ``band_hz`` (refined by parabolic
@@ -464,7 +466,7 @@ class RunResiduals:
 
 
 def run_residuals(theta, a, theta_model, a_model, v, u=None, closed: bool = True,
-                  dt: float = 0.002, max_lag: int = 25) -> RunResiduals:
+                  dt: float = DT, max_lag: int = 25) -> RunResiduals:
     """Residual tests and signatures of a model's run against the measured one.
 
     Parameters

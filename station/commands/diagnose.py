@@ -13,6 +13,7 @@ from pathlib import Path
 from station.commands.options import add_force_option, add_model_options, add_report_options, model_inputs, number
 from station.errors import StationError
 from station.outputs import Input, Output, Transaction, check_outputs
+from station.rig import DIAGNOSE_MAX_SAMPLES
 from station.signals import noting
 
 NAME = "diagnose"
@@ -20,9 +21,6 @@ HELP = ("diagnose the model on measured runs: residual tests, the missing effect
         "runs it was not fitted to), the extended model and its gain")
 
 
-MAX_SAMPLES = 100_000
-"""Default ``--max-samples``: samples of all runs together (200 s of the rig's data at 500 Hz;
-what four runs of 25 000 samples cost: docs/benchmarks.md, "The diagnosis")."""
 SIMULATIONS_PER_FOLD_RUN = 1430
 """Simulations of the whole vocabulary's diagnosis per run simulated in each fold (every
 evaluation simulates a fold's fit and validation runs): leave-one-run-out on n runs costs about
@@ -54,10 +52,10 @@ def configure(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--save-model", type=Path, default=None, metavar="FILE",
                         help="write the extended model (nominal + accepted effects) as a model file")
     add_force_option(parser)
-    parser.add_argument("--max-samples", type=number(50, 10**9, integer=True), default=MAX_SAMPLES, metavar="N",
+    parser.add_argument("--max-samples", type=number(50, 10**9, integer=True), default=DIAGNOSE_MAX_SAMPLES, metavar="N",
                         help=f"most samples of all runs together (RUNs and --validate runs); longer logs are "
                              f"refused before they are read: the diagnosis's time grows with their length times "
-                             f"the number of runs (default {MAX_SAMPLES}: 200 s of the rig's data, a few minutes "
+                             f"the number of runs (default {DIAGNOSE_MAX_SAMPLES}: 200 s of the rig's data, a few minutes "
                              f"of computing with four runs)")
     parser.add_argument("--quiet", action="store_true", help="no progress lines on stderr")
 

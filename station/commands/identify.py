@@ -15,6 +15,7 @@ from station.config import apply_config
 from station.errors import StationError
 from station.outputs import FORCE_HELP, Output, Transaction, check_folder, check_outputs
 from station.plant.model import as_model
+from station.rig import CLAMP, DAC_LIMIT
 
 NAME = "identify"
 HELP = ("identify the rig on the device: the thesis's four experiments, a diagnosis, then the experiments that "
@@ -39,7 +40,7 @@ def configure(parser: argparse.ArgumentParser) -> None:
     # loads scipy and numba, and every command's start-up builds this parser
     parser.add_argument("--budget", type=number(0, 100, integer=True), default=None, metavar="N",
                         help="designed experiments after the thesis's four, at most (default 8; 0: the four only)")
-    parser.add_argument("--limit", type=number(1, 255, unit="DAC counts"), default=200.0, metavar="COUNTS",
+    parser.add_argument("--limit", type=number(1, DAC_LIMIT, unit="DAC counts"), default=CLAMP, metavar="COUNTS",
                         help="the controllers' clamp, ±DAC counts (default 200, the rig's)")
     add_link_options(parser, soft_limit_help="; designed experiments keep the predicted |θ| within 80 %% of it")
     parser.add_argument("--out-dir", type=Path, default=None, metavar="DIR",

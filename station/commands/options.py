@@ -22,6 +22,7 @@ from station.errors import StationError
 from station.outputs import FORCE_HELP, Input
 from station.protocol import PROTOCOLS
 from station.ranges import SIM_RIG, Number, number  # noqa: F401 (Number, number: the commands' import place)
+from station.rig import DEFAULT_SOFT_LIMIT, DEFAULT_TIMEOUT
 
 
 class StationParser(argparse.ArgumentParser):
@@ -266,7 +267,7 @@ def add_link_options(parser: argparse.ArgumentParser, soft_limit_help: str = "")
         What the command adds to ``--soft-limit``'s help.
     """
     from station.link import LinkLimits  # lazy: start-up time (pyserial), every command builds its parser
-    from station.plan import DEFAULT_SOFT_LIMIT, DEFAULT_TIMEOUT, RANGES  # lazy: start-up time (numpy)
+    from station.plan import RANGES  # lazy: start-up time (numpy)
 
     parser.add_argument("--baud", type=RANGES["baudrate"], default=None,
                         help="baud rate (default 921600 for v1, 115200 legacy)")

@@ -12,6 +12,7 @@ from station.commands.options import add_force_option, add_model_options, chosen
 from station.errors import StationError
 from station.outputs import Input, Output, Transaction, check_outputs
 from station.plant.model import as_model
+from station.rig import SESSIONS_MAX_SAMPLES
 from station.signals import noting
 
 NAME = "survey"
@@ -19,10 +20,6 @@ HELP = ("replay every log of a folder (or the files given) on all cores and prin
         "rows, sample time, controller (named / inferred / none), alignment, max |dv|, step metrics, "
         "model fits or beam-test results, and why a file could not be used; --diagnose: the logs grouped "
         "into sessions, one model structure on all of them, and the effects that drift between sessions")
-
-MAX_SAMPLES = 20_000
-"""``--max-samples``' default (:data:`station.diagnosis.sessions.diagnose.MAX_SAMPLES`; not imported here:
-the parser loads no diagnosis)."""
 
 DIAGNOSE_ONLY = ("json", "save_models", "max_samples")
 """Options that belong to ``--diagnose``."""
@@ -59,7 +56,7 @@ def configure(parser: argparse.ArgumentParser) -> None:
                       help="write each session's model (nominal + shared + its drifting values) as DIR/<session>.toml")
     diag.add_argument("--max-samples", type=number(50, 10**9, integer=True), default=None, metavar="N",
                       help=f"most samples of all runs together; longer runs are cut to their first samples, the "
-                           f"longest first, and each cut is said (default {MAX_SAMPLES}: the rig's folder then "
+                           f"longest first, and each cut is said (default {SESSIONS_MAX_SAMPLES}: the rig's folder then "
                            f"takes a few minutes)")
 
 
@@ -185,7 +182,7 @@ def run_diagnose(args: argparse.Namespace) -> int:
           + ", ".join(f"{s.name} ({len(s.paths)})" for s in sessions), file=sys.stderr, flush=True)
     with noting(lambda: f"the diagnosis was at: {last[0]}; nothing written"):
         result = diagnose_sessions(sessions, model=model, progress=progress,
-                                   max_samples=MAX_SAMPLES if args.max_samples is None else args.max_samples)
+                                   max_samples=SESSIONS_MAX_SAMPLES if args.max_samples is None else args.max_samples)
     models = {s.name: str(model_paths[s.name]) for s in result.sessions if s.name in model_paths}
     print(format_sessions(result, models))
     with Transaction() as tx:

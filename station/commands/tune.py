@@ -11,19 +11,16 @@ import tempfile
 import warnings
 from pathlib import Path
 
-from station.analysis.metrics import NOT_SETTLED, settling_label
+from station.analysis.metrics import NOT_SETTLED, STEP_INFO_BAND_PCT, settling_label
 from station.commands.options import add_model_options, add_report_options, model_inputs, number
 from station.design.robust import DEFAULT_SAMPLES
 from station.design.space import DEFAULT_FILTER, DEFAULT_SHAPER, DEFAULT_TIP_RMS, FILTERS, SHAPERS, STRUCTURES
 from station.outputs import FORCE_HELP, Input, Output, Transaction, check_outputs
+from station.rig import CLAMP, DAC_LIMIT, DEFAULT_SOFT_LIMIT, THESIS_STEPS
 
 NAME = "tune"
 HELP = ("design a compensator (p, lead, lead + accelerometer, optional reference shaper) on a model, robust over "
         "its doubt, verified on the simulated rig, written as a compensator file")
-
-SOFT_LIMIT = 2048.0
-"""Largest step height, encoder counts (``station step``'s default soft limit)."""
-
 
 def configure(parser: argparse.ArgumentParser) -> None:
     """Add ``station tune``'s arguments to ``parser``.
@@ -44,11 +41,11 @@ def configure(parser: argparse.ArgumentParser) -> None:
                       elements=None, params=False)
     parser.add_argument("--controller", choices=STRUCTURES, default="lead-accel",
                         help="the compensator's structure (default lead-accel: Gth and the accelerometer filter Ga)")
-    parser.add_argument("--amplitude", type=number(-SOFT_LIMIT, SOFT_LIMIT, unit="encoder counts", nonzero=True),
+    parser.add_argument("--amplitude", type=number(-DEFAULT_SOFT_LIMIT, DEFAULT_SOFT_LIMIT, unit="encoder counts", nonzero=True),
                         default=None, metavar="COUNTS",
                         help="the step it is designed for (default: the rig's experiment, p 50, lead 100, "
                              "lead-accel 200)")
-    parser.add_argument("--limit", type=number(1, 255, unit="DAC counts"), default=200.0, metavar="COUNTS",
+    parser.add_argument("--limit", type=number(1, DAC_LIMIT, unit="DAC counts"), default=CLAMP, metavar="COUNTS",
                         help="the compensator's clamp, written into the file (default 200)")
     parser.add_argument("--overshoot", type=number(0, 100, unit="percent"), default=5.0, metavar="PCT",
                         help="largest overshoot on every model (default 5)")
@@ -125,7 +122,7 @@ def format_result(result) -> str:
     def worst(values):
         return None if any(x is None for x in values) else max(values)
 
-    s2 = settling_label(2)
+    s2 = settling_label(STEP_INFO_BAND_PCT)
     d = result.design_json()
     lines = [f"{result.space.structure} on {result.nominal.name!r}, step {result.amplitude:g}, "
              f"{len(result.robust.models)} model(s): " + ", ".join(f"{k} {v['value']:.4g}"
@@ -182,12 +179,12 @@ def run(args: argparse.Namespace) -> int:
         an input; an unreachable scheduler.
     """
     # lazy: start-up time (the design: scipy, python-control)
-    from station.design.tuning import DEFAULT_AMPLITUDE, check_request, tune
+    from station.design.tuning import check_request, tune
     from station.design.verify import verify
 
     structure = args.controller
     jobs = args.jobs if args.jobs is not None else max(1, min(os.cpu_count() or 1, 64))
-    amplitude = DEFAULT_AMPLITUDE[structure] if args.amplitude is None else args.amplitude
+    amplitude = THESIS_STEPS[structure] if args.amplitude is None else args.amplitude
     tip_rms = args.tip_rms or None  # 0: no bound on the tip
     check_request(structure, amplitude, args.limit, args.overshoot, args.shaper, args.samples, jobs, tip_rms,
                   args.filter)

@@ -13,6 +13,7 @@ from typing import Any
 
 from station.control.shaper import ReferenceShaper
 from station.control.tf import DiscreteTF
+from station.rig import CLAMP
 from station.rounding import half_away
 
 RECURSIONS = {"none": None, "trunc": lambda v: float(math.trunc(v)), "round": half_away}
@@ -63,7 +64,7 @@ class Compensator:
         A limit that is not positive, an unknown ``recursion``.
     """
 
-    def __init__(self, gth: DiscreteTF, ga: DiscreteTF | None = None, limit: float | None = 200.0,
+    def __init__(self, gth: DiscreteTF, ga: DiscreteTF | None = None, limit: float | None = CLAMP,
                  name: str = "", spec: dict[str, Any] | None = None, shaper: ReferenceShaper | None = None,
                  recursion: str = "none"):
         if limit is not None and not limit > 0:

@@ -8,7 +8,7 @@ or the simulated plant (:func:`station.plant.simulate.simulate`, a controller of
 type) goes through :func:`guard_command`: clamped to ±limit, NaN a
 :class:`ControllerFault`. The limit is :func:`wire_limit`'s.
 
-Imports only :mod:`station.errors`.
+Imports only :mod:`station.errors` and :mod:`station.rig`.
 """
 
 from __future__ import annotations
@@ -17,9 +17,7 @@ import math
 from typing import Any, Protocol
 
 from station.errors import StationError
-
-DAC_LIMIT = 255.0
-"""The DAC's range, ±counts (±2.5 V): the clamp of last resort before the wire."""
+from station.rig import DAC_LIMIT  # the clamp of last resort before the wire (re-exported)
 
 
 class ControllerFault(StationError):

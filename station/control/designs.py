@@ -51,6 +51,7 @@ from station.control.tf import DiscreteTF, tustin
 from station.errors import StationError
 from station.inputs import TomlDoc, exists, load_toml
 from station.ranges import RangeError, number, shown
+from station.rig import CLAMP, DT
 
 _P_LEAD = 2 * math.pi * 20.0
 _Z_LEAD = 2 * math.pi * 5.0
@@ -111,7 +112,7 @@ def _build(kind: str, name: str, gth: tuple, ga: tuple | None, limit: float | No
     return Compensator(gth_tf, ga_tf, limit=limit, name=name, spec=spec, shaper=shaping)
 
 
-def p_controller(kp: float = 2.0, limit: float | None = 200.0, dt: float = 0.002) -> Compensator:
+def p_controller(kp: float = 2.0, limit: float | None = CLAMP, dt: float = DT) -> Compensator:
     """Proportional control v = sat(kp e) (thesis: kp = 2).
 
     Parameters
@@ -126,7 +127,7 @@ def p_controller(kp: float = 2.0, limit: float | None = 200.0, dt: float = 0.002
     return _build("p", "p", ([kp], [1.0], "z"), None, limit, dt, {"kp": float(kp)})
 
 
-def lead_controller(limit: float | None = 200.0, dt: float = 0.002, accel: bool = False) -> Compensator:
+def lead_controller(limit: float | None = CLAMP, dt: float = DT, accel: bool = False) -> Compensator:
     """The rig's lead compensator Gth, optionally with accelerometer feedback Ga (Tustin at dt).
 
     Parameters
@@ -179,7 +180,7 @@ def controller_from_spec(spec: dict[str, Any]) -> Compensator | OpenLoop:
         if stages[0] is None:
             raise KeyError("gth")
         shaper = spec.get("shaper")
-        shaping = None if shaper is None else shaper_from_spec(shaper, float(spec.get("dt", 0.002)))
+        shaping = None if shaper is None else shaper_from_spec(shaper, float(spec.get("dt", DT)))
         return Compensator(stages[0], stages[1], limit=limit, name=str(spec.get("name", kind)), spec=spec,
                            shaper=shaping, recursion=str(spec.get("recursion", "none")))
     except (KeyError, TypeError, ValueError, AttributeError) as exc:
@@ -381,7 +382,7 @@ class CompensatorFile(NamedTuple):
         """The file's ``limit`` as written in TOML (``150``), for messages ("none" without one)."""
         return "none" if self.limit is None else f"{self.limit:g}"
 
-    def compensator(self, dt: float = 0.002, limit: float | None = 200.0) -> Compensator:
+    def compensator(self, dt: float = DT, limit: float | None = CLAMP) -> Compensator:
         """The compensator, ``domain = "s"`` stages discretized by Tustin at ``dt``.
 
         Parameters
@@ -525,7 +526,7 @@ def _read_shaper(doc) -> ShaperTimes | None:
     return check_shaper(table["times"], table["amplitudes"], where)
 
 
-def load_compensator_file(path: str | Path, dt: float = 0.002, limit: float | None = 200.0) -> Compensator:
+def load_compensator_file(path: str | Path, dt: float = DT, limit: float | None = CLAMP) -> Compensator:
     """Read a compensator file (TOML, see the module docstring) into a compensator.
 
     Parameters
@@ -550,8 +551,8 @@ def load_compensator_file(path: str | Path, dt: float = 0.002, limit: float | No
     return read_compensator_file(path).compensator(dt, limit)
 
 
-def make_controller(kind: str, dt: float = 0.002, kp: float = 2.0,
-                    limit: float | None = 200.0) -> Compensator | OpenLoop:
+def make_controller(kind: str, dt: float = DT, kp: float = 2.0,
+                    limit: float | None = CLAMP) -> Compensator | OpenLoop:
     """Build a controller by name or from a compensator file.
 
     Parameters

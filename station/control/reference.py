@@ -11,6 +11,7 @@ from pathlib import Path
 import numpy as np
 
 from station.errors import StationError
+from station.rig import DEFAULT_STEP_TICK, DT
 from station.runlog import read_log
 
 
@@ -20,7 +21,7 @@ def _check_n(n: int) -> int:
     return int(n)
 
 
-def step_reference(amplitude: float, n: int, at_tick: int = 10) -> np.ndarray:
+def step_reference(amplitude: float, n: int, at_tick: int = DEFAULT_STEP_TICK) -> np.ndarray:
     """A step: u[k] = amplitude for k >= at_tick, else 0.
 
     Parameters
@@ -84,7 +85,7 @@ def pulse_reference(amplitude: float, n: int, start_tick: int, width_ticks: int,
     return u
 
 
-def swept_sine_reference(n: int, amplitude: float = 50.0, dt: float = 0.002) -> np.ndarray:
+def swept_sine_reference(n: int, amplitude: float = 50.0, dt: float = DT) -> np.ndarray:
     """The swept-sine log's reference: u = trunc(amplitude sin(2 pi (t-1)^2)) for
     1 < t <= 21 s, else 0; t = k dt (DESIGN.md; chirp at 2(t-1) Hz, 0..40 Hz).
 

@@ -32,6 +32,7 @@ from typing import Any, NamedTuple
 import numpy as np
 
 from station.errors import StationError
+from station.rig import DT
 
 SUM_TOLERANCE = 1e-6
 """How far Σ amplitudes may be from 1 (a file's printed digits), absolute."""
@@ -85,7 +86,7 @@ class ReferenceShaper:
         Mismatched lengths, no impulse, a negative or non-increasing delay, a non-finite amplitude.
     """
 
-    def __init__(self, delays: Sequence[int], amplitudes: Sequence[float], dt: float = 0.002):
+    def __init__(self, delays: Sequence[int], amplitudes: Sequence[float], dt: float = DT):
         delays = tuple(int(n) for n in delays)
         amplitudes = tuple(float(a) for a in amplitudes)
         if not delays or len(delays) != len(amplitudes):
@@ -203,7 +204,7 @@ def check_shaper(times: Any, amplitudes: Any, where: str = "[shaper]") -> Shaper
     return ShaperTimes(t, a)
 
 
-def make_shaper(times: Sequence[float], amplitudes: Sequence[float], dt: float = 0.002,
+def make_shaper(times: Sequence[float], amplitudes: Sequence[float], dt: float = DT,
                 where: str = "[shaper]") -> ReferenceShaper:
     """A :class:`ReferenceShaper` from times in seconds, each rounded to the nearest sample.
 
@@ -232,7 +233,7 @@ def make_shaper(times: Sequence[float], amplitudes: Sequence[float], dt: float =
     return ReferenceShaper(delays, a, dt)
 
 
-def shaper_from_spec(spec: dict, dt: float = 0.002) -> ReferenceShaper:
+def shaper_from_spec(spec: dict, dt: float = DT) -> ReferenceShaper:
     """Rebuild a shaper from its ``spec`` (a log header's ``controller.shaper``).
 
     Parameters

@@ -18,6 +18,7 @@ import math
 from collections.abc import Sequence
 
 import numpy as np
+from station.rig import DT
 
 
 class DiscreteTF:
@@ -148,7 +149,7 @@ class DiscreteTF:
         return f"DiscreteTF(num={self.num.tolist()}, den={self.den.tolist()})"
 
 
-def tustin(num_s: Sequence[float], den_s: Sequence[float], dt: float = 0.002) -> tuple[np.ndarray, np.ndarray]:
+def tustin(num_s: Sequence[float], den_s: Sequence[float], dt: float = DT) -> tuple[np.ndarray, np.ndarray]:
     """Discretize a continuous transfer function by Tustin's (bilinear) method.
 
     The rig's compensators are the Tustin discretizations of their continuous designs at

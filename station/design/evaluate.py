@@ -49,21 +49,15 @@ from typing import NamedTuple
 
 import numpy as np
 
-from station import DT
-from station.analysis.metrics import settled_index, step_metrics
+from station.analysis.metrics import settled_index, step_info_band, step_metrics, time_at_clamp
 from station.control.reference import step_reference
 from station.design.linear import ALIGNMENT, loop_model
 from station.design.tip import residual, tip_position
 from station.plant.simulate import simulate
+from station.rig import DEFAULT_DURATION, DEFAULT_STEP_TICK, DT, STEP_INFO_BAND
 
-RUN_S = 2.0
+RUN_S = DEFAULT_DURATION
 """Length of a judged step run, s: ``station step``'s default, so its metrics are the design's."""
-
-BAND = 0.02
-"""The settling band's half-width, a fraction of the step (2 %)."""
-
-STEP_TICK = 10
-"""The step's tick (t = 0.02 s), as ``station step``."""
 
 REST_WINDOW_S = 0.5
 """The run's end over which the loop must be at rest, s."""
@@ -242,7 +236,7 @@ def step_run(model, compensator, amplitude: float, run_s: float = RUN_S, dt: flo
     -------
     station.plant.simulate.SimResult
     """
-    u = step_reference(amplitude, int(round(run_s / dt)), at_tick=STEP_TICK)
+    u = step_reference(amplitude, int(round(run_s / dt)), at_tick=DEFAULT_STEP_TICK)
     return simulate(model, compensator, u, alignment=ALIGNMENT, command="round", dt=dt)
 
 
@@ -255,7 +249,7 @@ def step_figures(run, amplitude: float, limit: float | None, tip=None) -> tuple:
     ----------
     run : SimResult or a logged run's columns
         ``t`` (s), ``theta`` (encoder counts), ``v`` (DAC counts), ``a`` (accelerometer
-        counts), the step at tick :data:`STEP_TICK`.
+        counts), the step at tick :data:`station.rig.DEFAULT_STEP_TICK`.
     amplitude : float
         Step height, encoder counts.
     limit : float or None
@@ -280,11 +274,11 @@ def step_figures(run, amplitude: float, limit: float | None, tip=None) -> tuple:
     t, theta, v = np.asarray(run["t"]), np.asarray(run["theta"]), np.asarray(run["v"])
     dt = float(t[1] - t[0])
     thesis = step_metrics(t, theta, amplitude)
-    after = slice(STEP_TICK, None)
-    ts, ys = t[after] - t[STEP_TICK], theta[after]
-    band = BAND * abs(amplitude)
+    after = slice(DEFAULT_STEP_TICK, None)
+    ts, ys = t[after] - t[DEFAULT_STEP_TICK], theta[after]
+    band = step_info_band(amplitude)
     k = settled_index(ts, ys, amplitude, band)  # as step_info's 2 % settling time
-    sat = float(np.count_nonzero(np.abs(v) >= limit) * dt) if limit is not None else 0.0
+    sat = time_at_clamp(v, limit, dt) if limit is not None else 0.0
     tail = max(2, int(round(REST_WINDOW_S / dt)))
     at_rest = bool(np.ptp(theta[-tail:]) <= 1.0 and np.ptp(v[-tail:]) <= REST_COMMAND)
     out = np.flatnonzero(np.abs(ys - amplitude) > band)
@@ -292,7 +286,7 @@ def step_figures(run, amplitude: float, limit: float | None, tip=None) -> tuple:
     rest_band = max(band, float(np.max(np.abs(amplitude - theta[-tail:]))))
     k_rest = k if rest_band == band else settled_index(ts, ys, amplitude, rest_band)
     k_tip = None if tip is None else settled_index(ts, np.asarray(tip, dtype=float)[after], amplitude, band)
-    res = residual(run["a"], STEP_TICK, dt)
+    res = residual(run["a"], DEFAULT_STEP_TICK, dt)
     return (thesis.overshoot_pct, None if k is None else float(ts[k]), thesis.settling_time_s,
             float(np.max(np.abs(v))), sat, at_rest, float(abs(amplitude - ys[-1])), last_out, band, rest_band,
             None if k_rest is None else float(ts[k_rest]), None if k_tip is None else float(ts[k_tip]),
@@ -376,7 +370,7 @@ def judge(model, compensator, amplitude: float, run_s: float = RUN_S, dt: float 
     if not rho < 1.0 or failed:
         nan = math.nan
         return Figures(nan, None, None, nan, nan, False, mg.gain_margin_db, mg.phase_margin_deg, rho, nan, nan,
-                       BAND * abs(amplitude))
+                       step_info_band(amplitude))
     run = step_run(model, compensator, amplitude, run_s, dt)
     fig = step_figures(run, amplitude, compensator.limit, tip_position(model, run.v, dt) if tip else None)
     return Figures(*fig[:6], mg.gain_margin_db, mg.phase_margin_deg, rho, *fig[6:])
@@ -484,7 +478,7 @@ def cost(f: Figures, req: Requirements, run_s: float = RUN_S, held: bool = True)
     if not bad:
         return f.settling_2pct_s
     if held and friction_held(f, req):
-        r = (f.rest_band - f.band) / (f.band / BAND)  # the held excess, a fraction of the step
+        r = (f.rest_band - f.band) / (f.band / STEP_INFO_BAND)  # the held excess, a fraction of the step
         bad["not_settled"] = f.settling_rest_s + r * (run_s - f.settling_rest_s)
     late = run_s if math.isnan(f.last_out_s) else f.last_out_s
     return late + run_s + sum(bad.values())

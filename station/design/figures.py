@@ -17,11 +17,12 @@ from __future__ import annotations
 
 import numpy as np
 
-from station.analysis.metrics import settling_label
-from station.design.evaluate import RUN_S, STEP_TICK, step_run
+from station.analysis.metrics import STEP_INFO_BAND_PCT, settling_label
+from station.design.evaluate import RUN_S, step_run
 from station.design.linear import loop_model
-from station.design.tip import RESIDUAL_AFTER_S, residual, tip_position
+from station.design.tip import residual, tip_position
 from station.plots import new_figure
+from station.rig import DEFAULT_STEP_TICK, RESIDUAL_AFTER_S
 
 
 def steps_figure(model, tuned, thesis, amplitude: float, names=("thesis", "tuned")):
@@ -54,8 +55,8 @@ def steps_figure(model, tuned, thesis, amplitude: float, names=("thesis", "tuned
         if comp.limit is not None:
             for s in (1, -1):
                 ax[1, col].axhline(s * comp.limit, color="grey", lw=0.6, ls=":")
-        start = r.t[STEP_TICK] + RESIDUAL_AFTER_S
-        res = residual(r.a, STEP_TICK, float(r.t[1] - r.t[0]))
+        start = r.t[DEFAULT_STEP_TICK] + RESIDUAL_AFTER_S
+        res = residual(r.a, DEFAULT_STEP_TICK, float(r.t[1] - r.t[0]))
         ax[2, col].axvspan(start, r.t[-1], color="C2", alpha=0.08)
         ax[2, col].plot(r.t, r.a, lw=0.7, color="C2")
         ax[2, col].text(0.98, 0.95, f"from {RESIDUAL_AFTER_S:g} s after the step: RMS {res.rms:.2f}, "
@@ -158,7 +159,7 @@ def robust_figure(models, tuned, thesis, amplitude: float, figures, baseline, ov
         ys = [f.overshoot_pct for f in figs]
         ax2.scatter(xs, ys, marker=marker, label=name)
     ax2.axhline(overshoot_limit, color="r", lw=0.7, ls="--", label=f"overshoot ≤ {overshoot_limit:g} %")
-    ax2.set_xlabel(f"hub {settling_label(2)} (s; {RUN_S:g} = not settled)")
+    ax2.set_xlabel(f"hub {settling_label(STEP_INFO_BAND_PCT)} (s; {RUN_S:g} = not settled)")
     ax2.set_ylabel("overshoot (%)")
     ax2.grid(True, lw=0.3)
     ax2.legend(fontsize=7)
@@ -215,7 +216,7 @@ def tradeoff_figure(tradeoff, tip_rms: float | None = None):
     for axis in (ax.xaxis, ax.yaxis):
         axis.set_major_formatter(FormatStrFormatter("%g"))
         axis.set_minor_formatter(FormatStrFormatter("%g"))
-    ax.set_xlabel(f"worst hub {settling_label(2)} / the thesis's, over the models (not settled: the run's length)")
+    ax.set_xlabel(f"worst hub {settling_label(STEP_INFO_BAND_PCT)} / the thesis's, over the models (not settled: the run's length)")
     ax.set_ylabel("worst tip residual RMS / the thesis's, over the models")
     ax.set_title(f"{len(pts)} designs judged on every model of the set", fontsize=9)
     ax.grid(True, which="both", lw=0.3)

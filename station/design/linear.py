@@ -29,7 +29,7 @@ from typing import NamedTuple
 import numpy as np
 import scipy.signal
 
-from station import DT
+from station.rig import DT
 
 ALIGNMENT = 1
 """The computational delay of the station's loop on protocol v1 and the simulated rig, samples."""

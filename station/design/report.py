@@ -12,7 +12,7 @@ import html
 import io
 from pathlib import Path
 
-from station.analysis.metrics import settling_label
+from station.analysis.metrics import STEP_INFO_BAND_PCT, THESIS_BAND_PCT, settling_label
 from station.design.figures import bode_figure, robust_figure, steps_figure, tradeoff_figure
 from station.design.space import thesis_compensator
 from station.outputs import Transaction
@@ -36,7 +36,7 @@ def _fmt(x, unit: str = "", digits: int = 3) -> str:
 def _tables(result) -> list[str]:
     esc = html.escape
     d = result.design_json()
-    s2, s1 = settling_label(2), settling_label(1)
+    s2, s1 = settling_label(STEP_INFO_BAND_PCT), settling_label(THESIS_BAND_PCT)
     tip = ("no bound on the tip" if result.tip_rms is None else
            f"tip residual RMS (accelerometer, from 0.6 s after the step) ≤ {result.tip_rms:g}× the thesis's "
            f"compensator's on the same model")
@@ -99,7 +99,7 @@ def tradeoff_table(tradeoff, space) -> list[str]:
         row, one row per front design (and the chosen one when off the front), the table's close.
     """
     esc = html.escape
-    s2 = esc(settling_label(2))
+    s2 = esc(settling_label(STEP_INFO_BAND_PCT))
     rows = [f"<h2>Hub against tip</h2><p>{len(tradeoff.points)} designs judged on every model; the "
             f"{len(tradeoff.front)} that no other beats on both the worst hub {s2} and the worst tip residual RMS "
             f"(each relative to the thesis's compensator on the same model), among those meeting overshoot, "

@@ -45,7 +45,7 @@ from pathlib import Path
 
 import numpy as np
 
-from station import DT
+from station.rig import CLAMP, DT
 from station.control.designs import (ACCEL_DEN_S, ACCEL_NUM_S, CompensatorFile, DesignRecord, lead_controller,
                                      p_controller)
 from station.control.shaper import ShaperTimes, zv_shaper, zvd_shaper
@@ -328,7 +328,7 @@ class DesignSpace:
 
     structure: str
     shaper: str = "none"
-    limit: float = 200.0
+    limit: float = CLAMP
     mode: tuple[float, float] | None = None
     filter: str = "none"
 
@@ -507,7 +507,7 @@ class DesignSpace:
         return CompensatorFile(Path(path), name, gth, ga, float(self.limit), True, self.shaper_times(values), design)
 
 
-def thesis_compensator(structure: str, limit: float = 200.0, dt: float = 0.002):
+def thesis_compensator(structure: str, limit: float = CLAMP, dt: float = DT):
     """The thesis's compensator of a structure (``station step --controller KIND``).
 
     Parameters

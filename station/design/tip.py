@@ -23,15 +23,10 @@ from typing import NamedTuple
 
 import numpy as np
 
-from station import DT
 from station.plant.fem import modal_basis
 from station.plant.kernel import COMMAND_QUANTIZATION, coefficients, effects_of, run_kernel
 from station.plant.modal import LinearForm
-
-RESIDUAL_AFTER_S = 0.6
-"""Where the tip's residual vibration is measured from, s after the step (the issue's and the
-thesis's: its lead + accelerometer step is quiet by then), to the run's end."""
-
+from station.rig import DT, RESIDUAL_AFTER_S  # noqa: F401 (RESIDUAL_AFTER_S: the window, re-exported)
 
 class Residual(NamedTuple):
     """The accelerometer's residual vibration after the step.

@@ -33,9 +33,7 @@ from station.design.space import (DEFAULT_FILTER, DEFAULT_SHAPER, DEFAULT_TIP_RM
                                   DesignSpace, thesis_compensator)
 from station.errors import StationError
 from station.plant.modes import modal_summary
-
-DEFAULT_AMPLITUDE = {"p": 50.0, "lead": 100.0, "lead-accel": 200.0}
-"""Default step height per structure, encoder counts: the rig's three experiments (thesis)."""
+from station.rig import CLAMP, DAC_LIMIT, DEFAULT_AMPLITUDE, DEFAULT_SOFT_LIMIT, THESIS_STEPS
 
 METRICS = ("overshoot_pct", "settling_2pct_s", "settling_thesis_s", "peak_command", "saturated_s",
            "tip_settling_2pct_s", "tip_residual_rms", "tip_residual_peak")
@@ -89,8 +87,9 @@ def check_request(structure: str, amplitude: float, limit: float, overshoot: flo
     if filter == "damper" and structure != "lead-accel":
         raise StationError(f"--filter damper: the damper is in the accelerometer filter Ga, so --controller "
                            f"lead-accel only, not {structure}")
-    checks = (("--amplitude", amplitude, lambda x: x != 0 and abs(x) <= 2048, "a step of 1..2048 encoder counts"),
-              ("--limit", limit, lambda x: 0 < x <= 255, "0 < limit <= 255 DAC counts"),
+    checks = (("--amplitude", amplitude, lambda x: x != 0 and abs(x) <= DEFAULT_SOFT_LIMIT,
+               f"a step of 1..{DEFAULT_SOFT_LIMIT:g} encoder counts"),
+              ("--limit", limit, lambda x: 0 < x <= DAC_LIMIT, f"0 < limit <= {DAC_LIMIT:g} DAC counts"),
               ("--overshoot", overshoot, lambda x: 0 <= x <= 100, "0..100 %"),
               ("--tip-rms", 1.0 if tip_rms is None else tip_rms, lambda x: 0 < x <= 100,
                "0 < ratio <= 100 of the thesis's compensator's"),
@@ -448,7 +447,7 @@ def design_record(model, nominal, robust=(), out: str | Path = "tuned.toml") -> 
     return DesignRecord.of(name, nominal.to_toml())
 
 
-def tune(model=None, structure: str = "lead-accel", amplitude: float | None = None, limit: float = 200.0,
+def tune(model=None, structure: str = "lead-accel", amplitude: float | None = None, limit: float = CLAMP,
          overshoot: float = 5.0, shaper: str = DEFAULT_SHAPER, robust: Sequence[str | Path] = (),
          samples: int = DEFAULT_SAMPLES, jobs: int = 1, scheduler: str | None = None,
          out: str | Path = "tuned.toml", budget: Budget = Budget(), seed: int = SEED,
@@ -463,7 +462,7 @@ def tune(model=None, structure: str = "lead-accel", amplitude: float | None = No
     structure : {"p", "lead", "lead-accel"}
         The compensator's structure (:mod:`station.design.space`).
     amplitude : float, optional
-        Step height, encoder counts (default :data:`DEFAULT_AMPLITUDE` of the structure).
+        Step height, encoder counts (default: the thesis's step of the structure, :data:`station.rig.THESIS_STEPS`).
     limit : float
         The compensator's clamp, DAC counts (0 < limit ≤ 255).
     overshoot : float
@@ -529,7 +528,7 @@ def tune(model=None, structure: str = "lead-accel", amplitude: float | None = No
     ...
     """
     t0 = time.perf_counter()
-    amplitude = DEFAULT_AMPLITUDE.get(structure, 100.0) if amplitude is None else amplitude
+    amplitude = THESIS_STEPS.get(structure, DEFAULT_AMPLITUDE) if amplitude is None else amplitude
     check_request(structure, amplitude, limit, overshoot, shaper, samples, jobs, tip_rms, filter)
     rs = robust_set(model, robust, samples, seed)
     nominal = rs.models[0]

@@ -17,8 +17,9 @@ from typing import NamedTuple
 import numpy as np
 
 from station.control.designs import read_compensator_file
-from station.design.evaluate import RUN_S, STEP_TICK, step_figures, step_run
+from station.design.evaluate import RUN_S, step_figures, step_run
 from station.experiment import run_step
+from station.rig import DEFAULT_STEP_TICK
 from station.runlog import read_log
 
 
@@ -105,7 +106,7 @@ def verify(model, compensator_file: str | Path, amplitude: float, log: str | Pat
     with tempfile.TemporaryDirectory(prefix="station-tune-") as tmp:
         path = Path(log) if log is not None else Path(tmp) / "verify-step.tsv"
         report = run_step(port="sim://?noise=0", controller=str(compensator_file), amplitude=amplitude,
-                          duration=run_s, step_time=STEP_TICK * 0.002, model=model, out=path, force=True,
+                          duration=run_s, step_tick=DEFAULT_STEP_TICK, model=model, out=path, force=True,
                           figure=False, progress=False)
         data = read_log(path).data
         sim = step_run(model, read_compensator_file(compensator_file).compensator(), amplitude, run_s)

@@ -37,7 +37,7 @@ What lives here:
 - :mod:`~station.link.v1`, :mod:`~station.link.legacy`: one session class per protocol.
 - here: :func:`open_session`, and every public name above (``from station.link import ...``).
 
-Imports: pyserial, :mod:`station` (DT), :mod:`station.errors` and :mod:`station.protocol`
+Imports: pyserial, :mod:`station.rig` (DT, the sample timeout), :mod:`station.errors` and :mod:`station.protocol`
 only; never the loop, the simulator (``sim://`` is found by pyserial, by name) or anything
 above them.
 """
@@ -52,6 +52,7 @@ from station.link.bursts import Burst, BurstMeter, burst_line
 from station.link.port import DEFAULT_BAUD, SIM_HANDLERS, PortInfo, latency_timer, open_port, port_info, sim_url
 from station.link.session import HANDSHAKE_TIMEOUT, ZERO_ACCEL_TICKS, Sample, Session, logger
 from station.link.v1 import FIRST_SEQ_WINDOW, V1Session
+from station.rig import DEFAULT_TIMEOUT
 
 __all__ = ["DEFAULT_BAUD", "FIRST_SEQ_WINDOW", "HANDSHAKE_TIMEOUT", "MISS_WINDOW", "POLL_S", "RATE_FAST", "RATE_SLOW",
            "RATE_WINDOW_S", "SIM_HANDLERS", "ZERO_ACCEL_TICKS", "Burst", "BurstMeter", "DeviceStopped", "Interrupted",
@@ -62,7 +63,7 @@ __all__ = ["DEFAULT_BAUD", "FIRST_SEQ_WINDOW", "HANDSHAKE_TIMEOUT", "MISS_WINDOW
 _SESSIONS = {"v1": V1Session, "legacy": LegacySession}
 
 
-def open_session(url: str, protocol: str = "v1", timeout: float = 0.1, baudrate: int | None = None,
+def open_session(url: str, protocol: str = "v1", timeout: float = DEFAULT_TIMEOUT, baudrate: int | None = None,
                  limits: LinkLimits | None = None) -> Session:
     """Open ``url`` and return a :class:`Session` of ``protocol`` ("v1" or "legacy").
 

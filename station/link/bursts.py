@@ -19,7 +19,7 @@ import time
 from collections import deque
 from typing import NamedTuple
 
-from station import DT
+from station.rig import DT
 
 KEPT = 8
 """Chunks kept (the newest ones)."""

@@ -9,6 +9,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from station.errors import StationError
+from station.rig import DEFAULT_TIMEOUT
 
 MISS_WINDOW = 100
 """Ticks over which --max-miss is counted."""
@@ -60,7 +61,7 @@ class LinkLimits:
         wait on it is the host's, bounded by ``timeout``.
     """
 
-    timeout: float = 0.1
+    timeout: float = DEFAULT_TIMEOUT
     max_lag: float = 0.020
     max_miss: int = 10
     max_step: float = 40.0

@@ -21,6 +21,7 @@ from serial.tools import list_ports
 
 from station.errors import StationError
 from station.protocol import legacy
+from station.rig import DEFAULT_TIMEOUT
 
 SIM_HANDLERS = "station.sim"
 """The package that holds ``protocol_sim`` (pyserial finds ``sim://`` there)."""
@@ -172,7 +173,7 @@ def sim_url(url: str, protocol: str) -> str:
     return f"{url}{'&' if parts.query else '' if url.endswith('?') else '?'}{urlencode({'protocol': protocol})}"
 
 
-def open_port(url: str, protocol: str = "v1", timeout: float = 0.1, baudrate: int | None = None,
+def open_port(url: str, protocol: str = "v1", timeout: float = DEFAULT_TIMEOUT, baudrate: int | None = None,
               write_timeout: float | None = None) -> serial.SerialBase:
     """Open ``url`` with pyserial for one protocol.
 

@@ -29,7 +29,7 @@ from typing import NamedTuple
 import serial
 from serial.serialutil import Timeout
 
-from station import DT
+from station.rig import DT
 from station.link.bursts import BurstMeter, burst_line
 from station.link.faults import (MISS_WINDOW, POLL_S, RATE_FAST, RATE_SLOW, RATE_WINDOW_S, Interrupted, LagError, LinkFault,
                                  LinkLimits, LinkTimeout, RateError, SequenceError)

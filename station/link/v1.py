@@ -7,7 +7,7 @@ import logging
 
 from serial.serialutil import Timeout
 
-from station import DT
+from station.rig import DT
 from station.errors import StationError
 from station.link.faults import DeviceStopped
 from station.link.session import HANDSHAKE_TIMEOUT, ZERO_ACCEL_TICKS, Sample, Session, logger

@@ -21,8 +21,6 @@ imports them.
 
 from station.logged.controller import (
     PRINTED_TOLERANCE,
-    RIG_DT,
-    RIG_LIMIT,
     ControllerId,
     identify_controller,
     log_controller,
@@ -33,7 +31,7 @@ from station.logged.run import REPRODUCED_TOLERANCE, LoggedRun
 from station.logged.simulate import ModelRun, compared_theta, simulate_log
 
 __all__ = [
-    "PRINTED_TOLERANCE", "REPRODUCED_TOLERANCE", "RIG_DT", "RIG_LIMIT",
+    "PRINTED_TOLERANCE", "REPRODUCED_TOLERANCE",
     "ControllerId", "LoggedRun", "ModelRun",
     "command_quantization", "compared_theta", "identify_controller", "log_controller", 
     "rig_controller", "simulate_log",

@@ -26,7 +26,8 @@ from pathlib import Path
 
 import numpy as np
 
-from station.runlog import RIG_DT, RunLog
+from station.rig import COUNTS_PER_REV, DT
+from station.runlog import RunLog
 
 CLAIMS = ("controller", "alignment", "reference", "sample_time", "columns")
 """What a log can claim (DESIGN.md "Log audit")."""
@@ -37,10 +38,7 @@ VERDICTS = ("confirmed", "contradicted", "unchecked")
 SOURCES = ("header", "inferred", "inferred (header contradicted)")
 """Where a log's controller came from (``controller_source``; None: no controller)."""
 
-ENCODER_COUNTS = 1024
-"""Encoder counts per revolution (DESIGN.md "The rig")."""
-
-THETA_UNITS = {"radians": 2.0 * math.pi / ENCODER_COUNTS, "degrees": 360.0 / ENCODER_COUNTS}
+THETA_UNITS = {"radians": 2.0 * math.pi / COUNTS_PER_REV, "degrees": 360.0 / COUNTS_PER_REV}
 """θ columns in another unit than counts, by one encoder count in that unit."""
 
 ACCEL_DRIFT_WINDOW_S = 2.0
@@ -356,7 +354,7 @@ def time_base(log: RunLog) -> TimeBase:
     sample_time = log.sample_time
     header_dt = meta.get("dt") if log.format == "station" else None
     stated = header_dt if isinstance(header_dt, (int, float)) and not isinstance(header_dt, bool) else None
-    claimed = float(stated) if stated is not None else RIG_DT
+    claimed = float(stated) if stated is not None else DT
     where = f"dt = {claimed:g} s" if stated is not None else f"{claimed:g} s (the rig's rate; t in s)"
     t = np.asarray(data["t"], dtype=float)
     has_t = sample_time is not None and not any("no time column" in n for n in log.notes)
@@ -404,7 +402,7 @@ def time_base(log: RunLog) -> TimeBase:
                     also = "; u, not whole counts, taken in the same unit"
                 claims.append(AuditClaim("columns", "θ in encoder counts", f"θ in {unit}", "contradicted",
                                          f"every θ is a multiple of {q:.6g} ({unit} per encoder count of "
-                                         f"{ENCODER_COUNTS}/rev), none of 1{also}"))
+                                         f"{COUNTS_PER_REV}/rev), none of 1{also}"))
                 notes.append(f"θ is in {unit} (the audit): converted to encoder counts{also}")
     if not changes and new_meta is None:
         return TimeBase(tuple(claims), log)

@@ -32,10 +32,8 @@ from station.control.designs import MAX_ORDER, z_problem
 from station.control.rerun import ALIGNMENTS, AlignmentFit, is_closed_loop
 from station.errors import StationError
 from station.logged.audit import AuditClaim
-from station.runlog import RIG_DT, RunLog  # RIG_DT: the rig's sample time, its compensators ran at it
-
-RIG_LIMIT = 200.0
-"""The rig software's clamp of v, DAC counts (DESIGN.md)."""
+from station.rig import CLAMP, DT  # the rig's clamp and sample time: its compensators ran at them
+from station.runlog import RunLog
 
 PRINTED_TOLERANCE = 5.0001e-9
 """Largest difference between a coefficient and its 8-decimal print (half a unit in the 8th place)."""
@@ -113,7 +111,7 @@ def _header_number(meta: dict[str, Any], key: str) -> float:
     return float(value)
 
 
-def rig_controller(meta: dict[str, Any], dt: float = 0.002) -> tuple[Compensator | OpenLoop | None, list[str]]:
+def rig_controller(meta: dict[str, Any], dt: float = DT) -> tuple[Compensator | OpenLoop | None, list[str]]:
     """The controller a rig log's header names.
 
     Parameters
@@ -134,26 +132,26 @@ def rig_controller(meta: dict[str, Any], dt: float = 0.002) -> tuple[Compensator
     notes: list[str] = []
     test = str(meta.get("test", ""))
     if "Gth" in meta:
-        ref = lead_controller(RIG_LIMIT, dt, accel=True)
+        ref = lead_controller(CLAMP, dt, accel=True)
         gth, gth_known = _rig_stage(meta, "Gth", ref.gth, notes)
         if gth is None:
             return None, [f"header has an empty Gth ({test}): controller unknown"]
         ga, ga_known = _rig_stage(meta, "Ga", ref.ga, notes)
         known = gth_known and ga_known
         name = ("lead-accel" if ga is not None else "lead") if known else "rig-printed"
-        spec = {"kind": name, "name": name, "dt": dt, "limit": RIG_LIMIT, "source": "rig header",
+        spec = {"kind": name, "name": name, "dt": dt, "limit": CLAMP, "source": "rig header",
                 "gth": {"num_z": gth.num.tolist(), "den_z": gth.den.tolist()},
                 "ga": None if ga is None else {"num_z": ga.num.tolist(), "den_z": ga.den.tolist()}}
         if known:
             notes.append("printed coefficients equal the Tustin designs to their 8 decimals: unrounded designs used")
-        return Compensator(gth, ga, limit=RIG_LIMIT, name=name, spec=spec), notes
+        return Compensator(gth, ga, limit=CLAMP, name=name, spec=spec), notes
     if "kp" in meta:
         kp, ki, kd = (_header_number(meta, key) for key in ("kp", "ki", "kd"))
         if ki != 0.0 or kd != 0.0:  # how the rig discretized it: the data decide (identify_controller)
             return None, []
         if "ki" in meta or "kd" in meta:
             notes.append("PID_control with ki = kd = 0: P control")
-        return p_controller(kp, RIG_LIMIT, dt), notes
+        return p_controller(kp, CLAMP, dt), notes
     if "OL" in test.split("_") or test.startswith("OL"):
         return OpenLoop(limit=None), notes
     return None, notes
@@ -209,7 +207,7 @@ def describe_controller(controller) -> str:
     if spec.get("kind") == "p" and isinstance(spec.get("kp"), (int, float)):
         text = f"P, kp = {spec['kp']:g}"
     elif isinstance(design, dict) and design.get("text"):
-        text = f"{design['text']} ({design.get('method', '?')}, {spec.get('dt', RIG_DT):g} s)"
+        text = f"{design['text']} ({design.get('method', '?')}, {spec.get('dt', DT):g} s)"
     elif name in ("lead", "lead-accel"):
         text = "lead Gth (the thesis's 20(s+2π·5)/(s+2π·20))" + (" with accelerometer feedback Ga"
                                                                  if name == "lead-accel" else "")
@@ -308,9 +306,9 @@ def identify_controller(log: RunLog, skipped=None) -> ControllerId:
     prefer = stated_d if isinstance(stated_d, int) and not isinstance(stated_d, bool) else PREFERRED_ALIGNMENT
     said = (describe_controller(controller) if controller is not None else
             f"PID kp = {pid[0]:g}, ki = {pid[1]:g}, kd = {pid[2]:g}" if pid is not None else "not stated")
-    if log.format == "rig" and abs(dt - RIG_DT) > 1e-9 and not isinstance(controller, OpenLoop):
-        notes.append(f"sampled at {dt:g} s, not the rig's {RIG_DT:g} s: closed-loop commands cannot be "
-                     f"replayed or inferred (the rig's controllers ran at {RIG_DT:g} s, on rows this log "
+    if log.format == "rig" and abs(dt - DT) > 1e-9 and not isinstance(controller, OpenLoop):
+        notes.append(f"sampled at {dt:g} s, not the rig's {DT:g} s: closed-loop commands cannot be "
+                     f"replayed or inferred (the rig's controllers ran at {DT:g} s, on rows this log "
                      f"lacks); the model is driven by the logged v at {dt:g} s")
         return ControllerId(None, None, notes, None, AuditClaim("controller", said, "not replayable", "unchecked",
                                                                 notes[-1]))
@@ -318,7 +316,7 @@ def identify_controller(log: RunLog, skipped=None) -> ControllerId:
                                               else ()) if not np.all(np.isfinite(data[name]))]
     header_dv = None
     if pid is not None and controller is None and not missing:
-        hit, best = match_pid(*pid, u, theta, v, a, dt, RIG_LIMIT)
+        hit, best = match_pid(*pid, u, theta, v, a, dt, CLAMP)
         gains = f"kp = {pid[0]:g}, ki = {pid[1]:g}, kd = {pid[2]:g}"
         if hit is not None:
             notes.append(f"PID header ({gains}) replayed with the {hit.law}")
@@ -350,7 +348,7 @@ def identify_controller(log: RunLog, skipped=None) -> ControllerId:
                          f"infer one from: commands not replayed, model driven by the logged v")
         return ControllerId(None, None, notes, None, AuditClaim(
             "controller", said, "not replayable", "unchecked", f"the log has no usable {', '.join(missing)}"))
-    hit = infer_controller(u, theta, v, a, dt, RIG_LIMIT, prefer=prefer)
+    hit = infer_controller(u, theta, v, a, dt, CLAMP, prefer=prefer)
     stated = controller is not None or pid is not None
     if hit is not None:
         fit = AlignmentFit(hit.alignment, hit.max_abs_dv, hit.v_replayed)

@@ -48,6 +48,7 @@ from station.control.rerun import OpenLoop
 from station.logged.audit import AuditClaim
 from station.logged.device import command_quantization
 from station.plant.effects import EFFECTS
+from station.rig import COUNTS_PER_REV
 
 THETA_HORIZON_S = 0.05
 """Horizon of the θ changes compared, s."""
@@ -293,7 +294,7 @@ def decide_faults(evidence: Sequence[SensorEvidence], accel_gain: float | None =
                 # θ off from a by a power of two, but the motion is off too: an encoder of another
                 # resolution beside friction or an actuator gain, or the accelerometer's gain
                 hint = (f"θ reads {q:.2f}× what a's motion gives (θ's ratio {g_th:.2f}, a's {abs(g_a):.2f}): "
-                        f"an encoder of {q * 1024:.0f} counts per revolution, or the accelerometer's gain; "
+                        f"an encoder of {q * COUNTS_PER_REV:.0f} counts per revolution, or the accelerometer's gain; "
                         f"the ratios do not decide it")
     bias_claim = _trend_claim("accel_offset", [e.accel_bias for e in ev], OFFSET_COUNTS, effects,
                               "a: zero at rest (the rig zeroes it before a test)", "counts")
@@ -336,7 +337,7 @@ def _theta_claim(sign: int, cosines, th_ratio, a_ratio, effects) -> AuditClaim |
         data = "the motor turns against the command (motor_polarity -1): θ and a both reversed"
     elif effects.get("encoder_scale", 1.0) != 1.0:
         s = effects["encoder_scale"]
-        data = (f"the encoder counts {abs(s) * 1024:.0f} per revolution" if abs(s) != 1.0 else "the encoder") + \
+        data = (f"the encoder counts {abs(s) * COUNTS_PER_REV:.0f} per revolution" if abs(s) != 1.0 else "the encoder") + \
                (" the other way" if s < 0 else "") + f" (encoder_scale {s:g})"
     else:
         return AuditClaim("columns", header, "as claimed", "confirmed", evidence)

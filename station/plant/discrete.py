@@ -12,7 +12,7 @@ import numpy as np
 # scipy.linalg / scipy.signal / scipy.optimize / python-control are imported where used:
 # they cost seconds, and a run's first tick does not need them (start-up time).
 
-from station import DT
+from station.rig import DT
 from station.plant.fem import state_matrices
 from station.plant.parameters import Params, load_params
 from station.rounding import sensor_count

@@ -45,6 +45,7 @@ from station.errors import StationError
 from station.plant.diskcache import cached_arrays
 from station.plant.modes import modal_summary
 from station.plant.parameters import load_params
+from station.rig import DAC_LIMIT
 
 
 class EffectSpec(NamedTuple):
@@ -139,7 +140,7 @@ EFFECTS: dict[str, EffectSpec] = {
         # 20 counts (0.2 V) would drive the free motor at 220 encoder counts/s open loop
         EffectSpec("amp_offset", "DAC counts", 0.0, -20.0, 20.0, "amplifier"),
         EffectSpec("deadzone", "DAC counts", 0.0, 0.0, 40.0, "amplifier"),
-        EffectSpec("saturation", "DAC counts", math.inf, 50.0, 255.0, "amplifier"),
+        EffectSpec("saturation", "DAC counts", math.inf, 50.0, DAC_LIMIT, "amplifier"),
         EffectSpec("delay", "samples", 0.0, 0.0, 6.0, "amplifier"),
         EffectSpec("backlash", "encoder counts", 0.0, 0.0, 30.0, "plant"),
         EffectSpec("beam_damping", "1", BEAM_DAMPING_NOMINAL, BEAM_DAMPING_NOMINAL, 0.2, "linear"),

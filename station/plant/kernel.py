@@ -34,7 +34,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from station import DT
+from station.rig import DT
 from station.plant.effects import friction_levels
 from station.plant.modal import LinearForm
 from station.rounding import half_away, sensor_count

@@ -31,7 +31,7 @@ from typing import Any
 
 import numpy as np
 
-from station import DT
+from station.rig import DT
 from station.errors import StationError
 from station.plant.discrete import DiscretePlant
 from station.inputs import TomlDoc, exists, load_toml

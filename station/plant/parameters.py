@@ -15,13 +15,10 @@ from pathlib import Path
 from station.errors import StationError, one_line
 from station.inputs import exists, load_toml
 from station.ranges import Number, RangeError, number, shown
+from station.rig import COUNTS_PER_RAD
 
 PARAMS_DIR = Path(__file__).resolve().parent / "params"
 """Folder of the packaged parameter sets (``<name>.toml``)."""
-
-COUNTS_PER_REV = 1024
-"""Encoder counts per revolution of the base (DESIGN.md, "The rig")."""
-
 
 @dataclass(frozen=True)
 class Params:
@@ -80,7 +77,7 @@ class Params:
     @property
     def H(self) -> float:
         """Encoder gain, counts/rad (1024/(2π))."""
-        return COUNTS_PER_REV / (2.0 * math.pi)
+        return COUNTS_PER_RAD
 
     @property
     def act_num(self) -> float:

@@ -22,7 +22,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from station import DT
+from station.rig import DT
 from station.control.compensator import Compensator, OpenLoop
 from station.control.contract import guard_command, wire_limit
 from station.plant.kernel import COMMAND_QUANTIZATION, KernelEffects, ModelPlant, Stepper, device_command, effects_of

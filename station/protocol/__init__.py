@@ -1,12 +1,12 @@
 """Wire formats: :mod:`station.protocol.v1` (framed, ours) and :mod:`station.protocol.legacy` (the rig's old PSoC).
 
 Both are pure codecs without I/O; :mod:`station.link` runs a session over a port. This
-package imports only :mod:`station` (DT), :mod:`station.errors` and :mod:`station.rounding`.
+package imports only :mod:`station.rig` (DT), :mod:`station.errors` and :mod:`station.rounding`.
 """
 
 from __future__ import annotations
 
-from station import DT
+from station.rig import DT
 from station.errors import StationError
 from station.protocol import legacy
 
@@ -22,7 +22,7 @@ def check_ticks(protocol: str, n_ticks: int, dt: float = DT) -> None:
         The protocol of the run.
     n_ticks : int
         Ticks the run would last.
-    dt : float, default :data:`station.DT`
+    dt : float, default :data:`station.rig.DT`
         Sample time, s (the message gives the limit in s too).
 
     Raises

@@ -23,16 +23,16 @@ The rig's format (its lab software, ../shared/data/rig): ``#`` header lines (tes
 without ``#`` lines, a first line of column names (its 2014 logs, cut-down copies).
 
 What lives where, from the bottom up (each module imports only those above it in this
-list, plus :mod:`station` for ``DT``, :mod:`station.errors` and :mod:`station.jsonio`;
+list, plus :mod:`station.rig` for ``DT``, :mod:`station.errors` and :mod:`station.jsonio`;
 nothing here imports the rest of the station):
 
 - ``schema``: the row (:class:`LogRow`, :data:`COLUMNS`, the station's status bit
-  :data:`SKIPPED`), column synonyms, the format's marks, the rig's sample time :data:`RIG_DT`, :class:`RunLogError` and its one form.
+  :data:`SKIPPED`), column synonyms, the format's marks, :class:`RunLogError` and its one form.
 - ``text``: values, rows, header and end record as text.
 - ``writer``: :class:`RunLogWriter` (queue, writer thread, sink thread, rescue file).
 - ``rows``: the lines of a file, the data lines (the torn last line decided once) and
   the rows as an array (numpy's parser from a line stream).
-- ``rig``: the rig's two header layouts.
+- ``rig_layouts``: the rig's two header layouts.
 - ``timebase``: t and n completed, the sample time found in t or given by the header.
 - ``log``: :class:`RunLog`, with :attr:`RunLog.dt`, the one definition of a log's
   sample time.
@@ -47,7 +47,6 @@ from station.runlog.schema import (
     END_PREFIX,
     FINITE_COLUMNS,
     MAGIC,
-    RIG_DT,
     SIGNAL_COLUMNS,
     SKIPPED,
     LogRow,
@@ -58,7 +57,7 @@ from station.runlog.text import format_lines, format_value, header_lines
 from station.runlog.writer import FLUSH_INTERVAL_S, RunLogWriter
 
 __all__ = [
-    "COLUMNS", "COLUMN_SYNONYMS", "END_PREFIX", "FINITE_COLUMNS", "FLUSH_INTERVAL_S", "MAGIC", "RIG_DT",
+    "COLUMNS", "COLUMN_SYNONYMS", "END_PREFIX", "FINITE_COLUMNS", "FLUSH_INTERVAL_S", "MAGIC",
     "SIGNAL_COLUMNS", "SKIPPED", "LogRow", "RunLog", "RunLogError", "RunLogWriter", "format_lines", "format_value",
     "header_lines", "read_log", "standard_column",
 ]

@@ -11,7 +11,7 @@ from typing import Any
 
 import numpy as np
 
-from station.runlog.schema import RIG_DT
+from station.rig import DT
 from station.runlog.timebase import header_dt
 
 
@@ -69,9 +69,9 @@ class RunLog:
         The header's ``dt`` when it is a finite positive number (our logs carry one; the
         reader refuses one outside (0, 1]); else :attr:`sample_time`, the median step of
         t rounded to 1 ns; else (fewer than two rows, t not increasing) the rig's
-        0.002 s (:data:`RIG_DT`).
+        0.002 s (:data:`station.rig.DT`).
         """
         dt = header_dt(self.meta)
         if dt is not None:
             return dt
-        return self.sample_time if self.sample_time is not None else RIG_DT
+        return self.sample_time if self.sample_time is not None else DT

@@ -1,6 +1,6 @@
 """The reader: one function, :func:`read_log`, for ours and the rig's layouts.
 
-The header is read line by line and decides the layout (ours, :mod:`station.runlog.rig`'s
+The header is read line by line and decides the layout (ours, or one of :mod:`station.runlog.rig_layouts`'s
 two); the rows go through :func:`station.runlog.rows.load_rows`; then the checks that need
 whole columns (finite numbers where they belong), the time base and the end record.
 
@@ -21,7 +21,7 @@ import numpy as np
 from station.errors import StationError
 from station.inputs import check_regular, exists
 from station.runlog.log import RunLog
-from station.runlog.rig import Header, parse_column_line, parse_rig_header
+from station.runlog.rig_layouts import Header, parse_column_line, parse_rig_header
 from station.runlog.rows import MAX_LINE, LineTooLong, Lines, load_rows
 from station.runlog.schema import COLUMN_LINE, COLUMNS, END_PREFIX, FINITE_COLUMNS, MAGIC, RunLogError, log_error
 

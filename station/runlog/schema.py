@@ -1,7 +1,7 @@
 """What a run log holds: the row, the column names and their synonyms, the format's marks,
 and the one form of a run log error.
 
-Imports only :mod:`station` (its ``DT``) and :mod:`station.errors`.
+Imports only :mod:`station.errors`.
 """
 
 from __future__ import annotations
@@ -9,7 +9,6 @@ from __future__ import annotations
 from pathlib import Path
 from typing import NamedTuple
 
-from station import DT
 from station.errors import StationError
 
 
@@ -97,11 +96,6 @@ FINITE_COLUMNS = ("t", "n", "u", "theta", "a")
 """Columns that must hold finite numbers in every log (time base, reference, sensors);
 the rig's logs must also have a finite v and theta_d_hat. Ours may log v = nan (the row
 of a controller fault) and nan latency or theta_d_hat."""
-
-RIG_DT = DT
-"""The rig's sample time, s (DESIGN.md; the same object as ``station.DT``): its
-compensators ran at it; t = n·RIG_DT when a log has n but no t."""
-
 
 def standard_column(name: str) -> str:
     """The standard name of a column as printed in a log (itself when not a known synonym).

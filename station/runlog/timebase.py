@@ -11,7 +11,7 @@ from typing import Any
 
 import numpy as np
 
-from station.runlog.schema import RIG_DT
+from station.rig import DT
 
 
 def _step_of(steps: np.ndarray) -> float | None:
@@ -59,8 +59,8 @@ def complete_time_base(data: dict[str, np.ndarray], names: list[str], notes: lis
     """
     t, n = data["t"], data["n"]
     if "t" not in names and "n" in names:
-        data["t"] = t = n * RIG_DT
-        notes.append(f"no time column: t = n * {RIG_DT} s (the rig's sample time)")
+        data["t"] = t = n * DT
+        notes.append(f"no time column: t = n * {DT} s (the rig's sample time)")
     if t.size < 2 or not np.all(np.isfinite(t)):
         return None
     steps = np.diff(t)

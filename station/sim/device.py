@@ -15,12 +15,11 @@ from dataclasses import dataclass
 
 from station.plant import Sensors
 from station.protocol import PROTOCOLS, legacy, v1
+from station.rig import COUNTS_PER_REV, DAC_LIMIT, RATE_HZ
 from station.rounding import round_half_away
 from station.sim.hardware import ACCEL_OFFSET, ZERO_ACCEL_READINGS, Hardware
 from station.plant.model import as_model
 
-RATE_HZ = 500
-COUNTS_PER_REV = 1024
 FW_VERSION = (0, 1, 0)
 """INFO fw_major/minor/patch of the simulated device (the firmware in ``firmware/`` says 1.0.0)."""
 NAME = "SIMRIG"
@@ -324,7 +323,7 @@ class SimDevice:
 
     def __init__(self, protocol: str = "v1", plant=None, seed: int = 0, *, n_elements: int | None = None,
                  model=None, accel_noise_std: float = 0.3, sensors=None, accel_offset: float = ACCEL_OFFSET,
-                 v_limit: int = 255, watchdog_ticks: int = 10, name: str = NAME) -> None:
+                 v_limit: int = int(DAC_LIMIT), watchdog_ticks: int = 10, name: str = NAME) -> None:
         if protocol not in PROTOCOLS:
             raise ValueError(f"unknown protocol {protocol!r}: expected one of {', '.join(PROTOCOLS)}")
         if not 1 <= watchdog_ticks <= 255:

@@ -10,6 +10,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+from station.rig import DAC_LIMIT
+
 ACCEL_OFFSET = -2.0
 """Accelerometer reading at rest, ADC counts (DESIGN.md: "offset ≈ −2 counts at rest")."""
 
@@ -57,7 +59,7 @@ class Hardware:
         the v1 firmware sets ``accel_zero`` after START bit1's averaging ticks).
     """
 
-    def __init__(self, plant, sensors, accel_offset: float = ACCEL_OFFSET, v_limit: int = 255) -> None:
+    def __init__(self, plant, sensors, accel_offset: float = ACCEL_OFFSET, v_limit: int = int(DAC_LIMIT)) -> None:
         self.plant = plant
         self.sensors = sensors
         self.accel_offset = float(accel_offset)

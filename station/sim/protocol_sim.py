@@ -56,7 +56,8 @@ from station.errors import StationError
 from station.plant.model import load_model
 from station.protocol import PROTOCOLS
 from station.ranges import SIM_RIG, shown
-from station.sim.device import RATE_HZ, SimDevice
+from station.rig import RATE_HZ
+from station.sim.device import SimDevice
 from station.sim.driver import DeviceDriver, Faults
 
 LOGGER_LEVELS = {"debug": logging.DEBUG, "info": logging.INFO, "warning": logging.WARNING, "error": logging.ERROR}

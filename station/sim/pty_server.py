@@ -27,6 +27,7 @@ import tty
 from typing import TYPE_CHECKING
 
 from station.realtime import RealtimePriority
+from station.rig import RATE_HZ
 
 if TYPE_CHECKING:
     from station.sim.driver import Faults
@@ -72,7 +73,7 @@ def serve_pty(protocol: str = "v1", realtime: bool = False, seed: int = 0, n_ele
         run (all 0 when no run was started), tx_lost over the whole session.
     """
     # lazy: start-up time (the FEM plant, not needed to build the CLI)
-    from station.sim.device import RATE_HZ, SimDevice
+    from station.sim.device import SimDevice
     from station.sim.driver import DeviceDriver
 
     out = out or sys.stdout

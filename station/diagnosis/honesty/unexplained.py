@@ -39,6 +39,7 @@ import scipy.signal
 
 from station.diagnosis.runs.cost import Evaluator
 from station.diagnosis.search.selection import NULL_PERTURBATIONS, perturbed
+from station.rig import DT
 
 THETA_COUNTS = 2.0
 """θ off by this many counts or more cannot be encoder rounding (at most one count)."""
@@ -373,7 +374,7 @@ def follows(parts: Sequence[tuple]) -> list[Follower]:
         e, theta, t = (np.asarray(x, float) for x in (e, theta, t))
         if e.size < 25:
             continue
-        dt = float(np.median(np.diff(t))) if t.size > 1 else 0.002
+        dt = float(np.median(np.diff(t))) if t.size > 1 else DT
         smooth = scipy.signal.savgol_filter(theta, 21, 2, deriv=1) / dt
         es.append(e)
         ths.append(theta)

@@ -31,6 +31,7 @@ from station.analysis.residuals import ACCEL_NOISE_STD, THETA_QUANTIZATION_STD
 from station.diagnosis.identify.experiments import Experiment, candidate_experiments
 from station.diagnosis.honesty.rivals import Rivals
 from station.plant import simulate
+from station.rig import CLAMP, DEFAULT_SOFT_LIMIT
 
 SOFT_LIMIT_MARGIN = 0.8
 """A candidate's predicted |θ| must stay below this fraction of the soft limit on every model."""
@@ -103,7 +104,7 @@ class Design(NamedTuple):
     predictions: dict
 
 
-def predict(model, experiment: Experiment, command: str = "round", limit: float = 200.0) -> Prediction:
+def predict(model, experiment: Experiment, command: str = "round", limit: float = CLAMP) -> Prediction:
     """An experiment on a model as the device runs it (module docstring).
 
     Parameters
@@ -208,7 +209,7 @@ def _why(experiment: Experiment, label: str, rivals, preds: dict, seps: Sequence
 
 
 def choose_experiment(base, rv: Rivals, candidates: Sequence[Experiment] | None = None, command: str = "round",
-                      soft_limit: float = 2048.0, limit: float = 200.0, sigma_theta: float = THETA_QUANTIZATION_STD,
+                      soft_limit: float = DEFAULT_SOFT_LIMIT, limit: float = CLAMP, sigma_theta: float = THETA_QUANTIZATION_STD,
                       sigma_a: float = ACCEL_NOISE_STD) -> Design:
     """The candidate experiment that best separates the rivals from the chosen explanation.
 

@@ -3,7 +3,7 @@ amplitude (:class:`Experiment`), the thesis's four (:data:`THESIS_EXPERIMENTS`) 
 set a design chooses from (:func:`candidate_experiments`).
 
 References (u[k], encoder counts in closed loop, DAC counts in open loop; zero for the first
-:data:`START_TICK` ticks, so every run has samples at rest before it moves):
+:data:`station.rig.DEFAULT_STEP_TICK` ticks, so every run has samples at rest before it moves):
 
 - ``step``: A from ``step_time`` on;
 - ``pulses``: the rig's pulse test, +A for 0.1 s from t = 0.04 s and −A for 0.1 s from t = 1.4 s;
@@ -25,14 +25,8 @@ from pathlib import Path
 
 import numpy as np
 
-from station import DT
 from station.control import make_controller
-
-START_TICK = 10
-"""First tick a reference moves (t = 0.02 s, the station's default step time)."""
-
-DURATION_S = 2.0
-"""Length of every experiment, s (the thesis's runs)."""
+from station.rig import CLAMP, DEFAULT_DURATION, DEFAULT_STEP_TICK, DT
 
 PULSE_TICKS = (20, 700, 50)
 """The rig's pulse test: first pulse's tick, the opposite pulse's tick, their width (0.1 s)."""
@@ -67,7 +61,7 @@ class Experiment:
     kp : float or None
         P gain (controller "p"), DAC counts per encoder count.
     step_time : float
-        When a step starts, s (other references start at :data:`START_TICK`).
+        When a step starts, s (other references start at :data:`station.rig.DEFAULT_STEP_TICK`).
     duration : float
         Run length, s.
     """
@@ -76,8 +70,8 @@ class Experiment:
     reference: str
     amplitude: float
     kp: float | None = None
-    step_time: float = START_TICK * DT
-    duration: float = DURATION_S
+    step_time: float = DEFAULT_STEP_TICK * DT
+    duration: float = DEFAULT_DURATION
 
     def __post_init__(self) -> None:
         if self.controller not in CONTROLLERS:
@@ -131,7 +125,7 @@ class Experiment:
         n = int(round(self.duration / dt))
         return reference(self.reference, self.amplitude, n, int(round(self.step_time / dt)), dt)
 
-    def controller_object(self, limit: float = 200.0, dt: float = DT):
+    def controller_object(self, limit: float = CLAMP, dt: float = DT):
         """The controller as the device's run uses it (:func:`station.control.make_controller`).
 
         Parameters
@@ -161,16 +155,16 @@ class Experiment:
         -------
         dict
             As above: ``amplitude`` in counts, ``step_time_s`` and ``duration_s`` in s (a reference
-            other than a step gives its start, :data:`START_TICK` ticks).
+            other than a step gives its start, :data:`station.rig.DEFAULT_STEP_TICK` ticks).
         """
         return {"controller": self.controller, "kp": self.kp,
                 "reference": {"kind": self.reference, "amplitude": self.amplitude,
-                              "step_time_s": self.step_time if self.reference == "step" else START_TICK * DT,
+                              "step_time_s": self.step_time if self.reference == "step" else DEFAULT_STEP_TICK * DT,
                               "duration_s": self.duration},
                 "label": self.label}
 
 
-def reference(kind: str, amplitude: float, n: int, step_tick: int = START_TICK, dt: float = DT) -> np.ndarray:
+def reference(kind: str, amplitude: float, n: int, step_tick: int = DEFAULT_STEP_TICK, dt: float = DT) -> np.ndarray:
     """u[k] of a reference kind (module docstring), shape (n,).
 
     Parameters
@@ -197,7 +191,7 @@ def reference(kind: str, amplitude: float, n: int, step_tick: int = START_TICK, 
         Unknown kind, or a run too short for it.
     """
     u = np.zeros(n)
-    k0 = START_TICK
+    k0 = DEFAULT_STEP_TICK
     m = n - k0  # ticks that move
     if m < 2:
         raise ValueError(f"{n} ticks: too short a run for a {kind} reference")

@@ -43,6 +43,7 @@ from station.link import LinkLimits
 from station.logged.device import command_quantization
 from station.plant.effects import CANDIDATES
 from station.plant.model import as_model
+from station.rig import CLAMP, DEFAULT_SOFT_LIMIT, DEFAULT_TIMEOUT
 from station.runlog import read_log
 from station.signals import StopSignal, StopSignals
 
@@ -80,8 +81,8 @@ Runner = Callable[[Experiment, Path], ExperimentRun]
 """``runner(experiment, log_path) -> ExperimentRun``: runs an experiment on the device."""
 
 
-def step_runner(port: str, protocol: str = "v1", soft_limit: float = 2048.0, limit: float = 200.0,
-                timeout: float = 0.1, force: bool = False, limits: LinkLimits | None = None,
+def step_runner(port: str, protocol: str = "v1", soft_limit: float = DEFAULT_SOFT_LIMIT, limit: float = CLAMP,
+                timeout: float = DEFAULT_TIMEOUT, force: bool = False, limits: LinkLimits | None = None,
                 baudrate: int | None = None) -> Runner:
     """A runner that runs each experiment as ``station step`` does (:func:`station.experiment.run_step`).
 
@@ -278,8 +279,8 @@ def recheck_candidates(diag, rival_effects: Sequence[str], allowed: Sequence[str
 
 
 def identify(port: str = "sim://", model=None, budget: int = DEFAULT_BUDGET, out_dir: str | Path | None = None,
-             protocol: str = "v1", candidates: Sequence[str] | None = None, soft_limit: float = 2048.0,
-             limit: float = 200.0, timeout: float = 0.1, force: bool = False,
+             protocol: str = "v1", candidates: Sequence[str] | None = None, soft_limit: float = DEFAULT_SOFT_LIMIT,
+             limit: float = CLAMP, timeout: float = DEFAULT_TIMEOUT, force: bool = False,
              progress: Callable[[str], None] | None = None, runner: Runner | None = None,
              limits: LinkLimits | None = None, baudrate: int | None = None) -> Identification:
     """Identify a rig by experiments on the device (module docstring).

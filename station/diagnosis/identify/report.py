@@ -11,7 +11,7 @@ from pathlib import Path
 
 import numpy as np
 
-from station import DT
+from station.rig import DT
 from station.diagnosis.runs.cases import load_case
 from station.diagnosis.answer.report import write_report
 from station.outputs import Transaction

@@ -46,15 +46,11 @@ from station.logged.simulate import simulate_log
 from station.outputs import unique_names
 from station.signals import check_stop
 from station.plant.model import as_model, builtin_models
+from station.rig import SESSIONS_MAX_SAMPLES
 from station.runlog.schema import MAGIC
 
 SESSION_KEY = "session"
 """Our log header's key naming a log's session (else: the folder it is in)."""
-
-MAX_SAMPLES = 20_000
-"""Default bound of the samples of all runs together (40 s of the rig's data). The rig's
-folder (ten usable runs, 66 000 samples) then uses the first 3000 samples (6 s) of its five
-long runs."""
 
 IGNORED_SIGMA = 1e6
 """σ_a (counts) of a run whose accelerometer is not used: its a error weighs nothing."""
@@ -274,7 +270,7 @@ class Loaded:
     samples: tuple = (0, 0)
 
 
-def load_sessions(sessions: Sequence[SessionLogs], max_samples: int = MAX_SAMPLES,
+def load_sessions(sessions: Sequence[SessionLogs], max_samples: int = SESSIONS_MAX_SAMPLES,
                   say: Callable[[str], None] = lambda msg: None) -> Loaded:
     """Read every session's logs as diagnosis cases; set aside what cannot be used, cut the
     longest runs to ``max_samples`` together (module docstring).
@@ -504,7 +500,7 @@ class SessionsDiagnosis:
 
 
 def diagnose_sessions(sessions: Sequence[SessionLogs], model=None, progress: Callable[[str], None] | None = None,
-                      candidates: Sequence[str] | None = None, max_samples: int = MAX_SAMPLES,
+                      candidates: Sequence[str] | None = None, max_samples: int = SESSIONS_MAX_SAMPLES,
                       simulate: Simulator | None = None) -> SessionsDiagnosis:
     """One structure on all sessions' runs, the effects that drift, and each session's values.
 
