@@ -7,10 +7,10 @@ or a new module nobody placed, fails here with the file and line. A package may 
 list its rooms (sub-packages and modules) with their own order, as rows ``| 7.1 |
 `diagnosis.runs/` |``: a room imports only from its own order or below.
 
-Module by module, there is no circle (inside a package too), and no import hides in a
-function unless it is a documented lazy import: ``# lazy: why`` on its line or on the
-line above its block of imports (start-up time: the CLI's parser and a step's first tick
-must not wait for scipy, python-control, matplotlib or numba).
+Module by module, there is no circle (inside a package too), no module is over 600 lines,
+and no import hides in a function unless it is a documented lazy import: ``# lazy: why`` on
+its line or on the line above its block of imports (start-up time: the CLI's parser and a
+step's first tick must not wait for scipy, python-control, matplotlib or numba).
 """
 
 from __future__ import annotations
@@ -278,3 +278,31 @@ def test_hidden_imports_are_found(tmp_path):
                    "    import scipy\n    from scipy import signal\n\n    x = 1\n    import re  # lazy: start-up time\n"
                    "    import math\n")
     assert [h.split(":")[1] for h in hidden_imports(src, tmp_path)] == ["12", "5"]
+
+
+MAX_LINES = 600
+"""Longest module, lines (the developers' guide: small modules, one job each)."""
+
+
+def long_modules(root: Path = PACKAGE, limit: int = MAX_LINES) -> list[str]:
+    """The modules under ``root`` longer than ``limit`` lines, ``path: N lines`` each."""
+    out = []
+    for path in sorted(root.rglob("*.py")):
+        n = len(path.read_text().splitlines())
+        if n > limit:
+            out.append(f"{path.relative_to(root.parent)}: {n} lines")
+    return out
+
+
+def test_long_modules_are_found(tmp_path):
+    pkg = tmp_path / "pkg"
+    pkg.mkdir()
+    (pkg / "short.py").write_text("x = 1\n" * 600)
+    (pkg / "long.py").write_text("x = 1\n" * 601)
+    assert long_modules(pkg) == ["pkg/long.py: 601 lines"]
+
+
+def test_no_module_is_over_600_lines():
+    """Split a module that grows past it by idea (the diagnosis's rooms show how), not in halves."""
+    found = long_modules()
+    assert not found, f"modules over {MAX_LINES} lines:\n" + "\n".join(found)

@@ -14,14 +14,9 @@ import pytest
 
 from station.cli import main
 from station.plant.model import builtin_models
-from station.diagnosis.sessions.drift import PerSession, key
-from station.diagnosis.sessions.diagnose import (
-    ACCEL_DRIFT_COUNTS,
-    cut_lengths,
-    diagnose_sessions,
-    group_sessions,
-    model_file_names,
-)
+from station.diagnosis.sessions.diagnose import ACCEL_DRIFT_COUNTS, diagnose_sessions
+from station.diagnosis.sessions.layout import PerSession, key
+from station.diagnosis.sessions.logs import cut_lengths, group_sessions, model_file_names
 from station.runlog.text import header_lines
 from tests.blind.cases import TOLERANCE, value_error
 from tests.blind.generator import write_case
@@ -115,7 +110,7 @@ def test_max_samples_default_is_the_diagnosis_one():
 
 def test_a_drifting_accelerometer_channel_is_not_used(rig_data):
     from station.diagnosis.runs.cases import load_case
-    from station.diagnosis.sessions.diagnose import accel_drift
+    from station.diagnosis.sessions.logs import accel_drift
 
     # the 2014 log's a creeps from -66 to -26 counts: no accelerometer behind it
     assert accel_drift(load_case(rig_data / "without_accel_01_28_14_test_2.txt")) > ACCEL_DRIFT_COUNTS

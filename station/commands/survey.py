@@ -155,7 +155,8 @@ def run_diagnose(args: argparse.Namespace) -> int:
         exists (without ``--force``) or cannot be written; no usable run, or only one.
     """
     # lazy: start-up time (the diagnosis: scipy)
-    from station.diagnosis.sessions.diagnose import diagnose_sessions, group_sessions, model_file_names
+    from station.diagnosis.sessions.diagnose import diagnose_sessions
+    from station.diagnosis.sessions.logs import group_sessions, model_file_names
     from station.diagnosis.sessions.report import REPORT_FILES, format_sessions
     from station.survey import find_logs, not_a_log
 

@@ -56,7 +56,7 @@ class Evaluator:
     run_effects : callable, optional
         ``run_effects(effects, i) -> effects``: the effects run i is simulated with, given
         the effects asked for (default: the same for every run). Sessions give each run
-        its session's values of the effects that drift (:class:`station.diagnosis.sessions.drift.PerSession`).
+        its session's values of the effects that drift (:class:`station.diagnosis.sessions.layout.PerSession`).
     likelihood : bool
         :meth:`cost` is the maximum-likelihood cost with an unknown error variance per run
         and signal, or (default) the noise-weighted mean Σ ‖e‖²/σ² / Σ N (module docstring).
