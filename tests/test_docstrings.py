@@ -50,6 +50,8 @@ def _callables():
             elif inspect.isclass(obj):
                 record = _is_record(obj)
                 init = obj.__new__ if record and issubclass(obj, tuple) else obj.__dict__.get("__init__")
+                if getattr(obj, "_is_protocol", False):
+                    init = None  # typing's stand-in __init__: a Protocol is a type, never instantiated
                 if init is not None and inspect.isfunction(init):
                     yield f"{mod.__name__}.{name}", init, obj.__doc__, True, record
                 for attr, member in obj.__dict__.items():

@@ -6,7 +6,7 @@
   and compensator files; `reference`: u[k] arrays.
 
 No I/O (a file reference reads a run log through :mod:`station.runlog`). Imports
-:mod:`station.errors`, :mod:`station.rounding` and :mod:`station.runlog` only. See docs/ARCHITECTURE.md
+:mod:`station.errors`, :mod:`station.rig`, :mod:`station.rounding` and :mod:`station.runlog` only. See docs/ARCHITECTURE.md
 "station.control" and DESIGN.md "Compensators".
 """
 

@@ -28,12 +28,8 @@ class Controller(Protocol):
     """What the loop and the simulation call: the station's compensators and any user object.
 
     A structural type (``typing.Protocol``): nothing needs to inherit from it, and the
-    station never checks it with ``isinstance``; callers check ``step`` and ``reset``.
-
-    Parameters
-    ----------
-    *args, **kwargs
-        None: a Protocol is not instantiated (an implementation takes its own).
+    station never checks it with ``isinstance``; callers check ``step`` and ``reset``. It is
+    never instantiated: an implementation takes its own constructor's parameters.
 
     Attributes
     ----------
