@@ -343,8 +343,6 @@ def step_metrics(t, theta, u_final: float) -> StepMetrics:
     A 100-count step answered by a 2 Hz ring that decays at 8 /s, in whole encoder counts:
 
     >>> import numpy as np
-
-from station.rig import STEP_INFO_BAND, THESIS_BAND, THESIS_BAND_FLOOR
     >>> from station.analysis.metrics import step_metrics
     >>> t = np.arange(1000) * 0.002
     >>> theta = np.round(100 * (1 - np.exp(-8 * t) * np.cos(2 * np.pi * 2 * t)))
