@@ -34,7 +34,7 @@ grey-box estimation with physical parameters and bounds, honest validation data)
 
 Before any work, a run given twice (same data rows, as a copy or as a RUN and a
 ``--validate`` run) is refused, and hub-held beam tests are set aside with a note
-(:mod:`~station.diagnosis.runs.inputs`).
+(:mod:`~station.diagnosis.runs.admission`).
 
 Rooms, from the bottom up (a room imports only from the rooms below it; the order is the
 table in docs/ARCHITECTURE.md "station.diagnosis", checked by tests/test_layers.py):
@@ -42,7 +42,7 @@ table in docs/ARCHITECTURE.md "station.diagnosis", checked by tests/test_layers.
 - ``units``: an effect's value with its unit (:func:`~station.diagnosis.units.format_quantity`);
 - ``runs``: a measured run read and simulated as the rig ran it (:class:`RunCase`,
   :func:`load_case`, :func:`simulate_case`), runs given twice refused and hub-held beam tests
-  set aside (``inputs``), the noise-normalised cost (:class:`Evaluator`), the folds (:class:`Fold`);
+  set aside (``admission``), the noise-normalised cost (:class:`Evaluator`), the folds (:class:`Fold`);
 - ``search``: bounded fitting (``bounded``), every candidate alone and the acceptance against
   what noise reaches by luck (``selection``), forward selection with a lookahead
   (``stepwise``), least-squares or likelihood values (``estimator``), the set-up a search runs in

@@ -13,7 +13,7 @@ from station.diagnosis.runs.cases import Simulator, load_case, keep_bias
 from station.diagnosis.runs.cost import Evaluator, calibrate_noise, pooled, relative_gain, rms_gain
 from station.diagnosis.runs.folds import fold_records, make_folds, validation_runs
 from station.diagnosis.honesty.doubt import alternatives, effective_terms, effect_interval, interval_method
-from station.diagnosis.runs.inputs import refuse_repeated_runs, set_aside_beam_tests
+from station.diagnosis.runs.admission import refuse_repeated_runs, set_aside_beam_tests
 from station.diagnosis.answer.records import effect_results, model_predictions, run_reports
 from station.diagnosis.answer.result import Diagnosis
 from station.diagnosis.search.selection import Search, Trial, fit_each_alone

@@ -23,7 +23,7 @@ from pathlib import Path
 import numpy as np
 
 from station.diagnosis.runs.cases import RunCase, load_case
-from station.diagnosis.runs.inputs import data_digest, set_aside_beam_tests
+from station.diagnosis.runs.admission import data_digest, set_aside_beam_tests
 from station.errors import StationError
 from station.logged.audit import accel_drift as audit_accel_drift
 from station.logged.simulate import simulate_log
