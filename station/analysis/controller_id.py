@@ -368,7 +368,13 @@ class LawRows:
 
     def integer_fit(self, recursion: str) -> np.ndarray | None:
         """Coefficients deepest inside the inequalities the logged integers set (a linear
-        program: maximise the margin t with lo + t <= x <= hi - t), None when there are none.
+        program: maximise the margin t with lo - BOUNDARY + t <= x <= hi + BOUNDARY - t), None
+        when there are none.
+
+        The inequalities are widened by :data:`BOUNDARY`: a law with round numbers (Tustin of
+        integer poles and zeros gives rational coefficients) puts some rows' x exactly on a
+        whole count or a half, from both sides, so the set of laws that reproduce the log is
+        that one law and has no inside; the lab's floating-point arithmetic decided those rows.
 
         Parameters
         ----------
@@ -380,6 +386,7 @@ class LawRows:
         if guess is None:
             return None
         lo, hi = self.bounds(recursion)
+        lo, hi = lo - BOUNDARY, hi + BOUNDARY
         p = self.X.shape[1]
         rows_up, rows_lo = np.isfinite(hi), np.isfinite(lo)
         a_ub = np.vstack([np.column_stack([self.X[rows_up], np.ones(rows_up.sum())]),
@@ -389,7 +396,7 @@ class LawRows:
         cost[-1] = -1.0
         bound = 1e3 * max(1.0, float(np.max(np.abs(guess))))
         res = linprog(cost, A_ub=a_ub, b_ub=b_ub, bounds=[(-bound, bound)] * p + [(None, 0.25)], method="highs")
-        if res.status != 0 or -res.fun <= 1e-9:
+        if res.status != 0 or -res.fun <= 0.0:
             return None
         return res.x[:p]
 
@@ -420,7 +427,7 @@ def _law_text(order: int, c: np.ndarray, design: ContinuousDesign | None, dt: fl
 def _law(rows: LawRows, recursion: str, dt: float) -> tuple[np.ndarray, ContinuousDesign | None] | None:
     """A law's coefficients (the nicest numbers that still reproduce every row), and its design."""
     c = rows.least_squares("none") if recursion == "none" else rows.integer_fit(recursion)
-    if c is None or not rows.reproduces(c, recursion):
+    if c is None or not rows.reproduces(c, recursion, 0.0 if recursion == "none" else BOUNDARY):
         return None
     order = rows.order
     if order == 0:  # the gain with the fewest digits among those that reproduce the log
@@ -444,6 +451,8 @@ def _law(rows: LawRows, recursion: str, dt: float) -> tuple[np.ndarray, Continuo
         nudged = exact + step * (c - exact)
         if rows.reproduces(nudged, recursion):
             return nudged, design
+    if recursion != "none" and rows.reproduces(exact, recursion, BOUNDARY):
+        return exact, design  # rows on a boundary from both sides: the replay decides
     return c, None
 
 
@@ -510,11 +519,32 @@ def infer_controller(u, theta, v, a=None, dt: float = 0.002, rig_limit: float = 
                                            extra, recursion, name)
                     except ValueError:
                         continue
-                    hit = _check(ctl, u, theta, a, v, _law_text(order, c, design, dt, recursion, limit, rig_limit),
-                                 alignments, design, prefer)
+                    law = _law_text(order, c, design, dt, recursion, limit, rig_limit)
+                    hit = _check(ctl, u, theta, a, v, law, alignments, design, prefer)
                     if hit is not None and hit.max_abs_dv <= TOLERANCE:
                         return hit
+                    ties = _ties(rows, c, recursion)
+                    if ties:
+                        return IdentifiedController(ctl, d, 0.0, v.copy(), f"{law}, {ties} row(s) on a quantization "
+                                                    f"boundary as the lab's arithmetic decided them", design, (d,))
     return None
+
+
+def _ties(rows: LawRows, c: np.ndarray, recursion: str) -> int:
+    """How many rows an integer law reproduces only as the lab's floating-point arithmetic
+    decided them (x within :data:`BOUNDARY` of a quantization boundary), when it reproduces
+    every other row with the logged integers as its history; 0 when it does not (or needs none).
+
+    With its history the stored integer, a law that gives every logged v from the logged
+    history gives the log when run on its own: our replay differs only where the last bit
+    of the arithmetic (the order of its sums, the discretization's rounding) falls on the
+    other side of a boundary, and from there on through its own history.
+    """
+    if recursion == "none" or not rows.reproduces(c, recursion, BOUNDARY):
+        return 0
+    x = rows.X @ c
+    lo, hi = rows.bounds(recursion)
+    return int(np.count_nonzero((np.abs(x - lo) <= BOUNDARY) | (np.abs(x - hi) <= BOUNDARY)))
 
 
 PID_INTEGRALS = {
