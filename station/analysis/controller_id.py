@@ -36,6 +36,7 @@ Control of Dynamic Systems, ch. 6) to try against the data.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from fractions import Fraction
 
 import numpy as np
 
@@ -427,7 +428,7 @@ def _law_text(order: int, c: np.ndarray, design: ContinuousDesign | None, dt: fl
 def _law(rows: LawRows, recursion: str, dt: float) -> tuple[np.ndarray, ContinuousDesign | None] | None:
     """A law's coefficients (the nicest numbers that still reproduce every row), and its design."""
     c = rows.least_squares("none") if recursion == "none" else rows.integer_fit(recursion)
-    if c is None or not rows.reproduces(c, recursion, 0.0 if recursion == "none" else BOUNDARY):
+    if c is None or not (rows.reproduces(c, recursion) or _ties(rows, c, recursion)):
         return None
     order = rows.order
     if order == 0:  # the gain with the fewest digits among those that reproduce the log
@@ -499,7 +500,7 @@ def infer_controller(u, theta, v, a=None, dt: float = 0.002, rig_limit: float = 
     recursions = ("none", *STORED) if whole_counts(v) else ("none",)
     for order in range(MAX_ORDER + 1):
         for d in alignments:
-            if d < 0 or np.any(v[:d] != 0):  # nothing was computed before the first sample
+            if d < 0:
                 continue
             e = _errors(u, theta, d)
             for limit in _limits(v, rig_limit):
@@ -544,7 +545,16 @@ def _ties(rows: LawRows, c: np.ndarray, recursion: str) -> int:
         return 0
     x = rows.X @ c
     lo, hi = rows.bounds(recursion)
-    return int(np.count_nonzero((np.abs(x - lo) <= BOUNDARY) | (np.abs(x - hi) <= BOUNDARY)))
+    near = (np.abs(x - lo) <= BOUNDARY) | (np.abs(x - hi) <= BOUNDARY)
+    for k in np.flatnonzero(near):
+        # a row whose exact value is a boundary (a whole gain times whole counts) has no last
+        # bit to decide it: the quantization's own rule does, and the logged v must follow it
+        exact = sum(Fraction(float(ci)) * Fraction(float(xi)) for ci, xi in zip(c, rows.X[k]))
+        if exact in (lo[k], hi[k]):
+            near[k] = False
+    if np.any((rows.predict(c, recursion) != rows.v) & ~near):
+        return 0
+    return int(np.count_nonzero(near))
 
 
 PID_INTEGRALS = {

@@ -143,14 +143,19 @@ def detect_alignment(controller, u, theta, a, v, alignments=ALIGNMENTS, skipped=
     Returns
     -------
     AlignmentFit
-        The best alignment (the first tried on a tie), its max |dv| and the replayed v;
-        unpacks as ``(d, max_abs_dv, v_replayed)``.
+        The best alignment (the first tried on a tie), its max |dv| over rows k >= d (the
+        first d rows' commands came from samples before the log: 0 on a run logged from its
+        start, the earlier run's on a copy cut from one) and the replayed v; unpacks as
+        ``(d, max_abs_dv, v_replayed)``.
     """
     v = np.asarray(v, dtype=float)
     best = None
     for d in alignments:
         v_hat, _ = replay_commands(controller, u, theta, a, d, skipped)
-        err = float(np.max(np.abs(v_hat - v)))
+        # rows k < d were computed from samples the log does not hold (0 on a run logged from
+        # its start; a copy cut from a longer run keeps their commands): not judged
+        judged = slice(min(max(int(d), 0), max(v.size - 1, 0)), None)
+        err = float(np.max(np.abs(v_hat[judged] - v[judged])))
         if best is None or err < best.max_abs_dv:
             best = AlignmentFit(d, err, v_hat)
     return best
