@@ -18,11 +18,15 @@ import numpy as np
 import pytest
 
 from station.compare import compare_run
+from station.diagnosis.runs.cases import load_case
+from station.diagnosis.runs.inputs import set_aside_copies
 from station.logged import LoggedRun
 from station.logged.audit import ACCEL_BASELINE_CLAIM, ACCEL_CLAIM
+from station.logged.copies import Copy, copy_between
 from station.logged.start import START_CLAIM, ZERO_CLAIM
 from station.plant.model import load_model
 from station.replay import format_report, replay
+from station.runlog import read_log
 from tests.blind.archive import (write_beam_test, write_copy, write_cut, write_unplugged, write_unpowered,
                                  write_unzeroed)
 
@@ -136,3 +140,28 @@ def test_a_short_pulse_beside_friction_was_applied_and_the_model_parts_later(tmp
     assert run.audit.lines() == []
     part = run.simulate(nominal).parting
     assert part.followed and part.t_part is not None and abs(part.end_model) > abs(part.end_measured)
+
+
+def test_cut_and_downsampled_copies_of_one_run_are_found(tmp_path):
+    # the lab's SFLR_OL_pulse_test_no_decline_trunc, _trunc_trunc (its rows from 37 on) and
+    # _trunc_trunc_downsampled (every 2nd): one experiment in three files
+    full, _ = write_cut(tmp_path / "a", 3, "open_loop_pulses", 0)
+    cut, _ = write_cut(tmp_path / "b", 3, "open_loop_pulses", 37)
+    down, _ = write_copy(tmp_path / "c", 3, 2, 37)
+    other, _ = write_cut(tmp_path / "d", 4, "open_loop_pulses", 0)  # another run of the same test
+    logs = {p: read_log(p) for p in (full, cut, down, other)}
+    assert copy_between(logs[full], logs[cut]) == (1, Copy(37, 1))
+    assert copy_between(logs[down], logs[full]) == (0, Copy(37, 2))
+    assert copy_between(logs[cut], logs[down]) == (1, Copy(0, 2))
+    assert all(copy_between(logs[other], logs[p]) is None for p in (full, cut, down))
+
+
+def test_a_diagnosis_refuses_a_copy_in_one_line_and_sessions_set_it_aside(tmp_path):
+    full, _ = write_cut(tmp_path / "s", 3, "open_loop_pulses", 0)
+    down, _ = write_copy(tmp_path / "s", 3, 2, 37)
+    out = subprocess.run([sys.executable, "-m", "station", "diagnose", str(full), str(down), "--quiet"],
+                         capture_output=True, text=True, timeout=300)
+    assert out.returncode == 2 and len(out.stderr.strip().splitlines()) == 1
+    assert f"{down} is a copy of RUN {full} (its rows from row 37 on, every 2nd)" in out.stderr
+    kept, notes = set_aside_copies([("s", [load_case(down), load_case(full)])])
+    assert [c.path for c in kept[0][1]] == [str(full)] and len(notes) == 1 and down.name in notes[0]

@@ -36,7 +36,7 @@ from station.diagnosis.sessions.drift import (
     session_axes,
 )
 from station.diagnosis.runs.folds import LEAVE_ONE_OUT, make_folds
-from station.diagnosis.runs.inputs import data_digest, set_aside_beam_tests
+from station.diagnosis.runs.inputs import data_digest, set_aside_beam_tests, set_aside_copies
 from station.diagnosis.search.workbench import Bench, nominal_trial, workbench
 from station.errors import StationError
 from station.logged.audit import ACCEL_DRIFT_COUNTS, ACCEL_DRIFT_WINDOW_S
@@ -325,6 +325,8 @@ def load_sessions(sessions: Sequence[SessionLogs], max_samples: int = MAX_SAMPLE
             per_session.append((s.name, [cases[i] for i in kept]))
         else:
             notes.append(f"{s.name}: no usable run; the session is left out")
+    per_session, copies = set_aside_copies(per_session)
+    notes += copies
     if not per_session:
         why = "; ".join(n for n in notes if "no usable run" not in n)
         raise StationError("survey --diagnose: no usable run in " + ", ".join(s.name for s in sessions)
