@@ -27,8 +27,9 @@ from station.logged.start import START_CLAIM, ZERO_CLAIM
 from station.plant.model import load_model
 from station.replay import format_report, replay
 from station.runlog import read_log
-from tests.blind.archive import (write_beam_test, write_copy, write_cut, write_unplugged, write_unpowered,
-                                 write_unzeroed)
+from tests.blind.archive import (cut_log, write_beam_test, write_copy, write_cut, write_unplugged,
+                                 write_unpowered, write_unzeroed)
+from tests.blind.audit import write_audit_case
 
 
 @pytest.fixture(scope="module")
@@ -165,3 +166,29 @@ def test_a_diagnosis_refuses_a_copy_in_one_line_and_sessions_set_it_aside(tmp_pa
     assert f"{down} is a copy of RUN {full} (its rows from row 37 on, every 2nd)" in out.stderr
     kept, notes = set_aside_copies([("s", [load_case(down), load_case(full)])])
     assert [c.path for c in kept[0][1]] == [str(full)] and len(notes) == 1 and down.name in notes[0]
+
+
+@pytest.mark.parametrize("case, seed, start", [
+    ("session", 4, 700), ("session", 6, 300), ("int:trunc_d0", 3, 900), ("int:round_d1", 2, 500),
+    ("lie:lead_pole", 1, 400), ("honest:lead_int", 0, 1200), ("session", 0, 300),
+])
+def test_a_lead_cut_from_a_longer_run_is_found_with_its_memory_taken_as_logged(tmp_path, case, seed, start):
+    # The third session's lead on the stored integer, cut mid-run: its first rows' commands
+    # remember rows the copy lacks; with that memory taken as logged the law reproduces every
+    # later v, and the cut is said (the hub may be at rest there: a settled step)
+    src, hidden = write_audit_case(tmp_path, case, seed)
+    run = LoggedRun.from_path(cut_log(src, tmp_path / f"cut_{src.name}", start))
+    assert run.reproduced and run.closed and run.identified.cut
+    assert (run.alignment == hidden.alignment or hidden.alignment in run.identified.alignments)
+    assert _verdicts(run, START_CLAIM) == ["contradicted"] and _verdicts(run, ZERO_CLAIM) == []
+    assert run.step_metrics() is None
+    if hidden.reference == "sweep" and run.source != "header":  # a settled step, a 5 Hz sine do not pin it
+        np.testing.assert_allclose(run.controller.spec["design"]["den_s"], hidden.den_s, rtol=1e-9)
+        np.testing.assert_allclose(run.controller.spec["design"]["num_s"], hidden.num_s, rtol=1e-9)
+
+
+def test_the_thesis_lead_cut_mid_step_replays_from_the_header(tmp_path):
+    path, hidden = write_cut(tmp_path, 0, "lead_step", 60, {"coulomb_friction": 6.0})
+    run = LoggedRun.from_path(path)
+    assert hidden.moving_at_start and run.source == "header" and run.reproduced and run.alignment == 1
+    assert _verdicts(run, START_CLAIM) == ["contradicted"]

@@ -136,7 +136,7 @@ PREFERRED_ALIGNMENT = 1
 
 
 def fit_alignments(controller, u, theta, a, v, alignments=ALIGNMENTS, skipped=None,
-                   prefer: int | None = PREFERRED_ALIGNMENT) -> tuple[AlignmentFit | None, tuple[int, ...]]:
+                   prefer: int | None = PREFERRED_ALIGNMENT, primed: int = 0) -> tuple[AlignmentFit | None, tuple[int, ...]]:
     """A controller replayed over a log at each alignment: the best fit, and every alignment
     at which it reproduces every logged v (to :data:`TOLERANCE`).
 
@@ -150,6 +150,9 @@ def fit_alignments(controller, u, theta, a, v, alignments=ALIGNMENTS, skipped=No
     prefer : int or None
         The alignment chosen when several reproduce the log (a log whose θ seldom changes
         between rows cannot tell them apart); None: the first.
+    primed : int
+        Rows taken into the controller's history as logged (a copy cut from a longer run:
+        :func:`station.control.rerun.replay_commands`).
 
     Returns
     -------
@@ -157,7 +160,8 @@ def fit_alignments(controller, u, theta, a, v, alignments=ALIGNMENTS, skipped=No
         The preferred reproducing alignment's fit, else the closest (the first on a tie);
         None when no alignment was tried.
     """
-    fits = [f for d in alignments if (f := detect_alignment(controller, u, theta, a, v, (d,), skipped)) is not None]
+    fits = [f for d in alignments if (f := detect_alignment(controller, u, theta, a, v, (d,), skipped, primed))
+            is not None]
     if not fits:
         return None, ()
     exact = tuple(f.alignment for f in fits if f.max_abs_dv <= TOLERANCE)
@@ -167,9 +171,9 @@ def fit_alignments(controller, u, theta, a, v, alignments=ALIGNMENTS, skipped=No
 
 
 def _check(controller, u, theta, a, v, law: str, alignments, design=None,
-           prefer: int | None = PREFERRED_ALIGNMENT) -> IdentifiedController | None:
+           prefer: int | None = PREFERRED_ALIGNMENT, primed: int = 0) -> IdentifiedController | None:
     """``controller`` at its best alignment (:func:`fit_alignments`)."""
-    fit, exact = fit_alignments(controller, u, theta, a, v, alignments, prefer=prefer)
+    fit, exact = fit_alignments(controller, u, theta, a, v, alignments, prefer=prefer, primed=primed)
     return None if fit is None else IdentifiedController(controller, *fit, law, design, exact)  # None: no alignment tried
 
 
@@ -193,7 +197,7 @@ def _variants(controller, v):
 
 
 def variant_of(controller, u, theta, a, v, alignments=ALIGNMENTS, skipped=None,
-               prefer: int | None = PREFERRED_ALIGNMENT):
+               prefer: int | None = PREFERRED_ALIGNMENT, cut: bool = False):
     """The variant of ``controller`` that reproduces a log best, its fit and every alignment
     at which it reproduces the log (:func:`fit_alignments`).
 
@@ -205,6 +209,9 @@ def variant_of(controller, u, theta, a, v, alignments=ALIGNMENTS, skipped=None,
     skipped : array_like of bool, optional
     prefer : int or None
         As :func:`fit_alignments`.
+    cut : bool
+        The log is a copy cut from a longer run: the law's first rows of history are taken
+        as logged (:func:`fit_alignments` ``primed``).
 
     Returns
     -------
@@ -216,7 +223,8 @@ def variant_of(controller, u, theta, a, v, alignments=ALIGNMENTS, skipped=None,
     """
     best = None
     for candidate in _variants(controller, v):
-        fit, exact = fit_alignments(candidate, u, theta, a, v, alignments, skipped, prefer)
+        primed = getattr(candidate, "history", 0) if cut else 0
+        fit, exact = fit_alignments(candidate, u, theta, a, v, alignments, skipped, prefer, primed)
         if fit is not None and (best is None or fit.max_abs_dv < best[1].max_abs_dv):
             best = (candidate, fit, exact)
         if best is not None and best[1].max_abs_dv <= TOLERANCE:
@@ -239,10 +247,13 @@ class LawRows:
         0 (P) to :data:`MAX_ORDER`.
     limit : float
         The clamp, DAC counts.
+    skip : int
+        Rows from d on left out (a copy cut from a longer run: their lags reach before its
+        first row).
     """
 
-    def __init__(self, e: np.ndarray, v: np.ndarray, d: int, order: int, limit: float):
-        rows = np.arange(d, v.size)
+    def __init__(self, e: np.ndarray, v: np.ndarray, d: int, order: int, limit: float, skip: int = 0):
+        rows = np.arange(d + skip, v.size)
         lag = lambda x, j: np.where(rows - j >= 0, x[np.maximum(rows - j, 0)], 0.0)  # noqa: E731
         cols = [lag(e, i) for i in range(order + 1)] + [-lag(v, j) for j in range(1, order + 1)]
         self.X = np.column_stack(cols)
@@ -458,7 +469,8 @@ def _law(rows: LawRows, recursion: str, dt: float) -> tuple[np.ndarray, Continuo
 
 
 def infer_controller(u, theta, v, a=None, dt: float = 0.002, rig_limit: float = 200.0,
-                     alignments=(0, 1), prefer: int | None = PREFERRED_ALIGNMENT) -> IdentifiedController | None:
+                     alignments=(0, 1), prefer: int | None = PREFERRED_ALIGNMENT,
+                     cut: bool = False) -> IdentifiedController | None:
     """Identify the controller that produced a log's commands from u, θ and v.
 
     Parameters
@@ -476,6 +488,9 @@ def infer_controller(u, theta, v, a=None, dt: float = 0.002, rig_limit: float = 
         Computational delays tried, samples.
     prefer : int or None
         The alignment chosen when the law reproduces the log at several (:func:`fit_alignments`).
+    cut : bool
+        The log is a copy cut from a longer run: a law of order m is fitted and judged from
+        its m-th row on, its history before taken as logged.
 
     Returns
     -------
@@ -504,7 +519,7 @@ def infer_controller(u, theta, v, a=None, dt: float = 0.002, rig_limit: float = 
                 continue
             e = _errors(u, theta, d)
             for limit in _limits(v, rig_limit):
-                rows = LawRows(e, v, d, order, limit)
+                rows = LawRows(e, v, d, order, limit, order if cut else 0)
                 for recursion in recursions:
                     found = _law(rows, recursion, dt)
                     if found is None:
@@ -521,7 +536,7 @@ def infer_controller(u, theta, v, a=None, dt: float = 0.002, rig_limit: float = 
                     except ValueError:
                         continue
                     law = _law_text(order, c, design, dt, recursion, limit, rig_limit)
-                    hit = _check(ctl, u, theta, a, v, law, alignments, design, prefer)
+                    hit = _check(ctl, u, theta, a, v, law, alignments, design, prefer, order if cut else 0)
                     if hit is not None and hit.max_abs_dv <= TOLERANCE:
                         return hit
                     ties = _ties(rows, c, recursion)

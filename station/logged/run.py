@@ -143,7 +143,7 @@ class LoggedRun:
         there (:func:`station.logged.start.start_claims`)."""
         d = self.data
         tip = not any(c.header == ACCEL_CLAIM for c in self._accel_claims)
-        return start_claims(d["theta"], d["a"], d["u"], d["v"], self.dt, self.closed, tip)
+        return start_claims(d["theta"], d["a"], d["u"], d["v"], self.dt, self.closed, tip, self.identified.cut)
 
     @property
     def audit_lines(self) -> list[str]:

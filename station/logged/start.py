@@ -73,7 +73,7 @@ def start_window(u, v) -> int:
     return min(first) if first else 0
 
 
-def start_claims(theta, a, u, v, dt: float, closed: bool, accel_is_tip: bool) -> Start:
+def start_claims(theta, a, u, v, dt: float, closed: bool, accel_is_tip: bool, remembered: bool = False) -> Start:
     """Check that the run starts at rest at t = 0, and where θ's zero is.
 
     Under the first command (:func:`start_window`, :data:`START_WINDOW_S` at most) a hub at rest
@@ -96,6 +96,10 @@ def start_claims(theta, a, u, v, dt: float, closed: bool, accel_is_tip: bool) ->
         Whether the run was closed loop.
     accel_is_tip : bool
         Whether a reads the tip (its swings count).
+    remembered : bool
+        The controller's law reproduces the log only with its first rows of memory taken as
+        logged (:attr:`station.logged.controller.ControllerId.cut`): a copy cut from a longer
+        run, its hub perhaps at rest.
 
     Returns
     -------
@@ -115,7 +119,13 @@ def start_claims(theta, a, u, v, dt: float, closed: bool, accel_is_tip: bool) ->
     span = f"the first {w} rows ({w * dt:g} s, before the command first changes)"
     early = not np.all(theta[:START_MIN_ROWS] == th0)  # sooner than any command of row 0 moves the hub
     claims = []
-    if (not still and (idle or early)) or swing > ACCEL_QUIET_COUNTS:
+    if remembered and still and swing <= ACCEL_QUIET_COUNTS:
+        claims.append(AuditClaim(
+            "reference", START_CLAIM, "cut from a longer run (at rest, the controller's memory not)", "contradicted",
+            f"the controller's law reproduces the logged v only with its first rows of memory taken as logged (the "
+            f"earlier run's); θ keeps one count over {span}"))
+        at_rest = False
+    elif (not still and (idle or early)) or swing > ACCEL_QUIET_COUNTS:
         what = []
         if not still:
             what.append(f"θ moves {np.ptp(theta[:w]):g} counts" + (f" (within its first {START_MIN_ROWS} rows: sooner "

@@ -159,12 +159,33 @@ def write_beam_test(folder: Path, seed: int, event: str = "release", baseline: s
 
 # --- cut, downsampled and cut-down copies of ordinary runs ---------------------------------
 
+KINDS = {"open_loop_pulses": "open-loop", "p_step": "p", "lead_step": "lead"}
+"""The runs :func:`write_cut` cuts (the thesis's), by the blind rig's controller kind."""
+
+
 def _run(kind: str, seed: int, effects: dict | None = None, n: int = 1000) -> tuple[str, np.ndarray, Run]:
-    """A run of the blind rig: "open_loop_pulses" or "p_step" (the thesis's), 2 s."""
+    """A run of the blind rig: one of :data:`KINDS` (the thesis's), 2 s."""
     u = reference(kind, n)
-    sim = simulate("open-loop" if kind == "open_loop_pulses" else "p", u, dict(effects or {}),
-                   np.random.default_rng([seed, 2610]))
+    sim = simulate(KINDS[kind], u, dict(effects or {}), np.random.default_rng([seed, 2610]))
     return kind, u, sim
+
+
+def _cut_text(text: str, start: int) -> str:
+    lines = text.splitlines()
+    rig = lines[0].startswith("#")  # the rig's "#" layout (t, n, ...), else the 2014 one (a name line; t, ...)
+    head = [x for x in lines if x.startswith("#")] if rig else lines[:1]
+    rows = [x.split("\t") for x in lines[len(head):]][start:]
+    t0 = float(rows[0][0])
+    out = [[_num(float(r[0]) - t0)] + ([str(k)] + r[2:] if rig else r[1:]) for k, r in enumerate(rows)]
+    return "\n".join(head + ["\t".join(r) for r in out]) + "\n"
+
+
+def cut_log(src: Path, dst: Path, start: int) -> Path:
+    """A log of the rig's ``#`` layout (columns t, n, ...) or its 2014 layout (a line of names;
+    t first) cut from row ``start`` on: t re-zeroed, n renumbered, every other column as
+    logged (the lab's ``_trunc`` copies)."""
+    Path(dst).write_text(_cut_text(Path(src).read_text(), start))
+    return Path(dst)
 
 
 def write_cut(folder: Path, seed: int, kind: str = "open_loop_pulses", start: int = 80,
@@ -176,19 +197,20 @@ def write_cut(folder: Path, seed: int, kind: str = "open_loop_pulses", start: in
     ----------
     folder : Path
     seed : int
-    kind : {"open_loop_pulses", "p_step"}
+    kind : {"open_loop_pulses", "p_step", "lead_step"}
     start : int
-        The first row kept (open-loop pulses: +100 over rows 20-69; a P step at row 50).
+        The first row kept (open-loop pulses: +100 over rows 20-69; a P step at row 50; the
+        lead's step at row 10).
     effects : dict, optional
         Hidden effects of the blind rig (e.g. Coulomb friction).
     """
     kind, u, sim = _run(kind, seed, effects)
-    s = slice(start, None)
     moving = bool(np.any(np.diff(sim.theta_true[max(start - 2, 0):start + 3]) != 0))
     folder = Path(folder)
     folder.mkdir(parents=True, exist_ok=True)
     path = folder / f"{kind}_{seed}_from_{start}_trunc.txt"
-    path.write_text(_rig_text(sim.u[s], sim.v[s], sim.theta[s], sim.a[s], head=tuple(header(kind))))
+    path.write_text(_cut_text(format_run(kind, sim) if kind != "open_loop_pulses" else
+                              _rig_text(sim.u, sim.v, sim.theta, sim.a, head=tuple(header(kind))), start))
     return path, Hidden("cut", moving, float(sim.theta[start]), DT, extra={"start": start, "run": kind})
 
 
@@ -255,5 +277,5 @@ def first_mode() -> tuple[float, float]:
     return held_first_mode(p, 4, beta_for_damping(p, 0.005, 4))
 
 
-__all__ = ["Hidden", "first_mode", "held_beam", "write_beam_test", "write_copy", "write_cut", "write_unplugged",
+__all__ = ["Hidden", "cut_log", "first_mode", "held_beam", "write_beam_test", "write_copy", "write_cut", "write_unplugged",
            "write_unpowered", "write_unzeroed"]
