@@ -112,8 +112,9 @@ def compare_run(path, plant) -> RunComparison:
     Raises
     ------
     StationError
-        Unreadable log, a log that does not name its controller or has no rows, or lacks a
-        column the simulation needs (:meth:`station.logged.LoggedRun.check_columns`).
+        Unreadable log, a log without rows, or one that lacks a column the simulation needs
+        (:meth:`station.logged.LoggedRun.check_columns`). A log whose controller is not known
+        is driven by its logged v, as replay does.
     """
     run = LoggedRun.from_path(path)
     log, data = run.log, run.data
@@ -121,8 +122,7 @@ def compare_run(path, plant) -> RunComparison:
     if len(log) == 0:  # the log's own notes say why: no controller to ask for
         raise StationError(f"{path}: the log has no rows; nothing to compare")
     controller, notes = run.controller, run.notes
-    if controller is None:
-        raise StationError(f"{path}: the log does not name its controller; cannot simulate it")
+    name = "none" if controller is None else controller.name  # none: the model is driven by the logged v
     if run.closed:
         clamp = "no clamp" if controller.limit is None else f"clamp ±{controller.limit:g}"
         notes.append(f"alignment {run.alignment} detected: the replay reproduces the logged v to "
@@ -130,21 +130,23 @@ def compare_run(path, plant) -> RunComparison:
     step = run.reference.amplitude if run.closed else None  # station.logged.reference: the one definition of a step
     if run.held is not None:
         notes.append(f"{run.held_note}; `station replay` analyzes the beam's free vibration after the release")
-        return RunComparison(str(path), controller.name, step, run.step_metrics(), None, None, None,
+        return RunComparison(str(path), name, step, run.step_metrics(), None, None, None,
                              {"theta": None, "accel": None}, data, None, notes, source=source, outcome=log.outcome,
                              controller_source=run.source, audit=run.audit)
     sim = run.simulate(plant)
     pred, fits = sim.prediction, sim.fit_pct
     notes.append(f"model: driven by {sim.how}")
+    if sim.parting is not None and sim.parting.t_follow is not None and not sim.parting.followed:
+        notes.append(sim.parting.line())
     rig = model = exp = fem = None
     if step is not None:
         rig = run.step_metrics()
         model = run.step_metrics(pred["theta"], pred["t"])
-        thesis_kp = controller.name != "p" or getattr(controller, "spec", {}).get("kp") == 2.0
-        if source == "rig" and THESIS_STEPS.get(controller.name) == step and thesis_kp:
-            (eo, es), (fo, fs) = THESIS_TABLE[controller.name]
+        thesis_kp = name != "p" or getattr(controller, "spec", {}).get("kp") == 2.0
+        if source == "rig" and THESIS_STEPS.get(name) == step and thesis_kp:
+            (eo, es), (fo, fs) = THESIS_TABLE[name]
             exp, fem = StepMetrics(eo, es), StepMetrics(fo, fs)
-    return RunComparison(str(path), controller.name, step, rig, model, exp, fem, fits, data, pred, notes,
+    return RunComparison(str(path), name, step, rig, model, exp, fem, fits, data, pred, notes,
                          source=source, outcome=log.outcome, controller_source=run.source, audit=run.audit)
 
 

@@ -221,9 +221,12 @@ def _model(report: ReplayReport, run: LoggedRun, model) -> None:
     report.prediction = sim.prediction
     report.n_elements = model.n_elements
     report.fit_pct = fits = sim.fit_pct
-    if fits["theta"] is not None and fits["theta"] < -100.0:
-        report.notes.append(f"the model's theta diverges from the log (fit {fits['theta']:.3g} %): "
-                            "was the logged v really applied (motor powered, no hold)?")
+    part = sim.parting
+    if part is not None and part.t_follow is not None and not part.followed:
+        report.notes.append(part.line())
+    elif fits["theta"] is not None and fits["theta"] < -100.0:
+        why = "" if part is None else f": {part.line()}"
+        report.notes.append(f"the model's theta diverges from the log (fit {fits['theta']:.3g} %){why}")
     effects = ", ".join(f"{k} = {v:g}" for k, v in model.effects) or "no effects"
     report.notes.append(f"model: {model.name} (FEM plant, {model.n_elements} elements, {effects}), "
                         f"driven by {sim.how}")

@@ -18,6 +18,7 @@ import pytest
 from station.logged import LoggedRun
 from station.logged.sensors import SIGN_COSINE, SensorEvidence, decide_faults, sensor_evidence
 from station.plant.model import load_model
+from station.replay import replay
 from tests.blind.cases import case_effects
 from tests.blind.generator import write_case
 
@@ -173,8 +174,10 @@ def test_the_labs_third_session_in_miniature(tmp_path):
                                 effects={"accel_gain": -1.2, "coulomb_friction": 6.0})
         paths.append(tmp_path / f"session_{seed}_SLFR_RTP_OL_Test.txt")
         paths[-1].write_text(format_audit_run(c, simulate_audit_case(c, seed)))
+    saved = tmp_path / "session.toml"
     out = subprocess.run([sys.executable, "-m", "station", "diagnose", *map(str, paths), "--json",
-                          str(tmp_path / "d.json")], capture_output=True, text=True, timeout=900)
+                          str(tmp_path / "d.json"), "--report", str(tmp_path / "rep"), "--save-model", str(saved)],
+                         capture_output=True, text=True, timeout=900)
     assert out.returncode == 0, out.stderr[-2000:]
     lines = out.stdout.splitlines()
     assert all(x.startswith("audit: session_") and "header: open loop; data: " in x for x in lines[:3])
@@ -185,3 +188,18 @@ def test_the_labs_third_session_in_miniature(tmp_path):
     found = dict(d["extended_model"]["effects"])
     assert abs(found["accel_gain"] + 1.2) <= 0.25 * 1.2 and abs(found["coulomb_friction"] - 6.0) <= 0.25 * 6.0
     assert d["gain_pct"] > 50.0
+    # the report leads the same way: the contradictions, the sensor fault, then the cause
+    page = (tmp_path / "rep" / "report.html").read_text()
+    where = [page.find(x) for x in ("header: open loop; data: ", "the accelerometer reads the other way", "Cause")]
+    assert -1 not in where and where == sorted(where)
+    # the saved model carries the fault and the friction; a fourth run of the session, unseen, is
+    # predicted by it through --model (its a with the accelerometer's sign)
+    model = load_model(saved)
+    assert dict(model.effects)["accel_gain"] < 0 and "coulomb_friction" in dict(model.effects)
+    c = dataclasses.replace(draw_case("session", 3), num_s=base.num_s, den_s=base.den_s,
+                            design_text=base.design_text, limit=base.limit,
+                            effects={"accel_gain": -1.2, "coulomb_friction": 6.0})
+    fourth = tmp_path / "session_3_SLFR_RTP_OL_Test.txt"
+    fourth.write_text(format_audit_run(c, simulate_audit_case(c, 3)))
+    fits = {name: replay(fourth, model=name).fit_pct for name in ("tmm-fit", str(saved))}
+    assert fits[str(saved)]["theta"] > 90.0 and fits[str(saved)]["accel"] > 80.0 > fits["tmm-fit"]["accel"]

@@ -212,7 +212,9 @@ def analyze_beam_test(t, a, dt: float, band: tuple[float, float] = BAND_HZ) -> B
     t : array_like, shape (N,)
         Time, s (evenly spaced by ``dt``).
     a : array_like, shape (N,)
-        Tip accelerometer, ADC counts (any offset).
+        Tip accelerometer, ADC counts (any offset; a baseline that drifts, or jumps at a
+        strike and creeps back, is removed: before the release its median, after it a cubic
+        trend).
     dt : float
         Sample time, s.
     band : (float, float)
@@ -241,8 +243,16 @@ def analyze_beam_test(t, a, dt: float, band: tuple[float, float] = BAND_HZ) -> B
     if not (0 < band[0] < band[1] < 0.5 / dt):
         return BeamTest(None, None, None, None,
                         notes=(f"the {band[0]:g}-{band[1]:g} Hz band does not fit below the Nyquist frequency",))
-    centered = a - np.median(a)
-    release = int(np.argmax(np.abs(centered)))
+    # The release (or strike) is the largest jump between two samples: a baseline that is not
+    # zeroed or drifts (a stab) moves slowly. Before it a is centred on its median; after it
+    # on a cubic trend: an accelerometer's baseline that jumps at a strike and creeps back
+    # leaves the band-pass no step to ring on, and no cubic over seconds follows the mode.
+    release = int(np.argmax(np.abs(np.diff(a)))) + 1 if a.size > 1 else 0
+    centered = np.empty_like(a)
+    centered[:release] = a[:release] - (np.median(a[:release]) if release else 0.0)
+    tail = t[release:] - t[release]
+    trend = np.polyval(np.polyfit(tail, a[release:], min(3, max(tail.size - 1, 0))), tail) if tail.size else tail
+    centered[release:] = a[release:] - trend
     start = release + int(round(SKIP_S / dt))
     y_all = band_pass(centered, dt, band)
     y, tw = y_all[start:], t[start:] - t[start] if start < t.size else t[:0]

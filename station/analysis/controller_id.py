@@ -40,20 +40,15 @@ from dataclasses import dataclass
 import numpy as np
 
 from station.analysis.continuous_design import ContinuousDesign, nicest_between, recognize
+from station.analysis.law_rows import BOUNDARY, TOLERANCE, LawRows, tie_rows
 from station.control import DAC_LIMIT, Compensator, DiscreteTF, OpenLoop  # DAC_LIMIT: the clamp assumed when v exceeds the rig's ±200
 from station.control.rerun import ALIGNMENTS, AlignmentFit, detect_alignment
 from station.rig import CLAMP, DT
 
-TOLERANCE = 1e-6
-"""max |v_replayed - v_logged| (DAC counts) a law must meet to be accepted."""
 
 MAX_ORDER = 3
 """Highest order of the linear compensators tried."""
 
-BOUNDARY = 1e-9
-"""How close (counts) x may come to an integer recursion's interval and still count as in
-it while a continuous design is recognised: the lab's discretization and ours may differ in
-the last bit, and a row whose x falls on a whole count is decided by that bit."""
 
 STORED = {"trunc": "truncated", "round": "rounded"}
 """How a recursion's stored integer is named in reports."""
@@ -136,7 +131,7 @@ PREFERRED_ALIGNMENT = 1
 
 
 def fit_alignments(controller, u, theta, a, v, alignments=ALIGNMENTS, skipped=None,
-                   prefer: int | None = PREFERRED_ALIGNMENT) -> tuple[AlignmentFit | None, tuple[int, ...]]:
+                   prefer: int | None = PREFERRED_ALIGNMENT, primed: int = 0) -> tuple[AlignmentFit | None, tuple[int, ...]]:
     """A controller replayed over a log at each alignment: the best fit, and every alignment
     at which it reproduces every logged v (to :data:`TOLERANCE`).
 
@@ -150,6 +145,9 @@ def fit_alignments(controller, u, theta, a, v, alignments=ALIGNMENTS, skipped=No
     prefer : int or None
         The alignment chosen when several reproduce the log (a log whose θ seldom changes
         between rows cannot tell them apart); None: the first.
+    primed : int
+        Rows taken into the controller's history as logged (a copy cut from a longer run:
+        :func:`station.control.rerun.replay_commands`).
 
     Returns
     -------
@@ -157,7 +155,8 @@ def fit_alignments(controller, u, theta, a, v, alignments=ALIGNMENTS, skipped=No
         The preferred reproducing alignment's fit, else the closest (the first on a tie);
         None when no alignment was tried.
     """
-    fits = [f for d in alignments if (f := detect_alignment(controller, u, theta, a, v, (d,), skipped)) is not None]
+    fits = [f for d in alignments if (f := detect_alignment(controller, u, theta, a, v, (d,), skipped, primed))
+            is not None]
     if not fits:
         return None, ()
     exact = tuple(f.alignment for f in fits if f.max_abs_dv <= TOLERANCE)
@@ -167,9 +166,9 @@ def fit_alignments(controller, u, theta, a, v, alignments=ALIGNMENTS, skipped=No
 
 
 def _check(controller, u, theta, a, v, law: str, alignments, design=None,
-           prefer: int | None = PREFERRED_ALIGNMENT) -> IdentifiedController | None:
+           prefer: int | None = PREFERRED_ALIGNMENT, primed: int = 0) -> IdentifiedController | None:
     """``controller`` at its best alignment (:func:`fit_alignments`)."""
-    fit, exact = fit_alignments(controller, u, theta, a, v, alignments, prefer=prefer)
+    fit, exact = fit_alignments(controller, u, theta, a, v, alignments, prefer=prefer, primed=primed)
     return None if fit is None else IdentifiedController(controller, *fit, law, design, exact)  # None: no alignment tried
 
 
@@ -193,7 +192,7 @@ def _variants(controller, v):
 
 
 def variant_of(controller, u, theta, a, v, alignments=ALIGNMENTS, skipped=None,
-               prefer: int | None = PREFERRED_ALIGNMENT):
+               prefer: int | None = PREFERRED_ALIGNMENT, cut: bool = False):
     """The variant of ``controller`` that reproduces a log best, its fit and every alignment
     at which it reproduces the log (:func:`fit_alignments`).
 
@@ -205,6 +204,9 @@ def variant_of(controller, u, theta, a, v, alignments=ALIGNMENTS, skipped=None,
     skipped : array_like of bool, optional
     prefer : int or None
         As :func:`fit_alignments`.
+    cut : bool
+        The log is a copy cut from a longer run: the law's first rows of history are taken
+        as logged (:func:`fit_alignments` ``primed``).
 
     Returns
     -------
@@ -216,183 +218,13 @@ def variant_of(controller, u, theta, a, v, alignments=ALIGNMENTS, skipped=None,
     """
     best = None
     for candidate in _variants(controller, v):
-        fit, exact = fit_alignments(candidate, u, theta, a, v, alignments, skipped, prefer)
+        primed = getattr(candidate, "history", 0) if cut else 0
+        fit, exact = fit_alignments(candidate, u, theta, a, v, alignments, skipped, prefer, primed)
         if fit is not None and (best is None or fit.max_abs_dv < best[1].max_abs_dv):
             best = (candidate, fit, exact)
         if best is not None and best[1].max_abs_dv <= TOLERANCE:
             break
     return best if best is not None else (controller, None, ())
-
-
-class LawRows:
-    """The rows of a log as one candidate law sees them: x[k] = Σ b_i e[k-i] − Σ a_j v[k-j]
-    with the logged v as the recursion's history (exact for an integer recursion, whose
-    history is the logged integer; one step ahead for a float one).
-
-    Parameters
-    ----------
-    e, v : numpy.ndarray, shape (N,)
-        The error u[k] − θ[k-d] (0 for k < d) and the logged command, DAC counts.
-    d : int
-        The alignment (rows k >= d are the controller's).
-    order : int
-        0 (P) to :data:`MAX_ORDER`.
-    limit : float
-        The clamp, DAC counts.
-    """
-
-    def __init__(self, e: np.ndarray, v: np.ndarray, d: int, order: int, limit: float):
-        rows = np.arange(d, v.size)
-        lag = lambda x, j: np.where(rows - j >= 0, x[np.maximum(rows - j, 0)], 0.0)  # noqa: E731
-        cols = [lag(e, i) for i in range(order + 1)] + [-lag(v, j) for j in range(1, order + 1)]
-        self.X = np.column_stack(cols)
-        self.v = v[rows]
-        self.order, self.limit = order, float(limit)
-        self.clamped = np.abs(self.v) >= self.limit
-
-    def predict(self, c: np.ndarray, recursion: str) -> np.ndarray:
-        """The commands the law gives, row by row (its history the logged v).
-
-        Parameters
-        ----------
-        c : numpy.ndarray, shape (2·order + 1,)
-            [b_0..b_m, a_1..a_m].
-        recursion : {"none", "trunc", "round"}
-        """
-        x = self.X @ c
-        if recursion == "trunc":
-            x = np.trunc(x)
-        elif recursion == "round":  # halves away from zero, exactly (station.rounding's rule)
-            mag = np.abs(x)
-            whole = np.floor(mag)
-            x = np.copysign(whole + (mag - whole >= 0.5), x)
-        return np.clip(x, -self.limit, self.limit)
-
-    def reproduces(self, c: np.ndarray, recursion: str, slack: float = 0.0) -> bool:
-        """Whether ``c`` gives every logged v: exactly for an integer recursion, to
-        :data:`TOLERANCE` for a float one.
-
-        Parameters
-        ----------
-        c : numpy.ndarray, shape (2·order + 1,)
-            [b_0..b_m, a_1..a_m].
-        recursion : {"none", "trunc", "round"}
-        slack : float
-            > 0: an integer recursion's x may also sit within ``slack`` counts of its
-            interval (where the lab's floating-point arithmetic, not the law, decided which
-            integer it stored).
-        """
-        if recursion != "none" and slack > 0:
-            x = self.X @ c
-            lo, hi = self.bounds(recursion)
-            return bool(np.all((x >= lo - slack) & (x <= hi + slack)))
-        dv = np.abs(self.predict(c, recursion) - self.v)
-        return bool(np.all(dv == 0.0)) if recursion != "none" else bool(np.all(dv <= TOLERANCE))
-
-    def least_squares(self, recursion: str) -> np.ndarray | None:
-        """Coefficients by least squares over the unclamped rows (for a truncated integer,
-        against v + sign(v)/2, the middle of its interval); None with too few rows.
-
-        Parameters
-        ----------
-        recursion : {"none", "trunc", "round"}
-        """
-        keep = ~self.clamped
-        if np.count_nonzero(keep) < 4 * (2 * self.order + 1) or not np.any(self.X[keep]):
-            return None
-        target = self.v[keep]
-        if recursion == "trunc":
-            target = target + 0.5 * np.sign(target)
-        c, *_ = np.linalg.lstsq(self.X[keep], target, rcond=None)
-        return c if np.all(np.isfinite(c)) else None
-
-    def gain_interval(self, num: np.ndarray, den: np.ndarray, recursion: str,
-                      slack: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
-        """The gains K with which laws K·num[i]/den[i] reproduce every row
-        (:data:`station.analysis.continuous_design.GainInterval`).
-
-        Parameters
-        ----------
-        num, den : numpy.ndarray, shape (L, order+1)
-            Unit-gain laws, ascending powers of z⁻¹, ``den[:, 0] = 1``.
-        recursion : {"none", "trunc", "round"}
-        slack : float
-            As :meth:`reproduces`.
-
-        Returns
-        -------
-        lo, hi : numpy.ndarray, shape (L,)
-            lo > hi where no gain does.
-        """
-        m = self.order + 1
-        if recursion == "none":
-            lo = np.where(self.clamped & (self.v > 0), self.limit, self.v - TOLERANCE)
-            hi = np.where(self.clamped & (self.v < 0), -self.limit, self.v + TOLERANCE)
-            lo = np.where(self.clamped & (self.v < 0), -np.inf, lo)
-            hi = np.where(self.clamped & (self.v > 0), np.inf, hi)
-        else:
-            lo, hi = self.bounds(recursion)
-            lo, hi = lo - slack, hi + slack
-        out_lo, out_hi = np.empty(num.shape[0]), np.empty(num.shape[0])
-        for start in range(0, num.shape[0], 256):  # rows x laws at a time: bounded memory
-            a = self.X[:, :m] @ num[start:start + 256].T
-            w = self.X[:, m:] @ den[start:start + 256, 1:].T if m > 1 else np.zeros_like(a)
-            with np.errstate(divide="ignore", invalid="ignore"):
-                k1, k2 = (lo[:, None] - w) / a, (hi[:, None] - w) / a
-            low = np.where(a > 0, k1, np.where(a < 0, k2, -np.inf))
-            high = np.where(a > 0, k2, np.where(a < 0, k1, np.inf))
-            dead = (a == 0) & ((w < lo[:, None]) | (w > hi[:, None]))  # no gain moves such a row
-            low = np.where(np.isnan(low), -np.inf, low)
-            high = np.where(np.isnan(high), np.inf, high)
-            out_lo[start:start + 256] = np.max(low, axis=0)
-            out_hi[start:start + 256] = np.where(np.any(dead, axis=0), -np.inf, np.min(high, axis=0))
-        return out_lo, out_hi
-
-    def bounds(self, recursion: str) -> tuple[np.ndarray, np.ndarray]:
-        """(lo, hi) of x per row for the logged integer: Q(x) = v, or x beyond the clamp.
-
-        Parameters
-        ----------
-        recursion : {"trunc", "round"}
-        """
-        v, lim = self.v, self.limit
-        if recursion == "trunc":
-            lo = np.where(v > 0, v, np.where(v < 0, v - 1.0, -1.0))
-            hi = np.where(v > 0, v + 1.0, np.where(v < 0, v, 1.0))
-            edge = 0.0
-        else:
-            lo, hi = v - 0.5, v + 0.5
-            edge = 0.5
-        lo = np.where(v >= lim, lim - edge, np.where(v <= -lim, -np.inf, lo))
-        hi = np.where(v <= -lim, -lim + edge, np.where(v >= lim, np.inf, hi))
-        return lo, hi
-
-    def integer_fit(self, recursion: str) -> np.ndarray | None:
-        """Coefficients deepest inside the inequalities the logged integers set (a linear
-        program: maximise the margin t with lo + t <= x <= hi - t), None when there are none.
-
-        Parameters
-        ----------
-        recursion : {"trunc", "round"}
-        """
-        from scipy.optimize import linprog  # lazy: start-up time (scipy.optimize), loaded when an integer recursion is looked for
-
-        guess = self.least_squares(recursion)  # the scale of the coefficients (its bias can be several counts)
-        if guess is None:
-            return None
-        lo, hi = self.bounds(recursion)
-        p = self.X.shape[1]
-        rows_up, rows_lo = np.isfinite(hi), np.isfinite(lo)
-        a_ub = np.vstack([np.column_stack([self.X[rows_up], np.ones(rows_up.sum())]),
-                          np.column_stack([-self.X[rows_lo], np.ones(rows_lo.sum())])])
-        b_ub = np.concatenate([hi[rows_up], -lo[rows_lo]])
-        cost = np.zeros(p + 1)
-        cost[-1] = -1.0
-        bound = 1e3 * max(1.0, float(np.max(np.abs(guess))))
-        res = linprog(cost, A_ub=a_ub, b_ub=b_ub, bounds=[(-bound, bound)] * p + [(None, 0.25)], method="highs")
-        if res.status != 0 or -res.fun <= 1e-9:
-            return None
-        return res.x[:p]
 
 
 def _errors(u: np.ndarray, theta: np.ndarray, d: int) -> np.ndarray:
@@ -421,7 +253,7 @@ def _law_text(order: int, c: np.ndarray, design: ContinuousDesign | None, dt: fl
 def _law(rows: LawRows, recursion: str, dt: float) -> tuple[np.ndarray, ContinuousDesign | None] | None:
     """A law's coefficients (the nicest numbers that still reproduce every row), and its design."""
     c = rows.least_squares("none") if recursion == "none" else rows.integer_fit(recursion)
-    if c is None or not rows.reproduces(c, recursion):
+    if c is None or not (rows.reproduces(c, recursion) or tie_rows(rows, c, recursion)):
         return None
     order = rows.order
     if order == 0:  # the gain with the fewest digits among those that reproduce the log
@@ -445,11 +277,14 @@ def _law(rows: LawRows, recursion: str, dt: float) -> tuple[np.ndarray, Continuo
         nudged = exact + step * (c - exact)
         if rows.reproduces(nudged, recursion):
             return nudged, design
+    if recursion != "none" and rows.reproduces(exact, recursion, BOUNDARY):
+        return exact, design  # rows on a boundary from both sides: the replay decides
     return c, None
 
 
 def infer_controller(u, theta, v, a=None, dt: float = DT, rig_limit: float = CLAMP,
-                     alignments=(0, 1), prefer: int | None = PREFERRED_ALIGNMENT) -> IdentifiedController | None:
+                     alignments=(0, 1), prefer: int | None = PREFERRED_ALIGNMENT,
+                     cut: bool = False) -> IdentifiedController | None:
     """Identify the controller that produced a log's commands from u, θ and v.
 
     Parameters
@@ -467,6 +302,9 @@ def infer_controller(u, theta, v, a=None, dt: float = DT, rig_limit: float = CLA
         Computational delays tried, samples.
     prefer : int or None
         The alignment chosen when the law reproduces the log at several (:func:`fit_alignments`).
+    cut : bool
+        The log is a copy cut from a longer run: a law of order m is fitted and judged from
+        its m-th row on, its history before taken as logged.
 
     Returns
     -------
@@ -491,11 +329,11 @@ def infer_controller(u, theta, v, a=None, dt: float = DT, rig_limit: float = CLA
     recursions = ("none", *STORED) if whole_counts(v) else ("none",)
     for order in range(MAX_ORDER + 1):
         for d in alignments:
-            if d < 0 or np.any(v[:d] != 0):  # nothing was computed before the first sample
+            if d < 0:
                 continue
             e = _errors(u, theta, d)
             for limit in _limits(v, rig_limit):
-                rows = LawRows(e, v, d, order, limit)
+                rows = LawRows(e, v, d, order, limit, order if cut else 0)
                 for recursion in recursions:
                     found = _law(rows, recursion, dt)
                     if found is None:
@@ -511,10 +349,14 @@ def infer_controller(u, theta, v, a=None, dt: float = DT, rig_limit: float = CLA
                                            extra, recursion, name)
                     except ValueError:
                         continue
-                    hit = _check(ctl, u, theta, a, v, _law_text(order, c, design, dt, recursion, limit, rig_limit),
-                                 alignments, design, prefer)
+                    law = _law_text(order, c, design, dt, recursion, limit, rig_limit)
+                    hit = _check(ctl, u, theta, a, v, law, alignments, design, prefer, order if cut else 0)
                     if hit is not None and hit.max_abs_dv <= TOLERANCE:
                         return hit
+                    ties = tie_rows(rows, c, recursion)
+                    if ties:
+                        return IdentifiedController(ctl, d, 0.0, v.copy(), f"{law}, {ties} row(s) on a quantization "
+                                                    f"boundary as the lab's arithmetic decided them", design, (d,))
     return None
 
 

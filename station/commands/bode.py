@@ -52,8 +52,8 @@ def run(args: argparse.Namespace) -> int:
     Raises
     ------
     StationError
-        Unreadable log or parameter set, a log shorter than one Welch segment, bad
-        element count; an output that is an input or another output, exists (without
+        Unreadable log or parameter set, a log shorter than one Welch segment, a hub-held
+        beam test (its v was not applied), bad element count; an output that is an input or another output, exists (without
         ``--force``) or cannot be written.
     """
     # lazy: start-up time (every command's parser is built at start-up: scipy, python-control, matplotlib)
@@ -66,6 +66,11 @@ def run(args: argparse.Namespace) -> int:
                   [Input("FILE", args.file), *model_inputs(args)], force=args.force)
     run = LoggedRun.from_path(args.file)
     log, t, dt = run.log, run.data["t"], run.dt
+    if run.held is not None:  # θ/v and a/v of a v that was not applied mean nothing
+        raise StationError(f"{args.file}: {run.held_note}; θ/v and a/v cannot be estimated: `station replay` "
+                           f"measures the beam's first mode from its free vibration")
+    for line in run.audit_lines:  # the data's contradictions first (DESIGN.md "Log audit")
+        print(line)
     model = as_model(args.model, args.elements, args.params)
     args.elements = model.n_elements
     try:

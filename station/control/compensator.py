@@ -120,6 +120,36 @@ class Compensator:
         gth.commit(e, v)
         return v, theta_d_hat
 
+    def prime(self, u: float, theta: float, a: float, v: float) -> tuple[float, float]:
+        """Take one logged sample and its logged command into the filters' history without
+        computing the command: the state a run cut from a longer one had at its first rows
+        (:func:`station.control.rerun.replay_commands` with ``primed``).
+
+        Parameters
+        ----------
+        u, theta, a : float
+            As :meth:`step`.
+        v : float
+            The command logged for this sample, DAC counts (what the recursion remembered).
+
+        Returns
+        -------
+        v : float
+            The logged command, as given.
+        theta_d_hat : float
+            The reference after the shaper and accelerometer feedback, encoder counts.
+        """
+        if self.shaper is not None:
+            u = self.shaper.step(u)
+        theta_d_hat = u - self.ga.step(a) if self.ga is not None else u
+        self.gth.commit(theta_d_hat - theta, v)
+        return v, theta_d_hat
+
+    @property
+    def history(self) -> int:
+        """Samples of e and v the Gth recursion remembers (its order)."""
+        return max(self.gth.num.size, self.gth.den.size) - 1
+
     def __repr__(self) -> str:
         shaped = "" if self.shaper is None else f", shaper={self.shaper!r}"
         stored = "" if self.recursion == "none" else f", recursion={self.recursion!r}"

@@ -41,7 +41,8 @@ def is_closed_loop(controller: Any) -> bool:
     return not (isinstance(spec, dict) and spec.get("kind") == "open-loop")
 
 
-def replay_commands(controller, u, theta, a, alignment: int, skipped=None) -> tuple[np.ndarray, np.ndarray]:
+def replay_commands(controller, u, theta, a, alignment: int, skipped=None, v=None,
+                    primed: int = 0) -> tuple[np.ndarray, np.ndarray]:
     """Run a controller over logged samples: v[k] = C(u[k], theta[k-d], a[k-d]).
 
     Before the first sample (k < d) there is nothing to compute from: v[k] = 0 and
@@ -63,6 +64,13 @@ def replay_commands(controller, u, theta, a, alignment: int, skipped=None) -> tu
         d >= 0, samples.
     skipped : array_like of bool, shape (N,), optional
         The samples the station did not answer (default: none).
+    v : array_like, shape (N,), optional
+        The logged commands (needed with ``primed``).
+    primed : int
+        The first ``primed`` rows from d on are not computed: their logged u, θ, a and v
+        go into the controller's history (:meth:`station.control.compensator.Compensator.prime`),
+        as a copy cut from a longer run had it; their v is the logged one. 0 (default):
+        the controller starts at rest. Controllers without ``prime`` start at rest.
 
     Returns
     -------
@@ -91,6 +99,12 @@ def replay_commands(controller, u, theta, a, alignment: int, skipped=None) -> tu
         held = skipped[rows - d]
         rows = rows[~held] if held.any() else rows
     controller.reset()
+    prime = getattr(controller, "prime", None)
+    if primed > 0 and v is not None and prime is not None:
+        logged = np.asarray(v, dtype=float)
+        for k in rows[:primed].tolist():
+            v_out[k], hat_out[k] = prime(float(u[k]), float(theta[k - d]), float(a[k - d]), float(logged[k]))
+        rows = rows[primed:]
     step = controller.step
     # in blocks: Python floats for speed, without a list per sample of a 100 MB log at once
     for lo in range(0, rows.size, _BLOCK):
@@ -126,7 +140,8 @@ class AlignmentFit(NamedTuple):
     v_replayed: np.ndarray
 
 
-def detect_alignment(controller, u, theta, a, v, alignments=ALIGNMENTS, skipped=None) -> AlignmentFit:
+def detect_alignment(controller, u, theta, a, v, alignments=ALIGNMENTS, skipped=None,
+                     primed: int = 0) -> AlignmentFit:
     """The computational delay d with which ``controller`` best reproduces the logged
     commands ``v`` (DESIGN.md: headers do not say; the data do).
 
@@ -139,18 +154,27 @@ def detect_alignment(controller, u, theta, a, v, alignments=ALIGNMENTS, skipped=
         The delays tried, samples (default :data:`ALIGNMENTS`).
     skipped : array_like of bool, shape (N,), optional
         The samples the station did not answer (:func:`replay_commands`).
+    primed : int
+        Rows from d on taken into the controller's history as logged and not judged
+        (:func:`replay_commands`: a copy cut from a longer run).
 
     Returns
     -------
     AlignmentFit
-        The best alignment (the first tried on a tie), its max |dv| and the replayed v;
-        unpacks as ``(d, max_abs_dv, v_replayed)``.
+        The best alignment (the first tried on a tie), its max |dv| over rows k >= d (the
+        first d rows' commands came from samples before the log: 0 on a run logged from its
+        start, the earlier run's on a copy cut from one) and the replayed v; unpacks as
+        ``(d, max_abs_dv, v_replayed)``.
     """
     v = np.asarray(v, dtype=float)
     best = None
     for d in alignments:
-        v_hat, _ = replay_commands(controller, u, theta, a, d, skipped)
-        err = float(np.max(np.abs(v_hat - v)))
+        v_hat, _ = replay_commands(controller, u, theta, a, d, skipped, v, primed)
+        # rows k < d were computed from samples the log does not hold (0 on a run logged from
+        # its start; a copy cut from a longer run keeps their commands): not judged, nor
+        # the primed rows after them
+        judged = slice(min(max(int(d), 0) + primed, max(v.size - 1, 0)), None)
+        err = float(np.max(np.abs(v_hat[judged] - v[judged])))
         if best is None or err < best.max_abs_dv:
             best = AlignmentFit(d, err, v_hat)
     return best

@@ -32,6 +32,7 @@ from station.control.designs import MAX_ORDER, z_problem
 from station.control.rerun import ALIGNMENTS, AlignmentFit, is_closed_loop
 from station.errors import StationError
 from station.logged.audit import AuditClaim
+from station.logged.start import start_claims
 from station.rig import CLAMP, DT  # the rig's clamp and sample time: its compensators ran at them
 from station.runlog import RunLog
 
@@ -179,6 +180,9 @@ class ControllerId(NamedTuple):
     alignments : tuple of int
         Every alignment at which the controller reproduces the logged v (more than one: the
         data cannot tell them apart; ``fit`` holds the preferred).
+    cut : bool
+        The log is a copy cut from a longer run: the law reproduces it only with its first
+        rows of memory taken as logged (or the hub moved at its first row).
     """
 
     controller: Compensator | OpenLoop | None
@@ -187,6 +191,7 @@ class ControllerId(NamedTuple):
     fit: AlignmentFit | None = None
     claim: AuditClaim | None = None
     alignments: tuple[int, ...] = ()
+    cut: bool = False
 
 
 def describe_controller(controller) -> str:
@@ -315,6 +320,8 @@ def identify_controller(log: RunLog, skipped=None) -> ControllerId:
     missing = [name for name in ("u", "v") + (("theta",) if is_closed_loop(controller) or controller is None
                                               else ()) if not np.all(np.isfinite(data[name]))]
     header_dv = None
+    # a copy cut from a longer run: a law's first rows of history are the logged ones
+    cut = not missing and start_claims(theta, a, u, v, dt, False, False).at_rest is False
     if pid is not None and controller is None and not missing:
         hit, best = match_pid(*pid, u, theta, v, a, dt, CLAMP)
         gains = f"kp = {pid[0]:g}, ki = {pid[1]:g}, kd = {pid[2]:g}"
@@ -332,7 +339,13 @@ def identify_controller(log: RunLog, skipped=None) -> ControllerId:
         if missing:  # LoggedRun.replayed names the column
             return ControllerId(controller, "header", notes, None, AuditClaim(
                 "controller", said, "not replayable", "unchecked", f"the log has no usable {', '.join(missing)}"))
-        used, fit, exact = variant_of(controller, u, theta, a, v, ALIGNMENTS, skipped, prefer)
+        used, fit, exact = variant_of(controller, u, theta, a, v, ALIGNMENTS, skipped, prefer, cut)
+        if fit.max_abs_dv > TOLERANCE and not cut and getattr(controller, "history", 0):
+            # a copy cut while the hub rested but the controller's memory did not
+            retry = variant_of(controller, u, theta, a, v, ALIGNMENTS, skipped, prefer, True)
+            if retry[1].max_abs_dv <= TOLERANCE:
+                (used, fit, exact), cut = retry, True
+                notes.append(_CUT_NOTE.format(used.history))
         if fit.max_abs_dv <= TOLERANCE:
             at = f" at alignment {fit.alignment}" if is_closed_loop(used) else ""
             if used is not controller:
@@ -340,7 +353,7 @@ def identify_controller(log: RunLog, skipped=None) -> ControllerId:
                              f"{STORED[used.recursion]} integer command (the lab's software stored it)")
             return ControllerId(used, "header", notes, fit, AuditClaim(
                 "controller", said, describe_controller(used) + at, "confirmed",
-                f"replays every logged v {_how_close(fit.max_abs_dv)}{at}"), exact)
+                f"replays every logged v {_how_close(fit.max_abs_dv)}{at}"), exact, cut=cut)
         header_dv = fit.max_abs_dv
     if missing:
         if pid is None and controller is None:
@@ -348,7 +361,12 @@ def identify_controller(log: RunLog, skipped=None) -> ControllerId:
                          f"infer one from: commands not replayed, model driven by the logged v")
         return ControllerId(None, None, notes, None, AuditClaim(
             "controller", said, "not replayable", "unchecked", f"the log has no usable {', '.join(missing)}"))
-    hit = infer_controller(u, theta, v, a, dt, CLAMP, prefer=prefer)
+    hit = infer_controller(u, theta, v, a, dt, CLAMP, prefer=prefer, cut=cut)
+    if hit is None and not cut:  # a copy cut while the hub rested but the controller's memory did not
+        hit = infer_controller(u, theta, v, a, dt, CLAMP, prefer=prefer, cut=True)
+        if hit is not None and getattr(hit.controller, "history", 0):
+            notes.append(_CUT_NOTE.format(hit.controller.history))
+            cut = True
     stated = controller is not None or pid is not None
     if hit is not None:
         fit = AlignmentFit(hit.alignment, hit.max_abs_dv, hit.v_replayed)
@@ -363,19 +381,19 @@ def identify_controller(log: RunLog, skipped=None) -> ControllerId:
                 "controller", said, data_says, "confirmed",
                 f"the data's law has the header's coefficients (to {SAME_LAW_RTOL:g} relative); as printed it "
                 f"replays v to max |dv| = {header_dv:.3g} counts, completed from the data "
-                f"{_how_close(hit.max_abs_dv)}{at}"), hit.alignments)
+                f"{_how_close(hit.max_abs_dv)}{at}"), hit.alignments, cut=cut)
         if stated:
             notes.append(f"the header's controller ({said}) does not reproduce the logged v (max |dv| = "
                          f"{header_dv:.3g} counts); the data's is used: {data_says}")
             return ControllerId(hit.controller, "inferred (header contradicted)", notes, fit, AuditClaim(
                 "controller", said, data_says, "contradicted",
                 f"the header's controller replays v to max |dv| = {header_dv:.3g} counts at best; the data's law "
-                f"reproduces every logged v {_how_close(hit.max_abs_dv)}{at}"), hit.alignments)
+                f"reproduces every logged v {_how_close(hit.max_abs_dv)}{at}"), hit.alignments, cut=cut)
         notes.append(f"controller inferred from the data: {hit.law}, alignment {hit.alignment} "
                      f"(reproduces the logged v {_how_close(hit.max_abs_dv)})")
         return ControllerId(hit.controller, "inferred", notes, fit, AuditClaim(
             "controller", said, data_says, "unchecked", "the log names no controller; inferred from the data"),
-            hit.alignments)
+            hit.alignments, cut=cut)
     tried = ("open loop, P, linear e -> v up to order 3, on the float or the stored integer command, "
              "alignments 0 and 1")
     if not stated:
@@ -392,6 +410,10 @@ def identify_controller(log: RunLog, skipped=None) -> ControllerId:
                         None if controller is None else fit, AuditClaim(
                             "controller", said, f"not this law (max |dv| = {header_dv:.3g} counts); no law found",
                             verdict, evidence))
+
+
+_CUT_NOTE = ("the law reproduces the log with its first {} row(s) of memory taken as logged: a copy cut from a "
+             "longer run (the controller remembered the earlier rows)")
 
 
 def _header_pid(log: RunLog) -> tuple[float, float, float] | None:

@@ -11,11 +11,12 @@ from station.analysis.beam import HELD_MIN_V, HubHeld, hub_held
 from station.analysis.metrics import StepMetrics, step_metrics
 from station.control.rerun import AlignmentFit, detect_alignment, is_closed_loop
 from station.errors import StationError
-from station.logged.audit import (Audit, TimeBase, accel_claims, alignment_claim, file_kp_claims, reference_claims,
-                                  time_base)
+from station.logged.audit import (ACCEL_CLAIM, Audit, AuditClaim, TimeBase, accel_claims, alignment_claim,
+                                  file_kp_claims, reference_claims, time_base)
 from station.logged.controller import ControllerId, describe_controller, identify_controller
 from station.logged.simulate import ModelRun, compared_theta, simulate_log
 from station.logged.reference import Reference, classify_reference
+from station.logged.start import Start, start_claims
 from station.runlog import SKIPPED, RunLog, read_log
 
 REPRODUCED_TOLERANCE = 1e-6
@@ -125,10 +126,24 @@ class LoggedRun:
             if row is not None:
                 claims.append(row)
         claims += reference_claims(self.log, self.reference)
+        claims += self.start.claims
         claims += self._time_base.claims
-        if len(self):
-            claims += accel_claims(self.data["a"], self.log.dt, self.accel_rest_offset)
+        claims += self._accel_claims
         return Audit(tuple(claims), cid.source)
+
+    @cached_property
+    def _accel_claims(self) -> list[AuditClaim]:
+        if not len(self):
+            return []
+        return accel_claims(self.data["a"], self.log.dt, self.accel_rest_offset, self.accel_rest_samples)
+
+    @cached_property
+    def start(self) -> Start:
+        """How the run starts: at rest at t = 0 or moving (a copy cut from a longer run), and θ
+        there (:func:`station.logged.start.start_claims`)."""
+        d = self.data
+        tip = not any(c.header == ACCEL_CLAIM for c in self._accel_claims)
+        return start_claims(d["theta"], d["a"], d["u"], d["v"], self.dt, self.closed, tip, self.identified.cut)
 
     @property
     def audit_lines(self) -> list[str]:
@@ -296,9 +311,17 @@ class LoggedRun:
 
     @cached_property
     def accel_rest_samples(self) -> int:
-        """Samples before the first non-zero command (all of them when v stays 0)."""
-        moving = np.flatnonzero(np.asarray(self.data["v"], dtype=float) != 0)
-        return int(moving[0]) if moving.size else len(self)
+        """Samples at rest at the start: before the first non-zero command, or before u, v or
+        θ first leave their first row's values when the command is not 0 there (a loop
+        holding an encoder that was not zeroed); all of them when nothing changes."""
+        d = self.data
+        v = np.asarray(d["v"], dtype=float)
+        moving = np.flatnonzero(v != 0)
+        if not moving.size or moving[0] > 0:
+            return int(moving[0]) if moving.size else len(self)
+        first = [int(np.flatnonzero(x != x[0])[0]) for x in (np.asarray(d[k], float) for k in ("u", "v", "theta"))
+                 if x.size and np.all(np.isfinite(x)) and np.any(x != x[0])]
+        return min(first, default=len(self))
 
     @cached_property
     def accel_rest_offset(self) -> float:
@@ -322,10 +345,11 @@ class LoggedRun:
         Returns
         -------
         StepMetrics or None
-            None unless the run is closed loop on a step reference.
+            None unless the run is closed loop on a step reference, logged from rest (a copy
+            cut from a longer run does not hold the step's start).
         """
-        if not (self.closed and self.reference.is_step and len(self)):
-            return None
+        if not (self.closed and self.reference.is_step and len(self)) or self.start.at_rest is False:
+            return None  # a copy cut after the step: its overshoot is not the run's
         return step_metrics(self.data["t"] if t is None else t, self.data["theta"] if theta is None else theta,
                             self.reference.amplitude)
 

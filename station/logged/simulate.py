@@ -38,6 +38,80 @@ def compared_theta(theta, closed: bool) -> np.ndarray:
     return theta if closed or not theta.size else theta - theta[0]
 
 
+PART_COUNTS = 3.0
+"""θ of the model and the log part where they differ by more than this, encoder counts
+(a few counts: the encoder's quantization and a sticking hub's last count)."""
+
+FOLLOW_COUNTS = 5.0
+"""How far the model's hub moves before the log's is judged to follow it, encoder counts."""
+
+FOLLOW_SHARE = 0.3
+"""The log's hub follows the model's when it has moved at least this share of the model's
+move by the time the model's has moved :data:`FOLLOW_COUNTS` (a held hub or an unpowered
+motor: none)."""
+
+
+@dataclass(frozen=True)
+class Parting:
+    """Where the model's θ parts from the log's, in an open-loop run (:func:`parting`).
+
+    Attributes
+    ----------
+    followed : bool
+        Whether the log's hub first moved with the model's (the logged v was applied).
+    t_follow : float or None
+        When the model's hub had moved :data:`FOLLOW_COUNTS`, s (None: it never did).
+    t_part : float or None
+        When the two first differ by more than :data:`PART_COUNTS`, s (None: never).
+    end_measured, end_model : float
+        θ at the end, encoder counts (as compared: relative to the first sample in open loop).
+    """
+
+    followed: bool
+    t_follow: float | None
+    t_part: float | None
+    end_measured: float
+    end_model: float
+
+    def line(self) -> str:
+        """One line: how long the model follows the log and how far they end apart."""
+        if self.t_follow is None:
+            return "the model's hub hardly moves"
+        if not self.followed:
+            return (f"the log's hub does not follow the model's (by t = {self.t_follow:.3g} s the model's moved "
+                    f"{FOLLOW_COUNTS:g} counts, the log's under {FOLLOW_SHARE:.0%} of that): the logged v did not "
+                    f"move the hub (an unpowered motor or a held hub)")
+        part = "never part" if self.t_part is None else f"part at t = {self.t_part:.3g} s"
+        return (f"the log's hub first moves with the model's (the logged v was applied); they {part} and end at "
+                f"θ = {self.end_measured:g} (log) and {self.end_model:.0f} (model) counts: what the model lacks "
+                f"acts after the start (friction, damping: `station diagnose`)")
+
+
+def parting(t, theta_measured, theta_model) -> Parting:
+    """How an open-loop run's model follows the log (its θ as compared, :func:`compared_theta`).
+
+    Parameters
+    ----------
+    t, theta_measured, theta_model : array_like, shape (N,)
+        Time (s), the logged and the modelled θ (encoder counts).
+
+    Returns
+    -------
+    Parting
+    """
+    t = np.asarray(t, float)
+    y = np.asarray(theta_measured, float)
+    m = np.asarray(theta_model, float)
+    moved = np.flatnonzero(np.abs(m) >= FOLLOW_COUNTS)
+    apart = np.flatnonzero(np.abs(y - m) > PART_COUNTS)
+    t_part = float(t[apart[0]]) if apart.size else None
+    if not moved.size:
+        return Parting(False, None, t_part, float(y[-1]), float(m[-1]))
+    k = int(moved[0])
+    followed = bool(y[k] * m[k] > 0 and abs(y[k]) >= FOLLOW_SHARE * abs(m[k]))
+    return Parting(followed, float(t[k]), t_part, float(y[-1]), float(m[-1]))
+
+
 @dataclass
 class ModelRun:
     """A logged run simulated on the plant (:func:`simulate_log`).
@@ -53,12 +127,16 @@ class ModelRun:
         None where undefined).
     how : str
         One line saying how the model was driven.
+    parting : Parting or None
+        Open loop: whether the log's hub first moved with the model's and where they part
+        (:func:`parting`); None in closed loop.
     """
 
     prediction: dict
     theta_measured: np.ndarray
     fit_pct: dict
     how: str
+    parting: Parting | None = None
 
 
 def simulate_log(log: RunLog, controller, alignment: int | None, model) -> ModelRun:
@@ -66,7 +144,8 @@ def simulate_log(log: RunLog, controller, alignment: int | None, model) -> Model
 
     Closed loop: the log's controller, reference, clamp and alignment, the device's
     command quantization (:func:`station.logged.device.command_quantization`); a
-    recursion on the stored integer runs compiled as the lab's software ran it. Open loop
+    recursion on the stored integer runs compiled as the lab's software ran it; the model
+    starts at rest at the log's first θ (an encoder that was not zeroed). Open loop
     (or no controller): the plant driven by what was applied: ``v_applied`` where the log
     has it (our logs), else the logged v quantized as the device did.
 
@@ -106,7 +185,14 @@ def simulate_log(log: RunLog, controller, alignment: int | None, model) -> Model
             how = f"the logged v (open loop), quantized as the device did ({command})"
     else:
         d = 1 if alignment is None else alignment
-        pred = simulate(model, controller, u, alignment=d, command=command, **kw)
+        # the loop's error is u - θ: a run whose encoder was not zeroed started at rest at its
+        # first θ (every position shifted alike is a rest of the plant: nothing holds it to 0)
+        theta0 = float(data["theta"][0]) if data["theta"].size and np.isfinite(data["theta"][0]) else 0.0
+        pred = simulate(model, controller, u - theta0, alignment=d, command=command, **kw)
         how = f"the log's controller and reference, alignment {d}, commands quantized as the device did ({command})"
+        if theta0 != 0.0:
+            pred = pred._replace(u=np.asarray(u, float), theta=pred.theta + theta0, theta_d_hat=pred.theta_d_hat + theta0)
+            how += f", from rest at θ = {theta0:g} (the log's first θ: the encoder was not zeroed)"
     theta = compared_theta(data["theta"], closed)
-    return ModelRun(pred, theta, fit_pct(theta, pred["theta"], data["a"], pred["a"]), how)
+    part = None if closed or not theta.size else parting(data["t"], theta, pred["theta"])
+    return ModelRun(pred, theta, fit_pct(theta, pred["theta"], data["a"], pred["a"]), how, part)

@@ -1,17 +1,20 @@
 """Which runs a diagnosis may use, checked before any work starts: no run judged on itself
-(the same data rows given twice, as a copy, or as both a RUN and a ``--validate`` run), and
+(the same data rows given twice, as a copy, cut or downsampled from another run
+(:func:`station.logged.copies.copy_between`), or as both a RUN and a ``--validate`` run), and
 hub-held beam tests set aside (the motor model cannot simulate a hand holding the hub)."""
 
 from __future__ import annotations
 
 import hashlib
 from collections.abc import Sequence
+from itertools import combinations
 
 import numpy as np
 
 from station.analysis.beam import HELD_COUNTS, HELD_MIN_S, HELD_MIN_V, hub_held
 from station.diagnosis.runs.cases import RunCase
 from station.errors import StationError
+from station.logged.copies import copy_between
 
 DIGEST_COLUMNS = ("t", "u", "v", "theta", "a")
 """The columns whose rows identify a run (its header and file name do not)."""
@@ -55,16 +58,22 @@ def refuse_repeated_runs(cases: Sequence[RunCase], n_fit: int) -> None:
     StationError
         One line naming both files (and their roles when one is a ``--validate`` run).
     """
+    role = lambda k: "--validate run" if k >= n_fit else "RUN"  # noqa: E731
     seen: dict[str, int] = {}
     for i, c in enumerate(cases):
         key = data_digest(c)
         j = seen.setdefault(key, i)
         if j == i:
             continue
-        role = lambda k: "--validate run" if k >= n_fit else "RUN"  # noqa: E731
         same = "the same file" if cases[j].path == c.path else "the same data rows"
         raise StationError(f"diagnose: {role(j)} {cases[j].path} and {role(i)} {c.path} are {same}: "
                            "a run cannot be judged on itself; give each run once")
+    for (i, x), (j, y) in combinations(enumerate(cases), 2):
+        found = copy_between(x.log, y.log)
+        if found is not None:
+            k, m = (i, j) if found[0] == 0 else (j, i)  # the copy, the run it was cut from
+            raise StationError(f"diagnose: {role(k)} {cases[k].path} is a copy of {role(m)} {cases[m].path} "
+                               f"({found[1].words()}): a run cannot be judged on itself; give each run once")
 
 
 def set_aside_beam_tests(cases: Sequence[RunCase]) -> tuple[list[int], list[str]]:
@@ -96,3 +105,31 @@ def set_aside_beam_tests(cases: Sequence[RunCase]) -> tuple[list[int], list[str]
                      f"within {HELD_COUNTS:g} counts): left out of the diagnosis, which simulates a free hub "
                      "(station replay analyses its beam modes)")
     return kept, notes
+
+
+def set_aside_copies(sessions: Sequence[tuple[str, list[RunCase]]]) -> tuple[list[tuple[str, list[RunCase]]], list[str]]:
+    """Runs that are cut or downsampled copies of another run of any session
+    (:func:`station.logged.copies.copy_between`) set aside: the longer is kept.
+
+    Parameters
+    ----------
+    sessions : sequence of (name, list of RunCase)
+
+    Returns
+    -------
+    kept : list of (name, list of RunCase)
+        The sessions with their copies left out (a session left with no run is dropped).
+    notes : list of str
+        One sentence per copy: "SESSION: FILE not used: a copy of PATH (its rows from row N on, ...)".
+    """
+    flat = [(name, c) for name, cs in sessions for c in cs]
+    out: set[int] = set()
+    notes = []
+    for (i, (_, x)), (j, (_, y)) in combinations(enumerate(flat), 2):
+        found = None if i in out or j in out else copy_between(x.log, y.log)
+        if found is not None:
+            k, m = (i, j) if found[0] == 0 else (j, i)
+            out.add(k)
+            notes.append(f"{flat[k][0]}: {flat[k][1].name} not used: a copy of {flat[m][1].path} ({found[1].words()})")
+    kept = [(name, [c for c in cs if not any(c is flat[k][1] for k in out)]) for name, cs in sessions]
+    return [(name, cs) for name, cs in kept if cs], notes

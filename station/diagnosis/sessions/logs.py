@@ -23,7 +23,7 @@ from pathlib import Path
 import numpy as np
 
 from station.diagnosis.runs.cases import RunCase, load_case
-from station.diagnosis.runs.admission import data_digest, set_aside_beam_tests
+from station.diagnosis.runs.admission import data_digest, set_aside_beam_tests, set_aside_copies
 from station.errors import StationError
 from station.logged.audit import accel_drift as audit_accel_drift
 from station.logged.simulate import simulate_log
@@ -301,6 +301,8 @@ def load_sessions(sessions: Sequence[SessionLogs], max_samples: int = SESSIONS_M
             per_session.append((s.name, [cases[i] for i in kept]))
         else:
             notes.append(f"{s.name}: no usable run; the session is left out")
+    per_session, copies = set_aside_copies(per_session)
+    notes += copies
     if not per_session:
         why = "; ".join(n for n in notes if "no usable run" not in n)
         raise StationError("survey --diagnose: no usable run in " + ", ".join(s.name for s in sessions)

@@ -1,0 +1,242 @@
+"""The rows of a log as one candidate control law sees them (:class:`LawRows`): the
+regression and the linear program that fit a law's coefficients to the logged commands, and
+the rows only the lab's floating-point arithmetic decided (:func:`tie_rows`).
+
+Used by :mod:`station.analysis.controller_id`; see its docstring for the laws tried.
+"""
+
+from __future__ import annotations
+
+from fractions import Fraction
+
+import numpy as np
+
+TOLERANCE = 1e-6
+"""max |v_replayed - v_logged| (DAC counts) a law must meet to be accepted."""
+
+BOUNDARY = 1e-9
+"""How close (counts) x may come to an integer recursion's interval and still count as in
+it while a continuous design is recognised: the lab's discretization and ours may differ in
+the last bit, and a row whose x falls on a whole count is decided by that bit."""
+
+
+class LawRows:
+    """The rows of a log as one candidate law sees them: x[k] = Σ b_i e[k-i] − Σ a_j v[k-j]
+    with the logged v as the recursion's history (exact for an integer recursion, whose
+    history is the logged integer; one step ahead for a float one).
+
+    Parameters
+    ----------
+    e, v : numpy.ndarray, shape (N,)
+        The error u[k] − θ[k-d] (0 for k < d) and the logged command, DAC counts.
+    d : int
+        The alignment (rows k >= d are the controller's).
+    order : int
+        0 (P) to :data:`MAX_ORDER`.
+    limit : float
+        The clamp, DAC counts.
+    skip : int
+        Rows from d on left out (a copy cut from a longer run: their lags reach before its
+        first row).
+    """
+
+    def __init__(self, e: np.ndarray, v: np.ndarray, d: int, order: int, limit: float, skip: int = 0):
+        rows = np.arange(d + skip, v.size)
+        lag = lambda x, j: np.where(rows - j >= 0, x[np.maximum(rows - j, 0)], 0.0)  # noqa: E731
+        cols = [lag(e, i) for i in range(order + 1)] + [-lag(v, j) for j in range(1, order + 1)]
+        self.X = np.column_stack(cols)
+        self.v = v[rows]
+        self.order, self.limit = order, float(limit)
+        self.clamped = np.abs(self.v) >= self.limit
+
+    def predict(self, c: np.ndarray, recursion: str) -> np.ndarray:
+        """The commands the law gives, row by row (its history the logged v).
+
+        Parameters
+        ----------
+        c : numpy.ndarray, shape (2·order + 1,)
+            [b_0..b_m, a_1..a_m].
+        recursion : {"none", "trunc", "round"}
+        """
+        x = self.X @ c
+        if recursion == "trunc":
+            x = np.trunc(x)
+        elif recursion == "round":  # halves away from zero, exactly (station.rounding's rule)
+            mag = np.abs(x)
+            whole = np.floor(mag)
+            x = np.copysign(whole + (mag - whole >= 0.5), x)
+        return np.clip(x, -self.limit, self.limit)
+
+    def reproduces(self, c: np.ndarray, recursion: str, slack: float = 0.0) -> bool:
+        """Whether ``c`` gives every logged v: exactly for an integer recursion, to
+        :data:`TOLERANCE` for a float one.
+
+        Parameters
+        ----------
+        c : numpy.ndarray, shape (2·order + 1,)
+            [b_0..b_m, a_1..a_m].
+        recursion : {"none", "trunc", "round"}
+        slack : float
+            > 0: an integer recursion's x may also sit within ``slack`` counts of its
+            interval (where the lab's floating-point arithmetic, not the law, decided which
+            integer it stored).
+        """
+        if recursion != "none" and slack > 0:
+            x = self.X @ c
+            lo, hi = self.bounds(recursion)
+            return bool(np.all((x >= lo - slack) & (x <= hi + slack)))
+        dv = np.abs(self.predict(c, recursion) - self.v)
+        return bool(np.all(dv == 0.0)) if recursion != "none" else bool(np.all(dv <= TOLERANCE))
+
+    def least_squares(self, recursion: str) -> np.ndarray | None:
+        """Coefficients by least squares over the unclamped rows (for a truncated integer,
+        against v + sign(v)/2, the middle of its interval); None with too few rows.
+
+        Parameters
+        ----------
+        recursion : {"none", "trunc", "round"}
+        """
+        keep = ~self.clamped
+        if np.count_nonzero(keep) < 4 * (2 * self.order + 1) or not np.any(self.X[keep]):
+            return None
+        target = self.v[keep]
+        if recursion == "trunc":
+            target = target + 0.5 * np.sign(target)
+        c, *_ = np.linalg.lstsq(self.X[keep], target, rcond=None)
+        return c if np.all(np.isfinite(c)) else None
+
+    def gain_interval(self, num: np.ndarray, den: np.ndarray, recursion: str,
+                      slack: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
+        """The gains K with which laws K·num[i]/den[i] reproduce every row
+        (:data:`station.analysis.continuous_design.GainInterval`).
+
+        Parameters
+        ----------
+        num, den : numpy.ndarray, shape (L, order+1)
+            Unit-gain laws, ascending powers of z⁻¹, ``den[:, 0] = 1``.
+        recursion : {"none", "trunc", "round"}
+        slack : float
+            As :meth:`reproduces`.
+
+        Returns
+        -------
+        lo, hi : numpy.ndarray, shape (L,)
+            lo > hi where no gain does.
+        """
+        m = self.order + 1
+        if recursion == "none":
+            lo = np.where(self.clamped & (self.v > 0), self.limit, self.v - TOLERANCE)
+            hi = np.where(self.clamped & (self.v < 0), -self.limit, self.v + TOLERANCE)
+            lo = np.where(self.clamped & (self.v < 0), -np.inf, lo)
+            hi = np.where(self.clamped & (self.v > 0), np.inf, hi)
+        else:
+            lo, hi = self.bounds(recursion)
+            lo, hi = lo - slack, hi + slack
+        out_lo, out_hi = np.empty(num.shape[0]), np.empty(num.shape[0])
+        for start in range(0, num.shape[0], 256):  # rows x laws at a time: bounded memory
+            a = self.X[:, :m] @ num[start:start + 256].T
+            w = self.X[:, m:] @ den[start:start + 256, 1:].T if m > 1 else np.zeros_like(a)
+            with np.errstate(divide="ignore", invalid="ignore"):
+                k1, k2 = (lo[:, None] - w) / a, (hi[:, None] - w) / a
+            low = np.where(a > 0, k1, np.where(a < 0, k2, -np.inf))
+            high = np.where(a > 0, k2, np.where(a < 0, k1, np.inf))
+            dead = (a == 0) & ((w < lo[:, None]) | (w > hi[:, None]))  # no gain moves such a row
+            low = np.where(np.isnan(low), -np.inf, low)
+            high = np.where(np.isnan(high), np.inf, high)
+            out_lo[start:start + 256] = np.max(low, axis=0)
+            out_hi[start:start + 256] = np.where(np.any(dead, axis=0), -np.inf, np.min(high, axis=0))
+        return out_lo, out_hi
+
+    def bounds(self, recursion: str) -> tuple[np.ndarray, np.ndarray]:
+        """(lo, hi) of x per row for the logged integer: Q(x) = v, or x beyond the clamp.
+
+        Parameters
+        ----------
+        recursion : {"trunc", "round"}
+        """
+        v, lim = self.v, self.limit
+        if recursion == "trunc":
+            lo = np.where(v > 0, v, np.where(v < 0, v - 1.0, -1.0))
+            hi = np.where(v > 0, v + 1.0, np.where(v < 0, v, 1.0))
+            edge = 0.0
+        else:
+            lo, hi = v - 0.5, v + 0.5
+            edge = 0.5
+        lo = np.where(v >= lim, lim - edge, np.where(v <= -lim, -np.inf, lo))
+        hi = np.where(v <= -lim, -lim + edge, np.where(v >= lim, np.inf, hi))
+        return lo, hi
+
+    def integer_fit(self, recursion: str) -> np.ndarray | None:
+        """Coefficients deepest inside the inequalities the logged integers set (a linear
+        program: maximise the margin t with lo - BOUNDARY + t <= x <= hi + BOUNDARY - t), None
+        when there are none.
+
+        The inequalities are widened by :data:`BOUNDARY`: a law with round numbers (Tustin of
+        integer poles and zeros gives rational coefficients) puts some rows' x exactly on a
+        whole count or a half, from both sides, so the set of laws that reproduce the log is
+        that one law and has no inside; the lab's floating-point arithmetic decided those rows.
+
+        Parameters
+        ----------
+        recursion : {"trunc", "round"}
+        """
+        from scipy.optimize import linprog  # lazy: start-up time (scipy.optimize), loaded when an integer recursion is looked for
+
+        guess = self.least_squares(recursion)  # the scale of the coefficients (its bias can be several counts)
+        if guess is None:
+            return None
+        lo, hi = self.bounds(recursion)
+        lo, hi = lo - BOUNDARY, hi + BOUNDARY
+        p = self.X.shape[1]
+        rows_up, rows_lo = np.isfinite(hi), np.isfinite(lo)
+        a_ub = np.vstack([np.column_stack([self.X[rows_up], np.ones(rows_up.sum())]),
+                          np.column_stack([-self.X[rows_lo], np.ones(rows_lo.sum())])])
+        b_ub = np.concatenate([hi[rows_up], -lo[rows_lo]])
+        cost = np.zeros(p + 1)
+        cost[-1] = -1.0
+        bound = 1e3 * max(1.0, float(np.max(np.abs(guess))))
+        res = linprog(cost, A_ub=a_ub, b_ub=b_ub, bounds=[(-bound, bound)] * p + [(None, 0.25)], method="highs")
+        if res.status != 0 or -res.fun <= 0.0:
+            return None
+        return res.x[:p]
+
+
+def tie_rows(rows: LawRows, c: np.ndarray, recursion: str) -> int:
+    """How many rows an integer law reproduces only as the lab's floating-point arithmetic
+    decided them (x within :data:`BOUNDARY` of a quantization boundary, not exactly on it),
+    when it reproduces every other row with the logged integers as its history; 0 when it
+    does not (or needs none).
+
+    With its history the stored integer, a law that gives every logged v from the logged
+    history gives the log when run on its own: a replay differs only where the last bit of
+    the arithmetic (the order of its sums, the discretization's rounding) falls on the other
+    side of a boundary, and from there on through its own history. A row whose exact value
+    (the coefficients and the row as exact binary fractions) is a boundary has no last bit to
+    decide it: the quantization's own rule does.
+
+    Parameters
+    ----------
+    rows : LawRows
+    c : numpy.ndarray, shape (2·order + 1,)
+        [b_0..b_m, a_1..a_m].
+    recursion : {"none", "trunc", "round"}
+
+    Returns
+    -------
+    int
+        The rows on a boundary (0 for a float recursion).
+    """
+    if recursion == "none" or not rows.reproduces(c, recursion, BOUNDARY):
+        return 0
+    x = rows.X @ c
+    lo, hi = rows.bounds(recursion)
+    near = (np.abs(x - lo) <= BOUNDARY) | (np.abs(x - hi) <= BOUNDARY)
+    for k in np.flatnonzero(near):
+        # a row whose exact value is a boundary (a whole gain times whole counts) has no last
+        # bit to decide it: the quantization's own rule does, and the logged v must follow it
+        exact = sum(Fraction(float(ci)) * Fraction(float(xi)) for ci, xi in zip(c, rows.X[k]))
+        if exact in (lo[k], hi[k]):
+            near[k] = False
+    if np.any((rows.predict(c, recursion) != rows.v) & ~near):
+        return 0
+    return int(np.count_nonzero(near))

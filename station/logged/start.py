@@ -1,0 +1,158 @@
+"""How a logged run starts: at rest at t = 0 (the lab zeroes the encoder and starts a test
+still), or moving (a copy cut from a longer run, t re-zeroed), and where θ's zero is
+(DESIGN.md "Log audit": the "reference" and "columns" claims of a run's start).
+
+:func:`start_claims` checks the start; :class:`station.logged.LoggedRun` says it first when
+contradicted, and a closed-loop run's model starts at rest at the logged first θ
+(:func:`station.logged.simulate.simulate_log`).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from station.logged.audit import AuditClaim
+
+START_WINDOW_S = 0.05
+"""The start window, s: the rows before the first change of command, at most this long."""
+
+START_MIN_ROWS = 3
+"""Fewest rows of the start window (a command from row 0 cannot move the hub sooner)."""
+
+ACCEL_QUIET_COUNTS = 8.0
+"""Largest peak-to-peak of a over the start window of a run at rest, counts (noise 0.3 std;
+a beam ringing from an earlier motion swings tens of counts)."""
+
+START_CLAIM = "the run starts at rest at t = 0"
+"""What every log claims about its start (the lab zeroes the encoder and starts a test at rest)."""
+
+ZERO_CLAIM = "θ: 0 at the start (the encoder zeroed before a closed-loop run)"
+"""What a closed-loop log claims about θ's zero (the loop's error is u - θ)."""
+
+
+@dataclass(frozen=True)
+class Start:
+    """How a run starts (:func:`start_claims`).
+
+    Attributes
+    ----------
+    claims : tuple of AuditClaim
+    at_rest : bool or None
+        True: still over the start window; False: moving (a copy cut from a longer run);
+        None: undecided (too short a window under a constant command).
+    theta0 : float
+        θ at the start, encoder counts.
+    """
+
+    claims: tuple[AuditClaim, ...]
+    at_rest: bool | None
+    theta0: float
+
+
+def start_window(u, v) -> int:
+    """Rows at the start under the run's first command: before u or v first changes from
+    row 0's value, at most :data:`START_WINDOW_S` (0.05 s at the rig's rate: 25 rows).
+
+    Parameters
+    ----------
+    u, v : array_like, shape (N,)
+        Reference and command (NaN where not logged: not used).
+
+    Returns
+    -------
+    int
+    """
+    first = []
+    for x in (u, v):
+        x = np.asarray(x, float)
+        if x.size and np.all(np.isfinite(x)):
+            moved = np.flatnonzero(x != x[0])
+            first.append(int(moved[0]) if moved.size else x.size)
+    return min(first) if first else 0
+
+
+def start_claims(theta, a, u, v, dt: float, closed: bool, accel_is_tip: bool, remembered: bool = False) -> Start:
+    """Check that the run starts at rest at t = 0, and where θ's zero is.
+
+    Under the first command (:func:`start_window`, :data:`START_WINDOW_S` at most) a hub at rest
+    stays on one count and the accelerometer reads noise (peak-to-peak at most
+    :data:`ACCEL_QUIET_COUNTS`): θ changing there while the command is 0, or within the first
+    :data:`START_MIN_ROWS` rows (no command moves the hub a count that soon: on the rig's logs
+    4 rows after a command of 100), or a swinging, is an earlier motion still going on (a copy cut from a longer run, t re-zeroed): "reference"
+    contradicted (the model starts at rest: the start of its fit is that motion's). A start at
+    rest off θ = 0 (the encoder not zeroed) contradicts a closed loop's zero ("columns": the
+    loop's error was u - θ from that θ, and the model starts there); in open loop θ is compared
+    relative to its first sample and a start off 0 is only said in the evidence.
+
+    Parameters
+    ----------
+    theta, a, u, v : array_like, shape (N,)
+        The log's columns (u NaN where not logged).
+    dt : float
+        Sample time, s.
+    closed : bool
+        Whether the run was closed loop.
+    accel_is_tip : bool
+        Whether a reads the tip (its swings count).
+    remembered : bool
+        The controller's law reproduces the log only with its first rows of memory taken as
+        logged (:attr:`station.logged.controller.ControllerId.cut`): a copy cut from a longer
+        run, its hub perhaps at rest.
+
+    Returns
+    -------
+    Start
+    """
+    theta = np.asarray(theta, float)
+    a = np.asarray(a, float)
+    v = np.asarray(v, float)
+    if theta.size < START_MIN_ROWS or not np.all(np.isfinite(theta[:START_MIN_ROWS])):
+        return Start((), None, 0.0)
+    cap = max(START_MIN_ROWS, int(round(START_WINDOW_S / dt)))
+    w = max(min(start_window(u, v), cap), min(START_MIN_ROWS, theta.size))
+    th0 = float(theta[0])
+    still = bool(np.all(theta[:w] == th0))
+    swing = (float(np.ptp(a[1:w])) if accel_is_tip and w > 2 and np.all(np.isfinite(a[1:w])) else 0.0)
+    idle = v.size >= w and np.all(np.isfinite(v[:w])) and np.all(v[:w] == 0)
+    span = f"the first {w} rows ({w * dt:g} s, before the command first changes)"
+    early = not np.all(theta[:START_MIN_ROWS] == th0)  # sooner than any command of row 0 moves the hub
+    claims = []
+    if remembered and still and swing <= ACCEL_QUIET_COUNTS:
+        claims.append(AuditClaim(
+            "reference", START_CLAIM, "cut from a longer run (at rest, the controller's memory not)", "contradicted",
+            f"the controller's law reproduces the logged v only with its first rows of memory taken as logged (the "
+            f"earlier run's); θ keeps one count over {span}"))
+        at_rest = False
+    elif (not still and (idle or early)) or swing > ACCEL_QUIET_COUNTS:
+        what = []
+        if not still:
+            what.append(f"θ moves {np.ptp(theta[:w]):g} counts" + (f" (within its first {START_MIN_ROWS} rows: sooner "
+                                                                    f"than a command moves the hub)" if early else ""))
+        if swing > ACCEL_QUIET_COUNTS:
+            what.append(f"a swings {swing:g} counts")
+        claims.append(AuditClaim(
+            "reference", START_CLAIM, "moving at t = 0 (a copy cut from a longer run)", "contradicted",
+            f"over {span} {' and '.join(what)}{' with v = 0' if idle else ''}: an earlier motion still going on "
+            f"(at rest θ keeps one count and a's noise stays within {ACCEL_QUIET_COUNTS:g} counts); the model "
+            f"starts at rest, so the start of its fit is that motion's"))
+        at_rest = False
+    elif not still:
+        claims.append(AuditClaim("reference", START_CLAIM, "undecided", "unchecked",
+                                 f"θ moves over {span} under a command from row 0: a motion it started or an "
+                                 f"earlier one"))
+        at_rest = None
+    else:
+        at_rest = True
+        off = "" if th0 == 0 else (f"; θ starts at {th0:g} counts (the encoder not zeroed"
+                                   + ("): the loop's error was u - θ from there" if closed else
+                                      "; open loop: θ compared relative to its first sample)"))
+        claims.append(AuditClaim("reference", START_CLAIM, "at rest at t = 0", "confirmed",
+                                 f"θ keeps one count and a's noise stays within {ACCEL_QUIET_COUNTS:g} counts over "
+                                 f"{span}{off}"))
+    if closed and th0 != 0 and at_rest:
+        claims.append(AuditClaim("columns", ZERO_CLAIM, f"θ starts at {th0:g} counts (the encoder not zeroed)",
+                                 "contradicted", f"θ[0] = {th0:g}: the controller's error was u - θ from there; the "
+                                 f"model starts at rest at θ = {th0:g}"))
+    return Start(tuple(claims), at_rest, th0)
