@@ -138,16 +138,19 @@ def judged_logs(paths: list[str], out=print) -> list[RunCase]:
     return cases
 
 
-def copy_of(case: RunCase, earlier: list[RunCase]) -> str | None:
-    """The log among ``earlier`` whose θ holds this log's θ as a contiguous stretch (the same
-    log, or a cut-down copy of it), or None."""
+def copy_of(case: RunCase, earlier: list[RunCase], max_step: int = 4) -> str | None:
+    """The log among ``earlier`` whose θ holds this log's θ as a contiguous stretch, every
+    sample or every k-th (k ≤ ``max_step``: the same log, a cut-down or a down-sampled copy), or None."""
     th = np.asarray(case.run.data["theta"], float)
     for fc in earlier:
-        ref = np.asarray(fc.run.data["theta"], float)
-        if th.size <= ref.size and th.size >= 50:
-            windows = np.lib.stride_tricks.sliding_window_view(ref, th.size)
-            if np.any(np.all(windows == th, axis=1)):
-                return fc.name
+        full = np.asarray(fc.run.data["theta"], float)
+        for k in range(1, max_step + 1):
+            for j in range(k):
+                ref = full[j::k]
+                if 50 <= th.size <= ref.size:
+                    windows = np.lib.stride_tricks.sliding_window_view(ref, th.size)
+                    if np.any(np.all(windows == th, axis=1)):
+                        return fc.name
     return None
 
 
@@ -237,7 +240,8 @@ def study(ev: Evaluator, fit_idx: list[int], groups: dict, names: tuple, copies:
     final = best_fit(ev, names, fit_idx, [middle] + starts[1:])
     out("  refitted on all: " + ", ".join(f"{k} = {v:.4g}" for k, v in final.items()))
     inside = judge(ev, fit_idx, final, {})
-    out(f"  in-sample θ RMS gain {pooled(inside):.1f} %")
+    out(f"  in-sample θ RMS gain {pooled(inside):.1f} % (θ RMS " + " / ".join(
+        f"{math.sqrt(g.sse_nominal / g.n):.2f} -> {math.sqrt(g.sse / g.n):.2f}" for g in inside) + " counts)")
     shoots = []
     for i in fit_idx:
         os_ = overshoot(ev, final, i)
@@ -262,7 +266,9 @@ def summary(results: list[Result], choosing: str | None, out=print) -> None:
             line += f"; {label} " + ", ".join(f"{g.pct:+.1f}" for g in gains if g.copy_of is None)
             line += f" (pooled {pooled(gains):.1f})"
         every = [g for gains in r.groups.values() for g in gains]
-        out(line + f"; every log not fitted, pooled {pooled(every):.1f}")
+        judged = [g for label, gains in r.groups.items() if label.startswith("judge ") for g in gains]
+        out(line + (f"; every --judge log, pooled {pooled(judged):.1f}" if judged else "")
+            + f"; every log not fitted, pooled {pooled(every):.1f}")
         if choosing in r.groups:
             gains = r.groups[choosing]
             met = {"LOO": r.loo >= BARS["loo"],
@@ -295,12 +301,15 @@ def also_models(names: list[str], groups: dict, ev: Evaluator, copies: dict, out
     for name in names:
         model = load_model(name)
         out(f"\n== model {name} ({', '.join(f'{k} = {v:.4g}' for k, v in model.effect_dict().items()) or 'no effects'})")
-        every = []
+        every, judged = [], []
         for label, idx in groups.items():
             gains = [Gain(ev.cases[i].name, ev.cases[i].n, ev.sse({}, i)[0], theta_sse(ev.cases[i], model),
                           copies.get(i)) for i in idx]
             print_group(label, gains, out)
             every += gains
+            judged += gains if label.startswith("judge ") else []
+        if judged:
+            out(f"  every --judge log, pooled θ RMS gain {pooled(judged):.1f} %")
         out(f"  every log not fitted, pooled θ RMS gain {pooled(every):.1f} %")
 
 

@@ -13,7 +13,8 @@ band against the rig's (|G_model|/|G_rig| and the phase error, from the sweep's 
 G = Θ(f)/V(f) of the logged and of the simulated v and θ); the θ/v antiresonance (the notch of
 |G| between 2 and 4 Hz in 0.05 Hz bins) against the model's hub-held first mode
 (:func:`station.plant.modes.modal_summary`), with and without the accelerometer's mass, and
-the rig's hub-held ping (the hold-and-release log, :func:`station.analysis.beam.analyze_beam_test`).
+the rig's hub-held ping (the hold-and-release log, :func:`station.analysis.beam.analyze_beam_test`);
+and, on the four thesis logs, how far the hub moves in the 40 ms after the first command.
 """
 
 from __future__ import annotations
@@ -38,6 +39,10 @@ from station.outputs import FORCE_HELP, Transaction, check_outputs
 RIG = Path(__file__).resolve().parents[1] / ".." / "shared" / "data" / "rig"
 SWEEPS = ["swept_sine_kp_1_amp_50.txt", "without_accel_01_28_14_test_2.txt"]
 PING = "log_dec_hold_and_release_1_SLFR_RTP_OL_Test_uend=77.txt"
+THESIS = ["OL_pulse_test_sys_check_SLFR_RTP_OL_Test_uend=0.txt",
+          "SFLR_P_control_step_kp_2_SLFR_RTP_P_control_kp=2.0.txt",
+          "step_response_Gth_comp_no_accel_FB_amp_100_duration_1000_SLFR_RTP_Motor_Comp_Gth.txt",
+          "step_response_Gth_comp_Ga_opt_amp_200_duration_1000_opt_case43_SLFR_RTP_Motor_Comp_Gth.txt"]
 STRETCHES_S = (0.0, 1.0, 1.5, 2.0, 2.5, 3.0, 3.5, 4.0, 6.0, 10.0, 16.0, 22.0)
 BANDS_HZ = ((0.3, 1.0), (1.0, 2.0), (2.0, 2.3), (2.3, 2.7), (2.7, 3.5), (3.5, 6.0), (6.0, 12.0), (12.0, 25.0))
 NOTCH_HZ = (2.0, 4.0)
@@ -171,6 +176,22 @@ def figure(cases: list[RunCase], sims: list[list[Sim]], path: str, tx: Transacti
         fig.savefig(fh, format="png", dpi=110)
 
 
+def onsets(models, samples: int = 20, out=print) -> None:
+    """How far the hub moves in the first ``samples`` samples after each thesis log's first
+    command, on the rig and on each model: a linear motor moves twice as far for twice the command."""
+    out(f"\nθ {samples} samples after the first command (counts): rig / " + " / ".join(m.name for m in models))
+    for name in THESIS:
+        path = RIG / name
+        if not path.exists():
+            continue
+        case = load_case(path)
+        v = np.asarray(case.run.data["v"], float)
+        k = int(np.argmax(np.abs(v) > 0.5)) + samples
+        sims = [simulate(case, m).theta[k] for m in models]
+        out(f"  {name[:40]:40s} v {v[k - samples]:+5.0f}: {case.theta[k]:4.0f} / "
+            + " / ".join(f"{x:4.0f}" for x in sims))
+
+
 def ping(out=print) -> None:
     """The rig's hub-held first mode from the hold-and-release log."""
     path = RIG / PING
@@ -197,6 +218,7 @@ def main(argv=None) -> int:
         effects = ", ".join(f"{k} = {v:.4g}" for k, v in m.effect_dict().items()) or "no effects"
         print(f"model {m.name}: {effects}; {first_modes(m)}")
     ping()
+    onsets(models)
     cases, sims = [], []
     for path in paths:
         case = load_case(path)
