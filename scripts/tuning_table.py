@@ -230,7 +230,7 @@ def main(argv: list[str] | None = None) -> int:
                     f"{max(f.tip_residual_rms for f in new_t):.2f} |")
         params = ", ".join(f"{k} = {v:.4g}" for k, v in r.values.items())
         met = r.met()
-        held = held_summary(r.figures, r.model_requirements()[0])
+        held = held_summary(r.figures, r.model_requirements())
         sec = [f"### {label}", "",
                f"Parameters: {params}. Margins on the model (python-control): gain "
                f"{r.margins.gain_margin_db:.1f} dB, phase {r.margins.phase_margin_deg:.1f}° (the thesis's: "

@@ -1,12 +1,15 @@
 """The shipped rig models against the rig's own logs (independent truth: measured data,
-the thesis's overshoot table), including logs they were not fitted to (docs/diagnosis.md)."""
+the thesis's overshoot table), including logs they were not fitted to (docs/diagnosis.md
+"Which model to ship")."""
 
+import json
 import math
 
 import numpy as np
 import pytest
 
 from station.analysis.metrics import step_metrics
+from station.cli import main
 from station.diagnosis.runs.cases import load_case, simulate_case
 from station.plant.model import load_model
 
@@ -22,15 +25,25 @@ SESSION_2009 = ["2009/step_response_amp=100_SLFR_RTP_P_control_kp=1.0.txt",
                 "2009/swept_sine_no_sat_amp=25_stopn=20000_test_1_SLFR_RTP_P_control_kp=1.0.txt"]
 
 
-def _theta_rms(case, model) -> float:
+def _theta_sse(case, model) -> float:
     theta, _ = simulate_case(case, model)
-    return math.sqrt(float(np.mean((case.theta - theta) ** 2)))
+    return float(np.sum((case.theta - theta) ** 2))
+
+
+def _pooled_gain(rig_data, logs, model) -> float:
+    """θ RMS gain over tmm-fit, pooled over all samples of the logs (scripts/rig_study.py's)."""
+    num = den = 0.0
+    for log in logs:
+        case = load_case(rig_data / log)
+        num += _theta_sse(case, load_model(model))
+        den += _theta_sse(case, load_model("tmm-fit"))
+    return 1 - math.sqrt(num / den)
 
 
 @pytest.mark.parametrize("log", sorted(THESIS_STEPS))
 def test_rig_model_step_overshoots_near_the_rig(rig_data, log):
     """The thesis's FEM misses the P step by 14 points; the rig model is within 3 of every step
-    (issue 17's target: 24.0 / 12.0 / 19.5 % against 24.0 / 10.0 / 21.5 %)."""
+    (issue 26's bar; 22.0 / 12.0 / 19.0 % against the rig's 24.0 / 10.0 / 21.5 %)."""
     case = load_case(rig_data / log)
     theta, _ = simulate_case(case, load_model("rig"))
     u = np.asarray(case.run.data["u"], float)
@@ -42,27 +55,53 @@ def test_rig_model_step_overshoots_near_the_rig(rig_data, log):
 def test_rig_model_beats_the_nominal_on_logs_it_was_not_fitted_to(rig_data, log):
     """Fitted on the four thesis logs; better than tmm-fit on every other rig log of both eras."""
     case = load_case(rig_data / log)
-    assert _theta_rms(case, load_model("rig")) < _theta_rms(case, load_model("tmm-fit"))
+    assert _theta_sse(case, load_model("rig")) < _theta_sse(case, load_model("tmm-fit"))
 
 
-def test_rig_model_pooled_gain_on_logs_it_was_not_fitted_to(rig_data):
-    """Pooled over the six unseen logs of both eras, θ RMS 29.5 % below tmm-fit's (the
-    noise-weighted fit's drive_c 2.0 + Coulomb 15.9 was 5.4 % worse than tmm-fit there)."""
-    num = den = 0.0
-    for log in NOT_FITTED_2014 + SESSION_2009:
-        case = load_case(rig_data / log)
-        num += _theta_rms(case, load_model("rig")) ** 2 * case.n
-        den += _theta_rms(case, load_model("tmm-fit")) ** 2 * case.n
-    assert 1 - math.sqrt(num / den) >= 0.25
+def test_rig_model_pooled_gain_on_the_unseen_2014_logs(rig_data):
+    """The two shared 2013-14 logs no fit uses: 32.3 % pooled (8.4 and 46.5 %). Issue 26 asks
+    40 %, which no structure fitted on the thesis logs reaches (docs/diagnosis.md: fitted on
+    these two logs themselves, drive damping + Coulomb friction + viscous friction reach
+    40.7 %); this guards the shipped model's level."""
+    assert _pooled_gain(rig_data, NOT_FITTED_2014, "rig") >= 0.30
+
+
+def test_rig_model_pooled_gain_on_the_2009_session(rig_data):
+    """The other era, never fitted by `rig`: 36.6 % pooled (the former rig without the
+    amplifier offset: 26.7 %)."""
+    assert _pooled_gain(rig_data, SESSION_2009, "rig") >= 0.33
+
+
+def test_station_compare_judges_the_unseen_logs_as_the_study_does(rig_data, tmp_path, capsys):
+    """`station compare`'s θ fit of rig and of tmm-fit on each unseen 2013-14 log gives the same
+    θ RMS gain as the study's simulation (both simulate the log as the rig ran it)."""
+    for log in NOT_FITTED_2014:
+        fits = {}
+        for model in ("rig", "tmm-fit"):
+            out = tmp_path / f"{model}-{log}.json"
+            assert main(["compare", str(rig_data / log), "--model", model, "--json", str(out),
+                         "--out-dir", str(tmp_path), "--force"]) == 0
+            (run,) = json.loads(out.read_text())["runs"]
+            fits[model] = run["fit_pct"]["theta"]
+        capsys.readouterr()
+        gain_compare = 1 - (100 - fits["rig"]) / (100 - fits["tmm-fit"])  # NRMSE fits share ‖θ − mean θ‖
+        assert gain_compare == pytest.approx(_pooled_gain(rig_data, [log], "rig"), abs=1e-9)
 
 
 @pytest.mark.parametrize("log", SESSION_2009)
 def test_rig_2009_fits_its_session_better_than_the_2014_rig(rig_data, log):
     """The rig drifted: the 2009 logs want far less friction than the 2013-14 runs."""
     case = load_case(rig_data / log)
-    assert _theta_rms(case, load_model("rig-2009")) < _theta_rms(case, load_model("rig"))
+    assert _theta_sse(case, load_model("rig-2009")) < _theta_sse(case, load_model("rig"))
 
 
 def test_rig_2009_has_less_friction_than_2014():
     old, new = load_model("rig-2009").effect_dict(), load_model("rig").effect_dict()
     assert old["coulomb_friction"] < 3.0 < new["coulomb_friction"]
+
+
+def test_both_eras_have_a_negative_amplifier_offset():
+    """Fitted separately on each era's own logs, the amplifier offset comes out −1.5 (2009)
+    and −2.0 DAC counts (2013-14): the same sign and size (station survey shares it)."""
+    for name in ("rig", "rig-2009"):
+        assert -3.0 < load_model(name).effect_dict()["amp_offset"] < -1.0

@@ -221,7 +221,7 @@ def format_diagnosis(diag) -> str:
              + (f"   (all accepted: {', '.join(diag.all_causes)})" if len(diag.all_causes) > 1 else ""),
              f"θ fit {pct(diag.baseline_fit.get('theta'))} -> {pct(diag.extended_fit.get('theta'))}, "
              f"a fit {pct(diag.baseline_fit.get('accel'))} -> {pct(diag.extended_fit.get('accel'))}, "
-             f"θ RMS gain {diag.gain_pct:.1f} %",
+             f"θ RMS gain {diag.gain_pct:.1f} % on runs not used to fit ({diag.validation})",
              "unexplained: " + ("no" if u is None or not u.flag else "yes - " + whole_sentences(u.evidence)
                                 + f" ({diag.prediction_words()})")]
     if diag.causes:
@@ -233,7 +233,8 @@ def format_diagnosis(diag) -> str:
         m = r.metrics
         ov = "" if m is None else ("   overshoot rig/nominal/extended " +
                                    " / ".join(f"{m[k].overshoot_pct:.2f}" for k in ("rig", "nominal", "extended")) + " %")
-        lines.append(f"  {r.file} ({r.role}): θ fit {pct(r.fit_nominal.get('theta'))} -> "
+        role = "fitted on: in-sample" if r.role == "fit" else "not used to fit"
+        lines.append(f"  {r.file} ({role}): θ fit {pct(r.fit_nominal.get('theta'))} -> "
                      f"{pct(r.fit_extended.get('theta'))}, gain {r.gain_pct:.1f} %{ov}")
     for note in diag.notes:
         lines.append(f"note: {note}")

@@ -144,7 +144,7 @@ def format_result(result) -> str:
         lines.append(f"  worst over the set against the thesis's on the same model: hub {s2} {c.hub_ratio:.2f}x, tip "
                      f"residual RMS {c.tip_ratio:.2f}x; the trade-off front holds {len(result.tradeoff.front)} of "
                      f"{len(result.tradeoff.points)} designs (--report draws it)")
-    note = held_summary(result.figures, result.model_requirements()[0])["note"]
+    note = held_summary(result.figures, result.model_requirements())["note"]
     if note:
         lines.append(f"  {note}")
     v = result.verification

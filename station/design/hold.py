@@ -105,7 +105,7 @@ def design_model_warning(space, values: dict, model, figure: Figures, requiremen
                    f"would remove the error, is not in the rig's structures")
 
 
-def held_summary(figures, requirements: Requirements) -> dict:
+def held_summary(figures, requirements) -> dict:
     """The models of a set on which friction holds the hub outside the 2 % band, and how
     their step was judged.
 
@@ -113,7 +113,9 @@ def held_summary(figures, requirements: Requirements) -> dict:
     ----------
     figures : sequence of Figures
         The design on each model.
-    requirements : Requirements
+    requirements : Requirements or sequence of Requirements
+        The requirements, or each model's own (a tip bound is per model: one model's
+        requirements would misjudge another's).
 
     Returns
     -------
@@ -122,7 +124,8 @@ def held_summary(figures, requirements: Requirements) -> dict:
         ``band_counts`` ([min, max] over them, None when none) and ``note``: one sentence
         saying how those models were judged (None when none).
     """
-    held = [f for f in figures if friction_held(f, requirements)]
+    reqs = [requirements] * len(figures) if isinstance(requirements, Requirements) else list(requirements)
+    held = [f for f, r in zip(figures, reqs) if friction_held(f, r)]
     out = {"models": len(held), "of": len(figures), "held_error_counts": None, "band_counts": None, "note": None}
     if not held:
         return out

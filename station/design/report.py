@@ -52,7 +52,7 @@ def _tables(result) -> list[str]:
                f"{esc(result.file.design.model_sha256)}</code>") + ".</p>",
             *[f"<p><b>Warning:</b> {esc(w)}.</p>" for w in d["warnings"]],
             *([f"<p>Friction: {esc(note)}.</p>"] if (note := held_summary(result.figures,
-                                                                       result.model_requirements()[0])["note"])
+                                                                       result.model_requirements())["note"])
               else []),
             "<h2>Parameters</h2><table><tr><th>parameter</th><th>value</th><th>unit</th></tr>"]
     for k, v in d["parameters"].items():

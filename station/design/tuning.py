@@ -407,7 +407,7 @@ def robust_json(rs: RobustSet, figures, baseline, req) -> dict:
                           "settling_held_s": f.settling_rest_s if held else None})
     out = _spread(figures)
     out.update({"all_met": all(p["requirements_met"] for p in per_model),
-                "friction_held": held_summary(figures, reqs[0]),
+                "friction_held": held_summary(figures, reqs),
                 "settling_ratio_to_baseline": [min(ratios), max(ratios)] if ratios else None,
                 "tip_rms_ratio_to_baseline": [min(tip_ratios), max(tip_ratios)] if tip_ratios else None,
                 "intervals": {k: list(v) for k, v in rs.intervals.items()}, "per_model": per_model})

@@ -90,8 +90,8 @@ def answer_lines(result) -> list[str]:
     if not result.accepted:
         lines.append("structure: none (no effect lowers the held-out cost beyond what noise reaches); nothing drifts")
         return lines
-    lines.append(f"structure: {', '.join(plain_name(n) for n in result.accepted)}; held-out θ RMS gain "
-                 f"{result.gain_pct:.1f} % over the nominal model")
+    lines.append(f"structure: {', '.join(plain_name(n) for n in result.accepted)}; θ RMS gain on runs not used "
+                 f"to fit ({result.validation}) {result.gain_pct:.1f} % over the nominal model")
     if len(result.sessions) < 2:
         lines.append("one session: nothing can drift")
     lines.append("drifting: " + (", ".join(result.drifting) or "none"))
