@@ -21,6 +21,7 @@ import numpy as np
 import pytest
 
 from station.cli import main
+from station.errors import StationError
 from station.signals import StopSignal, StopSignals, check_stop, noting
 from tests.output_cases import parts, write_p_log
 
@@ -93,7 +94,12 @@ def test_count_samples_counts_data_rows_not_header_lines(tmp_path):
     assert count_samples(log) == 1234
     (tmp_path / "ours.tsv").write_text("t\tn\n# station-runlog 1\n# {}\n0\t0\n0.002\t1\n# end {}\n")
     assert count_samples(tmp_path / "ours.tsv") == 3  # the column-name line is counted: an upper bound
-    assert count_samples(tmp_path / "missing.txt") == 0
+    # what the diagnosis would refuse, refused here already, before any reading: nothing blocks
+    with pytest.raises(StationError, match="missing.txt: run log not found"):
+        count_samples(tmp_path / "missing.txt")
+    os.mkfifo(tmp_path / "fifo.txt")
+    with pytest.raises(StationError, match="is a FIFO"):
+        count_samples(tmp_path / "fifo.txt")
 
 
 def _cpu_s(pid: int) -> float:

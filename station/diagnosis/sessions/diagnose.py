@@ -14,7 +14,6 @@ each cut is said.
 
 from __future__ import annotations
 
-import json
 import re
 import time
 from collections.abc import Callable, Iterable, Mapping, Sequence
@@ -39,6 +38,7 @@ from station.diagnosis.runs.folds import LEAVE_ONE_OUT, make_folds
 from station.diagnosis.runs.inputs import data_digest, set_aside_beam_tests
 from station.diagnosis.search.workbench import Bench, nominal_trial, workbench
 from station.errors import StationError
+from station.inputs import open_regular, parse_json
 from station.logged.audit import ACCEL_DRIFT_COUNTS, ACCEL_DRIFT_WINDOW_S
 from station.logged.audit import accel_drift as audit_accel_drift
 from station.logged.sensors import decide_faults, sensor_evidence
@@ -80,16 +80,16 @@ def _header_session(path: Path) -> str | None:
     """Our log header's ``session`` (None for any other file, or without one), from the
     header's first three lines alone (:data:`station.runlog.schema.MAGIC` among them)."""
     try:
-        with open(path, "rb") as fh:
+        with open_regular(path, "run log") as fh:
             lines = [fh.readline(1 << 20).decode("utf-8", "replace").rstrip("\r\n") for _ in range(3)]
-    except OSError:
+    except (OSError, StationError):  # not a regular file, unreadable: its reading names it
         return None
     if MAGIC not in lines:
         return None
     meta = next((line[2:] for line in lines if line.startswith("# {")), None)
     try:
-        meta = json.loads(meta) if meta is not None else None
-    except (ValueError, RecursionError):
+        meta = parse_json(meta, str(path)) if meta is not None else None
+    except StationError:
         return None
     s = meta.get(SESSION_KEY) if isinstance(meta, dict) else None
     return s.strip() if isinstance(s, str) and s.strip() else None
