@@ -84,8 +84,11 @@ _KINDS = ((stat.S_ISDIR, "a folder"), (stat.S_ISFIFO, "a FIFO (named pipe)"), (s
 
 
 def exists(path: str | Path) -> bool:
-    """Whether ``path`` names something that exists; False (never an exception) for a name
-    the system cannot even look up (too long, a NUL byte): the loader then says "not found".
+    """Whether ``path`` names something that is there, a symbolic link included even when it
+    points nowhere or at itself (then the loader reading it says so, rather than the name being
+    taken for something else: a built-in model, a controller kind); False, never an exception,
+    for a name the system cannot even look up (too long, a NUL byte): the loader then says
+    "not found".
 
     Parameters
     ----------
@@ -93,7 +96,7 @@ def exists(path: str | Path) -> bool:
         A name a user gave.
     """
     try:
-        os.stat(path)
+        os.lstat(path)
     except (OSError, ValueError):
         return False
     return True
@@ -124,6 +127,12 @@ def _refusal(path: str | Path, what: str, exc: BaseException) -> StationError:
     if isinstance(exc, OSError) and exc.errno == getattr(os, "ELOOP", 40):
         return StationError(f"{path}: is a symbolic link that loops (it points back at itself); expected a {what}",
                             file=path)
+    try:  # a socket cannot be opened at all (ENXIO): say what it is
+        _refuse_kind(path, what, os.stat(path).st_mode)
+    except StationError as kind:
+        return kind
+    except (OSError, ValueError):
+        pass
     reason = getattr(exc, "strerror", None) or exc  # ValueError: a NUL byte in the name
     return StationError(f"{path}: cannot read the {what}: {reason}", file=path)
 
@@ -255,11 +264,12 @@ def read_text(path: str | Path, what: str, max_bytes: int = MAX_TOML_BYTES) -> s
 def _depth(value: Any) -> int:
     """Nesting depth of parsed TOML (a scalar 0, a table or array 1 + its deepest member)."""
     depth, level = 0, [value]
-    while level:  # breadth-first: no recursion, whatever the file
-        level = [v for item in level if isinstance(item, (dict, list))
-                 for v in (item.values() if isinstance(item, dict) else item)]
-        depth += 1
-    return depth - 1
+    while True:  # breadth-first: no recursion, whatever the file
+        level = [item for item in level if isinstance(item, (dict, list))]
+        if not level:
+            return depth
+        depth += 1  # (an empty table or array counts: [[]] is 2 deep)
+        level = [v for item in level for v in (item.values() if isinstance(item, dict) else item)]
 
 
 class TomlDoc(NamedTuple):

@@ -7,10 +7,11 @@ import argparse
 from pathlib import Path
 
 from station.commands.options import (add_force_option, add_model_options, add_out_dir_option, add_report_options,
-                                      config_error, model_inputs, number, out_dir, out_dir_remedy)
+                                      config_error, model_inputs, number, out_dir, out_dir_label,
+                                      out_dir_remedy)
 from station.config import apply_config
 from station.errors import StationError
-from station.outputs import Input, Output, Transaction, check_outputs
+from station.outputs import Input, Output, Transaction, check_folder, check_outputs
 from station.plant import DiscretePlant
 from station.plant.model import as_model
 
@@ -69,6 +70,7 @@ def run(args: argparse.Namespace) -> int:
     if args.png is not None:
         figure = Output("--png", args.png)
     else:
+        check_folder(out_dir(args), out_dir_label(args))  # named as the user set it
         figure = Output(f"the figure of {args.file.name}", out_dir(args) / f"{args.file.stem}_bode.png",
                         f"--png FILE, or {out_dir_remedy(args)}")
     png = figure.path

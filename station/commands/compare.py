@@ -7,9 +7,10 @@ import argparse
 from pathlib import Path
 
 from station.commands.options import (add_force_option, add_model_options, add_out_dir_option, add_report_options,
-                                      config_error, model_inputs, out_dir, out_dir_remedy)
+                                      config_error, model_inputs, out_dir, out_dir_label,
+                                      out_dir_remedy)
 from station.config import apply_config
-from station.outputs import Input, Output, Transaction, check_outputs, unique_names
+from station.outputs import Input, Output, Transaction, check_folder, check_outputs, unique_names
 from station.plant.model import as_model
 from station.signals import noting
 
@@ -75,6 +76,7 @@ def run(args: argparse.Namespace) -> int:
 
     config_error(args)
     folder = out_dir(args)
+    check_folder(folder, out_dir_label(args))  # named as the user set it (an option, station.toml or the default)
     pngs = figure_paths(args.files, folder)
     check_outputs([Output("--json", args.json)] + [
         Output(f"the figure of {Path(f).name}", p, out_dir_remedy(args)) for f, p in zip(args.files, pngs)],

@@ -188,6 +188,10 @@ def run(args: argparse.Namespace) -> int:
     check_port(args.port)
     model = as_model(args.model)  # an unreadable model is refused before any run
     check_outputs(outputs(args), model_inputs(args), force=args.force)
+    if args.report is not None and is_folder(args.report) and any(args.report.iterdir()) and not args.force:
+        # its figures are named as the experiments come (experiment-NN.png, <log>_run.png): unknown up front
+        raise StationError(f"--report {args.report}: holds files already; use --force to write into it, or another "
+                           f"folder")
     folder = experiments_folder(args)
     check_experiment_names(outputs(args), folder)
     progress = None if args.quiet else (lambda msg: print(f"identify: {msg}", file=sys.stderr, flush=True))

@@ -5,9 +5,10 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from station.commands.options import add_force_option, add_out_dir_option, config_error, out_dir, out_dir_remedy
+from station.commands.options import (add_force_option, add_out_dir_option, config_error, out_dir, out_dir_label,
+                                      out_dir_remedy)
 from station.config import apply_config
-from station.outputs import Input, Output, check_outputs
+from station.outputs import Input, Output, check_folder, check_outputs
 
 NAME = "plot"
 HELP = "draw run logs (ours or the rig's; several are overlaid): θ and u, v and v_applied, a"
@@ -52,6 +53,7 @@ def run(args: argparse.Namespace) -> int:
     if args.out is not None:
         figure = Output("--out", args.out)
     else:
+        check_folder(out_dir(args), out_dir_label(args))  # named as the user set it
         figure = Output(f"the figure of {args.files[0].name}", out_dir(args) / f"{args.files[0].stem}.png",
                         f"--out FILE, or {out_dir_remedy(args)}")
     out = figure.path
