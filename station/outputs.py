@@ -71,12 +71,14 @@ class Output(NamedTuple):
         (``"the figure beside --out"``).
     path : str, Path or None
         The file (None: not asked for; ignored).
+    remedy : str
+        What else the user can do when the file exists, after "use --force to replace it, or"
+        (default "another name"; a file named in the output folder: another folder).
     """
 
     option: str
     path: str | Path | None
     remedy: str = "another name"
-    """What else the user can do when the file exists (after "use --force to replace it, or")."""
 
 
 class Input(NamedTuple):

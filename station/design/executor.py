@@ -93,6 +93,30 @@ class Runner:
         return results([self.executor.submit(one_thread, fn, *t) for t in tasks])
 
 
+def _connect(client_class, address: str):
+    """A Dask client of ``address``, or one line. A client whose making failed is still
+    collected later: its destructor would wait 10 s to close it and print a traceback (seen
+    with a port that answers but is no scheduler), so a half-made one is marked closed here."""
+    made = []
+
+    class Recorded(client_class):
+        def __init__(self, *args, **kwargs):
+            made.append(self)
+            super().__init__(*args, **kwargs)
+
+    try:
+        return Recorded(address, timeout=5, set_as_default=False)
+    except Exception as exc:  # noqa: BLE001 - whatever the far end did (a MemoryError: it sent no frame of Dask's)
+        for client in made:
+            client.status = "closed"  # (Client.__del__ closes only what is not closed)
+            with contextlib.suppress(Exception):
+                client._loop_runner.stop()
+        made.clear()
+        why = (f"something answers there, not as a Dask scheduler ({type(exc).__name__})"
+               if isinstance(exc, MemoryError) else f"{exc}" or type(exc).__name__)
+        raise StationError(f"--scheduler {address}: cannot connect ({why})") from None
+
+
 def check_scheduler(address: str) -> None:
     """Refuse a Dask scheduler's address that is malformed or where nothing listens, in one line,
     within :data:`CONNECT_S` (before a client is made: a client that cannot connect retries
@@ -157,10 +181,7 @@ def open_runner(jobs: int = 1, scheduler: str | None = None) -> Iterator[Runner]
         except ImportError:
             raise StationError("--scheduler: needs Dask distributed (pip install 'station[dask]')") from None
         check_scheduler(scheduler)
-        try:
-            client = Client(scheduler, timeout=5, set_as_default=False)
-        except (OSError, TimeoutError, ValueError) as exc:
-            raise StationError(f"--scheduler {scheduler}: cannot connect ({exc})") from None
+        client = _connect(Client, scheduler)
         executor = client.get_executor(pure=False)
         try:
             yield Runner(executor, f"dask scheduler {scheduler}")

@@ -107,8 +107,25 @@ def read_log(path: str | Path) -> RunLog:
 
 def open_log(path: Path, errors: str = "strict"):
     """``path`` opened as a run log's text (:func:`station.inputs.open_regular`: a folder, a FIFO
-    (opening it would block) or a device (/dev/zero never ends) is no log); a
-    :class:`RunLogError` naming the file otherwise."""
+    (opening it would block) or a device (/dev/zero never ends) is no log).
+
+    Parameters
+    ----------
+    path : Path
+        The log.
+    errors : str
+        The text decoder's error handling ("replace" to find a line's number in a bad file).
+
+    Returns
+    -------
+    file object
+        Text, UTF-8, lines as written.
+
+    Raises
+    ------
+    RunLogError
+        Not a regular file, missing or unreadable (naming the file).
+    """
     try:
         return open_regular(path, "run log", text=True, errors=errors)
     except StationError as exc:
