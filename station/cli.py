@@ -8,7 +8,9 @@ is printed as one line (``station: error: ...``) with exit code 2, never a trace
 from __future__ import annotations
 
 import argparse
+import contextlib
 import importlib
+import logging
 import os
 import sys
 import warnings
@@ -76,8 +78,8 @@ def main(argv: list[str] | None = None) -> int:
                     args = parser.parse_args(argv)
                 except SystemExit as exc:  # --help, or a refused value: argparse said it in one line
                     return exc.code if isinstance(exc.code, int) else 2
-                _configure_logging(args.verbose)
-                return int(args._run(args) or 0)
+                with _logging(args.verbose):
+                    return int(args._run(args) or 0)
             except StationError as exc:
                 print(f"station: error: {one_line(str(exc))}", file=sys.stderr)
                 return 2
@@ -100,17 +102,26 @@ def _one_line_warning(message, category, filename, lineno, file=None, line=None)
     print(f"station: warning: {message}", file=sys.stderr if file is None else file)
 
 
-def _configure_logging(verbose: int) -> None:
-    """``-v``: INFO of the station's loggers on stderr; ``-vv``: DEBUG (every byte on the wire)."""
-    if verbose <= 0:
-        return
-    import logging  # lazy: start-up time (logging, only with -v)
-
+@contextlib.contextmanager
+def _logging(verbose: int):
+    """The station's loggers on stderr for one command: warnings as one line each
+    (``station: warning: ...``); ``-v``: INFO with times and names, ``-vv``: DEBUG (every byte
+    on the wire). The handler goes when the command ends (``main`` may run again in a process)."""
     handler = logging.StreamHandler(sys.stderr)
-    handler.setFormatter(logging.Formatter("%(relativeCreated)9.1f ms %(name)s: %(message)s"))
     root = logging.getLogger("station")
+    level = root.level
+    if verbose <= 0:
+        handler.setFormatter(logging.Formatter("station: warning: %(message)s"))
+        handler.setLevel(logging.WARNING)
+    else:
+        handler.setFormatter(logging.Formatter("%(relativeCreated)9.1f ms %(name)s: %(message)s"))
+        root.setLevel(logging.DEBUG if verbose >= 2 else logging.INFO)
     root.addHandler(handler)
-    root.setLevel(logging.DEBUG if verbose >= 2 else logging.INFO)
+    try:
+        yield
+    finally:
+        root.removeHandler(handler)
+        root.setLevel(level)
 
 
 def _silence_stdout() -> None:

@@ -119,8 +119,7 @@ def compare_run(path, plant) -> RunComparison:
     run = LoggedRun.from_path(path)
     log, data = run.log, run.data
     source = source_label(log)
-    if len(log) == 0:  # the log's own notes say why: no controller to ask for
-        raise StationError(f"{path}: the log has no rows; nothing to compare")
+    log.require_rows("compare")  # the log's own notes say why: no controller to ask for
     controller, notes = run.controller, run.notes
     name = "none" if controller is None else controller.name  # none: the model is driven by the logged v
     if run.closed:

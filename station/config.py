@@ -8,11 +8,13 @@ Example::
     limit = 200            # controller clamp, DAC counts
     soft_limit = 1500      # encoder counts
     timeout = 0.1          # s
-    out_dir = "runs"       # where default run logs go
+    out_dir = "runs"       # the output folder: default run logs, figures named after logs
 
 Keys are ``station step``'s option names with ``_`` for ``-`` (:data:`KEYS`); each value
 is checked by the option's own type, so the ranges are the options' ranges. Options given
-on the command line win over the file (:func:`apply_config`).
+on the command line win over the file (:func:`apply_config`). Every command that names
+files itself (step, identify, compare, bode, plot) puts them in ``out_dir``
+(:mod:`station.outputs`); the device settings are step's and identify's.
 """
 
 from __future__ import annotations
@@ -35,8 +37,9 @@ def config_path(cwd: str | Path | None = None) -> Path | None:
     """The config file in use: ``./station.toml``, else ``$XDG_CONFIG_HOME/station/station.toml``
     (default ``~/.config/station/station.toml``); None when neither exists.
 
-    Anything by that name counts (a folder or a FIFO too: :func:`load_config` refuses it,
-    rather than the station silently using the other file or none).
+    Anything by that name counts (a folder, a FIFO, a dangling or looping symbolic link too:
+    :func:`load_config` refuses it, rather than the station silently using the other file or
+    none).
 
     Parameters
     ----------
@@ -44,11 +47,11 @@ def config_path(cwd: str | Path | None = None) -> Path | None:
         The working folder (default: the process's).
     """
     here = Path(cwd or ".") / FILE_NAME
-    if here.exists():
+    if os.path.lexists(here):  # (not Path.exists: it follows a link, and a dangling one would pass as no file)
         return here
     home = Path(os.environ.get("XDG_CONFIG_HOME") or Path.home() / ".config")
     user = home / "station" / FILE_NAME
-    return user if user.exists() else None
+    return user if os.path.lexists(user) else None
 
 
 def load_config(path: str | Path | None) -> dict[str, Any]:
@@ -84,7 +87,9 @@ def apply_config(parser: argparse.ArgumentParser, cwd: str | Path | None = None,
 
     A bad file does not stop the parser from being built (``station --help`` works): its
     error is kept as the default ``_config_error`` for the command to raise when it runs;
-    ``_config`` names the file in use (None without one).
+    ``_config`` names the file in use (None without one) and ``_config_values`` holds what
+    it set (so a message can say a value came from the file, not from an option). A key the
+    command has no option for is checked as a known key and not applied.
 
     Parameters
     ----------
@@ -94,8 +99,9 @@ def apply_config(parser: argparse.ArgumentParser, cwd: str | Path | None = None,
         The working folder (default: the process's).
     skip : tuple of str, optional
         Keys of :data:`KEYS` that mean something else to this command (``station identify``'s
-        ``--out-dir`` is its experiments' folder, not the folder of step's log names): the
-        file's value is not applied (still checked as a known key).
+        ``--out-dir`` is its experiments' folder, not the output folder they are made in): the
+        file's value is not applied as the option's default (still checked, and in
+        ``_config_values``).
     """
     path = None
     try:
@@ -104,9 +110,9 @@ def apply_config(parser: argparse.ArgumentParser, cwd: str | Path | None = None,
         actions = {a.dest: a for a in parser._actions}
         defaults = {}
         for key, value in ({} if doc is None else doc.data).items():
-            if key in skip:
+            action = actions.get(key)
+            if action is None:  # not this command's (a device setting for compare)
                 continue
-            action = actions[key]
             if isinstance(value, bool) or not isinstance(value, (str, int, float)):
                 raise doc.error(key, f"expected a string or a number, got {shown(value)}")
             text = str(value)
@@ -120,6 +126,8 @@ def apply_config(parser: argparse.ArgumentParser, cwd: str | Path | None = None,
                 raise StationError(f"{where}: expected one of {', '.join(action.choices)}", file=path, line=line,
                                    key=key)
             defaults[key] = converted
-        parser.set_defaults(**defaults, _config=str(path) if path else None, _config_error=None)
+        applied = {k: v for k, v in defaults.items() if k not in skip}
+        parser.set_defaults(**applied, _config=str(path) if path else None, _config_error=None,
+                            _config_values=defaults)
     except StationError as exc:
-        parser.set_defaults(_config=str(path) if path else None, _config_error=str(exc))
+        parser.set_defaults(_config=str(path) if path else None, _config_error=str(exc), _config_values={})

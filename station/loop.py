@@ -345,7 +345,7 @@ def run_loop(session: Session, controller, reference: np.ndarray, writer, soft_l
         counters["late"] = max(counters["late"], stopped.get("late", 0))
         counters["watchdog_trips"] = max(counters["watchdog_trips"], stopped.get("watchdog_trips", 0))
     outcome = Outcome(reason, message, ticks=ticks, command_zero_sent=stop_ok, **counters)
-    logger.log(logging.INFO if outcome.ok else logging.WARNING, "run ended: %s", outcome)
+    logger.info("run ended: %s (%s), %d ticks", outcome.reason, outcome.message, outcome.ticks)  # the caller reports it
     age = process_age()  # the start-up: from the process's start to the first sample
     first_tick = NAN if age is None else age - (time.perf_counter() - first_at)
     return RunResult(outcome, latencies, stopped, {"priority": level, "max_lag_ms": 1000.0 * session.max_lag_seen,

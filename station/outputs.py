@@ -1,8 +1,15 @@
 """Every file the station writes: one rule, checked before anything starts, and files that
 are written whole or not at all (docs/logs.md "Output files").
 
+Where: a file a command names itself (a run log's default name, a figure named after a
+log) goes into the output folder, ``--out-dir``: by default ``station.toml``'s ``out_dir``,
+else ``runs/`` in the working folder (:data:`DEFAULT_OUT_DIR`); a file the user names
+(``--out``, ``--png``, ``--json``, a ``--report`` folder, ...) goes where they say.
+
 The rule, the same for every command:
 
+0. Every output's name can be made: no part of its path longer than the file system allows
+   (with room for the temporary name of rule 4), the whole path within its limit, no NUL byte.
 1. No output is an input of the same command, and no two outputs are the same file.
    Paths are compared as files: an existing file by its device and inode (so a hard link
    or a symbolic link to an input is that input), a new one by its resolved path.
@@ -21,7 +28,7 @@ keeps the rows that fit (the run log writer saves the rest to a rescue file). Ru
 2 hold for it too: it is never created over an input or another output, and over an
 existing file only with ``--force``.
 
-:func:`check_outputs` applies rules 1 and 2 and checks that every folder can be written,
+:func:`check_outputs` applies rules 0, 1 and 2 and checks that every folder can be written,
 before a command starts its work; :class:`Transaction` writes a command's files by rule
 4, renaming them into place together at the end.
 """
@@ -46,6 +53,13 @@ PART_SUFFIX = ".part"
 """Suffix of the temporary file a :class:`Transaction` writes before renaming it (hidden: it
 starts with a dot)."""
 
+PART_EXTRA_BYTES = 1 + 1 + 8 + len(PART_SUFFIX)
+"""How much longer the temporary name is than its target's (``.NAME.XXXXXXXX.part``), bytes: an
+output's name must leave room for it."""
+
+DEFAULT_OUT_DIR = "runs"
+"""The output folder when neither ``--out-dir`` nor ``station.toml``'s ``out_dir`` names one."""
+
 
 class Output(NamedTuple):
     """A file a command will write.
@@ -57,10 +71,14 @@ class Output(NamedTuple):
         (``"the figure beside --out"``).
     path : str, Path or None
         The file (None: not asked for; ignored).
+    remedy : str
+        What else the user can do when the file exists, after "use --force to replace it, or"
+        (default "another name"; a file named in the output folder: another folder).
     """
 
     option: str
     path: str | Path | None
+    remedy: str = "another name"
 
 
 class Input(NamedTuple):
@@ -116,6 +134,63 @@ def _probe_folder(folder: Path, what: str, probed: dict[Path, None]) -> None:
     probed[existing] = None
 
 
+def _limit(folder: Path, name: str, default: int) -> int:
+    try:
+        value = os.pathconf(folder, name)
+    except (OSError, ValueError):
+        return default
+    return default if value is None or value <= 0 else value
+
+
+def _short(text: str, width: int = 48) -> str:
+    return text if len(text) <= width else text[:width - 3] + "..."
+
+
+def check_name(path: str | Path, what: str, written_whole: bool = True) -> None:
+    """Refuse an output name the file system cannot hold (rule 0), before any work: a NUL byte,
+    a part of the path longer than the folder's name limit (``NAME_MAX``, 255 bytes on most
+    file systems; less :data:`PART_EXTRA_BYTES` for a file written under a temporary name), or a
+    whole path past ``PATH_MAX``.
+
+    Parameters
+    ----------
+    path : str or Path
+        The output (a file or a folder; it need not exist).
+    what : str
+        How messages name it (the option or the derived file, and the path).
+    written_whole : bool
+        The last part is a file written through a :class:`Transaction` (its temporary name is
+        longer); False for a folder.
+
+    Raises
+    ------
+    StationError
+        ``WHAT: ...`` saying which part is too long, by how much, and the limit.
+    """
+    text = os.fspath(path)
+    if "\0" in text:
+        raise StationError(f"{what}: holds a NUL byte; a file name cannot")
+    existing = Path(os.path.abspath(text))
+    while _kind(existing) == "none" and existing.parent != existing:
+        existing = existing.parent
+    name_max = _limit(existing, "PC_NAME_MAX", 255)
+    parts = Path(text).parts
+    for i, part in enumerate(parts):
+        size = len(os.fsencode(part))
+        last = i == len(parts) - 1
+        room = name_max - (PART_EXTRA_BYTES if last and written_whole else 0)
+        if size > room:
+            extra = (f" (it is written first under a temporary name {PART_EXTRA_BYTES} bytes longer)"
+                     if last and written_whole else "")
+            raise StationError(f"{_short(what)}: the name {_short(part)!r} is {size} bytes; a "
+                               f"{'file' if last and written_whole else 'folder or file'} name here is at most "
+                               f"{room} bytes{extra}")
+    path_max = _limit(existing, "PC_PATH_MAX", 4096)
+    size = len(os.fsencode(os.path.abspath(text))) + (PART_EXTRA_BYTES if written_whole else 0)
+    if size >= path_max:
+        raise StationError(f"{_short(what)}: the path is {size} bytes; at most {path_max - 1} here")
+
+
 def is_device(path: str | Path) -> bool:
     """True for an existing path that is neither a regular file nor a folder (``/dev/null``, a pipe).
 
@@ -143,6 +218,7 @@ def check_folder(folder: str | Path | None, option: str) -> None:
         ``OPTION FOLDER: ...`` naming what is in the way.
     """
     if folder is not None:
+        check_name(folder, f"{option} {folder}", written_whole=False)
         if _kind(Path(folder)) not in ("folder", "none"):
             raise StationError(f"{option} {folder}: is a file, expected a folder")
         _probe_folder(Path(folder), f"{option} {folder}", {})
@@ -155,7 +231,7 @@ def check_outputs(outputs: Iterable[Output | tuple], inputs: Iterable[Input | tu
 
     Parameters
     ----------
-    outputs : iterable of Output or (option, path)
+    outputs : iterable of Output or (option, path[, remedy])
         Every file the command will write, derived files included; None paths are skipped.
     inputs : iterable of Input or (label, path)
         Every file the command reads; paths that are not existing files are skipped.
@@ -165,9 +241,10 @@ def check_outputs(outputs: Iterable[Output | tuple], inputs: Iterable[Input | tu
     Raises
     ------
     StationError
-        One line starting with the option and path: the output is a folder, an input, the
-        same file as another output, an existing file without ``force``, an existing file
-        that is not writable, or in a folder that cannot be created or written.
+        One line starting with the option and path: a name the file system cannot hold, the
+        output is a folder, an input, the same file as another output, an existing file
+        without ``force`` (the message says what else to do: the output's ``remedy``), an
+        existing file that is not writable, or in a folder that cannot be created or written.
     """
     protected = []
     for label, p in inputs:
@@ -175,12 +252,15 @@ def check_outputs(outputs: Iterable[Output | tuple], inputs: Iterable[Input | tu
             protected.append((label, Path(p), _identity(Path(p))))
     claimed: list[tuple[str, Path, tuple]] = []
     probed: dict[Path, None] = {}
-    for option, p in outputs:
+    for out in outputs:
+        option, p, remedy = (tuple(out) + ("another name",))[:3]
         if p is None:
             continue
         path = Path(p)
         what = f"{option} {path}"
         kind = _kind(path)
+        if kind == "none":
+            check_name(path, what)
         if kind == "folder":
             raise StationError(f"{what}: is a folder, expected a file")
         ident = _identity(path)
@@ -199,7 +279,7 @@ def check_outputs(outputs: Iterable[Output | tuple], inputs: Iterable[Input | tu
             continue
         if kind == "file":
             if not force:
-                raise StationError(f"{what}: exists; use --force to replace it, or another name")
+                raise StationError(f"{what}: exists; use --force to replace it, or {remedy}")
             if not os.access(path, os.W_OK):
                 raise StationError(f"{what}: exists and is read-only")
         _probe_folder(path.parent, f"{what}: its folder", probed)

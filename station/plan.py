@@ -137,7 +137,7 @@ def default_log_path(tag: str, when: _dt.datetime | None = None, folder: str | P
     stem = f"step-{tag}-{when:%Y%m%d-%H%M%S}-{when.microsecond // 1000:03d}"
     path = Path(folder) / f"{stem}.tsv"
     counter = 1
-    while path.exists() or figure_path(path).exists():
+    while exists(path) or exists(figure_path(path)):
         counter += 1
         path = Path(folder) / f"{stem}-{counter}.tsv"
     return path
@@ -250,7 +250,7 @@ class StepPlan:
         StationError
             As :func:`station.outputs.check_outputs`.
         """
-        check_outputs([Output("--out", self.log_path), Output("--out's figure", self.figure_path)],
+        check_outputs([Output("the run log", self.log_path), Output("the run log's figure", self.figure_path)],
                       self.inputs, force=self.force)
 
     def __repr__(self) -> str:
@@ -287,8 +287,10 @@ def _check_length(protocol: str, n_ticks: int, dt: float, what: str) -> None:
         raise StationError(f"{what}: {exc}") from None
 
 
-def _check_peak(u: np.ndarray, controller, soft_limit: float, what: str, reference: str, named: str) -> None:
-    """Closed loop: the reference, and the shaped one, below the soft limit; open loop: within the DAC."""
+def _check_peak(u: np.ndarray, controller, soft_limit: float, what: str, reference: str, named: str,
+                dt: float) -> None:
+    """Closed loop: the reference, and the shaped one, below the soft limit, every impulse of the
+    shaper inside the run; open loop: within the DAC."""
     peak = float(np.max(np.abs(u))) if u.size else 0.0
     if not is_closed_loop(controller):
         if peak > DAC_LIMIT:
@@ -299,6 +301,13 @@ def _check_peak(u: np.ndarray, controller, soft_limit: float, what: str, referen
         raise StationError(f"{what}: the {kind} would pass --soft-limit {soft_limit:g} encoder counts and stop the run")
     shaper = getattr(controller, "shaper", None)
     if isinstance(shaper, ReferenceShaper):
+        moves = np.flatnonzero(u)
+        last = shaper.delays[-1] if shaper.delays else 0
+        if moves.size and moves[0] + last >= u.size:  # the shaped reference would never reach the reference
+            raise StationError(f"--controller {named}: its reference shaper's last impulse comes {last * dt:g} s "
+                               f"after the {kind} starts ({moves[0] * dt:g} s), past the run's end ({u.size * dt:g} "
+                               f"s): the shaped {kind} would not reach its height within the run (a --duration "
+                               f"longer than {(moves[0] + last + 1) * dt:g} s, or a shorter shaper)")
         shaped = float(np.max(np.abs(shaper.apply(u))))
         if not shaped < soft_limit:  # (NaN too)
             raise StationError(f"--controller {named}: its reference shaper takes the {kind} to {shaped:.6g} "
@@ -315,7 +324,7 @@ def _check_resources(n_ticks: int, folder: Path, what: str, rrd: bool) -> None:
         raise StationError(f"{what}: {n_ticks} ticks need about {need_mem / 1e9:.1f} GB of memory; "
                            f"this machine has {available / 1e9:.1f} GB available")
     existing = Path(folder)
-    while not existing.exists() and existing.parent != existing:
+    while not exists(existing) and existing.parent != existing:
         existing = existing.parent
     free = shutil.disk_usage(existing).free
     if need_disk > free:
@@ -483,16 +492,17 @@ def plan_step(port: str = DEFAULT_PORT, protocol: str = "v1", controller: Any = 
 
     url, folder = run_url(port, model, n_elements, seed)  # a real port refuses the rig's options
     try:
-        log_path = Path(out) if out is not None else default_log_path(log_tag(chosen.controller), folder=out_dir)
-        if out is None:
+        if out is None:  # (first: a name the file system cannot hold is refused here)
             check_folder(out_dir, "--out-dir")
+        log_path = Path(out) if out is not None else default_log_path(log_tag(chosen.controller), folder=out_dir)
         figure_file = figure_path(log_path) if figure and not is_device(log_path) else None
         sim_model = _url_model(url)
         run_inputs = (Input("--controller", controller if isinstance(controller, (str, Path)) else None),
                       Input("--reference", reference_path(reference)),
                       Input(model_label, sim_model if folder is None else None), *inputs)
-        check_outputs([Output("--out", log_path), Output("--out's figure", figure_file), *outputs], run_inputs,
-                      force=force)
+        log_option = "--out" if out is not None else "the run log"  # (a name made up in out_dir)
+        check_outputs([Output(log_option, log_path), Output(f"the figure beside {log_option}", figure_file),
+                       *outputs], run_inputs, force=force)
         if n_ticks is not None:  # before the reference takes its memory
             _check_resources(n_ticks, log_path.parent, length, rrd)
         u, reference_meta = make_reference(reference, amplitude, duration, tick, dt)
@@ -501,7 +511,7 @@ def plan_step(port: str = DEFAULT_PORT, protocol: str = "v1", controller: Any = 
             _check_resources(u.size, log_path.parent, f"--reference {reference}", rrd)
         named = str(controller) if isinstance(controller, (str, Path)) else "(the controller object)"
         what = f"--amplitude {amplitude:g}" if builtin else f"--reference {reference}"
-        _check_peak(u, chosen.controller, soft_limit, what, reference, named)
+        _check_peak(u, chosen.controller, soft_limit, what, reference, named, dt)
     except BaseException:
         if folder is not None:
             folder.cleanup()

@@ -231,7 +231,7 @@ def plot_log_files(paths: Sequence[str | Path], out: str | Path, transaction=Non
     StationError
         An unreadable log (the reader's one-line error) or an unwritable ``out``.
     """
-    logs = [read_log(p) for p in paths]
+    logs = [read_log(p).require_rows("draw") for p in paths]
     return save_figure(plot_runs(logs, align=align), out, transaction=transaction)
 
 

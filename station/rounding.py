@@ -83,6 +83,23 @@ half_away = _half_away_with(math.floor)
 sensor_count = _sensor_count_with(half_away)
 
 
+def toward_zero(x: float) -> float:
+    """``x`` truncated toward zero, as a float (the lab's stored integer command).
+
+    Parameters
+    ----------
+    x : float
+        Any float; ±inf and NaN come back unchanged (``math.trunc`` would raise: an unstable
+        filter's replay reaches them).
+
+    Returns
+    -------
+    float
+        The whole number toward zero.
+    """
+    return x if not abs(x) < _WHOLE else float(math.trunc(x))
+
+
 
 def __getattr__(name: str):
     """``half_away_compiled`` and ``sensor_count_compiled``: :func:`half_away` and

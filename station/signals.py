@@ -13,11 +13,23 @@ a second too, also in its worker threads, where no handler runs: it calls
 :func:`check_stop` between two pieces of work (once per simulation), which raises
 :class:`StopSignal` in any thread once a signal has arrived, and says what it had when
 stopped with :func:`noting` (the CLI prints that line, exit 130 / 143).
+
+Python drops an exception raised where it cannot propagate (a destructor, an at-fork hook,
+a weakref callback) after printing it as "Exception ignored in ...": the guard's
+``sys.unraisablehook`` drops a :class:`StopSignal` there silently (the signal stays recorded:
+the next :func:`check_stop` raises it, and the pools' waits call it every 0.1 s).
+
+A call into compiled code must not have the stop raised inside it: the handler's exception
+would surface in the middle of numba's dispatcher (loading a cached function unpickles it in
+Python) as ``SystemError: CPUDispatcher(...) returned a result with an exception set``.
+:func:`shielded` holds the stop for such a block (a simulation takes milliseconds) and
+raises it as the block ends.
 """
 
 from __future__ import annotations
 
 import signal
+import sys
 import threading
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
@@ -80,6 +92,7 @@ class StopSignals:
         self.ignore_after = ignore_after
         self._raise = True
         self._old: dict[int, object] = {}
+        self._old_hook = None
         self._depth = 0
 
     @property
@@ -117,7 +130,15 @@ class StopSignals:
                 except (ValueError, OSError):
                     pass
             StopSignals._active = self
+            self._old_hook, sys.unraisablehook = sys.unraisablehook, self._unraisable
         return self
+
+    def _unraisable(self, unraisable) -> None:
+        """``sys.unraisablehook``: a stop raised where Python cannot raise it is dropped (recorded
+        already: :func:`check_stop` raises it next); anything else goes to the previous hook."""
+        if isinstance(unraisable.exc_value, StopSignal):
+            return
+        (self._old_hook or sys.__unraisablehook__)(unraisable)
 
     def __exit__(self, *exc) -> None:
         active = StopSignals._active
@@ -133,8 +154,36 @@ class StopSignals:
             except (ValueError, OSError, TypeError):
                 pass
         self._old.clear()
+        if self._old_hook is not None:
+            sys.unraisablehook, self._old_hook = self._old_hook, None
         if StopSignals._active is self:
             StopSignals._active = None
+
+
+@contextmanager
+def shielded() -> Iterator[None]:
+    """Hold a signal's :class:`StopSignal` until the block ends (main thread; elsewhere and
+    without an active guard, nothing to hold): for a call into compiled code, which must not
+    see an exception raised by a signal handler in the middle of it.
+
+    Raises
+    ------
+    StopSignal
+        As the block ends, when a signal arrived during it (a signal that came earlier raised
+        already, or is :func:`check_stop`'s).
+    """
+    active = StopSignals._active
+    if active is None or not active._raise or threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    active._raise = False
+    try:
+        yield
+    finally:
+        if active.signum is None:
+            active._raise = True
+    if active.signum is not None:  # it arrived during the block: raise it now, outside the compiled code
+        raise StopSignal(active.signum)
 
 
 def check_stop() -> None:

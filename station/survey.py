@@ -8,7 +8,7 @@ worker process
 never an abort. A file the station wrote beside its logs (a figure, a JSON report, a
 model file, a survey table: :func:`not_a_log`) is "not a log", a status of its own: it is
 neither replayed nor counted as a broken log. SIGINT / SIGTERM stop the worker processes
-at once (:mod:`station.signals`).
+at once (:mod:`station.pools`).
 """
 
 from __future__ import annotations
@@ -17,16 +17,16 @@ import csv
 import io
 import os
 import re
-import signal
 import warnings
 from collections.abc import Callable, Iterable, Sequence
-from concurrent.futures import ProcessPoolExecutor, as_completed
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Any
 
 from station.errors import StationError
+from station.inputs import exists, is_folder, open_regular
 from station.outputs import WRITTEN_SUFFIXES, Transaction
+from station.pools import as_finished, process_pool
 from station.replay import replay
 
 STATUSES = ("ok", "unusable", "not a log")
@@ -133,9 +133,9 @@ def not_a_log(path: str | Path) -> str | None:
     if what is not None:
         return what
     try:
-        with open(path, "rb") as fh:
+        with open_regular(path, "run log") as fh:
             head = fh.read(4096)
-    except OSError:
+    except (OSError, StationError):  # not a regular file, unreadable: replay names it
         return None
     if head.startswith(b"\x89PNG\r\n\x1a\n"):
         return WRITTEN_SUFFIXES[".png"]
@@ -161,12 +161,12 @@ def find_logs(paths: Iterable[str | Path]) -> list[Path]:
     """
     out: dict[Path, None] = {}
     for p in map(Path, paths):
-        if p.is_dir():
+        if is_folder(p):
             for f in sorted(p.rglob("*")):
                 rel = f.relative_to(p).parts
                 if f.is_file() and not any(part.startswith(".") for part in rel):
                     out[f] = None
-        elif p.exists():
+        elif exists(p) or os.path.islink(p):  # (a dangling link: its reading names it)
             out[p] = None
         else:
             raise StationError(f"{p}: no such file or folder")
@@ -261,10 +261,9 @@ def survey(paths: Sequence[str | Path], model: bool = True, workers: int | None 
             if progress:
                 progress(len(rows), len(files), rows[f])
     else:
-        pool = ProcessPoolExecutor(max_workers=min(workers, len(files)), initializer=_worker_signals)
-        try:
+        with process_pool(min(workers, len(files))) as pool:  # a signal, an error: the workers stop now
             futures = {pool.submit(survey_one, f, model): f for f in files}
-            for fut in as_completed(futures):
+            for fut in as_finished(futures):
                 f = futures[fut]
                 try:
                     rows[f] = fut.result()
@@ -272,33 +271,7 @@ def survey(paths: Sequence[str | Path], model: bool = True, workers: int | None 
                     rows[f] = SurveyRow(file=str(f), reason=f"worker failed: {type(exc).__name__}: {exc}")
                 if progress:
                     progress(len(rows), len(files), rows[f])
-        except BaseException:  # a signal (StopSignal), an error in progress: the workers stop now
-            _terminate(pool)
-            raise
-        pool.shutdown()
     return [rows[f] for f in files]
-
-
-def _worker_signals() -> None:
-    """A worker leaves SIGINT to the survey (a terminal's Ctrl-C reaches the whole process
-    group: no traceback per worker) and dies on SIGTERM (the survey's handler, inherited on
-    fork, would raise inside a replay)."""
-    signal.signal(signal.SIGINT, signal.SIG_IGN)
-    signal.signal(signal.SIGTERM, signal.SIG_DFL)
-
-
-def _terminate(pool: ProcessPoolExecutor) -> None:
-    """Cancel what has not started and end the worker processes at once (not after their file)."""
-    terminate = getattr(pool, "terminate_workers", None)  # Python 3.14+
-    if terminate is not None:
-        terminate()
-        return
-    processes = list((getattr(pool, "_processes", None) or {}).values())  # before 3.14: no public way
-    pool.shutdown(wait=False, cancel_futures=True)  # (forgets the processes: taken above)
-    for p in processes:
-        p.terminate()
-    for p in processes:
-        p.join(1.0)
 
 
 def _cell(value: Any, fmt: str = "") -> str:

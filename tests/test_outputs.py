@@ -433,3 +433,102 @@ def test_any_combination_of_outputs_follows_the_rule(template, tmp_path_factory,
         shutil.rmtree(root)
 
     check()
+
+
+# --- names the file system cannot hold (issue 24: OSError tracebacks, refusals after the work) --
+
+NAME_MAX = os.pathconf("/tmp", "PC_NAME_MAX")
+
+
+def _too_long(kind: str, path: Path) -> Path:
+    """``path`` with a name no file system here holds: a folder part of 300 bytes, a last part
+    of 300 bytes, or one that fits NAME_MAX but not the temporary name written first."""
+    if kind == "folder part":
+        return path.parent / ("d" * 300) / path.name
+    if kind == "name":
+        return path.with_name("n" * 300 + path.suffix)
+    return path.with_name("p" * (NAME_MAX - 2 - len(path.suffix)) + path.suffix)  # + .XXXXXXXX.part: too long
+
+
+LONG_KINDS = ("folder part", "name", "temporary name")
+
+
+def _long_cases():
+    files = [(n, o, k) for n, o in _file_cases() for k in LONG_KINDS]
+    # a folder's own name has no temporary name (its files' names are the command's)
+    return files + [(n, o, k) for n, c in WRITERS.items() for o in c.folders for k in LONG_KINDS[:2]]
+
+
+@pytest.mark.parametrize("name, option, kind", _long_cases())
+def test_an_output_name_the_file_system_cannot_hold_is_refused_before_anything_starts(ws, capsys, name, option,
+                                                                                       kind):
+    cmd = WRITERS[name]
+    target = _too_long(kind, default_outputs(name, cmd, ws)[option])
+    before = snapshot(ws)
+    code, _, err = _run(cmd.argv(name, _inputs(ws)) + [option, target], capsys)
+    _refused(code, err, "bytes")
+    assert option in err.splitlines()[0]
+    assert snapshot(ws) == before  # no log, no figure, no report: refused before anything started
+
+
+@pytest.mark.parametrize("name", ["step", "compare", "bode", "plot"])
+@pytest.mark.parametrize("where", ["--out-dir", "station.toml"])
+def test_an_output_folder_the_file_system_cannot_hold_is_refused_naming_where_it_came_from(ws, capsys, name, where):
+    cmd = WRITERS[name]
+    folder = ws / ("o" * 300)
+    extra = ["--out-dir", folder] if where == "--out-dir" else []
+    if where == "station.toml":
+        (ws / "station.toml").write_text(f'out_dir = "{folder}"\n')
+    before = snapshot(ws)
+    code, _, err = _run(cmd.argv(name, _inputs(ws)) + extra, capsys)
+    _refused(code, err, "300 bytes")
+    assert ("--out-dir" in err) == (where == "--out-dir") and ("station.toml's out_dir" in err) == (where != "--out-dir")
+    assert snapshot(ws) == before
+
+
+# --- where outputs go: one rule (issue 24 item 7) ----------------------------------------------
+
+NAMED = {"step": None, "compare": "step_compare.png", "bode": "sweep_bode.png", "plot": "step.png"}
+"""Commands that name a file themselves, and the name (step's log: made up from the time)."""
+
+
+@pytest.mark.parametrize("name", NAMED)
+@pytest.mark.parametrize("where", ["default", "station.toml", "--out-dir"])
+def test_a_file_a_command_names_goes_into_the_output_folder_never_the_working_folder(ws, capsys, name, where):
+    cmd = WRITERS[name]
+    extra = {"default": [], "station.toml": [], "--out-dir": ["--out-dir", "chosen"]}[where]
+    if where == "station.toml":
+        (ws / "station.toml").write_text('out_dir = "lab"\n')
+    folder = ws / {"default": "runs", "station.toml": "lab", "--out-dir": "chosen"}[where]
+    before = {p.name for p in ws.iterdir()}
+    code, out, err = _run(cmd.argv(name, _inputs(ws)) + extra, capsys)
+    assert code == 0, err
+    assert {p.name for p in ws.iterdir()} - before == {folder.name}, "nothing else in the working folder"
+    made = sorted(p.name for p in folder.iterdir())
+    assert made and (NAMED[name] is None or made == [NAMED[name]]), made
+    if NAMED[name] is None:  # step: its log and the figure beside it
+        assert len(made) == 2 and {Path(m).suffix for m in made} == {".tsv", ".png"}
+    # run again: the figure exists; the refusal names the file and the folder, and the option only when given
+    code, _, err = _run(cmd.argv(name, _inputs(ws)) + extra, capsys)
+    if NAMED[name] is None:
+        assert code == 0  # step makes up a new log name each time
+        return
+    _refused(code, err, f"{folder.name}/{NAMED[name]}: exists; use --force to replace it")
+    line = err.strip()
+    assert ("--out-dir chosen" in line) == (where == "--out-dir"), line
+    assert ("out_dir lab" in line) == (where == "station.toml"), line
+    assert f"another folder than" in line
+
+
+def test_identify_makes_its_experiments_folder_in_the_output_folder(ws):
+    import argparse
+
+    from station.commands.identify import experiments_folder
+
+    (ws / "station.toml").write_text('out_dir = "lab"\n')
+    args = build_parser().parse_args(["identify"])
+    assert args.out_dir is None and args._config_values["out_dir"] == Path("lab")
+    folder = experiments_folder(args)
+    assert folder.parent == Path("lab") and folder.name.startswith("identify-")
+    args = argparse.Namespace(out_dir=None, force=False, _config_values={})
+    assert experiments_folder(args).parent == Path("runs")

@@ -21,6 +21,7 @@ import numpy as np
 import pytest
 
 from station.cli import main
+from station.errors import StationError
 from station.signals import StopSignal, StopSignals, check_stop, noting
 from tests.output_cases import parts, write_p_log
 
@@ -93,7 +94,12 @@ def test_count_samples_counts_data_rows_not_header_lines(tmp_path):
     assert count_samples(log) == 1234
     (tmp_path / "ours.tsv").write_text("t\tn\n# station-runlog 1\n# {}\n0\t0\n0.002\t1\n# end {}\n")
     assert count_samples(tmp_path / "ours.tsv") == 3  # the column-name line is counted: an upper bound
-    assert count_samples(tmp_path / "missing.txt") == 0
+    # what the diagnosis would refuse, refused here already, before any reading: nothing blocks
+    with pytest.raises(StationError, match="missing.txt: run log not found"):
+        count_samples(tmp_path / "missing.txt")
+    os.mkfifo(tmp_path / "fifo.txt")
+    with pytest.raises(StationError, match="is a FIFO"):
+        count_samples(tmp_path / "fifo.txt")
 
 
 def _cpu_s(pid: int) -> float:
@@ -188,3 +194,161 @@ def test_compare_stops_between_logs_and_writes_no_figure(tmp_path):
                   signal.SIGTERM, tmp_path)
     run.check(143, "of 3 logs; nothing written")
     assert not (tmp_path / "figs").exists() and parts(tmp_path) == []
+
+
+# --- issue 24: every stop a clean line, tune's workers included --------------------------------
+
+class GroupStopped(Stopped):
+    """As :class:`Stopped`, the signal sent to the whole process group (a terminal's Ctrl-C)."""
+
+    def __init__(self, argv: list[str], trigger: str, sig: int, cwd: Path):
+        real = subprocess.Popen
+
+        def popen(*args, **kwargs):
+            p = real(*args, start_new_session=True, **kwargs)
+            p.send_signal = lambda s: os.killpg(p.pid, s)
+            return p
+
+        subprocess.Popen = popen
+        try:
+            super().__init__(argv, trigger, sig, cwd)
+        finally:
+            subprocess.Popen = real
+
+
+@pytest.mark.parametrize("how, sig, code, name", [(Stopped, signal.SIGTERM, 143, "SIGTERM"),
+                                                   (GroupStopped, signal.SIGINT, 130, "SIGINT"),
+                                                   (GroupStopped, signal.SIGTERM, 143, "SIGTERM")])
+def test_tune_stops_its_worker_processes_at_once_without_a_traceback(tmp_path, how, sig, code, name):
+    # a large model set: each task judges hundreds of models for seconds, and the workers'
+    # results queue up; the stop must not wait for them (it once took 15 minutes)
+    run = how(["tune", "--samples", "400", "--jobs", "2", "--out", "c.toml"], "local processes", sig, tmp_path)
+    run.check(code, f"station: stopped by {name}")
+    assert run.children and run.working == [], "the pool's workers were left running"
+    assert not any("InvalidStateError" in line or "Exception ignored" in line for line in run.after), run.after
+    assert not (tmp_path / "c.toml").exists()
+
+
+def test_a_stopped_run_prints_no_record_of_the_logger(tmp_path):
+    run = Stopped(["step", "--port", "sim://?pacing=realtime", "--duration", "5", "--quiet"], "run:",
+                  signal.SIGINT, tmp_path)
+    assert run.code == 130, run.after
+    assert not any("Outcome(" in line or "run ended" in line for line in run.after), run.after
+
+
+def test_the_packages_logger_never_reaches_pythons_last_resort(capsys):
+    import logging
+
+    logging.getLogger("station.loop").warning("a warning nobody configured")
+    assert capsys.readouterr().err == ""
+
+
+# --- the pools: a stop kills the workers, whatever they do -------------------------------------
+
+def _sleep_then(seconds: float, size: int) -> bytes:
+    time.sleep(seconds)
+    return b"x" * size  # a large result fills the pipe while nobody reads
+
+
+def _pool_children():
+    import multiprocessing
+
+    return [p for p in multiprocessing.active_children() if p.is_alive()]
+
+
+from hypothesis import HealthCheck, given, settings  # noqa: E402
+from hypothesis import strategies as st  # noqa: E402
+
+
+@settings(max_examples=8, deadline=None, database=None, suppress_health_check=list(HealthCheck))
+@given(tasks=st.lists(st.tuples(st.floats(0.0, 3.0), st.sampled_from([10, 10_000, 2_000_000])), min_size=2,
+                      max_size=12),
+       workers=st.integers(1, 3), after=st.floats(0.05, 1.0), sig=st.sampled_from([signal.SIGINT, signal.SIGTERM]),
+       lost=st.booleans())
+def test_a_stop_kills_a_pools_workers_and_leaves_no_thread_error(tasks, workers, after, sig, lost):
+    from station.pools import process_pool, results
+
+    errors = []
+    old_hook = threading.excepthook
+    threading.excepthook = lambda args: errors.append(args.exc_value)
+    try:
+        with StopSignals() as guard:
+            def signal_now():
+                if lost:  # as if the handler's raise had been swallowed (an at-fork hook): recorded only
+                    guard._raise, guard.signum = False, sig
+                else:
+                    os.kill(os.getpid(), sig)
+
+            timer = threading.Timer(after, signal_now)
+            with pytest.raises(StopSignal) as info:
+                with process_pool(workers) as pool:
+                    timer.start()
+                    results([pool.submit(_sleep_then, s, n) for s, n in tasks] +
+                            [pool.submit(_sleep_then, 30.0, 10)])  # never done before the stop
+            timer.join()
+        assert info.value.signum == sig
+        time.sleep(0.2)  # the pool's own thread fails the futures of the killed workers
+        assert _pool_children() == [], "a worker outlived the stop"
+        assert errors == [], errors
+    finally:
+        threading.excepthook = old_hook
+
+
+def test_a_stop_held_by_shielded_is_raised_as_the_block_ends():
+    from station.signals import shielded
+
+    with StopSignals() as guard:
+        done = []
+        with pytest.raises(StopSignal):
+            with shielded():
+                os.kill(os.getpid(), signal.SIGTERM)
+                time.sleep(0.05)  # the handler ran: recorded, not raised inside
+                done.append("the block finished")
+        assert done == ["the block finished"]
+    with StopSignals():
+        with shielded(), shielded():  # nested, no signal: nothing
+            pass
+        with pytest.raises(ValueError):  # the block's own error wins; the stop stays for check_stop
+            with shielded():
+                os.kill(os.getpid(), signal.SIGINT)
+                time.sleep(0.05)
+                raise ValueError("its own")
+        with pytest.raises(StopSignal):
+            check_stop()
+
+
+class _RaisesStopWhenCollected:
+    def __del__(self):
+        raise StopSignal(signal.SIGTERM)
+
+
+def test_a_stop_raised_where_python_cannot_raise_it_is_dropped_quietly(capfd):
+    import gc
+
+    with StopSignals():
+        obj = _RaisesStopWhenCollected()
+        del obj
+        gc.collect()
+    assert "Exception ignored" not in capfd.readouterr().err
+
+
+# --- tune --scheduler: a wrong address is one line at once ----------------------------------------
+
+@pytest.mark.parametrize("address, words", [("nonsense:::x", "not a scheduler's address"),
+                                             ("tcp://host", "not a scheduler's address"),
+                                             ("tcp://:8786", "not a scheduler's address"),
+                                             ("tcp://127.0.0.1:99999", "not a scheduler's address"),
+                                             ("tcp://127.0.0.1:1", "cannot connect")])
+def test_a_wrong_scheduler_is_one_line_before_a_client_is_made(monkeypatch, capsys, address, words):
+    pytest.importorskip("distributed")
+    import dask.distributed
+    import distributed
+
+    def no_client(*args, **kwargs):
+        raise AssertionError("a client was made")
+
+    monkeypatch.setattr(distributed, "Client", no_client)
+    monkeypatch.setattr(dask.distributed, "Client", no_client)
+    code = main(["tune", "--scheduler", address, "--samples", "0", "--quiet"])
+    err = capsys.readouterr().err.strip().splitlines()
+    assert code == 2 and len(err) == 1 and f"--scheduler {address}: {words}" in err[0], err

@@ -6,9 +6,12 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from station.commands.options import add_force_option, add_model_options, add_report_options, model_inputs, number
+from station.commands.options import (add_force_option, add_model_options, add_out_dir_option, add_report_options,
+                                      config_error, model_inputs, number, out_dir, out_dir_label,
+                                      out_dir_remedy)
+from station.config import apply_config
 from station.errors import StationError
-from station.outputs import Input, Output, Transaction, check_outputs
+from station.outputs import Input, Output, Transaction, check_folder, check_outputs
 from station.plant import DiscretePlant
 from station.plant.model import as_model
 
@@ -22,7 +25,7 @@ def configure(parser: argparse.ArgumentParser) -> None:
     Parameters
     ----------
     parser : argparse.ArgumentParser
-        Gets FILE, the model options, ``--nperseg``, ``--png``, ``--json`` and ``--force``.
+        Gets FILE, the model options, ``--nperseg``, ``--png``, ``--out-dir``, ``--json`` and ``--force``.
     """
     parser.add_argument("file", type=Path, metavar="FILE", help="run log (station or rig format), e.g. a swept sine")
     add_model_options(parser, "its linear part (param:NAME, beam_damping) gives the response")
@@ -30,9 +33,11 @@ def configure(parser: argparse.ArgumentParser) -> None:
                         help="Welch segment length, samples (default 4096: 0.12 Hz at 500 Hz; at least 1024, "
                              "0.5 Hz, to resolve the first antiresonance near 2.5 Hz)")
     parser.add_argument("--png", type=Path, default=None, metavar="OUT",
-                        help="figure file (default FILE's stem + _bode.png in the current folder)")
+                        help="figure file (default FILE's stem + _bode.png in --out-dir)")
+    add_out_dir_option(parser, "the figure when --png does not name it")
     add_report_options(parser, json="the antiresonances")
     add_force_option(parser)
+    apply_config(parser)  # its out_dir
 
 
 def run(args: argparse.Namespace) -> int:
@@ -61,8 +66,15 @@ def run(args: argparse.Namespace) -> int:
     from station.logged import LoggedRun
     from station.plots import plot_bode
 
-    png = args.png if args.png is not None else Path(f"{args.file.stem}_bode.png")
-    check_outputs([Output("--png", png), Output("--json", args.json)],
+    config_error(args)
+    if args.png is not None:
+        figure = Output("--png", args.png)
+    else:
+        check_folder(out_dir(args), out_dir_label(args))  # named as the user set it
+        figure = Output(f"the figure of {args.file.name}", out_dir(args) / f"{args.file.stem}_bode.png",
+                        f"--png FILE, or {out_dir_remedy(args)}")
+    png = figure.path
+    check_outputs([figure, Output("--json", args.json)],
                   [Input("FILE", args.file), *model_inputs(args)], force=args.force)
     run = LoggedRun.from_path(args.file)
     log, t, dt = run.log, run.data["t"], run.dt

@@ -6,8 +6,11 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from station.commands.options import add_force_option, add_model_options, add_report_options, model_inputs
-from station.outputs import Input, Output, Transaction, check_outputs, unique_names
+from station.commands.options import (add_force_option, add_model_options, add_out_dir_option, add_report_options,
+                                      config_error, model_inputs, out_dir, out_dir_label,
+                                      out_dir_remedy)
+from station.config import apply_config
+from station.outputs import Input, Output, Transaction, check_folder, check_outputs, unique_names
 from station.plant.model import as_model
 from station.signals import noting
 
@@ -21,15 +24,16 @@ def configure(parser: argparse.ArgumentParser) -> None:
     Parameters
     ----------
     parser : argparse.ArgumentParser
-        Gets FILE..., the model options, ``--out-dir``, ``--json`` and ``--force``.
+        Gets FILE..., the model options, ``--out-dir`` (default ``station.toml``'s ``out_dir``, else
+        runs), ``--json`` and ``--force``.
     """
     parser.add_argument("files", type=Path, nargs="+", metavar="FILE", help="run logs (station or rig format)")
     add_model_options(parser)
-    parser.add_argument("--out-dir", type=Path, default=Path("."), metavar="DIR",
-                        help="folder for the figures, <log stem>_compare.png (logs of the same stem: -2, -3 "
-                             "added in the order given; default: current folder)")
+    add_out_dir_option(parser, "the figures, <log stem>_compare.png (logs of the same stem: -2, -3 added in the "
+                               "order given)")
     add_report_options(parser, json="the comparisons")
     add_force_option(parser)
+    apply_config(parser)  # its out_dir
 
 
 def figure_paths(files, out_dir: Path) -> list[Path]:
@@ -70,8 +74,12 @@ def run(args: argparse.Namespace) -> int:
     from station.compare import compare_run, format_comparison
     from station.plots import plot_comparison
 
-    pngs = figure_paths(args.files, args.out_dir)
-    check_outputs([Output("--json", args.json)] + [Output("--out-dir", p) for p in pngs],
+    config_error(args)
+    folder = out_dir(args)
+    check_folder(folder, out_dir_label(args))  # named as the user set it (an option, station.toml or the default)
+    pngs = figure_paths(args.files, folder)
+    check_outputs([Output("--json", args.json)] + [
+        Output(f"the figure of {Path(f).name}", p, out_dir_remedy(args)) for f, p in zip(args.files, pngs)],
                   [Input("FILE", f) for f in args.files] + model_inputs(args), force=args.force)
     model = as_model(args.model, args.elements, args.params)
     effects = ", ".join(f"{k} = {v:g}" for k, v in model.effects) or "no effects"

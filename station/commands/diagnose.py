@@ -12,6 +12,7 @@ from pathlib import Path
 
 from station.commands.options import add_force_option, add_model_options, add_report_options, model_inputs, number
 from station.errors import StationError
+from station.inputs import open_regular
 from station.outputs import Input, Output, Transaction, check_outputs
 from station.rig import DIAGNOSE_MAX_SAMPLES
 from station.signals import noting
@@ -62,24 +63,29 @@ def configure(parser: argparse.ArgumentParser) -> None:
 
 def count_samples(path: Path) -> int:
     """A log's rows counted from its bytes, without parsing: its lines that do not start with
-    ``#`` (so the rig's 2014 column-name line counts as one); 0 when it cannot be read (the
-    diagnosis names the problem then).
+    ``#`` (so the rig's 2014 column-name line counts as one).
 
     Parameters
     ----------
     path : Path
         A run log.
+
+    Raises
+    ------
+    StationError
+        Not a regular file (a FIFO would block, ``/dev/zero`` never ends), missing or unreadable
+        (:func:`station.inputs.open_regular`).
     """
     lines = comments = 0
     last = b"\n"
     try:
-        with open(path, "rb") as fh:
+        with open_regular(path, "run log") as fh:
             while chunk := fh.read(1 << 20):
                 lines += chunk.count(b"\n")
                 comments += chunk.count(b"\n#") + (last == b"\n" and chunk[:1] == b"#")
                 last = chunk[-1:]
-    except OSError:
-        return 0
+    except OSError as exc:
+        raise StationError(f"{path}: cannot read the run log: {exc.strerror or exc}", file=path) from None
     return max(0, lines + (last != b"\n") - comments)
 
 

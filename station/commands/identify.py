@@ -5,15 +5,17 @@ the experiment that best separates them, up to ``--budget`` designed experiments
 from __future__ import annotations
 
 import argparse
+import re
 import sys
 from pathlib import Path
 
 from station.commands.options import (add_link_options, add_model_options, add_protocol_option, add_report_options,
-                                      check_port, link_limits, model_inputs, number, warn)
+                                      check_port, config_error, link_limits, model_inputs, number, warn)
 from station.commands.diagnose import format_diagnosis
 from station.config import apply_config
 from station.errors import StationError
-from station.outputs import FORCE_HELP, Output, Transaction, check_folder, check_outputs
+from station.inputs import is_folder
+from station.outputs import DEFAULT_OUT_DIR, FORCE_HELP, Output, Transaction, check_folder, check_outputs
 from station.plant.model import as_model
 from station.rig import CLAMP, DAC_LIMIT
 
@@ -44,8 +46,9 @@ def configure(parser: argparse.ArgumentParser) -> None:
                         help="the controllers' clamp, ±DAC counts (default 200, the rig's)")
     add_link_options(parser, soft_limit_help="; designed experiments keep the predicted |θ| within 80 %% of it")
     parser.add_argument("--out-dir", type=Path, default=None, metavar="DIR",
-                        help="folder of the experiments' logs (default runs/identify-<UTC time>); a folder "
-                             "that holds files needs --force")
+                        help="folder of the experiments' logs, NN-<experiment>.tsv with their figures (default "
+                             "identify-<UTC time> in station.toml's out_dir, else in runs/); a folder that holds "
+                             "files needs --force")
     add_report_options(parser, json="the diagnosis and the experiments")
     parser.add_argument("--report", type=Path, default=None, metavar="DIR",
                         help="write DIR/identify.html (the experiments, why each was run, predicted vs measured) "
@@ -54,7 +57,13 @@ def configure(parser: argparse.ArgumentParser) -> None:
                         help="write the identified model (nominal + accepted effects) as a model file")
     parser.add_argument("--force", action="store_true", help=FORCE_HELP + "; write into an --out-dir that holds files")
     parser.add_argument("--quiet", action="store_true", help="no progress lines on stderr")
-    apply_config(parser, skip=("out_dir",))  # station.toml's bounds, as station step's (its out_dir: step's logs)
+    apply_config(parser, skip=("out_dir",))  # station.toml's bounds, as station step's (its out_dir: the parent)
+
+
+EXPERIMENT_NAME = re.compile(r"^\d{2,}-")
+"""The names identify gives the files of its experiments in ``--out-dir``: ``NN-<experiment>.tsv``,
+its figure ``.png`` and a designed reference ``.u.tsv`` (the experiments are designed as it goes,
+so the names are known by this pattern only)."""
 
 
 def outputs(args: argparse.Namespace) -> list[Output]:
@@ -87,11 +96,39 @@ def experiments_folder(args: argparse.Namespace) -> Path:
     """
     from station.diagnosis.identify.loop import default_out_dir  # lazy: start-up time (the diagnosis: scipy)
 
-    folder = args.out_dir if args.out_dir is not None else default_out_dir()
-    if folder.is_dir() and any(folder.iterdir()) and not args.force:
-        raise StationError(f"--out-dir {folder}: holds files already; use --force to write into it, or another folder")
-    check_folder(folder, "--out-dir")
+    parent = (getattr(args, "_config_values", None) or {}).get("out_dir") or Path(DEFAULT_OUT_DIR)
+    folder = args.out_dir if args.out_dir is not None else default_out_dir(folder=parent)
+    label = "--out-dir" if args.out_dir is not None else "the experiments' folder"
+    check_folder(folder, label)  # (first: a name the file system cannot hold is refused here)
+    if is_folder(folder) and any(folder.iterdir()) and not args.force:
+        raise StationError(f"{label} {folder}: holds files already; use --force to write into it, or another folder")
     return folder
+
+
+def check_experiment_names(outputs: list[Output], folder: Path) -> None:
+    """Refuse an output that identify's experiments may write: a file in the experiments' folder
+    named like one (:data:`EXPERIMENT_NAME`), before any experiment runs.
+
+    Parameters
+    ----------
+    outputs : list of Output
+        ``--json``, ``--save-model`` and the report's pages.
+    folder : Path
+        The experiments' folder.
+
+    Raises
+    ------
+    StationError
+        ``--json exp/01-p2-step-50.tsv: ...`` naming the folder and the names it holds.
+    """
+    home = Path(folder).resolve()
+    for option, path, *_ in outputs:
+        if path is None:
+            continue
+        p = Path(path).resolve()
+        if p.parent == home and EXPERIMENT_NAME.match(p.name):
+            raise StationError(f"{option} {path}: in {folder}, the names NN-... are the experiments' logs, figures "
+                               f"and references identify writes; give another name or folder")
 
 
 def format_identification(ident) -> str:
@@ -146,14 +183,18 @@ def run(args: argparse.Namespace) -> int:
     """
     from station.diagnosis.identify.loop import DEFAULT_BUDGET, identify  # lazy: start-up time (the diagnosis: scipy)
 
-    if getattr(args, "_config_error", None):
-        raise StationError(args._config_error)
+    config_error(args)
     if getattr(args, "_config", None):
         warn(f"settings from {args._config} (options given on the command line win)")
     check_port(args.port)
     model = as_model(args.model)  # an unreadable model is refused before any run
     check_outputs(outputs(args), model_inputs(args), force=args.force)
+    if args.report is not None and is_folder(args.report) and any(args.report.iterdir()) and not args.force:
+        # its figures are named as the experiments come (experiment-NN.png, <log>_run.png): unknown up front
+        raise StationError(f"--report {args.report}: holds files already; use --force to write into it, or another "
+                           f"folder")
     folder = experiments_folder(args)
+    check_experiment_names(outputs(args), folder)
     progress = None if args.quiet else (lambda msg: print(f"identify: {msg}", file=sys.stderr, flush=True))
     budget = DEFAULT_BUDGET if args.budget is None else args.budget
     ident = identify(port=args.port, model=model, budget=budget, out_dir=folder, protocol=args.protocol,

@@ -19,7 +19,8 @@ import sys
 from pathlib import Path
 
 from station.errors import StationError
-from station.outputs import FORCE_HELP, Input
+from station.inputs import exists
+from station.outputs import DEFAULT_OUT_DIR, FORCE_HELP, Input
 from station.protocol import PROTOCOLS
 from station.ranges import SIM_RIG, Number, number  # noqa: F401 (Number, number: the commands' import place)
 from station.rig import DEFAULT_SOFT_LIMIT, DEFAULT_TIMEOUT
@@ -96,7 +97,7 @@ def check_port(port: str, option: str = "--port") -> None:
         ``--port PATH: no such device`` with the hint to ``station ports``.
     """
     port = str(port)
-    if "://" not in port and not Path(port).exists():
+    if "://" not in port and not exists(port):
         raise StationError(f"{option} {port}: no such device; `station ports` lists this machine's serial ports "
                            f"(the simulated rig is sim://)")
 
@@ -305,3 +306,85 @@ def link_limits(args: argparse.Namespace):
 
     return LinkLimits(timeout=args.timeout, max_lag=args.max_lag / 1000, max_miss=args.max_miss,
                       max_step=args.max_step)
+
+
+OUT_DIR_HELP = f"(default: station.toml's out_dir, else {DEFAULT_OUT_DIR}/ in the working folder)"
+"""How every ``--out-dir`` says where the station's output folder is by default."""
+
+
+def add_out_dir_option(parser: argparse.ArgumentParser, what: str) -> None:
+    """``--out-dir DIR``: the output folder where the command puts the files it names itself
+    (one rule for every command, :mod:`station.outputs`); ``station.toml``'s ``out_dir`` is its
+    default (:func:`station.config.apply_config`, called by the command after this).
+
+    Parameters
+    ----------
+    parser : argparse.ArgumentParser
+        The command's subparser.
+    what : str
+        What goes there (e.g. "the figures, <log stem>_compare.png").
+    """
+    parser.add_argument("--out-dir", type=Path, default=None, metavar="DIR", help=f"folder for {what} {OUT_DIR_HELP}")
+
+
+def out_dir(args: argparse.Namespace) -> Path:
+    """The output folder: ``--out-dir``, else ``station.toml``'s ``out_dir``, else ``runs``.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        Parsed options of :func:`add_out_dir_option` (``out_dir``).
+    """
+    return Path(args.out_dir) if getattr(args, "out_dir", None) is not None else Path(DEFAULT_OUT_DIR)
+
+
+def out_dir_label(args: argparse.Namespace) -> str:
+    """How a message names the output folder, before its path: the option the user gave, the
+    settings file that set it, or the default (never an option the user did not give).
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        Parsed options (``out_dir``, and ``_config``/``_config_values`` from
+        :func:`station.config.apply_config`).
+
+    Returns
+    -------
+    str
+        ``--out-dir``, ``station.toml's out_dir`` or ``the output folder``.
+    """
+    config = (getattr(args, "_config_values", None) or {}).get("out_dir")
+    if getattr(args, "out_dir", None) is None:
+        return "the output folder"
+    if config is not None and Path(config) == Path(args.out_dir):
+        return f"{getattr(args, '_config', None) or 'station.toml'}'s out_dir"
+    return "--out-dir"
+
+
+def out_dir_remedy(args: argparse.Namespace) -> str:
+    """What a refusal of a file the command named in the output folder suggests besides
+    ``--force``: another folder, naming the one in use and where it came from.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        Parsed options (as :func:`out_dir_label`).
+    """
+    return f"another folder than {out_dir_label(args)} {out_dir(args)} (--out-dir DIR)"
+
+
+def config_error(args: argparse.Namespace) -> None:
+    """Raise the settings file's error kept by :func:`station.config.apply_config`, if any.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        Parsed options.
+
+    Raises
+    ------
+    StationError
+        ``station.toml`` is not a regular file, not valid or holds a bad value.
+    """
+    if getattr(args, "_config_error", None):
+        raise StationError(args._config_error)

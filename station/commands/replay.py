@@ -73,6 +73,7 @@ def run(args: argparse.Namespace) -> int:
     check_outputs([Output("--json", args.json), Output("--rrd", args.rrd)],
                   [Input("FILE", args.file), *model_inputs(args)], force=args.force)
     report = replay(args.file, model=model, n_elements=args.elements)
+    report.run.log.require_rows("replay")  # a header only: nothing ran (exit 2, as a bad input)
     print(format_report(report))
     with Transaction() as tx:
         if args.json is not None:

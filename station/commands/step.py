@@ -8,10 +8,11 @@ from pathlib import Path
 
 from station import experiment as ex
 from station.errors import StationError
-from station.commands.options import (add_force_option, add_link_options, add_model_options, add_protocol_option,
-                                      add_report_options, add_seed_option, link_limits, warn)
+from station.commands.options import (add_force_option, add_link_options, add_model_options, add_out_dir_option,
+                                      add_protocol_option, add_report_options, add_seed_option, config_error,
+                                      link_limits, out_dir, out_dir_label, warn)
 from station.config import apply_config
-from station.outputs import Input, Output, write_json
+from station.outputs import Input, Output, check_folder, write_json
 from station.plan import RANGES, StepPlan, plan_step
 from station.signals import noting
 from station.viz import RerunSink
@@ -57,13 +58,12 @@ def configure(parser) -> None:
     add_seed_option(parser, note=SIM_ONLY)
     add_link_options(parser)
     parser.add_argument("--out", type=Path, default=None, metavar="FILE",
-                        help="run log (default runs/step-<controller>-<UTC time with ms>.tsv), streamed during the "
-                             "run. The run's figure goes beside it as <log stem>.png")
+                        help="run log (default step-<controller>-<UTC time with ms>.tsv in --out-dir), streamed "
+                             "during the run. The run's figure goes beside it as <log stem>.png")
     add_force_option(parser)
     parser.add_argument("--quiet", action="store_true",
                         help="no live progress line on stderr (it is shown only when stderr is a terminal)")
-    parser.add_argument("--out-dir", type=Path, default=Path("runs"), metavar="DIR",
-                        help="folder of the default run log names (default runs)")
+    add_out_dir_option(parser, "the run log and its figure when --out does not name the log")
     add_report_options(parser, json="metrics and timing", rerun="the run")
     apply_config(parser)
 
@@ -92,14 +92,15 @@ def plan(args) -> StepPlan:
     StationError
         One line naming the option (or the settings file).
     """
-    if getattr(args, "_config_error", None):
-        raise StationError(args._config_error)
+    config_error(args)
+    if args.out is None:  # the output folder named as the user set it (an option, station.toml or the default)
+        check_folder(out_dir(args), out_dir_label(args))
     return plan_step(port=args.port, protocol=args.protocol, controller=args.controller, amplitude=args.amplitude,
                      duration=args.duration, step_time=args.step_time, reference=args.reference,
                      kp=args.kp, limit=args.limit, soft_limit=args.soft_limit, timeout=args.timeout,
                      limits=link_limits(args),
                      baudrate=args.baud, model=args.model, n_elements=args.elements, seed=args.seed,
-                     out=args.out, out_dir=args.out_dir, force=args.force,
+                     out=args.out, out_dir=out_dir(args), force=args.force,
                      outputs=[Output("--json", args.json), Output("--rrd", args.rrd)],
                      inputs=[Input("station.toml", getattr(args, "_config", None))],
                      rrd=args.rrd is not None, notify=warn)

@@ -10,6 +10,7 @@ from pathlib import Path
 
 from station.commands.options import add_force_option, add_model_options, chosen_model, model_inputs, number
 from station.errors import StationError
+from station.inputs import is_folder
 from station.outputs import Input, Output, Transaction, check_outputs
 from station.plant.model import as_model
 from station.rig import SESSIONS_MAX_SAMPLES
@@ -109,7 +110,7 @@ def run(args: argparse.Namespace) -> int:
 
     with noting(lambda: f"after {done[0]} of {done[1]} files; nothing written"):
         rows = survey(args.paths, model=model, workers=args.jobs, progress=progress)
-    root = args.paths[0] if len(args.paths) == 1 and args.paths[0].is_dir() else None
+    root = args.paths[0] if len(args.paths) == 1 and is_folder(args.paths[0]) else None
     print(format_table(rows, root))
     with Transaction() as tx:
         if args.csv is not None:

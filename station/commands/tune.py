@@ -178,6 +178,10 @@ def run(args: argparse.Namespace) -> int:
         JSON with no model, an output that exists (without ``--force``), repeats another or is
         an input; an unreachable scheduler.
     """
+    from station.design.executor import check_scheduler  # lazy: start-up time (light: the design's package is PEP 562)
+
+    if args.scheduler is not None:  # first: a wrong address is one line at once, before the design's imports
+        check_scheduler(args.scheduler)
     # lazy: start-up time (the design: scipy, python-control)
     from station.design.tuning import check_request, tune
     from station.design.verify import verify

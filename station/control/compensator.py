@@ -8,15 +8,14 @@ a compensator file's ``[shaper]``) the reference is shaped first: theta_d_hat = 
 
 from __future__ import annotations
 
-import math
 from typing import Any
 
 from station.control.shaper import ReferenceShaper
 from station.control.tf import DiscreteTF
 from station.rig import CLAMP
-from station.rounding import half_away
+from station.rounding import half_away, toward_zero
 
-RECURSIONS = {"none": None, "trunc": lambda v: float(math.trunc(v)), "round": half_away}
+RECURSIONS = {"none": None, "trunc": toward_zero, "round": half_away}
 """What a compensator's recursion remembers of its command: "none" the float; "trunc" or
 "round" the whole DAC count the software stored (toward zero; halves away from zero), which
 is then the command itself."""

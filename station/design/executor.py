@@ -11,18 +11,29 @@ is the same whichever runs it.
 BLAS is held to one thread inside each task: the matrices are tiny (the 4-element plant is
 22 × 22) and BLAS threads only contend with each other and the compiled sample loop
 (docs/benchmarks.md, "Threads").
+
+Stopping: the local pool is :func:`station.pools.process_pool` (the workers leave SIGINT to
+the main process; a stop, or any error, kills them rather than waiting for their tasks) and
+results are collected by :func:`station.pools.results`, which answers a stop within 0.1 s
+and never cancels a future itself. A scheduler's address is checked
+(its form, and that something listens there, within :data:`CONNECT_S`) before a Dask client
+is made, so a wrong one is one line at once.
 """
 
 from __future__ import annotations
 
 import contextlib
+import socket
 from collections.abc import Callable, Iterable, Iterator
-from concurrent.futures import ProcessPoolExecutor
 from typing import Any
 
 from threadpoolctl import threadpool_limits
 
 from station.errors import StationError
+from station.pools import KILL_WAIT_S, process_pool, results
+
+CONNECT_S = 2.0
+"""How long a scheduler's address may take to accept a connection, s."""
 
 
 def one_thread(fn: Callable, *args) -> Any:
@@ -77,7 +88,68 @@ class Runner:
         tasks = list(tasks)
         if self.executor is None or len(tasks) <= 1:
             return [one_thread(fn, *t) for t in tasks]
-        return list(self.executor.map(one_thread, [fn] * len(tasks), *zip(*tasks)))
+        # submit and wait, never Executor.map: its clean-up cancels the futures from this thread,
+        # and the pool's thread, failing them after a kill, would meet cancelled ones
+        return results([self.executor.submit(one_thread, fn, *t) for t in tasks])
+
+
+def _connect(client_class, address: str):
+    """A Dask client of ``address``, or one line. A client whose making failed is still
+    collected later: its destructor would wait 10 s to close it and print a traceback (seen
+    with a port that answers but is no scheduler), so a half-made one is marked closed here."""
+    made = []
+
+    class Recorded(client_class):
+        def __init__(self, *args, **kwargs):
+            made.append(self)
+            super().__init__(*args, **kwargs)
+
+    try:
+        return Recorded(address, timeout=5, set_as_default=False)
+    except Exception as exc:  # noqa: BLE001 - whatever the far end did (a MemoryError: it sent no frame of Dask's)
+        for client in made:
+            client.status = "closed"  # (Client.__del__ closes only what is not closed)
+            with contextlib.suppress(Exception):
+                client._loop_runner.stop()
+        made.clear()
+        why = (f"something answers there, not as a Dask scheduler ({type(exc).__name__})"
+               if isinstance(exc, MemoryError) else f"{exc}" or type(exc).__name__)
+        raise StationError(f"--scheduler {address}: cannot connect ({why})") from None
+
+
+def check_scheduler(address: str) -> None:
+    """Refuse a Dask scheduler's address that is malformed or where nothing listens, in one line,
+    within :data:`CONNECT_S` (before a client is made: a client that cannot connect retries
+    for its whole timeout and leaves a traceback behind when it is collected).
+
+    Parameters
+    ----------
+    address : str
+        ``tcp://HOST:PORT`` (or ``tls://``, or ``HOST:PORT``); another scheme (``inproc://``)
+        is left to the client.
+
+    Raises
+    ------
+    StationError
+        ``--scheduler ADDRESS: ...`` saying what is wrong.
+    """
+    from distributed.comm.addressing import parse_address, parse_host_port  # lazy: optional dependency (dask.distributed)
+
+    try:
+        scheme, where = parse_address(address, strict=False)
+        if scheme not in ("tcp", "tls"):
+            return
+        host, port = parse_host_port(where)
+    except (ValueError, TypeError) as exc:
+        raise StationError(f"--scheduler {address}: not a scheduler's address ({exc}); expected tcp://HOST:PORT") \
+            from None
+    if not host or not 0 < int(port) < 65536:
+        raise StationError(f"--scheduler {address}: not a scheduler's address; expected tcp://HOST:PORT "
+                           f"(a port 1..65535)")
+    try:
+        socket.create_connection((host, int(port)), timeout=CONNECT_S).close()
+    except OSError as exc:
+        raise StationError(f"--scheduler {address}: cannot connect ({exc.strerror or exc})") from None
 
 
 @contextlib.contextmanager
@@ -100,25 +172,28 @@ def open_runner(jobs: int = 1, scheduler: str | None = None) -> Iterator[Runner]
     Raises
     ------
     StationError
-        Dask is not installed, or the scheduler cannot be reached (one line naming it).
+        Dask is not installed, or the scheduler's address is malformed or cannot be reached
+        (one line naming it, within :data:`CONNECT_S` when nothing listens there).
     """
     if scheduler is not None:
         try:
             from dask.distributed import Client  # lazy: optional dependency (dask.distributed)
         except ImportError:
             raise StationError("--scheduler: needs Dask distributed (pip install 'station[dask]')") from None
+        check_scheduler(scheduler)
+        client = _connect(Client, scheduler)
+        executor = client.get_executor(pure=False)
         try:
-            client = Client(scheduler, timeout=5, set_as_default=False)
-        except (OSError, TimeoutError, ValueError) as exc:
-            raise StationError(f"--scheduler {scheduler}: cannot connect ({exc})") from None
-        try:
-            yield Runner(client.get_executor(pure=False), f"dask scheduler {scheduler}")
+            yield Runner(executor, f"dask scheduler {scheduler}")
+        except BaseException:
+            executor.shutdown(wait=False)  # the cluster's tasks are released with the client
+            raise
         finally:
-            client.close()
+            client.close(timeout=KILL_WAIT_S * 4)
         return
     if jobs <= 1:
         yield Runner(None, "this process")
         return
 
-    with ProcessPoolExecutor(max_workers=int(jobs)) as pool:
+    with process_pool(jobs) as pool:
         yield Runner(pool, f"{int(jobs)} local processes")

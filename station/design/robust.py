@@ -21,7 +21,6 @@ file (a JSON with no model, a model that does not load, an unstable plant).
 from __future__ import annotations
 
 import itertools
-import json
 import math
 from pathlib import Path
 from typing import NamedTuple
@@ -29,6 +28,7 @@ from typing import NamedTuple
 import numpy as np
 
 from station.errors import StationError
+from station.inputs import load_json
 from station.plant.effects import EFFECTS
 from station.plant.model import Model, as_model, load_model
 from station.plant.parameters import params_from_dict
@@ -167,12 +167,7 @@ def read_diagnosis(path: str | Path) -> DiagnosisDoubt:
         Unreadable, not JSON, or no ``extended_model`` ("no model"); a bad alternative or interval.
     """
     path = Path(path)
-    try:
-        doc = json.loads(path.read_text(encoding="utf-8"))
-    except OSError as exc:
-        raise StationError(f"{path}: cannot read: {exc.strerror or exc}") from None
-    except (UnicodeDecodeError, json.JSONDecodeError) as exc:
-        raise StationError(f"{path}: not a JSON file ({exc})") from None
+    doc = load_json(path, "diagnosis JSON")  # bounded: a regular file, its nesting limited
     if not isinstance(doc, dict) or not isinstance(doc.get("extended_model"), dict):
         raise StationError(f"{path}: no model in this JSON (expected a diagnosis with \"extended_model\", "
                            f"from station diagnose --json)")

@@ -22,7 +22,8 @@ sensors' faults act on the noise-free outputs before their quantization: θ·enc
 and accel_gain·a + accel_offset + accel_drift·k·dt at sample k of the run (k = 0 the run's
 first sample; :class:`Stepper` counts its samples since ``reset``).
 
-Imports the modal form, the rounding rule and the vocabulary's friction levels only; a
+Imports the modal form, the rounding rule, the vocabulary's friction levels and
+:func:`station.signals.shielded` (a stop is held while compiled code runs) only; a
 Model is used through its methods (``linear_form``, ``linear_params``, ``effect_dict``),
 so :mod:`station.plant.model` can build a `ModelPlant` without a circle.
 """
@@ -38,6 +39,7 @@ from station.rig import DT
 from station.plant.effects import friction_levels
 from station.plant.modal import LinearForm
 from station.rounding import half_away, sensor_count
+from station.signals import shielded
 
 
 def _commit(num, den, xs, ys, x, y):  # pragma: no cover - compiled by numba
@@ -268,9 +270,16 @@ def run_kernel(*args):
     Returns
     -------
     theta, a, v, theta_d_hat : numpy.ndarray, shape (N,)
+
+    Raises
+    ------
+    station.signals.StopSignal
+        SIGINT or SIGTERM arrived during the call: held until the compiled code returned
+        (:func:`station.signals.shielded`), raised then.
     """
-    _compile()
-    return _compiled_loop(*args)
+    with shielded():  # a stop raised inside numba's dispatcher would come out as a SystemError
+        _compile()
+        return _compiled_loop(*args)
 
 
 def coefficients(tf) -> tuple[np.ndarray, np.ndarray]:

@@ -12,6 +12,7 @@ from typing import Any
 import numpy as np
 
 from station.rig import DT
+from station.runlog.schema import log_error
 from station.runlog.timebase import header_dt
 
 
@@ -61,6 +62,28 @@ class RunLog:
 
     def __len__(self) -> int:
         return int(self.data["t"].size)
+
+    def require_rows(self, doing: str) -> RunLog:
+        """This log, refused when it has no rows (a header only: a run that never started).
+
+        Parameters
+        ----------
+        doing : str
+            What the command would do with it ("replay", "compare", "draw").
+
+        Returns
+        -------
+        RunLog
+            ``self``.
+
+        Raises
+        ------
+        RunLogError
+            ``PATH: the log has no rows; nothing to DOING`` (a command's exit code 2: nothing ran).
+        """
+        if not len(self):
+            raise log_error(self.path, None, f"the log has no rows; nothing to {doing}")
+        return self
 
     @property
     def dt(self) -> float:

@@ -19,11 +19,12 @@ from typing import Any
 import numpy as np
 
 from station.errors import StationError
-from station.inputs import check_regular, exists
+from station.inputs import MAX_JSON_DEPTH, json_depth, open_regular
 from station.runlog.log import RunLog
 from station.runlog.rig_layouts import Header, parse_column_line, parse_rig_header
 from station.runlog.rows import MAX_LINE, LineTooLong, Lines, load_rows
-from station.runlog.schema import COLUMN_LINE, COLUMNS, END_PREFIX, FINITE_COLUMNS, MAGIC, RunLogError, log_error
+from station.runlog.schema import (COLUMN_LINE, COLUMNS, END_PREFIX, FINITE_COLUMNS, MAGIC, MAX_ABS_VALUE, RunLogError,
+                                   log_error)
 
 MAX_HEADER_LINES = 1000
 """Most ``#`` lines of a rig log's header (it has about ten): a file of comments is no log."""
@@ -89,18 +90,10 @@ def read_log(path: str | Path) -> RunLog:
     ...     read_log(path.with_name("missing.tsv"))
     ... except RunLogError as exc:                            # a StationError: one line
     ...     print(exc)
-    /.../missing.tsv: cannot read run log: No such file or directory
+    /.../missing.tsv: run log not found
     """
     path = Path(path)
-    try:  # a folder, a FIFO (opening it would block) or a device (/dev/zero never ends) is no log
-        if exists(path):  # (a missing file: open says so, below)
-            check_regular(path, "run log")
-    except StationError as exc:
-        raise RunLogError(str(exc), file=path) from None
-    try:
-        fh = open(path, encoding="utf-8", newline="")
-    except OSError as exc:
-        raise log_error(path, None, f"cannot read run log: {exc.strerror or exc}") from None
+    fh = open_log(path)
     with fh:
         try:
             return _read_stream(path, Lines(fh))
@@ -110,6 +103,35 @@ def read_log(path: str | Path) -> RunLog:
             raise log_error(path, exc.lineno, f"longer than {MAX_LINE} characters: not a run log") from None
         except OSError as exc:
             raise log_error(path, None, f"cannot read run log: {exc.strerror or exc}") from None
+
+
+def open_log(path: Path, errors: str = "strict"):
+    """``path`` opened as a run log's text (:func:`station.inputs.open_regular`: a folder, a FIFO
+    (opening it would block) or a device (/dev/zero never ends) is no log).
+
+    Parameters
+    ----------
+    path : Path
+        The log.
+    errors : str
+        The text decoder's error handling ("replace" to find a line's number in a bad file).
+
+    Returns
+    -------
+    file object
+        Text, UTF-8, lines as written.
+
+    Raises
+    ------
+    RunLogError
+        Not a regular file, missing or unreadable (naming the file).
+    """
+    try:
+        return open_regular(path, "run log", text=True, errors=errors)
+    except StationError as exc:
+        if exc.__class__ is RunLogError:
+            raise
+        raise RunLogError(str(exc), file=path) from None
 
 
 def _read_stream(path: Path, lines: Lines) -> RunLog:
@@ -182,6 +204,8 @@ def _station_header(path: Path, texts: list[str]) -> Header:
         raise log_error(path, json_no, f"metadata is not valid JSON ({exc.msg})") from None
     except RecursionError:
         raise log_error(path, json_no, "metadata JSON is nested too deeply") from None
+    if json_depth(meta) > MAX_JSON_DEPTH:
+        raise log_error(path, json_no, f"metadata JSON is nested too deeply (at most {MAX_JSON_DEPTH} levels)")
     if not isinstance(meta, dict):
         raise log_error(path, json_no, "expected a JSON object of metadata")
     _check_meta(path, json_no, meta)
@@ -193,17 +217,24 @@ def _station_header(path: Path, texts: list[str]) -> Header:
 
 def _check_finite(path: Path, data: dict[str, np.ndarray], names: list[str], fmt: str,
                   first_lineno: int | None) -> None:
-    """RunLogError naming the line and the field of the first non-finite value where a number belongs."""
+    """RunLogError naming the line and the field of the first non-finite value where a number
+    belongs, or of the first number of any column past :data:`MAX_ABS_VALUE` in magnitude."""
     must = FINITE_COLUMNS + (("v", "theta_d_hat") if fmt == "rig" else ())
     for name in names:
-        if name not in must:
-            continue
         col = data[name]
-        bad = np.flatnonzero(~np.isfinite(col))
-        if bad.size:
-            line = _line_of_row(path, first_lineno, int(bad[0]))
-            raise log_error(path, line, f"{name} is {float(col[bad[0]])!r}, expected a finite number "
-                            f"(a log with missing samples cannot be used as it is)", key=name)
+        if name in must:
+            bad = np.flatnonzero(~np.isfinite(col))
+            if bad.size:
+                line = _line_of_row(path, first_lineno, int(bad[0]))
+                raise log_error(path, line, f"{name} is {float(col[bad[0]])!r}, expected a finite number "
+                                f"(a log with missing samples cannot be used as it is)", key=name)
+        with np.errstate(invalid="ignore"):
+            big = np.flatnonzero(np.abs(col) > MAX_ABS_VALUE)  # (NaN compares False: allowed where it is)
+        if big.size:
+            line = _line_of_row(path, first_lineno, int(big[0]))
+            value = float(col[big[0]])
+            raise log_error(path, line, f"{name} is {value:.6g}, past any measurement (at most ±2^31 = "
+                            f"±{MAX_ABS_VALUE:.0f}, a 32-bit counter's range)", key=name)
 
 
 def _line_of_row(path: Path, first_lineno: int | None, row: int) -> int:
@@ -211,7 +242,7 @@ def _line_of_row(path: Path, first_lineno: int | None, row: int) -> int:
     if first_lineno is None:
         return 0
     seen = -1
-    with open(path, encoding="utf-8", errors="replace") as fh:
+    with open_log(path, errors="replace") as fh:
         for lineno, line in enumerate(fh, 1):
             if lineno < first_lineno or not line.strip() or line.startswith("#"):
                 continue
@@ -245,4 +276,6 @@ def _end_record(path: Path, lineno: int, line: str, terminated: bool) -> dict[st
         raise log_error(path, lineno, f"end record is not valid JSON ({msg})") from None
     if not isinstance(outcome, dict):
         raise log_error(path, lineno, f"expected a JSON object after '{END_PREFIX.strip()}'")
+    if json_depth(outcome) > MAX_JSON_DEPTH:
+        raise log_error(path, lineno, f"end record nested too deeply (at most {MAX_JSON_DEPTH} levels)")
     return outcome

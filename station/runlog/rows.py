@@ -6,7 +6,7 @@ row (a 100 MB log reads within a few times its size, ``scripts/bench_read.py``).
 file that numpy refuses is read again, through the same :class:`DataLines`, row by row, to
 name the bad row's line and field.
 
-Imports :mod:`station.runlog.schema`.
+Imports :mod:`station.runlog.schema` and :func:`station.inputs.open_regular` (the one way a given file is opened).
 """
 
 from __future__ import annotations
@@ -16,6 +16,7 @@ from pathlib import Path
 
 import numpy as np
 
+from station.inputs import open_regular
 from station.runlog.schema import log_error
 
 SEPARATOR_NAMES = {"\t": "tab", ",": "comma", ";": "semicolon", None: "whitespace"}
@@ -246,7 +247,7 @@ def _rows_one_by_one(path: Path, first: int, fmt: str, names: list[str],
                      sep: str | None) -> tuple[np.ndarray, DataLines]:
     """:func:`load_rows`'s exact (slow) pass from line ``first`` on, only for a file numpy
     refused: the same data lines, each parsed by :func:`parse_row` to name the bad one."""
-    with open(path, encoding="utf-8", newline="") as fh:
+    with open_regular(path, "run log", text=True) as fh:
         lines = Lines(fh)
         while lines.lineno < first - 1 and lines.next() is not None:
             pass

@@ -6,7 +6,11 @@ design the experiment that best separates them, run it and diagnose again, up to
 Every experiment is a normal ``station step`` run (:func:`station.experiment.run_step`:
 fail-safe, logged; the reference of a designed experiment is written beside its log as
 ``<log stem>.u.tsv`` and given as ``FILE:u``). A run that does not complete (any stop, or a
-watchdog trip) is reported and not used; a SIGINT or SIGTERM ends the identification.
+watchdog trip) is reported and not used; a SIGINT or SIGTERM ends the identification, and
+no experiment starts after one (a signal during a diagnosis or a design stops the work there,
+saying which experiments ran and where their logs are). A device that cannot be opened for a
+later experiment (unplugged, powered off) ends the identification with what ran (exit code 1),
+not as bad input.
 
 The first diagnosis tries the whole vocabulary (or the ``candidates`` given); each later one
 only the effects the first found worth a look (:func:`recheck_candidates`), which keeps a
@@ -45,7 +49,7 @@ from station.plant.effects import CANDIDATES
 from station.plant.model import as_model
 from station.rig import CLAMP, DEFAULT_SOFT_LIMIT, DEFAULT_TIMEOUT
 from station.runlog import read_log
-from station.signals import StopSignal, StopSignals
+from station.signals import StopSignal, StopSignals, noting
 
 DEFAULT_BUDGET = 8
 """Designed experiments after the thesis's four, at most (``station identify --budget``)."""
@@ -119,9 +123,14 @@ def step_runner(port: str, protocol: str = "v1", soft_limit: float = DEFAULT_SOF
             if path.exists() and not force:
                 raise StationError(f"{path}: exists; use --force to overwrite it, or another --out-dir")
             ref = {"reference": f"{write_reference(experiment, path)}:u"}
-        report = run_step(port=port, protocol=protocol, controller=experiment.controller, kp=experiment.kp,
-                          limit=limit, soft_limit=soft_limit, timeout=timeout, out=log, force=force,
-                          duration=experiment.duration, limits=limits, baudrate=baudrate, **ref)
+        try:
+            report = run_step(port=port, protocol=protocol, controller=experiment.controller, kp=experiment.kp,
+                              limit=limit, soft_limit=soft_limit, timeout=timeout, out=log, force=force,
+                              duration=experiment.duration, limits=limits, baudrate=baudrate, **ref)
+        except (StationError, StopSignal):  # the run never started: its reference file goes too
+            if experiment.reference != "step":
+                log.with_name(log.stem + ".u.tsv").unlink(missing_ok=True)
+            raise
         o = report.result.outcome
         return ExperimentRun(report.log_path, o.reason, o.exit_code)
 
@@ -340,7 +349,12 @@ def identify(port: str = "sim://", model=None, budget: int = DEFAULT_BUDGET, out
     except OSError as exc:
         raise StationError(f"{folder}: cannot create the experiments' folder: {exc.strerror or exc}") from None
     loop = _Loop(base, folder, run, say, soft_limit, limit)
+    with noting(loop.kept_note):  # a signal in a diagnosis or a design: what ran and where its logs are
+        return _identify(loop, names, budget)
 
+
+def _identify(loop: _Loop, names: list[str], budget: int) -> Identification:
+    """:func:`identify`'s loop: the thesis's four, then diagnose and design while rivals remain."""
     for exp, why in zip(THESIS_EXPERIMENTS, THESIS_WHY):
         code = loop.run(exp, why)
         if code is not None:
@@ -553,8 +567,24 @@ class _Loop:
         self.t0 = time.perf_counter()
         self.stopped_by = ""  # what stopped the last experiment (or kept the next from starting)
 
+    def kept_note(self) -> str:
+        """What the identification leaves on disk when a signal stops it outside a run."""
+        if not self.records:
+            return f"no experiment ran; nothing written (the experiments' folder {self.folder} is empty)"
+        logs = ", ".join(r.log.name for r in self.records)
+        return (f"{len(self.records)} experiment(s) ran; their logs and figures are in {self.folder} ({logs}); "
+                f"no JSON, report or model written")
+
     def run(self, exp: Experiment, why: str, design: Design | None = None) -> int | None:
-        """Run one experiment and record it; a signal's exit code when one stopped it, else None."""
+        """Run one experiment and record it; the exit code to end with when it ends the
+        identification (130 / 143 a signal, 1 a device that could not be opened for a later
+        experiment), else None.
+
+        Raises
+        ------
+        StationError
+            The first experiment could not start (a port that cannot be opened: nothing ran).
+        """
         k = len(self.records) + 1
         log = self.folder / f"{k:02d}-{exp.slug}.tsv"
         active = StopSignals._active
@@ -563,7 +593,15 @@ class _Loop:
             self.stopped_by = f"{active.reason} before experiment {k} started"
             return StopSignal(active.signum).exit_code
         t = time.perf_counter()
-        done = self.runner(exp, log)
+        try:
+            done = self.runner(exp, log)
+        except StationError as exc:
+            if not self.records:
+                raise  # nothing ran: bad input, as station step says it
+            ran = ", ".join(r.log.name for r in self.records)
+            self.stopped_by = (f"the device: experiment {k} ({exp.label}) could not start ({exc}); "
+                               f"{len(self.records)} experiment(s) ran before, their logs in {self.folder} ({ran})")
+            return 1
         self.stopped_by = done.reason
         self.timings["experiments"] += time.perf_counter() - t
         used = done.exit_code == 0

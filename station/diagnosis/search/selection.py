@@ -47,6 +47,7 @@ from station.diagnosis.runs.cost import Evaluator, pooled, relative_gain, rms_ga
 from station.diagnosis.runs.folds import Fold
 from station.diagnosis.units import format_quantity
 from station.plant.effects import EFFECTS
+from station.pools import results
 
 MIN_RELATIVE_GAIN = 0.05
 """An effect is accepted only when it lowers the pooled validation cost by this fraction."""
@@ -625,7 +626,9 @@ def fit_each_alone(search: Search, names: Sequence[str], nominal: Trial) -> Sing
     rms_nom = pooled(ev, nominal.val_sse).rms_theta
     trials, values = {}, {}
     with ThreadPoolExecutor(search.workers) as pool:
-        for k, (name, (tr, vals)) in enumerate(zip(names, pool.map(alone, names)), 1):
+        futures = [pool.submit(alone, name) for name in names]
+        for k, (name, fut) in enumerate(zip(names, futures), 1):
+            (tr, vals), = results([fut])  # a bounded wait: a stop is answered within 0.1 s
             trials[name], values[name] = tr, vals
             g = rms_gain(pooled(ev, tr.val_sse).rms_theta, rms_nom)
             cg = relative_gain(tr.val_weighted, nominal.val_weighted)

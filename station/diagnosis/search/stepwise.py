@@ -48,6 +48,7 @@ from station.diagnosis.search.selection import (MAX_EFFECTS, MIN_RELATIVE_GAIN, 
                                          Search, Selection, Singles, Step, Trial, accept, credible, fit_set,
                                          null_floor, screen_costs, set_axes, trial)
 from station.plant.effects import EFFECTS
+from station.pools import results
 
 LOOKAHEAD = 3
 """Single effects beside the chosen one tried as first effects at the second step (module
@@ -92,7 +93,8 @@ def _try_sets(search: Search, sets: Mapping, starts: Sequence) -> dict[str, Tria
     """Per key, its set of effects fitted per fold (:func:`trial`) from ``starts``."""
     with ThreadPoolExecutor(search.workers) as ex:
         futures = {n: ex.submit(trial, search.ev, search.folds, names, search.axes, starts) for n, names in sets.items()}
-    return {n: f.result() for n, f in futures.items()}
+        done = results(list(futures.values()))  # a bounded wait: a stop is answered within 0.1 s
+    return dict(zip(futures, done))
 
 
 def _joint_trials(search: Search, names: Sequence[str], accepted: list[str], current: Trial,

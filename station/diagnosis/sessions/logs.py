@@ -14,7 +14,6 @@ channel drifts (the diagnosis then uses its θ, not its a).
 
 from __future__ import annotations
 
-import json
 import re
 from collections.abc import Callable, Iterable, Sequence
 from dataclasses import dataclass, field, replace
@@ -25,6 +24,7 @@ import numpy as np
 from station.diagnosis.runs.cases import RunCase, load_case
 from station.diagnosis.runs.admission import data_digest, set_aside_beam_tests, set_aside_copies
 from station.errors import StationError
+from station.inputs import open_regular, parse_json
 from station.logged.audit import accel_drift as audit_accel_drift
 from station.logged.simulate import simulate_log
 from station.outputs import unique_names
@@ -56,16 +56,16 @@ def _header_session(path: Path) -> str | None:
     """Our log header's ``session`` (None for any other file, or without one), from the
     header's first three lines alone (:data:`station.runlog.schema.MAGIC` among them)."""
     try:
-        with open(path, "rb") as fh:
+        with open_regular(path, "run log") as fh:
             lines = [fh.readline(1 << 20).decode("utf-8", "replace").rstrip("\r\n") for _ in range(3)]
-    except OSError:
+    except (OSError, StationError):  # not a regular file, unreadable: its reading names it
         return None
     if MAGIC not in lines:
         return None
     meta = next((line[2:] for line in lines if line.startswith("# {")), None)
     try:
-        meta = json.loads(meta) if meta is not None else None
-    except (ValueError, RecursionError):
+        meta = parse_json(meta, str(path)) if meta is not None else None
+    except StationError:
         return None
     s = meta.get(SESSION_KEY) if isinstance(meta, dict) else None
     return s.strip() if isinstance(s, str) and s.strip() else None

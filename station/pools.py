@@ -1,0 +1,163 @@
+"""Process pools that stop at once, and waits that answer a signal: the one plumbing of every
+command that farms work out (``station survey``'s replays, ``station tune``'s evaluations).
+
+A stop must end the command within a second (DESIGN.md "Run outcome": 130 / 143, one line),
+whatever the workers are doing:
+
+- a worker leaves SIGINT to the main process (a terminal's Ctrl-C reaches the whole process
+  group: no traceback per worker) and dies at once on SIGTERM (the main process's Python
+  handler, inherited on fork, would raise inside the worker's queue reading)
+  (:func:`worker_signals`, the pools' initializer);
+- the main process never blocks on a result without a bound: it waits :data:`POLL_S` at a
+  time and looks for a pending stop in between (:func:`results`, :func:`as_finished`), so a
+  signal is answered even when it woke another thread than the waiting one;
+- when the work stops (a signal, or any other error), the workers are killed, not waited
+  for (:func:`abandon`): a task of a large model set runs for seconds, and a worker may be
+  blocked writing a result nobody reads any more. No future is cancelled by the main
+  process before the kill, so the pool's own thread fails every pending one without an
+  ``InvalidStateError``.
+
+The workers are started under :func:`station.signals.shielded`: a fork runs the at-fork hooks
+(logging's module lock is taken before and released after it), where a stop raised by the
+handler would be swallowed and leave the lock held.
+
+Imports only :mod:`station.signals`.
+"""
+
+from __future__ import annotations
+
+import concurrent.futures as cf
+import contextlib
+import signal
+from collections.abc import Iterable, Iterator, Sequence
+from typing import Any
+
+from station.signals import check_stop, shielded
+
+POLL_S = 0.1
+"""Longest wait for a result before looking for a pending stop, s."""
+
+KILL_WAIT_S = 0.5
+"""How long each killed worker is waited for, s (SIGKILL: it is gone within milliseconds)."""
+
+
+def worker_signals() -> None:
+    """A worker process's signals (a pool's initializer): SIGINT ignored (the main process
+    answers it), SIGTERM the default action (the worker ends at once)."""
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    signal.signal(signal.SIGTERM, signal.SIG_DFL)
+
+
+def abandon(pool: cf.ProcessPoolExecutor) -> None:
+    """Stop a process pool now: pending tasks dropped, running ones killed with their workers.
+
+    Parameters
+    ----------
+    pool : concurrent.futures.ProcessPoolExecutor
+        The pool (no further use after this).
+    """
+    kill = getattr(pool, "kill_workers", None)  # Python 3.14 has it
+    if kill is not None:
+        kill()
+        return
+    # before 3.14 the pool offers no way to stop a running task: its worker processes are
+    # killed (the pool's own thread then fails their futures and closes its queues)
+    workers = list((getattr(pool, "_processes", None) or {}).values())
+    pool.shutdown(wait=False, cancel_futures=True)
+    for proc in workers:
+        try:
+            proc.kill()
+        except (OSError, ValueError):
+            pass
+    for proc in workers:
+        try:
+            proc.join(KILL_WAIT_S)
+        except (OSError, ValueError, AssertionError):
+            pass
+
+
+@contextlib.contextmanager
+def process_pool(workers: int) -> Iterator[cf.ProcessPoolExecutor]:
+    """A process pool of ``workers`` (each with :func:`worker_signals`), shut down when the block
+    ends: waited for after normal work, abandoned (:func:`abandon`) when the block raises.
+
+    Parameters
+    ----------
+    workers : int
+        Worker processes, ≥ 1.
+
+    Yields
+    ------
+    concurrent.futures.ProcessPoolExecutor
+        Submit with ``pool.submit``; collect with :func:`results` or :func:`as_finished`.
+    """
+    pool = cf.ProcessPoolExecutor(max_workers=int(workers), initializer=worker_signals)
+    try:
+        with shielded():  # the workers start with the first task: never a stop inside the fork's hooks
+            pool.submit(int).result()
+        yield pool
+    except BaseException:
+        abandon(pool)
+        raise
+    pool.shutdown(wait=True)
+
+
+def _wait(futures: Iterable[cf.Future], return_when: str) -> tuple[set, set]:
+    """``concurrent.futures.wait`` in :data:`POLL_S` steps, a pending stop raised between them."""
+    pending = set(futures)
+    while True:
+        done, pending = cf.wait(pending, timeout=POLL_S, return_when=return_when)
+        if done or not pending:
+            return done, pending
+        check_stop()
+
+
+def results(futures: Sequence[cf.Future]) -> list[Any]:
+    """Every future's result, in their order (a task's exception raised as it is).
+
+    Parameters
+    ----------
+    futures : sequence of Future
+        From ``submit`` on a process pool, a thread pool or a Dask client's executor.
+
+    Returns
+    -------
+    list
+        ``[f.result() for f in futures]``.
+
+    Raises
+    ------
+    station.signals.StopSignal
+        A signal arrived while waiting (within :data:`POLL_S`); nothing is cancelled here.
+    """
+    out = []
+    for f in futures:
+        if not f.done():
+            _wait([f], cf.ALL_COMPLETED)
+        out.append(f.result())
+    return out
+
+
+def as_finished(futures: Iterable[cf.Future]) -> Iterator[cf.Future]:
+    """The futures as they finish (``concurrent.futures.as_completed``, answering a stop within
+    :data:`POLL_S`).
+
+    Parameters
+    ----------
+    futures : iterable of Future
+        Submitted work.
+
+    Yields
+    ------
+    Future
+        Each one once, done.
+
+    Raises
+    ------
+    station.signals.StopSignal
+        A signal arrived while waiting.
+    """
+    pending = set(futures)
+    while pending:
+        done, pending = _wait(pending, cf.FIRST_COMPLETED)
+        yield from done
