@@ -142,7 +142,7 @@ def test_not_a_log(tmp_path):
     path.write_text("hello\n1 2 3\n")
     with pytest.raises(RunLogError, match="line 1"):
         read_log(path)
-    with pytest.raises(RunLogError, match="cannot read"):
+    with pytest.raises(RunLogError, match="run log not found"):
         read_log(tmp_path / "missing.tsv")
 
 

@@ -218,8 +218,10 @@ def _station_header(path: Path, texts: list[str]) -> Header:
 def _check_finite(path: Path, data: dict[str, np.ndarray], names: list[str], fmt: str,
                   first_lineno: int | None) -> None:
     """RunLogError naming the line and the field of the first non-finite value where a number
-    belongs, or of the first number of any column past :data:`MAX_ABS_VALUE` in magnitude."""
+    belongs, or of the first number of a measured column (the time base, reference, command and
+    sensors) past :data:`MAX_ABS_VALUE` in magnitude."""
     must = FINITE_COLUMNS + (("v", "theta_d_hat") if fmt == "rig" else ())
+    measured = must + ("v", "v_applied")  # what analysis computes with; ours may log any theta_d_hat, latency
     for name in names:
         col = data[name]
         if name in must:
@@ -228,6 +230,8 @@ def _check_finite(path: Path, data: dict[str, np.ndarray], names: list[str], fmt
                 line = _line_of_row(path, first_lineno, int(bad[0]))
                 raise log_error(path, line, f"{name} is {float(col[bad[0]])!r}, expected a finite number "
                                 f"(a log with missing samples cannot be used as it is)", key=name)
+        if name not in measured:
+            continue
         with np.errstate(invalid="ignore"):
             big = np.flatnonzero(np.abs(col) > MAX_ABS_VALUE)  # (NaN compares False: allowed where it is)
         if big.size:

@@ -98,7 +98,7 @@ the rig's logs must also have a finite v and theta_d_hat. Ours may log v = nan (
 of a controller fault) and nan latency or theta_d_hat."""
 
 MAX_ABS_VALUE = 2.0 ** 31
-"""Largest magnitude of any number in a log's rows: a 32-bit counter's range, past every
+"""Largest magnitude of a measured number in a log's rows (time base, reference, command, sensors): a 32-bit counter's range, past every
 encoder, accelerometer, DAC or reference count and any run's time in s or ms. A larger finite
 number (1e160, 1e308) is no measurement, and its squares, sums and conversions to whole
 counts overflow in whatever reads the log next (a diagnosis's cost, a table's format): the
