@@ -3,7 +3,8 @@
 
 Each held-out rig is a model file (:mod:`station.plant` models, written here into a temporary
 folder, never given to ``station tune``): other friction levels, no friction, a breakaway
-friction, a dead zone, another drive damping, another beam EI, the 2009 session. On each, the
+friction, a dead zone, another drive damping, another beam EI, the 2009 session, a heavier hub,
+a weaker actuator, a softer drive train, viscous friction (:data:`HELD_OUT`). On each, the
 tuned compensator file and the thesis's ``lead-accel`` run as ``station step`` runs them
 (:func:`station.experiment.run_step` on ``sim://?model=FILE&seed=N``: protocol v1, the
 accelerometer's noise on), a step of 200 counts, and the logs give the overshoot, the hub's
@@ -25,6 +26,7 @@ import os
 import sys
 import tempfile
 import time
+import warnings
 from pathlib import Path
 
 REPO = Path(__file__).resolve().parents[1]
@@ -46,8 +48,18 @@ HELD_OUT = (
     ("drive damping x2 of rig", "rig", {"param:drive_c": 6.44}),
     ("beam EI x0.8", "rig", {"param:EI": 0.8}),
     ("beam EI x1.2, Coulomb 8", "rig", {"param:EI": 1.2, "coulomb_friction": 8.0}),
+    ("Coulomb 3", "rig", {"coulomb_friction": 3.0}),
+    ("breakaway 9 over Coulomb 5.3", "rig", {"static_friction": 9.0}),
+    ("hub inertia J_base x1.2", "rig", {"param:J_base": 1.2}),
+    ("actuator gain act_K x0.8", "rig", {"param:act_K": 0.8}),
+    ("drive stiffness drive_k x0.7", "rig", {"param:drive_k": 0.7}),
+    ("viscous 1.7, Coulomb 4", "rig", {"viscous_friction": 1.74, "coulomb_friction": 3.98}),
 )
-"""(label, base model, effects over it): the held-out rigs."""
+"""(label, base model, effects over it): the held-out rigs. The first nine are those the design
+was first judged on; the last six were added later, so that a design rule is not tuned to the
+nine: less friction than the estimate, a breakaway over the sliding level, a heavier hub, a
+weaker actuator (the diagnosis's in-sample act_K 0.78), a softer drive train, and the
+diagnosis's viscous alternative (docs/diagnosis.md "Which model to ship")."""
 
 
 def _measure(log_path: Path) -> dict:
@@ -72,11 +84,21 @@ def _run(controller: str, model_file: Path, seed: int, folder: Path, tag: str) -
     from station.experiment import run_step
 
     out = folder / f"{tag}.tsv"
-    report = run_step(port=f"sim://?seed={seed}", controller=controller, amplitude=AMPLITUDE, model=model_file,
-                      out=out, figure=False, force=True)
+    with warnings.catch_warnings():  # a held-out rig is another model than the design's: that is the point
+        warnings.filterwarnings("ignore", message=r".* was designed on model ", category=UserWarning)
+        report = run_step(port=f"sim://?seed={seed}", controller=controller, amplitude=AMPLITUDE, model=model_file,
+                          out=out, figure=False, force=True)
     if not report.result.ok:
         raise SystemExit(f"{tag}: the run stopped ({report.result.reason})")
     return _measure(out)
+
+
+def held_out_models() -> list[tuple[str, object]]:
+    """The held-out rigs as models: (label, :class:`station.plant.model.Model`), in :data:`HELD_OUT`'s order."""
+    from station.plant import load_model
+
+    return [(label, load_model(base).with_effects(effects, name=f"held-out {i + 1}"))
+            for i, (label, base, effects) in enumerate(HELD_OUT)]
 
 
 def check(controller: str | Path, seeds: int = 3, progress=None) -> list[dict]:
@@ -98,13 +120,10 @@ def check(controller: str | Path, seeds: int = 3, progress=None) -> list[dict]:
         tip_residual_rms, tip_residual_peak; ``hub_ratio``, ``tip_ratio``, ``meets_bar``), the worst
         ``hub_ratio``, ``tip_ratio``, ``overshoot_pct`` over the seeds, ``met``.
     """
-    from station.plant import load_model
-
     out = []
     with tempfile.TemporaryDirectory(prefix="heldout-") as tmp:
         folder = Path(tmp)
-        for i, (label, base, effects) in enumerate(HELD_OUT):
-            model = load_model(base).with_effects(effects, name=f"held-out {i + 1}")
+        for i, (label, model) in enumerate(held_out_models()):
             path = folder / f"heldout-{i + 1}.toml"
             model.save(path)
             runs = []

@@ -11,8 +11,10 @@ doubt with another seed, and the nominal tmm-fit FEM): the hub (overshoot, 2 % s
 the tip (its 2 % settling, its residual RMS from 0.6 s after the step). For lead +
 accelerometer it also designs each structure past the thesis's (two-mode shaper, notch or
 roll-off in Gth, damper in Ga, no bound on the tip), draws the hub-tip trade-off, probes a notch
-on the former fast design, and runs the held-out check (scripts/heldout_tune.py: ``station
-step`` on rigs the design never saw). Every number in docs/tuning.md comes from this script:
+on the former fast design, runs the held-out check (scripts/heldout_tune.py: ``station step`` on
+rigs the design never saw), sweeps the rule (``--hub-ratio``, and the doubt widened: each design
+checked on the held-out rigs) and shows where the limit is (the held-out rigs the rule misses,
+each designed for alone and together with ``rig``). Every number in docs/tuning.md comes from this script:
 rerun it when the ``rig`` model or the design changes.
 
 Usage: ``python scripts/tuning_table.py [--jobs N] [--unseen N] [--seeds N] [--out docs/tuning.md]``
@@ -23,9 +25,11 @@ from __future__ import annotations
 
 import argparse
 import importlib.util
+import math
 import os
 import time
 from pathlib import Path
+from unittest import mock
 
 REPO = Path(__file__).resolve().parents[1]
 
@@ -42,6 +46,25 @@ STRUCTURES = (("opt", "none", 1.0, "the thesis's structure: lead, Ga's gain and 
               ("opt2", "none", None, "the default structure with no bound on the tip (the hub alone)"))
 """lead + accelerometer structures compared on rig: (shaper, filter, tip bound, what it is)."""
 
+RULES = ((1.0, False), (0.6, False), (0.55, False), (0.5, False), (0.55, True))
+"""(``--hub-ratio``, the doubt widened) the rule table designs lead + accelerometer with: the bar
+on the design model, and the default doubt or :data:`WIDE_DOUBT`; 0.55 with the default doubt
+is ``station tune``'s default (reused, not designed twice)."""
+
+WIDE_DOUBT = (("coulomb_friction", "absolute", 0.0, 16.0), ("static_friction", "ratio", 0.7, 1.5),
+              ("amp_offset", "absolute", -3.0, 3.0), ("param:drive_c", "ratio", 0.48, 1.4),
+              ("param:EI", "ratio", 0.8, 1.1))
+"""The default doubt with the drive damping down to least squares' 95 % interval (x1.54 of
+tmm-fit: 0.48x `rig`'s) and the beam's EI down to 0.8x."""
+
+LIMIT_RIGS = ("tmm-fit (no friction, drive damping x1)", "beam EI x0.8", "rig-2009 (friction 1.2, offset -1.5)")
+"""Held-out rigs (scripts/heldout_tune.py's labels) the limit table designs for alone, and
+together with ``rig``, with the hidden rigs' bar as the requirement."""
+
+FIRST_HELD_OUT = 9
+"""scripts/heldout_tune.py's rigs from this index on were added beside the first nine while the
+design rule was chosen (marked "added")."""
+
 FORMER = {"k0": 7.176, "z": 50.24, "ratio": 1.808, "ga_gain": 0.5804, "ga_freq": 0.4487, "shaper_t2": 0.2084,
           "shaper_a2": 0.4238}
 """The former tuned lead + accelerometer (hub only): the notch probe starts from it."""
@@ -49,6 +72,10 @@ FORMER = {"k0": 7.176, "z": 50.24, "ratio": 1.808, "ga_gain": 0.5804, "ga_freq":
 
 def _s(x) -> str:
     return "not settled" if x is None else f"{x:.3f} s"
+
+
+def _x(ratio: float) -> str:
+    return "not settled" if not math.isfinite(ratio) else f"{ratio:.2f}x"
 
 
 def _worst(figs, key):
@@ -84,6 +111,8 @@ def _figures(result, folder: Path, structure: str, tag: str) -> list[str]:
     from station.design.figures import bode_figure, robust_figure, steps_figure, tradeoff_figure
     from station.design.space import thesis_compensator
     from station.plots import save_figure
+
+    import station.design.robust as robust_module
 
     tuned = result.file.compensator()
     thesis = thesis_compensator(structure, result.space.limit)
@@ -173,6 +202,132 @@ def _notch_probe(rig) -> list[str]:
     return rows
 
 
+def _hub_ok(figures, baseline, bar: float = 0.6) -> int:
+    """Models where the hub settles (2 %) in at most ``bar`` times the thesis's time."""
+    return sum(1 for f, b in zip(figures, baseline)
+               if f.settling_2pct_s is not None and b.settling_2pct_s and f.settling_2pct_s <= bar * b.settling_2pct_s)
+
+
+def _check(heldout, result, folder: Path, seeds: int) -> list[dict]:
+    """The held-out check of a lead + accelerometer design (scripts/heldout_tune.py)."""
+    controller = folder / "tuned-lead-accel-heldout.toml"
+    try:
+        controller.write_text(result.file.to_toml(), encoding="utf-8")
+        return heldout.check(controller, seeds)
+    finally:
+        controller.unlink(missing_ok=True)
+
+
+def _meets(r, i) -> bool:
+    """The hidden rigs' bar on model ``i`` of a design (without noise)."""
+    f, b = r.figures[i], r.baseline[i]
+    return (f.settling_2pct_s is not None and b.settling_2pct_s is not None and f.overshoot_pct <= 8.0
+            and f.settling_2pct_s <= 0.6 * b.settling_2pct_s and f.tip_residual_rms <= 1.5 * max(b.tip_residual_rms, 0.3))
+
+
+def _limit_rows(heldout, jobs: int) -> tuple[list[str], list[tuple[str, bool, bool, float]]]:
+    """Each of :data:`LIMIT_RIGS` designed for alone, and together with ``rig``, on the hidden
+    rigs' bar (overshoot 8 %, tip 1.5x, hub 0.6x on the design model): the table's rows, and
+    per rig (label, the bar met alone, met on both together, the pair's worst tip ratio)."""
+    import tempfile
+
+    from station.design import tune
+
+    rigs = dict(heldout.held_out_models())
+    bar = {"overshoot": 8.0, "tip_rms": 1.5, "hub_ratio": 0.6, "samples": 0, "front": 0, "jobs": jobs}
+
+    def ratios(r, i):
+        f, b = r.figures[i], r.baseline[i]
+        hub = "not settled" if f.settling_2pct_s is None else f"{f.settling_2pct_s / b.settling_2pct_s:.2f}x"
+        return f"{hub} / {f.tip_residual_rms / max(b.tip_residual_rms, 0.3):.2f}x / {f.overshoot_pct:.1f} %"
+
+    rows, found = [], []
+    with tempfile.TemporaryDirectory(prefix="tuning-limit-") as tmp:
+        for label in LIMIT_RIGS:
+            path = Path(tmp) / "rig-x.toml"
+            rigs[label].save(path)
+            alone = tune(rigs[label], structure="lead-accel", amplitude=200.0, **bar)
+            both = tune("rig", structure="lead-accel", amplitude=200.0, robust=[path], **bar)
+            path.unlink()
+            rows.append(f"| {label} | {ratios(alone, 0)} | {ratios(both, 0)} | {ratios(both, 1)} |")
+            found.append((label.split(" (")[0], _meets(alone, 0), _meets(both, 0) and _meets(both, 1),
+                          max(f.tip_residual_rms / max(b.tip_residual_rms, 0.3) for f, b in zip(both.figures,
+                                                                                                  both.baseline))))
+            print(f"limit {label}: alone {ratios(alone, 0)}; with rig {ratios(both, 0)} and {ratios(both, 1)}",
+                  flush=True)
+    return rows, found
+
+
+def _limit_words(found) -> str:
+    """The limit table in words (:func:`_limit_rows`' findings)."""
+    def names(xs):
+        return ", ".join(xs) if xs else "none"
+    alone = [n for n, a, _, _ in found if a]
+    pair = [(n, t) for n, _, p, t in found if p]
+    none = [n for n, _, p, _ in found if not p]
+    text = (f"- **One compensator for `rig` and such a rig?** Designed for each alone on the hidden rigs' bar "
+            f"(the last table), the bar is met on {names(alone)}")
+    if pair:
+        text += (f"; designed for `rig` and it together, one design meets it on both for "
+                 f"{names([n for n, _ in pair])}, its tip at up to {max(t for _, t in pair):.2f}x the thesis's "
+                 f"(the rule asks 1x on every model of its set, and no design found holds that and the set's "
+                 f"corners too)")
+    if none:
+        text += (f"; for {names(none)} together with `rig` the search finds none: one compensator of this "
+                 f"structure does not serve both")
+    return text + "."
+
+
+def _fails_words(r) -> str:
+    """Which models of the set the design misses (the hub above 0.6x, or any requirement), in words."""
+    from station.design.evaluate import violations
+
+    rig_c = r.nominal.effect("param:drive_c")
+    low = [m.effect("param:drive_c") <= 0.75 * rig_c for m in r.robust.models]
+    hub = [i for i, (f, b) in enumerate(zip(r.figures, r.baseline))
+           if not (f.settling_2pct_s and b.settling_2pct_s and f.settling_2pct_s <= 0.6 * b.settling_2pct_s)]
+    tip = [i for i, (f, q) in enumerate(zip(r.figures, r.model_requirements())) if "tip" in violations(f, q)]
+    no_friction = [r.robust.models[i].effect("coulomb_friction") == 0 for i in tip]
+    return (f"Of the {len(hub)} models where the hub is above 0.6x, {sum(low[i] for i in hub)} have the drive "
+            f"damping in the doubt's lowest quarter (at most {0.75 * rig_c:.2f}x tmm-fit's, `rig` {rig_c:.2f}x); "
+            f"of the {len(tip)} where the tip is louder than the thesis's, {sum(no_friction)} have no friction.")
+
+
+def _limit_figure(rules):
+    """Per rule (the bar on the design model): each model's hub settling (2 %) over the thesis's,
+    on the design set and on the held-out rigs, against the hidden rigs' bar of 0.6x."""
+    import numpy as np
+
+    from station.plots import new_figure
+
+    fig = new_figure(9, 5)
+    ax = fig.subplots()
+    top = 1.6
+    for k, (_, r, held) in enumerate(rules):
+        hub = [f.settling_2pct_s / b.settling_2pct_s if f.settling_2pct_s and b.settling_2pct_s else top
+               for f, b in zip(r.figures, r.baseline)]
+        jitter = np.linspace(-0.12, 0.12, len(hub))
+        ax.scatter(k - 0.15 + jitter, np.minimum(hub, top), s=12, color="0.55",
+                   label="the design set's models" if k == 0 else None)
+        ax.scatter([k - 0.15], [min(hub[0], top)], s=60, marker="D", color="C0", zorder=5,
+                   label="rig (the design model)" if k == 0 else None)
+        for met in (True, False):
+            ys = [min(h["hub_ratio"], top) for h in held if h["met"] == met]
+            ax.scatter(k + 0.15 + np.linspace(-0.08, 0.08, len(ys)), ys, s=22, marker="o" if met else "x",
+                       color="C2" if met else "C3",
+                       label=(("held-out rig: bar met" if met else "held-out rig: bar NOT met") if k == 0 else None))
+    ax.axhline(0.6, color="C2", lw=0.8, ls=":", label="hidden rigs' bar: 0.6x")
+    ax.set_xticks(range(len(rules)), [f"--hub-ratio {label}".replace(", ", "\n") for label, _, _ in rules])
+    ax.set_ylabel("hub settling (2 %) / the thesis's")
+    ax.set_title(f"per model, against the thesis's on the same model ({top:g}: more, or not settled); "
+                 f"held-out: the worst noise seed", fontsize=9)
+    ax.set_ylim(0.3, top + 0.05)
+    ax.grid(True, axis="y", lw=0.3)
+    ax.legend(fontsize=7, loc="upper left")
+    fig.tight_layout()
+    return fig
+
+
 def main(argv: list[str] | None = None) -> int:
     import sys
 
@@ -197,6 +352,9 @@ def main(argv: list[str] | None = None) -> int:
     from station.design.space import thesis_compensator
     from station.design.tuning import DEFAULT_SAMPLES
     from station.plant import load_model
+    from station.plots import save_figure
+
+    import station.design.robust as robust_module
 
     s1, s2 = settling_label(THESIS_BAND_PCT), settling_label(STEP_INFO_BAND_PCT)
     folder = args.out.parent / "figures"
@@ -290,26 +448,52 @@ def main(argv: list[str] | None = None) -> int:
 
     probe = _notch_probe(rig)
     heldout = _heldout()
-    controller = Path(args.out.parent / "tuned-lead-accel-heldout.toml")
-    try:
-        controller.write_text(la.file.to_toml(), encoding="utf-8")
-        held_rows = heldout.check(controller, args.seeds)
-    finally:
-        controller.unlink(missing_ok=True)
+    held_rows = _check(heldout, la, folder, args.seeds)
     held_met = sum(r["met"] for r in held_rows)
+    print(f"held-out: {held_met} of {len(held_rows)}", flush=True)
 
-    def held_line(h):
+    # the rule: the bar on the design model, swept (the default's design and check reused)
+    rules = []
+    for ratio, wide in RULES:
+        label = f"{ratio:g}" + (", the doubt widened" if wide else "")
+        if ratio == la.hub_ratio and not wide:
+            rules.append((label, la, held_rows))
+            continue
+        with mock.patch.object(robust_module, "DEFAULT_DOUBT", WIDE_DOUBT if wide else robust_module.DEFAULT_DOUBT):
+            r = tune("rig", structure="lead-accel", amplitude=200.0, jobs=args.jobs, hub_ratio=ratio, front=0)
+        rules.append((label, r, _check(heldout, r, folder, args.seeds)))
+        print(f"rule --hub-ratio {label}: held-out {sum(h['met'] for h in rules[-1][2])}", flush=True)
+
+    def rule_line(label, r, held):
+        f, b = r.figures[0], r.baseline[0]
+        hub = [h["hub_ratio"] for h in held]
+        failed = ", ".join(h["rig"].split(" (")[0] for h in held if not h["met"]) or "none"
+        ratios_set = [g.settling_2pct_s / h.settling_2pct_s if g.settling_2pct_s and h.settling_2pct_s else math.inf
+                      for g, h in zip(r.figures, r.baseline)]
+        tips_set = _tip_ratios(r.figures, r.baseline)
+        return (f"| {label}{' (default)' if r is la else ''} | {f.overshoot_pct:.1f} % / "
+                f"{f.settling_2pct_s / b.settling_2pct_s:.2f}x / {f.tip_residual_rms / max(b.tip_residual_rms, 0.3):.2f}x "
+                f"| {sum(r.met())}/{len(r.figures)} | {_hub_ok(r.figures, r.baseline)}/{len(r.figures)} | "
+                f"{_x(max(ratios_set))} / {_x(max(tips_set))} | {sum(h['met'] for h in held)}/{len(held)} "
+                f"| {sum(x <= 0.6 for x in hub)}/{len(held)} ({min(hub):.2f}-{sorted(hub)[len(hub) // 2]:.2f}x) "
+                f"| {failed} |")
+
+    rule_rows = [rule_line(*rr) for rr in rules]
+    save_figure(_limit_figure(rules), folder / "tune-lead-accel-limit.png")
+    limit_rows, limit_found = _limit_rows(heldout, args.jobs)
+
+    def held_line(h, i):
         worst = max(h["runs"], key=lambda r: (not r["meets_bar"], r["hub_ratio"], r["tip_ratio"]))
         th, tu = worst["thesis"], worst["tuned"]
-        return (f"| {h['rig']} | {th['overshoot_pct']:.1f} % / {_s(th['settling_2pct_s'])} / "
-                f"{th['tip_residual_rms']:.2f} | {tu['overshoot_pct']:.1f} % / {_s(tu['settling_2pct_s'])} / "
-                f"{tu['tip_residual_rms']:.2f} | {h['hub_ratio']:.2f}x | {h['tip_ratio']:.2f}x | "
-                f"{'met' if h['met'] else 'NOT met'} |")
+        return (f"| {h['rig']}{' (added)' if i >= FIRST_HELD_OUT else ''} | {th['overshoot_pct']:.1f} % / "
+                f"{_s(th['settling_2pct_s'])} / {th['tip_residual_rms']:.2f} | {tu['overshoot_pct']:.1f} % / "
+                f"{_s(tu['settling_2pct_s'])} / {tu['tip_residual_rms']:.2f} | {h['hub_ratio']:.2f}x | "
+                f"{h['tip_ratio']:.2f}x | {'met' if h['met'] else 'NOT met'} |")
 
     f, b = la.figures[0], la.baseline[0]
     c = la.tradeoff.points[la.tradeoff.chosen]
-    hub_ok = sum(1 for g, h in zip(la.figures, la.baseline)
-                 if g.settling_2pct_s is not None and h.settling_2pct_s and g.settling_2pct_s <= 0.6 * h.settling_2pct_s)
+    hub_ok = _hub_ok(la.figures, la.baseline)
+    set_ratios = _ratios(la.figures, la.baseline)
     front = [la.tradeoff.points[i] for i in la.tradeoff.front]
     front_rows = [f"| {'★' if i == la.tradeoff.chosen else ''} | {p.hub_ratio:.2f}x | {p.tip_ratio:.2f}x | "
                   f"{p.overshoot_pct:.1f} % | {'yes' if p.met else 'no'} |"
@@ -345,6 +529,14 @@ def main(argv: list[str] | None = None) -> int:
         f"{args.unseen} from the same doubt (another seed): the designs never saw them. The nominal tmm-fit",
         "FEM (no friction, a third of the rig's drive damping) lies outside the doubt; it is shown apart.",
         "",
+        f"The rule (`--hub-ratio {la.hub_ratio:g}`, the default): first every requirement on the design model, "
+        f"with its hub {s2} at",
+        f"most {la.hub_ratio:g}x the thesis's compensator's there; then, over the set, the worst of each model's hub "
+        f"{s2}",
+        "relative to the thesis's compensator's on that model (a model that fails a requirement adding its",
+        "cost). The hidden rigs' bar is 0.6x the thesis's: the margin on the design model is what keeps the",
+        "rigs near it, but not in its set, on the right side of that bar ([Where the limit is](#where-the-limit-is)).",
+        "",
         f"Settling times are named by their band: **{s2}** is the 2 % band's after the step",
         "(python-control's `step_info` definition with the station's 0.1 s hold), the hub's and the",
         f"tip's alike; **{s1}** is the thesis's (from t = 0 of the run). Overshoot is the thesis's;",
@@ -365,11 +557,10 @@ def main(argv: list[str] | None = None) -> int:
         f"accelerometer's RMS is {f.tip_residual_rms:.2f} counts against the thesis's {b.tip_residual_rms:.2f} "
         f"(peak {f.tip_residual_peak:.0f} against {b.tip_residual_peak:.0f}); its tip settles into the 2 % band in "
         f"{_s(f.tip_settling_2pct_s)} (the thesis's {_s(b.tip_settling_2pct_s)}). On every model of its set "
-        f"({len(la.figures)}) it meets overshoot ≤ 5 % and the tip's bound on {sum(la.met())}; the hub is at most "
-        f"0.6x the thesis's on {hub_ok} of them, and at worst {c.hub_ratio:.2f}x (tip {c.tip_ratio:.2f}x). "
-        "That is the limit the trade-off shows: on the doubt's corners with no friction, an amplifier "
-        "offset, a beam 10 % softer and the least drive damping, a loop quiet enough for the tip creeps "
-        "into the band, and a loop stiff enough to stop the hub sooner rings the tip (below).",
+        f"({len(la.figures)}) it meets every requirement, the tip's included, on {sum(la.met())}; the hub is at "
+        f"most 0.6x the thesis's on {hub_ok} of them (median {sorted(set_ratios)[len(set_ratios) // 2]:.2f}x), and "
+        f"at worst {c.hub_ratio:.2f}x (tip {c.tip_ratio:.2f}x). {_fails_words(la)} The limit, and why, below "
+        "([Where the limit is](#where-the-limit-is)).",
         "",
         "The former design (the hub alone: 0.266 s on `rig`) left the accelerometer swinging at the",
         "second mode for a second after the hub had stopped; what rings it after 0.6 s is the hub hunting",
@@ -378,18 +569,76 @@ def main(argv: list[str] | None = None) -> int:
         "band instead of hunting), and a second impulse pair in the shaper, half a period of the closed",
         "loop's second mode apart, that leaves the second mode unexcited by the step.",
         "",
+
+        "",
         "### The trade-off",
         "",
         f"Every design the search judged on every model ({len(la.tradeoff.points)}), by its worst hub {s2} and",
         "its worst tip residual RMS over the set, each relative to the thesis's compensator on the same",
         "model; the front holds those no other design beats on both (among those meeting overshoot,",
-        "margins and rest everywhere), ★ the chosen one.",
+        "margins and rest everywhere), ★ the chosen one."
+        + ("" if la.tradeoff.chosen in la.tradeoff.front else
+           f" It is not on the front: the rule puts the hub on `rig` first (at most {la.hub_ratio:g}x the "
+           "thesis's there), and the designs that beat it on the set's worst models settle later on `rig` "
+           "(the worst models are the doubt's corners no design meets the bar on: "
+           "[Where the limit is](#where-the-limit-is))."),
         "",
         f"| | worst hub {s2} / thesis's | worst tip RMS / thesis's | worst overshoot | every requirement met |",
         "|---|---|---|---|---|",
         *front_rows,
         "",
         "![tune-lead-accel-tradeoff.png](figures/tune-lead-accel-tradeoff.png)",
+        "",
+        "## Where the limit is",
+        "",
+        "On `rig` the bar is met with room to spare; on rigs unlike it, one compensator of this structure",
+        "cannot meet it everywhere:",
+        "",
+        "- **Rigs near the model** (other friction, an offset, a heavier hub, a weaker actuator, a softer",
+        "  drive train): a design whose hub settles at the bar on its model meets 0.6x on some of them and",
+        "  not on others, the ratio spreading by a few hundredths around the model's. A margin on the design",
+        f"  model (`--hub-ratio {la.hub_ratio:g}`) keeps them inside it; the worst case over the set alone "
+        "does not, because",
+        "  the set's worst models (below) are out of reach and leave the rest at the bar's edge.",
+        "- **Less drive damping, a softer beam, no friction** (tmm-fit, the 2009 rig, EI x0.8, the doubt's",
+        "  corners with no friction and the least damping): after the last impulse of the shaper the hub",
+        "  arrives, and the beam's first mode, no longer held by friction and less damped by the drive,",
+        "  drags it past the 2 % band. A loop soft enough to leave the tip quiet where friction holds the hub",
+        "  brings it back late; a loop stiff enough to hold it hunts between encoder counts on the rigs",
+        "  with friction and rings the tip. On the held-out rigs the bar is not met on: "
+        + "; ".join(f"{h['rig'].split(' (')[0]} overshoot {h['overshoot_pct']:.1f} %, hub {_x(h['hub_ratio'])}, "
+                    f"tip {h['tip_ratio']:.2f}x" for h in held_rows if not h["met"]) + ".",
+        _limit_words(limit_found),
+        "",
+        "Is the doubt honest? Drive damping 0.6-1.4x `rig`'s (x1.93-4.51 of tmm-fit) holds the diagnosis's",
+        "95 % interval (x2.36-4.47), least squares' answer (x1.98) and the 2009 session's (x1.96), but not",
+        "the lower part of least squares' interval (x1.54-1.93), the estimate the diagnosis did not keep",
+        "(docs/diagnosis.md); dry friction 0-16 counts holds none, the estimate (5.0, 3.2-8.0) and what the",
+        "open-loop pulses alone ask for; the beam's EI within 10 % holds the x0.91 the rig's first mode asks",
+        "for. tmm-fit (x1), drive damping x2 of `rig` (x6.4) and a beam 20 % softer lie outside what the",
+        "diagnosis allows: they test the design's margin, not its doubt. The last row of the rule table",
+        "widens the doubt to least squares' interval and a beam 20 % softer.",
+        "",
+        f"The rule, swept (lead + accelerometer, step 200, designed on `rig` with {len(la.figures)} models; "
+        "the held-out",
+        f"rigs as below, {args.seeds} noise seeds each):",
+        "",
+        f"| --hub-ratio (the bar on rig) | rig: overshoot / hub / tip vs the thesis's | design set: every "
+        f"requirement | hub ≤ 0.6x | worst hub / tip | held-out: bar met | hub ≤ 0.6x (least-median) | "
+        f"bar NOT met on |",
+        "|---|---|---|---|---|---|---|---|",
+        *rule_rows,
+        "",
+        "![tune-lead-accel-limit.png](figures/tune-lead-accel-limit.png)",
+        "",
+        "Each of the held-out rigs the rule does not meet the bar on, designed for alone and together",
+        "with `rig` (the model alone, no doubt drawn; the hidden rigs' bar as the requirement: overshoot",
+        "≤ 8 %, the tip ≤ 1.5x the thesis's, the hub ≤ 0.6x on the design model; hub / tip / overshoot,",
+        "the ratios to the thesis's compensator on the same rig, without noise):",
+        "",
+        "| rig X | designed for X alone, on X | designed for rig and X, on rig | on X |",
+        "|---|---|---|---|",
+        *limit_rows,
         "",
         "## What each structure can and cannot do",
         "",
@@ -430,12 +679,15 @@ def main(argv: list[str] | None = None) -> int:
         f"{args.seeds} noise seeds each, the worst counting) on",
         "held-out rigs made as model files and never given to the design; the bar for hidden rigs is",
         f"overshoot ≤ 8 %, hub {s2} ≤ 0.6x the thesis's, tip residual RMS ≤ 1.5x the thesis's. It is met on "
-        f"**{held_met} of {len(held_rows)}**:",
+        f"**{held_met} of {len(held_rows)}**",
+        f"({sum(h['met'] for h in held_rows[:FIRST_HELD_OUT])} of the first {FIRST_HELD_OUT}, "
+        f"{sum(h['met'] for h in held_rows[FIRST_HELD_OUT:])} of the {len(held_rows) - FIRST_HELD_OUT} added "
+        "beside them while the rule was chosen, so that it is not tuned to the nine):",
         "",
         f"| held-out rig | thesis's: overshoot / hub {s2} / tip RMS | tuned | hub / thesis's | tip / thesis's "
         "| bar |",
         "|---|---|---|---|---|---|",
-        *[held_line(h) for h in held_rows],
+        *[held_line(h, i) for i, h in enumerate(held_rows)],
         "",
         "P cannot promise a 2 % band of a 50-count step (1 encoder count) when the motor has dry",
         "friction: at rest the command is kp·e, and a hub that stops with |kp·e| below the friction",

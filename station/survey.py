@@ -23,6 +23,7 @@ from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Any
 
+from station.analysis.metrics import THESIS_BAND_PCT, settling_label
 from station.errors import StationError
 from station.inputs import exists, is_folder, open_regular
 from station.outputs import WRITTEN_SUFFIXES, Transaction
@@ -297,11 +298,12 @@ def format_table(rows: Sequence[SurveyRow], root: str | Path | None = None) -> s
         First each log's claims its data contradicted (``FILE: header: ...; data: ...``), then
         columns: file, format, rows, dt (s), controller (name and h = named by the
         header / i = inferred), d (alignment), max|dv| (DAC counts), overshoot (%),
-        settling (s), fit θ / a (%) or, for beam tests, f1 (Hz) and ζ1 with the model's;
+        settling (1 %) (s, the thesis's), fit θ / a (%) or, for beam tests, f1 (Hz) and ζ1 with the model's;
         an unusable file shows its reason instead. Files that are not logs are counted
         in the last line, by kind, not listed.
     """
-    head = ["file", "format", "rows", "dt s", "controller", "d", "max|dv|", "OS %", "Ts s", "model / beam test"]
+    head = ["file", "format", "rows", "dt s", "controller", "d", "max|dv|", "OS %",
+            f"{settling_label(THESIS_BAND_PCT)} s", "model / beam test"]
     lines = []
     first = []  # the audit's contradictions, said before the table
     others: dict[str, int] = {}

@@ -51,6 +51,7 @@ def test_command_on_rig_logs_prints_table_and_writes_csv(tmp_path, rig_data, cap
     captured = capsys.readouterr()
     assert "6 files: 3 replayed, 3 unusable" in captured.out
     assert "UNUSABLE" in captured.out and "survey: 6/6" in captured.err
+    assert "settling (1 %) s" in captured.out and "Ts s" not in captured.out  # a settling time names its band
     rows = {r["file"].split("/")[-1]: r for r in csv.DictReader(out.open())}
     p = rows["SFLR_P_control_step_kp_2_SLFR_RTP_P_control_kp=2.0.txt"]
     assert (p["controller"], p["controller_source"], p["alignment"]) == ("p", "header", "1")

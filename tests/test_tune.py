@@ -239,6 +239,9 @@ def no_work(monkeypatch):
     (["tune", "--scheduler", "tcp://127.0.0.1:9", "--samples", "0"], "--scheduler"),
     (["tune", "--tip-rms", "-1"], "argument --tip-rms"),
     (["tune", "--tip-rms", "nan"], "argument --tip-rms"),
+    (["tune", "--hub-ratio", "0"], "argument --hub-ratio"),
+    (["tune", "--hub-ratio", "11"], "argument --hub-ratio"),
+    (["tune", "--hub-ratio", "nan"], "argument --hub-ratio"),
     (["tune", "--controller", "lead", "--filter", "damper"], "lead-accel only"),
 ])
 def test_bad_input_is_one_line_and_exit_2_before_any_work(argv, words, tmp_path, monkeypatch, capsys, no_work, rig):
@@ -300,6 +303,47 @@ def test_the_ranking_puts_the_design_model_first():
     assert max(cost(f, req) for f in b[1:]) < max(cost(f, req) for f in a[1:])  # B's worst case is better
     # the design model settling later than the thesis's compensator there fails the first tier too
     assert objective(a, req, bar_s=0.5) > objective([_figures(0.45), _figures(1.9), _figures(1.9)], req, bar_s=0.5)
+
+
+def test_the_worst_case_is_the_worst_ratio_to_the_thesiss_on_the_same_model():
+    from station.design.evaluate import FEASIBLE_CAP
+    from station.design.search import Problem
+    from station.design.tuning import hub_scales
+
+    # the thesis's compensator settles in 0.5 s on the design model, 0.5 s on the second, 1.0 s
+    # on the third (friction slows it there)
+    thesis = [_figures(0.5), _figures(0.5), _figures(1.0)]
+    scales = hub_scales(thesis)
+    assert scales == (1.0, 1.0, 0.5)
+    assert hub_scales([_figures(None, at_rest=False), _figures(0.5)]) is None  # no reference on the design model
+    assert hub_scales([_figures(0.5), _figures(None, at_rest=False)]) == (1.0, 1.0)  # none there: plain seconds
+    problem = Problem(None, (None,) * 3, 50.0, Requirements(), hub_scales=scales)
+    reqs = problem.model_requirements()
+    # A: 0.30 / 0.34 / 0.60 s (ratios 0.6, 0.68, 0.6); B: 0.30 / 0.30 / 0.65 s (0.6, 0.6, 0.65)
+    a = [_figures(0.30), _figures(0.34), _figures(0.60)]
+    b = [_figures(0.30), _figures(0.30), _figures(0.65)]
+    assert max(f.settling_2pct_s for f in a) < max(f.settling_2pct_s for f in b)  # A's worst seconds are better
+    assert objective(b, reqs) < objective(a, reqs)  # B's worst ratio is: 0.65 / 1.0 against 0.34 / 0.5
+    assert objective(a, Requirements()) < objective(b, Requirements())  # in plain seconds it is the other way
+    for r, f, t in zip(reqs, b, thesis):
+        assert cost(f, r) == pytest.approx(thesis[0].settling_2pct_s * f.settling_2pct_s / t.settling_2pct_s)
+    # a scale never makes a feasible design cost what an infeasible one does
+    slow = _figures(1.9)
+    assert cost(slow, Requirements(settling_scale=4.0)) == pytest.approx(FEASIBLE_CAP * RUN_S) and FEASIBLE_CAP < 1
+    assert cost(slow, Requirements(settling_scale=4.0)) < cost(_figures(0.2, overshoot=9.0), Requirements())
+
+
+def test_the_hub_ratio_is_the_bar_on_the_design_model():
+    from station.design.tuning import _bar
+
+    req = Requirements()
+    thesis = _figures(0.5)
+    assert _bar(thesis, 0.55) == pytest.approx(0.275) and _bar(_figures(None, at_rest=False), 0.55) is None
+    # C is 0.56x the thesis's on the design model and faster everywhere else; D is 0.54x there
+    c = [_figures(0.28), _figures(0.3), _figures(0.3)]
+    d = [_figures(0.27), _figures(0.5), _figures(0.5)]
+    assert objective(c, req, bar_s=_bar(thesis, 1.0)) < objective(d, req, bar_s=_bar(thesis, 1.0))
+    assert objective(d, req, bar_s=_bar(thesis, 0.55)) < objective(c, req, bar_s=_bar(thesis, 0.55))
 
 
 def test_models_held_by_friction_still_rank_the_designs():

@@ -13,8 +13,9 @@ from pathlib import Path
 
 from station.analysis.metrics import NOT_SETTLED, STEP_INFO_BAND_PCT, settling_label
 from station.commands.options import add_model_options, add_report_options, model_inputs, number
-from station.design.robust import DEFAULT_SAMPLES
-from station.design.space import DEFAULT_FILTER, DEFAULT_SHAPER, DEFAULT_TIP_RMS, FILTERS, SHAPERS, STRUCTURES
+from station.design.robust import DEFAULT_DOUBT, DEFAULT_SAMPLES
+from station.design.space import (DEFAULT_FILTER, DEFAULT_HUB_RATIO, DEFAULT_SHAPER, DEFAULT_TIP_RMS, FILTERS, SHAPERS,
+                                  STRUCTURES)
 from station.outputs import FORCE_HELP, Input, Output, Transaction, check_outputs
 from station.rig import CLAMP, DAC_LIMIT, DEFAULT_SOFT_LIMIT, THESIS_STEPS
 
@@ -29,7 +30,7 @@ def configure(parser: argparse.ArgumentParser) -> None:
     ----------
     parser : argparse.ArgumentParser
         Gets ``--model``, ``--controller``, ``--amplitude``, ``--limit``, ``--overshoot``,
-        ``--shaper``, ``--filter``, ``--tip-rms``, ``--robust``, ``--samples``, ``--jobs``,
+        ``--shaper``, ``--filter``, ``--tip-rms``, ``--hub-ratio``, ``--robust``, ``--samples``, ``--jobs``,
         ``--scheduler``, ``--out``, ``--json``, ``--report``, ``--force``, ``--quiet``.
     """
     # light modules only: every command's parser is built at start-up (the design's
@@ -62,13 +63,19 @@ def configure(parser: argparse.ArgumentParser) -> None:
                              f"end) on every model, as a multiple of the thesis's compensator's on the same model "
                              f"(at least the accelerometer's noise, 0.3 counts); 0: no bound on the tip "
                              f"(default {DEFAULT_TIP_RMS:g}: at least as quiet)")
+    parser.add_argument("--hub-ratio", type=number(0, 10, unit="x the thesis's", nonzero=True),
+                        default=DEFAULT_HUB_RATIO, metavar="RATIO",
+                        help=f"the bar on the design model: its hub settling (2 %%) at most this multiple of the "
+                             f"thesis's compensator's there, before the worst case over the set counts (default "
+                             f"{DEFAULT_HUB_RATIO:g}: the hidden rigs' 0.6 with a margin; 1: no later than the "
+                             f"thesis's)")
     parser.add_argument("--robust", nargs="+", default=[], metavar="FILE",
                         help="model files (or built-in names) and diagnosis JSONs (extended model, alternatives, "
                              "intervals) the design is judged on too")
     parser.add_argument("--samples", type=number(0, 1000, integer=True), default=DEFAULT_SAMPLES, metavar="N",
-                        help=f"models drawn from the doubt (the diagnosis JSON's intervals, else dry friction "
-                             f"5-20 counts, amplifier offset ±5, drive damping 0.85-2x), besides its corners "
-                             f"(default {DEFAULT_SAMPLES}; 0: neither, the model and the --robust files alone)")
+                        help=f"models drawn from the doubt (the diagnosis JSON's intervals, else {_doubt()}), "
+                             f"besides its corners (default {DEFAULT_SAMPLES}; 0: neither, the model and the "
+                             f"--robust files alone)")
     parser.add_argument("--jobs", type=number(1, 64, integer=True), default=None, metavar="N",
                         help="local worker processes (default: the CPU count)")
     parser.add_argument("--scheduler", default=None, metavar="ADDRESS",
@@ -80,6 +87,12 @@ def configure(parser: argparse.ArgumentParser) -> None:
                         help="write DIR/report.html with its figures (also as PNG beside it)")
     parser.add_argument("--force", action="store_true", help=FORCE_HELP)
     parser.add_argument("--quiet", action="store_true", help="no progress lines on stderr")
+
+
+def _doubt() -> str:
+    """The default doubt in words (:data:`station.design.robust.DEFAULT_DOUBT`), for the help."""
+    return ", ".join(f"{name} {lo:g}..{hi:g}" + ("x the model's" if how == "ratio" else "")
+                     for name, how, lo, hi in DEFAULT_DOUBT)
 
 
 def outputs(args: argparse.Namespace) -> list[Output]:
@@ -112,7 +125,7 @@ def format_result(result) -> str:
 
     Parameters
     ----------
-    result : station.design.tuning.TuneResult
+    result : station.design.result.TuneResult
     """
     from station.design.hold import held_summary  # lazy: start-up time (the design: scipy)
 
@@ -191,14 +204,14 @@ def run(args: argparse.Namespace) -> int:
     amplitude = THESIS_STEPS[structure] if args.amplitude is None else args.amplitude
     tip_rms = args.tip_rms or None  # 0: no bound on the tip
     check_request(structure, amplitude, args.limit, args.overshoot, args.shaper, args.samples, jobs, tip_rms,
-                  args.filter)
+                  args.filter, args.hub_ratio)
     check_outputs(outputs(args), inputs(args), force=args.force)
     progress = None if args.quiet else (lambda msg: print(f"tune: {msg}", file=sys.stderr, flush=True))
     out = args.out
     result = tune(model=args.model, structure=structure, amplitude=amplitude, limit=args.limit,
                   overshoot=args.overshoot, shaper=args.shaper, robust=args.robust, samples=args.samples,
                   jobs=jobs, scheduler=args.scheduler, out=out or Path("tuned.toml"), progress=progress,
-                  tip_rms=tip_rms, filter=args.filter)
+                  tip_rms=tip_rms, filter=args.filter, hub_ratio=args.hub_ratio)
     with tempfile.TemporaryDirectory(prefix="station-tune-") as tmp:
         path = Path(tmp) / (out.name if out is not None else "tuned.toml")  # verified before it is written
         path.write_text(result.file.to_toml(), encoding="utf-8")

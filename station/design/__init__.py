@@ -10,8 +10,9 @@
 - `robust`: the set of models a design is judged on (model files, diagnosis JSONs, drawn doubt).
 - `search`: bracket (Sobol) and refine (Nelder-Mead, active set) the worst case.
 - `executor`: where evaluations run (this process, a process pool, a Dask cluster).
-- `tuning`: the design (:func:`tune`, :class:`TuneResult`); `verify`: a real ``station step`` on
-  the simulated rig; `figures`, `report`: the report.
+- `tuning`: the design (:func:`tune`); `result`: what it hands back (:class:`TuneResult`, the
+  trade-off, the JSON); `verify`: a real ``station step`` on the simulated rig; `figures`,
+  `report`: the report.
 
 Imports the control, plant and analysis packages and :mod:`station.experiment` (verify); nothing
 imports it but the ``tune`` command and scripts.
@@ -21,7 +22,7 @@ import importlib
 
 _WHERE = {"Figures": "evaluate", "Requirements": "evaluate", "RobustSet": "robust", "robust_set": "robust",
           "Budget": "search", "SHAPERS": "space", "STRUCTURES": "space", "DesignSpace": "space",
-          "TuneResult": "tuning", "tune": "tuning", "Verification": "verify", "verify": "verify"}
+          "TuneResult": "result", "tune": "tuning", "Verification": "verify", "verify": "verify"}
 
 __all__ = sorted(_WHERE)
 

@@ -34,8 +34,9 @@ while meeting everything else. There the step is also measured to the band the h
 error it holds, encoder counts), and :attr:`Figures.settling_rest_s`, the settling time into
 that band (the same definition and hold).
 
-Cost (:func:`cost`): the 2 % settling time when every constraint holds; held by friction
-(and ``held=True``), as infeasible, its "not settled" graded by the settling time into the
+Cost (:func:`cost`): the 2 % settling time when every constraint holds (times the model's
+:attr:`Requirements.settling_scale`: relative to the thesis's compensator on the same model);
+held by friction (and ``held=True``), as infeasible, its "not settled" graded by the settling time into the
 held band plus the held error's fraction of the step times the rest of the run (:func:`cost`),
 so a hub held farther off costs more, and any design that meets the band costs less; otherwise the time the response last leaves
 the band, plus the run's length, plus the constraints' normalised violations, so any feasible
@@ -67,6 +68,10 @@ TIP_RMS_FLOOR = 0.3
 accelerometer noise (0.3 counts std, DESIGN.md "FEM plant"), under which no run on it could
 show a difference (the design's own runs are noise-free)."""
 
+FEASIBLE_CAP = 0.999
+"""Largest cost of a design that meets every requirement, a fraction of the run's length: a
+scaled settling time (:attr:`Requirements.settling_scale`) stays below any infeasible cost."""
+
 REST_COMMAND = 50.0
 """Largest peak-to-peak command over the rest window, DAC counts: a quarter of the rig's clamp.
 (One count of θ flickering moves v by Gth's high-frequency gain, 20 for the thesis's lead:
@@ -87,12 +92,18 @@ class Requirements(NamedTuple):
     tip_rms : float or None
         Largest tip residual RMS, accelerometer counts (None: no bound); per model
         (:func:`tip_bound`).
+    settling_scale : float
+        What the hub's 2 % settling time counts times in the :func:`cost` when every requirement
+        holds (per model: ``station tune`` sets it to the thesis's compensator's settling on the
+        design model over its settling on this one, so the worst case over a set is the worst
+        ratio to the thesis's; 1: plain seconds). Not a requirement: no violation depends on it.
     """
 
     overshoot_pct: float = 5.0
     gain_margin_db: float = 6.0
     phase_margin_deg: float = 30.0
     tip_rms: float | None = None
+    settling_scale: float = 1.0
 
 
 def tip_reference(thesis_rms: float) -> float:
@@ -451,7 +462,7 @@ def held_error(f: Figures) -> int:
 def cost(f: Figures, req: Requirements, run_s: float = RUN_S, held: bool = True) -> float:
     """One model's cost of a design (module docstring), s.
 
-    Feasible: the 2 % settling time. Infeasible: how late the response leaves the band for
+    Feasible: the 2 % settling time times ``req.settling_scale`` (below ``run_s``). Infeasible: how late the response leaves the band for
     the last time (:attr:`Figures.last_out_s`), plus ``run_s``, plus the violations
     (:func:`violations`): every feasible design costs less than any infeasible one, and the
     infeasible ones are graded by how close they come. Held by friction (:func:`friction_held`,
@@ -476,7 +487,7 @@ def cost(f: Figures, req: Requirements, run_s: float = RUN_S, held: bool = True)
     """
     bad = violations(f, req)
     if not bad:
-        return f.settling_2pct_s
+        return min(f.settling_2pct_s * req.settling_scale, FEASIBLE_CAP * run_s)
     if held and friction_held(f, req):
         r = (f.rest_band - f.band) / (f.band / STEP_INFO_BAND)  # the held excess, a fraction of the step
         bad["not_settled"] = f.settling_rest_s + r * (run_s - f.settling_rest_s)

@@ -181,7 +181,7 @@ def tradeoff_figure(tradeoff, tip_rms: float | None = None):
 
     Parameters
     ----------
-    tradeoff : station.design.tuning.TradeOff
+    tradeoff : station.design.result.TradeOff
     tip_rms : float, optional
         The tip's requirement, a multiple of the thesis's (a line).
 

@@ -89,7 +89,7 @@ def tradeoff_table(tradeoff, space) -> list[str]:
 
     Parameters
     ----------
-    tradeoff : station.design.tuning.TradeOff
+    tradeoff : station.design.result.TradeOff
     space : station.design.space.DesignSpace
 
     Returns
@@ -129,7 +129,7 @@ def write_report(result, folder: str | Path, transaction: Transaction | None = N
 
     Parameters
     ----------
-    result : station.design.tuning.TuneResult
+    result : station.design.result.TuneResult
     folder : str or Path
         Created if needed.
     transaction : station.outputs.Transaction, optional

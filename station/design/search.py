@@ -43,6 +43,7 @@ import numpy as np
 from scipy.optimize import minimize
 from scipy.stats import qmc
 
+from station.analysis.metrics import settling_label
 from station.design.evaluate import RUN_S, Figures, Requirements, cost, judge, linear_checks, linear_key
 from station.design.linear import loop_model
 from station.design.space import SECOND_MODE_HZ
@@ -101,6 +102,11 @@ class Problem(NamedTuple):
     tip_bounds : tuple of float or None
         Per model, the bound on the tip's residual RMS, accelerometer counts
         (:func:`station.design.evaluate.tip_bound`; None: no bound anywhere).
+    hub_scales : tuple of float or None
+        Per model, what its hub settling (2 %) counts times in the cost
+        (:attr:`station.design.evaluate.Requirements.settling_scale`; ``tune``: the thesis's
+        compensator's settling on the design model over its settling on that model, so the
+        worst case is the worst ratio to the thesis's; None: 1 everywhere).
     """
 
     space: object
@@ -110,9 +116,10 @@ class Problem(NamedTuple):
     run_s: float = RUN_S
     bar_s: float | None = None
     tip_bounds: tuple | None = None
+    hub_scales: tuple | None = None
 
     def model_requirements(self, which=None) -> list[Requirements]:
-        """The requirements on each model (``which``: their indices; default all), the tip's bound its own.
+        """The requirements on each model (``which``: their indices; default all), the tip's bound and the hub's scale its own.
 
         Parameters
         ----------
@@ -123,12 +130,19 @@ class Problem(NamedTuple):
         -------
         list of Requirements
             One per index in ``which``, in its order: :attr:`requirements` with ``tip_rms`` set to
-            that model's :attr:`tip_bounds` entry (unchanged when there are no tip bounds).
+            that model's :attr:`tip_bounds` entry and ``settling_scale`` to its :attr:`hub_scales`
+            entry (each unchanged when there are none).
         """
         which = range(len(self.models)) if which is None else which
-        if self.tip_bounds is None:
-            return [self.requirements] * len(which)
-        return [self.requirements._replace(tip_rms=self.tip_bounds[i]) for i in which]
+        out = []
+        for i in which:
+            own = {}
+            if self.tip_bounds is not None:
+                own["tip_rms"] = self.tip_bounds[i]
+            if self.hub_scales is not None:
+                own["settling_scale"] = self.hub_scales[i]
+            out.append(self.requirements._replace(**own))
+        return out
 
 
 class Candidate(NamedTuple):
@@ -504,4 +518,5 @@ def _distinct(cands: list, n: int) -> list:
 def _describe(c: Candidate) -> str:
     f = c.figures[c.worst]
     settle = "not settled" if f.settling_2pct_s is None else f"{f.settling_2pct_s:.3f} s"
-    return f"worst case {settle}, overshoot {max(g.overshoot_pct for g in c.figures):.1f} %"
+    return (f"worst case: hub {settling_label(2)} {settle}, overshoot "
+            f"{max(g.overshoot_pct for g in c.figures):.1f} %")
