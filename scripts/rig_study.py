@@ -30,7 +30,8 @@ from station.analysis.metrics import step_metrics
 from station.diagnosis.runs.cases import load_case
 from station.diagnosis.runs.cost import Evaluator, calibrate_noise
 from station.diagnosis.runs.folds import make_folds
-from station.diagnosis.search.selection import effect_axes, fit_set, set_axes, trial
+from station.diagnosis.search.fitting import effect_axes, fit_set, set_axes
+from station.diagnosis.search.selection import trial
 from station.plant.model import as_model
 
 RIG = Path(__file__).resolve().parents[1] / ".." / "shared" / "data" / "rig"

@@ -2,7 +2,7 @@
 refitted or compared (issue 17): the search fits static_friction as coulomb_friction plus a
 breakaway excess, and every place outside it goes through
 :func:`station.diagnosis.honesty.rivals.explanation` (the values) and
-:func:`station.diagnosis.search.selection.refit_explanation` (the refit). Judged on logs of the blind
+:func:`station.diagnosis.search.fitting.refit_explanation` (the refit). Judged on logs of the blind
 generator (tests/blind, never station.plant) with the hidden values known.
 """
 
@@ -20,7 +20,7 @@ from station.diagnosis.honesty.doubt import Interval
 from station.diagnosis.identify.loop import Preference, kept_diagnosis, prefer
 from station.plant.effects import EFFECTS
 from station.diagnosis.honesty.rivals import explanation, rivals
-from station.diagnosis.search.selection import effect_axes, refit_explanation
+from station.diagnosis.search.fitting import effect_axes, refit_explanation
 from station.plant.model import as_model
 from tests.blind.generator import write_case
 

@@ -12,8 +12,8 @@ import numpy as np
 import pytest
 
 from station import diagnosis
-from station.diagnosis.search.selection import (EXCESS, MIN_EXCESS, Trial, credible, effect_axes, excess_fraction,
-                                         fit_set, set_axes)
+from station.diagnosis.search.fitting import EXCESS, MIN_EXCESS, effect_axes, fit_set, set_axes
+from station.diagnosis.search.selection import Trial, credible, excess_fraction
 
 
 def test_static_friction_is_fitted_on_the_sliding_level_and_an_excess():

@@ -42,7 +42,8 @@ import scipy.optimize
 
 from station.diagnosis.search.bounded import RESOLUTION_STEPS, Axis
 from station.diagnosis.runs.cost import Evaluator, pooled, rms_gain
-from station.diagnosis.search.selection import NESTED, SHAPE, Search, Selection, Trial, null_floor, refit_explanation, trial
+from station.diagnosis.search.fitting import NESTED, SHAPE, refit_explanation
+from station.diagnosis.search.selection import Search, Selection, Trial, null_floor, trial
 
 CHI2_95 = 3.841458820694124
 """χ²₁ at 95 %: the likelihood-ratio threshold of one parameter."""

@@ -36,7 +36,8 @@ from station.diagnosis.identify.design import Design, choose_experiment
 from station.diagnosis.identify.experiments import THESIS_EXPERIMENTS, Experiment, candidate_experiments, write_reference
 from station.diagnosis.pipeline import diagnose
 from station.diagnosis.honesty.rivals import describe, explanation, rivals
-from station.diagnosis.search.selection import accept, effect_axes, refit_explanation
+from station.diagnosis.search.fitting import effect_axes, refit_explanation
+from station.diagnosis.search.selection import accept
 from station.errors import StationError
 from station.experiment import run_step
 from station.link import LinkLimits
@@ -418,7 +419,7 @@ def prefer(old, new, runs: Sequence[str | Path], base) -> Preference:
     them as forward selection's acceptance demands
     (:func:`station.diagnosis.search.selection.accept`). An explanation is its causes with what they
     hold (:func:`station.diagnosis.honesty.rivals.explanation`: a static_friction's sliding level),
-    refitted as the search fits it (:func:`station.diagnosis.search.selection.refit_explanation`).
+    refitted as the search fits it (:func:`station.diagnosis.search.fitting.refit_explanation`).
 
     Parameters
     ----------

@@ -44,9 +44,10 @@ from station.diagnosis.search.bounded import fit
 from station.diagnosis.runs.cost import relative_gain
 from station.diagnosis.runs.folds import validation_runs
 from station.diagnosis.units import format_quantity
-from station.diagnosis.search.selection import (MAX_EFFECTS, MIN_RELATIVE_GAIN, NESTED, SECOND_STEP_CANDIDATES, SHAPE,
-                                         Search, Selection, Singles, Step, Trial, accept, credible, fit_set,
-                                         null_floor, screen_costs, set_axes, trial)
+from station.diagnosis.search.fitting import NESTED, SHAPE, fit_set, set_axes
+from station.diagnosis.search.selection import (MAX_EFFECTS, MIN_RELATIVE_GAIN, SECOND_STEP_CANDIDATES, Search,
+                                                Selection, Singles, Step, Trial, accept, credible, null_floor,
+                                                screen_costs, trial)
 from station.plant.effects import EFFECTS
 
 LOOKAHEAD = 3
