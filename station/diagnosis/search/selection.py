@@ -129,17 +129,24 @@ class Step:
     before : list of str
         The effects accepted before this step.
     trials : dict of str to Trial
-        Every candidate tried at this step (jointly with ``before``).
+        Every credible candidate tried at this step (jointly with ``before``).
     chosen : str or None
         The one accepted (None: nothing paid, selection stopped).
     floor : float
         What luck alone reaches around the model before this step (:func:`null_floor`).
+    set_aside : dict of str to Trial
+        Candidates tried and set aside by :func:`credible` (a breakaway that did not pay for
+        its excess over the sliding level): rivals still, when they fit as well.
+    current : Trial or None
+        The model before this step (the rival of an upgrade in place).
     """
 
     before: list
     trials: dict
     chosen: str | None
     floor: float
+    set_aside: dict = field(default_factory=dict)
+    current: Trial | None = None
 
 
 @dataclass

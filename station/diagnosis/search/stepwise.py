@@ -272,13 +272,17 @@ def forward_select(search: Search, names: Sequence[str], singles: Singles, nomin
     steps: list[Step] = []
     for step in range(MAX_EFFECTS + len(NESTED) + DROPS):
         if step == 0:
-            trials = {n: singles.trials[n] for n in names}
+            tried = {n: singles.trials[n] for n in names}
         else:
-            trials, bar = _joint_trials(search, names, accepted, current, values, step)
-        trials = credible(trials, terms)
+            tried, bar = _joint_trials(search, names, accepted, current, values, step)
+        trials = credible(tried, terms)
+        set_aside = {n: tr for n, tr in tried.items() if n not in trials}
         pairs = (_lookahead(search, names, singles, list(steps[0].trials), accepted, current, values, bar, terms)
                  if step == 1 else {})
         if not trials and not pairs:
+            if set_aside and step > 0:  # kept for the alternatives: a breakaway set aside in place of friction
+                steps.append(Step(list(accepted), {}, None, null_floor(ev, folds, current.fold_values), set_aside,
+                                  current))
             break
         best = min(trials, key=lambda n: trials[n].val_weighted) if trials else None
         new_first = None
@@ -287,7 +291,7 @@ def forward_select(search: Search, names: Sequence[str], singles: Singles, nomin
             if best is None or group[n].val_weighted < trials[best].val_weighted:
                 search.say(f"step {step + 1}: {' + '.join(group[n].names)} beats "
                            f"{' + '.join(trials[best].names) if best else ' + '.join(accepted)}")
-                new_first, best, trials = f, n, group
+                new_first, best, trials, set_aside = f, n, group, {}
         floor = null_floor(ev, folds, current.fold_values)
         search.say(f"step {step + 1}: best {best}, validation cost {trials[best].val_weighted / terms:.3g} per sample, "
                    f"current {current.val_weighted / terms:.3g}, reached by quantization and noise alone "
@@ -300,7 +304,7 @@ def forward_select(search: Search, names: Sequence[str], singles: Singles, nomin
             steps[0].chosen = new_first
             for st in steps[1:]:
                 st.before = [new_first if n == old else n for n in st.before]
-        steps.append(Step(list(accepted), trials, best if ok else None, floor))
+        steps.append(Step(list(accepted), trials, best if ok else None, floor, set_aside, current))
         if not ok:
             break
         simpler = NESTED.get(best)
