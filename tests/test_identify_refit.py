@@ -17,7 +17,7 @@ from station.diagnosis.runs.cost import Evaluator, calibrate_noise
 from station.diagnosis.honesty.doubt import profile_interval
 from station.diagnosis.answer.result import Diagnosis, EffectResult
 from station.diagnosis.honesty.doubt import Interval
-from station.diagnosis.identify.loop import Preference, kept_diagnosis, prefer
+from station.diagnosis.identify.prefer import Preference, kept_diagnosis, prefer
 from station.plant.effects import EFFECTS
 from station.diagnosis.honesty.rivals import explanation, rivals
 from station.diagnosis.search.fitting import effect_axes, refit_explanation
