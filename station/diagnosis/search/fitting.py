@@ -63,6 +63,10 @@ SHAPE = "stribeck_speed"
 NESTED = {"static_friction": "coulomb_friction"}
 """A candidate -> the simpler candidate it holds as a special case (no breakaway excess)."""
 
+SCREEN_REFINE = 4
+"""Nelder-Mead evaluations per axis (plus 8) of a joint screen's refinement
+(:func:`fit_beside`): a look at where the set's valley lies, a third of a fit's."""
+
 MIN_EXCESS = 0.1
 """static_friction is named only when its breakaway excess is at least this fraction of v_s
 (median over the folds): the cost of stick-slip is so jagged in v_c (a twentieth of a count
@@ -171,6 +175,39 @@ def fit_set(ev: Evaluator, axes: Sequence[Axis], runs: Sequence[int], start: Map
             if best is None or res.cost < best.cost:
                 best = res
     return _as_effects(best.values)
+
+
+def fit_beside(ev: Evaluator, axes: Mapping[str, Axis], names: Sequence[str], new: str, runs: Sequence[int],
+               start: Mapping[str, float]) -> tuple[float, dict]:
+    """One effect bracketed on its grid beside a set at its values, then the set and the effect
+    refined together once (no restarts): what a joint screen asks of a candidate, where holding
+    the set's values would hide it (an amplifier offset beside a Coulomb friction fitted
+    alone: the pair's valley has the friction a third higher).
+
+    Parameters
+    ----------
+    ev : Evaluator
+    axes : mapping of str to Axis
+        Every effect's axis (:func:`effect_axes`).
+    names : sequence of str
+        The set's effects (refitted).
+    new : str
+        The effect added (not static_friction: its screen is the excess grid).
+    runs : sequence of int
+        The runs the cost is summed over.
+    start : mapping of str to float
+        The set's values (and any held ones, passed on unchanged).
+
+    Returns
+    -------
+    (float, dict)
+        The lowest cost J seen (dimensionless) and its values, each in its effect's unit.
+    """
+    fitted = set_axes(tuple(names) + (new,), axes)
+    coords = _as_coords(start)
+    held = {k: v for k, v in coords.items() if k not in {a.name for a in fitted}}
+    res = fit(lambda vals: ev.cost(_as_effects(vals), runs), fitted, start=coords, fixed=held, refine=SCREEN_REFINE)
+    return res.cost, _as_effects(res.values)
 
 
 def _stuck(coords: Mapping[str, float]) -> bool:

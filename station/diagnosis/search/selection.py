@@ -27,7 +27,8 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from station.diagnosis.search.bounded import Axis
-from station.diagnosis.search.fitting import EXCESS, MIN_EXCESS, NESTED, excess_of, fit_set, set_axes, unstick
+from station.diagnosis.search.fitting import (EXCESS, MIN_EXCESS, NESTED, excess_of, fit_beside, fit_set, set_axes,
+                                              unstick)
 from station.diagnosis.runs.cost import Evaluator, pooled, relative_gain, rms_gain
 from station.diagnosis.runs.folds import Fold
 from station.diagnosis.units import format_quantity
@@ -228,9 +229,11 @@ def screen(ev: Evaluator, axes: Mapping[str, Axis], names: Sequence[str], fixed:
 
 
 def screen_costs(ev: Evaluator, axes: Mapping[str, Axis], names: Sequence[str], fixed: Mapping[str, float],
-                 runs: Sequence[int], every: int = 1) -> dict[str, float]:
+                 runs: Sequence[int], every: int = 1, refit: Sequence[str] = ()) -> dict[str, float]:
     """Each effect scanned on its grid with ``fixed`` held (in-sample, on ``runs``): the
     lowest cost it reaches, for those that lower the cost of ``fixed`` alone, best first.
+    With ``refit``, those effects of ``fixed`` are refined jointly with each candidate after its
+    scan (:func:`~station.diagnosis.search.fitting.fit_beside`): a joint screen.
 
     Parameters
     ----------
@@ -244,6 +247,9 @@ def screen_costs(ev: Evaluator, axes: Mapping[str, Axis], names: Sequence[str], 
         The runs the cost is summed over.
     every : int, optional
         Scan every so many grid points (2: half the simulations, a coarser look).
+    refit : sequence of str, optional
+        Effects of ``fixed`` refined jointly with each candidate (static_friction's screen,
+        over the excess grid, holds them).
 
     Returns
     -------
@@ -252,7 +258,12 @@ def screen_costs(ev: Evaluator, axes: Mapping[str, Axis], names: Sequence[str], 
         below the cost of ``fixed`` alone, in increasing order of cost.
     """
     c0 = ev.cost(fixed, runs)
-    best = {n: min(ev.cost(point, runs) for point in _screen_points(n, axes, fixed)[::every]) for n in names}
+    best = {}
+    for n in names:
+        if refit and n != "static_friction":
+            best[n] = fit_beside(ev, axes, refit, n, runs, fixed)[0]
+        else:
+            best[n] = min(ev.cost(point, runs) for point in _screen_points(n, axes, fixed)[::every])
     return {n: best[n] for n in sorted((n for n in names if best[n] < c0), key=best.get)}
 
 

@@ -27,6 +27,14 @@ the blind set and costs a tenth of a diagnosis of the rig's four logs (tried aga
 amp_offset + coulomb_friction + param:drive_c seed 0, issue 17: still nothing below the
 dead-zone's best).
 
+Joint screening. From the second step on, each candidate is scanned on its grid beside the
+accepted effects and then refined together with them (:func:`~station.diagnosis.search.selection.screen_costs`
+with ``refit``, a short Nelder-Mead: :data:`~station.diagnosis.search.fitting.SCREEN_REFINE`):
+held at their values, the accepted effects can hide a partner (an amplifier offset beside a
+Coulomb friction fitted alone: the pair's valley has the friction a third higher, and the
+offset scanned beside the friction held lowered nothing; blind breakaway 14 over 9 with an
+offset of 2.5 at alignment 0 was named Coulomb friction + drive stiffness).
+
 Stuck refits. The accepted effects' joint values on all fit runs are fitted again from a
 fold's values when those fit all runs better (:func:`_refit`: the folds' costs are cached),
 and an accepted effect refitted to within :data:`NEUTRAL` of no effect is tested for
@@ -98,14 +106,15 @@ def _try_sets(search: Search, sets: Mapping, starts: Sequence) -> dict[str, Tria
 
 def _joint_trials(search: Search, names: Sequence[str], accepted: list[str], current: Trial,
                   fixed: Mapping[str, float], step: int) -> tuple[dict[str, Trial], float]:
-    """The screened candidates, each fitted per fold jointly with the accepted ones, and the
-    lowest in-sample cost the screen reached (the accepted effects' own when none lowers it)."""
+    """The screened candidates (a joint screen: the accepted effects refined with each), each
+    fitted per fold jointly with the accepted ones, and the lowest in-sample cost the screen
+    reached (the accepted effects' own when none lowers it)."""
     ev = search.ev
     held = {NESTED[a] for a in accepted if a in NESTED}  # coulomb_friction is in an accepted static_friction
     full = len(accepted) >= MAX_EFFECTS  # then only an upgrade in place is left
     open_ = [n for n in names if n not in accepted and n not in held
              and (not full or NESTED.get(n) in accepted)]
-    costs = screen_costs(ev, search.axes, open_, fixed, search.fit_runs)
+    costs = screen_costs(ev, search.axes, open_, fixed, search.fit_runs, refit=current.names)
     # a candidate that lowers the in-sample cost by less than the parsimony margin with the
     # others held will not pay it on held-out runs (on the rig's four logs in-sample screen
     # gains of 8-31 % came out at 3-5 % held out)
