@@ -411,11 +411,12 @@ def excess_fraction(tr: Trial) -> float:
     return float(np.median(fr)) if fr else 0.0
 
 
-def credible(trials: Mapping[str, Trial], terms: int) -> dict[str, Trial]:
+def credible(trials: Mapping[str, Trial], terms: int,
+             floor: Callable[[Trial], float] | None = None) -> dict[str, Trial]:
     """The trials without a candidate that does not pay for its extra parameter over the
     simpler one it holds (:data:`NESTED`): a static_friction whose breakaway excess is
     below :data:`MIN_EXCESS`, or which does not :func:`accept` over coulomb_friction tried
-    beside the same effects.
+    beside the same effects (against what luck reaches around it, as every step is judged).
 
     Parameters
     ----------
@@ -423,6 +424,9 @@ def credible(trials: Mapping[str, Trial], terms: int) -> dict[str, Trial]:
         Candidate -> its trial in this step.
     terms : int
         Error terms of the validation runs.
+    floor : callable, optional
+        ``floor(trial) -> float``: what luck alone reaches around a trial's model
+        (:func:`null_floor` of its fold values); without it the simpler one's own cost.
 
     Returns
     -------
@@ -434,7 +438,11 @@ def credible(trials: Mapping[str, Trial], terms: int) -> dict[str, Trial]:
         simpler = NESTED.get(name)
         if simpler is None:
             continue
-        if excess_fraction(tr) < MIN_EXCESS or (
-                simpler in trials and not accept(trials[simpler].val_weighted, tr.val_weighted, terms)):
+        if excess_fraction(tr) < MIN_EXCESS:
             del out[name]
+        elif simpler in trials:
+            base = trials[simpler]
+            luck = floor(base) if floor is not None and tr.val_weighted < base.val_weighted else None
+            if not accept(base.val_weighted, tr.val_weighted, terms, luck):
+                del out[name]
     return out

@@ -131,6 +131,11 @@ def _joint_trials(search: Search, names: Sequence[str], accepted: list[str], cur
     return trials, min(costs.values(), default=ev.cost(fixed, search.fit_runs))
 
 
+def _luck(search: Search):
+    """What luck alone reaches around a trial's model (:func:`null_floor` of its fold values)."""
+    return lambda tr: null_floor(search.ev, search.folds, tr.fold_values)
+
+
 def _held(names: Sequence[str]) -> set[str]:
     """The effect values a set holds (a static_friction's sliding level too)."""
     return set(names) | {NESTED[n] for n in names if n in NESTED}
@@ -174,7 +179,7 @@ def _lookahead(search: Search, names: Sequence[str], singles: Singles, pool: Seq
                    f"{relative_gain(tr.val_weighted, current.val_weighted):.1f} % over {' + '.join(accepted)} "
                    f"({ev.simulations} simulations)")
         out.setdefault(f, {})[n] = tr
-    return {f: ok for f, group in out.items() if (ok := credible(group, terms))}
+    return {f: ok for f, group in out.items() if (ok := credible(group, terms, _luck(search)))}
 
 
 def _drop(search: Search, name: str, current: Trial, terms: int) -> Trial | None:
@@ -244,7 +249,7 @@ def _downgrade(search: Search, accepted: list[str], current: Trial, terms: int) 
             continue
         names = tuple(simpler if n == name else n for n in current.names)
         alt = trial(search.ev, search.folds, names, search.axes, current.fold_values)
-        if credible({name: current, simpler: alt}, terms).get(name) is None:
+        if credible({name: current, simpler: alt}, terms, _luck(search)).get(name) is None:
             search.say(f"{simpler} in place of {name}: the breakaway excess no longer pays beside "
                        f"{' + '.join(n for n in accepted if n != name)}")
             return [simpler if n == name else n for n in accepted], alt
@@ -284,7 +289,7 @@ def forward_select(search: Search, names: Sequence[str], singles: Singles, nomin
             tried = {n: singles.trials[n] for n in names}
         else:
             tried, bar = _joint_trials(search, names, accepted, current, values, step)
-        trials = credible(tried, terms)
+        trials = credible(tried, terms, _luck(search))
         set_aside = {n: tr for n, tr in tried.items() if n not in trials}
         pairs = (_lookahead(search, names, singles, list(steps[0].trials), accepted, current, values, bar, terms)
                  if step == 1 else {})
