@@ -16,10 +16,9 @@ every run worse than the earlier explanation is set aside
 explanation's rivals on all the runs (its intervals there, and the set-aside one unless the
 kept one pays over it), not the earlier diagnosis's of fewer runs, so a settled answer stops
 the loop. Every explanation met on the way (earlier answers, their alternatives) stays in
-``alternatives`` while it fits every run as well as the answer
-(:func:`station.diagnosis.identify.prefer.contest`: the likelihood-ratio test on all the
-runs), so the loop designs experiments against it and never ends with ``alternatives: []``
-while such a rival remains.
+``alternatives`` until the answer pays over it on all the runs as forward selection demands
+of an effect (:func:`station.diagnosis.identify.prefer.contest`), so the loop designs
+experiments against it and never ends with ``alternatives: []`` while such a rival remains.
 """
 
 from __future__ import annotations
@@ -483,7 +482,7 @@ class _Loop:
         return kept
 
     def contest(self, diag, met: Sequence[Explanation]):
-        """The answer with every explanation met so far that still fits every run as well among
+        """The answer with every explanation met so far that the answer does not pay over among
         its alternatives (:func:`station.diagnosis.identify.prefer.contest`); the rest forgotten."""
         t = time.perf_counter()
         runs = [str(r.log) for r in self.records if r.used]

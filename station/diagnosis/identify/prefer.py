@@ -5,11 +5,15 @@ judged again on all the runs (:func:`contest`).
 Forward selection is greedy, and a new run can send it down another path; the explanations it
 left behind stay rivals until the runs exclude them. :func:`contest` refits each on every
 completed run (:func:`station.diagnosis.search.fitting.refit_explanation`) and keeps it in
-``alternatives`` while its cost J is within what noise explains around the answer's: the
-likelihood-ratio test with the residuals' effective sample size (the diagnosis's, on all the
-runs: N_eff · ln(J / J_answer) ≤ χ²₁(0.95) = 3.84, N_eff from the answer's residuals'
-autocorrelation, :func:`station.diagnosis.honesty.doubt.effective_terms`). One it exceeds is
-settled and forgotten.
+``alternatives`` until the answer pays over it as forward selection demands of an effect
+(:func:`station.diagnosis.search.selection.accept`: its cost J on all the runs at least 5 %
+and 0.1 noise variance per error term above the answer's, what encoder rounding and
+accelerometer noise cannot explain; the rule :func:`kept_diagnosis` applies to a set-aside
+re-diagnosis). In-sample at the noise floor the cost is too jagged for a smooth test: on
+blind logs of an actuator gain of 0.8, perturbations of 0.2 % of the answer raise it by
+13-190 %, and the actuator pole with viscous friction that is the same model to the FEM
+refits 7.5 % above it, far outside the likelihood-ratio tolerance (0.1 % with N_eff 3468).
+One the answer pays over is settled and forgotten.
 """
 
 from __future__ import annotations
@@ -21,7 +25,7 @@ from pathlib import Path
 from typing import NamedTuple
 
 from station.diagnosis.answer.prose import at_range_end
-from station.diagnosis.honesty.doubt import CHI2_95, Alternative, effect_interval, effective_terms
+from station.diagnosis.honesty.doubt import Alternative, effect_interval, effective_terms
 from station.diagnosis.honesty.rivals import describe, explanation
 from station.diagnosis.honesty.unexplained import Unexplained, check_unexplained
 from station.diagnosis.runs.cases import load_case
@@ -223,7 +227,7 @@ def _same(a, b) -> bool:
 
 def contest(answer, earlier: Sequence[Explanation], runs: Sequence[str | Path], base) -> Contest:
     """Every explanation met earlier, refitted on every completed run and judged against the
-    answer by the likelihood-ratio test (module docstring).
+    answer: it stays while the answer does not pay over it (module docstring).
 
     Parameters
     ----------
@@ -261,20 +265,18 @@ def contest(answer, earlier: Sequence[Explanation], runs: Sequence[str | Path], 
     calibrate_noise(ev)
     idx = list(range(len(ev.cases)))
     chosen = explanation(answer)
-    j0 = ev.cost(chosen, idx)
-    n_eff = effective_terms(ev, {i: ev.predict(chosen, i) for i in idx}, idx)
-    limit = j0 * math.exp(CHI2_95 / n_eff)
+    j0, terms = ev.cost(chosen, idx), ev.terms(idx)
     rms_nom = pooled(ev, {i: ev.sse({}, i) for i in idx}).rms_theta
     axes = effect_axes(ev.model)
     alts, still, done = [], [], []
     for e in todo:
         values = refit_explanation(ev, e.causes, idx, e.values, axes)
         j = ev.cost(values, idx)
-        if j <= limit:
+        if not accept(j * terms, j0 * terms, terms):
             gain = rms_gain(pooled(ev, {i: ev.sse(values, i) for i in idx}).rms_theta, rms_nom)
             alts.append(Alternative(list(e.causes), {k: float(v) for k, v in values.items()}, float(gain),
                                     float(j / j0), "the identified explanation"))
             still.append(Explanation(e.causes, dict(values)))
         else:
-            done.append(f"{describe(values)} (cost {j:.3g} against {j0:.3g} per term, N_eff {n_eff:.0f})")
+            done.append(f"{describe(values)} (cost {j:.3g} against {j0:.3g} per term on {len(idx)} runs)")
     return Contest(sorted(alts, key=lambda a: a.cost_ratio), still, done)
