@@ -429,7 +429,7 @@ def test_cases_are_deterministic_and_keep_their_values():
             for part in case.split("+"):  # a combination draws each part as it is drawn alone
                 if part in cases.SETTING_MAGNITUDES:
                     assert effects[part] == cases.draw(part, seed)
-                elif part not in ("clean", "two"):
+                elif part not in ("clean", "two") and not part.startswith("held_offset"):  # drawn from the friction
                     single = cases.case_effects(part, seed)
                     assert {k: effects[k] for k in single} == single
         sf = cases.case_effects("static_friction", seed)
@@ -449,8 +449,14 @@ def test_cases_are_deterministic_and_keep_their_values():
         assert bs != cases.case_effects("static_friction", seed)
         d0 = cases.case_effects("breakaway_sliding+amp_offset@d0", seed)
         assert d0 == {**bs, "amp_offset": cases.case_effects("amp_offset", seed)["amp_offset"]}
+        held = cases.case_effects("breakaway_sliding+held_offset@d0", seed)
+        assert {k: held[k] for k in bs} == bs and 0.2 <= abs(held["amp_offset"]) / bs["coulomb_friction"] <= 0.8
+        offsets.append(held["amp_offset"])
     assert cases.case_alignment("breakaway_sliding+amp_offset@d0") == ("breakaway_sliding+amp_offset", 0)
     assert cases.case_alignment("breakaway_sliding") == ("breakaway_sliding", 1)
+    assert min(offsets[-10:]) < 0 < max(offsets[-10:])
+    with pytest.raises(ValueError):
+        cases.case_effects("held_offset+breakaway_sliding", 0)
     with pytest.raises(ValueError):
         cases.case_effects("static_friction+coulomb_friction", 0)
     with pytest.raises(ValueError):

@@ -37,7 +37,10 @@ Breakaway with a sliding level judged on both levels (:data:`SLIDING_CASES`, iss
 case part "breakaway_sliding" hides static_friction v_s 8-30 DAC counts over coulomb_friction
 v_c = (0.3-0.7) * v_s, drawn apart from "static_friction"'s (whose v_s alone is judged); a
 case's "@d0" suffix runs its closed loops at alignment 0, as the rig's 2009 logs
-(:func:`case_alignment`).
+(:func:`case_alignment`). The part "held_offset" (after a friction part) hides an amp_offset of
+(0.2-0.8) * v_c in size, either sign: below the sliding level, so friction holds a still motor
+against it, as in issue 26's case (breakaway 14 over 9 with an offset of 2.5); an offset of
+1-8 counts drawn alone may exceed v_c, and then the motor creeps on after every move.
 
 Out-of-vocabulary cases (:data:`OOV_CASES`, :data:`OOV_MAGNITUDES`; semantics in
 ``tests.blind.rig.OOV``), which no vocabulary effect explains, for the diagnosis's
@@ -174,9 +177,13 @@ SLIDING_MAGNITUDES: dict[str, tuple[float, float]] = {"breakaway_sliding": (8.0,
 """The breakaway level v_s of a "breakaway_sliding" case part, DAC counts (its sliding level is
 :data:`STATIC_TO_COULOMB` of it)."""
 
-SLIDING_CASES = ("breakaway_sliding", "breakaway_sliding+amp_offset@d0")
-"""Breakaway over a sliding level, both judged: alone, and beside an amplifier offset at the
-2009 alignment (d = 0; issue 26's case: breakaway 14 over 9 with an offset of 2.5)."""
+HELD_OFFSET = (0.2, 0.8)
+"""|amp_offset| / v_c of a "held_offset" case part (drawn uniformly, either sign)."""
+
+SLIDING_CASES = ("breakaway_sliding", "breakaway_sliding+held_offset@d0", "breakaway_sliding+amp_offset@d0")
+"""Breakaway over a sliding level, both judged: alone, beside an amplifier offset the friction
+holds at the 2009 alignment (d = 0; issue 26's case: breakaway 14 over 9 with an offset of
+2.5), and beside an offset of issue 17's range (1-8 counts, at times above the sliding level)."""
 
 ALIGNMENTS = {"@d0": 0}
 """A case's suffix -> the alignment of its closed loops (none: 1)."""
@@ -301,6 +308,13 @@ def case_effects(case: str, seed: int) -> dict[str, float]:
         return {name: draw(name, seed) for name in TWO_EFFECTS}
     effects: dict[str, float] = {}
     for part in case.split("+"):
+        if part == "held_offset":
+            if "coulomb_friction" not in effects:
+                raise ValueError(f"case {case!r}: held_offset needs a friction part before it")
+            rng = _rng(part, seed)
+            size = float(rng.uniform(*HELD_OFFSET)) * effects["coulomb_friction"]
+            effects["amp_offset"] = size if rng.random() < 0.5 else -size
+            continue
         hidden = _single(part, seed)
         if set(hidden) & set(effects):
             raise ValueError(f"case {case!r} hides {sorted(set(hidden) & set(effects))} twice")
