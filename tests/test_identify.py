@@ -247,6 +247,10 @@ def test_budget_bounds_the_designed_experiments(tmp_path, monkeypatch):
         assert Path(r.log).is_file() and Path(r.log).with_name(Path(r.log).stem + ".u.tsv").is_file() \
             or r.experiment.reference == "step"
     assert two.diagnoses == 3 and set(two.timings) == {"experiments", "diagnosis", "design", "total"}
+    # a rival that fits every run as well after two experiments designed against it is not chased further
+    four = identify(out_dir=tmp_path / "four", budget=4, **kw)
+    assert len(four.experiments) == 4 + identify_mod.SURVIVALS and "cannot tell them apart" in four.stopped
+    assert [a["causes"] for a in four.diagnosis.alternatives] == [["deadzone"]]  # still listed
 
 
 def test_prefer_keeps_the_explanation_that_fits_every_run(tmp_path):

@@ -35,6 +35,7 @@ from station.diagnosis.identify.experiments import THESIS_EXPERIMENTS, Experimen
 from station.diagnosis.identify.prefer import Explanation, contest, kept_diagnosis, prefer
 from station.diagnosis.pipeline import diagnose
 from station.diagnosis.honesty.rivals import describe, rivals
+from station.diagnosis.search.fitting import SHAPE
 from station.errors import StationError
 from station.experiment import run_step
 from station.link import LinkLimits
@@ -46,6 +47,12 @@ from station.signals import StopSignal, StopSignals
 
 DEFAULT_BUDGET = 8
 """Designed experiments after the thesis's four, at most (``station identify --budget``)."""
+
+SURVIVALS = 2
+"""An alternative that still fits every run as well as the answer after this many experiments
+designed against it (its refit matches each one) is not aimed at again: the loop ends when only
+such remain, and they stay listed (an actuator pole with viscous friction is an actuator gain
+to the model)."""
 
 RECHECK_CANDIDATES = 8
 """Re-diagnoses try at most this many effects: the first diagnosis's accepted ones, its rivals'
@@ -348,6 +355,7 @@ def identify(port: str = "sim://", model=None, budget: int = DEFAULT_BUDGET, out
     recheck = None
     tried = set(THESIS_EXPERIMENTS)
     designed = 0
+    survived: dict[frozenset, int] = {}  # an alternative -> designed experiments it fitted as well as the answer
     while True:
         rv = rivals(diag)  # the record identify prints and writes: the verdict reads what the table shows
         if not rv.rivals:
@@ -356,7 +364,12 @@ def identify(port: str = "sim://", model=None, budget: int = DEFAULT_BUDGET, out
         if designed >= budget:
             stopped = f"budget of {budget} designed experiment(s) spent; {len(rv.rivals)} rival(s) remain"
             break
-        design = loop.design(rv, [c for c in candidate_experiments() if c not in tried])
+        aimed = [r for r in rv.rivals if survived.get(_structure(r), 0) < SURVIVALS]
+        if not aimed:
+            stopped = (f"{len(rv.rivals)} alternative(s) fitted every run as well as the answer after "
+                       f"{SURVIVALS} experiments designed against each: the data cannot tell them apart")
+            break
+        design = loop.design(rv._replace(rivals=aimed), [c for c in candidate_experiments() if c not in tried])
         if design.experiment is None:
             stopped = design.why
             break
@@ -372,7 +385,16 @@ def identify(port: str = "sim://", model=None, budget: int = DEFAULT_BUDGET, out
         new = loop.diagnose(recheck)
         if new is not None:
             diag = loop.contest(loop.prefer(diag, new), Explanation.of(diag) + Explanation.of(new))
+        still = {_structure(r) for r in rivals(diag).rivals}
+        for key in {_structure(r) for r in aimed if r.kind == "alternative"} & still:
+            survived[key] = survived.get(key, 0) + 1
     return loop.result(diag, stopped, budget, 0)
+
+
+def _structure(rival) -> frozenset:
+    """An alternative rival's effects (its refits move its values, not its structure); an
+    interval's end is its own."""
+    return frozenset(n for n in rival.effects if n != SHAPE) if rival.kind == "alternative" else frozenset([rival.label])
 
 
 def settled(diag, rv) -> str:
