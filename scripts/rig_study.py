@@ -35,7 +35,8 @@ from station.analysis.metrics import step_metrics
 from station.diagnosis.runs.cases import RunCase, load_case, simulate_case
 from station.diagnosis.runs.cost import Evaluator, calibrate_noise
 from station.diagnosis.runs.folds import make_folds
-from station.diagnosis.search.selection import effect_axes, fit_set, set_axes, trial
+from station.diagnosis.search.fitting import effect_axes, fit_set, set_axes
+from station.diagnosis.search.selection import trial
 from station.errors import StationError
 from station.outputs import FORCE_HELP, Transaction, check_outputs
 from station.plant.model import as_model, load_model

@@ -85,6 +85,24 @@ def test_replay_reproduces_logged_v_with_alignment_1(tmp_path, effects):
             assert report.alignment == 1, run
 
 
+def test_alignment_0_computes_each_command_from_its_own_rows_samples(tmp_path):
+    """The rig's 2009 logs (DESIGN.md "Timing and log rows"): v[k] = C(u[k], θ[k], a[k]); the
+    station's replay finds d = 0 and reproduces every v; the same case at alignment 1 differs."""
+    effects = {"static_friction": 14.0, "coulomb_friction": 9.0, "amp_offset": 2.5}
+    d0 = write_case(tmp_path / "d0", effects, seed=2, alignment=0)
+    d1 = write_case(tmp_path / "d1", effects, seed=2)
+    for run, p0, p1 in zip(RUNS, d0, d1):
+        report = replay(p0, model=False)
+        assert report.max_abs_dv is not None and report.max_abs_dv < 1e-6, run
+        if run != "open_loop_pulses":
+            assert report.alignment == 0, run
+            assert not np.array_equal(read_log(p0).data["v"], read_log(p1).data["v"]), run
+        else:  # open loop: v = u whatever the alignment
+            np.testing.assert_array_equal(read_log(p0).data["v"], read_log(p1).data["v"])
+    with pytest.raises(ValueError):
+        simulate("p", reference("p_step"), {}, np.random.default_rng(0), alignment=2)
+
+
 def test_first_held_mode_is_the_sets_own():
     freq, zeta = fem.held_first_mode(fem.Params())
     assert freq == pytest.approx(2.55, abs=0.05)  # DESIGN.md: rig 2.52 Hz
@@ -411,7 +429,7 @@ def test_cases_are_deterministic_and_keep_their_values():
             for part in case.split("+"):  # a combination draws each part as it is drawn alone
                 if part in cases.SETTING_MAGNITUDES:
                     assert effects[part] == cases.draw(part, seed)
-                elif part not in ("clean", "two"):
+                elif part not in ("clean", "two") and not part.startswith("held_offset"):  # drawn from the friction
                     single = cases.case_effects(part, seed)
                     assert {k: effects[k] for k in single} == single
         sf = cases.case_effects("static_friction", seed)
@@ -424,6 +442,21 @@ def test_cases_are_deterministic_and_keep_their_values():
         enc = cases.case_effects("oov:encoder_cyclic", seed)
         assert 2 <= enc["oov:encoder_cyclic"] <= 4 and 64 <= enc["oov:encoder_cyclic_period"] <= 256
     assert all(1 <= abs(o) <= 8 for o in offsets) and min(offsets) < 0 < max(offsets)
+    for seed in range(10):  # a breakaway over its sliding level, both judged: drawn apart from static_friction's
+        bs = cases.case_effects("breakaway_sliding", seed)
+        assert set(bs) == {"static_friction", "coulomb_friction"} and 8 <= bs["static_friction"] <= 30
+        assert 0.3 <= bs["coulomb_friction"] / bs["static_friction"] <= 0.7
+        assert bs != cases.case_effects("static_friction", seed)
+        d0 = cases.case_effects("breakaway_sliding+amp_offset@d0", seed)
+        assert d0 == {**bs, "amp_offset": cases.case_effects("amp_offset", seed)["amp_offset"]}
+        held = cases.case_effects("breakaway_sliding+held_offset@d0", seed)
+        assert {k: held[k] for k in bs} == bs and 0.2 <= abs(held["amp_offset"]) / bs["coulomb_friction"] <= 0.8
+        offsets.append(held["amp_offset"])
+    assert cases.case_alignment("breakaway_sliding+amp_offset@d0") == ("breakaway_sliding+amp_offset", 0)
+    assert cases.case_alignment("breakaway_sliding") == ("breakaway_sliding", 1)
+    assert min(offsets[-10:]) < 0 < max(offsets[-10:])
+    with pytest.raises(ValueError):
+        cases.case_effects("held_offset+breakaway_sliding", 0)
     with pytest.raises(ValueError):
         cases.case_effects("static_friction+coulomb_friction", 0)
     with pytest.raises(ValueError):

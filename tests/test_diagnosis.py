@@ -149,7 +149,7 @@ class _TwoValleys:
 
 
 def test_breakaway_fit_leaves_the_plain_coulomb_valley():
-    from station.diagnosis.search.selection import effect_axes, fit_set, set_axes
+    from station.diagnosis.search.fitting import effect_axes, fit_set, set_axes
 
     values = fit_set(_TwoValleys(), set_axes(("static_friction",), effect_axes()), (0,), {"coulomb_friction": 3.9})
     assert values["coulomb_friction"] == pytest.approx(5.0, rel=0.05)

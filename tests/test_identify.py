@@ -7,6 +7,8 @@ before any run; on the simulated rig with hidden effects it names them within 25
 
 from __future__ import annotations
 
+import itertools
+
 import json
 import re
 import signal
@@ -24,6 +26,7 @@ from station.diagnosis.identify.design import MIN_SEPARATION, choose_experiment,
 from station.diagnosis.identify.experiments import (PRBS_HOLD_TICKS, THESIS_EXPERIMENTS, Experiment,
                                            candidate_experiments, write_reference)
 from station.diagnosis.identify.loop import ExperimentRun, identify, step_runner
+from station.diagnosis.identify.prefer import prefer
 from station.diagnosis.honesty.rivals import JACKKNIFE_Z, Rival, Rivals, jackknife_interval, rivals
 from station.plant.model import as_model
 from station.rig import DEFAULT_STEP_TICK
@@ -45,12 +48,20 @@ def test_thesis_experiments_are_the_blind_generators_runs():
 def test_candidate_references_have_their_shape(exp):
     u, a = exp.u(), exp.amplitude
     assert u.size == 1000 and not np.any(u[:DEFAULT_STEP_TICK])
-    assert np.max(np.abs(u)) == pytest.approx(a, rel=1e-9) or exp.reference in ("chirp", "triangle")
+    assert np.max(np.abs(u)) == pytest.approx(a, rel=1e-9) or exp.reference in ("chirp", "triangle", "reversals")
     assert np.max(np.abs(u)) <= a * (1 + 1e-12)
     if exp.reference == "ramp":
         assert np.all(np.diff(u[DEFAULT_STEP_TICK:]) > 0) and u[-1] == pytest.approx(a)
     if exp.reference == "triangle":
         assert u.max() == pytest.approx(a, rel=0.01) and u.min() == pytest.approx(-a, rel=0.01) and abs(u[-1]) < 0.02 * a
+    if exp.reference == "stairs":  # holds at A/3, 2A/3, A, 2A/3, A/3, 0, each a sixth of the run
+        levels = [float(x) for x, _ in itertools.groupby(u[DEFAULT_STEP_TICK:])]
+        assert levels == pytest.approx([a / 3, 2 * a / 3, a, 2 * a / 3, a / 3, 0.0])
+        assert u[DEFAULT_STEP_TICK] == pytest.approx(a / 3) and u[-1] == 0.0
+    if exp.reference == "reversals":  # three periods of the triangle: six turning points
+        slope = np.sign(np.diff(u[DEFAULT_STEP_TICK:]))
+        turns = np.count_nonzero(np.diff(slope[slope != 0]))
+        assert turns == 6 and u.max() == pytest.approx(a, rel=0.01) and u.min() == pytest.approx(-a, rel=0.01)
     if exp.reference == "prbs":
         assert set(np.unique(u[DEFAULT_STEP_TICK:])) == {-a, a}
         runs = np.diff(np.flatnonzero(np.diff(u[DEFAULT_STEP_TICK:]) != 0))
@@ -131,8 +142,8 @@ def _design(chosen, rival, **kw):
     return choose_experiment(NOMINAL, rv, **kw)
 
 
-FRICTION_EXCITERS = ("open-loop ramp", "open-loop triangle", "open-loop ±30", "open-loop ±60", "P (kp 2) step of 10",
-                     "P (kp 2) step of 25", "P (kp 2) ramp")
+FRICTION_EXCITERS = ("open-loop ramp", "open-loop triangle", "open-loop stairs", "open-loop 3 reversals", "open-loop ±30",
+                     "open-loop ±60", "P (kp 2) step of 10", "P (kp 2) step of 25", "P (kp 2) ramp")
 
 
 def test_friction_is_separated_by_an_experiment_that_excites_friction():
@@ -237,6 +248,10 @@ def test_budget_bounds_the_designed_experiments(tmp_path, monkeypatch):
         assert Path(r.log).is_file() and Path(r.log).with_name(Path(r.log).stem + ".u.tsv").is_file() \
             or r.experiment.reference == "step"
     assert two.diagnoses == 3 and set(two.timings) == {"experiments", "diagnosis", "design", "total"}
+    # a rival that fits every run as well after two experiments designed against it is not chased further
+    four = identify(out_dir=tmp_path / "four", budget=4, **kw)
+    assert len(four.experiments) == 4 + identify_mod.SURVIVALS and "cannot tell them apart" in four.stopped
+    assert [a["causes"] for a in four.diagnosis.alternatives] == [["deadzone"]]  # still listed
 
 
 def test_prefer_keeps_the_explanation_that_fits_every_run(tmp_path):
@@ -246,12 +261,12 @@ def test_prefer_keeps_the_explanation_that_fits_every_run(tmp_path):
     logs = [run(exp, tmp_path / f"{k}.tsv").log for k, exp in enumerate(THESIS_EXPERIMENTS)]
     old = _diag([_effect("deadzone", 7.0), _effect("param:act_K", 0.78)])
     new = _diag([_effect("coulomb_friction", 13.0)])
-    pref = identify_mod.prefer(old, new, logs, NOMINAL)
+    pref = prefer(old, new, logs, NOMINAL)
     assert pref.keep_old and pref.old_cost < pref.new_cost
     assert pref.values["deadzone"] == pytest.approx(8.0, rel=0.1) and pref.values["param:act_K"] == pytest.approx(0.8, rel=0.05)
     assert "fits them better" in pref.note
-    assert not identify_mod.prefer(new, old, logs, NOMINAL).keep_old  # the worse one never wins
-    assert identify_mod.prefer(old, old, logs, NOMINAL).note == ""  # same structure: nothing to compare
+    assert not prefer(new, old, logs, NOMINAL).keep_old  # the worse one never wins
+    assert prefer(old, old, logs, NOMINAL).note == ""  # same structure: nothing to compare
 
 
 def test_recheck_candidates_keep_the_causes_the_rivals_and_the_best_others():

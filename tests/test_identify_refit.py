@@ -2,7 +2,7 @@
 refitted or compared (issue 17): the search fits static_friction as coulomb_friction plus a
 breakaway excess, and every place outside it goes through
 :func:`station.diagnosis.honesty.rivals.explanation` (the values) and
-:func:`station.diagnosis.search.selection.refit_explanation` (the refit). Judged on logs of the blind
+:func:`station.diagnosis.search.fitting.refit_explanation` (the refit). Judged on logs of the blind
 generator (tests/blind, never station.plant) with the hidden values known.
 """
 
@@ -17,10 +17,10 @@ from station.diagnosis.runs.cost import Evaluator, calibrate_noise
 from station.diagnosis.honesty.doubt import profile_interval
 from station.diagnosis.answer.result import Diagnosis, EffectResult
 from station.diagnosis.honesty.doubt import Interval
-from station.diagnosis.identify.loop import Preference, kept_diagnosis, prefer
+from station.diagnosis.identify.prefer import Explanation, Preference, contest, kept_diagnosis, prefer
 from station.plant.effects import EFFECTS
 from station.diagnosis.honesty.rivals import explanation, rivals
-from station.diagnosis.search.selection import effect_axes, refit_explanation
+from station.diagnosis.search.fitting import effect_axes, refit_explanation
 from station.plant.model import as_model
 from tests.blind.generator import write_case
 
@@ -141,3 +141,23 @@ def test_a_kept_explanation_is_what_the_next_design_separates():
     assert [r.kind for r in rv.rivals] == ["interval", "interval"]  # amp_offset's is wide; the other apart
     close = rivals(kept_diagnosis(old, new, pref._replace(new_cost=1.21), model, 5))
     assert [r.effects for r in close.rivals if r.kind == "alternative"] == [{**BREAKAWAY, "viscous_friction": 1.0}]
+
+
+def test_contest_keeps_an_equivalent_explanation_and_settles_a_worse_one(tmp_path):
+    """identify's doubt across diagnoses (issue 26): an explanation met earlier stays among the
+    alternatives while it fits every run as well as the answer (the actuator's pole 0.80 with
+    3.7 DAC counts per rad/s of viscous friction is an actuator gain of 0.8 to the model: the
+    motor's inertia and damping both ×1.25), and one the runs exclude is settled."""
+    paths = write_case(tmp_path, {"param:act_K": 0.8}, seed=3)
+    answer = _record({"param:act_K": 0.8}, ["param:act_K"])
+    earlier = [Explanation(("param:act_p", "viscous_friction"), {"param:act_p": 0.85, "viscous_friction": 3.0}),
+               Explanation(("deadzone",), {"deadzone": 6.0}),
+               Explanation(("param:act_K",), {"param:act_K": 0.9})]  # the answer's own causes: not judged again
+    found = contest(answer, earlier, paths, NOMINAL)
+    assert [a.causes for a in found.alternatives] == [["param:act_p", "viscous_friction"]]
+    alt = found.alternatives[0]
+    assert alt.values["param:act_p"] == pytest.approx(0.80, abs=0.03), alt.values
+    assert alt.values["viscous_friction"] == pytest.approx(3.7, rel=0.15), alt.values
+    assert alt.cost_ratio < 1.1 and alt.gain_pct > 50  # the refit lands within the cost's jitter of the answer
+    assert [e.causes for e in found.open] == [("param:act_p", "viscous_friction")]
+    assert len(found.settled) == 1 and found.settled[0].startswith("deadzone")

@@ -68,7 +68,8 @@ from station.commands.identify import format_identification  # noqa: E402
 from station.diagnosis.identify import loop  # noqa: E402
 from station.diagnosis.identify.design import Design  # noqa: E402
 from station.diagnosis.identify.experiments import candidate_experiments  # noqa: E402
-from station.diagnosis.identify.loop import ExperimentRun, Preference, identify  # noqa: E402
+from station.diagnosis.identify.loop import ExperimentRun, identify  # noqa: E402
+from station.diagnosis.identify.prefer import Contest, Preference  # noqa: E402
 from station.diagnosis.honesty.rivals import WIDE_INTERVAL  # noqa: E402
 from station.plant.effects import EFFECTS  # noqa: E402
 
@@ -118,6 +119,7 @@ def _identify(monkeypatch, tmp_path, diagnoses, preference=None, budget=1):
     monkeypatch.setattr(loop, "command_quantization", lambda log: "round")
     monkeypatch.setattr(loop, "choose_experiment",
                         lambda base, rv, cands, *a: Design(cands[0], "it separates them", [], {}))
+    monkeypatch.setattr(loop, "contest", lambda diag, met, runs, base: Contest([], [], []))  # no logs to refit on
     if preference is not None:
         monkeypatch.setattr(loop, "prefer", lambda old, new, runs, base: preference)
     return identify(out_dir=tmp_path, budget=budget, candidates=["static_friction", "coulomb_friction"],

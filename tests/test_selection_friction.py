@@ -12,8 +12,8 @@ import numpy as np
 import pytest
 
 from station import diagnosis
-from station.diagnosis.search.selection import (EXCESS, MIN_EXCESS, Trial, credible, effect_axes, excess_fraction,
-                                         fit_set, set_axes)
+from station.diagnosis.search.fitting import EXCESS, MIN_EXCESS, effect_axes, fit_beside, fit_set, set_axes
+from station.diagnosis.search.selection import Trial, credible, excess_fraction, screen_costs
 
 
 def test_static_friction_is_fitted_on_the_sliding_level_and_an_excess():
@@ -112,3 +112,38 @@ def test_diagnose_keeps_plain_coulomb_friction_when_there_is_no_breakaway(blind_
                            simulate=friction_simulator(10.0, 10.0))
     assert d.causes == ["coulomb_friction"]
     assert d.extended_model.effect_dict() == {"coulomb_friction": pytest.approx(10.0, abs=0.3)}
+
+
+def test_a_breakaway_within_luck_of_coulomb_friction_is_not_named():
+    """credible judges the breakaway over plain Coulomb friction against what luck reaches
+    around the Coulomb friction (the null floor), as every step of the search is judged."""
+    terms = 1000
+    coulomb = _trial("coulomb_friction", [0, 0, 0], 2000.0)
+    static = _trial("static_friction", [0.4, 0.5, 0.45], 1800.0)  # 10 % lower: pays against the cost alone
+    trials = {"coulomb_friction": coulomb, "static_friction": static}
+    assert set(credible(trials, terms)) == {"coulomb_friction", "static_friction"}
+    assert set(credible(trials, terms, lambda tr: 1850.0)) == {"coulomb_friction"}  # luck reaches 7.5 % below
+    assert set(credible(trials, terms, lambda tr: 1990.0)) == {"coulomb_friction", "static_friction"}
+
+
+class _Valley:
+    """An evaluator whose cost has a narrow diagonal valley in (coulomb_friction, amp_offset): the
+    offset pays only with the friction moved with it (as a sliding level and an amplifier offset
+    do); alone the friction's best is 6."""
+
+    def cost(self, values, runs):
+        c, o = values.get("coulomb_friction", 0.0), values.get("amp_offset", 0.0)
+        return 1.0 + 10.0 * (c - 6.0 - o) ** 2 + 0.5 * (o - 3.0) ** 2 + 0.001 * values.get("param:EI", 1.0)
+
+
+def test_the_joint_screen_finds_a_partner_that_the_held_friction_hides():
+    ev, axes = _Valley(), effect_axes()
+    fixed = {"coulomb_friction": 6.0}
+    c0 = ev.cost(fixed, [0])
+    held = screen_costs(ev, axes, ["amp_offset", "param:EI"], fixed, [0])
+    assert held.get("amp_offset", c0) > 0.95 * c0  # beside the friction held, the offset hardly pays
+    joint = screen_costs(ev, axes, ["amp_offset", "param:EI"], fixed, [0], refit=["coulomb_friction"])
+    assert list(joint)[0] == "amp_offset" and joint["amp_offset"] < 0.5 * c0
+    cost, values = fit_beside(ev, axes, ["coulomb_friction"], "amp_offset", [0], fixed)
+    assert cost == pytest.approx(joint["amp_offset"])
+    assert values["coulomb_friction"] - values["amp_offset"] == pytest.approx(6.0, abs=0.3)

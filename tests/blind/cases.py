@@ -33,6 +33,15 @@ by :func:`draw_sensor`; :data:`SENSOR_PAIRS` beside a physical effect):
 - encoder_reversed: encoder_scale -1; motor_reversed: motor_polarity -1 (each alone runs the
   closed loops away to the clamp: positive feedback, as the rig would).
 
+Breakaway with a sliding level judged on both levels (:data:`SLIDING_CASES`, issue 26): the
+case part "breakaway_sliding" hides static_friction v_s 8-30 DAC counts over coulomb_friction
+v_c = (0.3-0.7) * v_s, drawn apart from "static_friction"'s (whose v_s alone is judged); a
+case's "@d0" suffix runs its closed loops at alignment 0, as the rig's 2009 logs
+(:func:`case_alignment`). The part "held_offset" (after a friction part) hides an amp_offset of
+(0.2-0.8) * v_c in size, either sign: below the sliding level, so friction holds a still motor
+against it, as in issue 26's case (breakaway 14 over 9 with an offset of 2.5); an offset of
+1-8 counts drawn alone may exceed v_c, and then the motor creeps on after every move.
+
 Out-of-vocabulary cases (:data:`OOV_CASES`, :data:`OOV_MAGNITUDES`; semantics in
 ``tests.blind.rig.OOV``), which no vocabulary effect explains, for the diagnosis's
 "unexplained" flag:
@@ -164,6 +173,42 @@ SENSOR_PAIRS = (
 
 CASES += (*SENSOR_CASES, *SENSOR_PAIRS)
 
+SLIDING_MAGNITUDES: dict[str, tuple[float, float]] = {"breakaway_sliding": (8.0, 30.0)}
+"""The breakaway level v_s of a "breakaway_sliding" case part, DAC counts (its sliding level is
+:data:`STATIC_TO_COULOMB` of it)."""
+
+HELD_OFFSET = (0.2, 0.8)
+"""|amp_offset| / v_c of a "held_offset" case part (drawn uniformly, either sign)."""
+
+SLIDING_CASES = ("breakaway_sliding", "breakaway_sliding+held_offset@d0", "breakaway_sliding+amp_offset@d0")
+"""Breakaway over a sliding level, both judged: alone, beside an amplifier offset the friction
+holds at the 2009 alignment (d = 0; issue 26's case: breakaway 14 over 9 with an offset of
+2.5), and beside an offset of issue 17's range (1-8 counts, at times above the sliding level)."""
+
+ALIGNMENTS = {"@d0": 0}
+"""A case's suffix -> the alignment of its closed loops (none: 1)."""
+
+CASES += SLIDING_CASES
+
+
+def case_alignment(case: str) -> tuple[str, int]:
+    """A case without its alignment suffix, and the alignment of its closed loops.
+
+    Parameters
+    ----------
+    case : str
+        A case, e.g. "breakaway_sliding+amp_offset@d0".
+
+    Returns
+    -------
+    (str, int)
+        The case's effects part and the alignment (1 without a suffix).
+    """
+    for suffix, d in ALIGNMENTS.items():
+        if case.endswith(suffix):
+            return case[:-len(suffix)], d
+    return case, 1
+
 
 def draw_sensor(part: str, seed: int) -> float:
     """The hidden value of a sensor fault case part for ``seed`` (deterministic).
@@ -216,6 +261,10 @@ def draw(name: str, seed: int) -> float:
 
 
 def _single(name: str, seed: int) -> dict[str, float]:
+    if name in SLIDING_MAGNITUDES:
+        v_s = float(_rng(name, seed).uniform(*SLIDING_MAGNITUDES[name]))
+        ratio = float(_rng(f"{name}/coulomb_friction", seed).uniform(*STATIC_TO_COULOMB))
+        return {"static_friction": v_s, "coulomb_friction": ratio * v_s}
     if name == "static_friction":
         v_s = draw(name, seed)
         ratio = float(_rng("static_friction/coulomb_friction", seed).uniform(*STATIC_TO_COULOMB))
@@ -252,12 +301,20 @@ def case_effects(case: str, seed: int) -> dict[str, float]:
         An unknown name, or two parts that hide the same effect (e.g. static_friction
         with coulomb_friction).
     """
+    case = case_alignment(case)[0]
     if case == "clean":
         return {}
     if case == "two":
         return {name: draw(name, seed) for name in TWO_EFFECTS}
     effects: dict[str, float] = {}
     for part in case.split("+"):
+        if part == "held_offset":
+            if "coulomb_friction" not in effects:
+                raise ValueError(f"case {case!r}: held_offset needs a friction part before it")
+            rng = _rng(part, seed)
+            size = float(rng.uniform(*HELD_OFFSET)) * effects["coulomb_friction"]
+            effects["amp_offset"] = size if rng.random() < 0.5 else -size
+            continue
         hidden = _single(part, seed)
         if set(hidden) & set(effects):
             raise ValueError(f"case {case!r} hides {sorted(set(hidden) & set(effects))} twice")

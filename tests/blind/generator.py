@@ -101,16 +101,16 @@ KIND = {"p_step": "p", "lead_step": "lead", "lead_accel_step": "lead-accel", "op
 
 
 def simulate_case(effects: dict[str, float], seed: int, n_elements: int = 4, substeps: int = 100,
-                  accel_noise: float = 0.3) -> dict[str, Run]:
+                  accel_noise: float = 0.3, alignment: int = 1) -> dict[str, Run]:
     """The four runs of a case, simulated (see :func:`write_case`)."""
     rngs = np.random.default_rng(seed).spawn(len(RUNS))
     return {run: simulate(KIND[run], reference(run), dict(effects), rng, n_elements=n_elements,
-                          substeps=substeps, accel_noise=accel_noise)
+                          substeps=substeps, accel_noise=accel_noise, alignment=alignment)
             for run, rng in zip(RUNS, rngs)}
 
 
 def write_case(folder: Path, effects: dict[str, float], seed: int, n_elements: int = 4,
-               substeps: int = 100, accel_noise: float = 0.3) -> list[Path]:
+               substeps: int = 100, accel_noise: float = 0.3, alignment: int = 1) -> list[Path]:
     """Write the four 2 s rig-format logs of one blind test case.
 
     Parameters
@@ -130,6 +130,9 @@ def write_case(folder: Path, effects: dict[str, float], seed: int, n_elements: i
         Integration sub-steps per sample for friction, backlash and cogging.
     accel_noise : float
         Accelerometer noise std, counts.
+    alignment : {1, 0}
+        The closed loops' alignment (:func:`tests.blind.rig.simulate`): 1 as the rig's later
+        logs and protocol v1, 0 as its 2009 logs.
 
     Returns
     -------
@@ -144,7 +147,7 @@ def write_case(folder: Path, effects: dict[str, float], seed: int, n_elements: i
     """
     folder = Path(folder)
     folder.mkdir(parents=True, exist_ok=True)
-    sims = simulate_case(effects, seed, n_elements, substeps, accel_noise)
+    sims = simulate_case(effects, seed, n_elements, substeps, accel_noise, alignment)
     paths = []
     for run in RUNS:
         path = folder / FILES[run]

@@ -3,7 +3,8 @@
 From DESIGN.md alone ("Compensators", "Timing and log rows", "Model diagnosis contract"):
 
 - alignment 1: v[k] = C(u[k], theta[k-1], a[k-1]), v[0] = 0 (open loop: v[k] = u[k]); the
-  log holds this computed v, whatever the amplifier then makes of it;
+  log holds this computed v, whatever the amplifier then makes of it; alignment 0 (the rig's
+  2009 logs): v[k] = C(u[k], theta[k], a[k]);
 - the PC truncates v toward zero, then the amplifier: offset (amp_offset), saturation,
   dead-zone, extra delay (that order); the torque on the motor is k_tau times the result;
 - the plant: the FEM with the motor's viscous friction (viscous_friction) added to the
@@ -445,7 +446,7 @@ def make_plant(effects: dict[str, float] | Effects, n_elements: int = 4, substep
 
 def simulate(kind: str, u: np.ndarray, effects: dict[str, float], rng: np.random.Generator,
              n_elements: int = 4, substeps: int = 100, accel_noise: float = ACCEL_NOISE,
-             kp: float = 2.0) -> Run:
+             kp: float = 2.0, alignment: int = 1) -> Run:
     """Simulate one run of the rig.
 
     Parameters
@@ -465,7 +466,11 @@ def simulate(kind: str, u: np.ndarray, effects: dict[str, float], rng: np.random
         Accelerometer noise std, counts.
     kp : float
         Gain of the P controller.
+    alignment : {1, 0}
+        1: the command of row k from row k-1's samples (v[0] = 0); 0: from row k's own.
     """
+    if alignment not in (0, 1):
+        raise ValueError(f"alignment {alignment!r}: expected 0 or 1")
     eff = Effects.parse(effects)
     plant, a_gain = make_plant(eff, n_elements, substeps)
     amp = Amplifier(eff.saturation, eff.deadzone, eff.delay, eff.amp_offset)
@@ -479,6 +484,8 @@ def simulate(kind: str, u: np.ndarray, effects: dict[str, float], rng: np.random
         a = math.floor(a_gain * acc + accel_bias(eff, k) + noise[k] + 0.5)
         if ctrl is None:
             v, th_d = float(u[k]), float(u[k])
+        elif alignment == 0:  # the 2009 logs: this row's samples
+            v, th_d = ctrl.step(float(u[k]), float(theta), float(a))
         elif k == 0:
             v, th_d = 0.0, float(u[0])
         else:  # alignment 1: the previous row's samples

@@ -22,13 +22,20 @@ N_eff · ln(J/J_min) > χ²₁(0.95) = 3.84.
   fitting model's coarser integration leaves and held 6 of the hidden values; with (2) and
   (3) 75 (96 %). The interval is clipped to the effect's range and flagged where it
   touches it.
-- Alternatives: at each forward-selection step, a candidate whose validation cost is
-  within the tolerance of the chosen one's — the larger of what luck reaches around the
-  chosen model (its :func:`station.diagnosis.search.selection.null_floor`) and the
-  likelihood-ratio tolerance J·(exp(3.84/N_eff) − 1) of the held-out residuals — is another
-  explanation: the accepted set with the chosen effect replaced by it, judged on the same
-  folds (refitted per fold when the step was not the last), kept when still within the
-  tolerance of the final explanation, and its values refitted jointly on all fit runs.
+- Alternatives: at each forward-selection step, a rival whose validation cost is within the
+  tolerance of the chosen one's — the larger of what luck reaches around the chosen model
+  (its :func:`station.diagnosis.search.selection.null_floor`) and the likelihood-ratio
+  tolerance J·(exp(3.84/N_eff) − 1) of the held-out residuals, a cost lower than the chosen
+  one's included — is another explanation: the accepted set with the chosen effect replaced
+  by it, judged on the same folds (refitted per fold when the step was not the last), kept
+  when still within the tolerance of the final explanation, and its values refitted jointly
+  on all fit runs. The rivals of a step: every other candidate tried in its place; a
+  breakaway that :func:`~station.diagnosis.search.selection.credible` set aside because its
+  excess did not pay over the sliding level (it fits as well, or better by less than
+  selection's margin: the data do not settle it); for a breakaway chosen in place of
+  Coulomb friction, plain Coulomb friction again; and after the last accepted step, a
+  breakaway tried over the accepted sliding level. A breakaway whose excess is below
+  :data:`~station.diagnosis.search.fitting.MIN_EXCESS` is plain Coulomb friction, no rival.
 """
 
 from __future__ import annotations
@@ -42,7 +49,9 @@ import scipy.optimize
 
 from station.diagnosis.search.bounded import RESOLUTION_STEPS, Axis
 from station.diagnosis.runs.cost import Evaluator, pooled, rms_gain
-from station.diagnosis.search.selection import NESTED, SHAPE, Search, Selection, Trial, null_floor, refit_explanation, trial
+from station.diagnosis.search.fitting import MIN_EXCESS, NESTED, SHAPE, excess_of, refit_explanation
+from station.diagnosis.search.selection import (Search, Selection, Step, Trial, excess_fraction, null_floor,
+                                                trial)
 
 CHI2_95 = 3.841458820694124
 """χ²₁ at 95 %: the likelihood-ratio threshold of one parameter."""
@@ -386,6 +395,46 @@ def tolerance(cost: float, floor: float, n_eff: float) -> float:
     return max(cost - floor, cost * math.expm1(CHI2_95 / n_eff))
 
 
+def _held(names) -> set[str]:
+    """The effect values a set of causes holds (a static_friction's sliding level too)."""
+    return set(names) | {NESTED[n] for n in names if n in NESTED}
+
+
+def _distinct(c: str, tr: Trial) -> bool:
+    """A rival is another explanation: a breakaway with an excess below MIN_EXCESS (the median
+    over its folds) is plain Coulomb friction again."""
+    return c not in NESTED or excess_fraction(tr) >= MIN_EXCESS
+
+
+def _step_rivals(step: Step, accepted: Sequence[str]) -> list[tuple[str, Trial]]:
+    """The rivals of an accepted step's choice, each with its trial at that step: every other
+    candidate tried in its place, those :func:`~station.diagnosis.search.selection.credible`
+    set aside (a breakaway whose excess did not pay), and for an upgrade in place the simpler
+    effect it replaced (the model before the step)."""
+    out = [(c, tr) for c, tr in {**step.set_aside, **step.trials}.items()
+           if c != step.chosen and c not in accepted and _distinct(c, tr)]
+    simpler = NESTED.get(step.chosen)
+    if simpler is not None and simpler in step.before and step.current is not None:
+        out.append((simpler, step.current))
+    return out
+
+
+def _upgrades(step: Step, final: Trial) -> list[tuple[str, Trial]]:
+    """After the step that accepted nothing: the upgrades in place it tried (a breakaway over an
+    accepted sliding level), each a whole explanation beside the final one."""
+    return [(c, tr) for c, tr in {**step.set_aside, **step.trials}.items()
+            if NESTED.get(c) in final.names and _distinct(c, tr)
+            and set(tr.names) == set(final.names) - {NESTED[c]} | {c}]
+
+
+def _rival_starts(final: Trial, rival: Trial, chosen: str, c: str) -> list[dict]:
+    """Per fold, where a rival's refit starts: the final values without what ``chosen`` holds,
+    with what ``c`` holds from the rival's own trial."""
+    return [{**{k: v for k, v in fv.items() if k not in _held([chosen])},
+             **{k: v for k, v in rv.items() if k in _held([c])}}
+            for fv, rv in zip(final.fold_values, rival.fold_values)]
+
+
 def alternatives(search: Search, sel: Selection, nominal: Trial, n_eff: float) -> list[Alternative]:
     """The other explanations the validation data cannot tell apart (module docstring).
 
@@ -412,45 +461,51 @@ def alternatives(search: Search, sel: Selection, nominal: Trial, n_eff: float) -
     floors = [sel.steps[k + 1].floor if k + 1 < len(sel.steps) else None for k in range(len(steps))]
     final = sel.current
     rms_nom = pooled(ev, nominal.val_sse).rms_theta
-    out: list[Alternative] = []
+    close: list[tuple[float, str, str, list, Trial, bool]] = []  # (step cost, rival, instead of, causes, trial, whole)
     tol_final = None
     for k, step in enumerate(steps):
         chosen = step.trials[step.chosen]
         floor = floors[k] if floors[k] is not None else null_floor(ev, folds, chosen.fold_values)
         tol = tolerance(chosen.val_weighted, floor, n_eff)
-        if k == len(steps) - 1:
+        last = k == len(steps) - 1
+        if last:
             tol_final = tol
-        close = sorted((c for c, tr in step.trials.items()
-                        if c != step.chosen and c not in sel.accepted and tr.val_weighted - chosen.val_weighted <= tol),
-                       key=lambda c: step.trials[c].val_weighted)
-        for c in close:
-            if len(out) >= MAX_ALTERNATIVES:
-                break
-            names = [c if n == step.chosen else n for n in sel.accepted]
-            if k == len(steps) - 1:
-                tr = step.trials[c]
-            else:
-                starts = [{**{n: v for n, v in fv.items() if n != step.chosen}, c: step.trials[c].fold_values[f][c]}
-                          for f, fv in enumerate(final.fold_values)]
-                tr = trial(ev, folds, tuple(names), axes, starts)
-            search.say(f"alternative to {step.chosen}: {' + '.join(names)}, validation cost "
-                       f"{tr.val_weighted / final.val_weighted:.3f}× the chosen one's")
-            out.append((c, step.chosen, names, tr))
+        if step.chosen not in sel.accepted:  # downgraded since (a breakaway to plain Coulomb friction)
+            continue
+        for c, tr in _step_rivals(step, sel.accepted):
+            if tr.val_weighted - chosen.val_weighted <= tol:
+                names = [c if n == step.chosen else n for n in sel.accepted]
+                close.append((tr.val_weighted, c, step.chosen, names, tr, last))
+    after = sel.steps[-1] if sel.steps and sel.steps[-1].chosen is None else None
+    if after is not None and tol_final is not None:
+        for c, tr in _upgrades(after, final):
+            if tr.val_weighted - final.val_weighted <= tol_final:
+                close.append((tr.val_weighted, c, NESTED[c], [c if n == NESTED[c] else n for n in sel.accepted], tr,
+                              True))
     if tol_final is None:
         return []
-    result = []
-    for c, instead, names, tr in out:
+    result, seen = [], set()
+    close = [x for x in sorted(close, key=lambda x: x[0])
+             if frozenset(x[3]) not in seen and not seen.add(frozenset(x[3]))]  # one per explanation, its closest
+    for _, c, instead, names, tr, whole in close[:MAX_ALTERNATIVES]:
+        if not whole:  # judged beside the effects accepted after its step: refitted per fold
+            tr = trial(ev, folds, tuple(names), axes, _rival_starts(final, tr, instead, c))
+        search.say(f"alternative to {instead}: {' + '.join(names)}, validation cost "
+                   f"{tr.val_weighted / final.val_weighted:.3f}× the chosen one's")
         if tr.val_weighted - final.val_weighted > tol_final:
             continue
         others = [n for n in names if n != c]
-        held = set(others) | {NESTED[n] for n in others if n in NESTED}  # a static_friction's sliding level
-        if c in held:  # coulomb_friction beside a static_friction that holds it
+        if c in _held(others):  # coulomb_friction beside a static_friction that holds it
             continue
         shape = {SHAPE} if any(n in NESTED for n in others) else set()  # an accepted breakaway's, held
-        values = refit_explanation(ev, others + [c], search.fit_runs,
-                                   {n: v for n, v in sel.values.items() if n in held | shape}, axes)
+        start = {n: v for n, v in sel.values.items() if n in _held(others) | shape}
+        start.update({n: float(np.median([fv[n] for fv in tr.fold_values])) for n in _held([c])
+                      if all(n in fv for fv in tr.fold_values)})
+        values = refit_explanation(ev, others + [c], search.fit_runs, start, axes)
+        if c in NESTED and excess_of(values) < MIN_EXCESS:  # refitted to plain Coulomb friction: no other explanation
+            continue
         gain = rms_gain(pooled(ev, tr.val_sse).rms_theta, rms_nom)
-        kept = names + [NESTED[n] for n in names if n in NESTED and NESTED[n] not in names]  # v_c of a v_s
-        result.append(Alternative(names, {n: float(values[n]) for n in kept if n in values}, float(gain),
+        kept = [n for n in names + sorted(_held(names) - set(names)) if n in values]  # v_c of a v_s
+        result.append(Alternative(names, {n: float(values[n]) for n in kept}, float(gain),
                                   float(tr.val_weighted / final.val_weighted), instead))
     return sorted(result, key=lambda a: a.cost_ratio)

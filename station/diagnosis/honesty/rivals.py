@@ -23,7 +23,7 @@ from collections.abc import Mapping
 from typing import Any, NamedTuple
 
 from station.diagnosis.units import format_quantity
-from station.diagnosis.search.selection import NESTED, SHAPE
+from station.diagnosis.search.fitting import NESTED, SHAPE
 from station.plant.effects import EFFECTS
 
 WIDE_INTERVAL = 0.1
@@ -191,7 +191,7 @@ def _accepted(diag) -> list:
 def explanation(diag) -> dict:
     """The chosen explanation's values: the accepted effects, in the order they were added, with
     what they hold (a static_friction's sliding level coulomb_friction and stribeck_speed:
-    :data:`station.diagnosis.search.selection.NESTED`, :data:`~station.diagnosis.search.selection.SHAPE`),
+    :data:`station.diagnosis.search.fitting.NESTED`, :data:`~station.diagnosis.search.fitting.SHAPE`),
     from the diagnosis's extended model. Simulating, refitting or comparing the accepted
     effects without them would be another model (a breakaway with no sliding level).
 

@@ -10,6 +10,12 @@ References (u[k], encoder counts in closed loop, DAC counts in open loop; zero f
 - ``ramp``: from 0 to A at the run's end, slowly (friction's breakaway in open loop, stick-slip
   while tracking in closed loop);
 - ``triangle``: 0 → A → −A → 0 (friction in both directions);
+- ``stairs``: holds at A/3, 2A/3, A, then back down at 2A/3, A/3 and 0, each a sixth of the
+  run (open loop: the motor's speed held at several commands tells Coulomb from viscous
+  friction, a still motor that starts only on a higher step shows the breakaway, and one that
+  keeps sliding on the way down shows a sliding level below it);
+- ``reversals``: :data:`REVERSALS` periods of a triangle ±A (slow reversals: the motor stops
+  and starts again at each, where breakaway and sliding friction differ);
 - ``chirp``: A sin of a frequency swept linearly from :data:`CHIRP_HZ`'s first to its last;
 - ``prbs``: ±A, each level held a whole number of :data:`PRBS_HOLD_TICKS` (seeded, repeatable);
 - ``multisine``: sines at :data:`MULTISINE_HZ` with Schroeder phases, peak A.
@@ -40,7 +46,13 @@ PRBS_HOLD_TICKS = 20
 MULTISINE_HZ = (0.5, 1.0, 2.0, 2.5, 3.0, 5.0, 8.0, 12.0, 18.0)
 """Frequencies of the multisine, Hz (dense around the first beam mode)."""
 
-REFERENCE_KINDS = ("step", "pulses", "ramp", "triangle", "chirp", "prbs", "multisine")
+REVERSALS = 3
+"""Periods of a ``reversals`` reference over the run."""
+
+STAIRS = (1, 2, 3, 2, 1, 0)
+"""The levels of a ``stairs`` reference, in thirds of A, each held a sixth of the run."""
+
+REFERENCE_KINDS = ("step", "pulses", "ramp", "triangle", "stairs", "reversals", "chirp", "prbs", "multisine")
 """Every reference an experiment may have."""
 
 CONTROLLERS = ("open-loop", "p", "lead", "lead-accel")
@@ -94,7 +106,8 @@ class Experiment:
             self.controller) or f"P (kp {self.kp:g})"
         a = f"{self.amplitude:g} {unit}"
         what = {"step": f"step of {a}", "pulses": f"±{a} pulses", "ramp": f"ramp to {a}",
-                "triangle": f"triangle ±{a}", "chirp": f"chirp {CHIRP_HZ[0]:g}-{CHIRP_HZ[1]:g} Hz of ±{a}",
+                "triangle": f"triangle ±{a}", "stairs": f"stairs up to {a} and down (holds)",
+                "reversals": f"{REVERSALS} reversals ±{a}", "chirp": f"chirp {CHIRP_HZ[0]:g}-{CHIRP_HZ[1]:g} Hz of ±{a}",
                 "prbs": f"PRBS ±{a}", "multisine": f"multisine of peak {a}"}[self.reference]
         return f"{who} {what}"
 
@@ -207,6 +220,12 @@ def reference(kind: str, amplitude: float, n: int, step_tick: int = DEFAULT_STEP
     elif kind == "triangle":
         phase = np.arange(m) / m  # one period over the run: 0 -> A -> -A -> 0
         u[k0:] = amplitude * np.where(phase < 0.25, 4 * phase, np.where(phase < 0.75, 2 - 4 * phase, 4 * phase - 4))
+    elif kind == "stairs":
+        hold = -(-m // len(STAIRS))
+        u[k0:] = amplitude / 3.0 * np.repeat(np.asarray(STAIRS, float), hold)[:m]
+    elif kind == "reversals":
+        phase = (np.arange(m) * REVERSALS / m) % 1.0
+        u[k0:] = amplitude * np.where(phase < 0.25, 4 * phase, np.where(phase < 0.75, 2 - 4 * phase, 4 * phase - 4))
     elif kind == "chirp":
         f0, f1 = CHIRP_HZ
         span = m * dt
@@ -236,16 +255,17 @@ step of 100, lead + accelerometer step of 200 (both at 0.02 s), open-loop ±100 
 
 def candidate_experiments() -> list[Experiment]:
     """The experiments a design chooses from: each reference at a few amplitudes under each
-    controller where it makes sense (open-loop ramps, triangles and small pulses for friction;
-    closed-loop steps, chirps, PRBS and multisines for the dynamics). About 40, all 2 s.
+    controller where it makes sense (open-loop ramps at three speeds, triangles, stairs of
+    holds, slow reversals and small pulses for friction; closed-loop steps, chirps, PRBS and
+    multisines for the dynamics). About 40, all 2 s.
 
     Returns
     -------
     list of Experiment
         The candidates, open-loop ones first, then per controller (P, lead, lead-accel).
     """
-    ol = [("ramp", (20, 40, 80)), ("triangle", (30, 60)), ("pulses", (30, 60, 150, 200)), ("prbs", (30, 60)),
-          ("chirp", (30, 60)), ("multisine", (40, 80))]
+    ol = [("ramp", (20, 40, 80)), ("triangle", (30, 60)), ("stairs", (20, 40)), ("reversals", (20, 40)),
+          ("pulses", (30, 60, 150, 200)), ("prbs", (30, 60)), ("chirp", (30, 60)), ("multisine", (40, 80))]
     closed = {"p": [("step", (10, 25, 100, 200)), ("ramp", (100, 300)), ("chirp", (20, 50)), ("prbs", (20, 50))],
               "lead": [("step", (25, 200, 400)), ("chirp", (20, 50)), ("prbs", (50,)), ("multisine", (50,))],
               "lead-accel": [("step", (50, 400)), ("chirp", (50,)), ("prbs", (50,))]}

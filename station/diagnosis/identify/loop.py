@@ -15,32 +15,31 @@ not as bad input.
 The first diagnosis tries the whole vocabulary (or the ``candidates`` given); each later one
 only the effects the first found worth a look (:func:`recheck_candidates`), which keeps a
 re-diagnosis of up to twelve runs by leave-one-run-out affordable. A re-diagnosis that fits
-every run worse than the earlier explanation is set aside (:func:`prefer`); the next design
-then separates the kept explanation's rivals on all the runs (its intervals there, and the
-set-aside one unless the kept one pays over it), not the earlier diagnosis's of fewer runs,
-so a settled answer stops the loop.
+every run worse than the earlier explanation is set aside
+(:func:`station.diagnosis.identify.prefer.prefer`); the next design then separates the kept
+explanation's rivals on all the runs (its intervals there, and the set-aside one unless the
+kept one pays over it), not the earlier diagnosis's of fewer runs, so a settled answer stops
+the loop. Every explanation met on the way (earlier answers, their alternatives) stays in
+``alternatives`` until the answer pays over it on all the runs as forward selection demands
+of an effect (:func:`station.diagnosis.identify.prefer.contest`), so the loop designs
+experiments against it and never ends with ``alternatives: []`` while such a rival remains.
 """
 
 from __future__ import annotations
 
 import datetime as _dt
-import math
 import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any, NamedTuple
 
-from station.diagnosis.runs.cases import load_case
-from station.diagnosis.runs.cost import Evaluator, calibrate_noise
-from station.diagnosis.answer.prose import at_range_end
-from station.diagnosis.honesty.doubt import Alternative, effect_interval, effective_terms
-from station.diagnosis.honesty.unexplained import Unexplained, check_unexplained
 from station.diagnosis.identify.design import Design, choose_experiment
 from station.diagnosis.identify.experiments import THESIS_EXPERIMENTS, Experiment, candidate_experiments, write_reference
+from station.diagnosis.identify.prefer import Explanation, contest, kept_diagnosis, prefer
 from station.diagnosis.pipeline import diagnose
-from station.diagnosis.honesty.rivals import describe, explanation, rivals
-from station.diagnosis.search.selection import accept, effect_axes, refit_explanation
+from station.diagnosis.honesty.rivals import describe, rivals
+from station.diagnosis.search.fitting import SHAPE
 from station.errors import StationError
 from station.experiment import run_step
 from station.link import LinkLimits
@@ -53,6 +52,12 @@ from station.signals import StopSignal, StopSignals, noting
 
 DEFAULT_BUDGET = 8
 """Designed experiments after the thesis's four, at most (``station identify --budget``)."""
+
+SURVIVALS = 2
+"""An alternative that still fits every run as well as the answer after this many experiments
+designed against it (its refit matches each one) is not aimed at again: the loop ends when only
+such remain, and they stay listed (an actuator pole with viscous friction is an actuator gain
+to the model)."""
 
 RECHECK_CANDIDATES = 8
 """Re-diagnoses try at most this many effects: the first diagnosis's accepted ones, its rivals'
@@ -365,6 +370,7 @@ def _identify(loop: _Loop, names: list[str], budget: int) -> Identification:
     recheck = None
     tried = set(THESIS_EXPERIMENTS)
     designed = 0
+    survived: dict[frozenset, int] = {}  # an alternative -> designed experiments it fitted as well as the answer
     while True:
         rv = rivals(diag)  # the record identify prints and writes: the verdict reads what the table shows
         if not rv.rivals:
@@ -373,7 +379,12 @@ def _identify(loop: _Loop, names: list[str], budget: int) -> Identification:
         if designed >= budget:
             stopped = f"budget of {budget} designed experiment(s) spent; {len(rv.rivals)} rival(s) remain"
             break
-        design = loop.design(rv, [c for c in candidate_experiments() if c not in tried])
+        aimed = [r for r in rv.rivals if survived.get(_structure(r), 0) < SURVIVALS]
+        if not aimed:
+            stopped = (f"{len(rv.rivals)} alternative(s) fitted every run as well as the answer after "
+                       f"{SURVIVALS} experiments designed against each: the data cannot tell them apart")
+            break
+        design = loop.design(rv._replace(rivals=aimed), [c for c in candidate_experiments() if c not in tried])
         if design.experiment is None:
             stopped = design.why
             break
@@ -388,102 +399,17 @@ def _identify(loop: _Loop, names: list[str], budget: int) -> Identification:
             recheck = recheck_candidates(diag, [n for r in rv.rivals for n in r.effects], names)
         new = loop.diagnose(recheck)
         if new is not None:
-            diag = loop.prefer(diag, new)
+            diag = loop.contest(loop.prefer(diag, new), Explanation.of(diag) + Explanation.of(new))
+        still = {_structure(r) for r in rivals(diag).rivals}
+        for key in {_structure(r) for r in aimed if r.kind == "alternative"} & still:
+            survived[key] = survived.get(key, 0) + 1
     return loop.result(diag, stopped, budget, 0)
 
 
-class Preference(NamedTuple):
-    """Which of two explanations fits every completed run better (:func:`prefer`).
-
-    Attributes
-    ----------
-    keep_old : bool
-        The earlier explanation, refitted on all the runs, fits them better.
-    values : dict of str to float
-        The earlier explanation's effects refitted on all the runs ({} when not compared).
-    old_cost, new_cost : float
-        Noise-normalised cost per error term on all the runs (1 ≈ the noise floor).
-    note : str
-        The comparison in words.
-    intervals : dict of str to Interval
-        When the earlier explanation is kept: each cause's 95 % interval on all the runs
-        (:func:`station.diagnosis.honesty.doubt.effect_interval`, around the refitted values).
-    unexplained : Unexplained or None
-        When the earlier explanation is kept: its residual check on all the runs.
-    """
-
-    keep_old: bool
-    values: dict
-    old_cost: float
-    new_cost: float
-    note: str
-    intervals: dict = {}
-    unexplained: Unexplained | None = None
-
-
-def prefer(old, new, runs: Sequence[str | Path], base) -> Preference:
-    """Compare an earlier diagnosis's explanation with a new one on the same runs.
-
-    Forward selection is greedy: a new run can send it down another path to an explanation
-    that fits every run worse than the one it had (seen on the simulated rig: deadzone +
-    param:act_K found on the thesis's four, Coulomb friction + backlash + delay once an
-    open-loop ramp was added). The earlier explanation's effects are refitted on all the runs
-    (from its values) and both are judged by the diagnosis's cost on all of them; the earlier
-    one is kept when it fits better with no more effects, or, with more, when it pays for
-    them as forward selection's acceptance demands
-    (:func:`station.diagnosis.search.selection.accept`). An explanation is its causes with what they
-    hold (:func:`station.diagnosis.honesty.rivals.explanation`: a static_friction's sliding level),
-    refitted as the search fits it (:func:`station.diagnosis.search.selection.refit_explanation`).
-
-    Parameters
-    ----------
-    old, new : Diagnosis
-        The current answer and the re-diagnosis (on ``runs``).
-    runs : sequence of path
-        Every completed run.
-    base : station.plant.model.Model
-        The nominal model.
-
-    Returns
-    -------
-    Preference
-        Whether to keep the earlier explanation, its values refitted on all runs, both costs
-        per error term (dimensionless, ≈ 1 at the noise floor), the comparison in words and,
-        when kept, its intervals and residual check; ``keep_old`` False with empty values and
-        NaN costs when ``old`` accepted nothing or names the same causes.
-
-    Raises
-    ------
-    StationError
-        A run that cannot be read as a diagnosis case (:func:`station.diagnosis.runs.cases.load_case`).
-    """
-    if not old.causes or set(old.causes) == set(new.causes):
-        return Preference(False, {}, math.nan, math.nan, "")
-    old_values, new_values = explanation(old), explanation(new)
-    ev = Evaluator([load_case(p) for p in runs], base)
-    calibrate_noise(ev)
-    idx = list(range(len(ev.cases)))
-    axes = effect_axes(ev.model)
-    refit = refit_explanation(ev, old.causes, idx, old_values, axes)
-    terms = ev.terms(idx)
-    c_old, c_new = ev.cost(refit, idx), ev.cost(new_values, idx)
-    if len(old.causes) <= len(new.causes):
-        keep = c_old < c_new
-    else:
-        keep = accept(c_new * terms, c_old * terms, terms)
-    note = (f"{describe(refit)} (the earlier explanation, refitted on all {len(idx)} runs) fits them "
-            f"{'better' if keep else 'no better'}: cost {c_old:.3g} against {c_new:.3g} per term for "
-            f"{describe(new_values)}")
-    intervals, unexplained = {}, None
-    if keep:  # what the runs now allow around it: the next design's rivals (the earlier diagnosis's are stale)
-        predictions = {i: ev.predict(refit, i) for i in idx}
-        n_eff = effective_terms(ev, predictions, idx)
-        for name in old.causes:
-            iv = effect_interval(ev, axes, name, refit, idx, n_eff, [refit[name]])
-            if iv is not None:
-                intervals[name] = iv
-        unexplained = check_unexplained(ev, refit, predictions)
-    return Preference(keep, refit, c_old, c_new, note, intervals, unexplained)
+def _structure(rival) -> frozenset:
+    """An alternative rival's effects (its refits move its values, not its structure); an
+    interval's end is its own."""
+    return frozenset(n for n in rival.effects if n != SHAPE) if rival.kind == "alternative" else frozenset([rival.label])
 
 
 def settled(diag, rv) -> str:
@@ -512,47 +438,6 @@ def settled(diag, rv) -> str:
             "but reaches only past its search range, where no experiment can look")
 
 
-def kept_diagnosis(old, new, pref: Preference, model, runs: int):
-    """The identification's record when a re-diagnosis is set aside for the earlier
-    explanation: the earlier diagnosis with that explanation as refitted on every completed
-    run (:func:`prefer`) -- its values, 95 % intervals, extended model and residual check there,
-    and the set-aside re-diagnosis as its alternative unless the kept one pays over it as
-    selection's acceptance demands. The table, the verdict, the JSON and the identified model
-    all read this one record.
-
-    Parameters
-    ----------
-    old, new : Diagnosis
-        The kept and the set-aside diagnosis.
-    pref : Preference
-        ``keep_old`` true.
-    model : station.plant.model.Model
-        The nominal model with the refitted explanation.
-    runs : int
-        Completed runs it was refitted on.
-
-    Returns
-    -------
-    Diagnosis
-        Its fits and held-out gains stay the earlier diagnosis's (a note says so): a held-out
-        gain needs a re-diagnosis.
-    """
-    effects = [replace(e, value=float(pref.values[e.name]), interval=pref.intervals.get(e.name),
-                       at_range_end=at_range_end(e.name, pref.values[e.name]))
-               if e.accepted and e.name in pref.values else e for e in old.effects]
-    terms = 1000.0  # the costs are per term: accept judges the relative gain and the gain per term
-    apart = accept(pref.new_cost * terms, pref.old_cost * terms, terms)
-    alts = [] if apart else [Alternative(list(new.causes), explanation(new), float(new.gain_pct),
-                                         float(pref.new_cost / pref.old_cost), "the kept explanation")]
-    n_old = len(old.runs) or "fewer"
-    note = (f"the earlier explanation, refitted on all {runs} runs, was kept over a re-diagnosis "
-            f"({pref.note}); its values, 95 % intervals, alternatives and residual check are on all {runs} runs, "
-            f"its fits and gains the earlier diagnosis's on {n_old} runs")
-    return replace(old, effects=effects, extended_model=model, alternatives=alts, folds=[],
-                   unexplained=pref.unexplained if pref.unexplained is not None else old.unexplained,
-                   notes=list(old.notes) + [note])
-
-
 class _Loop:
     """The identification's state: the records, the timings, and its three steps."""
 
@@ -563,6 +448,7 @@ class _Loop:
         self.timings = {"experiments": 0.0, "diagnosis": 0.0, "design": 0.0}
         self.diagnoses = 0
         self.kept: list[str] = []
+        self.open: list[Explanation] = []  # explanations met earlier that the runs have not settled
         self.command = "round"
         self.t0 = time.perf_counter()
         self.stopped_by = ""  # what stopped the last experiment (or kept the next from starting)
@@ -655,6 +541,22 @@ class _Loop:
         self.say(f"diagnosis {self.diagnoses}: the kept explanation on all {len(runs)} runs, unexplained: "
                  + ("no" if u is None or not u.flag else u.evidence))
         return kept
+
+    def contest(self, diag, met: Sequence[Explanation]):
+        """The answer with every explanation met so far that the answer does not pay over among
+        its alternatives (:func:`station.diagnosis.identify.prefer.contest`); the rest forgotten."""
+        t = time.perf_counter()
+        runs = [str(r.log) for r in self.records if r.used]
+        found = contest(diag, [*self.open, *met], runs, self.base)
+        self.timings["diagnosis"] += time.perf_counter() - t
+        self.open = found.open
+        for line in found.settled:
+            self.say(f"diagnosis {self.diagnoses}: settled by the runs: {line}")
+        if not found.alternatives:
+            return diag
+        self.say(f"diagnosis {self.diagnoses}: still fitting all {len(runs)} runs as well (kept as alternatives): "
+                 + "; ".join(f"{describe(a.values)} (cost ×{a.cost_ratio:.3f})" for a in found.alternatives))
+        return replace(diag, alternatives=list(diag.alternatives) + found.alternatives)
 
     def result(self, diag, stopped: str, budget: int, code: int) -> Identification:
         self.timings["total"] = time.perf_counter() - self.t0

@@ -31,6 +31,9 @@ the folds of a cross-validation, refining near the same grid point, share simula
 REFINE_ITERATIONS = 12
 """Bounded scalar refinement: at most this many evaluations inside the bracket."""
 
+REFINE_JOINT = 12
+"""Nelder-Mead evaluations per continuous axis of a joint refinement (plus 8)."""
+
 RESOLUTION_STEPS = 1.0 / 16.0
 """An interval is at least ± this many grid steps of the effect's search coordinate: the
 fit's own resolution (refinement to 0.02 grid step on a piecewise-constant cost)."""
@@ -201,7 +204,8 @@ class _Tracker:
 
 
 def fit(cost: Callable[[dict], float], axes: Sequence[Axis], start: Mapping[str, float] | None = None,
-        fixed: Mapping[str, float] | None = None, grid_cost: Callable[[list[dict]], list[float]] | None = None) -> FitResult:
+        fixed: Mapping[str, float] | None = None, grid_cost: Callable[[list[dict]], list[float]] | None = None,
+        refine: int = REFINE_JOINT) -> FitResult:
     """Fit effect values: bracket the last axis on its grid, then refine all axes locally.
 
     Parameters
@@ -221,6 +225,9 @@ def fit(cost: Callable[[dict], float], axes: Sequence[Axis], start: Mapping[str,
     grid_cost : callable, optional
         ``grid_cost(list_of_values) -> list of costs``: evaluates the grid at once (e.g. in
         parallel threads); default: ``cost`` one by one.
+    refine : int, optional
+        Nelder-Mead evaluations per continuous axis of a joint refinement (and as many again
+        once); default :data:`REFINE_JOINT`.
 
     Returns
     -------
@@ -256,13 +263,14 @@ def fit(cost: Callable[[dict], float], axes: Sequence[Axis], start: Mapping[str,
                     lambda t: track({new.name: new.from_unit(t)}), bounds=(lo, hi), method="bounded",
                     options={"xatol": 0.02 * new.step, "maxiter": REFINE_ITERATIONS})
     else:
-        _refine_joint(track, axes)
+        _refine_joint(track, axes, refine)
     best_cost, best = track.best
     return FitResult({**fixed, **best}, best_cost, track.calls)
 
 
-def _refine_joint(track: _Tracker, axes: list[Axis]) -> None:
-    """Nelder-Mead over the continuous axes, enumeration of whole-number ones, twice."""
+def _refine_joint(track: _Tracker, axes: list[Axis], refine: int = 12) -> None:
+    """Nelder-Mead over the continuous axes (at most ``refine`` evaluations per axis, and as
+    many again), enumeration of whole-number ones, twice."""
     cont = [a for a in axes if a.scale != "int"]
     ints = [a for a in axes if a.scale == "int"]
     for _ in range(2):
@@ -280,7 +288,7 @@ def _refine_joint(track: _Tracker, axes: list[Axis]) -> None:
                 return track(vals)
 
             scipy.optimize.minimize(f, x0, method="Nelder-Mead",
-                                    options={"initial_simplex": simplex, "maxfev": 12 * len(cont) + 8,
+                                    options={"initial_simplex": simplex, "maxfev": refine * len(cont) + 8,
                                              "xatol": 0.02 * float(steps.min()), "fatol": 1e-9})
         for a in ints:
             _, point = track.best

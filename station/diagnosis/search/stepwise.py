@@ -27,6 +27,14 @@ the blind set and costs a tenth of a diagnosis of the rig's four logs (tried aga
 amp_offset + coulomb_friction + param:drive_c seed 0, issue 17: still nothing below the
 dead-zone's best).
 
+Joint screening. From the second step on, each candidate is scanned on its grid beside the
+accepted effects and then refined together with them (:func:`~station.diagnosis.search.selection.screen_costs`
+with ``refit``, a short Nelder-Mead: :data:`~station.diagnosis.search.fitting.SCREEN_REFINE`):
+held at their values, the accepted effects can hide a partner (an amplifier offset beside a
+Coulomb friction fitted alone: the pair's valley has the friction a third higher, and the
+offset scanned beside the friction held lowered nothing; blind breakaway 14 over 9 with an
+offset of 2.5 at alignment 0 was named Coulomb friction + drive stiffness).
+
 Stuck refits. The accepted effects' joint values on all fit runs are fitted again from a
 fold's values when those fit all runs better (:func:`_refit`: the folds' costs are cached),
 and an accepted effect refitted to within :data:`NEUTRAL` of no effect is tested for
@@ -44,9 +52,10 @@ from station.diagnosis.search.bounded import fit
 from station.diagnosis.runs.cost import relative_gain
 from station.diagnosis.runs.folds import validation_runs
 from station.diagnosis.units import format_quantity
-from station.diagnosis.search.selection import (MAX_EFFECTS, MIN_RELATIVE_GAIN, NESTED, SECOND_STEP_CANDIDATES, SHAPE,
-                                         Search, Selection, Singles, Step, Trial, accept, credible, fit_set,
-                                         null_floor, screen_costs, set_axes, trial)
+from station.diagnosis.search.fitting import NESTED, SHAPE, fit_set, set_axes
+from station.diagnosis.search.selection import (MAX_EFFECTS, MIN_RELATIVE_GAIN, SECOND_STEP_CANDIDATES, Search,
+                                                Selection, Singles, Step, Trial, accept, credible, null_floor,
+                                                screen_costs, trial)
 from station.plant.effects import EFFECTS
 from station.pools import results
 
@@ -99,14 +108,15 @@ def _try_sets(search: Search, sets: Mapping, starts: Sequence) -> dict[str, Tria
 
 def _joint_trials(search: Search, names: Sequence[str], accepted: list[str], current: Trial,
                   fixed: Mapping[str, float], step: int) -> tuple[dict[str, Trial], float]:
-    """The screened candidates, each fitted per fold jointly with the accepted ones, and the
-    lowest in-sample cost the screen reached (the accepted effects' own when none lowers it)."""
+    """The screened candidates (a joint screen: the accepted effects refined with each), each
+    fitted per fold jointly with the accepted ones, and the lowest in-sample cost the screen
+    reached (the accepted effects' own when none lowers it)."""
     ev = search.ev
     held = {NESTED[a] for a in accepted if a in NESTED}  # coulomb_friction is in an accepted static_friction
     full = len(accepted) >= MAX_EFFECTS  # then only an upgrade in place is left
     open_ = [n for n in names if n not in accepted and n not in held
              and (not full or NESTED.get(n) in accepted)]
-    costs = screen_costs(ev, search.axes, open_, fixed, search.fit_runs)
+    costs = screen_costs(ev, search.axes, open_, fixed, search.fit_runs, refit=current.names)
     # a candidate that lowers the in-sample cost by less than the parsimony margin with the
     # others held will not pay it on held-out runs (on the rig's four logs in-sample screen
     # gains of 8-31 % came out at 3-5 % held out)
@@ -121,6 +131,11 @@ def _joint_trials(search: Search, names: Sequence[str], accepted: list[str], cur
                    f"{relative_gain(trials[n].val_weighted, current.val_weighted):.1f} % over {' + '.join(accepted)} "
                    f"({ev.simulations} simulations)")
     return trials, min(costs.values(), default=ev.cost(fixed, search.fit_runs))
+
+
+def _luck(search: Search):
+    """What luck alone reaches around a trial's model (:func:`null_floor` of its fold values)."""
+    return lambda tr: null_floor(search.ev, search.folds, tr.fold_values)
 
 
 def _held(names: Sequence[str]) -> set[str]:
@@ -166,7 +181,7 @@ def _lookahead(search: Search, names: Sequence[str], singles: Singles, pool: Seq
                    f"{relative_gain(tr.val_weighted, current.val_weighted):.1f} % over {' + '.join(accepted)} "
                    f"({ev.simulations} simulations)")
         out.setdefault(f, {})[n] = tr
-    return {f: ok for f, group in out.items() if (ok := credible(group, terms))}
+    return {f: ok for f, group in out.items() if (ok := credible(group, terms, _luck(search)))}
 
 
 def _drop(search: Search, name: str, current: Trial, terms: int) -> Trial | None:
@@ -236,7 +251,7 @@ def _downgrade(search: Search, accepted: list[str], current: Trial, terms: int) 
             continue
         names = tuple(simpler if n == name else n for n in current.names)
         alt = trial(search.ev, search.folds, names, search.axes, current.fold_values)
-        if credible({name: current, simpler: alt}, terms).get(name) is None:
+        if credible({name: current, simpler: alt}, terms, _luck(search)).get(name) is None:
             search.say(f"{simpler} in place of {name}: the breakaway excess no longer pays beside "
                        f"{' + '.join(n for n in accepted if n != name)}")
             return [simpler if n == name else n for n in accepted], alt
@@ -273,13 +288,17 @@ def forward_select(search: Search, names: Sequence[str], singles: Singles, nomin
     steps: list[Step] = []
     for step in range(MAX_EFFECTS + len(NESTED) + DROPS):
         if step == 0:
-            trials = {n: singles.trials[n] for n in names}
+            tried = {n: singles.trials[n] for n in names}
         else:
-            trials, bar = _joint_trials(search, names, accepted, current, values, step)
-        trials = credible(trials, terms)
+            tried, bar = _joint_trials(search, names, accepted, current, values, step)
+        trials = credible(tried, terms, _luck(search))
+        set_aside = {n: tr for n, tr in tried.items() if n not in trials}
         pairs = (_lookahead(search, names, singles, list(steps[0].trials), accepted, current, values, bar, terms)
                  if step == 1 else {})
         if not trials and not pairs:
+            if set_aside and step > 0:  # kept for the alternatives: a breakaway set aside in place of friction
+                steps.append(Step(list(accepted), {}, None, null_floor(ev, folds, current.fold_values), set_aside,
+                                  current))
             break
         best = min(trials, key=lambda n: trials[n].val_weighted) if trials else None
         new_first = None
@@ -288,7 +307,7 @@ def forward_select(search: Search, names: Sequence[str], singles: Singles, nomin
             if best is None or group[n].val_weighted < trials[best].val_weighted:
                 search.say(f"step {step + 1}: {' + '.join(group[n].names)} beats "
                            f"{' + '.join(trials[best].names) if best else ' + '.join(accepted)}")
-                new_first, best, trials = f, n, group
+                new_first, best, trials, set_aside = f, n, group, {}
         floor = null_floor(ev, folds, current.fold_values)
         search.say(f"step {step + 1}: best {best}, validation cost {trials[best].val_weighted / terms:.3g} per sample, "
                    f"current {current.val_weighted / terms:.3g}, reached by quantization and noise alone "
@@ -301,7 +320,7 @@ def forward_select(search: Search, names: Sequence[str], singles: Singles, nomin
             steps[0].chosen = new_first
             for st in steps[1:]:
                 st.before = [new_first if n == old else n for n in st.before]
-        steps.append(Step(list(accepted), trials, best if ok else None, floor))
+        steps.append(Step(list(accepted), trials, best if ok else None, floor, set_aside, current))
         if not ok:
             break
         simpler = NESTED.get(best)

@@ -13,7 +13,8 @@ from threadpoolctl import threadpool_limits
 
 from station.diagnosis.runs.cost import Evaluator
 from station.diagnosis.runs.folds import Fold, validation_runs
-from station.diagnosis.search.selection import Search, Trial, effect_axes
+from station.diagnosis.search.fitting import effect_axes
+from station.diagnosis.search.selection import Search, Trial
 from station.errors import StationError
 from station.plant.diskcache import bulk
 from station.plant.effects import CANDIDATES, EFFECTS
