@@ -4,6 +4,7 @@ error, a wrong protocol's hint, a custom Python controller's log replayed for th
 from __future__ import annotations
 
 import json
+from pathlib import Path
 
 import numpy as np
 
@@ -82,7 +83,8 @@ def test_custom_python_controller_log_is_replayed_for_the_model_only(tmp_path):
 
 def test_identify_runs_its_experiments_with_the_folders_station_toml(tmp_path, monkeypatch, capsys):
     """station identify takes station.toml's bounds as station step does (it ran with
-    200 / 2048 / 40 beside a file that said 50 / 300 / 5); its out_dir stays its own."""
+    200 / 2048 / 40 beside a file that said 50 / 300 / 5), and its experiments' folder goes where
+    every command's made-up names go: station.toml's out_dir (docs/logs.md, one rule)."""
     from station.diagnosis.identify import loop
 
     monkeypatch.chdir(tmp_path)
@@ -102,5 +104,5 @@ def test_identify_runs_its_experiments_with_the_folders_station_toml(tmp_path, m
         assert exc.code == 99
     assert (seen["limit"], seen["soft_limit"], seen["limits"].max_step, seen["limits"].max_lag) == (50.0, 300.0, 5.0,
                                                                                                    0.04)
-    assert not (tmp_path / "lab").exists()  # the experiments' folder is identify's own default
+    assert Path(seen["out"]).parent.parent == Path("lab")  # lab/identify-<UTC time>/NN-....tsv
     assert "settings from station.toml" in capsys.readouterr().err
