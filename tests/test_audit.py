@@ -16,6 +16,7 @@ import pytest
 
 from station.compare import compare_run, format_comparison
 from station.logged import LoggedRun
+from station.logged.accelerometer import MOUNTED_CLAIM
 from station.logged.audit import ACCEL_CLAIM, ACCEL_DRIFT_COUNTS, CLAIMS, SOURCES, VERDICTS, file_name_claims
 from station.logged.start import START_CLAIM
 from station.plant import DiscretePlant
@@ -44,9 +45,10 @@ def test_real_logs_contradict_nothing(rig_data, name):
     run = LoggedRun.from_path(rig_data / name)
     audit = run.audit
     named = name != "without_accel_01_28_14_test_2.txt"
-    # the 2014 log "without accel" has an a column with no accelerometer behind it: its one
-    # contradiction (the rig's README: the accelerometer was not connected)
-    assert [c.header for c in audit.contradicted] == ([] if named else [ACCEL_CLAIM]), audit.lines()
+    # the 2014 log "without accel" has an a column with no accelerometer behind it, and the
+    # accelerometer's mass was off the beam (θ/v's notch): its two contradictions
+    assert [c.header for c in audit.contradicted] == ([] if named else [ACCEL_CLAIM, MOUNTED_CLAIM]), audit.lines()
+    assert (run.mounting.mounted, run.mounting.claim is None) == ((True, True) if named else (False, False))
     assert audit.accel_is_tip is named
     assert run.reproduced
     rows = audit.to_json()
