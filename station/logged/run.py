@@ -154,7 +154,10 @@ class LoggedRun:
 
         if any(not self.has_column(n) for n in self.model_columns):
             return None
-        sim = simulate_log(self.log, self.controller, self.alignment, load_model("tmm-fit"))
+        try:
+            sim = simulate_log(self.log, self.controller, self.alignment, load_model("tmm-fit"))
+        except (StationError, ArithmeticError, ValueError):  # a run the model cannot replay decides nothing here
+            return None
         return sim.prediction["a"], motion_ratio(sim.theta_measured, sim.prediction["theta"], self.dt)
 
     @property
