@@ -26,7 +26,12 @@ Usage: ``python scripts/validate_diagnosis.py [--seeds 10] [--seed-list SEED ...
 faults (``SENSOR_CASES``: accel_reversed, accel_offset, accel_drift, encoder_4096, encoder_reversed,
 motor_reversed) alone and beside a physical effect (``SENSOR_PAIRS``); a fault is judged as the
 effect its case part hides (accel_reversed: accel_gain; encoder_*: encoder_scale; motor_reversed:
-motor_polarity). Progress goes to stderr,
+motor_polarity); the ``sensor`` family also holds the accelerometer's configuration
+(``ACCEL_SETUP_CASES``: a fifth run, the rig's 2014 swept sine, with the accelerometer off the
+beam, alone and beside Coulomb friction or drive damping, or on it unplugged), judged by the
+audit's decision on that run (off the beam: decided off; unplugged: not decided off), no
+beam_damping nor accelerometer mass or inertia among the causes, and the physical effect named
+as above (none alone). Progress goes to stderr,
 one line per case; the table is printed and written.
 """
 
@@ -48,6 +53,7 @@ from tests.blind.cases import (MAGNITUDES, NEW_MAGNITUDES, OOV_CASES, PAIRS, SET
                                TOLERANCE, TRIPLES, TWO_EFFECTS, case_effects, value_error)
 from tests.blind.cases import SENSOR_CASES, SENSOR_MAGNITUDES, SENSOR_PAIRS  # noqa: E402
 from tests.blind.cases import HELD_OFFSET, SLIDING_CASES, SLIDING_MAGNITUDES, case_alignment  # noqa: E402
+from tests.blind.cases import ACCEL_SETUP_CASES, ACCEL_SETUPS, DEAD_LEVEL, sweep_setup  # noqa: E402
 from station.ranges import number  # noqa: E402
 
 RANGES = {**MAGNITUDES, **NEW_MAGNITUDES, **SETTING_MAGNITUDES}
@@ -57,7 +63,8 @@ KNOWN = (*MAGNITUDES, "two", *NEW_CASES, "clean", *OOV_CASES)
 """Every case this script runs (the default), in the table's order."""
 
 RANGES.update(SENSOR_MAGNITUDES)
-SENSOR = (*SENSOR_CASES, *SENSOR_PAIRS)
+RANGES.update({part: DEAD_LEVEL for part in ACCEL_SETUPS})  # the dead channel's level, counts
+SENSOR = (*SENSOR_CASES, *SENSOR_PAIRS, *ACCEL_SETUP_CASES)
 """The sensor and wiring fault cases, alone and beside a physical effect (``--effects sensor``);
 a case part (e.g. "encoder_4096") names the effect it hides (tests/blind/cases.SENSOR_CASES)."""
 KNOWN += SENSOR
@@ -87,7 +94,7 @@ def judged(case: str) -> tuple[str, ...]:
     case = case_alignment(case)[0]
     out: tuple[str, ...] = ()
     for part in case.split("+"):
-        if part not in SETTING_MAGNITUDES:
+        if part not in SETTING_MAGNITUDES and part not in ACCEL_SETUPS:
             out += SLIDING_PARTS.get(part, (SENSOR_CASES.get(part, PART_EFFECT.get(part, part)),))
     return out
 
@@ -96,6 +103,11 @@ def rescued_by_alternative(case: str) -> bool:
     """Whether an alternative holding every hidden effect within 25 % makes the case right
     (the sliding cases)."""
     return any(part in SLIDING_PARTS for part in case_alignment(case)[0].split("+"))
+
+
+NOT_FOR_A_MISSING_MASS = ("beam_damping", "param:m_accel", "param:J_accel")
+"""Causes a configuration case must not name: what a model that keeps the accelerometer's mass
+would take for a beam without it."""
 
 
 @dataclass
@@ -115,6 +127,7 @@ class Outcome:
     cost_found: float = float("nan")   # ... and of the extended model
     unexplained: bool = False          # the diagnosis's flag
     alternatives: list = None          # the diagnosis's alternatives ({"causes", "values", ...})
+    mounting: str = ""                 # the fifth run's audit: "off", "on", "unchecked" ("" without one)
 
     @property
     def search_miss(self) -> bool:
@@ -129,6 +142,10 @@ class Outcome:
         names = judged(self.case)
         if self.case in OOV_CASES:  # out of vocabulary: flagged, whatever it names
             return self.unexplained
+        setup = [p for p in self.case.split("+") if p in ACCEL_SETUPS]
+        if setup and ((self.mounting == "off") != (setup[0] == "accel_off")
+                      or set(NOT_FOR_A_MISSING_MASS) & set(self.causes) or (not names and self.causes)):
+            return False
         if not names:
             return not self.causes and not self.unexplained
         if len(names) == 1 and not (self.causes and self.causes[0] == names[0]):
@@ -170,12 +187,15 @@ def _holds(names, causes, values) -> bool:
 def run_case(case: str, seed: int) -> Outcome:
     """Generate one case's logs in a temporary folder and diagnose them."""
     from station.diagnosis import diagnose
-    from tests.blind.generator import write_case
+    from tests.blind.generator import write_case, write_sweep
 
     hidden = case_effects(case, seed)
     alignment = case_alignment(case)[1]
+    setup = sweep_setup(case, seed)
     with tempfile.TemporaryDirectory(prefix=f"blind_{case.replace(':', '_').replace('@', '_')}_{seed}_") as tmp:
         paths = write_case(Path(tmp), hidden, seed, alignment=alignment)
+        if setup is not None:  # the fifth run: the swept sine with the accelerometer's configuration
+            paths.append(write_sweep(Path(tmp), {**hidden, **setup}, seed))
         t0 = time.perf_counter()
         try:
             result = diagnose([str(p) for p in paths]).to_json()
@@ -189,7 +209,18 @@ def run_case(case: str, seed: int) -> Outcome:
     values = {e["name"]: e["value"] for e in result["effects"] if e["name"] in hidden}
     values.update({k: v for k, v in extended.items() if k in hidden})  # the joint values
     return Outcome(case, seed, hidden, list(result["causes"]), values, float(result["gain_pct"]), seconds,
-                   extended, cost_hidden, cost_found, bool(result["unexplained"]), list(result.get("alternatives", [])))
+                   extended, cost_hidden, cost_found, bool(result["unexplained"]),
+                   list(result.get("alternatives", [])), _mounting(result, paths[-1].name) if setup is not None else "")
+
+
+def _mounting(result: dict, run: str) -> str:
+    """The audit's decision on a run: "off" (the accelerometer's mass off the beam), "on" or
+    "unchecked" (the question left open, or not asked)."""
+    from station.logged.accelerometer import MOUNTED_CLAIM
+
+    rows = next((r["audit"] for r in result["audit"] if r["run"] == run), [])
+    verdict = next((c["verdict"] for c in rows if c["header"] == MOUNTED_CLAIM), "")
+    return {"contradicted": "off", "confirmed": "on"}.get(verdict, "unchecked")
 
 
 def _costs(paths, hidden: dict, found: dict) -> tuple[float, float]:
@@ -274,7 +305,9 @@ def table(outcomes: list[Outcome], seeds: str, elapsed: float) -> str:
               "|---|---|---|---|---|---|---|---|---|---|"]
     for o in outcomes:
         mark = "" if o.ok else " ✗"
-        lines.append(f"| {o.case}{mark} | {o.seed} | {_fmt_hidden(o.hidden)} | {', '.join(o.causes) or 'none'} | "
+        hidden = _fmt_hidden(o.hidden) + (f"; fifth run: {_fmt_hidden(sweep_setup(o.case, o.seed))}, decided "
+                                          f"{o.mounting}" if o.mounting else "")
+        lines.append(f"| {o.case}{mark} | {o.seed} | {hidden} | {', '.join(o.causes) or 'none'} | "
                      f"{_fmt_hidden(o.values)} | {o.gain_pct:.1f} | {o.cost_hidden:.3g} | {o.cost_found:.3g} | "
                      f"{'yes' if o.unexplained else 'no'} | {o.seconds:.0f} |")
     return "\n".join(lines) + "\n"
@@ -346,7 +379,8 @@ def main(argv: list[str] | None = None) -> int:
         outcomes.append(o)
         verdict = "ok" if o.ok else "MISS"
         print(f"[{len(outcomes)}/{len(jobs)}] {o.case} seed {o.seed}: hidden {_fmt_hidden(o.hidden)}; found "
-              f"{', '.join(o.causes) or 'none'} ({_fmt_hidden(o.values)}) {verdict} {o.seconds:.0f} s",
+              f"{', '.join(o.causes) or 'none'} ({_fmt_hidden(o.values)})"
+              f"{f'; fifth run decided {o.mounting}' if o.mounting else ''} {verdict} {o.seconds:.0f} s",
               file=sys.stderr, flush=True)
 
     if args.jobs > 1:

@@ -24,16 +24,19 @@ RIG_P_HEADER = "#SLFR RTP P_control_Test\n#kp={kp:.1f}\n#t\tn\tu\tv\t$\\theta$\t
 
 
 def write_p_log(path: Path, u: np.ndarray, kp: float = 2.0, seed: int = 0) -> Path:
-    """A rig-format P-control run: v[k] = sat(kp (u[k] - θ[k-1])), a toy motor θ."""
+    """A rig-format P-control run: v[k] = sat(kp (u[k] - θ[k-1])), a toy motor θ, and an a that
+    reads its acceleration (a channel of noise alone is no tip acceleration to the log audit)."""
     rng = np.random.default_rng(seed)
     n = u.size
-    theta, v, a = np.zeros(n), np.zeros(n), np.round(rng.normal(0.0, 0.4, n))
+    theta, v, a = np.zeros(n), np.zeros(n), rng.normal(0.0, 0.4, n)
     w, x = 0.0, 0.0
     for k in range(n):
         v[k] = np.trunc(np.clip(kp * (u[k] - (theta[k - 1] if k else 0.0)), -200, 200))
+        a[k] += 40.0 * (0.004 * v[k] - 0.03 * w)  # the toy motor's change of speed
         w = 0.97 * w + 0.004 * v[k]
         x += w
         theta[k] = np.round(x)
+    a = np.round(a)
     t = np.arange(n) * 0.002
     with open(path, "w") as fh:
         fh.write(RIG_P_HEADER.format(kp=kp))

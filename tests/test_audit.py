@@ -16,6 +16,7 @@ import pytest
 
 from station.compare import compare_run, format_comparison
 from station.logged import LoggedRun
+from station.logged.accelerometer import MOUNTED_CLAIM
 from station.logged.audit import ACCEL_CLAIM, ACCEL_DRIFT_COUNTS, CLAIMS, SOURCES, VERDICTS, file_name_claims
 from station.logged.start import START_CLAIM
 from station.plant import DiscretePlant
@@ -44,9 +45,10 @@ def test_real_logs_contradict_nothing(rig_data, name):
     run = LoggedRun.from_path(rig_data / name)
     audit = run.audit
     named = name != "without_accel_01_28_14_test_2.txt"
-    # the 2014 log "without accel" has an a column with no accelerometer behind it: its one
-    # contradiction (the rig's README: the accelerometer was not connected)
-    assert [c.header for c in audit.contradicted] == ([] if named else [ACCEL_CLAIM]), audit.lines()
+    # the 2014 log "without accel" has an a column with no accelerometer behind it, and the
+    # accelerometer's mass was off the beam (θ/v's notch): its two contradictions
+    assert [c.header for c in audit.contradicted] == ([] if named else [ACCEL_CLAIM, MOUNTED_CLAIM]), audit.lines()
+    assert (run.mounting.mounted, run.mounting.claim is None) == ((True, True) if named else (False, False))
     assert audit.accel_is_tip is named
     assert run.reproduced
     rows = audit.to_json()
@@ -195,8 +197,10 @@ def test_draws_are_deterministic():
 @pytest.mark.parametrize("creep", [0.0, 5.0, 15.0, 40.0])
 def test_an_a_column_with_no_accelerometer_behind_it(rig_data, tmp_path, creep):
     # A rig log whose a is replaced by a noisy channel creeping `creep` counts over the run
-    # (an unplugged input, as in the 2014 log): contradicted from ACCEL_DRIFT_COUNTS on, said
-    # first by replay beside its accel fit; a flat noisy channel decides nothing.
+    # (an unplugged input, as in the 2014 log): contradicted from ACCEL_DRIFT_COUNTS on by its
+    # creep, below it by its silence where the sweep moved the tip (station.logged.accelerometer),
+    # said first by replay beside its accel fit; the sweep's θ/v keeps the accelerometer's mass
+    # on the beam (it was: the rig's swept sine).
     src = rig_data / "swept_sine_kp_1_amp_50.txt"  # 22 s, at rest for its first 0.5 s
     lines = src.read_text().splitlines()
     head = [x for x in lines if x.startswith("#")]
@@ -212,8 +216,11 @@ def test_an_a_column_with_no_accelerometer_behind_it(rig_data, tmp_path, creep):
     path.write_text("\n".join(head + out) + "\n")
     run = LoggedRun.from_path(path)
     # the drift is the window mean's distance from rest: about creep × (1 - window / run)
-    flagged = creep * (1 - 2.0 / (len(rows) * 0.002)) >= ACCEL_DRIFT_COUNTS
-    assert run.audit.accel_is_tip is not flagged
+    creeps = creep * (1 - 2.0 / (len(rows) * 0.002)) >= ACCEL_DRIFT_COUNTS
+    assert not run.audit.accel_is_tip
+    (claim,) = [c for c in run.audit.contradicted if c.header == ACCEL_CLAIM]
+    assert ("reads noise where the tip moved" in claim.data) is not creeps
+    assert run.mounting.mounted is True and run.mounting.claim.verdict == "confirmed"
     text = format_report(replay(path))
-    assert ("a is no tip acceleration" in text.splitlines()[0]) is flagged
-    assert ("(a is no tip acceleration: the audit)" in text) is flagged
+    assert "a is no tip acceleration" in text.splitlines()[0]
+    assert "(a is no tip acceleration: the audit)" in text

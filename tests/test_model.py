@@ -24,8 +24,11 @@ def test_vocabulary_matches_design():
     params = {"mu", "EI", "drive_k", "drive_c", "clamp_k", "clamp_c", "J_base", "m_accel", "J_accel", "act_K",
               "act_p"}
     faults = {"accel_offset", "accel_drift", "encoder_scale", "motor_polarity"}  # besides accel_gain
-    # stribeck_speed: a setting of static_friction in a model file, never a candidate cause
-    assert set(EFFECTS) == named | faults | {f"param:{p}" for p in params} | {"stribeck_speed"}
+    # stribeck_speed: a setting of static_friction in a model file, never a candidate cause;
+    # accel_mounted: the rig's configuration (the accelerometer on the beam or not), never one either
+    assert set(EFFECTS) == named | faults | {f"param:{p}" for p in params} | {"stribeck_speed", "accel_mounted"}
+    assert "accel_mounted" not in CANDIDATES and EFFECTS["accel_mounted"].admits(0.0)
+    assert not EFFECTS["accel_mounted"].admits(0.5) and EFFECTS["accel_mounted"].neutral == 1.0
     assert set(CANDIDATES) == named | {f"param:{p}" for p in params} and len(CANDIDATES) == 21
     assert EFFECTS["stribeck_speed"].neutral == 0.05 and EFFECTS["stribeck_speed"].unit == "rad/s"
     assert EFFECTS["viscous_friction"].unit == "DAC counts per rad/s" and EFFECTS["amp_offset"].neutral == 0.0

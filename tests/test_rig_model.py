@@ -59,11 +59,12 @@ def test_rig_model_beats_the_nominal_on_logs_it_was_not_fitted_to(rig_data, log)
 
 
 def test_rig_model_pooled_gain_on_the_unseen_2014_logs(rig_data):
-    """The two shared 2013-14 logs no fit uses: 32.3 % pooled (8.4 and 46.5 %). Issue 26 asks
-    40 %, which no structure fitted on the thesis logs reaches (docs/diagnosis.md: fitted on
-    these two logs themselves, drive damping + Coulomb friction + viscous friction reach
-    40.7 %); this guards the shipped model's level."""
-    assert _pooled_gain(rig_data, NOT_FITTED_2014, "rig") >= 0.30
+    """The two shared 2013-14 logs no fit uses: 28.0 % pooled (8.4 and 48.4 %; both models
+    simulate the 28 Jan sweep without the accelerometer's mass, as the log audit found it run,
+    and tmm-fit's error there falls from 4.6 to 3.5 counts RMS, so that sweep weighs less in the
+    pool: 32.3 % with the mass on it). Issue 26 asks 40 %, which no structure fitted on the
+    thesis logs reaches (docs/diagnosis.md); this guards the shipped model's level."""
+    assert _pooled_gain(rig_data, NOT_FITTED_2014, "rig") >= 0.26
 
 
 def test_rig_model_pooled_gain_on_the_2009_session(rig_data):

@@ -10,6 +10,7 @@ checked on every combination of signs.
 from __future__ import annotations
 
 import json
+import re
 import subprocess
 import sys
 
@@ -141,6 +142,23 @@ def test_a_majority_of_runs_decides_and_a_scale_needs_theta_and_a_to_agree():
     assert decide_faults([_ev(0.99, 0.99, th_ratio=2.0, a_ratio=2.0)] * 2).effects == {}
 
 
+@pytest.mark.parametrize("fitted", [-1.19, -1.4683, -0.85, None, 0.9])
+def test_one_record_says_the_gain_the_model_holds_and_the_first_estimate_beside_it(fitted):
+    decided = decide_faults([_ev(0.95, -0.9, a_ratio=1.55)] * 3)
+    first = decided.effects["accel_gain"]
+    assert first == pytest.approx(-0.9 * 1.55 / 0.95, abs=0.01)  # a's ratio over θ's
+    refined = decided.refined({} if fitted is None else {"accel_gain": fitted, "coulomb_friction": 6.0})
+    if fitted is None or fitted > 0 or f"{fitted:.3g}" == f"{first:.3g}":  # the model holds the decision
+        assert refined is decided and refined.first == {}
+        return
+    assert refined.effects == {"accel_gain": fitted} and refined.first == {"accel_gain": first}
+    line = refined.lines()[0]
+    assert f"accel_gain {fitted:.3g}; the decision's first estimate {first:.3g}, refined by the fit" in line
+    assert refined.to_json()["effects"] == {"accel_gain": fitted}
+    assert refined.to_json()["first_estimates"] == {"accel_gain": first}
+    assert refined.alternative == decided.alternative and refined.evidence == decided.evidence
+
+
 def test_diagnose_says_the_fault_first_and_fits_the_rest_on_its_side(tmp_path):
     hidden = case_effects("accel_reversed", 1)
     paths = write_case(tmp_path / "logs", hidden, 1)
@@ -187,6 +205,13 @@ def test_the_labs_third_session_in_miniature(tmp_path):
     assert d["causes"][:2] == ["accel_gain", "coulomb_friction"], d["causes"]
     found = dict(d["extended_model"]["effects"])
     assert abs(found["accel_gain"] + 1.2) <= 0.25 * 1.2 and abs(found["coulomb_friction"] - 6.0) <= 0.25 * 6.0
+    # one record: the line, the JSON and the saved model say the gain the model holds (the
+    # decision's first estimate beside it when the fit refined it)
+    said = float(re.search(r"accel_gain (-[\d.]+)", lines[3]).group(1))
+    assert said == pytest.approx(found["accel_gain"], abs=0.006)
+    assert d["sensor_faults"]["effects"]["accel_gain"] == found["accel_gain"]
+    first = d["sensor_faults"]["first_estimates"].get("accel_gain")
+    assert (first is not None) == ("the decision's first estimate" in lines[3])
     assert d["gain_pct"] > 50.0
     # the report leads the same way: the contradictions, the sensor fault, then the cause
     page = (tmp_path / "rep" / "report.html").read_text()

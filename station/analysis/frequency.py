@@ -143,6 +143,80 @@ def notch_frequencies(f, H, near, rel_window: float = 0.25) -> np.ndarray:
     return np.array(out)
 
 
+NOTCH_MIN_SEGMENT = 2048
+"""Shortest Welch segment :func:`band_notch` estimates with, samples (0.24 Hz at the rig's rate)."""
+
+
+@dataclass(frozen=True)
+class BandNotch:
+    """The deepest notch of a measured response in a band (:func:`band_notch`).
+
+    Attributes
+    ----------
+    frequency_hz : float
+        Where |Ĥ1| is smallest in the band, refined by :func:`notch_frequencies`, Hz.
+    depth : float
+        |Ĥ1| at that bin over the geometric mean of |Ĥ1| at the band's first and last bins
+        (a notch: well under 1).
+    coherence : float
+        Median magnitude-squared coherence γ² over the band's bins (how well the input
+        excites the band; the notch's own bins dip).
+    inside : bool
+        The smallest |Ĥ1| is not at the band's first or last bin (a notch, not a slope).
+    nperseg : int
+        Welch segment length used, samples.
+    """
+
+    frequency_hz: float
+    depth: float
+    coherence: float
+    inside: bool
+    nperseg: int
+
+
+def band_notch(x, y, dt: float, band: tuple[float, float], max_nperseg: int = 4096) -> BandNotch | None:
+    """The deepest notch of the H1 estimate of y/x in a frequency band (e.g. θ/v's first
+    antiresonance, between where two models put it).
+
+    Parameters
+    ----------
+    x, y : array_like, shape (N,)
+        Input and output samples (e.g. the applied command v and θ).
+    dt : float
+        Sample time, s.
+    band : (float, float)
+        Lowest and highest frequency searched, Hz.
+    max_nperseg : int, default 4096
+        Longest Welch segment; the segment is the longest power of two up to it that fits
+        twice in the run.
+
+    Returns
+    -------
+    BandNotch or None
+        None when the run is shorter than two segments of :data:`NOTCH_MIN_SEGMENT` samples,
+        x is constant, or the band holds fewer than three bins or lies past the Nyquist
+        frequency.
+    """
+    x = np.asarray(x, dtype=float)
+    y = np.asarray(y, dtype=float)
+    lo, hi = band
+    nperseg = max_nperseg
+    while nperseg > NOTCH_MIN_SEGMENT and 2 * nperseg > x.size:
+        nperseg //= 2
+    if 2 * nperseg > x.size or hi >= 0.5 / dt or not (np.all(np.isfinite(x)) and np.all(np.isfinite(y))) \
+            or np.ptp(x) == 0:  # no command: nothing to estimate from
+        return None
+    est = h1_estimate(x, y, 1.0 / dt, nperseg)
+    idx = np.flatnonzero((est.f >= lo) & (est.f <= hi))
+    mag = np.abs(est.H)
+    if idx.size < 3 or not np.all(np.isfinite(mag[idx])) or mag[idx[0]] <= 0 or mag[idx[-1]] <= 0:
+        return None
+    i = int(idx[np.argmin(mag[idx])])
+    f = float(notch_frequencies(est.f, est.H, [0.5 * (lo + hi)], (hi - lo) / (hi + lo))[0])
+    return BandNotch(f, float(mag[i] / np.sqrt(mag[idx[0]] * mag[idx[-1]])), float(np.median(est.coherence[idx])),
+                     bool(idx[0] < i < idx[-1]), nperseg)
+
+
 def phase_beside(H, reference) -> np.ndarray:
     """The phase of ``H`` in degrees, unwrapped onto the branch of ``reference``'s.
 

@@ -83,7 +83,7 @@ def run(args: argparse.Namespace) -> int:
                            f"measures the beam's first mode from its free vibration")
     for line in run.audit_lines:  # the data's contradictions first (DESIGN.md "Log audit")
         print(line)
-    model = as_model(args.model, args.elements, args.params)
+    model = run.model_for(as_model(args.model, args.elements, args.params))  # its accelerometer as the audit found it
     args.elements = model.n_elements
     try:
         plant = DiscretePlant(model.linear_params(), n_elements=model.n_elements, dt=dt)

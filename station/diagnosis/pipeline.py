@@ -225,6 +225,7 @@ def _diagnose(runs, validate, model, progress, bench: Bench, simulate, likelihoo
         validation=how, simulations=ev.simulations,
         folds=fold_records(folds, [c.name for c in cases], sel.current.fold_values),
         elapsed_s=time.perf_counter() - t0, cost_gain_pct=float(cost_gain), unexplained=unexplained,
-        alternatives=doubt.alternatives, interval_method=doubt.method, notes=notes, sensor_faults=faults,
+        alternatives=doubt.alternatives, interval_method=doubt.method, notes=notes,
+        sensor_faults=faults.refined(extended.effect_dict()),  # the values the saved model holds
         audit=[{"run": c.name, "audit": c.run.audit.to_json(), "controller_source": c.run.source,
                 "contradicted": c.run.audit_lines} for c in cases])

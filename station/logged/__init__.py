@@ -11,6 +11,9 @@ the rig ran it.
 - ``simulate``: :func:`simulate_log`, :class:`ModelRun` (the model glue).
 - ``reference``: what a logged u is (:class:`Reference`, :func:`classify_reference`: the one
   definition of a step).
+- ``accelerometer``: an a column that reads only noise, and whether the accelerometer's mass
+  was on the beam (θ/v's first antiresonance; :attr:`LoggedRun.mounting`,
+  :meth:`LoggedRun.model_for`).
 - ``device``: the device's command quantization (the sample time is :attr:`station.runlog.RunLog.dt`).
 
 Layering: this package sits above ``station.analysis``, ``station.control``,

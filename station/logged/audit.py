@@ -322,10 +322,41 @@ ACCEL_BASELINE_CLAIM = "a: the tip's acceleration about a steady zero"
 """What a log's a column claims about its baseline (a contradicted baseline keeps a in use)."""
 
 
+def accel_band(a, dt: float, rest_samples: int) -> tuple[float, float] | None:
+    """a's RMS in :data:`ACCEL_BAND_HZ` after the rest, and at rest (floored at
+    :data:`ACCEL_NOISE_FLOOR`), counts; None with fewer than :data:`ACCEL_REST_MIN` samples at
+    rest or a band past the Nyquist frequency.
+
+    Parameters
+    ----------
+    a : array_like, shape (N,)
+        Accelerometer samples, counts.
+    dt : float
+        Sample time, s.
+    rest_samples : int
+        Samples at rest at the start of the run (before the first command).
+
+    Returns
+    -------
+    (float, float) or None
+        (band RMS after the rest, band RMS at rest), counts.
+    """
+    # lazy: start-up time (scipy's filters, loaded when a log's a is checked)
+    from scipy.signal import butter, sosfiltfilt
+
+    a = np.asarray(a, float)
+    if rest_samples < ACCEL_REST_MIN or a.size < rest_samples + ACCEL_REST_MIN or ACCEL_BAND_HZ[1] >= 0.5 / dt \
+            or not np.all(np.isfinite(a)):
+        return None
+    sos = butter(2, ACCEL_BAND_HZ, "bandpass", fs=1.0 / dt, output="sos")
+    band = sosfiltfilt(sos, a[1:] - np.mean(a[1:rest_samples]))  # row 0 of the 2014 layout is a zero
+    at_rest = max(float(np.sqrt(np.mean(band[:rest_samples - 1] ** 2))), ACCEL_NOISE_FLOOR)
+    return float(np.sqrt(np.mean(band[rest_samples - 1:] ** 2))), at_rest
+
+
 def accel_signal(a, dt: float, rest_samples: int) -> float | None:
     """How far a's band RMS after the rest stands above its noise at rest (the ratio of
-    :data:`ACCEL_SIGNAL_RATIO`); None with fewer than :data:`ACCEL_REST_MIN` samples at rest or
-    a band past the Nyquist frequency.
+    :data:`ACCEL_SIGNAL_RATIO`, from :func:`accel_band`); None as :func:`accel_band`.
 
     Parameters
     ----------
@@ -340,17 +371,8 @@ def accel_signal(a, dt: float, rest_samples: int) -> float | None:
     -------
     float or None
     """
-    # lazy: start-up time (scipy's filters, loaded when a channel drifts)
-    from scipy.signal import butter, sosfiltfilt
-
-    a = np.asarray(a, float)
-    if rest_samples < ACCEL_REST_MIN or a.size < rest_samples + ACCEL_REST_MIN or ACCEL_BAND_HZ[1] >= 0.5 / dt \
-            or not np.all(np.isfinite(a)):
-        return None
-    sos = butter(2, ACCEL_BAND_HZ, "bandpass", fs=1.0 / dt, output="sos")
-    band = sosfiltfilt(sos, a[1:] - np.mean(a[1:rest_samples]))  # row 0 of the 2014 layout is a zero
-    at_rest = max(float(np.sqrt(np.mean(band[:rest_samples - 1] ** 2))), ACCEL_NOISE_FLOOR)
-    return float(np.sqrt(np.mean(band[rest_samples - 1:] ** 2))) / at_rest
+    band = accel_band(a, dt, rest_samples)
+    return None if band is None else band[0] / band[1]
 
 
 def accel_claims(a, dt: float, rest: float, rest_samples: int = 0) -> list[AuditClaim]:

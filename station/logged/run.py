@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 from functools import cached_property
 from pathlib import Path
 
@@ -11,6 +12,7 @@ from station.analysis.beam import HELD_MIN_V, HubHeld, hub_held
 from station.analysis.metrics import StepMetrics, step_metrics
 from station.control.rerun import AlignmentFit, detect_alignment, is_closed_loop
 from station.errors import StationError
+from station.logged.accelerometer import ON_THE_TIP, Mounting, decide_mounting, motion_ratio, silent_claims
 from station.logged.audit import (ACCEL_CLAIM, Audit, AuditClaim, TimeBase, accel_claims, alignment_claim,
                                   file_kp_claims, reference_claims, time_base)
 from station.logged.controller import ControllerId, describe_controller, identify_controller
@@ -129,21 +131,80 @@ class LoggedRun:
         claims += self.start.claims
         claims += self._time_base.claims
         claims += self._accel_claims
+        if self.mounting.claim is not None:
+            claims.append(self.mounting.claim)
         return Audit(tuple(claims), cid.source)
 
     @cached_property
     def _accel_claims(self) -> list[AuditClaim]:
         if not len(self):
             return []
-        return accel_claims(self.data["a"], self.log.dt, self.accel_rest_offset, self.accel_rest_samples)
+        dt, rest = self.log.dt, self.accel_rest_samples
+        claims = accel_claims(self.data["a"], dt, self.accel_rest_offset, rest)
+        if claims or self.held is not None:
+            return claims
+        return silent_claims(self.data["a"], dt, rest, self._nominal_a)
+
+    def _nominal_a(self) -> tuple[np.ndarray, float] | None:
+        """The nominal model's a for this run, as the rig ran it, and how far the hub moved
+        against the model's (:func:`station.logged.accelerometer.silent_claims`); None when the
+        run cannot be simulated."""
+        # lazy: start-up time (the FEM, only for a log whose a stays still)
+        from station.plant.model import load_model
+
+        if any(not self.has_column(n) for n in self.model_columns):
+            return None
+        try:
+            sim = simulate_log(self.log, self.controller, self.alignment, load_model("tmm-fit"))
+        except (StationError, ArithmeticError, ValueError):  # a run the model cannot replay decides nothing here
+            return None
+        return sim.prediction["a"], motion_ratio(sim.theta_measured, sim.prediction["theta"], self.dt)
+
+    @property
+    def _accel_is_tip(self) -> bool:
+        return not any(c.header == ACCEL_CLAIM for c in self._accel_claims)
+
+    @cached_property
+    def mounting(self) -> Mounting:
+        """Whether the accelerometer's mass was on the beam
+        (:func:`station.logged.accelerometer.decide_mounting`), asked only when a reads no tip
+        acceleration (an accelerometer that reads is on the beam) and the hub was free."""
+        if self._accel_is_tip or not len(self) or self.held is not None:
+            return ON_THE_TIP
+        d = self.data
+        applied = d["v_applied"]
+        v = applied if applied.size and np.all(np.isfinite(applied)) else d["v"]
+        return decide_mounting(v, d["theta"], self.dt)
+
+    def model_for(self, model):
+        """The model as this run had the rig: without the accelerometer's mass and rotary
+        inertia (``accel_mounted`` 0) when the data say it was off the beam (:attr:`mounting`),
+        else the model itself.
+
+        Parameters
+        ----------
+        model : station.plant.model.Model or station.plant.DiscretePlant
+
+        Returns
+        -------
+        station.plant.model.Model or station.plant.DiscretePlant
+            ``model``, or a copy (a DiscretePlant's with its parameter set's m_accel and
+            J_accel 0).
+        """
+        if self.mounting.mounted is not False:
+            return model
+        if hasattr(model, "with_effects"):
+            return model.with_effects({"accel_mounted": 0.0})
+        params = dataclasses.replace(model.params, m_accel=0.0, J_accel=0.0)
+        return type(model)(params, n_elements=model.n_elements, dt=model.dt)
 
     @cached_property
     def start(self) -> Start:
         """How the run starts: at rest at t = 0 or moving (a copy cut from a longer run), and θ
         there (:func:`station.logged.start.start_claims`)."""
         d = self.data
-        tip = not any(c.header == ACCEL_CLAIM for c in self._accel_claims)
-        return start_claims(d["theta"], d["a"], d["u"], d["v"], self.dt, self.closed, tip, self.identified.cut)
+        return start_claims(d["theta"], d["a"], d["u"], d["v"], self.dt, self.closed, self._accel_is_tip,
+                            self.identified.cut)
 
     @property
     def audit_lines(self) -> list[str]:
@@ -355,7 +416,8 @@ class LoggedRun:
 
     def simulate(self, model) -> ModelRun:
         """The run simulated on a model as the rig ran it (:func:`station.logged.simulate.simulate_log`
-        with this run's controller and alignment), with its NRMSE fits.
+        with this run's controller and alignment, on :meth:`model_for`: without the
+        accelerometer's mass when the data say it was off the beam), with its NRMSE fits.
 
         Parameters
         ----------
@@ -373,4 +435,8 @@ class LoggedRun:
             The log lacks a column the simulation or its fit needs (:attr:`model_columns`).
         """
         self.check_columns(self.model_columns, "simulating it on a model")
-        return simulate_log(self.log, self.controller, self.alignment, model)
+        sim = simulate_log(self.log, self.controller, self.alignment, self.model_for(model))
+        if self.mounting.mounted is False:
+            sim = dataclasses.replace(sim, how=sim.how + "; without the accelerometer's mass (the audit: no "
+                                      "accelerometer on the beam)")
+        return sim

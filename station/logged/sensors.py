@@ -148,6 +148,7 @@ def sensor_evidence(run, model) -> SensorEvidence:
     name = log.path.name if log.path is not None else "log"
     if len(run) < 50:
         return SensorEvidence(name, None, None, None, None)
+    model = run.model_for(model)  # the accelerometer's mass off the beam when the audit says so
     applied = d["v_applied"]
     if applied.size and np.all(np.isfinite(applied)):
         pred = simulate(model, OpenLoop(), d["u"], alignment=0, v_open=applied, dt=dt)
@@ -202,6 +203,9 @@ class SensorFaults:
     to_fit : tuple of str
         Faults the data point at but do not decide: a diagnosis fits them as candidates
         (an encoder of another resolution beside a slower motion).
+    first : dict of str to float
+        The decision's first estimate of a fault whose value a fit refined (:meth:`refined`:
+        ``effects`` holds the fitted value, the model's); empty when none was refined.
     """
 
     effects: dict = field(default_factory=dict)
@@ -209,6 +213,28 @@ class SensorFaults:
     alternative: str = ""
     evidence: tuple = ()
     to_fit: tuple = ()
+    first: dict = field(default_factory=dict)
+
+    def refined(self, values) -> SensorFaults:
+        """The same faults holding the values a model holds: a diagnosis's fit refines a
+        reversed accelerometer's gain beside the effects it accepts, and the record it reports
+        (its lines, its JSON, the saved model) says the value the model holds, and the
+        decision's first estimate beside it where they differ.
+
+        Parameters
+        ----------
+        values : mapping of str to float
+            The model's effects (e.g. the extended model's ``effect_dict()``).
+
+        Returns
+        -------
+        SensorFaults
+            Itself when the model holds the decided values.
+        """
+        g, first = values.get("accel_gain"), self.effects.get("accel_gain")
+        if g is None or first is None or not (g < 0 and first < 0) or f"{g:.3g}" == f"{first:.3g}":
+            return self
+        return decide_faults(self.evidence, accel_gain=g)
 
     def lines(self) -> list[str]:
         """One line per contradicted claim, the alternative after them."""
@@ -216,10 +242,10 @@ class SensorFaults:
         return out + ([f"or: {self.alternative}"] if self.alternative and out else [])
 
     def to_json(self) -> dict:
-        """``{"effects", "claims", "alternative", "to_fit", "runs"}``."""
-        return {"effects": dict(self.effects), "claims": [c.to_json() for c in self.claims],
-                "alternative": self.alternative, "to_fit": list(self.to_fit),
-                "runs": [dict(vars(e)) for e in self.evidence]}
+        """``{"effects", "first_estimates", "claims", "alternative", "to_fit", "runs"}``."""
+        return {"effects": dict(self.effects), "first_estimates": dict(self.first),
+                "claims": [c.to_json() for c in self.claims], "alternative": self.alternative,
+                "to_fit": list(self.to_fit), "runs": [dict(vars(e)) for e in self.evidence]}
 
 
 def _fmt(values: list[float]) -> str:
@@ -235,7 +261,8 @@ def decide_faults(evidence: Sequence[SensorEvidence], accel_gain: float | None =
         One per run of one rig (one session).
     accel_gain : float, optional
         A reversed accelerometer's gain found otherwise (a diagnosis refits it beside the
-        effects it accepted); default: a's ratio over θ's, the median over the runs.
+        effects it accepted: :meth:`SensorFaults.refined`); held as given, the decision's own
+        estimate (a's ratio over θ's, the median over the runs, the default) in ``first``.
 
     Returns
     -------
@@ -246,6 +273,7 @@ def decide_faults(evidence: Sequence[SensorEvidence], accel_gain: float | None =
     a_cos = [e.accel_cosine for e in ev if e.accel_cosine is not None]
     s_th, s_a = _sign(th_cos), _sign(a_cos)
     effects: dict[str, float] = {}
+    first: dict[str, float] = {}
     alternative = hint = ""
     if s_th < 0 and s_a < 0:
         effects["motor_polarity"] = -1.0
@@ -267,8 +295,10 @@ def decide_faults(evidence: Sequence[SensorEvidence], accel_gain: float | None =
             # a's ratio over θ's per run: the motion's own scale (friction, the actuator) cancels
             per_run = [e.accel_ratio / abs(e.theta_ratio) for e in ev if e.accel_ratio is not None
                        and e.theta_ratio is not None and abs(e.theta_ratio) >= 0.1]
-            g = accel_gain if accel_gain is not None else statistics.median(per_run) if per_run else g_a
-            effects["accel_gain"] = float(f"{min(g, -0.3):.3g}")
+            own = float(f"{min(statistics.median(per_run) if per_run else g_a, -0.3):.3g}")
+            effects["accel_gain"] = own
+            if accel_gain is not None and f"{accel_gain:.3g}" != f"{own:.3g}":
+                effects["accel_gain"], first["accel_gain"] = float(accel_gain), own
         if s_th != 0 and th_ratio and g_a != 0:
             g_th = abs(statistics.median(th_ratio))
             scale = min(ENCODER_SCALES, key=lambda s: abs(math.log(g_th / s)))
@@ -300,12 +330,12 @@ def decide_faults(evidence: Sequence[SensorEvidence], accel_gain: float | None =
                               "a: zero at rest (the rig zeroes it before a test)", "counts")
     drift_claim = _trend_claim("accel_drift", [e.accel_slope for e in ev], DRIFT_COUNTS_PER_S, effects,
                                "a: no drift over a run", "counts per s")
-    claims = [_theta_claim(s_th, th_cos, th_ratio, a_ratio, effects), _accel_claim(s_a, a_cos, effects),
+    claims = [_theta_claim(s_th, th_cos, th_ratio, a_ratio, effects), _accel_claim(s_a, a_cos, effects, first),
               bias_claim, drift_claim]
     if hint:
         claims.append(AuditClaim("columns", "θ: 1024 encoder counts per revolution", "undecided", "unchecked", hint))
     return SensorFaults(effects, tuple(c for c in claims if c is not None), alternative, ev,
-                        ("encoder_scale",) if hint else ())
+                        ("encoder_scale",) if hint else (), first)
 
 
 def _trend_claim(name: str, values, least: float, effects: dict, header: str, unit: str) -> AuditClaim | None:
@@ -344,7 +374,7 @@ def _theta_claim(sign: int, cosines, th_ratio, a_ratio, effects) -> AuditClaim |
     return AuditClaim("columns", header, data, "contradicted", evidence)
 
 
-def _accel_claim(sign: int, cosines, effects) -> AuditClaim | None:
+def _accel_claim(sign: int, cosines, effects, first) -> AuditClaim | None:
     if not cosines:
         return None
     header = "a: the tip's acceleration with the model's sign"
@@ -354,7 +384,9 @@ def _accel_claim(sign: int, cosines, effects) -> AuditClaim | None:
         return AuditClaim("columns", header, "undecided", "unchecked", evidence)
     g = effects.get("accel_gain", 1.0)
     if g < 0:
-        return AuditClaim("columns", header, f"the accelerometer reads the other way (accel_gain {g:g})",
-                          "contradicted", evidence)
+        value = f"accel_gain {g:.3g}" + (f"; the decision's first estimate {first['accel_gain']:.3g}, refined by the fit"
+                                         if "accel_gain" in first else "")
+        return AuditClaim("columns", header, f"the accelerometer reads the other way ({value})", "contradicted",
+                          evidence)
     return AuditClaim("columns", header, "as claimed" + (" (the motor's reversal aside)" if
                                                          "motor_polarity" in effects else ""), "confirmed", evidence)

@@ -8,7 +8,9 @@ Where each acts:
   amp_offset, saturation, deadzone, delay;
 - "plant" (inside the plant, integrated on a sub-step grid): coulomb_friction,
   static_friction, backlash;
-- "linear" (rebuild the linear FEM part): viscous_friction, beam_damping, param:NAME;
+- "linear" (rebuild the linear FEM part): viscous_friction, beam_damping, param:NAME, and
+  accel_mounted (:data:`CONFIGURATIONS`: 0 takes the accelerometer's mass m_accel and rotary
+  inertia J_accel off the beam's tip, whatever param:m_accel and param:J_accel say);
 - "output": the sensors' faults, on the noise-free outputs before their quantization:
   encoder_scale multiplies θ; a becomes accel_gain·a + accel_offset + accel_drift·t, t = k·dt
   from the run's first sample (k = 0);
@@ -88,7 +90,9 @@ class EffectSpec(NamedTuple):
         return value == self.neutral or self.lower <= size <= self.upper
 
     def range_text(self) -> str:
-        """The range as an error message says it ("0..40", "±0.3..3", "±1")."""
+        """The range as an error message says it ("0..40", "±0.3..3", "±1", "0 or 1")."""
+        if not self.signed and self.lower == self.upper:
+            return f"{self.lower:g} or {self.neutral:g}"
         if not self.signed:
             return f"{self.lower:g}..{self.upper:g}"
         return f"±{self.lower:g}" if self.lower == self.upper else f"±{self.lower:g}..{self.upper:g}"
@@ -101,6 +105,13 @@ PARAM_NAMES = ("mu", "EI", "drive_k", "drive_c", "clamp_k", "clamp_c", "J_base",
 AMPLIFIER_ORDER = ("amp_offset", "saturation", "deadzone", "delay")
 """DESIGN.md: after the device's command quantization, in this order (then motor_polarity
 at the amplifier's output)."""
+
+CONFIGURATIONS = ("accel_mounted",)
+"""How the rig was set up for a run, not a fault of it: accel_mounted 1 (the nominal, the
+accelerometer on the tip) or 0 (taken off the beam). Never a candidate cause: the log audit
+decides it per run from the data (:mod:`station.logged.mounting`), and a run is simulated in
+its own configuration (:meth:`station.logged.LoggedRun.model_for`); a model file may hold it for
+a rig that has no accelerometer at all."""
 
 SENSOR_FAULTS = ("accel_gain", "accel_offset", "accel_drift", "encoder_scale", "motor_polarity")
 """DESIGN.md's sensor and wiring faults: decided from the data where the data decide them
@@ -151,6 +162,7 @@ EFFECTS: dict[str, EffectSpec] = {
         EffectSpec("accel_drift", "accelerometer counts per s", 0.0, -20.0, 20.0, "output"),
         EffectSpec("encoder_scale", "1", 1.0, 0.25, 16.0, "output", signed=True),
         EffectSpec("motor_polarity", "1", 1.0, 1.0, 1.0, "wiring", signed=True),
+        EffectSpec("accel_mounted", "1", 1.0, 0.0, 0.0, "linear"),  # 1 or 0 only (CONFIGURATIONS)
         *(EffectSpec(f"param:{name}", "1", 1.0, PARAM_RATIO_RANGE[0], PARAM_RATIO_RANGE[1], "linear")
           for name in PARAM_NAMES),
     )

@@ -12,6 +12,7 @@ diagnosis) and one TOML file::
     stribeck_speed = 0.05        # rad/s of the motor: static_friction's Stribeck curve
     "param:drive_c" = 2.0
     accel_gain = -1.2            # a sensor fault: an accelerometer read with the opposite sign
+    accel_mounted = 0            # a configuration: no accelerometer on the beam (1, the default: on it)
 
 Built-in models live in ``station/plant/models/<name>.toml`` ("tmm-fit": the nominal
 4-element model). ``params`` may also be an inline table of the parameter set's fields
@@ -134,8 +135,8 @@ class Model:
         return any(EFFECTS[k].kind == "plant" for k, _ in self.effects)
 
     def linear_params(self) -> Params:
-        """The parameter set of the linear part: param:NAME ratios applied, then the
-        beam damping (``beam_beta``) that gives the beam_damping effect's first-mode ζ.
+        """The parameter set of the linear part: param:NAME ratios applied (and the
+        accelerometer's mass taken off with ``accel_mounted`` 0), then the beam damping (``beam_beta``) that gives the beam_damping effect's first-mode ζ.
 
         A beam_damping at or below :meth:`beam_damping_floor` leaves ``beam_beta`` = 0
         (:func:`load_model` refuses a file that asks for less; a fit's search may try it).
@@ -413,8 +414,11 @@ def as_model(model: Model | str | Path | None, n_elements: int | None = None,
 # --- the linear part, cached ------------------------------------------------------------
 
 def _ratio_params(params: Params, values: Mapping[str, float]) -> Params:
-    """The parameter set with the param:NAME ratios of ``values`` applied."""
+    """The parameter set with the param:NAME ratios of ``values`` applied, and without the
+    accelerometer's mass and rotary inertia when ``accel_mounted`` is 0."""
     ratios = {k.split(":", 1)[1]: v for k, v in values.items() if k.startswith("param:")}
+    if values.get("accel_mounted", 1.0) == 0.0:  # taken off the beam: no ratio brings it back
+        ratios.update(m_accel=0.0, J_accel=0.0)
     return dataclasses.replace(params, **{k: getattr(params, k) * r for k, r in ratios.items()}) if ratios else params
 
 

@@ -42,6 +42,13 @@ case's "@d0" suffix runs its closed loops at alignment 0, as the rig's 2009 logs
 against it, as in issue 26's case (breakaway 14 over 9 with an offset of 2.5); an offset of
 1-8 counts drawn alone may exceed v_c, and then the motor creeps on after every move.
 
+The accelerometer's configuration (:data:`ACCEL_SETUPS`, :data:`ACCEL_SETUP_CASES`): beside the
+case's four runs (with their accelerometer), a fifth, the rig's 2014 swept sine
+(:func:`tests.blind.generator.write_sweep`), with the accelerometer taken off the beam
+(accel_off: no tip mass, a reads a constant of :data:`DEAD_LEVEL` counts, either sign, and its
+noise) or left on the tip unplugged (accel_unplugged: the mass there, a the same dead
+channel), alone or beside a physical effect (in all five runs): :func:`sweep_setup`.
+
 Out-of-vocabulary cases (:data:`OOV_CASES`, :data:`OOV_MAGNITUDES`; semantics in
 ``tests.blind.rig.OOV``), which no vocabulary effect explains, for the diagnosis's
 "unexplained" flag:
@@ -210,6 +217,37 @@ def case_alignment(case: str) -> tuple[str, int]:
     return case, 1
 
 
+ACCEL_SETUPS: dict[str, str] = {"accel_off": "accel_mounted", "accel_unplugged": "accel_connected"}
+"""The accelerometer's configuration case parts -> the generator's key that is 0 in the fifth run
+(:data:`tests.blind.rig.CONFIGURATIONS`)."""
+
+ACCEL_SETUP_CASES = ("accel_off", "accel_off+coulomb_friction", "accel_off+param:drive_c", "accel_unplugged")
+"""The configuration cases: off the beam alone and beside a physical effect, unplugged on it."""
+
+DEAD_LEVEL = (2.0, 40.0)
+"""What a dead accelerometer channel reads, counts in size (either sign), besides its noise."""
+
+CASES += ACCEL_SETUP_CASES
+
+
+def sweep_setup(case: str, seed: int) -> dict[str, float] | None:
+    """The fifth run's accelerometer of a configuration case (its key 0 and the dead channel's
+    level as ``accel_offset``), None for a case without a fifth run (deterministic).
+
+    Parameters
+    ----------
+    case : str
+        A case (e.g. "accel_off+coulomb_friction").
+    seed : int
+    """
+    parts = [p for p in case.split("+") if p in ACCEL_SETUPS]
+    if not parts:
+        return None
+    rng = _rng("dead level", seed)
+    level = float(rng.uniform(*DEAD_LEVEL))
+    return {ACCEL_SETUPS[parts[0]]: 0.0, "accel_offset": level if rng.random() < 0.5 else -level}
+
+
 def draw_sensor(part: str, seed: int) -> float:
     """The hidden value of a sensor fault case part for ``seed`` (deterministic).
 
@@ -275,6 +313,8 @@ def _single(name: str, seed: int) -> dict[str, float]:
         return {name: draw(name, seed)}
     if name in SENSOR_CASES:
         return {SENSOR_CASES[name]: draw_sensor(name, seed)}
+    if name in ACCEL_SETUPS:  # the fifth run's configuration only (sweep_setup)
+        return {}
     raise ValueError(f"unknown case {name!r}; known: {', '.join(CASES)} (or effects joined by '+')")
 
 

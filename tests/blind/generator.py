@@ -2,7 +2,9 @@
 
 The runs (like ../shared/data/rig): P control kp = 2, step of 50 at t = 0.1 s; lead Gth,
 step of 100 at 0.02 s (clamp +-200); lead Gth + accelerometer Ga, step of 200 at 0.02 s;
-open loop, v = +100 for 0.1 s from 0.04 s and -100 for 0.1 s from 1.4 s. The header and
+open loop, v = +100 for 0.1 s from 0.04 s and -100 for 0.1 s from 1.4 s. Beside a case, a
+fifth run (:func:`write_sweep`), like the rig's 2014 sweeps: P control kp = 1, 21 s, the
+reference 50 sin(2 pi (t - 0.5)^2) from t = 0.5 s for 20 s (0-40 Hz). The header and
 column lines copy the rig's lab software (``#SLFR RTP ...``, ``#kp=2.0``, ``#Gth num=[...]``
 printed by numpy to 8 decimals); numbers are printed with 10 significant digits.
 """
@@ -32,6 +34,13 @@ FILES = {
 }
 
 
+SWEEP_N = 10500
+"""Samples of the "p_sweep" run (21 s)."""
+
+SWEEP_FROM_S, SWEEP_S, SWEEP_AMPLITUDE, SWEEP_KP = 0.5, 20.0, 50.0, 1.0
+"""The "p_sweep" run: its reference 50 sin(2 pi (t - 0.5)^2), 0-40 Hz from 0.5 s for 20 s,
+under P control kp = 1 (the rig's 2014 sweep ``without_accel_01_28_14_test_2``)."""
+
 RAMP_RATE = 0.05
 """DAC counts per sample of the "open_loop_ramp" reference (0 to 50 in 2 s)."""
 
@@ -55,6 +64,9 @@ def reference(run: str, n: int = N) -> np.ndarray:
         u[700:750] = -100.0
     elif run == "open_loop_ramp":
         u[:] = RAMP_RATE * np.arange(n)
+    elif run == "p_sweep":
+        t = np.arange(n) * DT - SWEEP_FROM_S
+        u[:] = np.where((t >= 0) & (t < SWEEP_S), SWEEP_AMPLITUDE * np.sin(2 * np.pi * t ** 2), 0.0)
     else:
         raise ValueError(f"unknown run {run!r}; expected one of {RUNS}")
     return u
@@ -69,6 +81,8 @@ def header(run: str) -> list[str]:
     """The rig's header lines of a run (without newlines), the column line last."""
     if run == "p_step":
         return ["#SLFR RTP P_control_Test", "#kp=2.0", COLUMNS]
+    if run == "p_sweep":
+        return ["#SLFR RTP P_control_Test", f"#kp={SWEEP_KP:.1f}", COLUMNS]
     if run == "open_loop_pulses":
         return ["#SLFR RTP OL_Test", COLUMNS]
     num, den = gth_design()
@@ -96,7 +110,7 @@ def format_run(run: str, sim: Run) -> str:
 
 
 KIND = {"p_step": "p", "lead_step": "lead", "lead_accel_step": "lead-accel", "open_loop_pulses": "open-loop",
-        "open_loop_ramp": "open-loop"}
+        "open_loop_ramp": "open-loop", "p_sweep": "p"}
 """Controller kind of each run (see :func:`tests.blind.rig.simulate`)."""
 
 
@@ -154,3 +168,37 @@ def write_case(folder: Path, effects: dict[str, float], seed: int, n_elements: i
         path.write_text(format_run(run, sims[run]))
         paths.append(path)
     return paths
+
+
+SWEEP_FILE = "swept_sine_amp_50_SLFR_RTP_P_control_kp=1.0.txt"
+"""The file name of :func:`write_sweep`'s run."""
+
+
+def write_sweep(folder: Path, effects: dict[str, float], seed: int, n_elements: int = 4, substeps: int = 100,
+                accel_noise: float = 0.3) -> Path:
+    """Write the "p_sweep" run (module docstring) beside a case's four, in the rig's log format.
+
+    Parameters
+    ----------
+    folder : Path
+        Created if missing; the file is :data:`SWEEP_FILE`.
+    effects : dict
+        As :func:`write_case`'s, and the accelerometer's configuration
+        (:data:`tests.blind.rig.CONFIGURATIONS`: ``{"accel_mounted": 0.0}`` off the beam).
+    seed : int
+        Seed of the accelerometer noise (another stream than the case's runs').
+    n_elements, substeps, accel_noise
+        As :func:`write_case`'s.
+
+    Returns
+    -------
+    Path
+    """
+    folder = Path(folder)
+    folder.mkdir(parents=True, exist_ok=True)
+    rng = np.random.default_rng([seed, len(RUNS)])
+    sim = simulate(KIND["p_sweep"], reference("p_sweep", SWEEP_N), dict(effects), rng, n_elements=n_elements,
+                   substeps=substeps, accel_noise=accel_noise, kp=SWEEP_KP)
+    path = folder / SWEEP_FILE
+    path.write_text(format_run("p_sweep", sim))
+    return path

@@ -23,6 +23,11 @@ From DESIGN.md alone ("Compensators", "Timing and log rows", "Model diagnosis co
   motor (motor_polarity -1) turns the amplifier's whole output around, torque
   -k_tau * amplifier output (dry friction still opposes the motion).
 
+- the accelerometer's configuration (:data:`CONFIGURATIONS`): accel_mounted 0 takes it off the
+  beam (no point mass nor rotary inertia at the tip, and a reads no tip: its offset and noise
+  only); accel_connected 0 leaves it on the tip unplugged (the mass there, a reads its offset
+  and noise only).
+
 Effects beyond DESIGN.md's vocabulary ("oov:" names) let tests check that a diagnosis does
 not pass them off as a vocabulary cause; see :data:`OOV`.
 """
@@ -31,7 +36,7 @@ from __future__ import annotations
 
 import functools
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 from scipy.linalg import expm
@@ -63,6 +68,9 @@ NAMED = ("coulomb_friction", "deadzone", "saturation", "delay", "backlash", "bea
 SENSOR_FAULTS = ("accel_offset", "accel_drift", "encoder_scale", "motor_polarity")
 """DESIGN.md's sensor and wiring faults besides accel_gain (one of :data:`NAMED`, which may be
 negative here): accelerometer counts, counts per s, measured/modelled encoder counts, +-1."""
+
+CONFIGURATIONS = ("accel_mounted", "accel_connected")
+"""How the accelerometer is set up, 1 (on the tip, read) or 0 (module docstring)."""
 
 SETTINGS = ("stribeck_speed",)
 """Keys that set an effect's shape, not an effect: stribeck_speed (rad/s, default
@@ -169,6 +177,8 @@ class Effects:
         Measured / modelled encoder counts (either sign, not 0).
     motor_polarity : float
         +1, or -1 for a motor the amplifier drives the other way.
+    accel_mounted, accel_connected : float
+        1, or 0: the accelerometer off the beam / on it unplugged (:data:`CONFIGURATIONS`).
     """
 
     coulomb_friction: float = 0.0
@@ -192,6 +202,13 @@ class Effects:
     accel_drift: float = 0.0
     encoder_scale: float = 1.0
     motor_polarity: float = 1.0
+    accel_mounted: float = 1.0
+    accel_connected: float = 1.0
+
+    @property
+    def accel_reads(self) -> bool:
+        """The accelerometer reads the tip: on the beam and plugged in."""
+        return bool(self.accel_mounted and self.accel_connected)
 
     @classmethod
     def parse(cls, effects: dict[str, float]) -> Effects:
@@ -210,7 +227,7 @@ class Effects:
                 if pname not in Params.__dataclass_fields__ or pname in ("L", "a_gain"):
                     raise ValueError(f"unknown parameter effect {name!r}")
                 ratios[pname] = float(value)
-            elif name in NAMED or name in SETTINGS or name in SENSOR_FAULTS:
+            elif name in NAMED or name in SETTINGS or name in SENSOR_FAULTS or name in CONFIGURATIONS:
                 fields[name] = int(value) if name == "delay" else float(value)
             elif name in OOV:
                 fields[name.split(":", 1)[1]] = float(value)
@@ -224,6 +241,8 @@ class Effects:
             raise ValueError("stribeck_speed, oov:encoder_cyclic_period and oov:cogging_cycles must be positive")
         if eff.motor_polarity not in (1.0, -1.0) or eff.encoder_scale == 0 or eff.accel_gain == 0:
             raise ValueError("motor_polarity must be +1 or -1, encoder_scale and accel_gain not 0")
+        if eff.accel_mounted not in (0.0, 1.0) or eff.accel_connected not in (0.0, 1.0):
+            raise ValueError("accel_mounted and accel_connected must be 0 or 1")
         return eff
 
     @property
@@ -436,6 +455,8 @@ def make_plant(effects: dict[str, float] | Effects, n_elements: int = 4, substep
     """The plant with the effects that act inside it, and the accelerometer gain (counts per m/s^2)."""
     eff = effects if isinstance(effects, Effects) else Effects.parse(effects)
     params = Params().scaled(eff.ratios)
+    if not eff.accel_mounted:  # the accelerometer off the beam: nothing at the tip
+        params = replace(params, m_accel=0.0, J_accel=0.0)
     beta = beta_for_damping(params, eff.beam_damping, n_elements) if eff.beam_damping else 0.0
     plant = Plant(params, n_elements, beta, friction=eff.coulomb_friction, backlash=eff.backlash,
                   substeps=substeps, static_friction=eff.static_friction, stribeck_speed=eff.stribeck_speed,
@@ -481,7 +502,8 @@ def simulate(kind: str, u: np.ndarray, effects: dict[str, float], rng: np.random
     for k in range(n):
         th, acc = plant.outputs()
         theta = encoder(eff.encoder_scale * th, eff.encoder_cyclic, eff.encoder_cyclic_period)
-        a = math.floor(a_gain * acc + accel_bias(eff, k) + noise[k] + 0.5)
+        tip = a_gain * acc if eff.accel_reads else 0.0  # a dead channel reads its bias and noise
+        a = math.floor(tip + accel_bias(eff, k) + noise[k] + 0.5)
         if ctrl is None:
             v, th_d = float(u[k]), float(u[k])
         elif alignment == 0:  # the 2009 logs: this row's samples

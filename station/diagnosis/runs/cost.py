@@ -307,9 +307,16 @@ class Evaluator:
         return math.exp(total / terms - 1.0) if terms else math.nan
 
 
+IGNORED_SIGMA = 1e6
+"""σ_a of a run whose a is not used (counts): its a errors weigh nothing beside θ's, and its
+noise realisations stay finite numbers."""
+
+
 def calibrate_noise(ev: Evaluator) -> dict[int, tuple[np.ndarray, np.ndarray]]:
     """Simulate every run on the nominal model and set each run's noise levels from the
-    high-frequency part of its residual (:func:`station.analysis.residuals.noise_std`).
+    high-frequency part of its residual (:func:`station.analysis.residuals.noise_std`); a run
+    whose a the log audit found to be no tip acceleration gets :data:`IGNORED_SIGMA` (a model
+    that damps its modelled a away must not win by it).
 
     Parameters
     ----------
@@ -326,7 +333,8 @@ def calibrate_noise(ev: Evaluator) -> dict[int, tuple[np.ndarray, np.ndarray]]:
         theta, a = ev.predict({}, i)
         nominal[i] = (theta, a)
         c.sigma_theta = noise_std(c.theta - theta, THETA_QUANTIZATION_STD)
-        c.sigma_a = noise_std(c.a - a, ACCEL_NOISE_STD)
+        tip = c.run is None or c.run.audit.accel_is_tip
+        c.sigma_a = noise_std(c.a - a, ACCEL_NOISE_STD) if tip else IGNORED_SIGMA
     return nominal
 
 

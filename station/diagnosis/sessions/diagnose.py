@@ -14,7 +14,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from station.diagnosis.runs.cases import Simulator, keep_bias
-from station.diagnosis.runs.cost import Evaluator, calibrate_noise, pooled, rms_gain
+from station.diagnosis.runs.cost import IGNORED_SIGMA, Evaluator, calibrate_noise, pooled, rms_gain
 from station.diagnosis.runs.folds import LEAVE_ONE_OUT, make_folds
 from station.diagnosis.search.workbench import Bench, nominal_trial, workbench
 from station.diagnosis.sessions.drift import DriftResult, decide_drift, finite, select_structure, session_axes
@@ -25,9 +25,6 @@ from station.logged.audit import ACCEL_DRIFT_COUNTS, ACCEL_DRIFT_WINDOW_S
 from station.logged.sensors import decide_faults, sensor_evidence
 from station.plant.model import as_model
 from station.rig import SESSIONS_MAX_SAMPLES
-
-IGNORED_SIGMA = 1e6
-"""σ_a (counts) of a run whose accelerometer is not used: its a error weighs nothing."""
 
 
 @dataclass

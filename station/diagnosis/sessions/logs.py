@@ -208,7 +208,8 @@ def _cut(case: RunCase, n: int) -> RunCase:
 
 def simulate_cut(case: RunCase, model) -> tuple[np.ndarray, np.ndarray]:
     """θ and a of a run, possibly cut (:func:`cut_lengths`), simulated on a model as the rig
-    ran it (:func:`station.logged.simulate.simulate_log` on the case's own log).
+    ran it (:func:`station.logged.simulate.simulate_log` on the case's own log, the model as
+    the whole run had the rig: :meth:`station.logged.LoggedRun.model_for`).
 
     Parameters
     ----------
@@ -221,6 +222,7 @@ def simulate_cut(case: RunCase, model) -> tuple[np.ndarray, np.ndarray]:
         Simulated θ (encoder counts) and a (accelerometer counts), each of shape (N,), N the
         case's (possibly cut) length.
     """
+    model = case.run.model_for(model) if case.run is not None else model  # the accelerometer as the run had it
     pred = simulate_log(case.log, case.controller, case.alignment, model).prediction
     return pred["theta"], pred["a"]
 
