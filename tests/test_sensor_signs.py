@@ -226,5 +226,46 @@ def test_the_labs_third_session_in_miniature(tmp_path):
                             effects={"accel_gain": -1.2, "coulomb_friction": 6.0})
     fourth = tmp_path / "session_3_SLFR_RTP_OL_Test.txt"
     fourth.write_text(format_audit_run(c, simulate_audit_case(c, 3)))
-    fits = {name: replay(fourth, model=name).fit_pct for name in ("tmm-fit", str(saved))}
-    assert fits[str(saved)]["theta"] > 90.0 and fits[str(saved)]["accel"] > 80.0 > fits["tmm-fit"]["accel"]
+    reps = {name: replay(fourth, model=name) for name in ("tmm-fit", str(saved))}
+    assert reps[str(saved)].fit_pct["theta"] > 90.0 and reps[str(saved)].fit_pct["accel"] > 80.0
+    # the run's own audit decides the sign too: said first, and the nominal model read through it,
+    # where the saved model holds it already (never applied twice)
+    said = " ".join(reps["tmm-fit"].audit.lines())
+    assert "the accelerometer reads the other way (accel_gain -1." in said
+    assert any("with the sensor faults the audit decided from the data (accel_gain -1." in n
+               for n in reps["tmm-fit"].notes)
+    assert not any("sensor faults the audit decided" in n for n in reps[str(saved)].notes)
+
+
+@pytest.mark.parametrize("case, seed, fault, said", [
+    ("accel_reversed", 0, "accel_gain", "the accelerometer reads the other way"),
+    ("accel_reversed+coulomb_friction", 1, "accel_gain", "the accelerometer reads the other way"),
+    ("encoder_reversed", 0, "encoder_scale", "the encoder the other way"),
+    ("motor_reversed", 0, "motor_polarity", "the motor turns against the command"),
+    ("coulomb_friction", 0, None, None),
+    ("accel_offset", 0, None, None),  # a bias is decided over a session's runs, not from one
+])
+def test_one_runs_signs_are_its_audit_and_replay_and_compare_use_them(tmp_path, case, seed, fault, said):
+    """A single log's sensors' and motor's signs are claims its data check (DESIGN.md "Log
+    audit": the columns' signs): replay and compare say a contradicted one first and simulate
+    the model as the data found the rig, so the a fit means the model, not the wiring."""
+    from station.compare import compare_run
+
+    hidden = case_effects(case, seed)
+    path = write_case(tmp_path, hidden, seed)[3]  # the open-loop pulses
+    run = LoggedRun.from_path(path)
+    lines = run.audit.lines()
+    assert set(run.sensors.effects) == ({fault} if fault else set()), (hidden, run.sensors.effects)
+    if fault is None:
+        assert not any(said_ in " ".join(lines) for said_ in ("reads the other way", "other way (encoder_scale",
+                                                              "turns against"))
+        assert not any("sensor faults the audit decided" in n for n in replay(path, model=True).notes)
+        return
+    assert run.sensors.effects[fault] * hidden[fault] > 0
+    assert any(said in line for line in lines), lines
+    rep, cmp = replay(path, model=True), compare_run(path, load_model("tmm-fit"))
+    assert any(f"with the sensor faults the audit decided from the data ({fault}" in n for n in rep.notes)
+    assert cmp.fit_pct == rep.fit_pct
+    # the wiring undone, the nominal model's a follows the log's as it does on a healthy rig
+    healthy = replay(write_case(tmp_path / "healthy", {}, seed)[3], model=True).fit_pct["accel"]
+    assert rep.fit_pct["accel"] > min(0.5 * healthy, 40.0), (rep.fit_pct, healthy)

@@ -22,7 +22,7 @@ from station.diagnosis.search.stepwise import forward_select
 from station.diagnosis.search.workbench import Bench, nominal_trial, workbench
 from station.diagnosis.honesty.unexplained import check_unexplained
 from station.errors import StationError
-from station.logged.sensors import decide_faults, sensor_evidence
+from station.logged.sensors import SIGN_HEADERS, decide_faults, sensor_evidence
 from station.plant.model import as_model
 
 
@@ -189,7 +189,7 @@ def _diagnose(runs, validate, model, progress, bench: Bench, simulate, likelihoo
     ev = Evaluator(cases, base, simulate)
     search = bench.search(ev, folds, range(n_fit), progress or (lambda msg: None))
     for c in cases:
-        for line in c.run.audit_lines:
+        for line in c.run.audit.lines(skip=SIGN_HEADERS):  # the signs: said once, decided over the runs
             search.say(f"audit: {c.name}: {line}")
     for line in faults.lines():
         search.say(f"sensor fault, decided from the data: {line}")
@@ -228,4 +228,4 @@ def _diagnose(runs, validate, model, progress, bench: Bench, simulate, likelihoo
         alternatives=doubt.alternatives, interval_method=doubt.method, notes=notes,
         sensor_faults=faults.refined(extended.effect_dict()),  # the values the saved model holds
         audit=[{"run": c.name, "audit": c.run.audit.to_json(), "controller_source": c.run.source,
-                "contradicted": c.run.audit_lines} for c in cases])
+                "contradicted": c.run.audit.lines(skip=SIGN_HEADERS)} for c in cases])

@@ -123,10 +123,21 @@ class Audit:
         (:func:`accel_claims`): its fit and its weight in a diagnosis mean nothing."""
         return not any(c.header == ACCEL_CLAIM for c in self.contradicted)
 
-    def lines(self) -> list[str]:
+    def lines(self, skip: tuple[str, ...] = ()) -> list[str]:
         """One line per contradicted claim, e.g. ``"header: open loop; data: a lead
-        3(s+13)/(s+20) ... at alignment 0, reproduces every logged v exactly"``."""
-        return [c.line for c in self.contradicted]
+        3(s+13)/(s+20) ... at alignment 0, reproduces every logged v exactly"``.
+
+        Parameters
+        ----------
+        skip : tuple of str, optional
+            Headers of claims not to say (a diagnosis says the sensors' signs it decided over
+            all its runs instead of each run's: :data:`station.logged.sensors.SIGN_HEADERS`).
+
+        Returns
+        -------
+        list of str
+        """
+        return [c.line for c in self.contradicted if c.header not in skip]
 
     def to_json(self) -> list[dict[str, str]]:
         """DESIGN.md's ``"audit"`` list."""

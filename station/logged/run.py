@@ -16,6 +16,7 @@ from station.logged.accelerometer import ON_THE_TIP, Mounting, decide_mounting, 
 from station.logged.audit import (ACCEL_CLAIM, Audit, AuditClaim, TimeBase, accel_claims, alignment_claim,
                                   file_kp_claims, reference_claims, time_base)
 from station.logged.controller import ControllerId, describe_controller, identify_controller
+from station.logged.sensors import NO_FAULTS, SensorFaults, decide_faults, sensor_evidence
 from station.logged.simulate import ModelRun, compared_theta, simulate_log
 from station.logged.reference import Reference, classify_reference
 from station.logged.start import Start, start_claims
@@ -133,6 +134,7 @@ class LoggedRun:
         claims += self._accel_claims
         if self.mounting.claim is not None:
             claims.append(self.mounting.claim)
+        claims += self.sensors.claims
         return Audit(tuple(claims), cid.source)
 
     @cached_property
@@ -161,15 +163,37 @@ class LoggedRun:
         return sim.prediction["a"], motion_ratio(sim.theta_measured, sim.prediction["theta"], self.dt)
 
     @property
-    def _accel_is_tip(self) -> bool:
+    def accel_is_tip(self) -> bool:
+        """False when the data say the a column is no tip acceleration (a silent channel, a
+        baseline that creeps with nothing in it): :attr:`station.logged.audit.Audit.accel_is_tip`
+        before the rest of the audit is asked."""
         return not any(c.header == ACCEL_CLAIM for c in self._accel_claims)
+
+    @cached_property
+    def sensors(self) -> SensorFaults:
+        """This run's sensors' and motor's signs and scales, decided from its own data against
+        the nominal model driven by its applied command (:func:`station.logged.sensors.decide_faults`
+        on this run alone, signs and scales only: an accelerometer's bias or drift is decided
+        over a session's runs, by a diagnosis). Its "columns" claims are in :attr:`audit`, and
+        :meth:`simulate` uses its decided faults. :data:`station.logged.sensors.NO_FAULTS` for a
+        run without rows, a hub-held beam test or one the nominal model cannot simulate."""
+        if not len(self) or self.held is not None or any(not self.has_column(n) for n in self.model_columns):
+            return NO_FAULTS
+        # lazy: start-up time (the FEM, only when a log's claims are checked)
+        from station.plant.model import load_model
+
+        try:
+            evidence = sensor_evidence(self, load_model("tmm-fit"))
+        except (StationError, ArithmeticError, ValueError):  # a run the model cannot replay decides nothing here
+            return NO_FAULTS
+        return decide_faults([evidence], trends=False)
 
     @cached_property
     def mounting(self) -> Mounting:
         """Whether the accelerometer's mass was on the beam
         (:func:`station.logged.accelerometer.decide_mounting`), asked only when a reads no tip
         acceleration (an accelerometer that reads is on the beam) and the hub was free."""
-        if self._accel_is_tip or not len(self) or self.held is not None:
+        if self.accel_is_tip or not len(self) or self.held is not None:
             return ON_THE_TIP
         d = self.data
         applied = d["v_applied"]
@@ -203,7 +227,7 @@ class LoggedRun:
         """How the run starts: at rest at t = 0 or moving (a copy cut from a longer run), and θ
         there (:func:`station.logged.start.start_claims`)."""
         d = self.data
-        return start_claims(d["theta"], d["a"], d["u"], d["v"], self.dt, self.closed, self._accel_is_tip,
+        return start_claims(d["theta"], d["a"], d["u"], d["v"], self.dt, self.closed, self.accel_is_tip,
                             self.identified.cut)
 
     @property
@@ -414,7 +438,41 @@ class LoggedRun:
         return step_metrics(self.data["t"] if t is None else t, self.data["theta"] if theta is None else theta,
                             self.reference.amplitude)
 
-    def simulate(self, model) -> ModelRun:
+    def found_faults(self, model) -> dict[str, float]:
+        """The sensor and wiring faults this run's data decided (:attr:`sensors`) that a model
+        does not hold itself (a model a diagnosis saved carries its session's: never applied twice).
+
+        Parameters
+        ----------
+        model : station.plant.model.Model or station.plant.DiscretePlant
+
+        Returns
+        -------
+        dict of str to float
+            Effect -> value; empty for a DiscretePlant (no effects) or when the model holds them.
+        """
+        held = model.effect_dict() if hasattr(model, "effect_dict") else None
+        if held is None:
+            return {}
+        return {k: v for k, v in self.sensors.effects.items() if k not in held}
+
+    def model_as_found(self, model, sensors: bool = True):
+        """The model as the audit found this run's rig: :meth:`model_for` (the accelerometer's
+        mass), with :meth:`found_faults` (the sensors' and motor's signs and scales) when ``sensors``.
+
+        Parameters
+        ----------
+        model : station.plant.model.Model or station.plant.DiscretePlant
+        sensors : bool, default True
+
+        Returns
+        -------
+        station.plant.model.Model or station.plant.DiscretePlant
+        """
+        found = self.found_faults(model) if sensors else {}
+        return self.model_for(model.with_effects(found) if found else model)
+
+    def simulate(self, model, sensors: bool = True) -> ModelRun:
         """The run simulated on a model as the rig ran it (:func:`station.logged.simulate.simulate_log`
         with this run's controller and alignment, on :meth:`model_for`: without the
         accelerometer's mass when the data say it was off the beam), with its NRMSE fits.
@@ -424,6 +482,10 @@ class LoggedRun:
         model : station.plant.model.Model or station.plant.DiscretePlant
             A Model is simulated at the log's sample time with its effects; a
             DiscretePlant (reset first) should have the log's dt.
+        sensors : bool, default True
+            Also give the model the sensor and wiring faults this run's data decided
+            (:meth:`found_faults`: a reversed accelerometer, encoder or motor), as the audit says
+            them; a diagnosis, which decides them over all its runs, passes False.
 
         Returns
         -------
@@ -435,8 +497,13 @@ class LoggedRun:
             The log lacks a column the simulation or its fit needs (:attr:`model_columns`).
         """
         self.check_columns(self.model_columns, "simulating it on a model")
-        sim = simulate_log(self.log, self.controller, self.alignment, self.model_for(model))
+        found = self.found_faults(model) if sensors else {}
+        sim = simulate_log(self.log, self.controller, self.alignment, self.model_as_found(model, sensors))
         if self.mounting.mounted is False:
             sim = dataclasses.replace(sim, how=sim.how + "; without the accelerometer's mass (the audit: no "
                                       "accelerometer on the beam)")
+        if found:
+            said = ", ".join(f"{k} {v:g}" for k, v in found.items())
+            sim = dataclasses.replace(sim, how=sim.how + f"; with the sensor faults the audit decided from the "
+                                      f"data ({said})")
         return sim

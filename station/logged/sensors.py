@@ -82,6 +82,12 @@ RATIO_TOLERANCE = 1.3
 """θ's ratio over a's may sit within this factor of the encoder's scale in each run: friction
 does not slow θ and a quite alike (3.2-4.2 for a 4096-count encoder beside 26-29 counts)."""
 
+THETA_HEADER = "θ: encoder counts, 1024 per revolution, turning with the command as the model's"
+ACCEL_HEADER = "a: the tip's acceleration with the model's sign"
+SIGN_HEADERS = (THETA_HEADER, ACCEL_HEADER)
+"""The headers of the signs' and scales' "columns" claims: a diagnosis decides them over all its
+runs and says that decision, not each run's (:attr:`station.logged.LoggedRun.sensors`)."""
+
 ENCODER_SCALES = (0.25, 0.5, 2.0, 4.0, 8.0, 16.0)
 """Encoder resolutions decided, relative to the model's 1024 counts per revolution."""
 
@@ -163,7 +169,7 @@ def sensor_evidence(run, model) -> SensorEvidence:
     ac: tuple[float | None, ...] = (None, None, None, None)
     nyquist = 0.5 / dt
     a_raw = np.asarray(d["a"], float)
-    if run.audit.accel_is_tip and len(run) > 30 and ACCEL_BAND_HZ[1] < nyquist and np.all(np.isfinite(a_raw)):
+    if run.accel_is_tip and len(run) > 30 and ACCEL_BAND_HZ[1] < nyquist and np.all(np.isfinite(a_raw)):
         sos = butter(2, ACCEL_BAND_HZ, "bandpass", fs=1.0 / dt, output="sos")
         rest = run.accel_rest_offset
         a, a_m = a_raw - rest, np.asarray(pred["a"], float)
@@ -252,7 +258,12 @@ def _fmt(values: list[float]) -> str:
     return ", ".join(f"{v:+.2f}" for v in values)
 
 
-def decide_faults(evidence: Sequence[SensorEvidence], accel_gain: float | None = None) -> SensorFaults:
+NO_FAULTS = SensorFaults()
+"""Nothing decided (a run without the evidence: no rows, a beam test)."""
+
+
+def decide_faults(evidence: Sequence[SensorEvidence], accel_gain: float | None = None,
+                  trends: bool = True) -> SensorFaults:
     """Decide the sensors' signs and scales from the runs' evidence (module docstring).
 
     Parameters
@@ -263,6 +274,11 @@ def decide_faults(evidence: Sequence[SensorEvidence], accel_gain: float | None =
         A reversed accelerometer's gain found otherwise (a diagnosis refits it beside the
         effects it accepted: :meth:`SensorFaults.refined`); held as given, the decision's own
         estimate (a's ratio over θ's, the median over the runs, the default) in ``first``.
+    trends : bool, default True
+        Also decide the accelerometer's bias and drift. Over one run they are not decided
+        (:attr:`station.logged.LoggedRun.sensors`): a model's a that is off in shape leaks
+        into one run's fit of bias and slope (the thesis's lead + accelerometer step: −1.25
+        counts and 0.98 counts per s), where a session's runs agreeing in sign do not.
 
     Returns
     -------
@@ -326,10 +342,12 @@ def decide_faults(evidence: Sequence[SensorEvidence], accel_gain: float | None =
                 hint = (f"θ reads {q:.2f}× what a's motion gives (θ's ratio {g_th:.2f}, a's {abs(g_a):.2f}): "
                         f"an encoder of {q * COUNTS_PER_REV:.0f} counts per revolution, or the accelerometer's gain; "
                         f"the ratios do not decide it")
-    bias_claim = _trend_claim("accel_offset", [e.accel_bias for e in ev], OFFSET_COUNTS, effects,
-                              "a: zero at rest (the rig zeroes it before a test)", "counts")
-    drift_claim = _trend_claim("accel_drift", [e.accel_slope for e in ev], DRIFT_COUNTS_PER_S, effects,
-                               "a: no drift over a run", "counts per s")
+    bias_claim = drift_claim = None
+    if trends:
+        bias_claim = _trend_claim("accel_offset", [e.accel_bias for e in ev], OFFSET_COUNTS, effects,
+                                  "a: zero at rest (the rig zeroes it before a test)", "counts")
+        drift_claim = _trend_claim("accel_drift", [e.accel_slope for e in ev], DRIFT_COUNTS_PER_S, effects,
+                                   "a: no drift over a run", "counts per s")
     claims = [_theta_claim(s_th, th_cos, th_ratio, a_ratio, effects), _accel_claim(s_a, a_cos, effects, first),
               bias_claim, drift_claim]
     if hint:
@@ -356,7 +374,7 @@ def _trend_claim(name: str, values, least: float, effects: dict, header: str, un
 def _theta_claim(sign: int, cosines, th_ratio, a_ratio, effects) -> AuditClaim | None:
     if not cosines:
         return None
-    header = "θ: encoder counts, 1024 per revolution, turning with the command as the model's"
+    header = THETA_HEADER
     evidence = (f"cosine of θ's {THETA_HORIZON_S * 1000:.0f} ms changes with the nominal model's, driven by the "
                 f"logged command: {_fmt(cosines)} over {len(cosines)} run(s)")
     if th_ratio and a_ratio:
@@ -377,7 +395,7 @@ def _theta_claim(sign: int, cosines, th_ratio, a_ratio, effects) -> AuditClaim |
 def _accel_claim(sign: int, cosines, effects, first) -> AuditClaim | None:
     if not cosines:
         return None
-    header = "a: the tip's acceleration with the model's sign"
+    header = ACCEL_HEADER
     evidence = (f"cosine of a ({ACCEL_BAND_HZ[0]:g}-{ACCEL_BAND_HZ[1]:g} Hz) with the nominal model's: "
                 f"{_fmt(cosines)} over {len(cosines)} run(s)")
     if sign == 0:

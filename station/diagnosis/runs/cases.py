@@ -149,5 +149,5 @@ def simulate_case(case: RunCase, model) -> tuple[np.ndarray, np.ndarray]:
         Simulated θ (encoder counts) and a (accelerometer counts), each of shape (N,), on the
         run's own scale (θ relative in open loop, as :func:`load_case`).
     """
-    pred = case.run.simulate(model).prediction
+    pred = case.run.simulate(model, sensors=False).prediction  # the sensors: decided over the runs, in the model
     return pred["theta"], pred["a"]
