@@ -59,6 +59,7 @@ class LoggedRun:
         self.raw_log = log
         self._time_base: TimeBase = time_base(log)
         self.log = self._time_base.log
+        self._simulable = False
 
     @classmethod
     def from_path(cls, path: str | Path) -> LoggedRun:
@@ -496,7 +497,9 @@ class LoggedRun:
         StationError
             The log lacks a column the simulation or its fit needs (:attr:`model_columns`).
         """
-        self.check_columns(self.model_columns, "simulating it on a model")
+        if not self._simulable:  # checked once: a diagnosis simulates a run thousands of times
+            self.check_columns(self.model_columns, "simulating it on a model")
+            self._simulable = True
         found = self.found_faults(model) if sensors else {}
         sim = simulate_log(self.log, self.controller, self.alignment, self.model_as_found(model, sensors))
         if self.mounting.mounted is False:

@@ -8,7 +8,8 @@ quantization; open loop: the plant driven by what the device applied.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
+from functools import cached_property
 
 import numpy as np
 
@@ -122,9 +123,8 @@ class ModelRun:
         As :func:`station.plant.simulate` returns (t, u, v, theta, a, theta_d_hat), shape (N,) each.
     theta_measured : ndarray, shape (N,)
         The logged θ it is compared with, encoder counts (:func:`compared_theta`).
-    fit_pct : dict
-        NRMSE fit of θ and a, % (:func:`station.analysis.fit.fit_pct`: ``{"theta", "accel"}``,
-        None where undefined).
+    accel_measured : ndarray, shape (N,)
+        The logged a, accelerometer counts.
     how : str
         One line saying how the model was driven.
     parting : Parting or None
@@ -134,9 +134,17 @@ class ModelRun:
 
     prediction: dict
     theta_measured: np.ndarray
-    fit_pct: dict
+    accel_measured: np.ndarray = field(repr=False)
     how: str
     parting: Parting | None = None
+
+    @cached_property
+    def fit_pct(self) -> dict:
+        """NRMSE fit of θ and a, % (:func:`station.analysis.fit.fit_pct`: ``{"theta", "accel"}``,
+        None where undefined); computed when first asked (a diagnosis's thousands of
+        simulations need only the prediction)."""
+        p = self.prediction
+        return fit_pct(self.theta_measured, p["theta"], self.accel_measured, p["a"])
 
 
 def simulate_log(log: RunLog, controller, alignment: int | None, model) -> ModelRun:
@@ -195,4 +203,4 @@ def simulate_log(log: RunLog, controller, alignment: int | None, model) -> Model
             how += f", from rest at θ = {theta0:g} (the log's first θ: the encoder was not zeroed)"
     theta = compared_theta(data["theta"], closed)
     part = None if closed or not theta.size else parting(data["t"], theta, pred["theta"])
-    return ModelRun(pred, theta, fit_pct(theta, pred["theta"], data["a"], pred["a"]), how, part)
+    return ModelRun(pred, theta, data["a"], how, part)
