@@ -28,14 +28,14 @@ from station.errors import StationError
 from station.inputs import exists, is_folder, open_regular
 from station.outputs import WRITTEN_SUFFIXES, Transaction
 from station.pools import as_finished, process_pool
-from station.replay import replay
+from station.replay import NOT_TIP, replay
 
 STATUSES = ("ok", "unusable", "not a log")
 """A file's status: replayed; a log (or what claims to be one) that could not be used; a file
 the station writes besides logs (:func:`not_a_log`)."""
 
 FIELDS = ("file", "status", "format", "rows", "sample_time_s", "controller", "controller_source", "alignment",
-          "max_abs_dv", "overshoot_pct", "settling_time_s", "fit_theta_pct", "fit_accel_pct",
+          "max_abs_dv", "overshoot_pct", "settling_time_s", "fit_theta_pct", "fit_accel_pct", "accel_is_tip",
           "f1_hz", "zeta1", "f1_model_hz", "zeta1_model", "reason")
 """Columns of the survey table and CSV, in order."""
 
@@ -68,6 +68,9 @@ class SurveyRow:
         Step metrics of the logged θ (:class:`station.analysis.metrics.StepMetrics`).
     fit_theta_pct, fit_accel_pct : float or None
         NRMSE fit of the model to the logged θ and a, %.
+    accel_is_tip : bool or None
+        False when the log audit found a no tip acceleration (its fit is then no model error:
+        the table says so beside it, as replay does); None without an audit.
     f1_hz, zeta1 : float or None
         Hub-held beam test: measured first mode, Hz, and its damping ratio.
     f1_model_hz, zeta1_model : float or None
@@ -96,6 +99,7 @@ class SurveyRow:
     settling_time_s: float | None = None
     fit_theta_pct: float | None = None
     fit_accel_pct: float | None = None
+    accel_is_tip: bool | None = None
     f1_hz: float | None = None
     zeta1: float | None = None
     f1_model_hz: float | None = None
@@ -206,6 +210,7 @@ def survey_one(path: str | Path, model: bool = True) -> SurveyRow:
     run = rep.run
     row.report = rep.to_json()
     row.contradictions = [] if rep.audit is None else rep.audit.lines()
+    row.accel_is_tip = None if rep.audit is None else bool(rep.audit.accel_is_tip)
     row.format = run.log.layout or run.log.format
     row.rows = len(run)
     row.sample_time_s = run.log.sample_time
@@ -328,7 +333,8 @@ def format_table(rows: Sequence[SurveyRow], root: str | Path | None = None) -> s
             last = (f"beam: f1 {_cell(r.f1_hz, '.3f')} Hz, zeta {_cell(r.zeta1, '.4f')} "
                     f"(model {_cell(r.f1_model_hz, '.3f')} Hz, {_cell(r.zeta1_model, '.4f')})")
         elif r.fit_theta_pct is not None or r.fit_accel_pct is not None:
-            last = f"fit theta {_cell(r.fit_theta_pct, '.1f')} %, a {_cell(r.fit_accel_pct, '.1f')} %"
+            why = f" ({NOT_TIP})" if r.accel_is_tip is False else ""
+            last = f"fit theta {_cell(r.fit_theta_pct, '.1f')} %, a {_cell(r.fit_accel_pct, '.1f')} %{why}"
         else:
             last = "-"
         lines.append([name, r.format, _cell(r.rows), _cell(r.sample_time_s, "g"), ctl, _cell(r.alignment),
