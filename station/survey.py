@@ -27,7 +27,7 @@ from station.analysis.metrics import THESIS_BAND_PCT, settling_label
 from station.errors import StationError
 from station.inputs import exists, is_folder, open_regular
 from station.outputs import WRITTEN_SUFFIXES, Transaction
-from station.pools import as_finished, process_pool
+from station.pools import as_finished, lost, process_pool
 from station.replay import NOT_TIP, replay
 
 STATUSES = ("ok", "unusable", "not a log")
@@ -267,17 +267,47 @@ def survey(paths: Sequence[str | Path], model: bool = True, workers: int | None 
             if progress:
                 progress(len(rows), len(files), rows[f])
     else:
-        with process_pool(min(workers, len(files))) as pool:  # a signal, an error: the workers stop now
-            futures = {pool.submit(survey_one, f, model): f for f in files}
-            for fut in as_finished(futures):
-                f = futures[fut]
-                try:
-                    rows[f] = fut.result()
-                except Exception as exc:  # noqa: BLE001 - a dead worker costs one row, not the survey
-                    rows[f] = SurveyRow(file=str(f), reason=f"worker failed: {type(exc).__name__}: {exc}")
-                if progress:
-                    progress(len(rows), len(files), rows[f])
+        # a worker that dies (killed, out of memory, crashed) breaks the pool and fails every file
+        # not yet replayed, through no fault of theirs: they are replayed again in a new pool, and
+        # those lost once more one by one, each in a process of its own (twice), so only a file
+        # whose replay kills its worker is a row saying so
+        pending = list(files)
+        for attempt in ("pool", "alone", "alone again"):
+            lost_now: list[Path] = []
+            for group in ([pending] if attempt == "pool" else [[f] for f in pending]):
+                lost_now += _survey_pool(group, model, min(workers, len(group)), rows, len(files), progress,
+                                         last_try=attempt == "alone again")
+            pending = lost_now
+            if not pending:
+                break
     return [rows[f] for f in files]
+
+
+WORKER_DIED = ("its replay ended the worker process abruptly twice, alone in a process of its own (crashed or out "
+               "of memory)")
+"""The row of a file whose replay kills the worker process every time."""
+
+
+def _survey_pool(files: list[Path], model: bool, workers: int, rows: dict, total: int, progress,
+                 last_try: bool) -> list[Path]:
+    """Replay ``files`` in a new pool into ``rows``; return the files a dead worker lost (on the
+    last try, their row says so instead)."""
+    lost_files = []
+    with process_pool(workers) as pool:  # a signal, an error: the workers stop now
+        futures = {pool.submit(survey_one, f, model): f for f in files}
+        for fut in as_finished(futures):
+            f = futures[fut]
+            if lost(fut) and not last_try:
+                lost_files.append(f)
+                continue
+            try:
+                rows[f] = fut.result()
+            except Exception as exc:  # noqa: BLE001 - a failed replay costs one row, not the survey
+                reason = WORKER_DIED if lost(fut) else f"worker failed: {type(exc).__name__}: {exc}"
+                rows[f] = SurveyRow(file=str(f), reason=reason)
+            if progress:
+                progress(len(rows), total, rows[f])
+    return lost_files
 
 
 def _cell(value: Any, fmt: str = "") -> str:
