@@ -82,7 +82,7 @@ def main(argv: list[str] | None = None) -> int:
                     return int(args._run(args) or 0)
             except StationError as exc:
                 print(f"station: error: {one_line(str(exc))}", file=sys.stderr)
-                return 2
+                return exc.exit_code
             except BrokenPipeError:  # `station step | head`: the reader left; nothing to say
                 _silence_stdout()
                 return 0

@@ -24,6 +24,10 @@ class StationError(Exception):
         The field, header key, column or option at fault.
     """
 
+    exit_code = 2
+    """The CLI's exit code for it: 2, bad input or a set-up error (nothing started); a failure
+    of the work itself (:class:`station.pools.WorkerLost`) says 1."""
+
     def __init__(self, message: str = "", *, file: str | Path | None = None, line: int | None = None,
                  key: str | None = None):
         super().__init__(message)

@@ -36,6 +36,7 @@ import os
 import re
 import stat
 import tomllib
+import urllib.parse
 from pathlib import Path
 from typing import Any, BinaryIO, NamedTuple, TextIO
 
@@ -100,6 +101,24 @@ def exists(path: str | Path) -> bool:
     except (OSError, ValueError):
         return False
     return True
+
+
+def sim_model_file(url: str | None) -> str | None:
+    """The model file a ``sim://?model=FILE`` port serves (None for another port, a port
+    without ``model`` or a built-in model's name is returned as written: the caller's
+    output check compares paths, and a name that is no file there matches none).
+
+    A file the simulated rig reads is an input of the command that opens the port, like
+    ``--model``'s: no output of that command may replace it.
+
+    Parameters
+    ----------
+    url : str or None
+        The port, as ``--port`` gave it.
+    """
+    if not isinstance(url, str) or not url.lower().startswith("sim://"):
+        return None
+    return dict(urllib.parse.parse_qsl(urllib.parse.urlsplit(url).query)).get("model")
 
 
 def is_folder(path: str | Path) -> bool:

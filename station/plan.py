@@ -28,7 +28,6 @@ import datetime as _dt
 import shutil
 import tempfile
 import time
-import urllib.parse
 import warnings
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
@@ -41,7 +40,7 @@ from station.control.contract import DAC_LIMIT
 from station.control.rerun import is_closed_loop
 from station.control.shaper import ReferenceShaper
 from station.errors import StationError
-from station.inputs import exists
+from station.inputs import exists, sim_model_file
 from station.link import LinkLimits
 from station.outputs import Input, Output, check_folder, check_outputs, is_device
 from station.protocol import check_ticks
@@ -274,9 +273,7 @@ def _check_numbers(values: dict[str, Any]) -> None:
 
 def _url_model(url: str) -> str | None:
     """The ``model`` option of a ``sim://`` URL (None without one, or for another port)."""
-    if not url.lower().startswith("sim://"):
-        return None
-    return dict(urllib.parse.parse_qsl(urllib.parse.urlsplit(url).query)).get("model")
+    return sim_model_file(url)
 
 
 def _check_length(protocol: str, n_ticks: int, dt: float, what: str) -> None:

@@ -299,14 +299,14 @@ def plot_bode(cmp, path: Path, title: str, transaction=None) -> None:
     for row, (est, model, label) in enumerate(((cmp.theta, cmp.model[0], "θ/v"), (cmp.accel, cmp.model[1], "a/v"))):
         ax[row].semilogx(f[band], 20 * np.log10(np.abs(est.H[band])), label=f"measured {label} (H1)")
         ax[row].semilogx(f[band], 20 * np.log10(np.abs(model[band])), label=f"model {label}, n = {cmp.n_elements}")
-        ax[row].set_ylabel(f"|{label}| (dB, counts/count)")
+        ax[row].set_ylabel(f"|{label}| (dB)\ncounts/count")  # two lines each: the panels' labels must not meet
         ax[row].legend(loc="lower left", fontsize=8)
     from station.analysis.frequency import phase_beside  # lazy: start-up time (scipy via the plant)
 
     # the measured phase on the model's branch: unwrapped apart, they can sit 360° apart (no error)
     ax[2].semilogx(f[band], phase_beside(cmp.theta.H[band], cmp.model[0][band]), ".", ms=2, label="measured θ/v")
     ax[2].semilogx(f[band], np.degrees(np.unwrap(np.angle(cmp.model[0][band]))), label="model θ/v")
-    ax[2].set_ylabel("phase θ/v (deg, unwrapped on the model's)")
+    ax[2].set_ylabel("phase θ/v (deg)\nunwrapped on the model's")
     ax[2].legend(loc="lower left", fontsize=8)
     ax[3].semilogx(f[band], cmp.theta.coherence[band], label="θ")
     ax[3].semilogx(f[band], cmp.accel.coherence[band], label="a")

@@ -15,13 +15,17 @@ whatever the workers are doing:
   for (:func:`abandon`): a task of a large model set runs for seconds, and a worker may be
   blocked writing a result nobody reads any more. No future is cancelled by the main
   process before the kill, so the pool's own thread fails every pending one without an
-  ``InvalidStateError``.
+  ``InvalidStateError``;
+- a worker that dies on its own (killed from outside, out of memory, crashed) breaks the whole
+  pool: every task not yet finished fails with ``BrokenProcessPool``. :func:`results` says it in
+  one line (:class:`WorkerLost`, exit code 1); :func:`as_finished`'s caller sees it per future
+  (:func:`lost`) and may run those tasks again in a new pool (``station survey``).
 
 The workers are started under :func:`station.signals.shielded`: a fork runs the at-fork hooks
 (logging's module lock is taken before and released after it), where a stop raised by the
 handler would be swallowed and leave the lock held.
 
-Imports only :mod:`station.signals`.
+Imports only :mod:`station.signals` and :mod:`station.errors`.
 """
 
 from __future__ import annotations
@@ -30,8 +34,10 @@ import concurrent.futures as cf
 import contextlib
 import signal
 from collections.abc import Iterable, Iterator, Sequence
+from concurrent.futures.process import BrokenProcessPool
 from typing import Any
 
+from station.errors import StationError
 from station.signals import check_stop, shielded
 
 POLL_S = 0.1
@@ -39,6 +45,38 @@ POLL_S = 0.1
 
 KILL_WAIT_S = 0.5
 """How long each killed worker is waited for, s (SIGKILL: it is gone within milliseconds)."""
+
+
+LOST = ("a worker process ended abruptly (killed from outside, out of memory or crashed) before its task "
+        "finished; the work stopped, nothing written")
+"""What :class:`WorkerLost` says."""
+
+
+class WorkerLost(StationError):
+    """A worker process of the pool ended abruptly (killed, out of memory or crashed) before
+    its task finished: the work stopped (exit code 1: not the user's input).
+
+    Parameters
+    ----------
+    message : str, optional
+        The line for the user (default :data:`LOST`).
+    """
+
+    exit_code = 1
+
+    def __init__(self, message: str = LOST):
+        super().__init__(message)
+
+
+def lost(future: cf.Future) -> bool:
+    """Whether a done future failed because its pool broke (a worker died), not by its own task.
+
+    Parameters
+    ----------
+    future : Future
+        Done.
+    """
+    return not future.cancelled() and isinstance(future.exception(), BrokenProcessPool)
 
 
 def worker_signals() -> None:
@@ -129,11 +167,15 @@ def results(futures: Sequence[cf.Future]) -> list[Any]:
     ------
     station.signals.StopSignal
         A signal arrived while waiting (within :data:`POLL_S`); nothing is cancelled here.
+    WorkerLost
+        A worker process died and broke the pool (one line, exit code 1).
     """
     out = []
     for f in futures:
         if not f.done():
             _wait([f], cf.ALL_COMPLETED)
+        if lost(f):
+            raise WorkerLost() from None
         out.append(f.result())
     return out
 

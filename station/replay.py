@@ -245,6 +245,11 @@ def _beam_test(report: ReplayReport, run: LoggedRun, model) -> None:
     report.notes.extend(f"beam test: {note}" for note in measured.notes)
 
 
+NOT_TIP = "a is no tip acceleration: the audit"
+"""Beside a's fit wherever it is printed (replay, survey) when the log audit found the a channel
+no tip acceleration (a fit far below zero is then no model error)."""
+
+
 def format_report(report: ReplayReport) -> str:
     """A readable summary of a replay (what ``station replay`` prints).
 
@@ -281,7 +286,7 @@ def format_report(report: ReplayReport) -> str:
     if report.fit_pct is not None:
         f = report.fit_pct
         fmt = lambda x: "n/a" if x is None else f"{x:.1f} %"  # noqa: E731
-        why = "" if report.audit is None or report.audit.accel_is_tip else " (a is no tip acceleration: the audit)"
+        why = "" if report.audit is None or report.audit.accel_is_tip else f" ({NOT_TIP})"
         lines.append(f"  model fit (NRMSE): theta {fmt(f['theta'])}, accel {fmt(f['accel'])}{why}")
     if report.beam_test is not None:
         lines.extend("  " + line for line in format_beam_test(report.beam_test))

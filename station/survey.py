@@ -27,15 +27,15 @@ from station.analysis.metrics import THESIS_BAND_PCT, settling_label
 from station.errors import StationError
 from station.inputs import exists, is_folder, open_regular
 from station.outputs import WRITTEN_SUFFIXES, Transaction
-from station.pools import as_finished, process_pool
-from station.replay import replay
+from station.pools import as_finished, lost, process_pool
+from station.replay import NOT_TIP, replay
 
 STATUSES = ("ok", "unusable", "not a log")
 """A file's status: replayed; a log (or what claims to be one) that could not be used; a file
 the station writes besides logs (:func:`not_a_log`)."""
 
 FIELDS = ("file", "status", "format", "rows", "sample_time_s", "controller", "controller_source", "alignment",
-          "max_abs_dv", "overshoot_pct", "settling_time_s", "fit_theta_pct", "fit_accel_pct",
+          "max_abs_dv", "overshoot_pct", "settling_time_s", "fit_theta_pct", "fit_accel_pct", "accel_is_tip",
           "f1_hz", "zeta1", "f1_model_hz", "zeta1_model", "reason")
 """Columns of the survey table and CSV, in order."""
 
@@ -68,6 +68,9 @@ class SurveyRow:
         Step metrics of the logged θ (:class:`station.analysis.metrics.StepMetrics`).
     fit_theta_pct, fit_accel_pct : float or None
         NRMSE fit of the model to the logged θ and a, %.
+    accel_is_tip : bool or None
+        False when the log audit found a no tip acceleration (its fit is then no model error:
+        the table says so beside it, as replay does); None without an audit.
     f1_hz, zeta1 : float or None
         Hub-held beam test: measured first mode, Hz, and its damping ratio.
     f1_model_hz, zeta1_model : float or None
@@ -96,6 +99,7 @@ class SurveyRow:
     settling_time_s: float | None = None
     fit_theta_pct: float | None = None
     fit_accel_pct: float | None = None
+    accel_is_tip: bool | None = None
     f1_hz: float | None = None
     zeta1: float | None = None
     f1_model_hz: float | None = None
@@ -206,6 +210,7 @@ def survey_one(path: str | Path, model: bool = True) -> SurveyRow:
     run = rep.run
     row.report = rep.to_json()
     row.contradictions = [] if rep.audit is None else rep.audit.lines()
+    row.accel_is_tip = None if rep.audit is None else bool(rep.audit.accel_is_tip)
     row.format = run.log.layout or run.log.format
     row.rows = len(run)
     row.sample_time_s = run.log.sample_time
@@ -262,17 +267,47 @@ def survey(paths: Sequence[str | Path], model: bool = True, workers: int | None 
             if progress:
                 progress(len(rows), len(files), rows[f])
     else:
-        with process_pool(min(workers, len(files))) as pool:  # a signal, an error: the workers stop now
-            futures = {pool.submit(survey_one, f, model): f for f in files}
-            for fut in as_finished(futures):
-                f = futures[fut]
-                try:
-                    rows[f] = fut.result()
-                except Exception as exc:  # noqa: BLE001 - a dead worker costs one row, not the survey
-                    rows[f] = SurveyRow(file=str(f), reason=f"worker failed: {type(exc).__name__}: {exc}")
-                if progress:
-                    progress(len(rows), len(files), rows[f])
+        # a worker that dies (killed, out of memory, crashed) breaks the pool and fails every file
+        # not yet replayed, through no fault of theirs: they are replayed again in a new pool, and
+        # those lost once more one by one, each in a process of its own (twice), so only a file
+        # whose replay kills its worker is a row saying so
+        pending = list(files)
+        for attempt in ("pool", "alone", "alone again"):
+            lost_now: list[Path] = []
+            for group in ([pending] if attempt == "pool" else [[f] for f in pending]):
+                lost_now += _survey_pool(group, model, min(workers, len(group)), rows, len(files), progress,
+                                         last_try=attempt == "alone again")
+            pending = lost_now
+            if not pending:
+                break
     return [rows[f] for f in files]
+
+
+WORKER_DIED = ("its replay ended the worker process abruptly twice, alone in a process of its own (crashed or out "
+               "of memory)")
+"""The row of a file whose replay kills the worker process every time."""
+
+
+def _survey_pool(files: list[Path], model: bool, workers: int, rows: dict, total: int, progress,
+                 last_try: bool) -> list[Path]:
+    """Replay ``files`` in a new pool into ``rows``; return the files a dead worker lost (on the
+    last try, their row says so instead)."""
+    lost_files = []
+    with process_pool(workers) as pool:  # a signal, an error: the workers stop now
+        futures = {pool.submit(survey_one, f, model): f for f in files}
+        for fut in as_finished(futures):
+            f = futures[fut]
+            if lost(fut) and not last_try:
+                lost_files.append(f)
+                continue
+            try:
+                rows[f] = fut.result()
+            except Exception as exc:  # noqa: BLE001 - a failed replay costs one row, not the survey
+                reason = WORKER_DIED if lost(fut) else f"worker failed: {type(exc).__name__}: {exc}"
+                rows[f] = SurveyRow(file=str(f), reason=reason)
+            if progress:
+                progress(len(rows), total, rows[f])
+    return lost_files
 
 
 def _cell(value: Any, fmt: str = "") -> str:
@@ -328,7 +363,8 @@ def format_table(rows: Sequence[SurveyRow], root: str | Path | None = None) -> s
             last = (f"beam: f1 {_cell(r.f1_hz, '.3f')} Hz, zeta {_cell(r.zeta1, '.4f')} "
                     f"(model {_cell(r.f1_model_hz, '.3f')} Hz, {_cell(r.zeta1_model, '.4f')})")
         elif r.fit_theta_pct is not None or r.fit_accel_pct is not None:
-            last = f"fit theta {_cell(r.fit_theta_pct, '.1f')} %, a {_cell(r.fit_accel_pct, '.1f')} %"
+            why = f" ({NOT_TIP})" if r.accel_is_tip is False else ""
+            last = f"fit theta {_cell(r.fit_theta_pct, '.1f')} %, a {_cell(r.fit_accel_pct, '.1f')} %{why}"
         else:
             last = "-"
         lines.append([name, r.format, _cell(r.rows), _cell(r.sample_time_s, "g"), ctl, _cell(r.alignment),

@@ -532,3 +532,59 @@ def test_identify_makes_its_experiments_folder_in_the_output_folder(ws):
     assert folder.parent == Path("lab") and folder.name.startswith("identify-")
     args = argparse.Namespace(out_dir=None, force=False, _config_values={})
     assert experiments_folder(args).parent == Path("runs")
+
+
+# --- files an option or a setting makes a command read are inputs too (issue 24: identify replaced
+# the model its sim:// port served, compare/bode/plot the station.toml they read) --------------
+
+SETTINGS = 'out_dir = "runs"\n'
+
+
+def _readers() -> dict[str, set[str]]:
+    """Per source, the table's commands that read it: station.toml when the command takes its
+    settings (:func:`station.config.apply_config`), the port's model when it opens a port."""
+    import tempfile
+
+    here = os.getcwd()
+    with tempfile.TemporaryDirectory() as d:
+        (Path(d) / "station.toml").write_text(SETTINGS)
+        os.chdir(d)
+        try:
+            sub = next(a for a in build_parser()._actions if a.dest == "command").choices
+        finally:
+            os.chdir(here)
+    parsers = {n: sub[c.command or n] for n, c in WRITERS.items()}
+    return {"station.toml": {n for n, p in parsers.items() if p.get_default("_config")},
+            "--port's model": {n for n, p in parsers.items() if p.get_default("port") is not None}}
+
+
+READERS = _readers()
+
+
+def test_the_readers_are_the_commands_that_take_settings_or_a_port():
+    assert READERS == {"station.toml": {"step", "compare", "bode", "plot", "identify"},
+                       "--port's model": {"step", "identify"}}
+
+
+MORE_FILES = {"identify": ("--save-model",)}
+"""File options the table leaves out for its full-disk case (output_cases.py), refused here all the same."""
+
+
+@pytest.mark.parametrize("name, option, source", [(n, o, s) for s, names in READERS.items() for n in sorted(names)
+                                                  for o in WRITERS[n].files + MORE_FILES.get(n, ())])
+def test_a_file_a_setting_or_the_port_makes_the_command_read_is_never_replaced(ws, capsys, name, option, source):
+    cmd, inp = WRITERS[name], _inputs(ws)
+    argv = cmd.argv(name, inp)
+    (ws / "station.toml").write_text(SETTINGS)
+    if source == "station.toml":
+        target = ws / "station.toml"
+    else:
+        target = ws / "served.toml"  # the simulated rig's model, as sim://?model=FILE names it
+        shutil.copy(inp["model"], target)
+        i = argv.index("--model")  # the port's model in --model's place
+        argv = argv[:i] + argv[i + 2:] + ["--port", f"sim://?model={target}"]
+    before = snapshot(ws)
+    code = main([str(a) for a in argv + [option, target, "--force"]])
+    err = "\n".join(line for line in capsys.readouterr().err.splitlines() if not line.startswith("station: note:"))
+    _refused(code, err, f"is an input of this command ({source})")
+    assert snapshot(ws) == before

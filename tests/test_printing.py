@@ -60,6 +60,28 @@ def test_the_table_labels_the_alone_and_the_extended_columns_and_fills_each_from
         assert line in printed
 
 
+@pytest.mark.parametrize("accepted", [True, False])
+def test_every_effects_row_keeps_each_cell_in_its_column(accepted):
+    """Every unit of the vocabulary (``DAC counts per rad/s``, ``accelerometer counts per s``, ...)
+    and every value fits its column: a cell never pushes the ones after it out of line."""
+    from station.plant.effects import EFFECTS as VOCABULARY
+
+    effects = [_effect(name, -123456.7 if i % 2 else 0.5, spec.unit, -484.2 if i % 3 else 5.0, 99.9, accepted,
+                       -98765.4 if i % 2 else 1.0, Interval(-1234.5, 67890.1, False, False) if accepted else None)
+               for i, (name, spec) in enumerate(VOCABULARY.items())]
+    diag = Diagnosis(effects[0].name, [e.name for e in effects if e.accepted], {"theta": 1.0}, {"theta": 1.0}, 0.0,
+                     effects, as_model(None), as_model(None), [], "leave-one-run-out")
+    header, *rows = candidate_rows(diag)
+    unit_at = header.index(" unit ") + 1
+    gain_end = header.index("θ gain (alone)") + len("θ gain (alone)")
+    cost_end = header.index("cost gain (alone)") + len("cost gain (alone)")
+    ext_end = header.index("value (extended)") + len("value (extended)")
+    for e, row in zip(effects, rows):
+        assert row[unit_at:].startswith(e.unit + " "), (row, e.unit)
+        assert row[:gain_end].endswith(f"{e.gain_pct:.1f} %") and row[:cost_end].endswith(f"{e.cost_gain_pct:.1f} %")
+        assert row[ext_end - 1] != " " and row[ext_end] == " ", row
+
+
 # --- identify: the verdict, the table, the identified model and the JSON read one record -----
 
 import re  # noqa: E402

@@ -149,6 +149,10 @@ def test_one_usable_run_is_refused(tmp_path, capsys):
     (one / src.name).write_bytes(src.read_bytes())
     assert main(["survey", str(one), "--diagnose"]) == 2
     assert "leave-one-run-out needs at least two" in capsys.readouterr().err
+    (one / "notes.txt").write_text("x\n")  # a file set aside: the refusal says which and why
+    assert main(["survey", str(one), "--diagnose"]) == 2
+    err = [line for line in capsys.readouterr().err.splitlines() if line.startswith("station:")]
+    assert len(err) == 1 and "one usable run" in err[0] and "set aside" in err[0] and "notes.txt" in err[0], err
 
 
 def test_an_existing_output_is_refused_before_the_diagnosis(drift_folder, tmp_path, capsys):

@@ -86,3 +86,25 @@ def test_the_files_the_station_writes_beside_its_logs_are_not_logs(tmp_path, cap
         "r.png": "a figure (PNG)", "r.json": "a JSON report", "r.rrd": "a rerun recording",
         "rig.toml": "a model or compensator file (TOML)", "s.csv": "a survey table", "survey.txt": "a survey table",
         "003_r.json": "a JSON report"}
+
+
+def test_an_a_fit_of_no_tip_acceleration_says_so_in_the_table_and_the_csv(tmp_path, rig_data, capsys):
+    """The 2014 sweep's a is no tip acceleration (the log audit): its fit of about -270 % is no model
+    error, and the survey's table says so beside it as replay does; the CSV carries the same fact."""
+    import csv
+    import io
+
+    from station.replay import NOT_TIP
+
+    d = tmp_path / "logs"
+    d.mkdir()
+    for name in ("without_accel_01_28_14_test_2.txt", "SFLR_P_control_step_kp_2_SLFR_RTP_P_control_kp=2.0.txt"):
+        shutil.copy(rig_data / name, d / name)
+    assert main(["survey", str(d), "--jobs", "1", "--csv", str(tmp_path / "s.csv")]) == 0
+    out = capsys.readouterr().out
+    rows = {line.split()[0]: line for line in out.splitlines() if line.startswith(("without", "SFLR"))}
+    assert rows["without_accel_01_28_14_test_2.txt"].endswith(f"% ({NOT_TIP})")
+    assert NOT_TIP not in rows["SFLR_P_control_step_kp_2_SLFR_RTP_P_control_kp=2.0.txt"]
+    table = {r["file"].rsplit("/", 1)[-1]: r for r in csv.DictReader(io.StringIO((tmp_path / "s.csv").read_text()))}
+    assert table["without_accel_01_28_14_test_2.txt"]["accel_is_tip"] == "False"
+    assert table["SFLR_P_control_step_kp_2_SLFR_RTP_P_control_kp=2.0.txt"]["accel_is_tip"] == "True"

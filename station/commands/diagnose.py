@@ -187,10 +187,7 @@ def candidate_rows(diag) -> list[str]:
     list of str
         The header and the rows, aligned.
     """
-    w = (18, 13, 15, 14, 17, 16)
-    c = CANDIDATE_COLUMNS
-    rows = [f"{c[0]:<{w[0]}} {c[1]:>{w[1]}} {c[2]:<{w[2]}} {c[3]:>{w[3]}} {c[4]:>{w[4]}} {c[5]:>{w[5]}}  "
-            f"{c[6]}  {c[7]}"]
+    cells = []
     held = diag.extended_model.effect_dict() if diag.extended_model is not None else {}
     for e in diag.effects:
         alone = e.value_alone if e.accepted and math.isfinite(e.value_alone) else e.value
@@ -200,10 +197,40 @@ def candidate_rows(diag) -> list[str]:
         # an interval's ends as found, also in samples (rounded, 0.6 .. 1.4 would read 1 .. 1: narrow)
         iv = "-" if e.interval is None else f"{_num(e.interval.lo, '')} .. {_num(e.interval.hi, '')}"
         end = "  (at the end of its search range)" if e.at_range_end else ""
-        rows.append(f"{e.name:<{w[0]}} {_num(alone, e.unit):>{w[1]}} {e.unit:<{w[2]}} {e.gain_pct:>{w[3] - 2}.1f} % "
-                    f"{e.cost_gain_pct:>{w[4] - 2}.1f} % {ext:>{w[5]}}  {iv:<{len(c[6])}}  "
-                    f"{mark}{end}".rstrip())
-    return rows
+        cells.append((e.name, _num(alone, e.unit), e.unit, f"{e.gain_pct:.1f} %", f"{e.cost_gain_pct:.1f} %", ext, iv,
+                      mark + end))
+    return align_columns(CANDIDATE_COLUMNS, cells, right=CANDIDATE_RIGHT)
+
+
+CANDIDATE_RIGHT = frozenset({1, 3, 4, 5})
+"""The candidates table's columns of numbers (right-aligned)."""
+
+
+def align_columns(head, rows, right=frozenset(), gap: str = " ") -> list[str]:
+    """A table's lines, every column as wide as its widest cell (the header's included), so no
+    cell pushes the ones after it out of their column; numbers (``right``) right-aligned, the
+    last column as it is.
+
+    Parameters
+    ----------
+    head : sequence of str
+        The column names.
+    rows : sequence of sequence of str
+        The cells, one sequence per row, as many as ``head``.
+    right : set of int
+        Indices of the right-aligned columns.
+    gap : str
+        Between two columns.
+    """
+    rows = [tuple(r) for r in rows]
+    width = [max([len(head[i])] + [len(r[i]) for r in rows]) for i in range(len(head))]
+
+    def line(cells) -> str:
+        last = len(cells) - 1
+        return gap.join(c if i == last else c.rjust(width[i]) if i in right else c.ljust(width[i])
+                        for i, c in enumerate(cells)).rstrip()
+
+    return [line(tuple(head))] + [line(r) for r in rows]
 
 
 def format_diagnosis(diag) -> str:

@@ -152,8 +152,10 @@ def format_identification(ident) -> str:
         lines.append(f"kept the earlier explanation: {note}")
     if ident.model is not None:
         lines.append(f"identified model: {describe(ident.model.effect_dict())}")
-    lines.append(f"{len(ident.experiments)} experiments ({sum(r.used for r in ident.experiments)} used), "
-                 f"{ident.diagnoses} diagnoses in {t.get('total', 0):.1f} s (experiments {t.get('experiments', 0):.1f} s, "
+    n, d = len(ident.experiments), ident.diagnoses
+    lines.append(f"{n} experiment{'' if n == 1 else 's'} ({sum(r.used for r in ident.experiments)} used), "
+                 f"{d} diagnos{'i' if d == 1 else 'e'}s in {t.get('total', 0):.1f} s "
+                 f"(experiments {t.get('experiments', 0):.1f} s, "
                  f"diagnoses {t.get('diagnosis', 0):.1f} s, designs {t.get('design', 0):.1f} s)")
     if ident.diagnosis is not None:
         lines.append(format_diagnosis(ident.diagnosis))

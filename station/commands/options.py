@@ -19,7 +19,7 @@ import sys
 from pathlib import Path
 
 from station.errors import StationError
-from station.inputs import exists
+from station.inputs import exists, sim_model_file
 from station.outputs import DEFAULT_OUT_DIR, FORCE_HELP, Input
 from station.protocol import PROTOCOLS
 from station.ranges import SIM_RIG, Number, number  # noqa: F401 (Number, number: the commands' import place)
@@ -242,16 +242,24 @@ def add_force_option(parser: argparse.ArgumentParser) -> None:
 
 
 def model_inputs(args: argparse.Namespace) -> list[Input]:
-    """The files the model options name (``--model``, ``--params``): inputs no output may replace.
+    """Every file a command reads because of its shared options and settings: inputs no
+    output may replace (:func:`station.outputs.check_outputs`). One list for every command,
+    so none forgets one: ``--model`` and ``--params``, the model file ``--port``'s
+    ``sim://?model=FILE`` serves, and the settings file in use (``station.toml``, for the
+    commands that read it: :func:`station.config.apply_config`). A command adds the files
+    it is given itself (its logs, ``--robust``, ...).
 
     Parameters
     ----------
     args : argparse.Namespace
-        Parsed options of :func:`add_model_options` (``model`` or ``model_spec``, ``params``).
+        Parsed options (``model`` or ``model_spec``, ``params``, ``port``, ``_config``; any
+        may be missing).
     """
     model = getattr(args, "model_spec", None) or getattr(args, "model", None)
     return [Input("--model", model if isinstance(model, (str, Path)) else None),
-            Input("--params", getattr(args, "params", None))]
+            Input("--params", getattr(args, "params", None)),
+            Input("--port's model", sim_model_file(getattr(args, "port", None))),
+            Input("station.toml", getattr(args, "_config", None))]
 
 
 def add_link_options(parser: argparse.ArgumentParser, soft_limit_help: str = "") -> None:

@@ -5,8 +5,8 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from station.commands.options import (add_force_option, add_out_dir_option, config_error, out_dir, out_dir_label,
-                                      out_dir_remedy)
+from station.commands.options import (add_force_option, add_out_dir_option, config_error, model_inputs, out_dir,
+                                      out_dir_label, out_dir_remedy)
 from station.config import apply_config
 from station.outputs import Input, Output, check_folder, check_outputs
 
@@ -57,6 +57,6 @@ def run(args: argparse.Namespace) -> int:
         figure = Output(f"the figure of {args.files[0].name}", out_dir(args) / f"{args.files[0].stem}.png",
                         f"--out FILE, or {out_dir_remedy(args)}")
     out = figure.path
-    check_outputs([figure], [Input("LOG", f) for f in args.files], force=args.force)
+    check_outputs([figure], [Input("LOG", f) for f in args.files] + model_inputs(args), force=args.force)
     print(f"figure: {plot_log_files(args.files, out, align=args.align)}")
     return 0

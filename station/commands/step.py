@@ -10,9 +10,9 @@ from station import experiment as ex
 from station.errors import StationError
 from station.commands.options import (add_force_option, add_link_options, add_model_options, add_out_dir_option,
                                       add_protocol_option, add_report_options, add_seed_option, config_error,
-                                      link_limits, out_dir, out_dir_label, warn)
+                                      link_limits, model_inputs, out_dir, out_dir_label, warn)
 from station.config import apply_config
-from station.outputs import Input, Output, check_folder, write_json
+from station.outputs import Output, check_folder, write_json
 from station.plan import RANGES, StepPlan, plan_step
 from station.signals import noting
 from station.viz import RerunSink
@@ -102,7 +102,7 @@ def plan(args) -> StepPlan:
                      baudrate=args.baud, model=args.model, n_elements=args.elements, seed=args.seed,
                      out=args.out, out_dir=out_dir(args), force=args.force,
                      outputs=[Output("--json", args.json), Output("--rrd", args.rrd)],
-                     inputs=[Input("station.toml", getattr(args, "_config", None))],
+                     inputs=model_inputs(args),  # (the plan names --model and --port's model itself)
                      rrd=args.rrd is not None, notify=warn)
 
 

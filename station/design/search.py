@@ -516,7 +516,11 @@ def _distinct(cands: list, n: int) -> list:
 
 
 def _describe(c: Candidate) -> str:
+    """The progress's words for a design: the hub's settling on its costliest model (the cost
+    weighs each model's settling by the thesis's there, so that model need not be the one that
+    settles last: the final 'worst over the set' is the latest over every model) and the highest
+    overshoot over the set."""
     f = c.figures[c.worst]
     settle = "not settled" if f.settling_2pct_s is None else f"{f.settling_2pct_s:.3f} s"
-    return (f"worst case: hub {settling_label(2)} {settle}, overshoot "
-            f"{max(g.overshoot_pct for g in c.figures):.1f} %")
+    return (f"costliest model: hub {settling_label(2)} {settle}; overshoot at most "
+            f"{max(g.overshoot_pct for g in c.figures):.1f} % over the models")

@@ -20,7 +20,6 @@ from station.diagnosis.search.workbench import Bench, nominal_trial, workbench
 from station.diagnosis.sessions.drift import DriftResult, decide_drift, finite, select_structure, session_axes
 from station.diagnosis.sessions.layout import Layout, PerSession, key
 from station.diagnosis.sessions.logs import SessionLogs, accel_drift, load_sessions, simulate_cut
-from station.errors import StationError
 from station.logged.audit import ACCEL_DRIFT_COUNTS, ACCEL_DRIFT_WINDOW_S
 from station.logged.sensors import decide_faults, sensor_evidence
 from station.plant.model import as_model
@@ -221,8 +220,6 @@ def _diagnose_sessions(sessions, model, say, bench: Bench, max_samples, simulate
     base = as_model(model)
     loaded = load_sessions(sessions, max_samples, say)
     cases = loaded.cases
-    if len(cases) < 2:
-        raise StationError(f"survey --diagnose: one usable run ({cases[0].path}); leave-one-run-out needs at least two")
     for note in loaded.notes:
         say(note)
     layout = Layout(tuple(loaded.groups))

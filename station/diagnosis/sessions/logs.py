@@ -274,7 +274,7 @@ def load_sessions(sessions: Sequence[SessionLogs], max_samples: int = SESSIONS_M
     Raises
     ------
     StationError
-        No usable run in any session.
+        Fewer than two usable runs in all sessions (naming what was set aside and why).
     StopSignal
         SIGINT or SIGTERM arrived between two logs (:func:`station.signals.check_stop`).
     """
@@ -305,10 +305,14 @@ def load_sessions(sessions: Sequence[SessionLogs], max_samples: int = SESSIONS_M
             notes.append(f"{s.name}: no usable run; the session is left out")
     per_session, copies = set_aside_copies(per_session)
     notes += copies
-    if not per_session:
+    usable = [c.path for _, cs in per_session for c in cs]
+    if len(usable) < 2:  # what was set aside and why, in the refusal itself (nothing is said before it)
         why = "; ".join(n for n in notes if "no usable run" not in n)
-        raise StationError("survey --diagnose: no usable run in " + ", ".join(s.name for s in sessions)
-                           + (f" ({why})" if why else ""))
+        if not usable:
+            raise StationError("survey --diagnose: no usable run in " + ", ".join(s.name for s in sessions)
+                               + (f" ({why})" if why else ""))
+        raise StationError(f"survey --diagnose: one usable run ({usable[0]}); leave-one-run-out needs at least two"
+                           + (f"; set aside: {why}" if why else ""))
     flat = [c for _, cs in per_session for c in cs]
     lengths = [c.n for c in flat]
     used = cut_lengths(lengths, max_samples)
