@@ -162,6 +162,13 @@ def _agrees(ident) -> str:
         if e["accepted"]:
             assert table[e["name"]][1] == pytest.approx(e["value"], rel=1e-3)
             assert table[e["name"]][2] == pytest.approx(e["interval"], rel=1e-3)
+        # a held effect is "held" at its extended value in the JSON as in the table (the alone
+        # value stays "value", DESIGN.md's meaning for an effect not accepted)
+        assert e["held"] == (table[e["name"]][3] == "held"), e
+        if e["accepted"] or e["held"]:
+            assert table[e["name"]][1] == pytest.approx(e["value_extended"], rel=1e-3)
+        else:
+            assert e["value_extended"] is None
     # the verdict says "narrow" only of intervals the table shows narrow
     if "every interval narrow" in printed:
         for name, (_, ext, iv, acc) in table.items():

@@ -22,11 +22,12 @@ HELP = ("diagnose the model on measured runs: residual tests, the missing effect
         "runs it was not fitted to), the extended model and its gain")
 
 
-SIMULATIONS_PER_FOLD_RUN = 1430
+SIMULATIONS_PER_FOLD_RUN = 1700
 """Simulations of the whole vocabulary's diagnosis per run simulated in each fold (every
 evaluation simulates a fold's fit and validation runs): leave-one-run-out on n runs costs about
-this × n × n. Counted here on the rig's thesis logs: 2 runs 5676 (1419 × 4), 3 runs 12 934
-(1437 × 9), 4 runs 22 886 (1430 × 16); the count hardly depends on the runs' length."""
+this × n × n. Counted on the rig's thesis logs (the joint screen from the second step on):
+2 runs 7829 (1957 × 4), 3 runs 16 139 (1793 × 9), 4 runs 25 703 (1606 × 16); the count hardly
+depends on the runs' length."""
 SECONDS_PER_SIMULATION = 0.8e-3
 """CPU time of a simulation besides its samples (building the model with its effects), s."""
 SECONDS_PER_SAMPLE = 0.25e-6
@@ -188,7 +189,7 @@ def candidate_rows(diag) -> list[str]:
         The header and the rows, aligned.
     """
     cells = []
-    held = diag.extended_model.effect_dict() if diag.extended_model is not None else {}
+    held = diag.held
     for e in diag.effects:
         alone = e.value_alone if e.accepted and math.isfinite(e.value_alone) else e.value
         # an effect an accepted one holds (a breakaway's sliding level) is in the model at its value there

@@ -116,6 +116,7 @@ def _candidates_table(diag) -> list[str]:
             "<tr><th>value</th><th>θ RMS gain (held out)</th><th>θ+a cost gain</th><th>value</th>"
             "<th>95 % interval</th></tr>"]
     warn = " <span class='warn'>(at the end of its search range)</span>"
+    held = diag.held
     for e in diag.effects:
         alone = e.value_alone if e.accepted else e.value
         cells = [esc(plain_name(e.name)),
@@ -124,6 +125,8 @@ def _candidates_table(diag) -> list[str]:
         if e.accepted:
             cells += [esc(plain_value(e.name, e.value, e.unit)) + (warn if e.at_range_end else ""),
                       esc(interval_words(e.name, e.interval, e.unit).replace("95 % interval ", "")), "yes"]
+        elif e.name in held:  # in the model, held by an accepted effect or decided from the data
+            cells += [esc(plain_value(e.name, held[e.name], e.unit)), "", "held"]
         else:
             cells += ["", "", ""]
         rows.append("<tr>" + "".join(f"<td>{c}</td>" for c in cells) + f"<td class='ev'>{esc(e.evidence)}</td></tr>")

@@ -4,6 +4,8 @@ each run side by side with the models (:class:`RunReport`) and the whole
 
 from __future__ import annotations
 
+from collections.abc import Mapping
+
 import math
 from dataclasses import dataclass, field
 from typing import Any
@@ -53,21 +55,32 @@ class EffectResult:
     interval: Any = None
     at_range_end: bool = False
 
-    def to_json(self) -> dict:
+    def to_json(self, held: Mapping[str, float] | None = None) -> dict:
         """The effect as DESIGN.md's ``effects`` entry.
+
+        Parameters
+        ----------
+        held : mapping of str to float, optional
+            Effects the extended model holds without accepting them (:attr:`Diagnosis.held`).
 
         Returns
         -------
         dict
             ``name``, ``value``, ``unit``, ``gain_pct`` and ``cost_gain_pct`` (%, 3 decimals),
-            ``evidence``, ``accepted``, ``fold_values``, ``value_alone``, ``interval`` ([low, high]
-            or None), ``interval_at_range_end`` ([bool, bool] or None) and ``at_range_end``; values in
-            the effect's unit, None where not finite.
+            ``evidence``, ``accepted``, ``held`` (in the extended model though not accepted),
+            ``value_extended`` (the value in the extended model: ``value`` when accepted, the held
+            value, else None), ``fold_values``, ``value_alone``, ``interval`` ([low, high] or None),
+            ``interval_at_range_end`` ([bool, bool] or None) and ``at_range_end``; values in the
+            effect's unit, None where not finite.
         """
         fin = lambda x: x if math.isfinite(x) else None  # noqa: E731
         iv = self.interval
+        held = held or {}
+        is_held = not self.accepted and self.name in held
+        ext = self.value if self.accepted else held[self.name] if is_held else math.nan
         return {"name": self.name, "value": fin(self.value), "unit": self.unit, "gain_pct": round(self.gain_pct, 3),
-                "evidence": self.evidence, "accepted": self.accepted,
+                "evidence": self.evidence, "accepted": self.accepted, "held": is_held,
+                "value_extended": fin(float(ext)),
                 "cost_gain_pct": round(self.cost_gain_pct, 3),
                 "fold_values": [fin(v) for v in self.fold_values],
                 "value_alone": fin(self.value_alone),
@@ -216,6 +229,16 @@ class Diagnosis:
         return dict(self.sensor_faults.effects) if self.sensor_faults is not None else {}
 
     @property
+    def held(self) -> dict:
+        """Effects the extended model holds that were not accepted as causes (a breakaway's
+        sliding level, a decided sensor fault) -> their value there: the one record the
+        candidates table, the report and the JSON's ``effects`` (``held``, ``value_extended``)
+        read. Empty without an extended model."""
+        model = self.extended_model.effect_dict() if self.extended_model is not None else {}
+        accepted = {e.name for e in self.effects if e.accepted}
+        return {k: v for k, v in model.items() if k not in accepted and any(e.name == k for e in self.effects)}
+
+    @property
     def all_causes(self) -> list:
         """DESIGN.md's ``causes``: the decided faults first, then the accepted effects."""
         faults = list(self.decided_faults)
@@ -276,7 +299,7 @@ class Diagnosis:
             "baseline": {"fit_pct": dict(self.baseline_fit)},
             "extended": {"fit_pct": dict(self.extended_fit)},
             "gain_pct": round(self.gain_pct, 3),
-            "effects": [e.to_json() for e in self.effects],
+            "effects": [e.to_json(self.held) for e in self.effects],
             "unexplained": bool(u.flag) if u is not None else False,
             "unexplained_evidence": u.evidence if u is not None else "",
             "alternatives": [a.to_json() for a in self.alternatives],
