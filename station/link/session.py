@@ -42,9 +42,11 @@ logger = logging.getLogger("station.link")
 ZERO_ACCEL_TICKS = 16
 """Readings averaged for the accelerometer's zero (protocol v1, START bit1)."""
 IDLE_S = 0.25 * DT
+"""A read that blocked this long found nothing waiting: the station was idle, the link late."""
 HELD_UP_S = 0.02
 """A poll that overran the port's read timeout by more than this: the host was held up."""
-"""A read that blocked this long found nothing waiting: the station was idle, the link late."""
+HELD_SPAN_S = POLL_S + HELD_UP_S
+"""A span between two polls (or a poll's own read) longer than this: the host was held up."""
 HANDSHAKE_TIMEOUT = 1.0
 """Seconds to wait for the device's answer to HELLO / θ0 / STOPPED."""
 
@@ -194,11 +196,13 @@ class Session:
         blocked: nothing had been there) feeds the burst meter; one that was already
         waiting (the station was busy) does not."""
         t0 = perf_counter()
-        self._credit_held_up(t0 - self._t_listen)  # since the last poll or the deadline's start
+        if t0 - self._t_listen > HELD_SPAN_S:  # since the last poll or the deadline's start (hot path: one test)
+            self._credit_held_up(t0 - self._t_listen)
         self._check_wait(waiting_for)
         got = self._receive()
         self._t_listen = now = perf_counter()
-        self._credit_held_up(now - t0)
+        if now - t0 > HELD_SPAN_S:
+            self._credit_held_up(now - t0)
         if got and now - t0 > IDLE_S:
             self.bursts.record(got, now)
 
