@@ -269,3 +269,22 @@ def test_one_runs_signs_are_its_audit_and_replay_and_compare_use_them(tmp_path, 
     # the wiring undone, the nominal model's a follows the log's as it does on a healthy rig
     healthy = replay(write_case(tmp_path / "healthy", {}, seed)[3], model=True).fit_pct["accel"]
     assert rep.fit_pct["accel"] > min(0.5 * healthy, 40.0), (rep.fit_pct, healthy)
+
+
+@pytest.mark.parametrize("held", [{}, 
+    {"motor_polarity": -1.0}, {"encoder_scale": -1.0}, {"accel_gain": 1.5}, {"motor_polarity": -1.0, "encoder_scale": -1.0},
+    {"encoder_scale": 2.0, "accel_gain": -1.0}])
+def test_a_runs_decision_is_one_explanation_never_added_to_a_model_that_holds_a_sign(tmp_path, held):
+    """The data of a reversed motor and encoder say "accelerometer reversed" against the nominal
+    model: the decision explains the run jointly, so a model that holds any sign or scale gets
+    none of it (adding accel_gain -1 to a model with the motor and encoder reversed turned its a
+    around: 53 counts off the generator's where it agreed within rounding)."""
+    hidden = {"motor_polarity": -1.0, "encoder_scale": -1.0}
+    run = LoggedRun.from_path(write_case(tmp_path, hidden, 0, accel_noise=0.0)[0])
+    assert run.sensors.effects  # the data contradict the nominal model's signs
+    model = load_model().with_effects(held, name="held")
+    found = run.found_faults(model)
+    assert found == ({} if held else run.sensors.effects)
+    if held == hidden:
+        sim = run.simulate(model)
+        assert max(abs(sim.prediction["a"] - run.data["a"])) <= 1.0

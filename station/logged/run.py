@@ -18,6 +18,7 @@ from station.logged.audit import (ACCEL_CLAIM, Audit, AuditClaim, TimeBase, acce
 from station.logged.controller import ControllerId, describe_controller, identify_controller
 from station.logged.sensors import NO_FAULTS, SensorFaults, decide_faults, sensor_evidence
 from station.logged.simulate import ModelRun, compared_theta, simulate_log
+from station.plant.effects import SENSOR_SIGNS
 from station.logged.reference import Reference, classify_reference
 from station.logged.start import Start, start_claims
 from station.runlog import SKIPPED, RunLog, read_log
@@ -440,8 +441,11 @@ class LoggedRun:
                             self.reference.amplitude)
 
     def found_faults(self, model) -> dict[str, float]:
-        """The sensor and wiring faults this run's data decided (:attr:`sensors`) that a model
-        does not hold itself (a model a diagnosis saved carries its session's: never applied twice).
+        """The sensor and wiring faults this run's data decided (:attr:`sensors`), for a model
+        that holds no sign or scale of its own. The decision is one joint explanation against the
+        nominal model (a reversed motor and encoder look like a reversed accelerometer), so a model
+        that holds any of them (one a diagnosis saved carries its session's) gets none of it:
+        never applied twice, never half of one explanation beside half of another.
 
         Parameters
         ----------
@@ -450,10 +454,11 @@ class LoggedRun:
         Returns
         -------
         dict of str to float
-            Effect -> value; empty for a DiscretePlant (no effects) or when the model holds them.
+            Effect -> value; empty for a DiscretePlant (no effects) or a model that holds a
+            sign or scale (:data:`station.plant.effects.SENSOR_SIGNS`).
         """
         held = model.effect_dict() if hasattr(model, "effect_dict") else None
-        if held is None:
+        if held is None or any(k in held for k in SENSOR_SIGNS):
             return {}
         return {k: v for k, v in self.sensors.effects.items() if k not in held}
 

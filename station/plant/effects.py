@@ -178,6 +178,11 @@ CANDIDATES: tuple[str, ...] = (
 """The effects a diagnosis tries (DESIGN.md "Candidates"); never a "setting"."""
 
 
+SENSOR_SIGNS = tuple(n for n in SENSOR_FAULTS if EFFECTS[n].signed)
+"""The sensor and wiring faults that turn a signal around or rescale it (:attr:`EffectSpec.signed`):
+the ones a single run's data decide (:attr:`station.logged.LoggedRun.sensors`)."""
+
+
 def is_neutral(name: str, value: float) -> bool:
     """True when ``value`` means "no effect" for the effect ``name`` (known name).
 
