@@ -83,6 +83,27 @@ half_away = _half_away_with(math.floor)
 sensor_count = _sensor_count_with(half_away)
 
 
+def sensor_counts(x) -> np.ndarray:
+    """:func:`sensor_count` of every element: an array's reading, the same exact rule.
+
+    Parameters
+    ----------
+    x : array_like
+        Noise-free (or noisy) outputs, counts, any shape.
+
+    Returns
+    -------
+    ndarray of float
+        The whole counts, the shape of ``x`` (+0.0 for a zero reading; ±inf and NaN unchanged).
+    """
+    x = np.asarray(x, float)
+    inside = np.abs(x) < _WHOLE  # False for ±inf and NaN too: they come back unchanged
+    mag = np.where(inside, np.abs(x), 0.0)
+    whole = np.floor(mag)
+    whole = np.where(mag - whole >= 0.5, whole + 1.0, whole)  # the fraction is exact: no sum rounded
+    return np.where(inside, np.copysign(whole, x), x) + 0.0
+
+
 def toward_zero(x: float) -> float:
     """``x`` truncated toward zero, as a float (the lab's stored integer command).
 

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from station.protocol import v1
-from station.rounding import half_away, half_away_compiled, round_half_away
+from station.rounding import half_away, half_away_compiled, round_half_away, sensor_count, sensor_counts
 
 TINY_BELOW_HALF = 0.49999999999999994  # the float just below 0.5: floor(x + 0.5) gives 1
 
@@ -23,6 +23,19 @@ EDGES = [
 def test_edge_cases_by_hand(x, expected):
     assert half_away(x) == expected
     assert half_away_compiled(x) == expected
+
+
+def test_an_arrays_reading_is_each_elements_by_the_one_rule():
+    # the edges by hand, random values, exact halves and the floats just inside them
+    rng = np.random.default_rng(12)
+    xs = np.concatenate([[x for x, _ in EDGES], [math.nan], rng.uniform(-40000, 40000, 5000),
+                         np.round(rng.uniform(-1000, 1000, 2000)) + 0.5,
+                         np.nextafter(np.round(rng.uniform(-1000, 1000, 2000)) + 0.5, 0.0)])
+    got = sensor_counts(xs.reshape(-1, 1)).ravel()  # any shape
+    want = np.array([sensor_count(float(x)) for x in xs])
+    np.testing.assert_array_equal(got, want)
+    assert not np.any(np.signbit(got[got == 0.0]))  # a count has no sign
+    assert sensor_counts(np.array([TINY_BELOW_HALF]))[0] == 0.0  # where floor(x + 0.5) gives 1
 
 
 def test_nan_stays_nan():

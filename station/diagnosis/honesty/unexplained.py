@@ -40,6 +40,7 @@ import scipy.signal
 from station.diagnosis.runs.cost import Evaluator
 from station.diagnosis.search.selection import NULL_PERTURBATIONS, perturbed
 from station.rig import DT
+from station.rounding import sensor_count, sensor_counts
 
 THETA_COUNTS = 2.0
 """θ off by this many counts or more cannot be encoder rounding (at most one count)."""
@@ -206,7 +207,7 @@ class _NoisyAccel:
     def step(self, u: float, theta: float, a: float):
         n = self.noise[min(self.k, self.noise.size - 1)]
         self.k += 1
-        return self.inner.step(u, theta, math.floor(a + n + 0.5))
+        return self.inner.step(u, theta, sensor_count(a + n))
 
 
 def _feeds_a_back(case) -> bool:
@@ -272,7 +273,7 @@ def null_replicates(ev: Evaluator, values: Mapping[str, float], i: int, predicti
     out = []
     for name, factor in NULL_PERTURBATIONS:
         theta, a = ev.predict({**values, name: perturbed(name, {**ev.model.effect_dict(), **values}, factor)}, i)
-        out.append((theta, np.floor(a + sigma * rng.standard_normal(a.size) + 0.5)))
+        out.append((theta, sensor_counts(a + sigma * rng.standard_normal(a.size))))
     loop = _feeds_a_back(c)
     for _ in range(NOISE_REPLICATES):
         noise = sigma * rng.standard_normal(c.n)
@@ -281,7 +282,7 @@ def null_replicates(ev: Evaluator, values: Mapping[str, float], i: int, predicti
             theta, a = ev.predict_case(noisy, values)
         else:
             theta, a = prediction
-        out.append((np.asarray(theta, float), np.floor(np.asarray(a, float) + noise + 0.5)))
+        out.append((np.asarray(theta, float), sensor_counts(np.asarray(a, float) + noise)))
     return out
 
 
