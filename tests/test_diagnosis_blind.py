@@ -129,6 +129,22 @@ def test_a_breakaway_over_a_sliding_level_is_named_or_its_rival_kept(tmp_path, h
     assert answer or rival, (hidden, result["causes"], result["extended_model"]["effects"], result["alternatives"])
 
 
+def test_a_breakaway_that_pays_only_by_luck_keeps_plain_coulomb_friction_as_its_rival(tmp_path):
+    """The mirror of the test above: plain Coulomb friction 28.4 (the motor reversed, seed 0)
+    named as a breakaway of 57 over it, which pays over the Coulomb friction only when both are
+    judged by their luck; the data cannot tell them apart, so the Coulomb friction stays among
+    the alternatives (it ended with none)."""
+    effects = case_effects("motor_reversed+coulomb_friction", 0)
+    result = _diagnose(tmp_path, effects, 0)
+    if "static_friction" not in result["causes"]:  # the plain level named: nothing to doubt here
+        assert "coulomb_friction" in result["causes"], result["causes"]
+        return
+    rivals = [a for a in result["alternatives"]
+              if "coulomb_friction" in a["causes"] and "static_friction" not in a["causes"]]
+    assert rivals, result["alternatives"]
+    assert value_error(effects["coulomb_friction"], rivals[0]["values"]["coulomb_friction"]) <= TOLERANCE
+
+
 def test_plain_coulomb_friction_beside_a_4096_count_encoder_is_not_a_breakaway(tmp_path):
     """Seed 1 named a breakaway over the right sliding level until credible weighed it against
     the luck around plain Coulomb friction (issue 26)."""

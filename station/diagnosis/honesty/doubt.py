@@ -50,8 +50,9 @@ import scipy.optimize
 from station.diagnosis.search.bounded import RESOLUTION_STEPS, Axis
 from station.diagnosis.runs.cost import Evaluator, pooled, rms_gain
 from station.diagnosis.search.fitting import MIN_EXCESS, NESTED, SHAPE, excess_of, refit_explanation
-from station.diagnosis.search.selection import (Search, Selection, Step, Trial, excess_fraction, null_floor,
-                                                trial)
+from station.diagnosis.runs.folds import validation_runs
+from station.diagnosis.search.selection import (Search, Selection, Step, Trial, accept, excess_fraction,
+                                                null_floor, trial)
 
 CHI2_95 = 3.841458820694124
 """χ²₁ at 95 %: the likelihood-ratio threshold of one parameter."""
@@ -435,6 +436,22 @@ def _rival_starts(final: Trial, rival: Trial, chosen: str, c: str) -> list[dict]
             for fv, rv in zip(final.fold_values, rival.fold_values)]
 
 
+def _paid_by_luck(steps: Sequence[Step], accepted: Sequence[str], terms: int) -> set[tuple[str, str]]:
+    """(simpler, chosen) for each accepted breakaway that pays over the plain Coulomb friction
+    of its step only when both are judged by their luck
+    (:func:`~station.diagnosis.search.selection.credible`), not by their own validation costs:
+    the simpler explanation fits within noise, so it stays an alternative whatever the
+    tolerance says (blind: Coulomb friction 28.4 named a breakaway of 57.4 over it, with no
+    alternative)."""
+    out = set()
+    for step in steps:
+        simpler = NESTED.get(step.chosen)
+        if step.chosen in accepted and simpler in step.trials and simpler not in accepted \
+                and not accept(step.trials[simpler].val_weighted, step.trials[step.chosen].val_weighted, terms):
+            out.add((simpler, step.chosen))
+    return out
+
+
 def alternatives(search: Search, sel: Selection, nominal: Trial, n_eff: float) -> list[Alternative]:
     """The other explanations the validation data cannot tell apart (module docstring).
 
@@ -462,6 +479,7 @@ def alternatives(search: Search, sel: Selection, nominal: Trial, n_eff: float) -
     final = sel.current
     rms_nom = pooled(ev, nominal.val_sse).rms_theta
     close: list[tuple[float, str, str, list, Trial, bool]] = []  # (step cost, rival, instead of, causes, trial, whole)
+    luck_only = _paid_by_luck(steps, sel.accepted, ev.terms(validation_runs(folds)))
     tol_final = None
     for k, step in enumerate(steps):
         chosen = step.trials[step.chosen]
@@ -473,7 +491,7 @@ def alternatives(search: Search, sel: Selection, nominal: Trial, n_eff: float) -
         if step.chosen not in sel.accepted:  # downgraded since (a breakaway to plain Coulomb friction)
             continue
         for c, tr in _step_rivals(step, sel.accepted):
-            if tr.val_weighted - chosen.val_weighted <= tol:
+            if tr.val_weighted - chosen.val_weighted <= tol or (c, step.chosen) in luck_only:
                 names = [c if n == step.chosen else n for n in sel.accepted]
                 close.append((tr.val_weighted, c, step.chosen, names, tr, last))
     after = sel.steps[-1] if sel.steps and sel.steps[-1].chosen is None else None
@@ -492,7 +510,7 @@ def alternatives(search: Search, sel: Selection, nominal: Trial, n_eff: float) -
             tr = trial(ev, folds, tuple(names), axes, _rival_starts(final, tr, instead, c))
         search.say(f"alternative to {instead}: {' + '.join(names)}, validation cost "
                    f"{tr.val_weighted / final.val_weighted:.3f}× the chosen one's")
-        if tr.val_weighted - final.val_weighted > tol_final:
+        if tr.val_weighted - final.val_weighted > tol_final and (c, instead) not in luck_only:
             continue
         others = [n for n in names if n != c]
         if c in _held(others):  # coulomb_friction beside a static_friction that holds it
