@@ -207,14 +207,14 @@ class Session:
             self.bursts.record(got, now)
 
     def _credit_held_up(self, span: float) -> None:
-        """The deadline counts time the station listened: a span between two polls far longer
-        than the port's read timeout means the host was frozen (a stalled VM), when no device
-        could be heard, and it is added to the deadline. A real device's samples are waiting
+        """The deadline counts time the station listened: a span between two polls longer than
+        :data:`HELD_SPAN_S` (the caller's test, one comparison on the hot path) means the host
+        was frozen (a stalled VM), when no device could be heard, and what it held past the
+        port's read timeout is added to the deadline. A real device's samples are waiting
         after such a stall and end the wait; a silent one is still caught, that much later."""
         held = span - POLL_S
-        if held > HELD_UP_S:
-            self._deadline.target_time += held
-            self.held_up_s += held
+        self._deadline.target_time += held
+        self.held_up_s += held
 
     def _listen(self, timeout: float) -> None:
         """A new sample deadline of ``timeout`` s, starting now."""

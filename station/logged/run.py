@@ -18,9 +18,9 @@ from station.logged.audit import (ACCEL_CLAIM, Audit, AuditClaim, TimeBase, acce
 from station.logged.controller import ControllerId, describe_controller, identify_controller
 from station.logged.sensors import NO_FAULTS, SensorFaults, decide_faults, sensor_evidence
 from station.logged.simulate import ModelRun, compared_theta, simulate_log
-from station.plant.effects import SENSOR_SIGNS
 from station.logged.reference import Reference, classify_reference
 from station.logged.start import Start, start_claims
+from station.plant.effects import SENSOR_SIGNS
 from station.runlog import SKIPPED, RunLog, read_log
 
 REPRODUCED_TOLERANCE = 1e-6
@@ -460,7 +460,7 @@ class LoggedRun:
         held = model.effect_dict() if hasattr(model, "effect_dict") else None
         if held is None or any(k in held for k in SENSOR_SIGNS):
             return {}
-        return {k: v for k, v in self.sensors.effects.items() if k not in held}
+        return dict(self.sensors.effects)  # one run decides signs and scales only: none held here
 
     def model_as_found(self, model, sensors: bool = True):
         """The model as the audit found this run's rig: :meth:`model_for` (the accelerometer's
