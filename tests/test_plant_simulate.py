@@ -143,3 +143,33 @@ def test_the_simulated_rig_steps_in_plain_python_to_the_same_bits():
             plain.advance(v)
             compiled.advance(v)
     assert ModelPlant(load_model("tmm-fit"))._fns[2] is not ModelPlant(load_model("rig"))._fns[2]
+
+
+@pytest.mark.parametrize("substeps, half_gap", [(0, 0.0), (10, 0.0), (10, 0.7)])
+def test_the_modal_step_is_the_complex_recursion(substeps, half_gap):
+    """The kernel writes z <- Λz + b_m·u + b_p·t as real products (complex × real without its
+    products by zero): the same floats as the complex recursion, compiled and plain, on random
+    modes (the Python loop below is the textbook form, not the kernel's)."""
+    from station.plant import kernel
+
+    kernel._compile()
+    rng = np.random.default_rng(11)
+    n = 13
+    cplx = lambda *shape: rng.normal(size=shape) + 1j * rng.normal(size=shape)  # noqa: E731
+    lam, bm, bp, co = cplx(n) * 0.9, cplx(n), cplx(n), cplx(4, n) * 0.1
+    k_d, c_d = 0.3, 0.01
+    for trial in range(50):
+        z0, vk = cplx(n), float(rng.uniform(-200, 200))
+        want = z0.copy()
+        for _ in range(max(substeps, 1)):
+            t = 0.0
+            if substeps and half_gap > 0.0:
+                dl = sum((co[0, i] * want[i]).real for i in range(n))
+                ddl = sum((co[1, i] * want[i]).real for i in range(n))
+                t = k_d * half_gap if dl > half_gap else -k_d * half_gap if dl < -half_gap else k_d * dl + c_d * ddl
+            want = np.array([lam[i] * want[i] + bm[i] * vk + bp[i] * t if substeps else lam[i] * want[i] + bm[i] * vk
+                             for i in range(n)])
+        for advance in (kernel._PLAIN[2], kernel._advance):
+            z = z0.copy()
+            advance(z, vk, lam, bm, bp, co, 1.0, 0.0, substeps, 0.0, 0.0, 0.05, half_gap, k_d, c_d)
+            assert np.array_equal(z, want), (trial, advance)

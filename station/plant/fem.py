@@ -286,7 +286,27 @@ def state_matrices(params: Params, n_elements: int = 4) -> tuple[np.ndarray, np.
         a_gain·(M⁻¹ b)_tip is zero (the torque acts on the motor only, DESIGN.md), so
         D = 0.
     """
-    m, Phi, omega, scale = modal_basis(params, n_elements)
+    return realization(params, modal_basis(params, n_elements))
+
+
+def realization(params: Params, basis: tuple[SecondOrderModel, np.ndarray, np.ndarray, np.ndarray]
+                ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """:func:`state_matrices` from a :func:`modal_basis` already at hand (a caller that
+    needs the basis too decomposes once).
+
+    Parameters
+    ----------
+    params : Params
+        The parameter set the basis was computed for.
+    basis : tuple
+        ``modal_basis(params, n_elements)``.
+
+    Returns
+    -------
+    A, B, C : ndarray
+        As :func:`state_matrices`.
+    """
+    m, Phi, omega, scale = basis
     n_dof = m.M.shape[0]
     damping = Phi.T @ m.C @ Phi
     Z = np.zeros((n_dof, n_dof))

@@ -105,9 +105,13 @@ def _advance(z, vk, lam, bm, bp, co, gw_v, gw_p, substeps, v_c, v_s, w_s, half_g
     when that is within ±v_s (stick), else ±v_s against the net torque (break-away).
     """
     n = z.shape[0]
+    # complex x real as two real products: the same floats as complex(x) * complex(u, 0)
+    # up to the sign of a zero, without the two products by zero (and no bp term without
+    # backlash: adding t·bp = 0 changes no value either)
     if substeps == 0:
         for i in range(n):
-            z[i] = lam[i] * z[i] + bm[i] * vk
+            w = lam[i] * z[i]
+            z[i] = complex(w.real + bm[i].real * vk, w.imag + bm[i].imag * vk)
         return
     stribeck = v_s > v_c
     for _ in range(substeps):
@@ -117,12 +121,12 @@ def _advance(z, vk, lam, bm, bp, co, gw_v, gw_p, substeps, v_c, v_s, w_s, half_g
         wf = 0.0
         if half_gap > 0.0:
             for i in range(n):
-                dl += (co[0, i] * z[i]).real
-                ddl += (co[1, i] * z[i]).real
+                dl += co[0, i].real * z[i].real - co[0, i].imag * z[i].imag  # Re(co z)
+                ddl += co[1, i].real * z[i].real - co[1, i].imag * z[i].imag
         if v_s > 0.0:
             for i in range(n):
-                wm += (co[2, i] * z[i]).real
-                wf += (co[3, i] * z[i]).real
+                wm += co[2, i].real * z[i].real - co[2, i].imag * z[i].imag
+                wf += co[3, i].real * z[i].real - co[3, i].imag * z[i].imag
         t = 0.0
         if half_gap > 0.0:
             if dl > half_gap:
@@ -152,8 +156,14 @@ def _advance(z, vk, lam, bm, bp, co, gw_v, gw_p, substeps, v_c, v_s, w_s, half_g
                 elif f < -v_s:
                     f = -v_s
         ue = vk - f
-        for i in range(n):
-            z[i] = lam[i] * z[i] + bm[i] * ue + bp[i] * t
+        if half_gap > 0.0:
+            for i in range(n):
+                w = lam[i] * z[i]
+                z[i] = complex(w.real + bm[i].real * ue + bp[i].real * t, w.imag + bm[i].imag * ue + bp[i].imag * t)
+        else:
+            for i in range(n):
+                w = lam[i] * z[i]
+                z[i] = complex(w.real + bm[i].real * ue, w.imag + bm[i].imag * ue)
 
 
 def _loop(lam, bm, bp, cm, co, gw_v, gw_p, substeps, z0, u, v_open, use_v_open, closed, gnum, gden, anum, aden,

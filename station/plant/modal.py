@@ -23,7 +23,7 @@ import numpy as np
 
 from station.plant.diskcache import cached_arrays, use_disk
 from station.plant.discrete import DiscretePlant
-from station.plant.fem import modal_basis, state_matrices
+from station.plant.fem import modal_basis, realization
 from station.plant.parameters import Params
 
 
@@ -119,8 +119,9 @@ def _linear_form(params: Params, n_elements: int, dt: float, substeps: int) -> L
     """:func:`linear_form` computed (not cached)."""
     if substeps == 0:
         return sampled_form(DiscretePlant(params, n_elements, dt))
-    A, B, C = state_matrices(params, n_elements)
-    m, Phi, _, scale = modal_basis(params, n_elements)
+    basis = modal_basis(params, n_elements)
+    A, B, C = realization(params, basis)
+    m, Phi, _, scale = basis
     n_dof = Phi.shape[0]
     pair = np.zeros(n_dof)
     pair[0], pair[m.base] = 1.0, -1.0

@@ -39,7 +39,7 @@ from station.inputs import TomlDoc, exists, load_toml
 from station.plant.effects import EFFECTS, check_effects
 from station.plant.kernel import ModelPlant
 from station.plant.modal import LinearForm, linear_form  # noqa: F401 (LinearForm re-exported: it lived here)
-from station.plant.modes import modal_summary, with_beam_damping
+from station.plant.modes import hub_held_modes, with_beam_damping
 from station.plant.parameters import PARAMS_DIR, Params, builtin_params, load_params, params_from_dict
 from station.ranges import N_ELEMENTS, RangeError
 
@@ -154,7 +154,7 @@ class Model:
             Damping ratio of the first hub-held mode, 1 (tmm-fit, 4 elements: 0.0054).
         """
         p = dataclasses.replace(_ratio_params(self.params, self.effect_dict()), beam_beta=0.0)
-        return float(modal_summary(p, self.n_elements).antiresonance_damping[0])
+        return float(hub_held_modes(p, self.n_elements)[1][0])
 
     def linear_form(self, dt: float = DT, substeps: int | None = None) -> LinearForm:
         """The modal form of the linear part, cached per (parameters, elements, dt, sub-steps).

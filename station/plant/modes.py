@@ -75,8 +75,28 @@ def modal_summary(params: Params, n_elements: int = 4, max_hz: float = 200.0) ->
     A, _, _ = state_matrices(params, n_elements)
     import scipy.linalg  # lazy: start-up time (scipy.linalg)
     f, z = _oscillatory(scipy.linalg.eigvals(A), max_hz)
-    fz, zz = _oscillatory(scipy.linalg.eigvals(base_held_matrix(params, n_elements)), max_hz)
-    return ModalSummary(int(n_elements), f, z, fz, zz)
+    return ModalSummary(int(n_elements), f, z, *hub_held_modes(params, n_elements, max_hz))
+
+
+def hub_held_modes(params: Params, n_elements: int = 4, max_hz: float = 200.0) -> tuple[np.ndarray, np.ndarray]:
+    """The hub-held beam modes alone: :func:`modal_summary`'s ``antiresonances_hz`` and
+    ``antiresonance_damping`` (the same numbers, without the whole model's poles, which a
+    search over the beam's damping does not need).
+
+    Parameters
+    ----------
+    params : Params
+    n_elements : int, default 4
+    max_hz : float, default 200
+
+    Returns
+    -------
+    frequencies_hz, damping : ndarray, shape (r,)
+        Damped natural frequencies (Hz, ascending) and damping ratios of the complex zeros
+        of θ/v (eigenvalues of :func:`base_held_matrix`, scipy.linalg.eigvals).
+    """
+    import scipy.linalg  # lazy: start-up time (scipy.linalg)
+    return _oscillatory(scipy.linalg.eigvals(base_held_matrix(params, n_elements)), max_hz)
 
 
 def base_held_matrix(params: Params, n_elements: int = 4) -> np.ndarray:
@@ -133,11 +153,11 @@ def with_beam_damping(params: Params, zeta: float, n_elements: int = 4) -> Param
     """
     def first_zeta(beta: float) -> float:
         p = dataclasses.replace(params, beam_beta=beta)
-        zetas = modal_summary(p, n_elements).antiresonance_damping
+        _, zetas = hub_held_modes(p, n_elements)
         return float(zetas[0]) if zetas.size else 1.0  # no oscillating mode left: overdamped
 
-    if modal_summary(params if params.beam_beta == 0 else dataclasses.replace(params, beam_beta=0.0),
-                     n_elements).antiresonance_damping.size == 0:
+    if hub_held_modes(params if params.beam_beta == 0 else dataclasses.replace(params, beam_beta=0.0),
+                      n_elements)[1].size == 0:
         raise ValueError("no oscillating hub-held beam mode in this parameter set: no beam damping to set")
     floor = first_zeta(0.0)
     if not floor <= zeta <= 0.5:
