@@ -59,9 +59,13 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--budget", type=int, default=8, help="identify's budget of designed experiments (default 8)")
     args = parser.parse_args(argv)
 
+    with tempfile.TemporaryDirectory(prefix="bench_diagnose_") as tmp:  # the generated logs, identify's runs
+        return _bench(args, Path(tmp))
+
+
+def _bench(args: argparse.Namespace, tmp: Path) -> int:
     from station.diagnosis import diagnose
 
-    tmp = Path(tempfile.mkdtemp(prefix="bench_diagnose_"))
     if args.blind is not None or not args.rig.is_dir():
         sys.path.insert(0, str(REPO))
         from tests.blind.generator import write_case
