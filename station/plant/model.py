@@ -154,7 +154,7 @@ class Model:
             Damping ratio of the first hub-held mode, 1 (tmm-fit, 4 elements: 0.0054).
         """
         p = dataclasses.replace(_ratio_params(self.params, self.effect_dict()), beam_beta=0.0)
-        return float(hub_held_modes(p, self.n_elements)[1][0])
+        return float(hub_held_modes(p, self.n_elements).damping[0])
 
     def linear_form(self, dt: float = DT, substeps: int | None = None) -> LinearForm:
         """The modal form of the linear part, cached per (parameters, elements, dt, sub-steps).

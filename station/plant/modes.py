@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import dataclasses
 from dataclasses import dataclass
+from typing import NamedTuple
 
 import numpy as np
 
@@ -78,7 +79,20 @@ def modal_summary(params: Params, n_elements: int = 4, max_hz: float = 200.0) ->
     return ModalSummary(int(n_elements), f, z, *hub_held_modes(params, n_elements, max_hz))
 
 
-def hub_held_modes(params: Params, n_elements: int = 4, max_hz: float = 200.0) -> tuple[np.ndarray, np.ndarray]:
+class HubHeldModes(NamedTuple):
+    """The beam's modes with the base held still (:func:`hub_held_modes`).
+
+    Attributes
+    ----------
+    frequencies_hz, damping : ndarray, shape (r,)
+        Damped natural frequencies (Hz, ascending) and damping ratios.
+    """
+
+    frequencies_hz: np.ndarray
+    damping: np.ndarray
+
+
+def hub_held_modes(params: Params, n_elements: int = 4, max_hz: float = 200.0) -> HubHeldModes:
     """The hub-held beam modes alone: :func:`modal_summary`'s ``antiresonances_hz`` and
     ``antiresonance_damping`` (the same numbers, without the whole model's poles, which a
     search over the beam's damping does not need).
@@ -91,12 +105,12 @@ def hub_held_modes(params: Params, n_elements: int = 4, max_hz: float = 200.0) -
 
     Returns
     -------
-    frequencies_hz, damping : ndarray, shape (r,)
-        Damped natural frequencies (Hz, ascending) and damping ratios of the complex zeros
-        of θ/v (eigenvalues of :func:`base_held_matrix`, scipy.linalg.eigvals).
+    HubHeldModes
+        The complex zeros of θ/v (eigenvalues of :func:`base_held_matrix`,
+        scipy.linalg.eigvals) up to ``max_hz``.
     """
     import scipy.linalg  # lazy: start-up time (scipy.linalg)
-    return _oscillatory(scipy.linalg.eigvals(base_held_matrix(params, n_elements)), max_hz)
+    return HubHeldModes(*_oscillatory(scipy.linalg.eigvals(base_held_matrix(params, n_elements)), max_hz))
 
 
 def base_held_matrix(params: Params, n_elements: int = 4) -> np.ndarray:
@@ -153,11 +167,11 @@ def with_beam_damping(params: Params, zeta: float, n_elements: int = 4) -> Param
     """
     def first_zeta(beta: float) -> float:
         p = dataclasses.replace(params, beam_beta=beta)
-        _, zetas = hub_held_modes(p, n_elements)
+        zetas = hub_held_modes(p, n_elements).damping
         return float(zetas[0]) if zetas.size else 1.0  # no oscillating mode left: overdamped
 
     if hub_held_modes(params if params.beam_beta == 0 else dataclasses.replace(params, beam_beta=0.0),
-                      n_elements)[1].size == 0:
+                      n_elements).damping.size == 0:
         raise ValueError("no oscillating hub-held beam mode in this parameter set: no beam damping to set")
     floor = first_zeta(0.0)
     if not floor <= zeta <= 0.5:
