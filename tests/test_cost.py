@@ -96,3 +96,35 @@ def test_costed_switches_the_cost_inside_the_block_only():
     with pytest.raises(RuntimeError), ev.costed(likelihood=True):
         raise RuntimeError("a fit that fails")
     assert not ev.likelihood  # restored on the way out of a failure too
+
+
+def test_each_set_of_effects_is_simulated_on_its_own_model_to_the_last_bit():
+    """The evaluator keeps one model per set of effects (its linear part is then built once
+    for all runs), keyed by the exact values: effects 1e-12 apart get models 1e-12 apart
+    (the errors' cache may round its key; the model simulated may not)."""
+    seen = []
+    ev = Evaluator([_case("a", 1.0, 0.0)], _Line(), simulate=lambda c, m: (seen.append(m), _simulate(c, m))[1])
+    one = ev.model_with({"x": 1.0})
+    assert ev.model_with({"x": 1.0}) is one
+    near = ev.model_with({"x": 1.0 + 1e-12})
+    assert near is not one and near.x == 1.0 + 1e-12
+    ev.sse({"x": 2.0}, 0)
+    assert seen[-1].x == 2.0
+
+
+def test_a_models_remembered_linear_part_is_its_own_and_not_pickled():
+    """Model remembers its parameter set and modal form (the fits' many runs of one model);
+    a copy with other effects has its own, and a pickled model carries none of it."""
+    import pickle
+
+    from station.plant.model import load_model
+
+    rig = load_model("rig")
+    form = rig.linear_form()
+    assert rig.linear_form() is form
+    other = rig.with_effects({"param:drive_c": 2.0})
+    assert other.linear_params().drive_c == pytest.approx(2.0 * rig.params.drive_c)
+    assert not np.array_equal(other.linear_form().lam, form.lam)
+    clone = pickle.loads(pickle.dumps(rig))
+    assert clone == rig and clone._memo == {}
+    assert np.array_equal(clone.linear_form().lam, form.lam)

@@ -91,6 +91,15 @@ class Model:
         pairs = tuple(sorted((k, v) for k, v in values.items() if v != EFFECTS[k].neutral))
         object.__setattr__(self, "n_elements", n)
         object.__setattr__(self, "effects", pairs)
+        object.__setattr__(self, "_memo", {})
+
+    # the linear part, remembered per model: a fit simulates one model on several runs, and
+    # the module's caches would hash the parameter set again for each (not pickled)
+    def __getstate__(self) -> dict:
+        return {k: v for k, v in self.__dict__.items() if k != "_memo"}
+
+    def __setstate__(self, state: dict) -> None:
+        self.__dict__.update(state, _memo={})
 
     def effect_dict(self) -> dict[str, float]:
         """The effects as {name: value} (only non-neutral ones)."""
@@ -141,8 +150,11 @@ class Model:
         A beam_damping at or below :meth:`beam_damping_floor` leaves ``beam_beta`` = 0
         (:func:`load_model` refuses a file that asks for less; a fit's search may try it).
         """
-        linear = tuple((k, v) for k, v in self.effects if EFFECTS[k].kind == "linear")
-        return _linear_params(self.params, self.n_elements, linear)
+        memo = self._memo.get("params")
+        if memo is None:
+            linear = tuple((k, v) for k, v in self.effects if EFFECTS[k].kind == "linear")
+            memo = self._memo["params"] = _linear_params(self.params, self.n_elements, linear)
+        return memo
 
     def beam_damping_floor(self) -> float:
         """The first-mode damping ratio of the linear part without beam damping (param:NAME
@@ -168,7 +180,11 @@ class Model:
             ignored (1) without them.
         """
         m = (SUBSTEPS if substeps is None else int(substeps)) if self.has_plant_effects else 0
-        return linear_form(self.linear_params(), self.n_elements, float(dt), m)
+        key = ("form", float(dt), m)
+        memo = self._memo.get(key)
+        if memo is None:
+            memo = self._memo[key] = linear_form(self.linear_params(), self.n_elements, float(dt), m)
+        return memo
 
     def linear_plant(self, dt: float = DT) -> DiscretePlant:
         """The linear part sampled by exact ZOH (what a frequency response or the

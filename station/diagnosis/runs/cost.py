@@ -43,6 +43,10 @@ def _key(effects: Mapping[str, float]) -> tuple:
     return tuple(sorted((k, float(f"{v:.10g}")) for k, v in effects.items()))
 
 
+MODELS_KEPT = 1024
+"""Models :meth:`Evaluator.model_with` keeps (a fit asks for the same effects on each of its runs)."""
+
+
 class Evaluator:
     """Simulates runs on the base model with effects and caches their squared errors.
 
@@ -77,6 +81,7 @@ class Evaluator:
         self.run_effects = run_effects
         self.simulations = 0
         self._cache: dict[tuple, tuple[float, float]] = {}
+        self._models: dict[tuple, object] = {}  # one Model per set of effects: its linear part built once
         self._lock = threading.Lock()
 
     def model_with(self, effects: Mapping[str, float]):
@@ -97,7 +102,15 @@ class Evaluator:
         StationError
             An unknown effect or a value out of its range (:meth:`station.plant.model.Model.with_effects`).
         """
-        return self.model.with_effects(effects) if effects else self.model
+        if not effects:
+            return self.model
+        key = tuple(sorted(effects.items()))  # exact values: the model is what is simulated
+        model = self._models.get(key)
+        if model is None:
+            if len(self._models) >= MODELS_KEPT:
+                self._models.clear()
+            model = self._models[key] = self.model.with_effects(effects)
+        return model
 
     def effects_for(self, effects: Mapping[str, float], i: int) -> Mapping[str, float]:
         """The effects run i is simulated with (``run_effects``; ``effects`` itself without it).
