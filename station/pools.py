@@ -115,7 +115,7 @@ def abandon(pool: cf.ProcessPoolExecutor) -> None:
 
 
 @contextlib.contextmanager
-def process_pool(workers: int) -> Iterator[cf.ProcessPoolExecutor]:
+def process_pool(workers: int, context=None) -> Iterator[cf.ProcessPoolExecutor]:
     """A process pool of ``workers`` (each with :func:`worker_signals`), shut down when the block
     ends: waited for after normal work, abandoned (:func:`abandon`) when the block raises.
 
@@ -123,13 +123,16 @@ def process_pool(workers: int) -> Iterator[cf.ProcessPoolExecutor]:
     ----------
     workers : int
         Worker processes, ≥ 1.
+    context : multiprocessing context, optional
+        How the workers start (default: the platform's); with ``fork`` every worker is
+        forked as the block begins, so it inherits the state of that moment.
 
     Yields
     ------
     concurrent.futures.ProcessPoolExecutor
         Submit with ``pool.submit``; collect with :func:`results` or :func:`as_finished`.
     """
-    pool = cf.ProcessPoolExecutor(max_workers=int(workers), initializer=worker_signals)
+    pool = cf.ProcessPoolExecutor(max_workers=int(workers), mp_context=context, initializer=worker_signals)
     try:
         with shielded():  # the workers start with the first task: never a stop inside the fork's hooks
             pool.submit(int).result()

@@ -255,7 +255,7 @@ def test_unexplained_says_whether_the_extended_model_predicts_better_and_the_sav
     assert word in line and "than the nominal model" in line
     # --save-model warns exactly when the saved model predicts no better than nominal
     args = argparse.Namespace(runs=["a.txt"], validate=[], max_samples=10**6, quiet=True, model=None,
-                              report=None, json=None, save_model=str(tmp_path / "m.toml"), force=False)
+                              report=None, json=None, save_model=str(tmp_path / "m.toml"), force=False, jobs=1)
     err = io.StringIO()
     real = (cmd.check_outputs, cmd.plan)
     cmd.check_outputs, cmd.plan = (lambda *a, **k: None), (lambda *a, **k: "")

@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import argparse
 import math
+import os
 import re
 import sys
 from pathlib import Path
@@ -42,7 +43,7 @@ def configure(parser: argparse.ArgumentParser) -> None:
     ----------
     parser : argparse.ArgumentParser
         Gets RUN..., ``--validate``, ``--json``, ``--report``, ``--model``, ``--save-model``,
-        ``--force``, ``--max-samples``, ``--quiet``.
+        ``--force``, ``--max-samples``, ``--jobs``, ``--quiet``.
     """
     parser.add_argument("runs", type=Path, nargs="+", metavar="RUN", help="run logs the candidates are fitted on")
     parser.add_argument("--validate", type=Path, nargs="+", default=[], metavar="RUN",
@@ -59,6 +60,9 @@ def configure(parser: argparse.ArgumentParser) -> None:
                              f"refused before they are read: the diagnosis's time grows with their length times "
                              f"the number of runs (default {DIAGNOSE_MAX_SAMPLES}: 200 s of the rig's data, a few minutes "
                              f"of computing with four runs)")
+    parser.add_argument("--jobs", type=number(1, 64, integer=True), default=None, metavar="N",
+                        help="local worker processes fitting candidates at once (default: the CPU count; "
+                             "the same answer with any N)")
     parser.add_argument("--quiet", action="store_true", help="no progress lines on stderr")
 
 
@@ -327,7 +331,8 @@ def run(args: argparse.Namespace) -> int:
                 print(f"diagnose: {line}", file=sys.stderr, flush=True)
             cost.clear()
     with noting(lambda: f"the diagnosis was at: {last[0]}; nothing written"):
-        diag = diagnose(args.runs, validate=args.validate, model=args.model, progress=progress)
+        diag = diagnose(args.runs, validate=args.validate, model=args.model, progress=progress,
+                        workers=args.jobs or min(os.cpu_count() or 1, 64))
     print(format_diagnosis(diag))
     if args.save_model is not None and diag.causes and diag.gain_pct <= 0:
         print(f"diagnose: warning: --save-model {args.save_model}: {diag.prediction_words()}; "

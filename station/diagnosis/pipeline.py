@@ -48,9 +48,10 @@ def diagnose(runs: Sequence[str | Path], validate: Sequence[str | Path] = (), mo
         ``simulate(case, model) -> (theta, a)`` (default:
         :func:`station.diagnosis.runs.cases.simulate_case`); tests plug in their own.
     workers : int, optional
-        Threads fitting candidates at once (default 1). The compiled sample loop releases
-        the GIL but building models and scoring runs hold it, so on a machine with few
-        cores more threads can be slower (docs/benchmarks.md, "Threads").
+        Worker processes fitting candidates (and the sets tried beside the accepted effects)
+        at once, each forked with the search as it stands (default 1: one after another;
+        without ``fork`` always so). The answer is the same; the simulation count may be
+        higher (workers do not share what they simulate while they work).
     likelihood_values : bool
         Also estimate the accepted effects' values by maximum likelihood and keep that
         estimate when the held-out runs prefer it (:mod:`station.diagnosis.search.estimator`);

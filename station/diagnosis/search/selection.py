@@ -21,11 +21,11 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable, Mapping, Sequence
-from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
 
 import numpy as np
 
+from station.diagnosis.search.farm import farm
 from station.diagnosis.search.bounded import Axis
 from station.diagnosis.search.fitting import (EXCESS, MIN_EXCESS, NESTED, excess_of, fit_beside, fit_set, set_axes,
                                               unstick)
@@ -33,7 +33,6 @@ from station.diagnosis.runs.cost import Evaluator, pooled, relative_gain, rms_ga
 from station.diagnosis.runs.folds import Fold
 from station.diagnosis.units import format_quantity
 from station.plant.effects import EFFECTS
-from station.pools import results
 
 MIN_RELATIVE_GAIN = 0.05
 """An effect is accepted only when it lowers the pooled validation cost by this fraction."""
@@ -77,7 +76,7 @@ class Search:
     axes : dict of str to Axis
         How each effect is searched (:func:`effect_axes`).
     workers : int
-        Threads fitting candidates at once.
+        Worker processes fitting candidates at once (:func:`station.diagnosis.search.farm.farm`).
     say : callable
         Called with one line of progress text.
     """
@@ -392,15 +391,13 @@ def fit_each_alone(search: Search, names: Sequence[str], nominal: Trial) -> Sing
 
     rms_nom = pooled(ev, nominal.val_sse).rms_theta
     trials, values = {}, {}
-    with ThreadPoolExecutor(search.workers) as pool:
-        futures = [pool.submit(alone, name) for name in names]
-        for k, (name, fut) in enumerate(zip(names, futures), 1):
-            (tr, vals), = results([fut])  # a bounded wait: a stop is answered within 0.1 s
-            trials[name], values[name] = tr, vals
-            g = rms_gain(pooled(ev, tr.val_sse).rms_theta, rms_nom)
-            cg = relative_gain(tr.val_weighted, nominal.val_weighted)
-            search.say(f"[{k}/{len(names)}] {name} = {format_quantity(vals[name], EFFECTS[name].unit)}: "
-                       f"validation θ gain {g:.1f} %, cost gain {cg:.1f} % ({ev.simulations} simulations)")
+    for k, (tr, vals) in farm(alone, names, ev, search.workers):
+        name = names[k]
+        trials[name], values[name] = tr, vals
+        g = rms_gain(pooled(ev, tr.val_sse).rms_theta, rms_nom)
+        cg = relative_gain(tr.val_weighted, nominal.val_weighted)
+        search.say(f"[{k + 1}/{len(names)}] {name} = {format_quantity(vals[name], EFFECTS[name].unit)}: "
+                   f"validation θ gain {g:.1f} %, cost gain {cg:.1f} % ({ev.simulations} simulations)")
     return Singles(trials, values)
 
 

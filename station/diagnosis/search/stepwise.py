@@ -45,10 +45,10 @@ dropping at the end (:func:`_drop`).
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
-from concurrent.futures import ThreadPoolExecutor
 
 import numpy as np
 
+from station.diagnosis.search.farm import farm
 from station.diagnosis.search.bounded import fit
 from station.diagnosis.runs.cost import relative_gain
 from station.diagnosis.runs.folds import validation_runs
@@ -58,7 +58,6 @@ from station.diagnosis.search.selection import (MAX_EFFECTS, MIN_RELATIVE_GAIN, 
                                                 Selection, Singles, Step, Trial, accept, credible, null_floor,
                                                 screen_costs, trial)
 from station.plant.effects import EFFECTS
-from station.pools import results
 
 LOOKAHEAD = 3
 """Single effects beside the chosen one tried as first effects at the second step (module
@@ -101,10 +100,10 @@ def _family(name: str) -> set[str]:
 
 def _try_sets(search: Search, sets: Mapping, starts: Sequence) -> dict[str, Trial]:
     """Per key, its set of effects fitted per fold (:func:`trial`) from ``starts``."""
-    with ThreadPoolExecutor(search.workers) as ex:
-        futures = {n: ex.submit(trial, search.ev, search.folds, names, search.axes, starts) for n, names in sets.items()}
-        done = results(list(futures.values()))  # a bounded wait: a stop is answered within 0.1 s
-    return dict(zip(futures, done))
+    keys = list(sets)
+    fitted = farm(lambda names: trial(search.ev, search.folds, names, search.axes, starts), [sets[n] for n in keys],
+                  search.ev, search.workers)
+    return {keys[i]: tr for i, tr in fitted}
 
 
 def _joint_trials(search: Search, names: Sequence[str], accepted: list[str], current: Trial,

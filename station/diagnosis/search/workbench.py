@@ -54,7 +54,7 @@ class Bench(NamedTuple):
     names : list of str
         The candidate effects, checked.
     workers : int
-        Threads fitting candidates at once (at least 1).
+        Worker processes fitting candidates at once (at least 1).
     """
 
     names: list[str]
@@ -95,7 +95,7 @@ def workbench(command: str, candidates: Sequence[str] | None, workers: int | Non
     candidates : sequence of str or None
         Effect names (:func:`check_candidates`).
     workers : int, optional
-        Threads fitting candidates at once (default 1).
+        Worker processes fitting candidates at once (default 1).
 
     Yields
     ------
