@@ -35,7 +35,14 @@ def _run(i: int) -> tuple[int, Any, dict, int]:
 
 
 def can_fork() -> bool:
-    """Whether worker processes can inherit the search (the ``fork`` start method exists)."""
+    """Whether worker processes can inherit the search.
+
+    Returns
+    -------
+    bool
+        True where the ``fork`` start method exists (Linux); elsewhere :func:`farm` runs its
+        tasks one after another.
+    """
     return "fork" in multiprocessing.get_all_start_methods()
 
 
