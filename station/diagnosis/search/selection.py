@@ -235,7 +235,7 @@ def screen(ev: Evaluator, axes: Mapping[str, Axis], names: Sequence[str], fixed:
 
 
 def screen_costs(ev: Evaluator, axes: Mapping[str, Axis], names: Sequence[str], fixed: Mapping[str, float],
-                 runs: Sequence[int], every: int = 1, refit: Sequence[str] = ()) -> dict[str, float]:
+                 runs: Sequence[int], every: int = 1, refit: Sequence[str] = (), workers: int = 1) -> dict[str, float]:
     """Each effect scanned on its grid with ``fixed`` held (in-sample, on ``runs``): the
     lowest cost it reaches, for those that lower the cost of ``fixed`` alone, best first.
     With ``refit``, those effects of ``fixed`` are refined jointly with each candidate after its
@@ -256,6 +256,9 @@ def screen_costs(ev: Evaluator, axes: Mapping[str, Axis], names: Sequence[str], 
     refit : sequence of str, optional
         Effects of ``fixed`` refined jointly with each candidate (static_friction's screen,
         over the excess grid, holds them).
+    workers : int, optional
+        Worker processes screening candidates at once (:func:`~station.diagnosis.search.farm.farm`;
+        the same costs with any number).
 
     Returns
     -------
@@ -264,12 +267,14 @@ def screen_costs(ev: Evaluator, axes: Mapping[str, Axis], names: Sequence[str], 
         below the cost of ``fixed`` alone, in increasing order of cost.
     """
     c0 = ev.cost(fixed, runs)
-    best = {}
-    for n in names:
+
+    def lowest(n: str) -> float:
         if refit and n != "static_friction":
-            best[n] = fit_beside(ev, axes, refit, n, runs, fixed)[0]
-        else:
-            best[n] = min(ev.cost(point, runs) for point in _screen_points(n, axes, fixed)[::every])
+            return fit_beside(ev, axes, refit, n, runs, fixed)[0]
+        return min(ev.cost(point, runs) for point in _screen_points(n, axes, fixed)[::every])
+
+    names = list(names)
+    best = {names[i]: c for i, c in farm(lowest, names, ev, workers)}
     return {n: best[n] for n in sorted((n for n in names if best[n] < c0), key=best.get)}
 
 

@@ -116,7 +116,7 @@ def _joint_trials(search: Search, names: Sequence[str], accepted: list[str], cur
     full = len(accepted) >= MAX_EFFECTS  # then only an upgrade in place is left
     open_ = [n for n in names if n not in accepted and n not in held
              and (not full or NESTED.get(n) in accepted)]
-    costs = screen_costs(ev, search.axes, open_, fixed, search.fit_runs, refit=current.names)
+    costs = screen_costs(ev, search.axes, open_, fixed, search.fit_runs, refit=current.names, workers=search.workers)
     # a candidate that lowers the in-sample cost by less than the parsimony margin with the
     # others held will not pay it on held-out runs (on the rig's four logs in-sample screen
     # gains of 8-31 % came out at 3-5 % held out)
