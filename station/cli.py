@@ -69,6 +69,15 @@ def main(argv: list[str] | None = None) -> int:
     argv : list of str, optional
         Command-line arguments; None: ``sys.argv[1:]`` (the console script).
     """
+    try:
+        return _main(argv)
+    except KeyboardInterrupt:  # SIGINT before the guard took the signals (on its own `with` line)
+        print("station: stopped by SIGINT", file=sys.stderr)
+        return 130
+
+
+def _main(argv: list[str] | None) -> int:
+    """:func:`main` inside the signal guard."""
     with StopSignals(ignore_after=argv is None) as signals, warnings.catch_warnings():
         warnings.showwarning = _one_line_warning
         try:

@@ -607,3 +607,17 @@ def test_legacy_without_framing_still_stops_on_time(device, tmp_path, name, muta
     report, path = _run(dev, tmp_path, protocol="legacy")
     o = _check_stopped_safely(dev, report, path, reason, TIMEOUT + SLACK)
     assert o.ticks == FAULT_TICK
+
+
+def test_a_sigint_before_the_guard_takes_the_signals_is_one_line(monkeypatch, capsys):
+    """The guard's own `with` line is inside main() but before the handlers: a SIGINT landing
+    there (CI met it once) is the same one line and 130, not a traceback naming main()."""
+    from station import cli
+    from station.signals import StopSignals
+
+    def interrupted(self):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(StopSignals, "__enter__", interrupted)
+    assert cli.main(["--version"]) == 130
+    assert capsys.readouterr().err == "station: stopped by SIGINT\n"
