@@ -32,6 +32,8 @@ from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass
 from pathlib import Path
 
+import numpy as np
+
 REPO = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(REPO))  # tests.blind is not installed with the package
 
@@ -68,6 +70,23 @@ def _same(a, b, rel: float = 1e-9) -> bool:
     return len(a) == len(b) and all(abs(x - y) <= rel * max(1.0, abs(y)) for x, y in zip(a, b))
 
 
+GA_RTOL = 1e-3
+"""Relative agreement of a found Ga's continuous coefficients with the hidden ones."""
+
+
+def _same_s(found, hidden) -> bool:
+    """Whether a found continuous law (num, den) is the hidden one to :data:`GA_RTOL`: each
+    coefficient against the largest of its polynomial (a Tustin inverse leaves ~1e-10 of
+    higher powers in the numerator)."""
+    out = True
+    for f, h in zip(found, hidden):
+        f, h = np.asarray(f, float), np.asarray(h, float)
+        h = np.concatenate((np.zeros(max(0, f.size - h.size)), h))
+        f = np.concatenate((np.zeros(max(0, h.size - f.size)), f))
+        out = out and bool(np.all(np.abs(f - h) <= GA_RTOL * np.abs(h) + 1e-9 * np.max(np.abs(h))))
+    return out
+
+
 def run_case(case: str, seed: int) -> Outcome:
     """Write one case's log in a temporary folder and audit it."""
     from station.logged import LoggedRun
@@ -100,6 +119,16 @@ def run_case(case: str, seed: int) -> Outcome:
     else:
         design_ok = (isinstance(design, dict) and design.get("method") == "Tustin"
                      and _same(design["num_s"], hidden.num_s) and _same(design["den_s"], hidden.den_s))
+    if hidden.ga_s is not None and design_ok is not None:  # and the accelerometer feedback, as the generator discretized it
+        from tests.blind.rig import DT
+
+        # Ga's numbers are not round (DESIGN.md's): named when its continuous form (Tustin's
+        # inverse) is the hidden one to GA_RTOL, as far as the data pin its slowest pole
+        from station.analysis.continuous_design import to_continuous
+
+        ga = getattr(run.controller, "ga", None)
+        back = None if ga is None else to_continuous(ga.num, ga.den, DT, "Tustin")
+        design_ok = design_ok and back is not None and _same_s(back, hidden.ga_s)
     found = (f"{getattr(run.controller, 'name', None)}, recursion {getattr(run.controller, 'recursion', 'none')}, "
              f"d {run.alignment}, max|dv| {run.max_abs_dv if run.max_abs_dv is None else f'{run.max_abs_dv:.2g}'}")
     return Outcome(case, seed, what, found, run.source, contradiction_ok, reproduced, design_ok, seconds)
@@ -120,7 +149,10 @@ def table(outcomes: list[Outcome], seeds: str, elapsed: float) -> str:
         "recursion on the float or on the stored integer (truncated or rounded), alignment 0 or 1, clamp ±200 or "
         "±150, a step, 5 Hz sine or 0–10 Hz sweep reference); `station.logged.LoggedRun` sees only the file. "
         "`lie:open_loop`: an open-loop header on closed-loop data; `lie:p_kp`: `#kp=2.0` over another gain; "
-        "`lie:lead_pole`: the thesis's lead printed, another pole run; `int:*`: integer recursions with no "
+        "`lie:lead_pole`: the thesis's lead printed, another pole run; `lie:accel_fb`: a lead with "
+        "accelerometer feedback θ̂_d = u − Ga(a) (DESIGN.md's Ga, its gain ×0.5–1.5 and frequencies ×0.7–1.4; "
+        "the float recursion) under a header without Ga (open loop, or the lead alone); `int:*`: integer "
+        "recursions with no "
         "header (the 2014 layout); `session`: the lab's third session (open-loop header, a lead on the "
         "truncated integer at alignment 0); `honest:*`: true headers (P, or a lead on the stored integer) the "
         "audit must confirm. `+coulomb_friction`: beside a hidden Coulomb friction of 3–30 DAC counts.",
@@ -128,7 +160,9 @@ def table(outcomes: list[Outcome], seeds: str, elapsed: float) -> str:
         "Bar (issue 26): in at least 9 of 10 seeds, a lying header contradicted (and a true or absent one not), "
         "the controller reproducing every logged v to the device's quantization (1e-6 counts; the logged "
         "integer exactly) at the hidden alignment, and the hidden law named: the continuous design (num/den in s "
-        "to 1e-9, Tustin) or the P gain (— where the header's law is confirmed and used as printed).",
+        "to 1e-9, Tustin) or the P gain (— where the header's law is confirmed and used as printed), and "
+        "for `lie:accel_fb` Ga too (its Tustin inverse's coefficients to 1e-3: DESIGN.md's are not round "
+        "numbers, and a run pins Ga's slowest pole only so far).",
         "",
         "| class | seeds | contradiction right | reproduced | design / gain named | all | median s |",
         "|---|---|---|---|---|---|---|",

@@ -14,6 +14,7 @@ import math
 import numpy as np
 import pytest
 
+from station.analysis.continuous_design import to_continuous
 from station.compare import compare_run, format_comparison
 from station.logged import LoggedRun
 from station.logged.accelerometer import MOUNTED_CLAIM
@@ -85,7 +86,10 @@ BLIND = [("lie:open_loop", 0), ("lie:open_loop", 1), ("lie:p_kp", 0), ("lie:lead
          # from both sides: the one law, its ties decided by the lab's last bit (were order 2-3 laws with a
          # cancelled pair, or no law at all)
          ("int:round_d0", 5), ("int:trunc_d0+coulomb_friction", 6), ("session", 5), ("int:trunc_d1", 9),
-         ("honest:lead_int+coulomb_friction", 8)]
+         ("honest:lead_int+coulomb_friction", 8),
+         # a lead with accelerometer feedback under a header without Ga (open loop at d 0 and 1, the
+         # lead alone on a 5 Hz sine, which hardly pins Ga's slowest pole, and on a sweep at a ±150 clamp)
+         ("lie:accel_fb", 0), ("lie:accel_fb", 5), ("lie:accel_fb", 8), ("lie:accel_fb+coulomb_friction", 9)]
 
 
 @pytest.mark.parametrize("case, seed", BLIND)
@@ -110,6 +114,33 @@ def test_blind_headers_and_recursions(tmp_path, case, seed):
             np.testing.assert_allclose(spec["design"]["num_s"], hidden.num_s, rtol=1e-9)
             np.testing.assert_allclose(spec["design"]["den_s"], hidden.den_s, rtol=1e-9)
         assert run.controller.recursion == hidden.recursion or hidden.law == "p"
+    if hidden.ga_s is not None:  # the accelerometer feedback too, its continuous form (Tustin's inverse)
+        back = to_continuous(run.controller.ga.num, run.controller.ga.den, 0.002, "Tustin")
+        for found, truth in zip(back, hidden.ga_s):
+            np.testing.assert_allclose(found[-len(truth):], truth, rtol=1e-3)
+            assert np.all(np.abs(found[:-len(truth)]) <= 1e-9 * np.max(np.abs(truth)))
+
+
+def test_the_rigs_accelerometer_run_under_an_open_loop_header_is_its_lead_and_ga(rig_data, tmp_path):
+    # the thesis's lead + accelerometer step with its header saying open loop, or the lead
+    # without Ga: the data's law is the thesis's Gth and Ga (DESIGN.md), to the log's digits
+    from station.control.designs import lead_controller
+    from station.logged.controller import same_law
+
+    src = rig_data / "step_response_Gth_comp_Ga_opt_amp_200_duration_1000_opt_case43_SLFR_RTP_Motor_Comp_Gth.txt"
+    lines = src.read_text().splitlines()
+    rows = [x for x in lines if x and not x.startswith("#")]
+    no_ga = [("#Ga num=[]" if x.startswith("#Ga num") else "#Ga den=[]" if x.startswith("#Ga den") else x)
+             for x in lines if x.startswith("#")]
+    for name, header in (("ol.txt", ["#SLFR RTP OL_Test", lines[5]]), ("no_ga.txt", no_ga)):
+        path = tmp_path / name
+        path.write_text("\n".join(header + rows) + "\n")
+        run = LoggedRun.from_path(path)
+        assert run.audit.controller_source == "inferred (header contradicted)", name
+        assert same_law(lead_controller(accel=True), run.controller)
+        assert run.reproduced and run.alignment == 1 and run.max_abs_dv < 1e-6
+        assert "the thesis's accelerometer feedback Ga" in run.audit.lines()[0]
+        assert run.controller.spec["design"]["text"] == "20(s+2π·5)/(s+2π·20)"
 
 
 def test_session_said_first_everywhere(tmp_path):

@@ -10,6 +10,7 @@ import pytest
 
 from station.control import Compensator, DiscreteTF, make_controller
 from station.errors import StationError
+from station.logged import LoggedRun
 from station.protocol import PROTOCOLS
 from station.control.rerun import replay_commands
 from station.logged import rig_controller
@@ -120,9 +121,41 @@ def test_log_without_controller_gets_it_inferred(tmp_path):
     assert r.fit_pct["theta"] == pytest.approx(100.0, abs=1e-6)
 
 
-def test_log_without_an_inferable_controller_is_model_only(tmp_path):
+def test_log_with_accelerometer_feedback_and_no_controller_gets_gth_and_ga_inferred(tmp_path):
+    from station.logged.controller import same_law
+
     path = tmp_path / "anon.tsv"
-    _simulated_log(path, "lead-accel", 1, meta_controller=False)  # v depends on a too: not e -> v
+    _simulated_log(path, "lead-accel", 1, meta_controller=False)  # v depends on a too: not e -> v alone
+    r = replay(path)
+    assert r.controller_source == "inferred" and r.alignment == 1 and r.max_abs_dv <= 1e-6
+    assert same_law(make_controller("lead-accel"), LoggedRun.from_path(path).controller)
+    assert r.fit_pct["theta"] == pytest.approx(100.0, abs=1e-6)
+
+
+class _Nonlinear:
+    """v = sat(e + e·|e|/50): no linear law, with or without a."""
+
+    spec = {"kind": "custom"}
+
+    def reset(self):
+        pass
+
+    def step(self, u, theta, a):
+        e = u - theta
+        return max(-200.0, min(200.0, e + e * abs(e) / 50.0)), u
+
+
+def test_log_without_an_inferable_controller_is_model_only(tmp_path):
+    import station.plant as plant_mod
+
+    u = np.zeros(600)
+    u[10:] = 100.0
+    sim = plant_mod.simulate(plant_mod.DiscretePlant(), _Nonlinear(), u, alignment=1)
+    path = tmp_path / "anon.tsv"
+    with RunLogWriter(path, {"alignment": 1, "dt": 0.002}) as w:
+        for k in range(u.size):
+            w.append((sim["t"][k], k, sim["u"][k], sim["v"][k], sim["theta"][k], sim["a"][k],
+                      sim["theta_d_hat"][k], sim["v"][k], 0, math.nan))
     r = replay(path)
     assert r.controller is None and r.max_abs_dv is None and r.controller_source is None
     assert r.to_json()["controller_source"] is None

@@ -6,7 +6,12 @@ each for both alignments d (DESIGN.md "Timing and log rows": v[k] = C(u[k], θ[k
 
 - open loop, v = u;
 - proportional, v = sat(kp·(u[k] - θ[k-d])), any kp;
-- linear compensators e -> v of order 1 to 3 (a direct-form recursion in z^-1).
+- linear compensators e -> v of order 1 to 3 (a direct-form recursion in z^-1);
+- then, where a moved and v is no whole count, the rig's two-input law: a P or linear Gth
+  of order 0 to 3 with accelerometer feedback Ga of order 0 to 3, θ̂_d = u − Ga(a)
+  (DESIGN.md "Compensators"; :mod:`station.analysis.accel_law` finds Ga, then Gth is found
+  from e = u − θ − Ga(a) as any one-input law). Ga beside a recursion on the stored integer
+  is not tried.
 
 Each at the rig's clamp (±200, or the DAC's when v exceeds it) or the log's own (a level
 |v| sits at on several rows), and with the recursion as lab software ran it
@@ -39,9 +44,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from station.analysis.continuous_design import ContinuousDesign, nicest_between, recognize
+from station.analysis.accel_law import accel_feedback
+from station.analysis.continuous_design import ContinuousDesign, nicest_between, recognize, to_continuous
 from station.analysis.law_rows import BOUNDARY, TOLERANCE, LawRows, tie_rows
-from station.control import DAC_LIMIT, Compensator, DiscreteTF, OpenLoop  # DAC_LIMIT: the clamp assumed when v exceeds the rig's ±200
+from station.control import DAC_LIMIT, Compensator, DiscreteTF, OpenLoop, lead_controller  # DAC_LIMIT: the clamp assumed when v exceeds the rig's ±200
 from station.control.rerun import ALIGNMENTS, AlignmentFit, detect_alignment
 from station.rig import CLAMP, DT
 
@@ -101,13 +107,16 @@ def _limits(v: np.ndarray, rig_limit: float) -> list[float]:
 
 
 def _compensator(num, den, limit: float | None, dt: float, kind: str, extra: dict | None = None,
-                 recursion: str = "none", name: str | None = None) -> Compensator:
+                 recursion: str = "none", name: str | None = None, ga=None) -> Compensator:
     tf = DiscreteTF(num, den)
+    ga_tf = None if ga is None else DiscreteTF(*ga)
     spec = {"kind": kind, "name": name or kind, "dt": dt, "limit": limit, "source": "inferred from the data",
-            "gth": {"num_z": tf.num.tolist(), "den_z": tf.den.tolist()}, "ga": None, **(extra or {})}
+            "gth": {"num_z": tf.num.tolist(), "den_z": tf.den.tolist()},
+            "ga": None if ga_tf is None else {"num_z": ga_tf.num.tolist(), "den_z": ga_tf.den.tolist()},
+            **(extra or {})}
     if recursion != "none":
         spec["recursion"] = recursion
-    return Compensator(tf, None, limit=limit, name=name or kind, spec=spec, recursion=recursion)
+    return Compensator(tf, ga_tf, limit=limit, name=name or kind, spec=spec, recursion=recursion)
 
 
 def with_recursion(controller: Compensator, recursion: str) -> Compensator:
@@ -233,8 +242,46 @@ def _errors(u: np.ndarray, theta: np.ndarray, d: int) -> np.ndarray:
     return e
 
 
+def _s_poly(c: np.ndarray) -> str:
+    """A polynomial in s (descending powers) to 4 significant digits, negligible terms left out."""
+    n, big = c.size - 1, float(np.max(np.abs(c)))
+    terms = []
+    for i, x in enumerate(c):
+        if abs(x) <= 1e-9 * big:
+            continue
+        power = n - i
+        s_part = "" if power == 0 else "s" if power == 1 else f"s^{power}"
+        mag = "" if abs(abs(x) - 1.0) < 1e-12 and power else f"{abs(x):.4g}"
+        terms.append(("-" if x < 0 else "+") + mag + s_part)
+    text = "".join(terms).lstrip("+")
+    return text or "0"
+
+
+def ga_text(ga: DiscreteTF, dt: float) -> str:
+    """Accelerometer feedback in a few words: the thesis's Ga when it is that law, else its
+    continuous form by the Tustin inverse (4 digits; the z-law itself is in the spec).
+
+    Parameters
+    ----------
+    ga : DiscreteTF
+    dt : float
+        Sample time, s.
+    """
+    thesis = lead_controller(CLAMP, dt, accel=True).ga
+    if (ga.num.size == thesis.num.size and ga.den.size == thesis.den.size
+            and np.allclose(ga.num, thesis.num, rtol=1e-6, atol=0.0)
+            and np.allclose(ga.den, thesis.den, rtol=1e-6, atol=0.0)):
+        return "the thesis's accelerometer feedback Ga"
+    order = max(ga.num.size, ga.den.size) - 1
+    back = to_continuous(ga.num, ga.den, dt, "Tustin") if order else None
+    if back is None:
+        fmt = lambda x: "[" + ", ".join(f"{y:.8g}" for y in x) + "]"  # noqa: E731
+        return f"accelerometer feedback Ga num {fmt(ga.num)}, den {fmt(ga.den)} (z^-1)"
+    return f"accelerometer feedback Ga ≈ ({_s_poly(back[0])})/({_s_poly(back[1])}) (Tustin, {dt:g} s)"
+
+
 def _law_text(order: int, c: np.ndarray, design: ContinuousDesign | None, dt: float, recursion: str,
-              limit: float, rig_limit: float) -> str:
+              limit: float, rig_limit: float, ga: DiscreteTF | None = None) -> str:
     if order == 0:
         text = f"P, kp = {c[0]:g}"
     elif design is not None:
@@ -243,6 +290,8 @@ def _law_text(order: int, c: np.ndarray, design: ContinuousDesign | None, dt: fl
         fmt = lambda x: "[" + ", ".join(f"{y:.8g}" for y in x) + "]"  # noqa: E731
         text = (f"linear compensator e -> v of order {order}, num {fmt(c[:order + 1])}, "
                 f"den {fmt(np.concatenate(([1.0], c[order + 1:])))} (z^-1)")
+    if ga is not None:
+        text += f", with {ga_text(ga, dt)}"
     if recursion != "none":
         text += f", its recursion on the {STORED[recursion]} integer command"
     if limit != rig_limit:
@@ -292,7 +341,7 @@ def infer_controller(u, theta, v, a=None, dt: float = DT, rig_limit: float = CLA
     u, theta, v : array_like, shape (N,)
         Logged reference (encoder counts), encoder counts and command (DAC counts).
     a : array_like, shape (N,), optional
-        Accelerometer counts (unused by the laws tried; passed to the replay).
+        Accelerometer counts (the accelerometer feedback's input; passed to the replay).
     dt : float
         Sample time, s (recorded in the controller's spec; the continuous design's).
     rig_limit : float
@@ -310,7 +359,7 @@ def infer_controller(u, theta, v, a=None, dt: float = DT, rig_limit: float = CLA
     -------
     IdentifiedController or None
         The simplest law (open loop, P, then linear of order 1..3; a float recursion before
-        an integer one) that reproduces every logged v (to :data:`TOLERANCE`; exactly for an
+        an integer one; then Gth with accelerometer feedback Ga) that reproduces every logged v (to :data:`TOLERANCE`; exactly for an
         integer recursion); None when none does, or the log lacks u, θ or v (NaN) or never
         commands anything.
     """
@@ -357,6 +406,46 @@ def infer_controller(u, theta, v, a=None, dt: float = DT, rig_limit: float = CLA
                     if ties:
                         return IdentifiedController(ctl, d, 0.0, v.copy(), f"{law}, {ties} row(s) on a quantization "
                                                     f"boundary as the lab's arithmetic decided them", design, (d,))
+    if cut or not np.any(a != a[0]) or whole_counts(v):  # Ga beside a recursion on the stored integer: not yet
+        return None
+    return _with_accel_feedback(u, theta, a, v, dt, rig_limit, alignments, prefer, ("none",))
+
+
+def _with_accel_feedback(u, theta, a, v, dt: float, rig_limit: float, alignments, prefer,
+                         recursions) -> IdentifiedController | None:
+    """The simplest Gth with accelerometer feedback Ga (:mod:`station.analysis.accel_law`)
+    that reproduces every logged v: total order m + p first, then the lower Gth order m (a
+    lead and the thesis's third-order Ga before a third-order Gth and a first-order Ga)."""
+    for total in range(2 * MAX_ORDER + 1):
+        for order in range(max(0, total - MAX_ORDER), min(total, MAX_ORDER) + 1):
+            ga_order = total - order
+            for d in alignments:
+                if d < 0:
+                    continue
+                for limit in _limits(v, rig_limit):
+                    for recursion in recursions:
+                        ga = accel_feedback(u, theta, a, v, d, order, ga_order, limit, recursion, dt)
+                        if ga is None:
+                            continue
+                        rows = LawRows(_errors(u, theta, d) - ga.x, v, d, order, limit)
+                        found = _law(rows, recursion, dt)
+                        if found is None:
+                            continue
+                        c, design = found
+                        extra = {"kp": float(c[0])} if order == 0 else {}
+                        if design is not None:
+                            extra["design"] = design.to_json()
+                        kind = ("p" if order == 0 else f"linear-{order}") + f"+accel-{ga_order}"
+                        try:
+                            name = f"{design.text} with Ga" if design is not None else kind
+                            ctl = _compensator(c[:order + 1], np.concatenate(([1.0], c[order + 1:])), limit, dt,
+                                               kind, extra, recursion, name, ga=(ga.num, ga.den))
+                        except ValueError:
+                            continue
+                        law = _law_text(order, c, design, dt, recursion, limit, rig_limit, ctl.ga)
+                        hit = _check(ctl, u, theta, a, v, law, alignments, design, prefer)
+                        if hit is not None and hit.max_abs_dv <= TOLERANCE:
+                            return hit
     return None
 
 

@@ -23,6 +23,7 @@ from station.analysis.controller_id import (
     PREFERRED_ALIGNMENT,
     STORED,
     TOLERANCE,
+    ga_text,
     infer_controller,
     match_pid,
     variant_of,
@@ -225,6 +226,9 @@ def describe_controller(controller) -> str:
         text = f"{name}: Gth num {fmt(gth.num)}, den {fmt(gth.den)} (z^-1)"
         if getattr(controller, "ga", None) is not None:
             text += f", Ga num {fmt(controller.ga.num)}, den {fmt(controller.ga.den)}"
+    ga = getattr(controller, "ga", None)
+    if ga is not None and (spec.get("kind") == "p" or isinstance(design, dict) and design.get("text")):
+        text += f", with {ga_text(ga, spec.get('dt', DT))}"
     recursion = getattr(controller, "recursion", "none")
     if recursion != "none":
         text += f", its recursion on the {STORED[recursion]} integer command"
@@ -273,7 +277,8 @@ def identify_controller(log: RunLog, skipped=None) -> ControllerId:
     reproduces every logged v (to 1e-6 DAC counts; exactly for an integer recursion). When it
     does not, or the log names none, a law is identified from u, θ and v
     (:func:`station.analysis.controller_id.infer_controller`: open loop, P, linear e -> v up
-    to order 3, float or integer recursion, both alignments, the clamp) and, when one
+    to order 3, float or integer recursion, Gth with accelerometer feedback Ga, both
+    alignments, the clamp) and, when one
     reproduces every v, it is used: "inferred", or "inferred (header contradicted)". A
     header law that misses by a count or more with no law found is contradicted but kept;
     one that misses by less stays unchecked. A rig log sampled at another rate than the
@@ -395,7 +400,7 @@ def identify_controller(log: RunLog, skipped=None) -> ControllerId:
             "controller", said, data_says, "unchecked", "the log names no controller; inferred from the data"),
             hit.alignments, cut=cut)
     tried = ("open loop, P, linear e -> v up to order 3, on the float or the stored integer command, "
-             "alignments 0 and 1")
+             "Gth with accelerometer feedback Ga up to order 3 each on the float command, alignments 0 and 1")
     if not stated:
         notes.append(f"the log names no controller and none could be inferred from the data ({tried}): "
                      f"commands not replayed, model driven by the logged v")

@@ -16,7 +16,10 @@ friction and sensors), with a controller the lab could have run:
 Classes (:data:`CLASSES`): headers that lie ("lie:open_loop": an open-loop header on
 closed-loop data; "lie:p_kp": a P header with the wrong kp; "lie:lead_pole": the thesis's
 lead printed in the header, another pole in the data); integer recursions with no header
-(the 2014 layout, "int:trunc_d0" ... "int:round_d1"); the lab's third session ("session":
+(the 2014 layout, "int:trunc_d0" ... "int:round_d1"); "lie:accel_fb": a lead with
+accelerometer feedback θ̂_d = u − Ga(a) (DESIGN.md's Ga(s), its gain and frequency scaled),
+under a header that leaves Ga out (open loop, or the lead alone), its recursion on the float
+command (as the thesis's software ran it), at either alignment; the lab's third session ("session":
 an open-loop header on a lead run on the truncated integer at alignment 0); truthful headers
 the audit must confirm ("honest:p", "honest:lead_int"). A class joined with "+" to
 "coulomb_friction" hides that friction too (drawn as :func:`tests.blind.cases.draw` draws it).
@@ -38,8 +41,8 @@ from tests.blind.rig import DT, Amplifier, Effects, Run, encoder, gth_design, ma
 N = 2000
 """Samples per run (4 s at 500 Hz)."""
 
-CLASSES = ("lie:open_loop", "lie:p_kp", "lie:lead_pole", "int:trunc_d0", "int:trunc_d1", "int:round_d0",
-           "int:round_d1", "session", "honest:p", "honest:lead_int")
+CLASSES = ("lie:open_loop", "lie:p_kp", "lie:lead_pole", "lie:accel_fb", "int:trunc_d0", "int:trunc_d1",
+           "int:round_d0", "int:round_d1", "session", "honest:p", "honest:lead_int")
 """The audit's blind classes, in the validation table's order."""
 
 PHYSICAL = ("coulomb_friction",)
@@ -52,6 +55,13 @@ OTHER_POLES_HZ = (8.0, 10.0, 12.0, 15.0, 25.0, 30.0, 40.0)
 
 HEADER_KP = 2.0
 """The gain a lying P header states."""
+
+GA_S = ((467.22634242, 281.56096177), (1.0, 36.49022971, 172.1552844, 15.39673089))
+"""DESIGN.md's accelerometer feedback Ga(s) = (b1 s + b0)/(s³ + a2 s² + a1 s + a0)."""
+
+GA_GAINS = (0.5, 0.75, 1.0, 1.5)
+GA_FREQUENCIES = (0.7, 1.0, 1.4)
+"""Scales of Ga's gain and of its frequencies (Ga(s/f)) the accel_fb class draws."""
 
 
 @dataclass(frozen=True)
@@ -80,6 +90,8 @@ class AuditCase:
     amplitude : float
     effects : dict
         Hidden physical effects.
+    ga_s : (tuple, tuple) or None
+        The accelerometer feedback's continuous design (num, den, descending powers of s).
     """
 
     name: str
@@ -96,11 +108,12 @@ class AuditCase:
     reference: str
     amplitude: float
     effects: dict = field(default_factory=dict)
+    ga_s: tuple | None = None
 
     @property
     def lies(self) -> bool:
         """Whether the header names another controller than the data's."""
-        return self.name.split("+")[0] in ("lie:open_loop", "lie:p_kp", "lie:lead_pole", "session")
+        return self.name.split("+")[0] in ("lie:open_loop", "lie:p_kp", "lie:lead_pole", "lie:accel_fb", "session")
 
 
 def _rng(name: str, seed: int) -> np.random.Generator:
@@ -154,6 +167,12 @@ def draw_case(name: str, seed: int) -> AuditCase:
         kk = 5.0 * pp / zz
         return AuditCase(**common, law="lead", kp=None, num_s=(kk, kk * zz), den_s=(1.0, pp),
                          design_text=_lead_text(kk, zz, pp, hz=True), recursion="none", alignment=1, header="lead")
+    if base == "lie:accel_fb":
+        g, f = float(rng.choice(GA_GAINS)), float(rng.choice(GA_FREQUENCIES))
+        (b1, b0), (_, a2, a1, a0) = GA_S
+        ga = ((g * b1 * f, g * b0 * f * f), (1.0, a2 * f, a1 * f * f, a0 * f ** 3))  # g·Ga(s/f)
+        return AuditCase(**common, **lead, recursion="none", alignment=int(rng.integers(0, 2)),
+                         header=str(rng.choice(["open-loop", "lead"])), ga_s=ga)
     if base.startswith("int:"):
         recursion, d = base[4:].split("_d")
         return AuditCase(**common, **lead, recursion=recursion, alignment=int(d), header="none")
@@ -220,6 +239,7 @@ def simulate_audit_case(case: AuditCase, seed: int, substeps: int = 100, accel_n
         ctrl = LabController([case.kp], [1.0], case.limit, case.recursion)
     else:
         ctrl = LabController(*tustin(list(case.num_s), list(case.den_s), DT), case.limit, case.recursion)
+    ga = None if case.ga_s is None else LabController(*tustin(*case.ga_s, DT), math.inf, "none")
     u = reference(case)
     rng = np.random.default_rng([seed, 26])
     noise = rng.normal(0.0, accel_noise, N)
@@ -230,9 +250,10 @@ def simulate_audit_case(case: AuditCase, seed: int, substeps: int = 100, accel_n
         theta = encoder(th)
         a = math.floor(a_gain * acc + noise[k] + 0.5)
         out[2, k], out[3, k] = theta, a
-        v = 0.0 if k < d else ctrl.step(float(u[k]) - out[2, k - d])
+        hat = u[k] if k < d or ga is None else float(u[k]) - ga.step(out[3, k - d])
+        v = 0.0 if k < d else ctrl.step(hat - out[2, k - d])
         applied = amp(v)
-        out[:, k] = (u[k], v, theta, a, u[k], applied, th, plant.motor())
+        out[:, k] = (u[k], v, theta, a, hat, applied, th, plant.motor())
         plant.advance(applied)
     return Run(*out)
 

@@ -1,0 +1,272 @@
+"""The accelerometer feedback behind a log's commands, identified from u, θ, a and v.
+
+The rig's two-input law (DESIGN.md "Compensators"): θ̂_d = u − Ga(a), e = θ̂_d − θ,
+v = sat(Gth(e)), Gth's recursion on the clamped v, Ga's on its own output. A header that
+names open loop, or a lead without its Ga, on such a run leaves :mod:`controller_id`'s
+one-input laws e -> v without an answer; this module finds Ga, after which e = u − θ − Ga(a)
+is a one-input law's error and :mod:`controller_id` finds Gth (its integer recursion, its
+nicest numbers, its continuous design) as it does for any lead.
+
+With Gth = B/A of order m and Ga = C/D of order p, on every row whose p predecessors the
+clamp did not touch either, multiplying Gth's recursion A·v = B·(w − x) (w = u − θ, x = Ga(a))
+through by D gives a law linear in the products' coefficients:
+
+    (AD)·v = (DB)·w − (BC)·a,
+
+an ARX law with two inputs (Ljung, System Identification, 2nd ed., §4.2) of order
+N = m + p, exact where the recursion is on the float command. Linear least squares gives
+AD, DB and BC; the roots AD shares with DB are D's, the others A's; polynomial division
+gives B = DB/D and C = BC/B. A nonlinear least-squares polish of (B, A, C, D) on the law
+itself over every unclamped row (:func:`scipy.optimize.least_squares`) takes them to the
+data's last digits, or within the quantization of a recursion on the stored integer.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import NamedTuple
+
+import numpy as np
+
+from station.analysis.continuous_design import discretize, to_continuous
+from station.rig import DT
+
+LOG_POLE = 40.0
+"""Largest |log| of a pole's magnitude (rad/s) a search may step to."""
+
+ARX_SLACK = 1e-6
+"""Largest ARX residual of a float recursion's law worth factoring, relative to max |v| (at least 1 count)."""
+
+
+class AccelFeedback(NamedTuple):
+    """An accelerometer feedback Ga found in a log (:func:`accel_feedback`).
+
+    Attributes
+    ----------
+    num, den : numpy.ndarray
+        Ga's z-law, ascending powers of z⁻¹, ``den[0] = 1`` (accelerometer counts to encoder
+        counts).
+    x : numpy.ndarray, shape (N,)
+        Ga(a) on every row (0 before the alignment), encoder counts: e = u − θ − x.
+    """
+
+    num: np.ndarray
+    den: np.ndarray
+    x: np.ndarray
+
+
+def lagged(x: np.ndarray, d: int) -> np.ndarray:
+    """``x`` as the controller read it at alignment d: x[k − d] on row k, 0 before.
+
+    Parameters
+    ----------
+    x : numpy.ndarray, shape (N,)
+    d : int
+        The alignment, samples (>= 0).
+    """
+    out = np.zeros(x.size)
+    out[d:] = x[:x.size - d]
+    return out
+
+
+def _filter(num: np.ndarray, den: np.ndarray, x: np.ndarray, d: int) -> np.ndarray:
+    """The filter num/den run from rest on rows d.. (the controller is not stepped before)."""
+    from scipy.signal import lfilter  # lazy: start-up time
+
+    out = np.zeros(x.size)
+    out[d:] = lfilter(num, den, x[d:])
+    return out
+
+
+def _columns(x: np.ndarray, rows: np.ndarray, lags: range) -> list[np.ndarray]:
+    return [x[rows - j] for j in lags]
+
+
+def _arx(w, alpha, v, target, d: int, n: int, free: np.ndarray, whole: bool):
+    """The products (AD, DB, BC) of order n by least squares, or None when they do not fit."""
+    k = np.arange(d + n, v.size)
+    k = k[np.all([free[k - j] for j in range(n + 1)], axis=0)] if k.size else k
+    width = 3 * n + 2
+    if k.size < 4 * width:
+        return None
+    x = np.column_stack(_columns(-v, k, range(1, n + 1)) + _columns(w, k, range(n + 1))
+                        + _columns(-alpha, k, range(n + 1)))
+    if not np.any(x[:, n + n + 1:]):
+        return None
+    target = target[k]
+    c, *_ = np.linalg.lstsq(x, target, rcond=None)
+    if not np.all(np.isfinite(c)):
+        return None
+    ad = np.concatenate(([1.0], c[:n]))
+    slack = float(np.sum(np.abs(ad))) + ARX_SLACK if whole else ARX_SLACK * max(1.0, float(np.max(np.abs(v))))
+    if float(np.max(np.abs(x @ c - target))) > slack:
+        return None
+    return ad, c[n:2 * n + 1], c[2 * n + 1:]
+
+
+def _factor(ad, db, bc, m: int, p: int):
+    """(B, A, C, D) from the products, or None when they do not factor so."""
+    from scipy.optimize import linear_sum_assignment  # lazy: start-up time
+
+    if p == 0:
+        b, a, d = db, ad, np.ones(1)
+    else:
+        if abs(db[0]) == 0.0:
+            return None
+        r_ad, r_db = np.roots(ad), np.roots(db)
+        if r_ad.size != m + p or r_db.size < p:
+            return None
+        dist = np.abs(r_ad[:, None] - r_db[None, :])
+        rows, cols = linear_sum_assignment(dist)
+        shared = rows[np.argsort(dist[rows, cols])[:p]]  # D's roots: the p AD shares with DB
+        d = np.atleast_1d(np.real(np.poly(r_ad[shared])))
+        a = np.atleast_1d(np.real(np.poly(np.delete(r_ad, shared))))
+        b, _ = np.polydiv(db, d)
+    if b.size != m + 1 or abs(b[0]) == 0.0:
+        return None
+    c, _ = np.polydiv(bc, b)
+    c = np.concatenate((np.zeros(p + 1 - c.size), c)) if c.size < p + 1 else c[-(p + 1):]
+    return b, a, c, d
+
+
+def _exp(x: float) -> float:
+    """exp within ±:data:`LOG_POLE` (a search's step into nonsense stays finite)."""
+    return math.exp(min(max(float(x), -LOG_POLE), LOG_POLE))
+
+
+def _pole_params(den_s: np.ndarray):
+    """Ga's s-poles as parameters, and the map back to its monic s-denominator: a real pole
+    as log |p| (its sign kept), a complex pair as (log ωn, ζ). Ga's poles span decades (the
+    thesis's at −0.064, −3.8 and −22 rad/s: a, integrated, is a position), where its z and
+    s coefficients are ill-conditioned and its poles' logarithms are not."""
+    roots = np.roots(den_s)
+    real = [r.real for r in roots if abs(r.imag) <= 1e-9 * max(1.0, abs(r))]
+    pairs = [r for r in roots if r.imag > 1e-9 * max(1.0, abs(r))]
+    signs = [1.0 if r > 0 else -1.0 for r in real]
+    zero = [r == 0.0 for r in real]
+    q = [math.log(abs(r)) if r else 0.0 for r in real]
+    for r in pairs:
+        q += [math.log(abs(r)), -r.real / abs(r)]
+
+    def den(z):
+        out = np.ones(1)
+        for i, (sg, z0) in enumerate(zip(signs, zero)):
+            out = np.convolve(out, [1.0, 0.0 if z0 else -sg * _exp(z[i])])
+        for j in range(len(pairs)):
+            wn, zeta = _exp(z[len(real) + 2 * j]), z[len(real) + 2 * j + 1]
+            out = np.convolve(out, [1.0, 2.0 * zeta * wn, wn * wn])
+        return out
+
+    return np.array(q), den
+
+
+def accel_feedback(u, theta, a, v, d: int, m: int, p: int, limit: float, recursion: str = "none",
+                   dt: float = DT) -> AccelFeedback | None:
+    """Ga of order ``p`` beside a Gth of order ``m`` that together give the logged v, if any.
+
+    Given Ga's denominator D, the law A·v = B·w − (BC)·(a/D) is linear in A, B and the
+    product BC: the polish searches D alone (its poles, :func:`_pole_params`, through
+    Tustin's inverse) with the rest solved by least squares at each step (variable
+    projection; Golub & Pereyra, SIAM J. Numer. Anal. 10, 1973), and C = BC/B.
+
+    Parameters
+    ----------
+    u, theta, a, v : numpy.ndarray, shape (N,)
+        The log's reference and θ (encoder counts), a (accelerometer counts) and v (DAC counts).
+    d : int
+        The alignment: row k's command from θ[k − d] and a[k − d].
+    m, p : int
+        Gth's and Ga's orders (0..3).
+    limit : float
+        The clamp, DAC counts (rows at it do not hold Gth's law).
+    recursion : {"none", "trunc", "round"}
+        What Gth's recursion stores (:data:`station.control.compensator.RECURSIONS`): on the
+        stored integer the fit is within the quantization (a truncated v's interval's middle).
+    dt : float
+        Sample time, s (Tustin's inverse of D, for the polish).
+
+    Returns
+    -------
+    AccelFeedback or None
+        None when the products do not fit (no such law: the usual answer), do not factor, or
+        the accelerometer never moved.
+    """
+    from scipy.optimize import least_squares  # lazy: start-up time
+    from scipy.signal import lfilter  # lazy: start-up time
+
+    alpha = lagged(a, d)
+    if not np.any(alpha):
+        return None
+    w = np.zeros(v.size)
+    w[d:] = u[d:] - theta[:v.size - d]
+    free = np.abs(v) < limit
+    middle = 0.5 * np.sign(v) if recursion == "trunc" else np.zeros(v.size)
+    with np.errstate(all="ignore"):  # wrong orders overflow on the way to being refused
+        products = _arx(w, alpha, v, v + middle, d, m + p, free, recursion != "none")
+        factors = None if products is None else _factor(*products, m, p)
+        if factors is None or not all(np.all(np.isfinite(f)) for f in factors):
+            return None
+        d_ga = factors[3]
+        k = np.arange(d + m + p, v.size)
+        k = k[free[k]]
+        target = (v + middle)[k]
+        known = [-v[k - 1 - j] for j in range(m)] + [w[k - i] for i in range(m + 1)]
+
+        def inner(den_z):
+            filtered = np.zeros(v.size)
+            filtered[d:] = lfilter([1.0], den_z, alpha[d:])
+            if not np.all(np.isfinite(filtered)):  # an unstable D on the way: refused
+                return np.full(k.size, 1e30), np.zeros(2 * m + p + 2)
+            x = np.column_stack(known + [-filtered[k - j] for j in range(m + p + 1)])
+            sol, *_ = np.linalg.lstsq(x, target, rcond=None)
+            return x @ sol - target, sol
+
+        den_z, den_of, q = d_ga, None, np.zeros(0)
+        back = to_continuous(np.ones(1), d_ga, dt, "Tustin") if p else None
+        if back is not None and np.all(np.isfinite(back[1])):
+            q, den_s = _pole_params(back[1])
+
+            def den_of(q):
+                return discretize(np.ones(1), den_s(q), dt, "Tustin")[1]
+
+            fit = least_squares(lambda q: inner(den_of(q))[0], q, method="trf", jac="3-point", x_scale="jac",
+                                xtol=1e-15, ftol=1e-15, gtol=1e-15)
+            if np.all(np.isfinite(fit.x)):
+                q, den_z = fit.x, den_of(fit.x)
+        _, sol = inner(den_z)
+        if not (np.all(np.isfinite(sol)) and np.all(np.isfinite(den_z))):
+            return None
+        a_th, b = sol[:m], sol[m:2 * m + 1]
+        if b[0] == 0.0:
+            return None
+        # C itself (BC/B leaves a remainder): with D and B held, the law is linear in A and C
+        den = np.asarray(den_z, float) / den_z[0]
+        filtered = np.zeros(v.size)
+        filtered[d:] = lfilter(b, den, alpha[d:])
+        x = np.column_stack([-v[k - 1 - j] for j in range(m)] + [-filtered[k - j] for j in range(p + 1)])
+        sol, *_ = np.linalg.lstsq(x, target - np.column_stack(known[m:]) @ b, rcond=None)
+        num = sol[m:]
+        if den_of is not None:  # the law itself, every factor free, from there
+            n_q = q.size
+            w_lags = np.column_stack(known[m:])
+            v_lags = np.column_stack(known[:m]) if m else np.zeros((k.size, 0))
+
+            def split(z):
+                return den_of(z[:n_q]), z[n_q:n_q + p + 1], z[n_q + p + 1:n_q + p + m + 2], z[n_q + p + m + 2:]
+
+            def law(z):
+                dz, cz, bz, az = split(z)
+                xa = np.zeros(v.size)
+                xa[d:] = lfilter(cz, dz, alpha[d:])
+                if not np.all(np.isfinite(xa)):
+                    return np.full(k.size, 1e30)
+                return w_lags @ bz - np.column_stack([xa[k - i] for i in range(m + 1)]) @ bz + v_lags @ az - target
+
+            z0 = np.concatenate((q, num, b, a_th))
+            fit = least_squares(law, z0, method="trf", jac="3-point", x_scale="jac", xtol=1e-15, ftol=1e-15, gtol=1e-15)
+            if np.all(np.isfinite(fit.x)) and np.max(np.abs(fit.fun)) < np.max(np.abs(law(z0))):
+                dz, num, _, _ = split(fit.x)
+                den = np.asarray(dz, float) / dz[0]
+        if p and np.any(np.abs(np.roots(den)) >= 1.0 + 1e-9):
+            return None  # an unstable Ga: not a compensator a lab ran
+        return AccelFeedback(num, den, _filter(num, den, alpha, d))
