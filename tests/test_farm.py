@@ -44,6 +44,20 @@ def test_each_items_result_comes_in_order_and_the_workers_errors_join_the_cache(
     assert ev.simulations == before, "the workers' simulations were not in the main process's cache"
 
 
+def test_the_work_since_a_mark_is_what_was_computed_after_it_and_another_evaluator_takes_it_in():
+    ev = _evaluator()
+    ev.sse({"x": 1.0}, 0)
+    mark = ev.mark()
+    for x in (2.0, 1.0, 3.0):  # 1.0 is cached before the mark: not new work
+        ev.sse({"x": x}, 0)
+    work = ev.work_since(mark)
+    assert work.simulations == 2 and sorted(v[0] for v in work.errors.values()) == [N * 4.0, N * 9.0]
+    other = _evaluator()
+    other.take_in(work)
+    assert other.simulations == 2
+    assert other.sse({"x": 3.0}, 0)[0] == N * 9.0 and other.simulations == 2  # from the taken-in cache
+
+
 def test_a_task_that_fails_in_a_worker_raises_its_error_here():
     ev = _evaluator()
 

@@ -25,6 +25,7 @@ breakaway excess in 9 of 10 seeds where the arithmetic mean named it in 10 of 10
 
 from __future__ import annotations
 
+import itertools
 import math
 import threading
 from contextlib import contextmanager
@@ -45,6 +46,21 @@ def _key(effects: Mapping[str, float]) -> tuple:
 
 MODELS_KEPT = 1024
 """Models :meth:`Evaluator.model_with` keeps (a fit asks for the same effects on each of its runs)."""
+
+
+class EvaluatorWork(NamedTuple):
+    """What an evaluator did since a mark (:meth:`Evaluator.work_since`).
+
+    Attributes
+    ----------
+    errors : dict
+        Cache key -> (Σ θ error², Σ a error²), counts².
+    simulations : int
+        Runs simulated.
+    """
+
+    errors: dict
+    simulations: int
 
 
 class Evaluator:
@@ -83,6 +99,44 @@ class Evaluator:
         self._cache: dict[tuple, tuple[float, float]] = {}
         self._models: dict[tuple, object] = {}  # one Model per set of effects: its linear part built once
         self._lock = threading.Lock()
+
+    def mark(self) -> tuple[int, int]:
+        """Where the evaluator's work stands: a mark for :meth:`work_since`.
+
+        Returns
+        -------
+        (int, int)
+            Errors cached and runs simulated so far.
+        """
+        return len(self._cache), self.simulations
+
+    def work_since(self, mark: tuple[int, int]) -> EvaluatorWork:
+        """The errors computed and the runs simulated since ``mark`` (a forked worker's, for
+        the main process: :mod:`station.diagnosis.search.farm`).
+
+        Parameters
+        ----------
+        mark : (int, int)
+            From :meth:`mark`.
+
+        Returns
+        -------
+        EvaluatorWork
+        """
+        n, sims = mark
+        # the cache only grows, in insertion order: what came after the mark is new
+        return EvaluatorWork(dict(itertools.islice(self._cache.items(), n, None)), self.simulations - sims)
+
+    def take_in(self, work: EvaluatorWork) -> None:
+        """Add another process's work (:meth:`work_since`): its errors join the cache, its
+        simulations the count.
+
+        Parameters
+        ----------
+        work : EvaluatorWork
+        """
+        self._cache.update(work.errors)
+        self.simulations += work.simulations
 
     def model_with(self, effects: Mapping[str, float]):
         """The base model with ``effects`` applied (the base model itself for none).

@@ -19,19 +19,19 @@ import multiprocessing
 from collections.abc import Callable, Iterator, Sequence
 from typing import Any
 
-from station.diagnosis.runs.cost import Evaluator
+from station.diagnosis.runs.cost import Evaluator, EvaluatorWork
 from station.pools import process_pool, results
 
 _TASKS: tuple[Callable[[Any], Any], Sequence[Any], Evaluator] | None = None
 """The farmed function, its items and the evaluator, set before the workers fork (inherited)."""
 
 
-def _run(i: int) -> tuple[int, Any, dict, int]:
-    """Task i in a worker: its result, the errors it added to the cache and its simulations."""
+def _run(i: int) -> tuple[int, Any, EvaluatorWork]:
+    """Task i in a worker: its result, and the errors it computed and the runs it simulated."""
     fn, items, ev = _TASKS
-    before, sims = set(ev._cache), ev.simulations
+    mark = ev.mark()
     out = fn(items[i])
-    return i, out, {k: v for k, v in ev._cache.items() if k not in before}, ev.simulations - sims
+    return i, out, ev.work_since(mark)
 
 
 def can_fork() -> bool:
@@ -85,9 +85,8 @@ def farm(fn: Callable[[Any], Any], items: Sequence[Any], ev: Evaluator, workers:
             futures = [pool.submit(_run, i) for i in range(len(items))]
             _TASKS = None  # the workers have their copy
             for fut in futures:
-                (i, out, cache, sims), = results([fut])  # a bounded wait: a stop is answered within 0.1 s
-                ev._cache.update(cache)
-                ev.simulations += sims
+                (i, out, work), = results([fut])  # a bounded wait: a stop is answered within 0.1 s
+                ev.take_in(work)
                 yield i, out
     finally:
         _TASKS = None
