@@ -4,7 +4,7 @@ The rig's two-input law (DESIGN.md "Compensators"): θ̂_d = u − Ga(a), e = θ
 v = sat(Gth(e)), Gth's recursion on the clamped v, Ga's on its own output. A header that
 names open loop, or a lead without its Ga, on such a run leaves :mod:`controller_id`'s
 one-input laws e -> v without an answer; this module finds Ga, after which e = u − θ − Ga(a)
-is a one-input law's error and :mod:`controller_id` finds Gth (its integer recursion, its
+is a one-input law's error and :mod:`controller_id` finds Gth (its
 nicest numbers, its continuous design) as it does for any lead.
 
 With Gth = B/A of order m and Ga = C/D of order p, on every row whose p predecessors the
@@ -88,7 +88,7 @@ def _columns(x: np.ndarray, rows: np.ndarray, lags: range) -> list[np.ndarray]:
     return [x[rows - j] for j in lags]
 
 
-def _arx(w, alpha, v, target, d: int, n: int, free: np.ndarray, whole: bool):
+def _arx(w, alpha, v, d: int, n: int, free: np.ndarray):
     """The products (AD, DB, BC) of order n by least squares, or None when they do not fit."""
     k = np.arange(d + n, v.size)
     k = k[np.all([free[k - j] for j in range(n + 1)], axis=0)] if k.size else k
@@ -99,15 +99,13 @@ def _arx(w, alpha, v, target, d: int, n: int, free: np.ndarray, whole: bool):
                         + _columns(-alpha, k, range(n + 1)))
     if not np.any(x[:, n + n + 1:]):
         return None
-    target = target[k]
+    target = v[k]
     c, *_ = np.linalg.lstsq(x, target, rcond=None)
     if not np.all(np.isfinite(c)):
         return None
-    ad = np.concatenate(([1.0], c[:n]))
-    slack = float(np.sum(np.abs(ad))) + ARX_SLACK if whole else ARX_SLACK * max(1.0, float(np.max(np.abs(v))))
-    if float(np.max(np.abs(x @ c - target))) > slack:
+    if float(np.max(np.abs(x @ c - target))) > ARX_SLACK * max(1.0, float(np.max(np.abs(v)))):
         return None
-    return ad, c[n:2 * n + 1], c[2 * n + 1:]
+    return np.concatenate(([1.0], c[:n])), c[n:2 * n + 1], c[2 * n + 1:]
 
 
 def _factor(ad, db, bc, m: int, p: int):
@@ -166,8 +164,7 @@ def _pole_params(den_s: np.ndarray):
     return np.array(q), den
 
 
-def accel_feedback(u, theta, a, v, d: int, m: int, p: int, limit: float, recursion: str = "none",
-                   dt: float = DT) -> AccelFeedback | None:
+def accel_feedback(u, theta, a, v, d: int, m: int, p: int, limit: float, dt: float = DT) -> AccelFeedback | None:
     """Ga of order ``p`` beside a Gth of order ``m`` that together give the logged v, if any.
 
     Given Ga's denominator D, the law A·v = B·w − (BC)·(a/D) is linear in A, B and the
@@ -184,10 +181,8 @@ def accel_feedback(u, theta, a, v, d: int, m: int, p: int, limit: float, recursi
     m, p : int
         Gth's and Ga's orders (0..3).
     limit : float
-        The clamp, DAC counts (rows at it do not hold Gth's law).
-    recursion : {"none", "trunc", "round"}
-        What Gth's recursion stores (:data:`station.control.compensator.RECURSIONS`): on the
-        stored integer the fit is within the quantization (a truncated v's interval's middle).
+        The clamp, DAC counts (rows at it do not hold Gth's law). Gth's recursion is on the
+        float command (module docstring: not beside the stored integer).
     dt : float
         Sample time, s (Tustin's inverse of D, for the polish).
 
@@ -206,16 +201,15 @@ def accel_feedback(u, theta, a, v, d: int, m: int, p: int, limit: float, recursi
     w = np.zeros(v.size)
     w[d:] = u[d:] - theta[:v.size - d]
     free = np.abs(v) < limit
-    middle = 0.5 * np.sign(v) if recursion == "trunc" else np.zeros(v.size)
     with np.errstate(all="ignore"):  # wrong orders overflow on the way to being refused
-        products = _arx(w, alpha, v, v + middle, d, m + p, free, recursion != "none")
+        products = _arx(w, alpha, v, d, m + p, free)
         factors = None if products is None else _factor(*products, m, p)
         if factors is None or not all(np.all(np.isfinite(f)) for f in factors):
             return None
         d_ga = factors[3]
         k = np.arange(d + m + p, v.size)
         k = k[free[k]]
-        target = (v + middle)[k]
+        target = v[k]
         known = [-v[k - 1 - j] for j in range(m)] + [w[k - i] for i in range(m + 1)]
 
         def inner(den_z):

@@ -44,7 +44,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from station.analysis.accel_law import accel_feedback
+from station.analysis.accel_law import AccelFeedback, accel_feedback
 from station.analysis.continuous_design import ContinuousDesign, nicest_between, recognize, to_continuous
 from station.analysis.law_rows import BOUNDARY, TOLERANCE, LawRows, tie_rows
 from station.control import DAC_LIMIT, Compensator, DiscreteTF, OpenLoop, lead_controller  # DAC_LIMIT: the clamp assumed when v exceeds the rig's ±200
@@ -384,68 +384,64 @@ def infer_controller(u, theta, v, a=None, dt: float = DT, rig_limit: float = CLA
             for limit in _limits(v, rig_limit):
                 rows = LawRows(e, v, d, order, limit, order if cut else 0)
                 for recursion in recursions:
-                    found = _law(rows, recursion, dt)
-                    if found is None:
-                        continue
-                    c, design = found
-                    kind = "p" if order == 0 else f"linear-{order}"
-                    extra = {"kp": float(c[0])} if order == 0 else {}
-                    if design is not None:
-                        extra["design"] = design.to_json()
-                    name = design.text if design is not None else kind
-                    try:
-                        ctl = _compensator(c[:order + 1], np.concatenate(([1.0], c[order + 1:])), limit, dt, kind,
-                                           extra, recursion, name)
-                    except ValueError:
-                        continue
-                    law = _law_text(order, c, design, dt, recursion, limit, rig_limit)
-                    hit = _check(ctl, u, theta, a, v, law, alignments, design, prefer, order if cut else 0)
-                    if hit is not None and hit.max_abs_dv <= TOLERANCE:
+                    hit = _accepted(rows, recursion, d, (u, theta, a, v), dt, rig_limit, alignments, prefer,
+                                    order if cut else 0)
+                    if hit is not None:
                         return hit
-                    ties = tie_rows(rows, c, recursion)
-                    if ties:
-                        return IdentifiedController(ctl, d, 0.0, v.copy(), f"{law}, {ties} row(s) on a quantization "
-                                                    f"boundary as the lab's arithmetic decided them", design, (d,))
     if cut or not np.any(a != a[0]) or whole_counts(v):  # Ga beside a recursion on the stored integer: not yet
         return None
-    return _with_accel_feedback(u, theta, a, v, dt, rig_limit, alignments, prefer, ("none",))
+    return _with_accel_feedback(u, theta, a, v, dt, rig_limit, alignments, prefer)
 
 
-def _with_accel_feedback(u, theta, a, v, dt: float, rig_limit: float, alignments, prefer,
-                         recursions) -> IdentifiedController | None:
+def _accepted(rows: LawRows, recursion: str, d: int, log, dt: float, rig_limit: float, alignments, prefer,
+              primed: int = 0, ga: AccelFeedback | None = None) -> IdentifiedController | None:
+    """The law ``rows`` hold (with the accelerometer feedback ``ga`` when given), when, run as
+    the rig ran it, it reproduces the log ``(u, θ, a, v)``: to :data:`TOLERANCE`, or with rows
+    on a quantization boundary only (:func:`tie_rows`); else None."""
+    found = _law(rows, recursion, dt)
+    if found is None:
+        return None
+    c, design = found
+    order = rows.order
+    kind = ("p" if order == 0 else f"linear-{order}") + ("" if ga is None else f"+accel-{ga.den.size - 1}")
+    extra = {"kp": float(c[0])} if order == 0 else {}
+    if design is not None:
+        extra["design"] = design.to_json()
+    name = kind if design is None else design.text + ("" if ga is None else " with Ga")
+    limit = rows.limit
+    try:
+        ctl = _compensator(c[:order + 1], np.concatenate(([1.0], c[order + 1:])), limit, dt, kind, extra,
+                           recursion, name, ga=None if ga is None else (ga.num, ga.den))
+    except ValueError:
+        return None
+    law = _law_text(order, c, design, dt, recursion, limit, rig_limit, ctl.ga)
+    hit = _check(ctl, *log, law, alignments, design, prefer, primed)
+    if hit is not None and hit.max_abs_dv <= TOLERANCE:
+        return hit
+    ties = tie_rows(rows, c, recursion)
+    if ties:
+        return IdentifiedController(ctl, d, 0.0, np.asarray(log[3], float).copy(), f"{law}, {ties} row(s) on a "
+                                    f"quantization boundary as the lab's arithmetic decided them", design, (d,))
+    return None
+
+
+def _with_accel_feedback(u, theta, a, v, dt: float, rig_limit: float, alignments, prefer) -> IdentifiedController | None:
     """The simplest Gth with accelerometer feedback Ga (:mod:`station.analysis.accel_law`)
     that reproduces every logged v: total order m + p first, then the lower Gth order m (a
     lead and the thesis's third-order Ga before a third-order Gth and a first-order Ga)."""
     for total in range(2 * MAX_ORDER + 1):
         for order in range(max(0, total - MAX_ORDER), min(total, MAX_ORDER) + 1):
-            ga_order = total - order
             for d in alignments:
                 if d < 0:
                     continue
                 for limit in _limits(v, rig_limit):
-                    for recursion in recursions:
-                        ga = accel_feedback(u, theta, a, v, d, order, ga_order, limit, recursion, dt)
-                        if ga is None:
-                            continue
-                        rows = LawRows(_errors(u, theta, d) - ga.x, v, d, order, limit)
-                        found = _law(rows, recursion, dt)
-                        if found is None:
-                            continue
-                        c, design = found
-                        extra = {"kp": float(c[0])} if order == 0 else {}
-                        if design is not None:
-                            extra["design"] = design.to_json()
-                        kind = ("p" if order == 0 else f"linear-{order}") + f"+accel-{ga_order}"
-                        try:
-                            name = f"{design.text} with Ga" if design is not None else kind
-                            ctl = _compensator(c[:order + 1], np.concatenate(([1.0], c[order + 1:])), limit, dt,
-                                               kind, extra, recursion, name, ga=(ga.num, ga.den))
-                        except ValueError:
-                            continue
-                        law = _law_text(order, c, design, dt, recursion, limit, rig_limit, ctl.ga)
-                        hit = _check(ctl, u, theta, a, v, law, alignments, design, prefer)
-                        if hit is not None and hit.max_abs_dv <= TOLERANCE:
-                            return hit
+                    ga = accel_feedback(u, theta, a, v, d, order, total - order, limit, dt)
+                    if ga is None:
+                        continue
+                    rows = LawRows(_errors(u, theta, d) - ga.x, v, d, order, limit)
+                    hit = _accepted(rows, "none", d, (u, theta, a, v), dt, rig_limit, alignments, prefer, ga=ga)
+                    if hit is not None:
+                        return hit
     return None
 
 
