@@ -298,7 +298,8 @@ def table(outcomes: list[Outcome], seeds: str, elapsed: float) -> str:
                       "the four runs better than the answer (in-sample cost J, the diagnosis's own: noise-normalised "
                       "θ and a errors, 1 at the noise floor; columns J hidden / J found below): the search did not "
                       "reach the better explanation (a friction-like proxy such as deadzone often comes first; the "
-                      "lookahead of station.diagnosis.search.stepwise replaces it at the second step only), rather than the "
+                      "lookahead, last look and swap of station.diagnosis.search.stepwise undo it only where another "
+                      "first effect with one partner, or one swap, reaches the better one), rather than the "
                       "runs failing to tell the explanations apart."]
     lines += ["", "## Every case", "",
               "| case | seed | hidden | causes found | values found | θ gain % | J hidden | J found | unexplained | s |",

@@ -81,9 +81,12 @@ def test_new_hidden_effect_is_named_with_its_value(tmp_path, effect, seed):
 
 @pytest.mark.parametrize("case, seed", [
     ("coulomb_friction+amp_offset", 0),
-    # seed 0 of this triple is one of docs/diagnosis_validation.md's misses (a dead-zone is
-    # taken first for Coulomb friction plus an offset, and forward selection never undoes it)
-    ("amp_offset+coulomb_friction+param:drive_c", 1),
+    # a miss before the last look (station.diagnosis.search.stepwise): a dead-zone taken first
+    # for Coulomb friction plus an offset, drive damping beside it, and no offset paid beside both
+    ("amp_offset+coulomb_friction+param:drive_c", 0),
+    # a miss before the swap: the actuator pole taken at the third step for a delay of 1 sample,
+    # which paid in its place only once breakaway friction replaced the Coulomb friction
+    ("static_friction+amp_offset+delay", 0),
     # before the lookahead (station.diagnosis.search.stepwise) 0 of 10: Coulomb friction came first
     # and backlash never paid beside it; seed 0 named coulomb_friction + param:drive_c
     ("viscous_friction+backlash", 0),

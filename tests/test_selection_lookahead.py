@@ -65,3 +65,34 @@ def test_a_single_effect_is_not_traded_for_a_pair(blind_logs):
         return case.theta - 3.0 * (u1 - fitted), case.a
     d = diagnosis.diagnose(blind_logs, candidates=CANDIDATES, simulate=simulate)
     assert d.causes == ["viscous_friction"]
+
+
+def late_proxy_simulator(amplitude: float = 1.0):
+    """θ off from the log by amplitude·(3 u1 + 2 u2 + u4), u_k = sin(kπt/T): viscous_friction
+    = 3 cancels u1; param:drive_c = 2 cancels u4; backlash = 10 cancels u2, but only beside the
+    drive damping (at its nominal 1 it changes nothing); coulomb_friction is a proxy for u2
+    (along u2 + 0.6 u3, half the error left). Forward selection takes viscous friction, then
+    the proxy (it pays beside viscous friction, backlash does not), then the drive damping:
+    only then would backlash pay in the proxy's place."""
+    def simulate(case, model):
+        eff = model.effect_dict()
+        t = np.arange(case.n) / case.n
+        u1, u2, u3, u4 = (np.sin(k * np.pi * t) for k in (1, 2, 3, 4))
+        d = eff.get("param:drive_c", 1.0) - 1.0
+        fitted = (eff.get("viscous_friction", 0.0) / 3.0 * 3 * u1
+                  + eff.get("coulomb_friction", 0.0) / 10.0 * 2 * (u2 + 0.6 * u3)
+                  + eff.get("backlash", 0.0) / 10.0 * 2 * u2 * d + d * u4)
+        return case.theta - amplitude * (3 * u1 + 2 * u2 + u4 - fitted), case.a
+    return simulate
+
+
+def test_a_proxy_accepted_before_the_effect_it_stood_for_could_pay_is_swapped_out(blind_logs):
+    lines = []
+    d = diagnosis.diagnose(blind_logs, candidates=["viscous_friction", "coulomb_friction", "backlash", "param:drive_c"],
+                           simulate=late_proxy_simulator(3.0), progress=lines.append)
+    assert sorted(d.causes) == ["backlash", "param:drive_c", "viscous_friction"], "\n".join(lines)
+    fx = d.extended_model.effect_dict()
+    assert fx["backlash"] == pytest.approx(10.0, rel=0.05)
+    assert fx["param:drive_c"] == pytest.approx(2.0, rel=0.05)
+    assert "coulomb_friction" not in fx
+    assert any(line.startswith("swapped backlash in for coulomb_friction") for line in lines), "\n".join(lines)

@@ -23,10 +23,24 @@ judged on the validation runs like every second-step candidate, and the best of 
 is accepted by the same rule against the chosen first effect alone. A pair from the
 lookahead replaces the first choice; its first effect is then dropped when it does not pay
 beside the second (SFFS's conditional exclusion, :func:`_drop`) and selection goes on.
-The lookahead is not repeated at the third step: it did not reach the hidden triples of
-the blind set and costs a tenth of a diagnosis of the rig's four logs (tried again for
-amp_offset + coulomb_friction + param:drive_c seed 0, issue 17: still nothing below the
-dead-zone's best).
+Beside each other first effect, the effects that paid beside the chosen one are refined
+jointly too, and a pair's per-fold fits start from the valley so found: a proxy's partner
+is often its rival's, far from the rival's value alone (an amplifier offset beside a
+dead-zone, and beside a Coulomb friction: 4.2 alone, 11.6 with an offset of 5.9).
+
+Last look. When a later step adds nothing (no candidate is accepted beside two effects),
+the lookahead runs once more beside the effects accepted after the first: blind
+amp_offset + coulomb_friction + param:drive_c seed 0 took a dead-zone for the friction
+and its offset, drive damping beside it, and no offset paid beside both; from breakaway
+friction beside the drive damping the offset reaches the hidden triple. On the rig's
+four logs the third step adds nothing, so it runs there; with the swap it costs 26 % more
+simulations (33 076 against 26 315).
+
+Swap. When forward selection would stop, an accepted effect after the first may be
+replaced by one that pays more in its place (:func:`_swap`, SFFS's swap; at most
+:data:`SWAPS`): a proxy accepted at a later step, before the effect it stands for could pay
+(the actuator pole for a delay of 1 sample, which paid in its place only once breakaway
+friction had replaced the Coulomb friction beside them).
 
 Joint screening. From the second step on, each candidate is scanned on its grid beside the
 accepted effects and then refined together with them (:func:`~station.diagnosis.search.selection.screen_costs`
@@ -80,6 +94,9 @@ NEUTRAL = 0.01
 """An accepted effect whose joint value ends this close to its neutral one (a fraction of
 the neutral value, or of the range when that is 0) is tested for dropping at the end: blind
 static_friction + param:drive_c seed 3 ended with param:act_K = 1.000 beside them."""
+
+SWAPS = 1
+"""Swaps (:func:`_swap`) tried when forward selection would stop."""
 
 LOOKAHEAD_TRIALS = 2
 """Pairs from the lookahead fitted per fold: those with the lowest screened cost, if below
@@ -144,11 +161,15 @@ def _held(names: Sequence[str]) -> set[str]:
 
 
 def _lookahead(search: Search, names: Sequence[str], singles: Singles, pool: Sequence[str], accepted: list[str],
-               current: Trial, values: Mapping[str, float], bar: float, terms: int) -> dict[str, dict[str, Trial]]:
+               current: Trial, values: Mapping[str, float], bar: float, terms: int,
+               partners: Sequence[str] = ()) -> dict[str, dict[str, Trial]]:
     """Other first effects, beside the accepted ones after the first, with the next effect
     that pays most beside them (module docstring): first effect -> {next effect: the set's
     trial}, credible ones only. ``bar`` is the lowest in-sample cost screened beside the
-    accepted effects."""
+    accepted effects; ``partners`` the effects that paid beside the chosen first effect in
+    its joint screen, refined jointly beside each other first effect too (a proxy's partner
+    is its rival's: an amplifier offset beside a dead-zone, and beside a Coulomb friction
+    whose valley with the offset lies far from its value alone)."""
     ev, runs = search.ev, search.fit_runs
     chosen, kept = accepted[0], accepted[1:]
     keep = {k: v for k, v in values.items() if k in _held(kept)}
@@ -162,18 +183,24 @@ def _lookahead(search: Search, names: Sequence[str], singles: Singles, pool: Seq
         if n not in taken and fitted[n] < ev.cost({}, runs):
             firsts.append(n)
             taken |= _family(n)
-    sets = []
+    sets, valleys = [], {}
     for f in firsts:
         others = [n for n in names if n not in _family(f) and n not in _held(kept)]
         start = {**singles.values[f], **keep}
         costs = screen_costs(ev, search.axes, others, start, runs, LOOKAHEAD_GRID)
-        best = next(iter(costs), None)
-        if best is not None and best not in NESTED:
-            # like for like: the bar is the accepted effects refined beside their best partner
-            # (the joint screen), so the best partner here is refined beside f too; held at its
-            # value alone, f hid its pair (viscous friction 1.97 beside backlash: J 2.9 against
-            # act_K + backlash's 1.6, where the hidden 2.15 + 2.57 reach 0.96)
-            costs[best] = min(costs[best], fit_beside(ev, search.axes, (f, *kept), best, runs, start)[0])
+        # like for like: the bar is the accepted effects refined beside their partners (the
+        # joint screen), so the best partner here, and those that paid beside the chosen first
+        # effect, are refined beside f too; held at its value alone, f hid its pair (viscous
+        # friction 1.97 beside backlash: J 2.9 against act_K + backlash's 1.6, where the hidden
+        # 2.15 + 2.57 reach 0.96; Coulomb friction 4.2 alone, beside which no amplifier offset
+        # lowers J, where friction 11.6 with an offset of 5.9 reach 26 against a dead-zone
+        # with its offset's 49)
+        refine = [n for n in dict.fromkeys([*list(costs)[:1], *partners])
+                  if n in others and n not in NESTED]
+        for n in refine:
+            cost, valley = fit_beside(ev, search.axes, (f, *kept), n, runs, start)
+            if cost < costs.get(n, np.inf):
+                costs[n], valleys[f, n] = cost, valley
         sets += [(cost, f, n) for n, cost in costs.items() if cost < (1 - MIN_RELATIVE_GAIN) * bar]
     sets = sorted(sets)[:LOOKAHEAD_TRIALS]
     step = len(accepted) + 1
@@ -182,14 +209,74 @@ def _lookahead(search: Search, names: Sequence[str], singles: Singles, pool: Seq
                + f" ({ev.simulations} simulations)")
     out: dict[str, dict[str, Trial]] = {}
     for _, f, n in sets:
-        starts = [{**fv, **{k: v for k, v in cv.items() if k in _held(kept)}}
-                  for fv, cv in zip(singles.trials[f].fold_values, current.fold_values)]
+        # from the pair's valley when the joint refinement found it (the fold fits move locally)
+        starts = ([dict(valleys[f, n])] * len(current.fold_values) if (f, n) in valleys else
+                  [{**fv, **{k: v for k, v in cv.items() if k in _held(kept)}}
+                   for fv, cv in zip(singles.trials[f].fold_values, current.fold_values)])
         tr = _try_sets(search, {n: (f, *kept, n)}, starts)[n]
         search.say(f"step {step}: {' + '.join(tr.names)}: validation cost gain "
                    f"{relative_gain(tr.val_weighted, current.val_weighted):.1f} % over {' + '.join(accepted)} "
                    f"({ev.simulations} simulations)")
         out.setdefault(f, {})[n] = tr
     return {f: ok for f, group in out.items() if (ok := credible(group, terms, _luck(search)))}
+
+
+def _pays(search: Search, trials: Mapping[str, Trial], current: Trial, terms: int) -> bool:
+    """The best of ``trials`` is accepted beside ``current`` (:func:`accept`)."""
+    if not trials:
+        return False
+    best = min(trials.values(), key=lambda tr: tr.val_weighted)
+    return accept(current.val_weighted, best.val_weighted, terms, null_floor(search.ev, search.folds,
+                                                                             current.fold_values))
+
+
+def _swap(search: Search, names: Sequence[str], accepted: list[str], current: Trial, values: Mapping[str, float],
+          terms: int) -> tuple[str, str, Trial] | None:
+    """An accepted effect after the first replaced by another that pays more in its place
+    (SFFS's swap), when forward selection would stop: each, latest first, left out, the
+    candidates screened jointly beside the rest (:func:`screen_costs` with ``refit``), those
+    below the accepted set's in-sample cost fitted per fold; the first whose validation cost
+    :func:`accept` takes over the accepted set's, as (left out, in its place, its trial), else
+    None. A proxy accepted in a later step stays otherwise: drive stiffness for a delay of 2-4
+    samples, beside breakaway friction and an amplifier offset."""
+    ev, runs = search.ev, search.fit_runs
+    c0 = ev.cost(values, runs)
+    for out in reversed(accepted[1:]):
+        rest = [a for a in accepted if a != out]
+        fixed = {k: v for k, v in values.items() if k in _held(rest)}
+        open_ = [n for n in names if n not in _family(out) and n not in _held(rest)
+                 and not (n in NESTED and NESTED[n] not in rest)]
+        costs = screen_costs(ev, search.axes, open_, fixed, runs, refit=rest, workers=search.workers)
+        pool = [n for n in costs if costs[n] < (1 - MIN_RELATIVE_GAIN) * c0][:LOOKAHEAD_TRIALS]
+        if not pool:
+            continue
+        starts = [{k: v for k, v in fv.items() if k in _held(rest)} for fv in current.fold_values]
+        trials = _try_sets(search, {n: _set_with(rest, n) for n in pool}, starts)
+        n = min(trials, key=lambda k: trials[k].val_weighted)
+        search.say(f"swap: {' + '.join(trials[n].names)} in place of {' + '.join(accepted)}: validation cost gain "
+                   f"{relative_gain(trials[n].val_weighted, current.val_weighted):.1f} % ({ev.simulations} simulations)")
+        if accept(current.val_weighted, trials[n].val_weighted, terms):
+            return out, n, trials[n]
+    return None
+
+
+def _swapped(search: Search, names: Sequence[str], accepted: list[str], current: Trial,
+             values: Mapping[str, float], steps: list[Step], terms: int) -> tuple[list[str], Trial, dict, list] | None:
+    """The accepted effects, their trial, joint values and steps after a swap (:func:`_swap`),
+    or None when none pays. The swap is a step of its own, the set it replaced its rival
+    (for the alternatives); the step that found nothing before it is forgotten."""
+    swapped = _swap(search, names, accepted, current, values, terms) if len(accepted) > 1 else None
+    if swapped is None:
+        return None
+    out, n, tr = swapped
+    rest = [a for a in accepted if a != out]
+    floor = null_floor(search.ev, search.folds, current.fold_values)
+    steps = [st for st in steps if st.chosen is not None] + [Step(rest, {n: tr, out: current}, n, floor, {}, current)]
+    accepted = [n if a == out else a for a in accepted]
+    values = refit_accepted(search, tr, _refit_start({k: v for k, v in values.items() if k in _held(accepted)}, tr))
+    search.say(f"swapped {n} in for {out}: " + ", ".join(
+        f"{k} = {format_quantity(v, EFFECTS[k].unit)}" for k, v in values.items()))
+    return accepted, tr, values, steps
 
 
 def _drop(search: Search, name: str, current: Trial, terms: int) -> Trial | None:
@@ -294,20 +381,26 @@ def forward_select(search: Search, names: Sequence[str], singles: Singles, nomin
     current = nominal
     values: dict[str, float] = {}
     steps: list[Step] = []
-    for step in range(MAX_EFFECTS + len(NESTED) + DROPS):
+    swaps = SWAPS
+    for step in range(MAX_EFFECTS + len(NESTED) + DROPS + SWAPS):
         if step == 0:
             tried = {n: singles.trials[n] for n in names}
         else:
             tried, bar = _joint_trials(search, names, accepted, current, values, step)
         trials = credible(tried, terms, _luck(search))
         set_aside = {n: tr for n, tr in tried.items() if n not in trials}
-        pairs = (_lookahead(search, names, singles, list(steps[0].trials), accepted, current, values, bar, terms)
-                 if step == 1 else {})
+        pairs = (_lookahead(search, names, singles, list(steps[0].trials), accepted, current, values, bar, terms,
+                            [n for n in tried if n not in NESTED])
+                 if step == 1 or (1 < step and len(accepted) < MAX_EFFECTS
+                                  and not _pays(search, trials, current, terms)) else {})
         if not trials and not pairs:
             if set_aside and step > 0:  # kept for the alternatives: a breakaway set aside in place of friction
                 steps.append(Step(list(accepted), {}, None, null_floor(ev, folds, current.fold_values), set_aside,
                                   current))
-            break
+            if not swaps or (swapped := _swapped(search, names, accepted, current, values, steps, terms)) is None:
+                break
+            swaps, (accepted, current, values, steps) = swaps - 1, swapped
+            continue
         best = min(trials, key=lambda n: trials[n].val_weighted) if trials else None
         new_first = None
         for f, group in pairs.items():  # a set from the lookahead replaces the first choice
@@ -330,7 +423,10 @@ def forward_select(search: Search, names: Sequence[str], singles: Singles, nomin
                 st.before = [new_first if n == old else n for n in st.before]
         steps.append(Step(list(accepted), trials, best if ok else None, floor, set_aside, current))
         if not ok:
-            break
+            if not swaps or (swapped := _swapped(search, names, accepted, current, values, steps, terms)) is None:
+                break
+            swaps, (accepted, current, values, steps) = swaps - 1, swapped
+            continue
         simpler = NESTED.get(best)
         if simpler in accepted:  # an upgrade in place
             accepted[accepted.index(simpler)] = best
