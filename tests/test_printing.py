@@ -223,7 +223,7 @@ def test_a_settled_diagnosis_reads_the_same_everywhere(monkeypatch, tmp_path):
 
 def test_the_estimate_counts_the_simulations_the_diagnosis_runs(rig_data, tmp_path, capsys):
     """Issue 24: 'about 12000 simulations' up front, '22886 simulations' at the end. On two of
-    the rig's logs (leave-one-run-out, the whole vocabulary; about 7 s) the estimate is within
+    the rig's logs (leave-one-run-out, the whole vocabulary; about 20 s) the estimate is within
     0.67-1.5× of the count."""
     import json
 

@@ -23,12 +23,12 @@ HELP = ("diagnose the model on measured runs: residual tests, the missing effect
         "runs it was not fitted to), the extended model and its gain")
 
 
-SIMULATIONS_PER_FOLD_RUN = 1700
+SIMULATIONS_PER_FOLD_RUN = 2400
 """Simulations of the whole vocabulary's diagnosis per run simulated in each fold (every
 evaluation simulates a fold's fit and validation runs): leave-one-run-out on n runs costs about
-this × n × n. Counted on the rig's thesis logs (the joint screen from the second step on):
-2 runs 7829 (1957 × 4), 3 runs 16 139 (1793 × 9), 4 runs 25 703 (1606 × 16); the count hardly
-depends on the runs' length."""
+this × n × n. Counted on the rig's thesis logs with the lookahead, the last look and the swap:
+2 runs 11 007 (2752 × 4), 3 runs 24 981 (2776 × 9), 4 runs 33 076 (2067 × 16); how many steps
+pay moves it more than the runs' length does."""
 SECONDS_PER_SIMULATION = 0.8e-3
 """CPU time of a simulation besides its samples (building the model with its effects), s."""
 SECONDS_PER_SAMPLE = 0.25e-6
