@@ -287,3 +287,15 @@ def test_blind_out_of_vocabulary_effect_is_unexplained_and_follows_position(tmp_
     assert r["unexplained"] is True, f"{case} seed {seed}: causes {r['causes']}, not flagged"
     assert "position θ" in [f["what"] for f in r["residual_check"]["follows"]], r["unexplained_evidence"]
     assert "position θ" in r["unexplained_evidence"]
+
+
+@pytest.mark.slow
+def test_blind_cogging_that_no_single_effect_pays_for_is_still_unexplained(tmp_path):
+    """oov:cogging seed 8: no single effect pays and the nominal model is far from the noise
+    (J 1740), so pairs are screened from nothing (station.diagnosis.search.stepwise); the pair
+    found (breakaway friction + drive stiffness) is no explanation, and the diagnosis says so.
+    The pair's first effect, a breakaway that did not pay alone, once made the doubt's reading
+    of the steps fail (KeyError)."""
+    r = _blind(tmp_path, "oov:cogging", 8)
+    assert r["unexplained"] is True, f"causes {r['causes']}, not flagged"
+    assert "position θ" in r["unexplained_evidence"]

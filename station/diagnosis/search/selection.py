@@ -271,14 +271,14 @@ def screen_costs(ev: Evaluator, axes: Mapping[str, Axis], names: Sequence[str], 
     def lowest(n: str) -> float:
         if refit and n != "static_friction":
             return fit_beside(ev, axes, refit, n, runs, fixed)[0]
-        return min(ev.cost(point, runs) for point in _screen_points(n, axes, fixed)[::every])
+        return min(ev.cost(point, runs) for point in screen_points(n, axes, fixed)[::every])
 
     names = list(names)
     best = {names[i]: c for i, c in farm(lowest, names, ev, workers)}
     return {n: best[n] for n in sorted((n for n in names if best[n] < c0), key=best.get)}
 
 
-def _screen_points(name: str, axes: Mapping[str, Axis], fixed: Mapping[str, float]) -> list[dict]:
+def screen_points(name: str, axes: Mapping[str, Axis], fixed: Mapping[str, float]) -> list[dict]:
     """The values :func:`screen` tries for one effect beside ``fixed``: its grid; for
     static_friction the excess grid over an accepted sliding level, else its grid with
     the sliding level at half of it."""

@@ -42,6 +42,15 @@ replaced by one that pays more in its place (:func:`_swap`, SFFS's swap; at most
 (the actuator pole for a delay of 1 sample, which paid in its place only once breakaway
 friction had replaced the Coulomb friction beside them).
 
+Pair start. When no single effect pays and the nominal model's in-sample cost is far from
+the noise (:data:`PAIR_START`), pairs are screened from nothing (:func:`_pairs_from_nothing`):
+each of the effects that fit best alone with every other on a coarse grid of both, the best
+pairs fitted jointly and judged like a step. Some effects act only together: an amplifier
+offset above the sliding friction makes the open-loop hub run away unless a breakaway holds
+it, so alone the offset, the friction and the breakaway all fit worse than nothing (blind
+breakaway_sliding+amp_offset@d0 seeds 0 and 7 ended "none" at J 605 and 543, the hidden
+triple's 1.06). The screen costs about 18 000 simulations on four runs, spent only then.
+
 Joint screening. From the second step on, each candidate is scanned on its grid beside the
 accepted effects and then refined together with them (:func:`~station.diagnosis.search.selection.screen_costs`
 with ``refit``, a short Nelder-Mead: :data:`~station.diagnosis.search.fitting.SCREEN_REFINE`):
@@ -69,8 +78,8 @@ from station.diagnosis.runs.folds import validation_runs
 from station.diagnosis.units import format_quantity
 from station.diagnosis.search.fitting import NESTED, SHAPE, fit_beside, fit_set, set_axes
 from station.diagnosis.search.selection import (MAX_EFFECTS, MIN_RELATIVE_GAIN, SECOND_STEP_CANDIDATES, Search,
-                                                Selection, Singles, Step, Trial, accept, credible, null_floor,
-                                                screen_costs, trial)
+                                                Selection, Singles, Step, Trial, screen_points, accept, credible,
+                                                null_floor, screen_costs, trial)
 from station.plant.effects import EFFECTS
 
 LOOKAHEAD = 3
@@ -101,6 +110,10 @@ SWAPS = 1
 LOOKAHEAD_TRIALS = 2
 """Pairs from the lookahead fitted per fold: those with the lowest screened cost, if below
 the best pair beside the chosen first effect."""
+
+PAIR_START = 20.0
+"""The nominal model's in-sample cost J on the fit runs (1 at the noise floor) from which,
+when no single effect pays, pairs are screened from nothing (:func:`_pairs_from_nothing`)."""
 
 
 def _set_with(accepted: Sequence[str], name: str) -> tuple:
@@ -216,6 +229,52 @@ def _lookahead(search: Search, names: Sequence[str], singles: Singles, pool: Seq
         tr = _try_sets(search, {n: (f, *kept, n)}, starts)[n]
         search.say(f"step {step}: {' + '.join(tr.names)}: validation cost gain "
                    f"{relative_gain(tr.val_weighted, current.val_weighted):.1f} % over {' + '.join(accepted)} "
+                   f"({ev.simulations} simulations)")
+        out.setdefault(f, {})[n] = tr
+    return {f: ok for f, group in out.items() if (ok := credible(group, terms, _luck(search)))}
+
+
+def _pairs_from_nothing(search: Search, names: Sequence[str], singles: Singles,
+                        terms: int) -> dict[str, dict[str, Trial]]:
+    """Pairs tried when no single effect pays and the nominal model is far from the noise
+    (module docstring, pair start): the :data:`LOOKAHEAD` effects that fit all fit runs best
+    alone, each scanned with every other on a coarse grid of both (every
+    :data:`LOOKAHEAD_GRID`-th point of each: neither held at its value alone), the
+    :data:`LOOKAHEAD_TRIALS` pairs whose lowest cost is below the best single's by the
+    parsimony margin fitted jointly from that point on all fit runs and then per fold from
+    the valley found: first effect -> {second effect: the pair's trial}, credible ones only."""
+    ev, runs, axes = search.ev, search.fit_runs, search.axes
+    fitted = {n: ev.cost(singles.values[n], runs) for n in names}
+    bar = min(fitted.values(), default=ev.cost({}, runs))
+    firsts, taken = [], set()
+    for n in sorted(fitted, key=fitted.get):
+        if len(firsts) < LOOKAHEAD and n not in taken:
+            firsts.append(n)
+            taken |= _family(n)
+    pairs = [(f, n) for f in firsts for n in names if n not in _family(f)
+             and not (n in firsts and firsts.index(n) < firsts.index(f))]
+
+    def lowest(pair):
+        f, n = pair
+        points = [q for p in screen_points(f, axes, {})[::LOOKAHEAD_GRID]
+                  for q in screen_points(n, axes, p)[::LOOKAHEAD_GRID]]
+        costs = [ev.cost(q, runs) for q in points]
+        k = int(np.argmin(costs))
+        return costs[k], points[k]
+
+    scanned = {pairs[i]: out for i, out in farm(lowest, pairs, ev, search.workers)}
+    best = sorted((c, pair) for pair, (c, _) in scanned.items() if c < (1 - MIN_RELATIVE_GAIN) * bar)
+    best = best[:LOOKAHEAD_TRIALS]
+    search.say(f"step 1: no single effect pays, the nominal model's cost {ev.cost({}, runs):.3g} is far from the "
+               f"noise: pairs from nothing over {', '.join(firsts)}: "
+               + (", ".join(f"{f} + {n} ({c:.3g})" for c, (f, n) in best) or f"nothing below {bar:.3g}")
+               + f" ({ev.simulations} simulations)")
+    out: dict[str, dict[str, Trial]] = {}
+    for _, (f, n) in best:
+        valley = fit_set(ev, set_axes((f, n), axes), runs, scanned[f, n][1])
+        tr = _try_sets(search, {n: (f, n)}, [dict(valley)] * len(search.folds))[n]
+        search.say(f"step 2: {' + '.join(tr.names)}: validation cost gain "
+                   f"{relative_gain(tr.val_weighted, singles.trials[f].val_weighted):.1f} % over {f} alone "
                    f"({ev.simulations} simulations)")
         out.setdefault(f, {})[n] = tr
     return {f: ok for f, group in out.items() if (ok := credible(group, terms, _luck(search)))}
@@ -393,6 +452,9 @@ def forward_select(search: Search, names: Sequence[str], singles: Singles, nomin
                             [n for n in tried if n not in NESTED])
                  if step == 1 or (1 < step and len(accepted) < MAX_EFFECTS
                                   and not _pays(search, trials, current, terms)) else {})
+        if step == 0 and ev.cost({}, search.fit_runs) >= PAIR_START and not _pays(search, trials, current, terms):
+            pairs = _pairs_from_nothing(search, names, singles, terms)
+        first_step = (trials, set_aside)  # step 1 as screened, before a pair from nothing replaces it
         if not trials and not pairs:
             if set_aside and step > 0:  # kept for the alternatives: a breakaway set aside in place of friction
                 steps.append(Step(list(accepted), {}, None, null_floor(ev, folds, current.fold_values), set_aside,
@@ -414,7 +476,17 @@ def forward_select(search: Search, names: Sequence[str], singles: Singles, nomin
                    f"current {current.val_weighted / terms:.3g}, reached by quantization and noise alone "
                    f"{floor / terms:.3g}")
         ok = accept(current.val_weighted, trials[best].val_weighted, terms, floor)
-        if ok and new_first is not None:
+        if ok and new_first is not None and step == 0:  # a pair from nothing: its first effect is step 1's
+            # the first effect's own trial stays in its step, credible alone or not (the doubt reads
+            # it); the simpler effect it holds is left out: alone, neither paid, so a breakaway alone
+            # against plain Coulomb friction alone says nothing of the pair's
+            alone = {k: v for k, v in {**first_step[0], new_first: singles.trials[new_first]}.items()
+                     if k != NESTED.get(new_first)}
+            steps.append(Step([], alone, new_first, floor,
+                              {k: v for k, v in first_step[1].items() if k not in _family(new_first)}, current))
+            accepted, values, current = [new_first], {}, singles.trials[new_first]
+            floor = null_floor(ev, folds, current.fold_values)
+        elif ok and new_first is not None:
             old = accepted[0]
             values = {**singles.values[new_first], **{k: v for k, v in values.items() if k in _held(accepted[1:])}}
             accepted = [new_first, *accepted[1:]]
@@ -435,7 +507,9 @@ def forward_select(search: Search, names: Sequence[str], singles: Singles, nomin
         current = trials[best]
         if step > 0 and best not in NESTED:
             accepted, current = _downgrade(search, accepted, current, terms)
-        if step == 0:
+        if step == 0 and new_first is not None:
+            values = refit_accepted(search, current, dict(current.fold_values[0]))
+        elif step == 0:
             values = refit_accepted(search, current, {}, dict(singles.values[best]))
         else:
             values = refit_accepted(search, current, _refit_start(values, current))
