@@ -242,6 +242,8 @@ def _beam_test(report: ReplayReport, run: LoggedRun, model) -> None:
         report.notes.append(f"the model's hub-held first mode could not be computed ({exc})")
     report.beam_test = BeamTestReport(measured, run.held, f_model, z_model)
     report.notes.append(f"{run.held_note}; the beam's free vibration after the release is analyzed instead")
+    if (departure := report.beam_test.departure()) is not None:
+        report.notes.append(f"beam test: {departure}")
     report.notes.extend(f"beam test: {note}" for note in measured.notes)
 
 
