@@ -29,7 +29,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from hypothesis import HealthCheck, assume, event, given, settings
+from hypothesis import HealthCheck, assume, event, example, given, settings
 from hypothesis import strategies as st
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
@@ -594,6 +594,9 @@ def check_log(path: Path) -> None:
 
 @LOADER
 @given(text=rig_logs())
+# finite gains whose discretization overflows (kd / dt = inf): a ValueError from DiscreteTF once
+@example(text="#SLFR RTP Motor_Comp_w_accel_fb\n#Gth num=[]\n#kp=0.0\n#kd=1.7976931348623157e+308\n"
+              "#t\ta\tn\t$\\theta$\t$\\hat{\\theta}_d$\tu\tv\n0.0\t78\t0\t87\t-10\t46\t110\n")
 def test_fuzz_rig_log_headers(folder, text):
     path = folder / "rig.txt"
     path.write_text(text)

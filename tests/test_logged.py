@@ -87,3 +87,27 @@ def test_step_metrics_use_the_classified_amplitude(tmp_path):
     run = LoggedRun.from_path(path)
     assert run.reference.is_step and run.reference.step_tick == 10
     assert run.step_metrics().overshoot_pct == pytest.approx(100 * (sim["theta"].max() - 100) / 100)
+
+
+LEAD_LOG = "step_response_Gth_comp_no_accel_FB_amp_100_duration_1000_SLFR_RTP_Motor_Comp_Gth.txt"
+
+
+@pytest.mark.parametrize("b0, b1, a1, source", [
+    (18.32547182, -17.20911971, -0.77672958, "header"),  # the thesis's Gth, as the lab printed it
+    (2.9702970297, -2.8925742574, -0.9603960396, "inferred (header contradicted)"),  # another lead
+])
+def test_the_labs_b_and_a_header_lines_are_a_claim_checked_against_the_data(rig_data, tmp_path, b0, b1, a1, source):
+    """ryanGT's Motor_Comp scripts printed Gth as '#b0=', '#b1=', '#a1=' lines (v[i] = b0 e[i] +
+    b1 e[i-1] - a1 v[i-1]); read as Gth, they are checked like any header: the thesis's lead is
+    confirmed, another lead on the same data is contradicted and the data's law used. Before,
+    the lines were ignored and the controller inferred with nothing said of the header."""
+    rows = (rig_data / LEAD_LOG).read_text().splitlines()
+    body = [r for r in rows if not r.startswith("#Gth") and not r.startswith("#Ga")][1:]
+    path = tmp_path / "lab_motor_comp.txt"
+    path.write_text("\n".join(["#SLFR RTP Motor_Comp", f"#b0={b0}", f"#b1={b1}", f"#a1={a1}", *body]) + "\n")
+    run = LoggedRun.from_path(path)
+    assert run.source == source and run.reproduced and run.alignment == 1
+    if source == "header":
+        assert run.controller.name == "lead"
+    else:
+        assert "Gth num [2.970297" in " ".join(run.audit.lines())

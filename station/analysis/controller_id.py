@@ -471,7 +471,8 @@ def pid_controllers(kp: float, ki: float, kd: float, dt: float = DT,
     list of (str, Compensator)
         One per integral rule (backward Euler, forward Euler, Tustin; one entry when
         ki = 0), the derivative always by backward difference kd (1 - z^-1)/dt; the name
-        says which.
+        says which. A rule whose coefficients overflow (gains near the float's limit) is
+        left out: it runs no law.
     """
     deriv = np.array([kd / dt, -kd / dt])
     out = []
@@ -489,6 +490,8 @@ def pid_controllers(kp: float, ki: float, kd: float, dt: float = DT,
             den = np.asarray(den)
         what = ("derivative by backward difference" if make is None
                 else f"integral by {rule}" + (", derivative by backward difference" if kd else ""))
+        if not (np.all(np.isfinite(num)) and np.all(np.isfinite(den))):
+            continue  # finite gains whose discretization overflows (kd = 1.8e308 over dt) run no law
         extra = {"kp": kp, "ki": ki, "kd": kd, "discretization": what}
         ctl = _compensator(num, den, limit, dt, "pid", extra)
         ctl.spec["source"] = "rig header"

@@ -113,6 +113,18 @@ def _header_number(meta: dict[str, Any], key: str) -> float:
     return float(value)
 
 
+def _lab_coefficients(meta: dict[str, Any], notes: list[str]) -> dict[str, Any]:
+    """``meta`` with a Gth read from the lab's own way of printing it, when it has no Gth: the
+    lines ``#b0=``, ``#b1=``, ``#a1=`` of ryanGT's Motor_Comp scripts (their recursion
+    v[i] = b0·e[i] + b1·e[i−1] − a1·v[i−1]) are Gth's z⁻¹ num [b0, b1, …] and den [1, a1, …]."""
+    if "Gth" in meta or "b0" not in meta:
+        return meta
+    num = [_header_number(meta, f"b{k}") for k in range(MAX_ORDER + 2) if f"b{k}" in meta]
+    den = [1.0] + [_header_number(meta, f"a{k}") for k in range(1, MAX_ORDER + 2) if f"a{k}" in meta]
+    notes.append(f"Gth read from the header's b and a lines (the lab's Motor_Comp): num {num}, den {den}")
+    return {**meta, "Gth": {"num": num, "den": den}}
+
+
 def rig_controller(meta: dict[str, Any], dt: float = DT) -> tuple[Compensator | OpenLoop | None, list[str]]:
     """The controller a rig log's header names.
 
@@ -133,6 +145,7 @@ def rig_controller(meta: dict[str, Any], dt: float = DT) -> tuple[Compensator | 
     """
     notes: list[str] = []
     test = str(meta.get("test", ""))
+    meta = _lab_coefficients(meta, notes)
     if "Gth" in meta:
         ref = lead_controller(CLAMP, dt, accel=True)
         gth, gth_known = _rig_stage(meta, "Gth", ref.gth, notes)

@@ -281,7 +281,23 @@ def screen_costs(ev: Evaluator, axes: Mapping[str, Axis], names: Sequence[str], 
 def screen_points(name: str, axes: Mapping[str, Axis], fixed: Mapping[str, float]) -> list[dict]:
     """The values :func:`screen` tries for one effect beside ``fixed``: its grid; for
     static_friction the excess grid over an accepted sliding level, else its grid with
-    the sliding level at half of it."""
+    the sliding level at half of it.
+
+    Parameters
+    ----------
+    name : str
+        The effect scanned (:data:`station.plant.effects.EFFECTS`).
+    axes : mapping of str to Axis
+        Every effect's axis (:func:`~station.diagnosis.search.fitting.effect_axes`).
+    fixed : mapping of str to float
+        The effects held, each in its effect's unit; copied into every point.
+
+    Returns
+    -------
+    list of dict
+        One effect-value mapping per grid point (``fixed`` plus the scanned effect, and for
+        static_friction its sliding level), in the grid's order.
+    """
     if name != "static_friction":
         return [{**fixed, name: float(g)} for g in axes[name].grid()]
     if "coulomb_friction" in fixed:
