@@ -147,7 +147,7 @@ def table(outcomes: list[Outcome], seeds: str, elapsed: float) -> str:
         "one rig-format log of 2000 samples written by the independent generator `tests/blind/audit.py` (its own "
         "FEM, amplifier and sensors; a P law or a lead K(s+z)/(s+p) with round numbers, Tustin at 0.002 s, its "
         "recursion on the float or on the stored integer (truncated or rounded), alignment 0 or 1, clamp ±200 or "
-        "±150, a step, 5 Hz sine or 0–10 Hz sweep reference); `station.logged.LoggedRun` sees only the file. "
+        "±150, a step, 5 Hz sine or the lab's ‘0–10 Hz’ sweep (its instantaneous frequency to 20 Hz) reference); `station.logged.LoggedRun` sees only the file. "
         "`lie:open_loop`: an open-loop header on closed-loop data; `lie:p_kp`: `#kp=2.0` over another gain; "
         "`lie:lead_pole`: the thesis's lead printed, another pole run; `lie:accel_fb`: a lead with "
         "accelerometer feedback θ̂_d = u − Ga(a) (DESIGN.md's Ga, its gain ×0.5–1.5 and frequencies ×0.7–1.4; "

@@ -11,9 +11,17 @@ model moves as the rig moved if those claims hold. Two numbers per run test them
   :data:`THETA_HORIZON_S` where the measured hub moved (short, and moving, so the model's
   drift without friction does not count), and the least-squares ratio of the measured to
   the modelled changes;
-- a: the same between the measured and the modelled a band-passed to
-  :data:`ACCEL_BAND_HZ` (the accelerometer's offset and drift, and the beam's rigid motion,
-  removed).
+- a: the cosine between the measured and the modelled a in each octave of
+  :data:`ACCEL_OCTAVES_HZ` (1-40 Hz: the accelerometer's offset and drift, and the beam's
+  rigid motion, removed) where the model's a has :data:`OCTAVE_SHARE` of its largest octave's
+  RMS, the median over those octaves; and a's least-squares ratio over the whole band, or,
+  where the whole band's cosine (the runs' median) is below :data:`SIGN_COSINE`, over the
+  octaves whose cosine reaches it. One cosine over the whole band is the largest octave's: a
+  lightly damped mode the model puts off the rig's turns the phase around it, and where a
+  run's a is mostly that mode (the lab's 2009 sweeps reach 20 Hz, the second mode: 30-36
+  counts RMS at 14-20 Hz against 13-15 below) the whole band's cosine fell to −0.44 while
+  every octave below the mode said −0.95 or less; on a blind sweep on a beam 20 % softer it
+  was −0.04 and the ratio −0.04 (by octaves −0.77 and −0.96, the hidden gain −1.2).
 
 A cosine below −:data:`SIGN_COSINE` is a reversal, above +:data:`SIGN_COSINE` the model's
 sign, between them undecided. θ's sign is the encoder's times the motor's; a's the
@@ -30,7 +38,8 @@ gain is the median ratio of a; an encoder of another resolution is decided when 
 cancels), and the inverse of their median is no accelerometer gain of the vocabulary (0.3-3).
 
 On the rig's own logs (2009, 2013-14) every cosine is +0.74 or more where the channel
-moves (``tests/test_sensor_signs.py``); on the blind generator's reversed and rescaled
+moves (``tests/test_sensor_signs.py``), on the lab's April 2009 session (its accelerometer
+reversed) −0.86 or less; on the blind generator's reversed and rescaled
 sensors the decided cosines are −0.88 or less and the ratios within 30 % of the hidden
 values.
 """
@@ -45,7 +54,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from station.control.rerun import OpenLoop
-from station.logged.audit import AuditClaim
+from station.logged.audit import ACCEL_BAND_HZ, AuditClaim
 from station.logged.device import command_quantization
 from station.plant.effects import EFFECTS
 from station.rig import COUNTS_PER_REV
@@ -53,8 +62,18 @@ from station.rig import COUNTS_PER_REV
 THETA_HORIZON_S = 0.05
 """Horizon of the θ changes compared, s."""
 
-ACCEL_BAND_HZ = (1.0, 40.0)
-"""Band a is compared in, Hz (second-order Butterworth, forward and backward)."""
+ACCEL_OCTAVES_HZ = (1.0, 2.0, 4.0, 8.0, 16.0, 40.0)
+"""Edges of the bands a's cosines are taken in, Hz (second-order Butterworth, forward and
+backward): octaves across :data:`station.logged.audit.ACCEL_BAND_HZ`, the last one wider."""
+
+OCTAVE_SHARE = 0.1
+"""An octave's cosine counts where the model's a there has at least this share of its largest
+octave's RMS (and at least :data:`OCTAVE_FLOOR_COUNTS`): an octave the run hardly moves is the
+noise's."""
+
+OCTAVE_FLOOR_COUNTS = 0.6
+"""Least RMS of the model's a in an octave whose cosine counts, counts (twice the
+accelerometer's noise)."""
 
 MOVING_COUNTS = 2.0
 """θ changes are compared where the measured hub moved at least this many counts over
@@ -103,13 +122,23 @@ class SensorEvidence:
     theta_cosine, theta_ratio : float or None
         Cosine and least-squares ratio (measured / model) of θ's changes over
         :data:`THETA_HORIZON_S`; None when either did not move.
-    accel_cosine, accel_ratio : float or None
-        The same for a in :data:`ACCEL_BAND_HZ`; None when either is flat or the log's a is
+    accel_cosine : float or None
+        The same for a, the median over the octaves that count (:func:`octave_compare`);
+        None when either is flat, the band reaches the Nyquist frequency or the log's a is
         no tip acceleration (its audit).
+    accel_ratio : float or None
+        a's least-squares ratio over all of :data:`ACCEL_BAND_HZ` at once; None as
+        ``accel_cosine``.
     accel_bias, accel_slope : float or None
         a's bias (counts: its rest value before the first command plus what remains) and its
         drift (counts per s) beside the model's a: the least-squares fit of the measured a on
         [1, t, the model's a] over the whole run; None as ``accel_cosine``.
+    accel_band_cosine : float or None
+        a's cosine over all of :data:`ACCEL_BAND_HZ` at once, where its ratio measures a gain
+        (:func:`decide_faults`); None as ``accel_cosine``.
+    accel_shaped_ratio : float or None
+        a's ratio over the octaves whose shape the model has (:func:`octave_compare`); None as
+        ``accel_cosine``.
     """
 
     name: str
@@ -119,6 +148,8 @@ class SensorEvidence:
     accel_ratio: float | None
     accel_bias: float | None = None
     accel_slope: float | None = None
+    accel_band_cosine: float | None = None
+    accel_shaped_ratio: float | None = None
 
 
 def _compare(measured: np.ndarray, model: np.ndarray) -> tuple[float | None, float | None]:
@@ -166,19 +197,65 @@ def sensor_evidence(run, model) -> SensorEvidence:
     dm, ds = theta[h:] - theta[:-h], theta_m[h:] - theta_m[:-h]
     moving = np.abs(dm) >= MOVING_COUNTS  # a stuck hub is friction's, not the sensor's: not compared
     th = _compare(dm[moving], ds[moving]) if np.count_nonzero(moving) >= MIN_WINDOWS else (None, None)
-    ac: tuple[float | None, ...] = (None, None, None, None)
     nyquist = 0.5 / dt
     a_raw = np.asarray(d["a"], float)
     if run.accel_is_tip and len(run) > 30 and ACCEL_BAND_HZ[1] < nyquist and np.all(np.isfinite(a_raw)):
         sos = butter(2, ACCEL_BAND_HZ, "bandpass", fs=1.0 / dt, output="sos")
         rest = run.accel_rest_offset
         a, a_m = a_raw - rest, np.asarray(pred["a"], float)
-        cos_ratio = _compare(sosfiltfilt(sos, a), sosfiltfilt(sos, a_m))
-        if cos_ratio[0] is not None:
+        band = _compare(sosfiltfilt(sos, a), sosfiltfilt(sos, a_m))
+        octaves = octave_compare(a, a_m, dt)
+        if band[0] is not None and octaves[0] is not None:
             t = np.arange(a.size) * dt  # the plant's drift runs from the run's first sample
             (bias, slope, _), *_ = np.linalg.lstsq(np.column_stack([np.ones_like(t), t, a_m]), a, rcond=None)
-            ac = (*cos_ratio, float(rest + bias), float(slope))
-    return SensorEvidence(name, *th, *ac)
+            return SensorEvidence(name, *th, octaves[0], band[1], float(rest + bias), float(slope), band[0],
+                                  octaves[1])
+    return SensorEvidence(name, *th, None, None)
+
+
+def octave_compare(measured, model, dt: float) -> tuple[float | None, float | None]:
+    """The cosine and the least-squares ratio (measured / model) of a, from the octaves of
+    :data:`ACCEL_OCTAVES_HZ` where the model's a has :data:`OCTAVE_SHARE` of its largest
+    octave's RMS and at least :data:`OCTAVE_FLOOR_COUNTS` (the largest always counts): the
+    median of their cosines, and the ratio over those whose cosine reaches
+    :data:`SIGN_COSINE` either way (all of them when none does), each weighted by its energy
+    as one least-squares fit.
+
+    Parameters
+    ----------
+    measured, model : array_like, shape (N,)
+        a, counts, the measured one less its rest offset.
+    dt : float
+        Sample time, s (octaves at or past the Nyquist frequency are left out).
+
+    Returns
+    -------
+    (float, float) or (None, None)
+        The cosine in [-1, 1] and the ratio; None when no octave has both signals.
+    """
+    # lazy: start-up time (scipy's filters)
+    from scipy.signal import butter, sosfiltfilt
+
+    x, y = np.asarray(measured, float), np.asarray(model, float)
+    nyquist = 0.5 / dt
+    octaves = []  # (cosine, ratio, the model's RMS)
+    for lo, hi in zip(ACCEL_OCTAVES_HZ[:-1], ACCEL_OCTAVES_HZ[1:]):
+        if hi >= nyquist:
+            break
+        sos = butter(2, (lo, hi), "bandpass", fs=1.0 / dt, output="sos")
+        xb, yb = sosfiltfilt(sos, x), sosfiltfilt(sos, y)
+        c = _compare(xb, yb)[0]
+        if c is not None:
+            octaves.append((c, float(xb @ yb), float(yb @ yb)))
+    if not octaves:
+        return None, None
+    least = max(OCTAVE_SHARE ** 2 * max(o[2] for o in octaves), OCTAVE_FLOOR_COUNTS ** 2 * x.size)
+    counted = [o for o in octaves if o[2] >= least] or [max(octaves, key=lambda o: o[2])]
+    cosine = float(statistics.median(o[0] for o in counted))
+    # the ratio over the octaves whose shape the model has (least squares across them): an
+    # octave the model's mode misses would pull it toward 0
+    shaped = [o for o in counted if abs(o[0]) >= SIGN_COSINE] or counted
+    return cosine, sum(o[1] for o in shaped) / sum(o[2] for o in shaped)
 
 
 def _sign(cosines: list[float]) -> int:
@@ -303,13 +380,18 @@ def decide_faults(evidence: Sequence[SensorEvidence], accel_gain: float | None =
         alternative = "the encoder and the motor both reversed (encoder_scale -1, motor_polarity -1)"
     # magnitudes: a's gain from its ratio, the encoder's from θ's ratio over a's
     motor = effects.get("motor_polarity", 1.0)
-    a_ratio = [e.accel_ratio * motor for e in ev if e.accel_ratio is not None]
+    # a's ratio is the whole band's where the whole band has the model's shape (the median of
+    # its cosines decides too); where only the octaves decide, the octaves' with the shape
+    band_cos = [e.accel_band_cosine for e in ev if e.accel_band_cosine is not None]
+    shaped = bool(band_cos) and abs(statistics.median(band_cos)) < SIGN_COSINE
+    ratios = [e.accel_shaped_ratio if shaped else e.accel_ratio for e in ev]
+    a_ratio = [r * motor for r in ratios if r is not None]
     th_ratio = [e.theta_ratio * motor for e in ev if e.theta_ratio is not None]
     if s_a != 0 and a_ratio:
         g_a = statistics.median(a_ratio)
         if effects.get("accel_gain", 1.0) < 0 and g_a < 0:
             # a's ratio over θ's per run: the motion's own scale (friction, the actuator) cancels
-            per_run = [e.accel_ratio / abs(e.theta_ratio) for e in ev if e.accel_ratio is not None
+            per_run = [r / abs(e.theta_ratio) for e, r in zip(ev, ratios) if r is not None
                        and e.theta_ratio is not None and abs(e.theta_ratio) >= 0.1]
             own = float(f"{min(statistics.median(per_run) if per_run else g_a, -0.3):.3g}")
             effects["accel_gain"] = own
@@ -325,8 +407,8 @@ def decide_faults(evidence: Sequence[SensorEvidence], accel_gain: float | None =
             q = g_th / abs(g_a)
             # θ over a per run, the motion's own scale (friction) cancelling: a power of two whose
             # inverse no accelerometer gain of the vocabulary reaches is the encoder's
-            qs = [abs(e.theta_ratio / e.accel_ratio) for e in ev
-                  if e.theta_ratio is not None and e.accel_ratio not in (None, 0.0)]
+            qs = [abs(e.theta_ratio / r) for e, r in zip(ev, ratios)
+                  if e.theta_ratio is not None and r not in (None, 0.0)]
             if not near and qs:
                 by_q = min(ENCODER_SCALES, key=lambda s: abs(math.log(statistics.median(qs) / s)))
                 spec = EFFECTS["accel_gain"]
@@ -396,7 +478,8 @@ def _accel_claim(sign: int, cosines, effects, first) -> AuditClaim | None:
     if not cosines:
         return None
     header = ACCEL_HEADER
-    evidence = (f"cosine of a ({ACCEL_BAND_HZ[0]:g}-{ACCEL_BAND_HZ[1]:g} Hz) with the nominal model's: "
+    evidence = (f"cosine of a with the nominal model's (the median of its octaves' from {ACCEL_OCTAVES_HZ[0]:g} to "
+                f"{ACCEL_OCTAVES_HZ[-1]:g} Hz): "
                 f"{_fmt(cosines)} over {len(cosines)} run(s)")
     if sign == 0:
         return AuditClaim("columns", header, "undecided", "unchecked", evidence)

@@ -11,7 +11,7 @@ friction and sensors), with a controller the lab could have run:
   truncation toward zero or rounding (halves away from zero);
 - at alignment 0 (v[k] from θ[k], the 2009 software) or 1 (from θ[k-1]);
 - the rig's clamp ±200, or ±150 on some seeds;
-- a step (at tick 10), a 5 Hz sine or a 0-10 Hz sweep reference.
+- a step (at tick 10), a 5 Hz sine or the lab's "0-10 Hz" sweep reference (to 20 Hz).
 
 Classes (:data:`CLASSES`): headers that lie ("lie:open_loop": an open-loop header on
 closed-loop data; "lie:p_kp": a P header with the wrong kp; "lie:lead_pole": the thesis's
@@ -215,8 +215,11 @@ class LabController:
 
 
 def reference(case: AuditCase, n: int = N) -> np.ndarray:
-    """u[k] of a case, encoder counts: a step at tick 10, a 5 Hz sine or a 0-10 Hz sweep
-    (from 0.02 s), the sines truncated to whole counts as the lab's software did."""
+    """u[k] of a case, encoder counts: a step at tick 10, a 5 Hz sine or a "0-10 Hz" sweep
+    (from 0.02 s), the sines truncated to whole counts as the lab's software did. The sweep is
+    the lab's: sin(2π f(t) t) with f rising from 0 to 10 Hz over the run, whose instantaneous
+    frequency 2 f(t) reaches 20 Hz, through the beam's second mode (the April 2009 session's
+    "swept*-0-10hz" references: 50 sin(2π·2.5 t²), 20 Hz at 4 s)."""
     t = np.arange(n) * DT
     u = np.zeros(n)
     on = t >= 10 * DT
@@ -226,7 +229,7 @@ def reference(case: AuditCase, n: int = N) -> np.ndarray:
         u[on] = np.trunc(case.amplitude * np.sin(2 * math.pi * 5.0 * (t[on] - t[on][0])))
     else:
         tt = t[on] - t[on][0]
-        u[on] = np.trunc(case.amplitude * np.sin(2 * math.pi * (10.0 / (2 * tt[-1])) * tt ** 2))
+        u[on] = np.trunc(case.amplitude * np.sin(2 * math.pi * (10.0 * tt / tt[-1]) * tt))
     return u
 
 
