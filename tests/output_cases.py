@@ -94,8 +94,7 @@ COMMANDS: dict[str, Command | None] = {
     "plot": Command(("{step}",), files=("--out",), inputs=("step",)),
     "modes": Command(("--elements", "1", "2", "--model", "{model}"), files=("--json",), inputs=("model",)),
     "identify": Command(("--budget", "0", "--model", "{model}", "--out-dir", "runs/identify", "--quiet"),
-                        # not --save-model: the nominal model it saves here is shorter than the full-disk
-                        # fake's 100 bytes of room (diagnose's case covers the option's writing)
+                        # not --save-model: diagnose's case covers the option's writing
                         files=("--json",), inputs=("model",),
                         folders={"--report": ("identify.html", "report.html")}, together=False),
     "tune": Command(("--controller", "lead", "--samples", "0", "--shaper", "none", "--jobs", "1", "--model", "{model}",
