@@ -134,13 +134,45 @@ def process_pool(workers: int, context=None) -> Iterator[cf.ProcessPoolExecutor]
     """
     pool = cf.ProcessPoolExecutor(max_workers=int(workers), mp_context=context, initializer=worker_signals)
     try:
-        with shielded():  # the workers start with the first task: never a stop inside the fork's hooks
+        # the workers start with the first task: never a stop inside the fork's hooks
+        with shielded():
             pool.submit(int).result()
         yield pool
     except BaseException:
         abandon(pool)
         raise
     pool.shutdown(wait=True)
+
+
+def submit_all(pool, fn, tasks: Iterable[tuple]) -> list[cf.Future]:
+    """Submit ``fn(*task)`` for each task, a stop held until every submission is in
+    (:func:`station.signals.shielded`): ``submit`` puts the task on the pool's queues under their
+    locks, and a stop raised by the handler between a lock's acquire and its release leaves it
+    held; the pool's own thread then waits for it for ever, and so does the interpreter's exit
+    (a ``tune`` stopped in CI hung in ``concurrent.futures.process._python_exit``).
+
+    Parameters
+    ----------
+    pool : Executor
+        A process pool, a thread pool or a Dask client's executor.
+    fn : callable
+        Picklable for a process pool.
+    tasks : iterable of tuple
+        Argument tuples.
+
+    Returns
+    -------
+    list of Future
+        In the order of ``tasks``.
+
+    Raises
+    ------
+    station.signals.StopSignal
+        A signal arrived during the submissions (raised after them; the caller's pool is
+        abandoned as for any stop).
+    """
+    with shielded():
+        return [pool.submit(fn, *task) for task in tasks]
 
 
 def _wait(futures: Iterable[cf.Future], return_when: str) -> tuple[set, set]:

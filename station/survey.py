@@ -27,7 +27,7 @@ from station.analysis.metrics import THESIS_BAND_PCT, settling_label
 from station.errors import StationError
 from station.inputs import exists, is_folder, open_regular
 from station.outputs import WRITTEN_SUFFIXES, Transaction
-from station.pools import as_finished, lost, process_pool
+from station.pools import as_finished, lost, process_pool, submit_all
 from station.replay import NOT_TIP, replay
 
 STATUSES = ("ok", "unusable", "not a log")
@@ -294,7 +294,7 @@ def _survey_pool(files: list[Path], model: bool, workers: int, rows: dict, total
     last try, their row says so instead)."""
     lost_files = []
     with process_pool(workers) as pool:  # a signal, an error: the workers stop now
-        futures = {pool.submit(survey_one, f, model): f for f in files}
+        futures = dict(zip(submit_all(pool, survey_one, [(f, model) for f in files]), files))
         for fut in as_finished(futures):
             f = futures[fut]
             if lost(fut) and not last_try:

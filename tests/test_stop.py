@@ -294,6 +294,32 @@ def test_a_stop_kills_a_pools_workers_and_leaves_no_thread_error(tasks, workers,
         threading.excepthook = old_hook
 
 
+def test_a_stop_during_a_submission_never_leaves_the_pools_queue_locked():
+    # CI hung once in a stopped `tune`: the handler's raise came inside ProcessPoolExecutor.submit
+    # while its work-id queue's lock was held, and the pool's own thread (then the interpreter's
+    # exit) waited for that lock for ever. Here the signal arrives at that point on purpose.
+    from station.pools import process_pool, submit_all
+
+    with StopSignals():
+        with pytest.raises(StopSignal):
+            with process_pool(1) as pool:
+                q = pool._work_ids
+
+                def put(item, block=True, timeout=None):  # queue.Queue.put, the signal inside
+                    q.mutex.acquire()
+                    os.kill(os.getpid(), signal.SIGTERM)
+                    time.sleep(0.05)  # the handler runs here, the lock held
+                    q._put(item)
+                    q.unfinished_tasks += 1
+                    q.not_empty.notify()
+                    q.mutex.release()
+
+                q.put = put
+                submit_all(pool, _sleep_then, [(0.0, 10), (0.0, 10)])
+    assert q.mutex.acquire(blocking=False), "the pool's queue lock was left held"
+    q.mutex.release()
+
+
 def test_a_stop_held_by_shielded_is_raised_as_the_block_ends():
     from station.signals import shielded
 

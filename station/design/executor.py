@@ -30,7 +30,7 @@ from typing import Any
 from threadpoolctl import threadpool_limits
 
 from station.errors import StationError
-from station.pools import KILL_WAIT_S, process_pool, results
+from station.pools import KILL_WAIT_S, process_pool, results, submit_all
 
 CONNECT_S = 2.0
 """How long a scheduler's address may take to accept a connection, s."""
@@ -90,7 +90,7 @@ class Runner:
             return [one_thread(fn, *t) for t in tasks]
         # submit and wait, never Executor.map: its clean-up cancels the futures from this thread,
         # and the pool's thread, failing them after a kill, would meet cancelled ones
-        return results([self.executor.submit(one_thread, fn, *t) for t in tasks])
+        return results(submit_all(self.executor, one_thread, [(fn, *t) for t in tasks]))
 
 
 def _connect(client_class, address: str):

@@ -20,7 +20,7 @@ from collections.abc import Callable, Iterator, Sequence
 from typing import Any
 
 from station.diagnosis.runs.cost import Evaluator, EvaluatorWork
-from station.pools import process_pool, results
+from station.pools import process_pool, results, submit_all
 
 _TASKS: tuple[Callable[[Any], Any], Sequence[Any], Evaluator] | None = None
 """The farmed function, its items and the evaluator, set before the workers fork (inherited)."""
@@ -82,7 +82,7 @@ def farm(fn: Callable[[Any], Any], items: Sequence[Any], ev: Evaluator, workers:
     _TASKS = (fn, items, ev)
     try:
         with process_pool(n, multiprocessing.get_context("fork")) as pool:
-            futures = [pool.submit(_run, i) for i in range(len(items))]
+            futures = submit_all(pool, _run, [(i,) for i in range(len(items))])
             _TASKS = None  # the workers have their copy
             for fut in futures:
                 (i, out, work), = results([fut])  # a bounded wait: a stop is answered within 0.1 s
