@@ -128,3 +128,42 @@ def test_a_models_remembered_linear_part_is_its_own_and_not_pickled():
     clone = pickle.loads(pickle.dumps(rig))
     assert clone == rig and clone._memo == {}
     assert np.array_equal(clone.linear_form().lam, form.lam)
+
+
+class _Gained(_Line):
+    """A stand-in model holding an accelerometer gain of -0.8 (a reversed accelerometer)."""
+
+    def effect_dict(self):
+        return {"accel_gain": -0.8}
+
+    def with_effects(self, effects):
+        return _Gained(effects.get("x", self.x))
+
+
+def _shape(case, model):
+    # a: -0.8 times a unit sine; θ: the effect x itself
+    return np.full(N, model.x), -0.8 * SINE
+
+
+class _Ga:
+    ga = object()  # a controller that feeds a back
+
+
+def test_a_free_accelerometer_scale_judges_a_by_its_shape_and_refits_the_gain():
+    true_gain = -1.3  # the runs' a: 1.3 / 0.8 times what the model with its -0.8 gives
+    cases = [_case(n, 1.0, 0.0, sigma_a=0.5) for n in "ab"] + [_case("ga", 1.0, 0.0, sigma_a=0.5)]
+    for c in cases:
+        c.a = true_gain * SINE
+    cases[2].controller = _Ga()
+    free = Evaluator(cases, _Gained(), _shape, accel_scale=(0.3 / 0.8, 3.0 / 0.8))
+    held = Evaluator(cases, _Gained(), _shape)
+    err = float(np.sum(((true_gain + 0.8) * SINE) ** 2))
+    assert free.sse({}, 0) == pytest.approx((0.0, 0.0), abs=1e-18)
+    assert held.sse({}, 0) == pytest.approx((0.0, err))
+    assert free.sse({}, 2) == held.sse({}, 2)  # a fed back: judged as simulated
+    assert free.fit_accel_gain({}, [0, 1, 2]) == pytest.approx(true_gain)
+    assert held.fit_accel_gain({}, [0, 1]) == -0.8  # no free scale: the model's own
+    tight = Evaluator(cases, _Gained(), _shape, accel_scale=(0.5, 1.5))
+    assert tight.fit_accel_gain({}, [0]) == pytest.approx(-0.8 * 1.5)  # clipped to the bounds
+    free.accel_scale = None  # from here as simulated, cached apart
+    assert free.sse({}, 0) == pytest.approx((0.0, err))

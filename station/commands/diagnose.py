@@ -253,7 +253,7 @@ def format_diagnosis(diag) -> str:
     lines = diag.audit_lines()
     faults = diag.decided_faults
     lines += [f"model: {diag.nominal_model.name}" + (
-        " with the sensor faults decided from the data (" + ", ".join(f"{k} {v:g}" for k, v in faults.items()) + ")"
+        " with the sensor faults decided from the data (" + ", ".join(f"{k} {v:.3g}" for k, v in faults.items()) + ")"
         if faults else "") + f"; judged by {diag.validation}",
              f"cause: {(diag.all_causes or ['none'])[0]}"
              + (f"   (all accepted: {', '.join(diag.all_causes)})" if len(diag.all_causes) > 1 else ""),

@@ -21,6 +21,12 @@ follows them: docs/diagnosis.md). At the noise floor both are least squares. Hel
 judgement is in noise variances either way (:meth:`Evaluator.weighted`, summed over
 validation runs). The option is not the diagnosis's default: blind, it named a small
 breakaway excess in 9 of 10 seeds where the arithmetic mean named it in 10 of 10.
+
+Where the accelerometer's gain is a nuisance (a reversed accelerometer, its gain decided
+against the nominal model: :func:`station.diagnosis.pipeline.accel_scale`), a is judged up
+to each run's own least-squares scale (``Evaluator(..., accel_scale=(lo, hi))``) on the runs
+whose controller does not feed it back, and the gain a model then holds is fitted over runs
+pooled (:meth:`Evaluator.fit_accel_gain`).
 """
 
 from __future__ import annotations
@@ -80,18 +86,28 @@ class Evaluator:
     likelihood : bool
         :meth:`cost` is the maximum-likelihood cost with an unknown error variance per run
         and signal, or (default) the noise-weighted mean Σ ‖e‖²/σ² / Σ N (module docstring).
+    accel_scale : (float, float), optional
+        a judged up to each run's own scale, its least-squares scale bounded to this range (a
+        factor on the base model's a): where the accelerometer's gain is a nuisance, a
+        reversed accelerometer's decided from the data against the nominal model, which the
+        search must not lean on (module docstring). Runs whose controller feeds a back (Ga)
+        are judged as simulated. None (default): every run as simulated.
 
     Attributes
     ----------
     simulations : int
         Runs simulated so far (cache misses).
+    accel_scale : (float, float) or None
+        As the parameter; set to None to judge every run as simulated from then on (the
+        errors are cached apart).
     """
 
     def __init__(self, cases: Sequence[RunCase], model, simulate: Simulator | None = None,
                  run_effects: Callable[[Mapping[str, float], int], Mapping[str, float]] | None = None,
-                 likelihood: bool = False):
+                 likelihood: bool = False, accel_scale: tuple[float, float] | None = None):
         self.cases = list(cases)
         self.likelihood = likelihood
+        self.accel_scale = accel_scale
         self.model = model
         self.simulate = simulate or simulate_case
         self.run_effects = run_effects
@@ -258,7 +274,8 @@ class Evaluator:
             SIGINT or SIGTERM arrived before a simulation (:func:`station.signals.check_stop`).
         """
         effects = self.effects_for(effects, i)  # cached per run's own effects: other sessions' values never miss
-        key = (_key(effects), i)
+        scaled = self.accel_scale is not None and not feeds_back_a(self.cases[i])
+        key = (_key(effects), i, scaled)
         hit = self._cache.get(key)
         if hit is None:
             try:
@@ -270,10 +287,49 @@ class Evaluator:
             c = self.cases[i]
             with np.errstate(all="ignore"):
                 st = float(np.sum((c.theta - theta) ** 2))
+                if scaled:
+                    a = a * least_squares_scale(c.a, a, self.accel_scale)
                 sa = float(np.sum((c.a - a) ** 2))
             hit = (st if math.isfinite(st) else math.inf, sa if math.isfinite(sa) else math.inf)
             self._cache[key] = hit
         return hit
+
+    def fit_accel_gain(self, effects: Mapping[str, float], runs: Sequence[int]) -> float:
+        """The accelerometer's gain that fits a best over runs, pooled (least squares, each run
+        weighted by its noise level), the others held: the gain a model holds after a search that
+        judged a up to each run's scale (:attr:`accel_scale`).
+
+        Parameters
+        ----------
+        effects : mapping of str to float
+            Effect name -> value, applied to the base model (its accel_gain the reference).
+        runs : sequence of int
+            Indices of the runs in ``cases``; those whose controller feeds a back are left out.
+
+        Returns
+        -------
+        float
+            The gain, the reference's times the pooled scale, within :attr:`accel_scale`'s
+            bounds (the reference's where no run counts or the bounds are None).
+
+        Raises
+        ------
+        StopSignal
+            SIGINT or SIGTERM arrived before a simulation (:func:`station.signals.check_stop`).
+        """
+        g0 = float({**self.model.effect_dict(), **effects}.get("accel_gain", 1.0))
+        ms = ss = 0.0
+        for i in runs:
+            c = self.cases[i]
+            if feeds_back_a(c) or not math.isfinite(c.sigma_a):
+                continue
+            _, a = self.predict(effects, i)
+            ms += float(np.dot(c.a, a)) / c.sigma_a ** 2
+            ss += float(np.dot(a, a)) / c.sigma_a ** 2
+        if self.accel_scale is None or not (ss > 0 and math.isfinite(ms)):
+            return g0
+        lo, hi = self.accel_scale
+        return g0 * min(max(ms / ss, lo), hi)
 
     def weighted(self, effects: Mapping[str, float], i: int) -> float:
         """‖e_θ‖²/σ_θ² + ‖e_a‖²/σ_a² of run i.
@@ -372,6 +428,41 @@ class Evaluator:
                     total += c.n * (math.log(j) + 1.0 if j >= 1.0 else j)
                     terms += c.n
         return math.exp(total / terms - 1.0) if terms else math.nan
+
+
+def feeds_back_a(case: RunCase) -> bool:
+    """Whether the run's controller feeds the accelerometer back (Ga): its a then shapes the
+    loop, and no scale of the simulated a stands for another gain.
+
+    Parameters
+    ----------
+    case : RunCase
+
+    Returns
+    -------
+    bool
+    """
+    return getattr(case.controller, "ga", None) is not None
+
+
+def least_squares_scale(measured: np.ndarray, simulated: np.ndarray, bounds: tuple[float, float]) -> float:
+    """The factor k minimising ‖measured − k·simulated‖², clipped to ``bounds`` (1 when the
+    simulated signal is zero).
+
+    Parameters
+    ----------
+    measured, simulated : ndarray, shape (N,)
+    bounds : (float, float)
+        Least and largest k.
+
+    Returns
+    -------
+    float
+    """
+    ss = float(np.dot(simulated, simulated))
+    if not ss > 0 or not math.isfinite(ss):
+        return 1.0
+    return min(max(float(np.dot(measured, simulated)) / ss, bounds[0]), bounds[1])
 
 
 IGNORED_SIGMA = 1e6

@@ -199,13 +199,57 @@ def trial(ev: Evaluator, folds: Sequence[Fold], names: tuple, axes: Mapping[str,
         (counts²) and their noise-weighted sum.
     """
     fold_values = [fit_set(ev, set_axes(names, axes), fold.fit, start) for fold, start in zip(folds, starts)]
-    fold_values = unstick(ev, folds, names, axes, fold_values)
+    return judge(ev, folds, names, unstick(ev, folds, names, axes, fold_values))
+
+
+def judge(ev: Evaluator, folds: Sequence[Fold], names: tuple, fold_values: Sequence[Mapping]) -> Trial:
+    """Judge a set of effects as fitted per fold on each fold's validation runs.
+
+    Parameters
+    ----------
+    ev : Evaluator
+    folds : sequence of Fold
+    names : tuple of str
+        The effects fitted.
+    fold_values : sequence of mapping
+        Per fold, the values fitted on its fit runs.
+
+    Returns
+    -------
+    Trial
+    """
     val_sse, total = {}, 0.0
     for fold, values in zip(folds, fold_values):
         for i in fold.val:
             val_sse[i] = ev.sse(values, i)
             total += ev.weighted(values, i)
-    return Trial(names, fold_values, val_sse, total)
+    return Trial(names, list(fold_values), val_sse, total)
+
+
+def with_accel_gain(ev: Evaluator, folds: Sequence[Fold], fit_runs: Sequence[int], sel: Selection) -> Selection:
+    """The selection holding the accelerometer's gain refitted beside its effects, on all fit
+    runs and per fold on the fold's, where the search judged a up to each run's own scale
+    (:attr:`station.diagnosis.runs.cost.Evaluator.accel_scale`): the gain a saved model holds
+    and a held-out run is predicted with.
+
+    Parameters
+    ----------
+    ev : Evaluator
+    folds : sequence of Fold
+    fit_runs : sequence of int
+    sel : Selection
+
+    Returns
+    -------
+    Selection
+        A copy: its ``values`` and its current trial's ``fold_values`` hold ``accel_gain``
+        (the trial's validation errors as the search judged them).
+    """
+    values = {**sel.values, "accel_gain": ev.fit_accel_gain(sel.values, fit_runs)}
+    fold_values = [{**fv, "accel_gain": ev.fit_accel_gain(fv, fold.fit)}
+                   for fv, fold in zip(sel.current.fold_values, folds)]
+    current = Trial(sel.current.names, fold_values, sel.current.val_sse, sel.current.val_weighted)
+    return Selection(sel.accepted, current, values, sel.steps)
 
 
 def screen(ev: Evaluator, axes: Mapping[str, Axis], names: Sequence[str], fixed: Mapping[str, float],
