@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import json
 import math
+import re
 
 import pytest
 
@@ -239,6 +240,11 @@ def test_a_session_whose_accelerometer_reads_the_other_way(tmp_path, capsys):
     captured = capsys.readouterr()
     assert "after: sensor fault, decided from the data: header: a: the tip's acceleration" in captured.err
     assert "before: sensor fault" not in captured.err
+    # the answer leads with it, before the structure; the other session says nothing of it
+    lines = captured.out.splitlines()
+    assert lines[0].startswith("after: sensor fault, decided from the data: header: a: the tip's acceleration")
+    assert not any(x.startswith("before: ") for x in lines)
+    said = float(re.search(r"reads the other way \(accel_gain (-[\d.]+)", lines[0]).group(1))
     doc = {s["name"]: s for s in json.loads(out.read_text())["sessions"]}
     after, before = doc["after"]["effects"], doc["before"]["effects"]
     assert after["accel_gain"] < 0 and value_error(-1.2, after["accel_gain"]) <= TOLERANCE, after
@@ -246,3 +252,60 @@ def test_a_session_whose_accelerometer_reads_the_other_way(tmp_path, capsys):
     for name, friction in (("before", 6.0), ("after", 14.0)):
         assert value_error(friction, doc[name]["effects"]["coulomb_friction"]) <= TOLERANCE, doc[name]
     assert load_model(doc["after"]["model"]).effect("accel_gain") == pytest.approx(after["accel_gain"])
+    assert said == pytest.approx(after["accel_gain"], abs=0.006)  # the line says the gain the model holds
+    # every printed value of the gain is one a session's model holds, or said to be a size
+    for line in lines:
+        for m in re.finditer(r"accel_gain = (-?[\d.]+)( in size)?", line):
+            v = float(m.group(1))
+            assert m.group(2) or v == pytest.approx(after["accel_gain"], abs=0.006) or v > 0, line
+
+
+def test_a_shared_signed_effect_is_said_as_the_sessions_models_hold_it():
+    # one number, one meaning: a size searched beside a reversed sensor (PerSession) is printed
+    # with the sign every session's model gives it, or said to be a size where they differ
+    from station.diagnosis.sessions.diagnose import SessionResult, SessionsDiagnosis
+    from station.diagnosis.sessions.report import _range, _shared
+
+    def result(*faults):
+        return SessionsDiagnosis([SessionResult(f"s{i}", [], {}, None, None, faults=f) for i, f in enumerate(faults)],
+                                 {"accel_gain": 1.08, "coulomb_friction": 5.0}, [], [], [], None, 0.0, [], (0, 0), 0, 0.0)
+
+    reversed_everywhere = result({"accel_gain": -0.85}, {"accel_gain": -1.2})
+    assert reversed_everywhere.held("accel_gain", 1.08) == -1.08
+    assert reversed_everywhere.to_json()["shared"]["accel_gain"] == -1.08
+    assert _shared(reversed_everywhere, "accel_gain", 1.08).startswith("-1.08")
+    mixed = result({"accel_gain": -0.85}, {})
+    assert mixed.held("accel_gain", 1.08) == 1.08 and mixed.sign_differs("accel_gain")
+    assert _shared(mixed, "accel_gain", 1.08).endswith("in size (its sign each session's sensors')")
+    plain = result({}, {})
+    assert plain.held("accel_gain", 1.08) == 1.08 and not plain.sign_differs("accel_gain")
+    assert mixed.held("coulomb_friction", 5.0) == 5.0  # an unsigned effect as it is
+    assert _range(mixed.sessions[0], "accel_gain", 1.0, 1.2).startswith("-1.2") and "..-1" in \
+        _range(mixed.sessions[0], "accel_gain", 1.0, 1.2)
+    assert _range(mixed.sessions[1], "accel_gain", 1.0, 1.2).startswith("1")
+
+
+def test_a_sessions_answer_leads_with_what_its_logs_headers_got_wrong(tmp_path, capsys):
+    # the lab's third session in miniature: open-loop headers over a lead on the truncated
+    # integer command; said once for the session, with how many runs, before the structure
+    import dataclasses
+
+    from tests.blind.audit import draw_case, format_audit_run, simulate_audit_case
+
+    base = draw_case("session", 0)
+    root = tmp_path / "lab" / "april"
+    root.mkdir(parents=True)
+    for seed in range(3):
+        c = dataclasses.replace(draw_case("session", seed), num_s=base.num_s, den_s=base.den_s,
+                                design_text=base.design_text, limit=base.limit, effects={"coulomb_friction": 6.0})
+        (root / f"session_{seed}_SLFR_RTP_OL_Test.txt").write_text(format_audit_run(c, simulate_audit_case(c, seed)))
+    report = tmp_path / "rep"
+    assert main(["survey", str(tmp_path / "lab"), "--diagnose", "--report", str(report)]) == 0
+    lines = capsys.readouterr().out.splitlines()
+    # grouped: one line per contradiction and the runs it holds for (a settled step on the
+    # stored integer may reproduce a neighbouring pole exactly too: its own line)
+    assert re.match(r"april: audit: [23] of 3 runs: header: open loop; data: 1.5\(s\+12\)/\(s\+4\d\)", lines[0]), lines[0]
+    structure = next(i for i, x in enumerate(lines) if x.startswith("structure: "))
+    assert all(x.startswith("april: ") for x in lines[:structure - 1])
+    page = (report / "report.html").read_text()
+    assert -1 < page.find("header: open loop; data: ") < page.find("structure: ")

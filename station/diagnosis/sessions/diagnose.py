@@ -21,7 +21,8 @@ from station.diagnosis.sessions.drift import DriftResult, decide_drift, finite, 
 from station.diagnosis.sessions.layout import Layout, PerSession, key
 from station.diagnosis.sessions.logs import SessionLogs, accel_drift, load_sessions, simulate_cut
 from station.logged.audit import ACCEL_DRIFT_COUNTS, ACCEL_DRIFT_WINDOW_S
-from station.logged.sensors import decide_faults, sensor_evidence
+from station.logged.sensors import SIGN_HEADERS, decide_faults, sensor_evidence
+from station.plant.effects import EFFECTS
 from station.plant.model import as_model
 from station.rig import SESSIONS_MAX_SAMPLES
 
@@ -48,6 +49,9 @@ class SessionResult:
     faults : dict of str to float
         The sensor and wiring faults decided from its runs' data
         (:func:`station.logged.sensors.decide_faults`), in its model under ``effects``.
+    said : list of str
+        What its runs' data contradicted, said first (:func:`audit_said`): each contradicted
+        claim of the logs with how many runs it holds for, then its sensor faults.
     """
 
     name: str
@@ -58,6 +62,7 @@ class SessionResult:
     separate: dict = field(default_factory=dict)
     refits: dict = field(default_factory=dict)
     faults: dict = field(default_factory=dict)
+    said: list = field(default_factory=list)
 
     @property
     def gain_pct(self) -> float:
@@ -105,6 +110,45 @@ class SessionsDiagnosis:
     simulations: int
     elapsed_s: float
     validation: str = LEAVE_ONE_OUT
+
+    def held(self, name: str, value: float) -> float:
+        """A shared value as the sessions' models hold it: a signed effect is searched as a size
+        beside a sensor that reads the other way (:class:`station.diagnosis.sessions.layout.PerSession`),
+        and takes the sign every session's data decided; where the sessions' signs differ it
+        stays a size (:meth:`sign_differs`).
+
+        Parameters
+        ----------
+        name : str
+            An effect of the structure.
+        value : float
+            Its shared value as searched.
+
+        Returns
+        -------
+        float
+        """
+        signs = self._signs(name)
+        return -value if signs == {-1} and value > 0 else value
+
+    def sign_differs(self, name: str) -> bool:
+        """Whether a signed effect's sign differs between sessions (its shared value a size).
+
+        Parameters
+        ----------
+        name : str
+
+        Returns
+        -------
+        bool
+        """
+        return len(self._signs(name)) > 1
+
+    def _signs(self, name: str) -> set:
+        spec = EFFECTS.get(name)
+        if spec is None or not spec.signed:
+            return {1}
+        return {-1 if s.faults.get(name, 1.0) < 0 else 1 for s in self.sessions}
 
     def session_model(self, name: str):
         """A session's model: the nominal model with its effects (shared + its drifting values).
@@ -177,8 +221,34 @@ class SessionsDiagnosis:
         return {"sessions": [{"name": s.name, "runs": list(s.runs),
                               "effects": {k: fin(v) for k, v in {**s.faults, **s.effects}.items()},
                               "model": models.get(s.name)} for s in self.sessions],
-                "shared": {k: fin(v) for k, v in self.shared.items()},
+                "shared": {k: fin(self.held(k, v)) for k, v in self.shared.items()},
                 "drifting": list(self.drifting)}
+
+
+def audit_said(cases, faults) -> list[str]:
+    """What a session's runs' data contradicted, in the words of the log audit, said once per
+    claim: ``"audit: 16 of 16 runs: header: open loop; data: ..."`` (the runs named where one
+    holds it alone), then ``"sensor fault, decided from the data: ..."`` per sensor fault.
+
+    Parameters
+    ----------
+    cases : sequence of station.diagnosis.runs.cases.RunCase
+        The session's runs.
+    faults : station.logged.sensors.SensorFaults
+        Decided over them.
+
+    Returns
+    -------
+    list of str
+        In the order the claims were first met; empty when nothing was contradicted.
+    """
+    where: dict[str, list[str]] = {}
+    for case in cases:
+        for line in case.run.audit.lines(skip=SIGN_HEADERS):
+            where.setdefault(line, []).append(case.name)
+    out = [f"audit: {len(names)} of {len(cases)} runs: {line}" if len(names) > 1 else
+           f"audit: {names[0]}: {line}" for line, names in where.items()]
+    return out + [f"sensor fault, decided from the data: {line}" for line in faults.lines()]
 
 
 def diagnose_sessions(sessions: Sequence[SessionLogs], model=None, progress: Callable[[str], None] | None = None,
@@ -271,7 +341,8 @@ def _diagnose_sessions(sessions, model, say, bench: Bench, max_samples, simulate
         effects = ev.run_effects(effects, g[0])  # a size searched beside a reversed sensor takes its sign
         effects = {n: effects[n] for n in drift.accepted}
         results.append(SessionResult(name, [cases[i].path for i in g], effects, fit_nom, fit_fin,
-                                     separate, refits, dict(faults[s].effects)))
+                                     separate, refits, dict(faults[s].effects),
+                                     audit_said([cases[i] for i in g], faults[s].refined({**faults[s].effects, **effects}))))
     gain = rms_gain(pooled(ev, drift.final.val_sse).rms_theta, pooled(ev, nominal.val_sse).rms_theta) \
         if drift.accepted else 0.0
     shared = {n: drift.values[n] for n in drift.shared}

@@ -324,14 +324,26 @@ def _screen(search: Search, layout: Layout, names: Sequence[str], fixed: Mapping
     return keep[:SECOND_STEP_CANDIDATES]
 
 
-def _values_text(values: Mapping[str, float], names: Sequence[str], session_names: Sequence[str]) -> str:
+def _fixed(search: Search) -> Sequence[Mapping[str, float]]:
+    """Per session, the sensor faults its runs are simulated under (:class:`PerSession`'s)."""
+    return getattr(search.ev.run_effects, "fixed", ())
+
+
+def _values_text(values: Mapping[str, float], names: Sequence[str], session_names: Sequence[str],
+                 fixed: Sequence[Mapping[str, float]] = ()) -> str:
+    """The values as the sessions' models hold them: a size searched beside a sensor that reads
+    the other way (``fixed``: per session its decided faults) with that session's sign."""
+    def signed(n, v, sessions):
+        flip = EFFECTS[n].signed and v > 0 and all(s < len(fixed) and fixed[s].get(n, 1.0) < 0 for s in sessions)
+        return -v if flip else v
+
     parts = []
     for n in names:
         unit = EFFECTS[n].unit
         if n in values:
-            parts.append(f"{n} = {format_quantity(values[n], unit)}")
+            parts.append(f"{n} = {format_quantity(signed(n, values[n], range(len(session_names))), unit)}")
         else:
-            parts.append(f"{n} = " + ", ".join(f"{format_quantity(values[key(n, s)], unit)} ({name})"
+            parts.append(f"{n} = " + ", ".join(f"{format_quantity(signed(n, values[key(n, s)], [s]), unit)} ({name})"
                                                for s, name in enumerate(session_names) if key(n, s) in values))
     return "; ".join(parts)
 
@@ -405,7 +417,7 @@ def select_structure(search: Search, layout: Layout, names: Sequence[str], nomin
         accepted.append(best)
         current = trials[best]
         values = fit_structure(search, layout, (), accepted, all_runs, values)
-        search.say(f"structure: {_values_text(values, accepted, session_names)}")
+        search.say(f"structure: {_values_text(values, accepted, session_names, _fixed(search))}")
     return Structure(accepted, current, values)
 
 
@@ -476,7 +488,7 @@ def decide_drift(search: Search, layout: Layout, structure: Structure, nominal: 
                 st[n] = _mean_value(search, n, [fv[key(n, s)] for s in range(layout.sessions)])
         final = structure_trial(search, layout, shared, drifting, starts)
     values = fit_structure(search, layout, shared, drifting, all_runs, start)
-    search.say(f"final: {_values_text(values, accepted, session_names)}; held-out θ gain "
+    search.say(f"final: {_values_text(values, accepted, session_names, _fixed(search))}; held-out θ gain "
                f"{rms_gain(pooled(ev, final.val_sse).rms_theta, pooled(ev, nominal.val_sse).rms_theta):.1f} % "
                f"({ev.simulations} simulations)")
     refits = {n: session_refits(search, layout, per_session, n) for n in accepted}

@@ -54,12 +54,11 @@ def decision_words(result, d: Decision) -> str:
         The sentence, without a final period: "NAME drifts: ..." or "NAME is shared: ...".
     """
     pay = (f"per-session values lower the held-out θ + a cost by {d.cost_gain_pct:.1f} % (θ RMS "
-           f"{d.theta_gain_pct:.1f} %) against one shared value ({_value(d.name, d.shared_value)})"
+           f"{d.theta_gain_pct:.1f} %) against one shared value ({_shared(result, d.name, d.shared_value)})"
            if d.cost_gain_pct >= 0 else
            f"per-session values raise the held-out θ + a cost by {-d.cost_gain_pct:.1f} % against one shared value")
     luck = f", tiny perturbations of the shared model by {d.luck_gain_pct:.1f} % (luck alone)"
-    ranges = ", ".join(f"{_value(d.name, lo)}..{_value(d.name, hi)} in {s.name}"
-                       for (lo, hi), s in zip(d.ranges, result.sessions))
+    ranges = ", ".join(f"{_range(s, d.name, lo, hi)} in {s.name}" for (lo, hi), s in zip(d.ranges, result.sessions))
     if d.drifts:
         values = ", ".join(f"{_value(d.name, s.effects[d.name])} in {s.name}" for s in result.sessions)
         return f"{d.name} drifts: {values}; {pay}{luck}; refits leaving one run out: {ranges}"
@@ -68,7 +67,22 @@ def decision_words(result, d: Decision) -> str:
         why = (f"; the sessions' refits leaving one run out overlap ({ranges})" if not d.apart else
                f"; a drift must pay {100 * MIN_RELATIVE_GAIN:.0f} % and {MIN_NOISE_GAIN:g} noise variances per "
                "sample beyond the lower of the shared model and luck")
-    return f"{d.name} is shared: {_value(d.name, result.shared[d.name])} in every session; {pay}{luck}{why}"
+    return f"{d.name} is shared: {_shared(result, d.name, result.shared[d.name])} in every session; {pay}{luck}{why}"
+
+
+def _range(session, name: str, lo: float, hi: float) -> str:
+    """A session's refits of an effect, lo..hi, with the sign its sensors give a size searched
+    beside them (:class:`station.diagnosis.sessions.layout.PerSession`)."""
+    spec = EFFECTS.get(name)
+    if spec is not None and spec.signed and session.faults.get(name, 1.0) < 0 < lo:
+        lo, hi = -hi, -lo
+    return f"{_value(name, lo)}..{_value(name, hi)}"
+
+
+def _shared(result, name: str, value: float) -> str:
+    """A shared value with its unit, as the sessions' models hold it (:meth:`SessionsDiagnosis.held`)."""
+    text = _value(name, result.held(name, value))
+    return text + " in size (its sign each session's sensors')" if result.sign_differs(name) else text
 
 
 def answer_lines(result) -> list[str]:
@@ -85,8 +99,9 @@ def answer_lines(result) -> list[str]:
         effect was accepted) what drifts and what is shared and one indented line per decision.
     """
     n_runs = sum(len(s.runs) for s in result.sessions)
-    lines = [f"{len(result.sessions)} session(s), {n_runs} runs ({result.samples[0]} of {result.samples[1]} samples "
-             f"used); one structure judged by {result.validation}"]
+    lines = [f"{s.name}: {line}" for s in result.sessions for line in s.said]  # the data's answers first
+    lines.append(f"{len(result.sessions)} session(s), {n_runs} runs ({result.samples[0]} of {result.samples[1]} "
+                 f"samples used); one structure judged by {result.validation}")
     if not result.accepted:
         lines.append("structure: none (no effect lowers the held-out cost beyond what noise reaches); nothing drifts")
         return lines
@@ -95,7 +110,8 @@ def answer_lines(result) -> list[str]:
     if len(result.sessions) < 2:
         lines.append("one session: nothing can drift")
     lines.append("drifting: " + (", ".join(result.drifting) or "none"))
-    lines.append("shared: " + (", ".join(f"{n} = {_value(n, v)}" for n, v in result.shared.items()) or "none"))
+    lines.append("shared: " + (", ".join(f"{n} = {_shared(result, n, v)}" for n, v in result.shared.items())
+                               or "none"))
     lines += [f"  {decision_words(result, d)}" for d in result.decisions]
     return lines
 
@@ -232,8 +248,8 @@ def write_report(result, folder: str | Path, transaction: Transaction | None = N
         for d in result.decisions:
             body.append(f"<tr><td>{esc(plain_name(d.name))}</td><td>{'yes' if d.drifts else 'no'}</td>"
                         f"<td>{d.cost_gain_pct:.1f} %</td><td>{d.theta_gain_pct:.1f} %</td>"
-                        f"<td>{d.luck_gain_pct:.1f} %</td><td>{esc(_value(d.name, d.shared_value))}</td>"
-                        f"<td>{esc(', '.join(f'{_value(d.name, lo)}..{_value(d.name, hi)} ({s.name})' for (lo, hi), s in zip(d.ranges, result.sessions)))}"
+                        f"<td>{d.luck_gain_pct:.1f} %</td><td>{esc(_shared(result, d.name, d.shared_value))}</td>"
+                        f"<td>{esc(', '.join(f'{_range(s, d.name, lo, hi)} ({s.name})' for (lo, hi), s in zip(d.ranges, result.sessions)))}"
                         f"{'' if d.apart else ' (overlap)'}</td></tr>")
         body.append("</table>")
     if result.notes:
