@@ -131,6 +131,12 @@ def run_case(case: str, seed: int) -> Outcome:
         design_ok = design_ok and back is not None and _same_s(back, hidden.ga_s)
     found = (f"{getattr(run.controller, 'name', None)}, recursion {getattr(run.controller, 'recursion', 'none')}, "
              f"d {run.alignment}, max|dv| {run.max_abs_dv if run.max_abs_dv is None else f'{run.max_abs_dv:.2g}'}")
+    alts = design.get("alternatives", []) if isinstance(design, dict) else []
+    if alts:  # the designs the log does not tell apart from it, said beside it
+        among = any(_same(d["num_s"], hidden.num_s) and _same(d["den_s"], hidden.den_s) for d in alts)
+        more = design.get("more_alternatives", 0)
+        found += (f"; beside it {' or '.join(d['text'] for d in alts)}" + (f" and {more} more" if more else "")
+                  + (" (the hidden among them)" if among else ""))
     return Outcome(case, seed, what, found, run.source, contradiction_ok, reproduced, design_ok, seconds)
 
 

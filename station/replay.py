@@ -18,6 +18,7 @@ import numpy as np
 
 from station.analysis.beam import BeamTestReport, analyze_beam_test, model_first_mode
 from station.analysis.metrics import StepMetrics
+from station.analysis.continuous_design import alternatives_phrase
 from station.errors import StationError
 from station.logged import REPRODUCED_TOLERANCE, LoggedRun
 from station.logged.audit import Audit
@@ -275,7 +276,11 @@ def format_report(report: ReplayReport) -> str:
         lines.append("  controller: none replayed (see the notes)")
     else:
         source = SOURCE_WORDS.get(report.controller_source, "")
-        lines.append(f"  controller: {report.controller}" + (f" ({source})" if source else ""))
+        design = (report.controller_spec or {}).get("design") or {}
+        alts = [d["text"] + ("" if d["method"] == design["method"] else f" ({d['method']})")
+                for d in design.get("alternatives", ())]
+        lines.append(f"  controller: {report.controller}" + (f" ({source})" if source else "")
+                     + alternatives_phrase(alts, design.get("more_alternatives", 0)))
     if report.max_abs_dv is not None:
         verdict = "reproduces" if report.reproduced else "does NOT reproduce"
         align = "" if report.alignment is None else f", alignment d = {report.alignment}"

@@ -113,6 +113,8 @@ def test_blind_headers_and_recursions(tmp_path, case, seed):
             assert spec["design"]["method"] == "Tustin"
             np.testing.assert_allclose(spec["design"]["num_s"], hidden.num_s, rtol=1e-9)
             np.testing.assert_allclose(spec["design"]["den_s"], hidden.den_s, rtol=1e-9)
+            for d in spec["design"]["alternatives"]:  # any design named beside it reproduces the log too
+                assert _lab_reproduces(run, d, hidden.limit, hidden.recursion, run.alignment), d["text"]
         assert run.controller.recursion == hidden.recursion or hidden.law == "p"
     if hidden.ga_s is not None:  # the accelerometer feedback too, its continuous form (Tustin's inverse)
         back = to_continuous(run.controller.ga.num, run.controller.ga.den, 0.002, "Tustin")
@@ -255,3 +257,57 @@ def test_an_a_column_with_no_accelerometer_behind_it(rig_data, tmp_path, creep):
     text = format_report(replay(path))
     assert "a is no tip acceleration" in text.splitlines()[0]
     assert "(a is no tip acceleration: the audit)" in text
+
+
+def _lab_reproduces(run, design: dict, limit: float, recursion: str, alignment: int) -> bool:
+    """The lab's recursion of a design (the blind generator's LabController, scipy's Tustin),
+    fed the logged u − θ at the alignment, gives every logged v exactly."""
+    from tests.blind.audit import LabController
+
+    ctrl = LabController(*tustin(design["num_s"], design["den_s"]), limit, recursion)
+    u, theta, v = (np.asarray(run.data[c], float) for c in ("u", "theta", "v"))
+    out = [0.0 if k < alignment else ctrl.step(u[k - alignment] - theta[k - alignment]) for k in range(len(v))]
+    return bool(np.array_equal(np.asarray(out), v))
+
+
+def test_designs_a_log_cannot_tell_apart_are_each_named(tmp_path):
+    # a settled step on the stored integer pins a lead's pole only so far: the lab's third
+    # session's lead 1.5(s+12)/(s+48) run on this step reproduces every v, and so does (s+47);
+    # the audit named one as if sure (it picked (s+47)). Every design it names reproduces the
+    # log, and the one run is among them.
+    import dataclasses
+
+    from tests.blind.audit import format_audit_run, simulate_audit_case
+
+    base = draw_case("session", 0)
+    case = dataclasses.replace(draw_case("session", 2), num_s=base.num_s, den_s=base.den_s,
+                               design_text=base.design_text, limit=base.limit)
+    path = tmp_path / "step_SLFR_RTP_OL_Test.txt"
+    path.write_text(format_audit_run(case, simulate_audit_case(case, 2)))
+    run = LoggedRun.from_path(path)
+    design = run.controller.spec["design"]
+    named = [design] + design["alternatives"]
+    assert len(named) >= 2, design["text"]
+    assert any(np.allclose(d["num_s"], case.num_s, rtol=1e-9) and np.allclose(d["den_s"], case.den_s, rtol=1e-9)
+               for d in named)
+    for d in named:
+        assert _lab_reproduces(run, d, case.limit, case.recursion, run.alignment), d["text"]
+    line = run.audit.lines()[0]
+    assert all(d["text"] in line for d in named) and "(the log reproduced by each)" in line
+
+
+def test_a_log_without_a_header_names_the_designs_it_cannot_tell_apart(tmp_path):
+    # blind int:trunc_d0 seed 5: a step of 41 on the stored integer under no header; 1(s+18)/(s+66)
+    # was run, 1(s+17)/(s+65) is named first, and the one run is among the others said beside it
+    path, hidden = write_audit_case(tmp_path, "int:trunc_d0", 5)
+    run = LoggedRun.from_path(path)
+    design = run.controller.spec["design"]
+    named = [design] + design["alternatives"]
+    assert any(np.allclose(d["num_s"], hidden.num_s, rtol=1e-9) and np.allclose(d["den_s"], hidden.den_s, rtol=1e-9)
+               for d in named)
+    for d in named:
+        if d["method"] == "Tustin":  # the lab's recursion of each reproduces the log
+            assert _lab_reproduces(run, d, hidden.limit, hidden.recursion, run.alignment), d["text"]
+    line = next(x for x in format_report(replay(path)).splitlines() if x.startswith("  controller: "))
+    assert all(d["text"] in line for d in named) and "(the log reproduced by each; " in line, line
+    assert f"{design['more_alternatives']} more as simple" in line

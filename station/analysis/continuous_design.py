@@ -8,7 +8,8 @@ each method's inverse, rounds its zeros and poles to the numbers a person types 
 significant digits, in rad/s or as 2π times a frequency in Hz), discretizes each such
 design again the same way and keeps the simplest whose discretization reproduces the log
 with a gain of few digits (every method is linear in the gain, so the gains that reproduce
-the log are an interval the caller computes). Coefficients in z are in ascending powers of z⁻¹, ``den[0] = 1``
+the log are an interval the caller computes); the others as simple that reproduce it too are
+kept beside it (:attr:`ContinuousDesign.alternatives`): a log may not tell them apart. Coefficients in z are in ascending powers of z⁻¹, ``den[0] = 1``
 (:class:`station.control.DiscreteTF`); in s in descending powers, the denominator monic.
 """
 
@@ -17,7 +18,7 @@ from __future__ import annotations
 import itertools
 import math
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 from numpy.polynomial import polynomial as P
@@ -32,6 +33,9 @@ _ALPHA = {"Tustin": 0.5, "backward Euler": 1.0, "forward Euler": 0.0}
 
 MAX_DIGITS = 5
 """Most significant digits a recognised design's numbers may have."""
+
+MAX_ALTERNATIVES = 3
+"""Most equally simple designs named beside a recognised one (:attr:`ContinuousDesign.alternatives`)."""
 
 INFINITE_ZERO = 20.0
 """A zero beyond this many times 1/dt rad/s is a zero at infinity (Tustin puts it at z = −1)."""
@@ -53,6 +57,12 @@ class ContinuousDesign:
         The factored form, e.g. ``"3(s+13)/(s+20)"`` or ``"20(s+2π·5)/(s+2π·20)"``.
     digits : int
         Significant digits of its numbers (the fewer, the more surely a person typed it).
+    alternatives : tuple of ContinuousDesign
+        Other designs with no more digits whose discretization reproduces the log as well, at
+        most :data:`MAX_ALTERNATIVES`: the log does not tell them apart (a settled step on the
+        stored integer command pins a lead's pole only so far).
+    more : int
+        How many more such designs were found than ``alternatives`` holds.
     """
 
     num_s: tuple[float, ...]
@@ -60,6 +70,8 @@ class ContinuousDesign:
     method: str
     text: str
     digits: int
+    alternatives: tuple[ContinuousDesign, ...] = ()
+    more: int = 0
 
     def discretize(self, dt: float) -> tuple[np.ndarray, np.ndarray]:
         """Its z-law at ``dt`` by its method (:func:`discretize`).
@@ -77,8 +89,44 @@ class ContinuousDesign:
         return f"{self.text} (num {fmt(self.num_s)}, den {fmt(self.den_s)} in s; {self.method})"
 
     def to_json(self) -> dict:
-        """``{"num_s", "den_s", "method", "text"}``."""
-        return {"num_s": list(self.num_s), "den_s": list(self.den_s), "method": self.method, "text": self.text}
+        """``{"num_s", "den_s", "method", "text", "alternatives", "more_alternatives"}``."""
+        return {"num_s": list(self.num_s), "den_s": list(self.den_s), "method": self.method, "text": self.text,
+                "alternatives": [d.to_json() for d in self.alternatives], "more_alternatives": self.more}
+
+    def describe_with_method(self, method: str) -> str:
+        """Its factored form, with its method where it differs from ``method``.
+
+        Parameters
+        ----------
+        method : str
+            The method of the design it is named beside.
+
+        Returns
+        -------
+        str
+        """
+        return self.text + ("" if self.method == method else f" ({self.method})")
+
+
+def alternatives_phrase(texts, more: int = 0) -> str:
+    """What is said after a recognised design that its log does not single out:
+    ``" or A or B (the log reproduced by each; 2 more as simple)"``, empty without alternatives.
+
+    Parameters
+    ----------
+    texts : sequence of str
+        The alternatives' factored forms (:meth:`ContinuousDesign.describe_with_method`).
+    more : int
+        How many more were found (:attr:`ContinuousDesign.more`).
+
+    Returns
+    -------
+    str
+    """
+    if not texts:
+        return ""
+    tail = f"; {more} more as simple" if more else ""
+    return f" or {' or '.join(texts)} (the log reproduced by each{tail})"
 
 
 def _gbt(num_s, den_s, dt: float, alpha: float) -> tuple[np.ndarray, np.ndarray]:
@@ -441,7 +489,8 @@ def recognize(num_z, den_z, dt: float, gain_interval: GainInterval, methods=METH
     -------
     ContinuousDesign or None
         The design whose numbers have the fewest digits (then the first method of
-        ``methods``); None when none up to ``max_digits`` reproduces the log.
+        ``methods``), the others of as few digits that reproduce the log as its
+        ``alternatives``; None when none up to ``max_digits`` reproduces the log.
     """
     plans = []
     for method in methods:
@@ -452,6 +501,7 @@ def recognize(num_z, den_z, dt: float, gain_interval: GainInterval, methods=METH
         options = [_candidates(r, max_digits) for r in zeros + poles]
         plans.append((method, len(zeros), options, set()))
     for level in range(1, max_digits + 1):
+        found = []  # every design of this level that reproduces the log, the preferred first
         for method, n_zeros, options, tried in plans:
             combos, laws = [], []
             for combo in _combos(options, level):
@@ -469,7 +519,12 @@ def recognize(num_z, den_z, dt: float, gain_interval: GainInterval, methods=METH
             for i in np.flatnonzero(lo <= hi):
                 gain = nicest_between(float(lo[i]), float(hi[i]), level)
                 if gain is not None:
-                    return _design(gain[0], combos[i], n_zeros, method, max(gain[1], *(f[4] for f in combos[i])))
+                    found.append(_design(gain[0], combos[i], n_zeros, method, max(gain[1], *(f[4] for f in combos[i]))))
+        if found:
+            best = found[0]
+            others = {d.describe_with_method(best.method): d for d in found[1:] if d.digits <= best.digits}
+            return replace(best, alternatives=tuple(others.values())[:MAX_ALTERNATIVES],
+                           more=max(len(others) - MAX_ALTERNATIVES, 0))
     return None
 
 

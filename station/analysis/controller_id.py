@@ -45,7 +45,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from station.analysis.accel_law import AccelFeedback, accel_feedback
-from station.analysis.continuous_design import ContinuousDesign, nicest_between, recognize, to_continuous
+from station.analysis.continuous_design import (ContinuousDesign, alternatives_phrase, nicest_between, recognize,
+                                                to_continuous)
 from station.analysis.law_rows import BOUNDARY, TOLERANCE, LawRows, tie_rows
 from station.control import DAC_LIMIT, Compensator, DiscreteTF, OpenLoop, lead_controller  # DAC_LIMIT: the clamp assumed when v exceeds the rig's ±200
 from station.control.rerun import ALIGNMENTS, AlignmentFit, detect_alignment
@@ -286,6 +287,9 @@ def _law_text(order: int, c: np.ndarray, design: ContinuousDesign | None, dt: fl
         text = f"P, kp = {c[0]:g}"
     elif design is not None:
         text = f"{design.text} ({design.method}, {dt:g} s)"
+        if design.alternatives:  # the log does not tell them apart: said, never hidden
+            text += alternatives_phrase([d.describe_with_method(design.method) for d in design.alternatives],
+                                        design.more)
     else:
         fmt = lambda x: "[" + ", ".join(f"{y:.8g}" for y in x) + "]"  # noqa: E731
         text = (f"linear compensator e -> v of order {order}, num {fmt(c[:order + 1])}, "
