@@ -352,3 +352,28 @@ def test_a_reversed_accelerometers_first_gain_does_not_steer_the_search(tmp_path
         for name in ("accel_gain", "param:drive_c"):
             assert found[name] == pytest.approx(hidden[name], rel=0.05), (factor, name, found)
     assert answers[off].gain_pct == pytest.approx(answers[1.0].gain_pct, abs=1.0)
+
+
+def test_a_reversed_accelerometer_alone_is_reported_with_the_gain_its_model_holds(tmp_path, monkeypatch):
+    # nothing physical to find, the first estimate 40 % low: the saved model holds the refitted
+    # gain, and the fits reported beside it are that model's (before, the first estimate's: a fit
+    # 60 % beside a model that fits a to 98 %)
+    import station.diagnosis.pipeline as pipeline
+    from station.diagnosis import diagnose
+
+    hidden = case_effects("accel_reversed", 1)
+    paths = [p for p in write_case(tmp_path, hidden, 1)
+             if getattr(LoggedRun.from_path(p).controller, "ga", None) is None]
+
+    def decide(evidence, **kw):
+        faults = decide_faults(evidence, **kw)
+        faults.effects["accel_gain"] *= 0.6
+        return faults
+
+    monkeypatch.setattr(pipeline, "decide_faults", decide)
+    d = diagnose(paths)
+    assert d.causes == [] and d.gain_pct == 0.0
+    g = d.extended_model.effect_dict()["accel_gain"]
+    assert g == pytest.approx(hidden["accel_gain"], rel=0.02)
+    assert d.sensor_faults.effects["accel_gain"] == pytest.approx(g, rel=0.005)
+    assert d.extended_fit["accel"] > 95.0 > d.baseline_fit["accel"]

@@ -268,7 +268,7 @@ def _diagnose(runs, validate, model, progress, bench: Bench, simulate, likelihoo
                f"simulations in {time.perf_counter() - t0:.1f} s")
     return Diagnosis(
         cause=accepted[0] if accepted else "none", causes=accepted,
-        baseline_fit=fit_nom.fit_pct(), extended_fit=(fit_ext if accepted else fit_nom).fit_pct(),
+        baseline_fit=fit_nom.fit_pct(), extended_fit=(fit_ext if accepted or scale is not None else fit_nom).fit_pct(),
         gain_pct=float(gain), effects=effects, extended_model=extended, nominal_model=base, runs=reports,
         validation=how, simulations=ev.simulations,
         folds=fold_records(folds, [c.name for c in cases], sel.current.fold_values),

@@ -57,7 +57,7 @@ def model_predictions(ev: Evaluator, folds: Sequence[Fold], nominal: Mapping[int
                       sel: Selection) -> tuple[dict[int, tuple], dict[int, tuple]]:
     """Every run on the extended model: as judged (a validation run on the model fitted
     without it, a fit run on the final one) and on the final model (refitted on all fit
-    runs); the nominal model's when nothing was accepted.
+    runs); the nominal model's when nothing was accepted or refitted.
 
     Parameters
     ----------
@@ -73,7 +73,7 @@ def model_predictions(ev: Evaluator, folds: Sequence[Fold], nominal: Mapping[int
     judged, final : dict of int to (ndarray, ndarray)
         Run index -> θ and a.
     """
-    if not sel.accepted:
+    if not sel.accepted and "accel_gain" not in sel.values:  # nothing accepted, nor a reversed gain refitted
         return dict(nominal), dict(nominal)
     final = {i: ev.predict(sel.values, i) for i in range(len(ev.cases))}
     judged = dict(final)
