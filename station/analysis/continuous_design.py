@@ -93,29 +93,20 @@ class ContinuousDesign:
         return {"num_s": list(self.num_s), "den_s": list(self.den_s), "method": self.method, "text": self.text,
                 "alternatives": [d.to_json() for d in self.alternatives], "more_alternatives": self.more}
 
-    def describe_with_method(self, method: str) -> str:
-        """Its factored form, with its method where it differs from ``method``.
-
-        Parameters
-        ----------
-        method : str
-            The method of the design it is named beside.
-
-        Returns
-        -------
-        str
-        """
-        return self.text + ("" if self.method == method else f" ({self.method})")
 
 
-def alternatives_phrase(texts, more: int = 0) -> str:
+def alternatives_phrase(alternatives, method: str, more: int = 0) -> str:
     """What is said after a recognised design that its log does not single out:
-    ``" or A or B (the log reproduced by each; 2 more as simple)"``, empty without alternatives.
+    ``" or A or B (ZOH) (the log reproduced by each; 2 more as simple)"``, empty without
+    alternatives.
 
     Parameters
     ----------
-    texts : sequence of str
-        The alternatives' factored forms (:meth:`ContinuousDesign.describe_with_method`).
+    alternatives : sequence of (str, str)
+        Each alternative's factored form and method (:attr:`ContinuousDesign.alternatives`'
+        ``text`` and ``method``, or their JSON's).
+    method : str
+        The recognised design's method: an alternative's is said where it differs.
     more : int
         How many more were found (:attr:`ContinuousDesign.more`).
 
@@ -123,8 +114,9 @@ def alternatives_phrase(texts, more: int = 0) -> str:
     -------
     str
     """
-    if not texts:
+    if not alternatives:
         return ""
+    texts = [text + ("" if m == method else f" ({m})") for text, m in alternatives]
     tail = f"; {more} more as simple" if more else ""
     return f" or {' or '.join(texts)} (the log reproduced by each{tail})"
 
@@ -522,7 +514,7 @@ def recognize(num_z, den_z, dt: float, gain_interval: GainInterval, methods=METH
                     found.append(_design(gain[0], combos[i], n_zeros, method, max(gain[1], *(f[4] for f in combos[i]))))
         if found:
             best = found[0]
-            others = {d.describe_with_method(best.method): d for d in found[1:] if d.digits <= best.digits}
+            others = {(d.text, d.method): d for d in found[1:] if d.digits <= best.digits}
             return replace(best, alternatives=tuple(others.values())[:MAX_ALTERNATIVES],
                            more=max(len(others) - MAX_ALTERNATIVES, 0))
     return None

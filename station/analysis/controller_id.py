@@ -288,8 +288,7 @@ def _law_text(order: int, c: np.ndarray, design: ContinuousDesign | None, dt: fl
     elif design is not None:
         text = f"{design.text} ({design.method}, {dt:g} s)"
         if design.alternatives:  # the log does not tell them apart: said, never hidden
-            text += alternatives_phrase([d.describe_with_method(design.method) for d in design.alternatives],
-                                        design.more)
+            text += alternatives_phrase([(d.text, d.method) for d in design.alternatives], design.method, design.more)
     else:
         fmt = lambda x: "[" + ", ".join(f"{y:.8g}" for y in x) + "]"  # noqa: E731
         text = (f"linear compensator e -> v of order {order}, num {fmt(c[:order + 1])}, "

@@ -318,6 +318,8 @@ class Evaluator:
             SIGINT or SIGTERM arrived before a simulation (:func:`station.signals.check_stop`).
         """
         g0 = float({**self.model.effect_dict(), **effects}.get("accel_gain", 1.0))
+        if self.accel_scale is None:
+            return g0
         ms = ss = 0.0
         for i in runs:
             c = self.cases[i]
@@ -326,7 +328,7 @@ class Evaluator:
             _, a = self.predict(effects, i)
             ms += float(np.dot(c.a, a)) / c.sigma_a ** 2
             ss += float(np.dot(a, a)) / c.sigma_a ** 2
-        if self.accel_scale is None or not (ss > 0 and math.isfinite(ms)):
+        if not (ss > 0 and math.isfinite(ms)):
             return g0
         lo, hi = self.accel_scale
         return g0 * min(max(ms / ss, lo), hi)

@@ -18,11 +18,10 @@ from station.diagnosis.runs.cost import IGNORED_SIGMA, Evaluator, calibrate_nois
 from station.diagnosis.runs.folds import LEAVE_ONE_OUT, make_folds
 from station.diagnosis.search.workbench import Bench, nominal_trial, workbench
 from station.diagnosis.sessions.drift import DriftResult, decide_drift, finite, select_structure, session_axes
-from station.diagnosis.sessions.layout import Layout, PerSession, key
+from station.diagnosis.sessions.layout import Layout, PerSession, key, sensor_sign
 from station.diagnosis.sessions.logs import SessionLogs, accel_drift, load_sessions, simulate_cut
 from station.logged.audit import ACCEL_DRIFT_COUNTS, ACCEL_DRIFT_WINDOW_S
 from station.logged.sensors import SIGN_HEADERS, decide_faults, sensor_evidence
-from station.plant.effects import EFFECTS
 from station.plant.model import as_model
 from station.rig import SESSIONS_MAX_SAMPLES
 
@@ -145,10 +144,7 @@ class SessionsDiagnosis:
         return len(self._signs(name)) > 1
 
     def _signs(self, name: str) -> set:
-        spec = EFFECTS.get(name)
-        if spec is None or not spec.signed:
-            return {1}
-        return {-1 if s.faults.get(name, 1.0) < 0 else 1 for s in self.sessions}
+        return {sensor_sign(name, s.faults) for s in self.sessions}
 
     def session_model(self, name: str):
         """A session's model: the nominal model with its effects (shared + its drifting values).

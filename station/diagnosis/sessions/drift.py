@@ -49,7 +49,7 @@ from station.diagnosis.search.selection import (
     accept,
     null_floor,
 )
-from station.diagnosis.sessions.layout import Layout, PerSession, key
+from station.diagnosis.sessions.layout import Layout, PerSession, as_held, key
 from station.plant.effects import EFFECTS
 
 
@@ -333,17 +333,20 @@ def _values_text(values: Mapping[str, float], names: Sequence[str], session_name
                  fixed: Sequence[Mapping[str, float]] = ()) -> str:
     """The values as the sessions' models hold them: a size searched beside a sensor that reads
     the other way (``fixed``: per session its decided faults) with that session's sign."""
-    def signed(n, v, sessions):
-        flip = EFFECTS[n].signed and v > 0 and all(s < len(fixed) and fixed[s].get(n, 1.0) < 0 for s in sessions)
-        return -v if flip else v
+    def faults(s):
+        return fixed[s] if s < len(fixed) else {}
+
+    def shared(n, v):  # the sign every session gives it, or the size where they differ
+        held = {as_held(n, v, faults(s)) for s in range(len(session_names))}
+        return held.pop() if len(held) == 1 else v
 
     parts = []
     for n in names:
         unit = EFFECTS[n].unit
         if n in values:
-            parts.append(f"{n} = {format_quantity(signed(n, values[n], range(len(session_names))), unit)}")
+            parts.append(f"{n} = {format_quantity(shared(n, values[n]), unit)}")
         else:
-            parts.append(f"{n} = " + ", ".join(f"{format_quantity(signed(n, values[key(n, s)], [s]), unit)} ({name})"
+            parts.append(f"{n} = " + ", ".join(f"{format_quantity(as_held(n, values[key(n, s)], faults(s)), unit)} ({name})"
                                                for s, name in enumerate(session_names) if key(n, s) in values))
     return "; ".join(parts)
 

@@ -61,6 +61,44 @@ def split_key(k: str) -> tuple[str, int | None]:
     return (name, int(s)) if sep else (k, None)
 
 
+def sensor_sign(name: str, fixed: Mapping[str, float]) -> int:
+    """The sign a session's decided sensor faults give a signed effect searched as a size: −1
+    where it holds the effect negative (its accelerometer reads the other way), else 1.
+
+    Parameters
+    ----------
+    name : str
+        An effect name (plain).
+    fixed : mapping of str to float
+        The session's sensor and wiring faults (:func:`station.logged.sensors.decide_faults`).
+
+    Returns
+    -------
+    int
+    """
+    spec = EFFECTS.get(name)
+    return -1 if spec is not None and spec.signed and fixed.get(name, 1.0) < 0 else 1
+
+
+def as_held(name: str, value: float, fixed: Mapping[str, float]) -> float:
+    """A size searched beside a session's sensor faults as the session's model holds it
+    (:func:`sensor_sign`; values at or below 0 as they are).
+
+    Parameters
+    ----------
+    name : str
+    value : float
+        The value as searched.
+    fixed : mapping of str to float
+        The session's sensor and wiring faults.
+
+    Returns
+    -------
+    float
+    """
+    return -value if sensor_sign(name, fixed) < 0 < value else value
+
+
 class PerSession:
     """The effects each run is simulated with: the shared values, and its own session's
     values of the per-session keys (:class:`station.diagnosis.runs.cost.Evaluator`'s
@@ -95,8 +133,7 @@ class PerSession:
         out, own = dict(fixed), {}
         for k, v in effects.items():
             name, ks = split_key(k)
-            if name in fixed and EFFECTS[name].signed and fixed[name] < 0 < v:
-                v = -v  # searched as a size; this session's sensor reads the other way
+            v = as_held(name, v, fixed)  # searched as a size; this session's sensor may read the other way
             if ks is None:
                 out[name] = v
             elif ks == s:

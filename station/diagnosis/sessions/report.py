@@ -19,6 +19,7 @@ from collections.abc import Mapping
 from pathlib import Path
 
 from station.diagnosis.sessions.drift import Decision
+from station.diagnosis.sessions.layout import as_held
 from station.diagnosis.answer.prose import plain_name
 from station.diagnosis.units import format_quantity
 from station.diagnosis.search.selection import MIN_NOISE_GAIN, MIN_RELATIVE_GAIN
@@ -73,9 +74,7 @@ def decision_words(result, d: Decision) -> str:
 def _range(session, name: str, lo: float, hi: float) -> str:
     """A session's refits of an effect, lo..hi, with the sign its sensors give a size searched
     beside them (:class:`station.diagnosis.sessions.layout.PerSession`)."""
-    spec = EFFECTS.get(name)
-    if spec is not None and spec.signed and session.faults.get(name, 1.0) < 0 < lo:
-        lo, hi = -hi, -lo
+    lo, hi = sorted((as_held(name, lo, session.faults), as_held(name, hi, session.faults)))
     return f"{_value(name, lo)}..{_value(name, hi)}"
 
 
