@@ -63,11 +63,11 @@ overshoot within 3 points of the rig's, and better than tmm-fit on every shared 
 was not fitted to, pooled ≥ 40 %."""
 
 STARTS = [{"param:drive_c": 2.0, "coulomb_friction": 8.0, "static_friction": 14.0, "amp_offset": -1.0,
-           "viscous_friction": 0.5, "param:act_K": 0.8},
+           "viscous_friction": 0.5, "param:act_K": 0.8, "deadzone": 2.0},
           {"param:drive_c": 3.2, "coulomb_friction": 5.0, "static_friction": 8.0, "amp_offset": -2.5,
-           "viscous_friction": 3.0, "param:act_K": 1.0},
+           "viscous_friction": 3.0, "param:act_K": 1.0, "deadzone": 4.0},
           {"param:drive_c": 1.5, "coulomb_friction": 3.0, "static_friction": 20.0, "amp_offset": 0.0,
-           "viscous_friction": 0.1, "param:act_K": 1.2}]
+           "viscous_friction": 0.1, "param:act_K": 1.2, "deadzone": 1.0}]
 """Where the fits start (an effect without a start is bracketed on its grid). The cost is
 piecewise constant (quantized θ, stick-slip) and its valleys flat, so one start can stall;
 with ``--starts N`` every fold and the refit are fitted from the first N and the fit with the
