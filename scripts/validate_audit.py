@@ -133,9 +133,12 @@ def run_case(case: str, seed: int) -> Outcome:
              f"d {run.alignment}, max|dv| {run.max_abs_dv if run.max_abs_dv is None else f'{run.max_abs_dv:.2g}'}")
     alts = design.get("alternatives", []) if isinstance(design, dict) else []
     if alts:  # the designs the log does not tell apart from it, said beside it
-        among = any(_same(d["num_s"], hidden.num_s) and _same(d["den_s"], hidden.den_s) for d in alts)
+        law = getattr(run.controller, "recursion", "none")
+        among = any(_same(d["num_s"], hidden.num_s) and _same(d["den_s"], hidden.den_s)
+                    and d.get("recursion", law) == hidden.recursion for d in alts)
         more = design.get("more_alternatives", 0)
-        found += (f"; beside it {' or '.join(d['text'] for d in alts)}" + (f" and {more} more" if more else "")
+        texts = [d["text"] + (f" (recursion {d['recursion']})" if d.get("recursion") else "") for d in alts]
+        found += (f"; beside it {' or '.join(texts)}" + (f" and {more} more" if more else "")
                   + (" (the hidden among them)" if among else ""))
     return Outcome(case, seed, what, found, run.source, contradiction_ok, reproduced, design_ok, seconds)
 

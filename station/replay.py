@@ -277,9 +277,10 @@ def format_report(report: ReplayReport) -> str:
     else:
         source = SOURCE_WORDS.get(report.controller_source, "")
         design = (report.controller_spec or {}).get("design") or {}
-        alts = [(d["text"], d["method"]) for d in design.get("alternatives", ())]
+        alts = [(d["text"], d["method"], d.get("recursion", "")) for d in design.get("alternatives", ())]
         lines.append(f"  controller: {report.controller}" + (f" ({source})" if source else "")
-                     + alternatives_phrase(alts, design.get("method", ""), design.get("more_alternatives", 0)))
+                     + alternatives_phrase(alts, design.get("method", ""), design.get("more_alternatives", 0),
+                                           (report.controller_spec or {}).get("recursion", "")))
     if report.max_abs_dv is not None:
         verdict = "reproduces" if report.reproduced else "does NOT reproduce"
         align = "" if report.alignment is None else f", alignment d = {report.alignment}"

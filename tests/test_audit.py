@@ -320,3 +320,22 @@ def test_a_log_without_a_header_names_the_designs_it_cannot_tell_apart(tmp_path)
     line = next(x for x in format_report(replay(path)).splitlines() if x.startswith("  controller: "))
     assert all(d["text"] in line for d in named) and "(the log reproduced by each; " in line, line
     assert f"{design['more_alternatives']} more as simple" in line
+
+
+def test_a_law_on_the_other_stored_integer_is_named_beside_it(tmp_path):
+    # blind int:round_d1+coulomb_friction seed 4: 2(s+5)/(s+41) on the rounded integer was run;
+    # 2(s+9)/(s+42) on the truncated integer reproduces the step too and is named first (truncation
+    # is tried first). The rounding law was said nowhere; now every law that reproduces the log on
+    # either stored integer is named, each with the integer its recursion runs on
+    path, hidden = write_audit_case(tmp_path, "int:round_d1+coulomb_friction", 4)
+    run = LoggedRun.from_path(path)
+    design = run.controller.spec["design"]
+    law = run.controller.spec.get("recursion", "none")
+    named = [design] + design["alternatives"]
+    assert any(np.allclose(d["num_s"], hidden.num_s, rtol=1e-9) and np.allclose(d["den_s"], hidden.den_s, rtol=1e-9)
+               and d.get("recursion", law) == hidden.recursion for d in named)
+    assert {d.get("recursion", law) for d in named} == {"trunc", "round"}
+    for d in named:
+        assert _lab_reproduces(run, d, hidden.limit, d.get("recursion", law), run.alignment), d["text"]
+    line = next(x for x in format_report(replay(path)).splitlines() if x.startswith("  controller: "))
+    assert all(d["text"] in line for d in named) and "(on the rounded integer)" in line, line

@@ -17,7 +17,7 @@ from __future__ import annotations
 
 import itertools
 import math
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, replace
 
 import numpy as np
@@ -33,6 +33,9 @@ _ALPHA = {"Tustin": 0.5, "backward Euler": 1.0, "forward Euler": 0.0}
 
 MAX_DIGITS = 5
 """Most significant digits a recognised design's numbers may have."""
+
+STORED = {"trunc": "truncated", "round": "rounded"}
+"""How a recursion's stored integer is named in reports."""
 
 MAX_ALTERNATIVES = 3
 """Most equally simple designs named beside a recognised one (:attr:`ContinuousDesign.alternatives`)."""
@@ -63,6 +66,10 @@ class ContinuousDesign:
         stored integer command pins a lead's pole only so far).
     more : int
         How many more such designs were found than ``alternatives`` holds.
+    recursion : str
+        For an alternative only: the stored integer its recursion runs on ("trunc" or
+        "round") where it differs from the recognised law's ("": the same); a step on the
+        stored integer may be reproduced by a truncating law and a rounding one alike.
     """
 
     num_s: tuple[float, ...]
@@ -72,6 +79,7 @@ class ContinuousDesign:
     digits: int
     alternatives: tuple[ContinuousDesign, ...] = ()
     more: int = 0
+    recursion: str = ""
 
     def discretize(self, dt: float) -> tuple[np.ndarray, np.ndarray]:
         """Its z-law at ``dt`` by its method (:func:`discretize`).
@@ -89,26 +97,57 @@ class ContinuousDesign:
         return f"{self.text} (num {fmt(self.num_s)}, den {fmt(self.den_s)} in s; {self.method})"
 
     def to_json(self) -> dict:
-        """``{"num_s", "den_s", "method", "text", "alternatives", "more_alternatives"}``."""
-        return {"num_s": list(self.num_s), "den_s": list(self.den_s), "method": self.method, "text": self.text,
-                "alternatives": [d.to_json() for d in self.alternatives], "more_alternatives": self.more}
+        """``{"num_s", "den_s", "method", "text", "alternatives", "more_alternatives"}``, and
+        ``"recursion"`` where an alternative's stored integer differs from the law's."""
+        out = {"num_s": list(self.num_s), "den_s": list(self.den_s), "method": self.method, "text": self.text,
+               "alternatives": [d.to_json() for d in self.alternatives], "more_alternatives": self.more}
+        if self.recursion:
+            out["recursion"] = self.recursion
+        return out
+
+    def with_alternatives(self, others: Sequence[ContinuousDesign], recursion: str) -> ContinuousDesign:
+        """This design with ``others`` (and their own alternatives), found for a law on another
+        stored integer, said beside it: at most :data:`MAX_ALTERNATIVES` in all, those with no
+        more digits than this one.
+
+        Parameters
+        ----------
+        others : sequence of ContinuousDesign
+            Designs recognised for the same rows with the recursion on ``recursion``'s integer.
+        recursion : str
+            "trunc" or "round".
+
+        Returns
+        -------
+        ContinuousDesign
+        """
+        found = [replace(d, alternatives=(), more=0, recursion=recursion)
+                 for o in others for d in (o, *o.alternatives) if d.digits <= self.digits]
+        extra = sum(o.more for o in others if o.digits <= self.digits)
+        pool = list(self.alternatives) + found
+        return replace(self, alternatives=tuple(pool[:MAX_ALTERNATIVES]),
+                       more=self.more + extra + max(len(pool) - MAX_ALTERNATIVES, 0))
 
 
 
-def alternatives_phrase(alternatives, method: str, more: int = 0) -> str:
+def alternatives_phrase(alternatives, method: str, more: int = 0, recursion: str = "") -> str:
     """What is said after a recognised design that its log does not single out:
-    ``" or A or B (ZOH) (the log reproduced by each; 2 more as simple)"``, empty without
-    alternatives.
+    ``" or A or B (ZOH) or C (on the rounded integer) (the log reproduced by each; 2 more as
+    simple)"``, empty without alternatives.
 
     Parameters
     ----------
-    alternatives : sequence of (str, str)
-        Each alternative's factored form and method (:attr:`ContinuousDesign.alternatives`'
-        ``text`` and ``method``, or their JSON's).
+    alternatives : sequence of (str, str, str)
+        Each alternative's factored form, method and stored integer
+        (:attr:`ContinuousDesign.alternatives`' ``text``, ``method`` and ``recursion``, or
+        their JSON's; "" where the law's).
     method : str
         The recognised design's method: an alternative's is said where it differs.
     more : int
         How many more were found (:attr:`ContinuousDesign.more`).
+    recursion : str
+        The stored integer the recognised law's recursion runs on ("trunc", "round" or "":
+        none or said elsewhere): said first where an alternative's differs.
 
     Returns
     -------
@@ -116,9 +155,14 @@ def alternatives_phrase(alternatives, method: str, more: int = 0) -> str:
     """
     if not alternatives:
         return ""
-    texts = [text + ("" if m == method else f" ({m})") for text, m in alternatives]
+    own = f" (on the {STORED[recursion]} integer)" if recursion in STORED and any(r for _, _, r in alternatives) else ""
+    texts = []
+    for text, m, recursion in alternatives:
+        how = [m] if m != method else []
+        how += [f"on the {STORED[recursion]} integer"] if recursion else []
+        texts.append(text + (f" ({', '.join(how)})" if how else ""))
     tail = f"; {more} more as simple" if more else ""
-    return f" or {' or '.join(texts)} (the log reproduced by each{tail})"
+    return f"{own} or {' or '.join(texts)} (the log reproduced by each{tail})"
 
 
 def _gbt(num_s, den_s, dt: float, alpha: float) -> tuple[np.ndarray, np.ndarray]:

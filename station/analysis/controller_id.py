@@ -45,7 +45,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from station.analysis.accel_law import AccelFeedback, accel_feedback
-from station.analysis.continuous_design import (ContinuousDesign, alternatives_phrase, nicest_between, recognize,
+from station.analysis.continuous_design import (STORED, ContinuousDesign, alternatives_phrase, nicest_between, recognize,
                                                 to_continuous)
 from station.analysis.law_rows import BOUNDARY, TOLERANCE, LawRows, tie_rows
 from station.control import DAC_LIMIT, Compensator, DiscreteTF, OpenLoop, lead_controller  # DAC_LIMIT: the clamp assumed when v exceeds the rig's ±200
@@ -57,8 +57,6 @@ MAX_ORDER = 3
 """Highest order of the linear compensators tried."""
 
 
-STORED = {"trunc": "truncated", "round": "rounded"}
-"""How a recursion's stored integer is named in reports."""
 
 
 @dataclass(frozen=True)
@@ -287,15 +285,18 @@ def _law_text(order: int, c: np.ndarray, design: ContinuousDesign | None, dt: fl
         text = f"P, kp = {c[0]:g}"
     elif design is not None:
         text = f"{design.text} ({design.method}, {dt:g} s)"
+        if recursion != "none":
+            text += f", its recursion on the {STORED[recursion]} integer command"
         if design.alternatives:  # the log does not tell them apart: said, never hidden
-            text += alternatives_phrase([(d.text, d.method) for d in design.alternatives], design.method, design.more)
+            text += alternatives_phrase([(d.text, d.method, d.recursion) for d in design.alternatives], design.method,
+                                        design.more)
     else:
         fmt = lambda x: "[" + ", ".join(f"{y:.8g}" for y in x) + "]"  # noqa: E731
         text = (f"linear compensator e -> v of order {order}, num {fmt(c[:order + 1])}, "
                 f"den {fmt(np.concatenate(([1.0], c[order + 1:])))} (z^-1)")
     if ga is not None:
         text += f", with {ga_text(ga, dt)}"
-    if recursion != "none":
+    if recursion != "none" and design is None:
         text += f", its recursion on the {STORED[recursion]} integer command"
     if limit != rig_limit:
         text += f", clamp ±{limit:g}"
@@ -405,6 +406,10 @@ def _accepted(rows: LawRows, recursion: str, d: int, log, dt: float, rig_limit: 
     if found is None:
         return None
     c, design = found
+    if design is not None and recursion in STORED:  # a law on the other stored integer may reproduce it too
+        others = [f[1] for q in STORED if q != recursion
+                  for f in [_law(rows, q, dt)] if f is not None and f[1] is not None]
+        design = design.with_alternatives(others, next(q for q in STORED if q != recursion)) if others else design
     order = rows.order
     kind = ("p" if order == 0 else f"linear-{order}") + ("" if ga is None else f"+accel-{ga.den.size - 1}")
     extra = {"kp": float(c[0])} if order == 0 else {}
