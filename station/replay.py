@@ -18,7 +18,7 @@ import numpy as np
 
 from station.analysis.beam import BeamTestReport, analyze_beam_test, model_first_mode
 from station.analysis.metrics import StepMetrics
-from station.analysis.continuous_design import alternatives_phrase
+from station.analysis.continuous_design import STORED, alternatives_phrase
 from station.errors import StationError
 from station.logged import REPRODUCED_TOLERANCE, LoggedRun
 from station.logged.audit import Audit
@@ -278,9 +278,11 @@ def format_report(report: ReplayReport) -> str:
         source = SOURCE_WORDS.get(report.controller_source, "")
         design = (report.controller_spec or {}).get("design") or {}
         alts = [(d["text"], d["method"], d.get("recursion", "")) for d in design.get("alternatives", ())]
+        own = (report.controller_spec or {}).get("recursion", "")
+        if own in STORED and any(r for _, _, r in alts):  # beside laws on the other integer: its own said
+            source = "; ".join(filter(None, (source, f"on the {STORED[own]} integer")))
         lines.append(f"  controller: {report.controller}" + (f" ({source})" if source else "")
-                     + alternatives_phrase(alts, design.get("method", ""), design.get("more_alternatives", 0),
-                                           (report.controller_spec or {}).get("recursion", "")))
+                     + alternatives_phrase(alts, design.get("method", ""), design.get("more_alternatives", 0)))
     if report.max_abs_dv is not None:
         verdict = "reproduces" if report.reproduced else "does NOT reproduce"
         align = "" if report.alignment is None else f", alignment d = {report.alignment}"

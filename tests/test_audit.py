@@ -339,3 +339,4 @@ def test_a_law_on_the_other_stored_integer_is_named_beside_it(tmp_path):
         assert _lab_reproduces(run, d, hidden.limit, d.get("recursion", law), run.alignment), d["text"]
     line = next(x for x in format_report(replay(path)).splitlines() if x.startswith("  controller: "))
     assert all(d["text"] in line for d in named) and "(on the rounded integer)" in line, line
+    assert "(inferred from the data; on the truncated integer)" in line, line  # the answer's own integer too

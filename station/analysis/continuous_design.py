@@ -130,7 +130,7 @@ class ContinuousDesign:
 
 
 
-def alternatives_phrase(alternatives, method: str, more: int = 0, recursion: str = "") -> str:
+def alternatives_phrase(alternatives, method: str, more: int = 0) -> str:
     """What is said after a recognised design that its log does not single out:
     ``" or A or B (ZOH) or C (on the rounded integer) (the log reproduced by each; 2 more as
     simple)"``, empty without alternatives.
@@ -145,9 +145,6 @@ def alternatives_phrase(alternatives, method: str, more: int = 0, recursion: str
         The recognised design's method: an alternative's is said where it differs.
     more : int
         How many more were found (:attr:`ContinuousDesign.more`).
-    recursion : str
-        The stored integer the recognised law's recursion runs on ("trunc", "round" or "":
-        none or said elsewhere): said first where an alternative's differs.
 
     Returns
     -------
@@ -155,14 +152,13 @@ def alternatives_phrase(alternatives, method: str, more: int = 0, recursion: str
     """
     if not alternatives:
         return ""
-    own = f" (on the {STORED[recursion]} integer)" if recursion in STORED and any(r for _, _, r in alternatives) else ""
     texts = []
     for text, m, recursion in alternatives:
         how = [m] if m != method else []
         how += [f"on the {STORED[recursion]} integer"] if recursion else []
         texts.append(text + (f" ({', '.join(how)})" if how else ""))
     tail = f"; {more} more as simple" if more else ""
-    return f"{own} or {' or '.join(texts)} (the log reproduced by each{tail})"
+    return f" or {' or '.join(texts)} (the log reproduced by each{tail})"
 
 
 def _gbt(num_s, den_s, dt: float, alpha: float) -> tuple[np.ndarray, np.ndarray]:
