@@ -17,7 +17,7 @@ from __future__ import annotations
 
 import itertools
 import math
-from collections.abc import Callable, Sequence
+from collections.abc import Callable
 from dataclasses import dataclass, replace
 
 import numpy as np
@@ -105,15 +105,15 @@ class ContinuousDesign:
             out["recursion"] = self.recursion
         return out
 
-    def with_alternatives(self, others: Sequence[ContinuousDesign], recursion: str) -> ContinuousDesign:
-        """This design with ``others`` (and their own alternatives), found for a law on another
+    def with_alternatives(self, other: ContinuousDesign, recursion: str) -> ContinuousDesign:
+        """This design with ``other`` (and its own alternatives), found for a law on another
         stored integer, said beside it: at most :data:`MAX_ALTERNATIVES` in all, those with no
         more digits than this one.
 
         Parameters
         ----------
-        others : sequence of ContinuousDesign
-            Designs recognised for the same rows with the recursion on ``recursion``'s integer.
+        other : ContinuousDesign
+            The design recognised for the same rows with the recursion on ``recursion``'s integer.
         recursion : str
             "trunc" or "round".
 
@@ -122,8 +122,8 @@ class ContinuousDesign:
         ContinuousDesign
         """
         found = [replace(d, alternatives=(), more=0, recursion=recursion)
-                 for o in others for d in (o, *o.alternatives) if d.digits <= self.digits]
-        extra = sum(o.more for o in others if o.digits <= self.digits)
+                 for d in (other, *other.alternatives) if d.digits <= self.digits]
+        extra = other.more if other.digits <= self.digits else 0
         pool = list(self.alternatives) + found
         return replace(self, alternatives=tuple(pool[:MAX_ALTERNATIVES]),
                        more=self.more + extra + max(len(pool) - MAX_ALTERNATIVES, 0))

@@ -285,19 +285,17 @@ def _law_text(order: int, c: np.ndarray, design: ContinuousDesign | None, dt: fl
         text = f"P, kp = {c[0]:g}"
     elif design is not None:
         text = f"{design.text} ({design.method}, {dt:g} s)"
-        if recursion != "none":
-            text += f", its recursion on the {STORED[recursion]} integer command"
-        if design.alternatives:  # the log does not tell them apart: said, never hidden
-            text += alternatives_phrase([(d.text, d.method, d.recursion) for d in design.alternatives], design.method,
-                                        design.more)
     else:
         fmt = lambda x: "[" + ", ".join(f"{y:.8g}" for y in x) + "]"  # noqa: E731
         text = (f"linear compensator e -> v of order {order}, num {fmt(c[:order + 1])}, "
                 f"den {fmt(np.concatenate(([1.0], c[order + 1:])))} (z^-1)")
+    if recursion != "none":  # before the alternatives: theirs is said where it differs
+        text += f", its recursion on the {STORED[recursion]} integer command"
+    if design is not None and design.alternatives:  # the log does not tell them apart: said, never hidden
+        text += alternatives_phrase([(d.text, d.method, d.recursion) for d in design.alternatives], design.method,
+                                    design.more)
     if ga is not None:
         text += f", with {ga_text(ga, dt)}"
-    if recursion != "none" and design is None:
-        text += f", its recursion on the {STORED[recursion]} integer command"
     if limit != rig_limit:
         text += f", clamp ±{limit:g}"
     return text
@@ -407,9 +405,10 @@ def _accepted(rows: LawRows, recursion: str, d: int, log, dt: float, rig_limit: 
         return None
     c, design = found
     if design is not None and recursion in STORED:  # a law on the other stored integer may reproduce it too
-        others = [f[1] for q in STORED if q != recursion
-                  for f in [_law(rows, q, dt)] if f is not None and f[1] is not None]
-        design = design.with_alternatives(others, next(q for q in STORED if q != recursion)) if others else design
+        other = next(q for q in STORED if q != recursion)
+        beside = _law(rows, other, dt)
+        if beside is not None and beside[1] is not None:
+            design = design.with_alternatives(beside[1], other)
     order = rows.order
     kind = ("p" if order == 0 else f"linear-{order}") + ("" if ga is None else f"+accel-{ga.den.size - 1}")
     extra = {"kp": float(c[0])} if order == 0 else {}
