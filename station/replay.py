@@ -18,7 +18,7 @@ import numpy as np
 
 from station.analysis.beam import BeamTestReport, analyze_beam_test, model_first_mode
 from station.analysis.metrics import StepMetrics
-from station.analysis.continuous_design import STORED, alternatives_phrase
+from station.analysis.continuous_design import STORED, alternatives_phrase, on_integer
 from station.errors import StationError
 from station.logged import REPRODUCED_TOLERANCE, LoggedRun
 from station.logged.audit import Audit
@@ -280,7 +280,7 @@ def format_report(report: ReplayReport) -> str:
         alts = [(d["text"], d["method"], d.get("recursion", "")) for d in design.get("alternatives", ())]
         own = (report.controller_spec or {}).get("recursion", "")
         if own in STORED and any(r for _, _, r in alts):  # beside laws on the other integer: its own said
-            source = "; ".join(filter(None, (source, f"on the {STORED[own]} integer")))
+            source = "; ".join(filter(None, (source, on_integer(own))))
         lines.append(f"  controller: {report.controller}" + (f" ({source})" if source else "")
                      + alternatives_phrase(alts, design.get("method", ""), design.get("more_alternatives", 0)))
     if report.max_abs_dv is not None:

@@ -37,6 +37,26 @@ MAX_DIGITS = 5
 STORED = {"trunc": "truncated", "round": "rounded"}
 """How a recursion's stored integer is named in reports."""
 
+
+def on_integer(recursion: str) -> str:
+    """The words for the stored integer a recursion runs on: ``"on the truncated integer"``.
+
+    Parameters
+    ----------
+    recursion : str
+        "trunc" or "round" (a key of :data:`STORED`).
+
+    Returns
+    -------
+    str
+
+    Raises
+    ------
+    KeyError
+        Any other recursion ("none" has no integer).
+    """
+    return f"on the {STORED[recursion]} integer"
+
 MAX_ALTERNATIVES = 3
 """Most equally simple designs named beside a recognised one (:attr:`ContinuousDesign.alternatives`)."""
 
@@ -155,7 +175,7 @@ def alternatives_phrase(alternatives, method: str, more: int = 0) -> str:
     texts = []
     for text, m, recursion in alternatives:
         how = [m] if m != method else []
-        how += [f"on the {STORED[recursion]} integer"] if recursion else []
+        how += [on_integer(recursion)] if recursion else []
         texts.append(text + (f" ({', '.join(how)})" if how else ""))
     tail = f"; {more} more as simple" if more else ""
     return f" or {' or '.join(texts)} (the log reproduced by each{tail})"

@@ -45,8 +45,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from station.analysis.accel_law import AccelFeedback, accel_feedback
-from station.analysis.continuous_design import (STORED, ContinuousDesign, alternatives_phrase, nicest_between, recognize,
-                                                to_continuous)
+from station.analysis.continuous_design import (STORED, ContinuousDesign, alternatives_phrase, nicest_between,
+                                                on_integer, recognize, to_continuous)
 from station.analysis.law_rows import BOUNDARY, TOLERANCE, LawRows, tie_rows
 from station.control import DAC_LIMIT, Compensator, DiscreteTF, OpenLoop, lead_controller  # DAC_LIMIT: the clamp assumed when v exceeds the rig's ±200
 from station.control.rerun import ALIGNMENTS, AlignmentFit, detect_alignment
@@ -55,8 +55,6 @@ from station.rig import CLAMP, DT
 
 MAX_ORDER = 3
 """Highest order of the linear compensators tried."""
-
-
 
 
 @dataclass(frozen=True)
@@ -290,7 +288,7 @@ def _law_text(order: int, c: np.ndarray, design: ContinuousDesign | None, dt: fl
         text = (f"linear compensator e -> v of order {order}, num {fmt(c[:order + 1])}, "
                 f"den {fmt(np.concatenate(([1.0], c[order + 1:])))} (z^-1)")
     if recursion != "none":  # before the alternatives: theirs is said where it differs
-        text += f", its recursion on the {STORED[recursion]} integer command"
+        text += f", its recursion {on_integer(recursion)} command"
     if design is not None and design.alternatives:  # the log does not tell them apart: said, never hidden
         text += alternatives_phrase([(d.text, d.method, d.recursion) for d in design.alternatives], design.method,
                                     design.more)
