@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 from station import diagnosis
-from station.diagnosis.search.fitting import EXCESS, MIN_EXCESS, effect_axes, fit_beside, fit_set, set_axes
+from station.diagnosis.search.fitting import EXCESS, MIN_EXCESS, UNSTICK_COST, effect_axes, excess_of, fit_beside, fit_set, set_axes
 from station.diagnosis.search.selection import Trial, credible, excess_fraction, screen_costs
 
 
@@ -147,3 +147,51 @@ def test_the_joint_screen_finds_a_partner_that_the_held_friction_hides():
     cost, values = fit_beside(ev, axes, ["coulomb_friction"], "amp_offset", [0], fixed)
     assert cost == pytest.approx(joint["amp_offset"])
     assert values["coulomb_friction"] - values["amp_offset"] == pytest.approx(6.0, abs=0.3)
+
+
+class _TwoValleys:
+    """An evaluator whose breakaway cost has two valleys, as stick-slip's has: a shallow one at
+    v_s 13.7 (J 4, far from the noise) and the true one at v_c 8.5, v_s 24.9 (J 1) that exists only
+    near that sliding level, so a fit bracketing the excess from the Coulomb level 9.4 never
+    sees it (blind static_friction + amp_offset + delay seed 7)."""
+
+    def __init__(self, shallow=3.0):
+        self.calls, self.shallow = 0, shallow
+
+    def cost(self, values, runs):
+        self.calls += 1
+        v_c = values.get("coulomb_friction", 0.0)
+        v_s = values.get("static_friction", v_c)
+        deep = abs(v_c - 8.5) < 0.5 and abs(v_s - 24.9) < 6
+        g = 0.3 * (v_s - 24.9) ** 2 if deep else self.shallow + 0.3 * (v_s - 13.7) ** 2
+        return 1.0 + (v_c - 8.5) ** 2 + g  # J: a mean over the runs, 1 at the noise floor
+
+
+def test_a_breakaway_fold_left_in_a_worse_valley_is_fitted_again_from_a_fold_that_found_the_better():
+    from station.diagnosis.runs.folds import Fold
+    from station.diagnosis.search.fitting import unstick
+
+    ev, axes, names = _TwoValleys(), effect_axes(), ("static_friction",)
+    folds = [Fold((1, 2), (0,)), Fold((0, 2), (1,)), Fold((0, 1), (2,))]
+    shallow = {"coulomb_friction": 9.4, "static_friction": 13.7}
+    deep = {"coulomb_friction": 8.5, "static_friction": 24.9}
+    # the precondition: fitted from the Coulomb level, a fold stays in the shallow valley
+    # with an excess far above MIN_EXCESS (not "stuck" by the excess alone)
+    alone = fit_set(ev, set_axes(names, axes), (0, 2), shallow)
+    assert alone["static_friction"] == pytest.approx(13.7, abs=0.3) and excess_of(alone) > 3 * MIN_EXCESS
+    out = unstick(ev, folds, names, axes, [dict(deep), dict(shallow), dict(shallow)])
+    assert out[0] == deep
+    for fv in out[1:]:
+        assert fv["static_friction"] == pytest.approx(24.9, abs=0.3)
+        assert fv["coulomb_friction"] == pytest.approx(8.5, abs=0.2)
+    # where no other fold fits a fold's runs better, nothing is fitted again: cost look-ups
+    # only (the real Evaluator caches them), where a fit takes a hundred
+    ev.calls = 0
+    same = [dict(shallow) for _ in folds]
+    assert unstick(ev, folds, names, axes, same) == same and ev.calls <= 4 * len(folds)
+    assert unstick(ev, folds, ("coulomb_friction",), axes, [dict(shallow)] * 3) == [shallow] * 3  # no breakaway
+    # near the noise a lower point is luck as often as the truth (UNSTICK_COST): left alone
+    near = _TwoValleys(shallow=0.2)
+    close = {"coulomb_friction": 8.5, "static_friction": 13.7}
+    assert ev.cost(close, (0, 2)) > UNSTICK_COST > near.cost(close, (0, 2)) > near.cost(deep, (0, 2))
+    assert unstick(near, folds, names, axes, [dict(deep), dict(close), dict(close)]) == [deep, close, close]
