@@ -88,7 +88,14 @@ class Verdict(NamedTuple):
     held_out: tuple | None = None
 
     def words(self) -> str:
-        """What a note adds when it paid in-sample only ("" otherwise)."""
+        """What a note adds when it paid in-sample only.
+
+        Returns
+        -------
+        str
+            "; in-sample it pays ..., on runs its fits did not see ... it does not: A against B
+            per term", or "" when it paid both ways, or not in-sample.
+        """
         if not self.in_sample or self.pays or self.held_out is None:
             return ""
         return (f"; in-sample it pays for its extra effects, on runs its fits did not see "
