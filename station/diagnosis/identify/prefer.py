@@ -18,9 +18,8 @@ deeper lucky point. Where it pays in-sample, the decision is confirmed on runs e
 see (:func:`held_out`, leave-one-run-out), as forward selection judges an effect, and it stands
 only when the winner pays there too. Seen on a hidden rig of breakaway 12 over 5 with an
 actuator gain of 0.8 (five runs): the actuator pole with viscous friction refitted at J 1.11
-in-sample against 1.21 for the truth's causes (the truth's own values: 1.05), held out 1.26
-against 1.33, within what accept demands. One the answer pays over both ways is settled and
-forgotten.
+in-sample against 1.21 for the truth's causes (the truth's own values: 1.05), and held out it
+did not pay as accept demands. One the answer pays over both ways is settled and forgotten.
 """
 
 from __future__ import annotations
@@ -40,6 +39,7 @@ from station.diagnosis.runs.cost import Evaluator, calibrate_noise, pooled, rms_
 from station.diagnosis.runs.folds import make_folds
 from station.diagnosis.search.fitting import effect_axes, refit_explanation
 from station.diagnosis.search.selection import accept
+
 
 def held_out(ev: Evaluator, causes: Sequence[str], values: Mapping[str, float], axes) -> float:
     """An explanation's leave-one-run-out cost: refitted from ``values`` on all runs but one
@@ -102,7 +102,8 @@ class Verdict(NamedTuple):
                 f"(leave-one-run-out) it does not: {self.held_out[0]:.3g} against {self.held_out[1]:.3g} per term")
 
 
-def pays_over(ev: Evaluator, winner: tuple, loser: tuple, in_sample: tuple[float, float], axes) -> Verdict:
+def pays_over(ev: Evaluator, winner: tuple, loser: tuple, in_sample: tuple[float, float], axes,
+              winner_held_out: float | None = None) -> Verdict:
     """Whether ``winner`` pays over ``loser`` as forward selection's acceptance demands
     (:func:`station.diagnosis.search.selection.accept`), in-sample and then held out
     (:func:`held_out`; module docstring).
@@ -116,6 +117,8 @@ def pays_over(ev: Evaluator, winner: tuple, loser: tuple, in_sample: tuple[float
     in_sample : tuple of float
         Their costs per term on every run, (winner's, loser's).
     axes : mapping of str to Axis
+    winner_held_out : float, optional
+        ``winner``'s :func:`held_out` cost when already known (one answer against many rivals).
 
     Returns
     -------
@@ -127,7 +130,8 @@ def pays_over(ev: Evaluator, winner: tuple, loser: tuple, in_sample: tuple[float
         return Verdict(False, False)
     if len(idx) < 2:
         return Verdict(True, True)
-    costs = (held_out(ev, *winner, axes), held_out(ev, *loser, axes))
+    own = held_out(ev, *winner, axes) if winner_held_out is None else winner_held_out
+    costs = (own, held_out(ev, *loser, axes))
     return Verdict(accept(costs[1] * terms, costs[0] * terms, terms), True, costs)
 
 
@@ -368,10 +372,13 @@ def contest(answer, earlier: Sequence[Explanation], runs: Sequence[str | Path], 
     rms_nom = pooled(ev, {i: ev.sse({}, i) for i in idx}).rms_theta
     axes = effect_axes(ev.model)
     alts, still, done = [], [], []
+    own = None  # the answer's held-out cost, computed once when a rival first needs it
     for e in todo:
         values = refit_explanation(ev, e.causes, idx, e.values, axes)
         j = ev.cost(values, idx)
-        if not pays_over(ev, (tuple(answer.causes), chosen), (e.causes, values), (j0, j), axes).pays:
+        verdict = pays_over(ev, (tuple(answer.causes), chosen), (e.causes, values), (j0, j), axes, own)
+        own = verdict.held_out[0] if verdict.held_out is not None else own
+        if not verdict.pays:
             gain = rms_gain(pooled(ev, {i: ev.sse(values, i) for i in idx}).rms_theta, rms_nom)
             alts.append(Alternative(list(e.causes), {k: float(v) for k, v in values.items()}, float(gain),
                                     float(j / j0), "the identified explanation"))
