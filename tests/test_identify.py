@@ -91,7 +91,7 @@ def _effect(name, value, accepted=True, cost_gain=50.0, interval=None):
 
 
 def _diag(effects, folds=(), **extra):
-    d = SimpleNamespace(effects=list(effects), causes=[e.name for e in effects if e.accepted], folds=list(folds))
+    d = SimpleNamespace(effects=list(effects), accepted=[e.name for e in effects if e.accepted], folds=list(folds))
     for k, v in extra.items():
         setattr(d, k, v)
     return d

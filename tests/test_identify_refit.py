@@ -37,7 +37,7 @@ def _effect(name, value, interval=None):
 def _diag(values, causes, interval=None):
     """A diagnosis of ``causes`` whose extended model holds ``values`` (as forward selection's)."""
     effects = [_effect(n, values[n], interval if n == "static_friction" else None) for n in causes]
-    return SimpleNamespace(effects=effects, causes=list(causes), folds=[], alternatives=[],
+    return SimpleNamespace(effects=effects, accepted=list(causes), folds=[], alternatives=[],
                            extended_model=NOMINAL.with_effects(values))
 
 
@@ -120,7 +120,7 @@ def test_a_profile_of_the_breakaway_level_keeps_it_above_the_sliding_level(blind
 def _record(values, causes):
     """A typed diagnosis record of ``causes`` (what :func:`kept_diagnosis` rebuilds)."""
     effects = [EffectResult(n, values[n], EFFECTS[n].unit, 10.0, 20.0, True, "", [], values[n]) for n in causes]
-    return Diagnosis(causes[0], list(causes), {}, {}, 30.0, effects, NOMINAL.with_effects(values), NOMINAL, [],
+    return Diagnosis(list(causes), {}, {}, 30.0, effects, NOMINAL.with_effects(values), NOMINAL, [],
                      "leave-one-run-out")
 
 

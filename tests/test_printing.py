@@ -31,7 +31,7 @@ def built_diagnosis(unexplained_flag: bool = False) -> Diagnosis:
     ]
     ext = nominal.with_effects({"coulomb_friction": 4.97, "amp_offset": -3.008}, name="tmm-fit + 2")
     u = Unexplained(unexplained_flag, "4 of 5 runs keep structure" if unexplained_flag else "", [], [], 0)
-    return Diagnosis("coulomb_friction", ["coulomb_friction", "amp_offset"], {"theta": 80.0, "accel": 50.0},
+    return Diagnosis(["coulomb_friction", "amp_offset"], {"theta": 80.0, "accel": 50.0},
                      {"theta": 90.0, "accel": 60.0}, 35.0, effects, ext, nominal, [], "leave-one-run-out",
                      simulations=100, elapsed_s=1.0, unexplained=u)
 
@@ -69,7 +69,7 @@ def test_every_effects_row_keeps_each_cell_in_its_column(accepted):
     effects = [_effect(name, -123456.7 if i % 2 else 0.5, spec.unit, -484.2 if i % 3 else 5.0, 99.9, accepted,
                        -98765.4 if i % 2 else 1.0, Interval(-1234.5, 67890.1, False, False) if accepted else None)
                for i, (name, spec) in enumerate(VOCABULARY.items())]
-    diag = Diagnosis(effects[0].name, [e.name for e in effects if e.accepted], {"theta": 1.0}, {"theta": 1.0}, 0.0,
+    diag = Diagnosis([e.name for e in effects if e.accepted], {"theta": 1.0}, {"theta": 1.0}, 0.0,
                      effects, as_model(None), as_model(None), [], "leave-one-run-out")
     header, *rows = candidate_rows(diag)
     unit_at = header.index(" unit ") + 1
@@ -129,7 +129,7 @@ def _record(values: dict, causes: list, intervals: dict, alone: dict, flag: bool
                 if n not in causes]
     u = Unexplained(flag, "4 of 5 runs keep structure that encoder rounding cannot produce." if flag else "",
                     [], [], 0)
-    return Diagnosis(causes[0], causes, {"theta": 80.0}, {"theta": 90.0}, 30.0, effects,
+    return Diagnosis(causes, {"theta": 80.0}, {"theta": 90.0}, 30.0, effects,
                      nominal.with_effects(values), nominal, [], "leave-one-run-out", unexplained=u)
 
 

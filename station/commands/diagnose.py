@@ -255,14 +255,13 @@ def format_diagnosis(diag) -> str:
     lines += [f"model: {diag.nominal_model.name}" + (
         " with the sensor faults decided from the data (" + ", ".join(f"{k} {v:.3g}" for k, v in faults.items()) + ")"
         if faults else "") + f"; judged by {diag.validation}",
-             f"cause: {(diag.all_causes or ['none'])[0]}"
-             + (f"   (all accepted: {', '.join(diag.all_causes)})" if len(diag.all_causes) > 1 else ""),
+             f"cause: {diag.cause}" + (f"   (causes: {', '.join(diag.causes)})" if len(diag.causes) > 1 else ""),
              f"θ fit {pct(diag.baseline_fit.get('theta'))} -> {pct(diag.extended_fit.get('theta'))}, "
              f"a fit {pct(diag.baseline_fit.get('accel'))} -> {pct(diag.extended_fit.get('accel'))}, "
              f"θ RMS gain {diag.gain_pct:.1f} % on runs not used to fit ({diag.validation})",
              "unexplained: " + ("no" if u is None or not u.flag else "yes - " + whole_sentences(u.evidence)
                                 + f" ({diag.prediction_words()})")]
-    if diag.causes:
+    if diag.accepted:
         lines.append("alternatives: " + ("none" if not diag.alternatives else "; ".join(
             f"{' + '.join(a.causes)} (cost ratio {a.cost_ratio:.3f}, θ gain {a.gain_pct:.1f} %)"
             for a in diag.alternatives)))
@@ -334,7 +333,7 @@ def run(args: argparse.Namespace) -> int:
         diag = diagnose(args.runs, validate=args.validate, model=args.model, progress=progress,
                         workers=args.jobs or min(os.cpu_count() or 1, 64))
     print(format_diagnosis(diag))
-    if args.save_model is not None and diag.causes and diag.gain_pct <= 0:
+    if args.save_model is not None and diag.accepted and diag.gain_pct <= 0:
         print(f"diagnose: warning: --save-model {args.save_model}: {diag.prediction_words()}; "
               f"simulate with it knowing that", file=sys.stderr)
     with Transaction() as tx:

@@ -264,10 +264,8 @@ def _diagnose(runs, validate, model, progress, bench: Bench, simulate, likelihoo
     reports, before = run_reports(ev, folds, nominal.predictions, sel, judged, final)
     effects = effect_results(ev, how, names, singles, sel, nominal.trial, before, doubt.intervals)
 
-    search.say(f"done: cause {accepted[0] if accepted else 'none'}, θ gain {gain:.1f} %, {ev.simulations} "
-               f"simulations in {time.perf_counter() - t0:.1f} s")
-    return Diagnosis(
-        cause=accepted[0] if accepted else "none", causes=accepted,
+    diag = Diagnosis(
+        accepted=accepted,
         baseline_fit=fit_nom.fit_pct(), extended_fit=(fit_ext if accepted or scale is not None else fit_nom).fit_pct(),
         gain_pct=float(gain), effects=effects, extended_model=extended, nominal_model=base, runs=reports,
         validation=how, simulations=ev.simulations,
@@ -277,3 +275,6 @@ def _diagnose(runs, validate, model, progress, bench: Bench, simulate, likelihoo
         sensor_faults=faults.refined(extended.effect_dict()),  # the values the saved model holds
         audit=[{"run": c.name, "audit": c.run.audit.to_json(), "controller_source": c.run.source,
                 "contradicted": c.run.audit.lines(skip=SIGN_HEADERS)} for c in cases])
+    search.say(f"done: cause {diag.cause}, θ gain {gain:.1f} %, {ev.simulations} "  # the cause the answer prints
+               f"simulations in {time.perf_counter() - t0:.1f} s")
+    return diag

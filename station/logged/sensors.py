@@ -327,9 +327,10 @@ class SensorFaults:
         return decide_faults(self.evidence, accel_gain=g)
 
     def lines(self) -> list[str]:
-        """One line per contradicted claim, the alternative after them."""
+        """One line per contradicted claim, then the other wiring the same signs fit (never
+        read as a second fault)."""
         out = [c.line for c in self.claims if c.verdict == "contradicted"]
-        return out + ([f"or: {self.alternative}"] if self.alternative and out else [])
+        return out + ([f"the signs seen fit as well: {self.alternative}"] if self.alternative and out else [])
 
     def to_json(self) -> dict:
         """``{"effects", "first_estimates", "claims", "alternative", "to_fit", "runs"}``."""

@@ -323,17 +323,22 @@ def answer_points(diag) -> list[tuple[str, str]]:
     """
     base = diag.nominal_model.name
     points = [("Audit", line + ".") for line in diag.audit_lines()]
-    if not diag.causes:
+    # the causes as every output names them (Diagnosis.causes): the decided faults lead
+    faults = "; ".join(f"{plain_name(k)} {plain_value(k, v, EFFECTS[k].unit)}" for k, v in diag.decided_faults.items())
+    if not diag.accepted:
         best = diag.effects[0] if diag.effects else None
         extra = "" if best is None else (f" The best candidate, {plain_name(best.name)} "
                                          f"{plain_value(best.name, best.value, best.unit)}, changes the θ RMS error "
                                          f"on held-out data by {best.gain_pct:+.1f} %, below the significance threshold.")
-        points.append(("Cause", f"none: no effect explains the differences between {base} and the runs beyond what "
-                                f"sensor quantization and noise can ({diag.validation}).{extra}"))
+        points.append(("Cause", (f"the sensor faults decided from the data, {faults}; beside them no physical effect "
+                                 f"explains the differences between {base} and the runs" if faults else
+                                 f"none: no effect explains the differences between {base} and the runs")
+                       + f" beyond what sensor quantization and noise can ({diag.validation}).{extra}"))
     else:
         accepted = {e.name: e for e in diag.effects if e.accepted}
-        more = [cause_words(accepted[n]) for n in diag.causes[1:]]
-        points.append(("Cause", cause_words(accepted[diag.causes[0]])
+        more = [cause_words(accepted[n]) for n in diag.accepted[1:]]
+        points.append(("Cause", (f"the sensor faults decided from the data, {faults}; then " if faults else "")
+                       + cause_words(accepted[diag.accepted[0]])
                        + (f", together with {'; '.join(more)}" if more else "") + "."))
         points.append(("Gain", f"on runs it was not fitted to ({diag.validation}) the extended model lowers the θ RMS "
                                f"error by {diag.gain_pct:.1f} % (θ fit {format_pct(diag.baseline_fit.get('theta'))} → "
@@ -345,7 +350,7 @@ def answer_points(diag) -> list[tuple[str, str]]:
         points.append(("Still unexplained", f"{u.evidence} ({diag.prediction_words()})" if u.flag else
                        "nothing: the remaining θ and a residuals are what encoder rounding and accelerometer noise "
                        "produce around the model."))
-    if diag.causes:
+    if diag.accepted:
         if diag.alternatives:
             alts = "; ".join(f"{' + '.join(a.causes)} (instead of {a.instead_of}; validation cost {a.cost_ratio:.3f}× "
                              f"the chosen one's, θ gain {a.gain_pct:.1f} %)" for a in diag.alternatives)

@@ -93,8 +93,8 @@ def _result_table(diag) -> list[str]:
     esc, pct = html.escape, format_pct
     effects = ", ".join(f"{k} = {v:.4g}" for k, v in diag.extended_model.effect_dict().items()) or "no effects"
     return ["<h2>Evidence</h2><h3>Result</h3><table>",
-            f"<tr><th>cause</th><td>{esc((diag.all_causes or ['none'])[0])}</td></tr>",
-            f"<tr><th>causes</th><td>{esc(', '.join(diag.all_causes) or '[]')}</td></tr>",
+            f"<tr><th>cause</th><td>{esc(diag.cause)}</td></tr>",
+            f"<tr><th>causes</th><td>{esc(', '.join(diag.causes) or '[]')}</td></tr>",
             f"<tr><th>validation</th><td>{esc(diag.validation)}</td></tr>",
             f"<tr><th>θ fit nominal → extended</th><td>{pct(diag.baseline_fit.get('theta'))} → "
             f"{pct(diag.extended_fit.get('theta'))}</td></tr>",
@@ -135,7 +135,7 @@ def _candidates_table(diag) -> list[str]:
 
 
 def _alternatives_table(diag) -> list[str]:
-    if not diag.causes:
+    if not diag.accepted:
         return []
     esc = html.escape
     if not diag.alternatives:
@@ -243,7 +243,7 @@ def write_report(diag, folder: str | Path, transaction: Transaction | None = Non
     body = (_answer(diag) + _result_table(diag) + _candidates_table(diag) + _alternatives_table(diag)
             + _residual_table(diag) + _runs_table(diag) + ["<h3>Each run</h3>"])
     for r, slug in zip(diag.runs, _slugs([r.file for r in diag.runs])):
-        body += _run_section(r, slug, folder, bool(diag.causes), transaction)
+        body += _run_section(r, slug, folder, bool(diag.accepted), transaction)
     page = html_page("Model diagnosis", body)
     out = folder / PAGE
     transaction.write(out, page, "the report")

@@ -161,10 +161,9 @@ class Diagnosis:
 
     Attributes
     ----------
-    cause : str
-        The best accepted effect, or "none".
-    causes : list of str
-        Accepted effects in the order forward selection added them.
+    accepted : list of str
+        The physical effects forward selection accepted, in the order it added them (the
+        decided sensor faults are not among them: :attr:`causes` holds both).
     baseline_fit, extended_fit : dict
         NRMSE fit {"theta", "accel"} (%) over all validation samples pooled, of the
         nominal and the extended model.
@@ -202,8 +201,7 @@ class Diagnosis:
         Per run: ``{"run", "audit", "controller_source", "contradicted"}`` (DESIGN.md "Log audit").
     """
 
-    cause: str
-    causes: list
+    accepted: list
     baseline_fit: dict
     extended_fit: dict
     gain_pct: float
@@ -239,10 +237,16 @@ class Diagnosis:
         return {k: v for k, v in model.items() if k not in accepted and any(e.name == k for e in self.effects)}
 
     @property
-    def all_causes(self) -> list:
-        """DESIGN.md's ``causes``: the decided faults first, then the accepted effects."""
+    def causes(self) -> list:
+        """DESIGN.md's ``causes``, the one definition every output prints: the decided sensor
+        faults first, then the accepted effects (:attr:`accepted`)."""
         faults = list(self.decided_faults)
-        return faults + [c for c in self.causes if c not in faults]
+        return faults + [c for c in self.accepted if c not in faults]
+
+    @property
+    def cause(self) -> str:
+        """DESIGN.md's ``cause``: the first of :attr:`causes`, or "none"."""
+        return (self.causes or ["none"])[0]
 
     def prediction_words(self) -> str:
         """Whether the extended model predicts the runs it was not fitted to better than the
@@ -254,7 +258,7 @@ class Diagnosis:
         str
             One clause without a final period, naming the validation and the θ RMS gain (%).
         """
-        if not self.causes:
+        if not self.accepted:
             return "no effect accepted: the extended model is the nominal one"
         how = "better" if self.gain_pct > 0 else "no better" if self.gain_pct == 0 else "worse"
         return (f"on runs it was not fitted to ({self.validation}) the extended model predicts θ "
@@ -290,10 +294,9 @@ class Diagnosis:
             JSON-ready mapping with those keys (percentages rounded to 3 decimals, ``elapsed_s`` in s).
         """
         u = self.unexplained
-        causes = self.all_causes
         return {
-            "cause": causes[0] if causes else "none",
-            "causes": causes,
+            "cause": self.cause,
+            "causes": self.causes,
             "audit": self.audit,
             "sensor_faults": self.sensor_faults.to_json() if self.sensor_faults is not None else None,
             "baseline": {"fit_pct": dict(self.baseline_fit)},

@@ -184,7 +184,8 @@ def _holds(name: str) -> tuple:
 def _accepted(diag) -> list:
     """The accepted effects' records, in the order they were added."""
     accepted = [e for e in diag.effects if e.accepted]
-    accepted.sort(key=lambda e: diag.causes.index(e.name) if e.name in diag.causes else len(diag.causes))
+    order = diag.accepted
+    accepted.sort(key=lambda e: order.index(e.name) if e.name in order else len(order))
     return accepted
 
 

@@ -283,13 +283,13 @@ def recheck_candidates(diag, rival_effects: Sequence[str], allowed: Sequence[str
         Distinct effect names from ``allowed`` in that order, at most
         :data:`RECHECK_CANDIDATES` (or as many as the causes); ``allowed`` itself when none.
     """
-    order = list(diag.causes) + list(rival_effects)
+    order = list(diag.accepted) + list(rival_effects)
     order += [e.name for e in sorted(diag.effects, key=lambda e: -e.cost_gain_pct) if e.cost_gain_pct > 0]
     out: list[str] = []
     for n in order:
         if n in allowed and n not in out:
             out.append(n)
-    return out[:max(RECHECK_CANDIDATES, len(diag.causes))] or list(allowed)
+    return out[:max(RECHECK_CANDIDATES, len(diag.accepted))] or list(allowed)
 
 
 def identify(port: str = "sim://", model=None, budget: int = DEFAULT_BUDGET, out_dir: str | Path | None = None,
@@ -430,7 +430,7 @@ def settled(diag, rv) -> str:
     str
         One sentence without a final period.
     """
-    if not diag.causes:
+    if not diag.accepted:
         return "the diagnosis accepted no effect: nothing to tell apart"
     if not rv.wide:
         return f"settled: {describe(rv.chosen)}, no alternatives and every interval narrow"

@@ -200,20 +200,20 @@ def prefer(old, new, runs: Sequence[str | Path], base) -> Preference:
     StationError
         A run that cannot be read as a diagnosis case (:func:`station.diagnosis.runs.cases.load_case`).
     """
-    if not old.causes or set(old.causes) == set(new.causes):
+    if not old.accepted or set(old.accepted) == set(new.accepted):
         return Preference(False, {}, math.nan, math.nan, "")
     old_values, new_values = explanation(old), explanation(new)
     ev = Evaluator([load_case(p) for p in runs], base)
     calibrate_noise(ev)
     idx = list(range(len(ev.cases)))
     axes = effect_axes(ev.model)
-    refit = refit_explanation(ev, old.causes, idx, old_values, axes)
+    refit = refit_explanation(ev, old.accepted, idx, old_values, axes)
     c_old, c_new = ev.cost(refit, idx), ev.cost(new_values, idx)
     held = ""
-    if len(old.causes) <= len(new.causes):
+    if len(old.accepted) <= len(new.accepted):
         keep = c_old < c_new
     else:
-        verdict = pays_over(ev, (old.causes, refit), (new.causes, new_values), (c_old, c_new), axes)
+        verdict = pays_over(ev, (old.accepted, refit), (new.accepted, new_values), (c_old, c_new), axes)
         keep, held = verdict.pays, verdict.words()
     note = (f"{describe(refit)} (the earlier explanation, refitted on all {len(idx)} runs) fits them "
             f"{'better' if keep else 'no better'}: cost {c_old:.3g} against {c_new:.3g} per term for "
@@ -222,7 +222,7 @@ def prefer(old, new, runs: Sequence[str | Path], base) -> Preference:
     if keep:  # what the runs now allow around it: the next design's rivals (the earlier diagnosis's are stale)
         predictions = {i: ev.predict(refit, i) for i in idx}
         n_eff = effective_terms(ev, predictions, idx)
-        for name in old.causes:
+        for name in old.accepted:
             iv = effect_interval(ev, axes, name, refit, idx, n_eff, [refit[name]])
             if iv is not None:
                 intervals[name] = iv
@@ -260,7 +260,7 @@ def kept_diagnosis(old, new, pref: Preference, model, runs: int):
                if e.accepted and e.name in pref.values else e for e in old.effects]
     terms = 1000.0  # the costs are per term: accept judges the relative gain and the gain per term
     apart = accept(pref.new_cost * terms, pref.old_cost * terms, terms)
-    alts = [] if apart else [Alternative(list(new.causes), explanation(new), float(new.gain_pct),
+    alts = [] if apart else [Alternative(list(new.accepted), explanation(new), float(new.gain_pct),
                                          float(pref.new_cost / pref.old_cost), "the kept explanation")]
     n_old = len(old.runs) or "fewer"
     note = (f"the earlier explanation, refitted on all {runs} runs, was kept over a re-diagnosis "
@@ -297,7 +297,7 @@ class Explanation(NamedTuple):
         list of Explanation
             The answer first (none when it accepted nothing), then each alternative.
         """
-        out = [cls(tuple(diag.causes), explanation(diag))] if diag.causes else []
+        out = [cls(tuple(diag.accepted), explanation(diag))] if diag.accepted else []
         return out + [cls(tuple(_field(a, "causes")), dict(_field(a, "values"))) for a in diag.alternatives]
 
 
@@ -356,13 +356,13 @@ def contest(answer, earlier: Sequence[Explanation], runs: Sequence[str | Path], 
     StationError
         A run that cannot be read as a diagnosis case.
     """
-    known = [tuple(answer.causes)] + [tuple(_field(a, "causes")) for a in answer.alternatives]
+    known = [tuple(answer.accepted)] + [tuple(_field(a, "causes")) for a in answer.alternatives]
     todo, seen = [], list(known)
     for e in earlier:
         if e.causes and not any(_same(e.causes, k) for k in seen):
             todo.append(e)
             seen.append(e.causes)
-    if not todo or not answer.causes:
+    if not todo or not answer.accepted:
         return Contest([], [], [])
     ev = Evaluator([load_case(p) for p in runs], base)
     calibrate_noise(ev)
@@ -376,7 +376,7 @@ def contest(answer, earlier: Sequence[Explanation], runs: Sequence[str | Path], 
     for e in todo:
         values = refit_explanation(ev, e.causes, idx, e.values, axes)
         j = ev.cost(values, idx)
-        verdict = pays_over(ev, (tuple(answer.causes), chosen), (e.causes, values), (j0, j), axes, own)
+        verdict = pays_over(ev, (tuple(answer.accepted), chosen), (e.causes, values), (j0, j), axes, own)
         own = verdict.held_out[0] if verdict.held_out is not None else own
         if not verdict.pays:
             gain = rms_gain(pooled(ev, {i: ev.sse(values, i) for i in idx}).rms_theta, rms_nom)
