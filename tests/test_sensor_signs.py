@@ -134,7 +134,7 @@ def test_the_fewest_faults_that_give_the_signs_seen(th, a, decided):
     assert set(f.effects) == decided
     assert all(v in (-1.0, 1.0) or k == "accel_gain" for k, v in f.effects.items())
     if decided:
-        assert f.alternative and f.lines()[-1].startswith("or: ")
+        assert f.alternative and f.lines()[-1] == f"the signs seen fit as well: {f.alternative}"
     unchecked = [c for c in f.claims if c.verdict == "unchecked"]
     assert len(unchecked) == sum(x is not None and abs(x) < SIGN_COSINE for x in (th, a))
 
