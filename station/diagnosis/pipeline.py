@@ -229,8 +229,8 @@ def _diagnose(runs, validate, model, progress, bench: Bench, simulate, likelihoo
     for c in cases:
         for line in c.run.audit.lines(skip=SIGN_HEADERS):  # the signs: said once, decided over the runs
             search.say(f"audit: {c.name}: {line}")
-    for line in faults.lines():
-        search.say(f"sensor fault, decided from the data: {line}")
+    for line in faults.said():
+        search.say(line)
     for note in notes:
         search.say(note)
 

@@ -332,6 +332,16 @@ class SensorFaults:
         out = [c.line for c in self.claims if c.verdict == "contradicted"]
         return out + ([f"the signs seen fit as well: {self.alternative}"] if self.alternative and out else [])
 
+    def said(self) -> list[str]:
+        """The lines as every output says them (diagnose, survey, the report, the progress).
+
+        Returns
+        -------
+        list of str
+            Each of :meth:`lines` after "sensor fault, decided from the data: ".
+        """
+        return [f"sensor fault, decided from the data: {line}" for line in self.lines()]
+
     def to_json(self) -> dict:
         """``{"effects", "first_estimates", "claims", "alternative", "to_fit", "runs"}``."""
         return {"effects": dict(self.effects), "first_estimates": dict(self.first),

@@ -279,7 +279,7 @@ class Diagnosis:
         """
         lines = [f"audit: {r['run']}: {line}" for r in self.audit for line in r["contradicted"]]
         if self.sensor_faults is not None:
-            lines += [f"sensor fault, decided from the data: {line}" for line in self.sensor_faults.lines()]
+            lines += self.sensor_faults.said()
         return lines
 
     def to_json(self) -> dict:

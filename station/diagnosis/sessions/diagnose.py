@@ -244,7 +244,7 @@ def audit_said(cases, faults) -> list[str]:
             where.setdefault(line, []).append(case.name)
     out = [f"audit: {len(names)} of {len(cases)} runs: {line}" if len(names) > 1 else
            f"audit: {names[0]}: {line}" for line, names in where.items()]
-    return out + [f"sensor fault, decided from the data: {line}" for line in faults.lines()]
+    return out + faults.said()
 
 
 def diagnose_sessions(sessions: Sequence[SessionLogs], model=None, progress: Callable[[str], None] | None = None,
@@ -293,8 +293,8 @@ def _diagnose_sessions(sessions, model, say, bench: Bench, max_samples, simulate
     # mounted the other way in one session only)
     faults = [decide_faults([sensor_evidence(cases[i].run, base) for i in g]) for g in layout.groups]
     for name, f, g in zip(loaded.names, faults, layout.groups):
-        for line in f.lines():
-            say(f"{name}: sensor fault, decided from the data: {line}")
+        for line in f.said():
+            say(f"{name}: {line}")
         for i in g if "accel_offset" in f.effects else ():
             keep_bias(cases[i])
     ev = Evaluator(cases, base, simulate or simulate_cut,
