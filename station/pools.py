@@ -17,9 +17,11 @@ whatever the workers are doing:
   process before the kill, so the pool's own thread fails every pending one without an
   ``InvalidStateError``;
 - a worker that dies on its own (killed from outside, out of memory, crashed) breaks the whole
-  pool: every task not yet finished fails with ``BrokenProcessPool``. :func:`results` says it in
-  one line (:class:`WorkerLost`, exit code 1); :func:`as_finished`'s caller sees it per future
-  (:func:`lost`) and may run those tasks again in a new pool (``station survey``).
+  pool: every task not yet finished fails with ``BrokenProcessPool``. :func:`results` and
+  :func:`submit_all` say it in one line (:class:`WorkerLost`, exit code 1); :func:`as_finished`'s
+  caller sees it per future (:func:`lost`) and may run those tasks again in a new pool
+  (``station survey``). A signal sent to the process group kills the workers as it reaches the
+  main process: where the pool broke with a stop pending, the stop is raised, not the loss.
 
 The workers are started under :func:`station.signals.shielded`: a fork runs the at-fork hooks
 (logging's module lock is taken before and released after it), where a stop raised by the
@@ -169,10 +171,17 @@ def submit_all(pool, fn, tasks: Iterable[tuple]) -> list[cf.Future]:
     ------
     station.signals.StopSignal
         A signal arrived during the submissions (raised after them; the caller's pool is
-        abandoned as for any stop).
+        abandoned as for any stop), also when it killed a worker and so broke the pool
+        mid-submission (a process group's SIGTERM reaches the workers too).
+    WorkerLost
+        A worker process died during the submissions, no signal pending (one line, exit code 1).
     """
-    with shielded():
-        return [pool.submit(fn, *task) for task in tasks]
+    try:
+        with shielded():
+            return [pool.submit(fn, *task) for task in tasks]
+    except BrokenProcessPool:  # the block's own error: a stop held meanwhile is the cause, and comes first
+        check_stop()
+        raise WorkerLost() from None
 
 
 def _wait(futures: Iterable[cf.Future], return_when: str) -> tuple[set, set]:
@@ -203,13 +212,14 @@ def results(futures: Sequence[cf.Future]) -> list[Any]:
     station.signals.StopSignal
         A signal arrived while waiting (within :data:`POLL_S`); nothing is cancelled here.
     WorkerLost
-        A worker process died and broke the pool (one line, exit code 1).
+        A worker process died and broke the pool (one line, exit code 1), no signal pending.
     """
     out = []
     for f in futures:
         if not f.done():
             _wait([f], cf.ALL_COMPLETED)
         if lost(f):
+            check_stop()  # a signal that killed the worker too: the stop is what happened
             raise WorkerLost() from None
         out.append(f.result())
     return out

@@ -343,6 +343,53 @@ def test_a_stop_held_by_shielded_is_raised_as_the_block_ends():
             check_stop()
 
 
+class _BreaksOnSubmit:
+    """A pool whose worker dies at the second submission, killed by ``sig`` (None: on its own)."""
+
+    def __init__(self, sig):
+        self.sig, self.n = sig, 0
+
+    def submit(self, fn, *args):
+        import concurrent.futures as cf
+        from concurrent.futures.process import BrokenProcessPool
+
+        self.n += 1
+        if self.n < 2:
+            return cf.Future()
+        if self.sig is not None:
+            os.kill(os.getpid(), self.sig)
+            time.sleep(0.05)  # the handler ran (held by shielded)
+        raise BrokenProcessPool("A child process terminated abruptly")
+
+
+@pytest.mark.parametrize("sig", [signal.SIGTERM, signal.SIGINT, None])
+def test_a_pool_broken_by_the_stop_itself_stops_and_one_broken_alone_is_a_lost_worker(sig):
+    # a process group's SIGTERM kills the workers as it reaches the main process: the pool broke
+    # mid-submission while shielded held the stop, and a traceback of BrokenProcessPool came out
+    # of `station tune` (CI, test_tune_stops_its_worker_processes_at_once_without_a_traceback)
+    import concurrent.futures as cf
+    from concurrent.futures.process import BrokenProcessPool
+
+    from station.pools import WorkerLost, results, submit_all
+    from station.signals import shielded
+
+    with StopSignals():
+        with pytest.raises(StopSignal if sig is not None else WorkerLost) as caught:
+            submit_all(_BreaksOnSubmit(sig), print, [(1,), (2,), (3,)])
+        if sig is not None:
+            assert caught.value.signum == sig
+    # the same order where the results are awaited: a broken future with a stop pending
+    broken = cf.Future()
+    broken.set_exception(BrokenProcessPool("A child process terminated abruptly"))
+    with StopSignals():
+        if sig is not None:  # a stop that arrived earlier, raised once and still pending
+            with pytest.raises(StopSignal), shielded():
+                os.kill(os.getpid(), sig)
+                time.sleep(0.05)
+        with pytest.raises(StopSignal if sig is not None else WorkerLost):
+            results([broken])
+
+
 class _RaisesStopWhenCollected:
     def __del__(self):
         raise StopSignal(signal.SIGTERM)
