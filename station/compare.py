@@ -146,7 +146,7 @@ def compare_run(path, plant) -> RunComparison:
             (eo, es), (fo, fs) = THESIS_TABLE[name]
             exp, fem = StepMetrics(eo, es), StepMetrics(fo, fs)
     return RunComparison(str(path), name, step, rig, model, exp, fem, fits, data, pred, notes,
-                         source=source, outcome=log.outcome, controller_source=run.source, audit=run.audit)
+                         source=source, outcome=log.outcome, controller_source=run.source, audit=run.audit_for(plant))
 
 
 def format_comparison(c: RunComparison) -> str:

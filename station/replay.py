@@ -207,6 +207,7 @@ def replay(path: str | Path, model=True, n_elements: int | None = None) -> Repla
         from station.plant.model import as_model  # lazy: start-up time (the FEM, loaded only when a model runs)
 
         the_model = as_model(None if model is True or not want_model else model, n_elements)
+        report.audit = run.audit_for(the_model)  # the sensors' values the model simulates with
     if run.held is not None:
         _beam_test(report, run, the_model)
     elif want_model and len(run):

@@ -284,6 +284,34 @@ def test_one_runs_signs_are_its_audit_and_replay_and_compare_use_them(tmp_path, 
     assert rep.fit_pct["accel"] > min(0.5 * healthy, 40.0), (rep.fit_pct, healthy)
 
 
+@pytest.mark.parametrize("held, said", [
+    (-1.2, "accel_gain -1.2, the model's; this run alone gives "),  # a diagnosis's session value
+    (None, "the accelerometer reads the other way (accel_gain "),   # the nominal model: the run's own
+    (0.9, "the accelerometer reads the other way (accel_gain "),    # a positive gain: no sign held
+])
+def test_a_comparison_quotes_the_gain_it_simulates_with(tmp_path, held, said):
+    """A model a diagnosis saved holds its session's accelerometer gain; replay and compare
+    simulate with it (never the run's own decision on top: :meth:`LoggedRun.found_faults`),
+    so their audit line says that gain, this run's own estimate beside it. Before, the line
+    quoted the run's estimate (-1.67 on the third session's replica) beside a model at -1.20."""
+    from station.compare import compare_run, format_comparison
+
+    path = write_case(tmp_path, case_effects("accel_reversed", 1), 1)[3]
+    run = LoggedRun.from_path(path)
+    own = run.sensors.effects["accel_gain"]
+    assert own < 0 and f"{own:.3g}" != "-1.2"
+    model = load_model("tmm-fit") if held is None else load_model("tmm-fit").with_effects({"accel_gain": held})
+    cmp, rep = compare_run(path, model), replay(path, model=model)
+    for lines in (cmp.audit.lines(), rep.audit.lines(), format_comparison(cmp).splitlines()):
+        (line,) = [x for x in lines if "the accelerometer reads" in x]
+        assert said in line, line
+        if held is not None and held < 0:
+            assert line.endswith(f"gives {own:.3g})"), line
+        else:
+            assert f"accel_gain {own:.3g})" in line, line
+    assert run.audit.lines() == LoggedRun.from_path(path).audit.lines()  # the run's own audit as it was
+
+
 @pytest.mark.parametrize("gain", [-1.2, 1.0])
 @pytest.mark.parametrize("seed", [0, 2])
 def test_a_sweep_through_a_mode_the_model_misplaces_still_decides_the_accelerometers_sign(tmp_path, gain, seed):

@@ -16,7 +16,7 @@ from station.logged.accelerometer import ON_THE_TIP, Mounting, decide_mounting, 
 from station.logged.audit import (ACCEL_CLAIM, Audit, AuditClaim, TimeBase, accel_claims, alignment_claim,
                                   file_kp_claims, reference_claims, time_base)
 from station.logged.controller import ControllerId, describe_controller, identify_controller
-from station.logged.sensors import NO_FAULTS, SensorFaults, decide_faults, sensor_evidence
+from station.logged.sensors import NO_FAULTS, REFINED_BY_MODEL, SensorFaults, decide_faults, sensor_evidence
 from station.logged.simulate import ModelRun, compared_theta, simulate_log
 from station.logged.reference import Reference, classify_reference
 from station.logged.start import Start, start_claims
@@ -136,8 +136,32 @@ class LoggedRun:
         claims += self._accel_claims
         if self.mounting.claim is not None:
             claims.append(self.mounting.claim)
-        claims += self.sensors.claims
-        return Audit(tuple(claims), cid.source)
+        return Audit(tuple(claims) + self.sensors.claims, cid.source)
+
+    def audit_for(self, model) -> Audit:
+        """:attr:`audit` as said beside a model: where the model holds the sensors' signs and
+        scales of its own (one a diagnosis saved, :meth:`found_faults`), a reversed
+        accelerometer's claim says the gain the model simulates with, this run's own estimate
+        beside it (:meth:`station.logged.sensors.SensorFaults.refined`), so a comparison never
+        quotes one gain in its audit and simulates with another.
+
+        Parameters
+        ----------
+        model : station.plant.model.Model or station.plant.DiscretePlant
+
+        Returns
+        -------
+        Audit
+        """
+        held = model.effect_dict() if hasattr(model, "effect_dict") else {}
+        if not any(k in held for k in SENSOR_SIGNS):
+            return self.audit
+        faults = self.sensors.refined(held, by=REFINED_BY_MODEL)
+        if faults is self.sensors:
+            return self.audit
+        audit = self.audit  # its claims end with this run's sensors' (above)
+        return Audit(audit.claims[:len(audit.claims) - len(self.sensors.claims)] + faults.claims,
+                     audit.controller_source)
 
     @cached_property
     def _accel_claims(self) -> list[AuditClaim]:

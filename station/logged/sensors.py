@@ -113,6 +113,13 @@ ACCEL_HEADER = "a: the tip's acceleration with the model's sign"
 SIGN_HEADERS = (THETA_HEADER, ACCEL_HEADER)
 """The headers of the signs' and scales' "columns" claims: a diagnosis decides them over all its
 runs and says that decision, not each run's (:attr:`station.logged.LoggedRun.sensors`)."""
+OFFSET_HEADER = "a: zero at rest (the rig zeroes it before a test)"
+DRIFT_HEADER = "a: no drift over a run"
+"""The headers of the accelerometer's bias and drift claims (decided over a session's runs)."""
+REFINED_BY_FIT = "; the decision's first estimate {first}, refined by the fit"
+REFINED_BY_MODEL = ", the model's; this run alone gives {first}"
+"""How a reversed accelerometer's claim says a gain found otherwise beside the data's own
+estimate: a diagnosis's fit refines it; a saved model holds its session's."""
 
 ENCODER_SCALES = (0.25, 0.5, 2.0, 4.0, 8.0, 16.0)
 """Encoder resolutions decided, relative to the model's 1024 counts per revolution."""
@@ -305,16 +312,20 @@ class SensorFaults:
     to_fit: tuple = ()
     first: dict = field(default_factory=dict)
 
-    def refined(self, values) -> SensorFaults:
+    def refined(self, values, by: str = REFINED_BY_FIT) -> SensorFaults:
         """The same faults holding the values a model holds: a diagnosis's fit refines a
         reversed accelerometer's gain beside the effects it accepts, and the record it reports
         (its lines, its JSON, the saved model) says the value the model holds, and the
-        decision's first estimate beside it where they differ.
+        decision's first estimate beside it where they differ. A run compared with a model
+        that holds its own (one a diagnosis saved) says the model's value the same way.
 
         Parameters
         ----------
         values : mapping of str to float
             The model's effects (e.g. the extended model's ``effect_dict()``).
+        by : str, default :data:`REFINED_BY_FIT`
+            How the accelerometer's claim says the two values, after the model's
+            (a format with ``{first}``; :data:`REFINED_BY_MODEL` beside a saved model).
 
         Returns
         -------
@@ -324,7 +335,11 @@ class SensorFaults:
         g, first = values.get("accel_gain"), self.effects.get("accel_gain")
         if g is None or first is None or not (g < 0 and first < 0) or f"{g:.3g}" == f"{first:.3g}":
             return self
-        return decide_faults(self.evidence, accel_gain=g)
+        return decide_faults(self.evidence, accel_gain=g, trends=self._trends, refined_by=by)
+
+    @property
+    def _trends(self) -> bool:
+        return any(c.header in (OFFSET_HEADER, DRIFT_HEADER) for c in self.claims)
 
     def lines(self) -> list[str]:
         """One line per contradicted claim, then the other wiring the same signs fit (never
@@ -358,7 +373,7 @@ NO_FAULTS = SensorFaults()
 
 
 def decide_faults(evidence: Sequence[SensorEvidence], accel_gain: float | None = None,
-                  trends: bool = True) -> SensorFaults:
+                  trends: bool = True, refined_by: str | None = None) -> SensorFaults:
     """Decide the sensors' signs and scales from the runs' evidence (module docstring).
 
     Parameters
@@ -374,6 +389,9 @@ def decide_faults(evidence: Sequence[SensorEvidence], accel_gain: float | None =
         (:attr:`station.logged.LoggedRun.sensors`): a model's a that is off in shape leaks
         into one run's fit of bias and slope (the thesis's lead + accelerometer step: −1.25
         counts and 0.98 counts per s), where a session's runs agreeing in sign do not.
+    refined_by : str, default :data:`REFINED_BY_FIT`
+        How the accelerometer's claim says ``accel_gain`` beside the first estimate (a
+        format with ``{first}``).
 
     Returns
     -------
@@ -445,10 +463,11 @@ def decide_faults(evidence: Sequence[SensorEvidence], accel_gain: float | None =
     bias_claim = drift_claim = None
     if trends:
         bias_claim = _trend_claim("accel_offset", [e.accel_bias for e in ev], OFFSET_COUNTS, effects,
-                                  "a: zero at rest (the rig zeroes it before a test)", "counts")
+                                  OFFSET_HEADER, "counts")
         drift_claim = _trend_claim("accel_drift", [e.accel_slope for e in ev], DRIFT_COUNTS_PER_S, effects,
-                                   "a: no drift over a run", "counts per s")
-    claims = [_theta_claim(s_th, th_cos, th_ratio, a_ratio, effects), _accel_claim(s_a, a_cos, effects, first),
+                                   DRIFT_HEADER, "counts per s")
+    claims = [_theta_claim(s_th, th_cos, th_ratio, a_ratio, effects),
+              _accel_claim(s_a, a_cos, effects, first, refined_by or REFINED_BY_FIT),
               bias_claim, drift_claim]
     if hint:
         claims.append(AuditClaim("columns", "θ: 1024 encoder counts per revolution", "undecided", "unchecked", hint))
@@ -498,7 +517,7 @@ def _theta_claim(sign: int, cosines, th_ratio, a_ratio, effects) -> AuditClaim |
     return AuditClaim("columns", header, data, "contradicted", evidence)
 
 
-def _accel_claim(sign: int, cosines, effects, first) -> AuditClaim | None:
+def _accel_claim(sign: int, cosines, effects, first, refined_by: str) -> AuditClaim | None:
     if not cosines:
         return None
     header = ACCEL_HEADER
@@ -509,7 +528,7 @@ def _accel_claim(sign: int, cosines, effects, first) -> AuditClaim | None:
         return AuditClaim("columns", header, "undecided", "unchecked", evidence)
     g = effects.get("accel_gain", 1.0)
     if g < 0:
-        value = f"accel_gain {g:.3g}" + (f"; the decision's first estimate {first['accel_gain']:.3g}, refined by the fit"
+        value = f"accel_gain {g:.3g}" + (refined_by.format(first=f"{first['accel_gain']:.3g}")
                                          if "accel_gain" in first else "")
         return AuditClaim("columns", header, f"the accelerometer reads the other way ({value})", "contradicted",
                           evidence)
