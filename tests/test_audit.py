@@ -182,6 +182,45 @@ def test_integer_recursion_simulated_as_the_lab_ran_it(tmp_path):
     np.testing.assert_array_equal(pred["theta"], theta)
 
 
+@pytest.mark.parametrize("stored", ["trunc", "round"])
+def test_the_rigs_lead_logged_as_the_whole_counts_it_sent(rig_data, tmp_path, stored):
+    """Lab software that recurses on the float and logs the whole count it sends: the thesis's
+    lead step with each v truncated (or rounded) as such software would. The header's law
+    reproduces every logged v exactly with that recursion, said in the audit and in the
+    notes, and the model run sends what the log holds; before, replay said "does NOT
+    reproduce the logged v: max |dv| = 0.999 counts" and used the float law."""
+    import math
+
+    from station.control.compensator import SENT
+    from station.rounding import half_away
+
+    src = rig_data / "step_response_Gth_comp_no_accel_FB_amp_100_duration_1000_SLFR_RTP_Motor_Comp_Gth.txt"
+    q = math.trunc if stored == "trunc" else half_away
+    lines = src.read_text().splitlines()
+    names = [x for x in lines if x.startswith("#")][-1][1:].split("\t")
+    col = names.index("v")
+    out = []
+    for line in lines:
+        cells = line.split("\t")
+        if not line.startswith("#") and len(cells) > col:
+            cells[col] = str(int(q(float(cells[col]))))
+        out.append("\t".join(cells))
+    path = tmp_path / src.name
+    path.write_text("\n".join(out) + "\n")
+    run = LoggedRun.from_path(path)
+    assert run.controller.recursion == f"float-{stored}" and f"float-{stored}" in SENT
+    assert run.reproduced and run.max_abs_dv == 0.0 and run.alignment == 1
+    assert run.audit.controller_source == "header" and run.audit.lines() == []
+    said = {"trunc": "truncated", "round": "rounded"}[stored]
+    assert any(f"its recursion on the float, the command sent as its {said} integer" in n for n in run.notes)
+    logged = np.asarray(run.data["v"], float)
+    np.testing.assert_array_equal(run.replayed.v_replayed, logged)
+    sim = run.simulate(DiscretePlant(), sensors=False).prediction
+    assert np.all(sim["v"] == np.round(sim["v"]))  # the model is sent whole counts as the rig was
+    float_law = LoggedRun.from_path(src)
+    assert float_law.controller.recursion == "none" and float_law.max_abs_dv < 1e-6  # the rig's own log: the float
+
+
 def _rewrite(src, dst, column, scale, digits=None):
     lines = src.read_text().splitlines()
     head = [x for x in lines if x.startswith("#")]

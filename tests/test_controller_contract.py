@@ -140,11 +140,12 @@ def test_nan_is_a_controller_fault_in_simulate_and_in_the_loop_alike(tmp_path):
     assert report.result.message.startswith(str(caught.value))
 
 
-@pytest.mark.parametrize("recursion", ["trunc", "round"])
+@pytest.mark.parametrize("recursion", ["trunc", "round", "float-trunc", "float-round"])
 @pytest.mark.parametrize("alignment", [0, 1])
 def test_an_integer_recursion_runs_compiled_as_its_own_step_runs_it(recursion, alignment):
-    # the lab's software stores the whole-count command and recurses on it; the compiled
-    # loop (store mode) and the compensator's own step() (Python loop) must agree bit for bit
+    # the lab's software stores the whole-count command and recurses on it (or recurses on
+    # the float and sends its whole count); the compiled loop (store mode) and the
+    # compensator's own step() (Python loop) must agree bit for bit
     from station.control import Compensator, DiscreteTF
     from station.control.reference import step_reference
     from station.plant import simulate

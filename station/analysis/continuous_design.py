@@ -57,6 +57,27 @@ def on_integer(recursion: str) -> str:
     """
     return f"on the {STORED[recursion]} integer"
 
+
+def recursion_words(recursion: str) -> str:
+    """How a report says a quantized recursion, after a law's text:
+    ``"its recursion on the truncated integer command"`` (the integer remembered) or
+    ``"its recursion on the float, the command sent as its truncated integer"`` (the float
+    remembered, :data:`station.control.compensator.SENT`).
+
+    Parameters
+    ----------
+    recursion : str
+        A key of :data:`STORED`, or "float-" and one.
+
+    Raises
+    ------
+    KeyError
+        Any other recursion ("none" has no integer).
+    """
+    if recursion.startswith("float-"):
+        return f"its recursion on the float, the command sent as its {STORED[recursion[6:]]} integer"
+    return f"its recursion {on_integer(recursion)} command"
+
 MAX_ALTERNATIVES = 3
 """Most equally simple designs named beside a recognised one (:attr:`ContinuousDesign.alternatives`)."""
 

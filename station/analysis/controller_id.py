@@ -17,7 +17,9 @@ Each at the rig's clamp (±200, or the DAC's when v exceeds it) or the log's own
 |v| sits at on several rows), and with the recursion as lab software ran it
 (:data:`station.control.compensator.RECURSIONS`): on the float command, or, when every
 logged v is a whole count, on the stored integer (truncated toward zero or rounded), the
-integer then being the command: v[k] = sat(Q(Σ b_i e[k-i] - Σ a_j v[k-j])).
+integer then being the command: v[k] = sat(Q(Σ b_i e[k-i] - Σ a_j v[k-j])). A header's law
+is also checked on the float with its whole count sent (:data:`station.control.compensator.SENT`,
+:func:`variant_of`); such a law is not inferred (its float history is not in the log).
 
 Coefficients: for a float recursion, linear least squares over the unclamped rows (the
 recursion runs on the clamped v, so the regression is exact there). For an integer
@@ -46,8 +48,9 @@ import numpy as np
 
 from station.analysis.accel_law import AccelFeedback, accel_feedback
 from station.analysis.continuous_design import (STORED, ContinuousDesign, alternatives_phrase, nicest_between,
-                                                on_integer, recognize, to_continuous)
+                                                recognize, recursion_words, to_continuous)
 from station.analysis.law_rows import BOUNDARY, TOLERANCE, LawRows, tie_rows
+from station.control.compensator import SENT
 from station.control import DAC_LIMIT, Compensator, DiscreteTF, OpenLoop, lead_controller  # DAC_LIMIT: the clamp assumed when v exceeds the rig's ±200
 from station.control.rerun import ALIGNMENTS, AlignmentFit, detect_alignment
 from station.rig import CLAMP, DT
@@ -122,7 +125,7 @@ def with_recursion(controller: Compensator, recursion: str) -> Compensator:
     Parameters
     ----------
     controller : Compensator
-    recursion : {"none", "trunc", "round"}
+    recursion : {"none", "trunc", "round", "float-trunc", "float-round"}
     """
     spec = {**controller.spec, "recursion": recursion}
     if recursion == "none":
@@ -193,7 +196,7 @@ def whole_counts(v) -> bool:
 def _variants(controller, v):
     yield controller
     if isinstance(controller, Compensator) and getattr(controller, "recursion", "none") == "none" and whole_counts(v):
-        for q in STORED:
+        for q in (*STORED, *SENT):
             yield with_recursion(controller, q)
 
 
@@ -219,7 +222,8 @@ def variant_of(controller, u, theta, a, v, alignments=ALIGNMENTS, skipped=None,
     (controller, AlignmentFit or None, tuple of int)
         The controller itself or, when every logged v is a whole count and it does not
         reproduce them as it is, a copy with its recursion on the stored integer
-        (:func:`with_recursion`: truncated, then rounded): the first that reproduces every v
+        (:func:`with_recursion`: truncated, then rounded), then on the float with its whole
+        count sent (truncated, then rounded): the first that reproduces every v
         (to :data:`TOLERANCE`), else the closest; the fit is None without rows.
     """
     best = None
@@ -288,7 +292,7 @@ def _law_text(order: int, c: np.ndarray, design: ContinuousDesign | None, dt: fl
         text = (f"linear compensator e -> v of order {order}, num {fmt(c[:order + 1])}, "
                 f"den {fmt(np.concatenate(([1.0], c[order + 1:])))} (z^-1)")
     if recursion != "none":  # before the alternatives: theirs is said where it differs
-        text += f", its recursion {on_integer(recursion)} command"
+        text += f", {recursion_words(recursion)}"
     if design is not None and design.alternatives:  # the log does not tell them apart: said, never hidden
         text += alternatives_phrase([(d.text, d.method, d.recursion) for d in design.alternatives], design.method,
                                     design.more)

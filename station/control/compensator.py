@@ -15,10 +15,16 @@ from station.control.tf import DiscreteTF
 from station.rig import CLAMP
 from station.rounding import half_away, toward_zero
 
-RECURSIONS = {"none": None, "trunc": toward_zero, "round": half_away}
+RECURSIONS = {"none": None, "trunc": toward_zero, "round": half_away,
+              "float-trunc": toward_zero, "float-round": half_away}
 """What a compensator's recursion remembers of its command: "none" the float; "trunc" or
 "round" the whole DAC count the software stored (toward zero; halves away from zero), which
-is then the command itself."""
+is then the command itself; "float-trunc" or "float-round" the float, the command sent (and
+stored) being its whole count (:data:`SENT`)."""
+
+SENT = ("float-trunc", "float-round")
+"""Recursions on the float whose command is the whole count (lab software that logs what it
+sends): the recursion remembers the clamped float, the command is Q(that)."""
 
 
 def saturate(v: float, limit: float | None) -> float:
@@ -53,9 +59,10 @@ class Compensator:
         JSON-able description for log headers (kind, designs, z coefficients, limit, shaper).
     shaper : ReferenceShaper or None
         Shapes the reference before anything else (None: u as given).
-    recursion : {"none", "trunc", "round"}
+    recursion : {"none", "trunc", "round", "float-trunc", "float-round"}
         The command the Gth recursion remembers (:data:`RECURSIONS`): the float, or the whole
-        DAC count lab software stored (the command is then that integer).
+        DAC count lab software stored (the command is then that integer); or the float with
+        the whole count as the command (:data:`SENT`).
 
     Raises
     ------
@@ -113,10 +120,13 @@ class Compensator:
         e = theta_d_hat - theta
         gth = self.gth
         v = gth.output(e)
-        if self._store is not None:  # the integer the lab's software stored, then its clamp
+        sent = self.recursion in SENT
+        if self._store is not None and not sent:  # the integer the lab's software stored, then its clamp
             v = self._store(v)
         v = saturate(v, self.limit)
         gth.commit(e, v)
+        if sent:  # the float remembered, its whole count sent
+            v = self._store(v)
         return v, theta_d_hat
 
     def prime(self, u: float, theta: float, a: float, v: float) -> tuple[float, float]:

@@ -149,7 +149,8 @@ def controller_from_spec(spec: dict[str, Any]) -> Compensator | OpenLoop:
 
     Uses the z coefficients as recorded (JSON floats round-trip exactly), the reference
     shaper's delays and amplitudes when the spec has a ``shaper``, and the integer the
-    recursion stored when it has a ``recursion`` ("trunc" or "round").
+    recursion stored when it has a ``recursion`` ("trunc" or "round"; "float-trunc" or
+    "float-round": the float remembered, its whole count sent).
 
     Parameters
     ----------

@@ -19,7 +19,7 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
-from station.analysis.continuous_design import on_integer
+from station.analysis.continuous_design import recursion_words
 from station.analysis.controller_id import (
     PREFERRED_ALIGNMENT,
     TOLERANCE,
@@ -244,7 +244,7 @@ def describe_controller(controller) -> str:
         text += f", with {ga_text(ga, spec.get('dt', DT))}"
     recursion = getattr(controller, "recursion", "none")
     if recursion != "none":
-        text += f", its recursion {on_integer(recursion)} command"
+        text += f", {recursion_words(recursion)}"
     return text
 
 
@@ -367,8 +367,8 @@ def identify_controller(log: RunLog, skipped=None) -> ControllerId:
         if fit.max_abs_dv <= TOLERANCE:
             at = f" at alignment {fit.alignment}" if is_closed_loop(used) else ""
             if used is not controller:
-                notes.append(f"the header's controller reproduces the logged v with its recursion "
-                             f"{on_integer(used.recursion)} command (the lab's software stored it)")
+                notes.append(f"the header's controller reproduces the logged v with "
+                             f"{recursion_words(used.recursion)} (the lab's software stored it)")
             return ControllerId(used, "header", notes, fit, AuditClaim(
                 "controller", said, describe_controller(used) + at, "confirmed",
                 f"replays every logged v {_how_close(fit.max_abs_dv)}{at}"), exact, cut=cut)

@@ -220,6 +220,11 @@ def _loop(lam, bm, bp, cm, co, gw_v, gw_p, substeps, z0, u, v_open, use_v_open, 
                 vk = -limit
             if closed:
                 g_acc = _commit(gnum, gden, gx, gy, e, vk)
+                # the float remembered, its whole count sent (Compensator's SENT recursions)
+                if store_mode == 3:
+                    vk = _half_away(vk)
+                elif store_mode == 4:
+                    vk = float(math.trunc(vk))
         v[k] = vk
         thd[k] = td
         # what the device applies: whole DAC counts (the controller keeps the unrounded v)

@@ -47,9 +47,10 @@ def _plant_parts(model, dt, substeps):
     return form, KernelEffects(), form.vinv @ model.x.astype(complex), getattr(model, "dt", DT)
 
 
-STORE_MODES = {"none": 0, "round": 1, "trunc": 2}
+STORE_MODES = {"none": 0, "round": 1, "trunc": 2, "float-round": 3, "float-trunc": 4}
 """A compensator's recursion (:data:`station.control.compensator.RECURSIONS`) as the compiled
-loop's store mode: the float, the whole count rounded half away from zero, or truncated."""
+loop's store mode: the float, the whole count rounded half away from zero, or truncated; or
+the float remembered and its whole count sent, rounded or truncated."""
 
 
 def _python_loop(stepper, controller, u, d, v_open, quantize, cmd_mode, limit):
