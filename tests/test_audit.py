@@ -76,7 +76,7 @@ def test_file_name_claims():
 
 BLIND = [("lie:open_loop", 0), ("lie:open_loop", 1), ("lie:p_kp", 0), ("lie:lead_pole", 2), ("int:trunc_d0", 1),
          ("int:round_d1", 2), ("session", 0), ("session+coulomb_friction", 1), ("honest:p", 3),
-         ("honest:lead_int", 0),
+         ("honest:lead_int", 0), ("honest:lead_sent", 0), ("honest:lead_sent+coulomb_friction", 1),
          # honest headers on what they state: a P header with no clamp over a ±150 clamp; leads printed
          # to 8 digits whose integer recursion the printing moves by a count (were "contradicted")
          ("honest:p", 8), ("honest:lead_int", 6), ("honest:lead_int", 7),

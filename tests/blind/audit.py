@@ -21,7 +21,9 @@ accelerometer feedback θ̂_d = u − Ga(a) (DESIGN.md's Ga(s), its gain and fre
 under a header that leaves Ga out (open loop, or the lead alone), its recursion on the float
 command (as the thesis's software ran it), at either alignment; the lab's third session ("session":
 an open-loop header on a lead run on the truncated integer at alignment 0); truthful headers
-the audit must confirm ("honest:p", "honest:lead_int"). A class joined with "+" to
+the audit must confirm ("honest:p", "honest:lead_int"; "honest:lead_sent": a lead whose
+recursion runs on the float while the whole count it sends is logged, "float-trunc" or
+"float-round"). A class joined with "+" to
 "coulomb_friction" hides that friction too (drawn as :func:`tests.blind.cases.draw` draws it).
 """
 
@@ -42,7 +44,7 @@ N = 2000
 """Samples per run (4 s at 500 Hz)."""
 
 CLASSES = ("lie:open_loop", "lie:p_kp", "lie:lead_pole", "lie:accel_fb", "int:trunc_d0", "int:trunc_d1",
-           "int:round_d0", "int:round_d1", "session", "honest:p", "honest:lead_int")
+           "int:round_d0", "int:round_d1", "session", "honest:p", "honest:lead_int", "honest:lead_sent")
 """The audit's blind classes, in the validation table's order."""
 
 PHYSICAL = ("coulomb_friction",)
@@ -79,7 +81,7 @@ class AuditCase:
         The lead's continuous design (descending powers of s), Tustin at 0.002 s.
     design_text : str
         The design as a person writes it, e.g. "3(s+13)/(s+20)".
-    recursion : {"none", "trunc", "round"}
+    recursion : {"none", "trunc", "round", "float-trunc", "float-round"}
     alignment : int
     limit : float
         The clamp, DAC counts.
@@ -181,6 +183,9 @@ def draw_case(name: str, seed: int) -> AuditCase:
     if base == "honest:p":
         return AuditCase(**{**common, "header_kp": kp}, **p_law, recursion=str(rng.choice(["none", "trunc"])),
                          alignment=int(rng.integers(0, 2)), header="p")
+    if base == "honest:lead_sent":
+        return AuditCase(**common, **lead, recursion=str(rng.choice(["float-trunc", "float-round"])),
+                         alignment=int(rng.integers(0, 2)), header="lead")
     return AuditCase(**common, **lead, recursion=str(rng.choice(["trunc", "round"])),
                      alignment=int(rng.integers(0, 2)), header="lead")  # honest:lead_int
 
@@ -197,7 +202,8 @@ def _quantize(x: float, recursion: str) -> float:
 
 
 class LabController:
-    """The lab's recursion: y = sat(Q(Σ b x − Σ a y)), its history the stored y."""
+    """The lab's recursion: y = sat(Q(Σ b x − Σ a y)), its history the stored y; or, with a
+    "float-" recursion, y = sat(Σ b x − Σ a y) remembered and Q(y) sent (and logged)."""
 
     def __init__(self, num, den, limit: float, recursion: str):
         self.b, self.a = [float(c) for c in num], [float(c) for c in den]
@@ -208,10 +214,11 @@ class LabController:
     def step(self, e: float) -> float:
         self.x = [e] + self.x[:-1]
         acc = sum(b * x for b, x in zip(self.b, self.x)) - sum(a * y for a, y in zip(self.a[1:], self.y))
-        y = min(max(_quantize(acc, self.recursion), -self.limit), self.limit)
+        sent = self.recursion.startswith("float-")
+        y = min(max(acc if sent else _quantize(acc, self.recursion), -self.limit), self.limit)
         if self.y:
             self.y = [y] + self.y[:-1]
-        return y
+        return _quantize(y, self.recursion[6:]) if sent else y
 
 
 def reference(case: AuditCase, n: int = N) -> np.ndarray:
