@@ -77,6 +77,9 @@ def test_file_name_claims():
 BLIND = [("lie:open_loop", 0), ("lie:open_loop", 1), ("lie:p_kp", 0), ("lie:lead_pole", 2), ("int:trunc_d0", 1),
          ("int:round_d1", 2), ("session", 0), ("session+coulomb_friction", 1), ("honest:p", 3),
          ("honest:lead_int", 0), ("honest:lead_sent", 0), ("honest:lead_sent+coulomb_friction", 1),
+         # a lead on the float logging the whole count it sent, under an open-loop header: a step
+         # whose least squares on the counts puts the pole 6 % off; a truncated one
+         ("lie:sent", 2), ("lie:sent+coulomb_friction", 4),
          # honest headers on what they state: a P header with no clamp over a ±150 clamp; leads printed
          # to 8 digits whose integer recursion the printing moves by a count (were "contradicted")
          ("honest:p", 8), ("honest:lead_int", 6), ("honest:lead_int", 7),
@@ -183,12 +186,15 @@ def test_integer_recursion_simulated_as_the_lab_ran_it(tmp_path):
 
 
 @pytest.mark.parametrize("stored", ["trunc", "round"])
-def test_the_rigs_lead_logged_as_the_whole_counts_it_sent(rig_data, tmp_path, stored):
+@pytest.mark.parametrize("lying", [False, True])
+def test_the_rigs_lead_logged_as_the_whole_counts_it_sent(rig_data, tmp_path, stored, lying):
     """Lab software that recurses on the float and logs the whole count it sends: the thesis's
     lead step with each v truncated (or rounded) as such software would. The header's law
     reproduces every logged v exactly with that recursion, said in the audit and in the
     notes, and the model run sends what the log holds; before, replay said "does NOT
-    reproduce the logged v: max |dv| = 0.999 counts" and used the float law."""
+    reproduce the logged v: max |dv| = 0.999 counts" and used the float law. Under an
+    open-loop header the data's law is the thesis's design, found from the counts alone
+    (before: "no law found")."""
     import math
 
     from station.control.compensator import SENT
@@ -205,14 +211,23 @@ def test_the_rigs_lead_logged_as_the_whole_counts_it_sent(rig_data, tmp_path, st
         if not line.startswith("#") and len(cells) > col:
             cells[col] = str(int(q(float(cells[col]))))
         out.append("\t".join(cells))
-    path = tmp_path / src.name
+    said = {"trunc": "truncated", "round": "rounded"}[stored]
+    if lying:
+        out = ["#SLFR RTP OL_Test"] + [x for x in out if not x.startswith("#")]
+        out.insert(1, "#" + "\t".join(names))
+    path = tmp_path / ("ol_SLFR_RTP_OL_Test.txt" if lying else src.name)
     path.write_text("\n".join(out) + "\n")
     run = LoggedRun.from_path(path)
     assert run.controller.recursion == f"float-{stored}" and f"float-{stored}" in SENT
     assert run.reproduced and run.max_abs_dv == 0.0 and run.alignment == 1
-    assert run.audit.controller_source == "header" and run.audit.lines() == []
-    said = {"trunc": "truncated", "round": "rounded"}[stored]
-    assert any(f"its recursion on the float, the command sent as its {said} integer" in n for n in run.notes)
+    if lying:
+        assert run.audit.controller_source == "inferred (header contradicted)"
+        assert run.audit.lines()[0] == (f"header: open loop; data: 20(s+2π·5)/(s+2π·20) (Tustin, 0.002 s), its "
+                                        f"recursion on the float, the command sent as its {said} integer at "
+                                        f"alignment 1, reproduces every logged v exactly")
+    else:
+        assert run.audit.controller_source == "header" and run.audit.lines() == []
+        assert any(f"its recursion on the float, the command sent as its {said} integer" in n for n in run.notes)
     logged = np.asarray(run.data["v"], float)
     np.testing.assert_array_equal(run.replayed.v_replayed, logged)
     sim = run.simulate(DiscretePlant(), sensors=False).prediction

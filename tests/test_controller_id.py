@@ -62,6 +62,56 @@ def test_integer_recursion_reproduced_exactly_and_its_design_recognised(method, 
     assert "truncated" in hit.law if recursion == "trunc" else "rounded" in hit.law
 
 
+@pytest.mark.parametrize("method", ["Tustin", "ZOH"])
+@pytest.mark.parametrize("stored", ["trunc", "round"])
+@pytest.mark.parametrize("d", [0, 1])
+def test_a_float_recursion_logged_as_the_whole_counts_it_sent_is_found(method, stored, d):
+    """Lab software that recurses on the float and logs (and sends) the whole count: its float
+    history is not in the log; the design is found from its poles and zeros (the law's own
+    float run fitted to the logged counts) and its gain from the rows' exact bounds."""
+    num, den = _scipy_law([3.0, 39.0], [1.0, 20.0], 0.002, method)  # 3(s+13)/(s+20)
+    lab = LabController(num, den, 200.0, f"float-{stored}")
+    u, theta, v = _closed_loop(lab.step, d)
+    assert np.all(v == np.round(v)) and np.max(np.abs(v)) == 200.0
+    hit = infer_controller(u, theta, v)
+    assert hit is not None and hit.max_abs_dv == 0.0 and d in hit.alignments
+    assert hit.recursion == f"float-{stored}" and hit.design.method == method
+    assert hit.design.text == "3(s+13)/(s+20)"
+    assert f"its recursion on the float, the command sent as its {'truncated' if stored == 'trunc' else 'rounded'} " \
+           "integer" in hit.law
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_the_sent_gain_interval_holds_exactly_the_gains_that_reproduce(seed):
+    """sent_gain_interval against the generator's lab recursion run at gains on both sides of
+    each end: inside (by a part in 10^6 of the width) every logged v is given, outside (by a
+    tenth of the width) some row differs; and the hidden gain is inside."""
+    from station.analysis.law_rows import sent_gain_interval
+
+    rng = np.random.default_rng(seed)
+    k, z = float(rng.choice([1.0, 1.5, 2.0, 3.0])), float(rng.integers(5, 30))
+    p = z + float(rng.integers(5, 60))
+    stored, d = str(rng.choice(["trunc", "round"])), int(rng.integers(0, 2))
+    num, den = _scipy_law([k, k * z], [1.0, p], 0.002, "Tustin")
+    u, theta, v = _closed_loop(LabController(num, den, 200.0, f"float-{stored}").step, d, seed=seed)
+    e = np.zeros(u.size)
+    e[d:] = u[d:] - theta[:u.size - d]
+    lo, hi = sent_gain_interval(e, v, d, 200.0, stored, (num / k)[None], den[None], np.array([k]))
+    lo, hi = float(lo[0]), float(hi[0])
+    assert lo <= k <= hi, (lo, k, hi)
+
+    def gives(gain):
+        lab = LabController(num / k * gain, den, 200.0, f"float-{stored}")
+        w = np.zeros(u.size)
+        for i in range(d, u.size):
+            w[i] = lab.step(e[i])
+        return np.array_equal(w, v)
+
+    width = hi - lo
+    assert gives(lo + 1e-6 * width) and gives(hi - 1e-6 * width)
+    assert not gives(lo - 0.1 * width) and not gives(hi + 0.1 * width)
+
+
 @pytest.mark.parametrize("kp, recursion, d", [(0.5, "trunc", 1), (1.2, "round", 0), (2.5, "trunc", 0), (0.37, "none", 1)])
 def test_p_with_any_gain(kp, recursion, d):
     lab = LabController([kp], [1.0], 200.0, recursion)

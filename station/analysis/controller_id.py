@@ -17,9 +17,10 @@ Each at the rig's clamp (±200, or the DAC's when v exceeds it) or the log's own
 |v| sits at on several rows), and with the recursion as lab software ran it
 (:data:`station.control.compensator.RECURSIONS`): on the float command, or, when every
 logged v is a whole count, on the stored integer (truncated toward zero or rounded), the
-integer then being the command: v[k] = sat(Q(Σ b_i e[k-i] - Σ a_j v[k-j])). A header's law
-is also checked on the float with its whole count sent (:data:`station.control.compensator.SENT`,
-:func:`variant_of`); such a law is not inferred (its float history is not in the log).
+integer then being the command: v[k] = sat(Q(Σ b_i e[k-i] - Σ a_j v[k-j])); or on the float
+with its whole count sent and logged (:data:`station.control.compensator.SENT`): a header's
+law is checked that way (:func:`variant_of`), and a continuous design is inferred that way
+when nothing simpler reproduces the log (:func:`_sent_design`).
 
 Coefficients: for a float recursion, linear least squares over the unclamped rows (the
 recursion runs on the clamped v, so the regression is exact there). For an integer
@@ -49,7 +50,7 @@ import numpy as np
 from station.analysis.accel_law import AccelFeedback, accel_feedback
 from station.analysis.continuous_design import (STORED, ContinuousDesign, alternatives_phrase, nicest_between,
                                                 recognize, recursion_words, to_continuous)
-from station.analysis.law_rows import BOUNDARY, TOLERANCE, LawRows, tie_rows
+from station.analysis.law_rows import BOUNDARY, TOLERANCE, LawRows, sent_gain_interval, tie_rows
 from station.control.compensator import SENT
 from station.control import DAC_LIMIT, Compensator, DiscreteTF, OpenLoop, lead_controller  # DAC_LIMIT: the clamp assumed when v exceeds the rig's ±200
 from station.control.rerun import ALIGNMENTS, AlignmentFit, detect_alignment
@@ -392,6 +393,17 @@ def infer_controller(u, theta, v, a=None, dt: float = DT, rig_limit: float = CLA
                                     order if cut else 0)
                     if hit is not None:
                         return hit
+    if len(recursions) > 1 and not cut:  # the float with its whole count sent: after every law the log holds
+        for order in range(1, MAX_ORDER + 1):
+            for d in alignments:
+                if d < 0:
+                    continue
+                e = _errors(u, theta, d)
+                for limit in _limits(v, rig_limit):
+                    hit = _sent_design(LawRows(e, v, d, order, limit), e, d, (u, theta, a, v), dt, rig_limit,
+                                       alignments, prefer)
+                    if hit is not None:
+                        return hit
     if cut or not np.any(a != a[0]) or whole_counts(v):  # Ga beside a recursion on the stored integer: not yet
         return None
     return _with_accel_feedback(u, theta, a, v, dt, rig_limit, alignments, prefer)
@@ -431,6 +443,90 @@ def _accepted(rows: LawRows, recursion: str, d: int, log, dt: float, rig_limit: 
     if ties:
         return IdentifiedController(ctl, d, 0.0, np.asarray(log[3], float).copy(), f"{law}, {ties} row(s) on a "
                                     f"quantization boundary as the lab's arithmetic decided them", design, (d,))
+    return None
+
+
+def _clamped_float(e: np.ndarray, c: np.ndarray, order: int, limit: float, d: int) -> np.ndarray:
+    """x[k] = sat(Σ b_i e[k-i] − Σ a_j x[k-j]) from rest at row d: what a recursion on the float remembers."""
+    num, den = c[:order + 1], c[order + 1:]
+    x = np.zeros(e.size)
+    for k in range(d, e.size):
+        acc = sum(num[i] * e[k - i] for i in range(order + 1) if k - i >= 0)
+        acc -= sum(den[j - 1] * x[k - j] for j in range(1, order + 1) if k - j >= d)
+        x[k] = min(max(acc, -limit), limit)
+    return x
+
+
+def _output_error(e: np.ndarray, v: np.ndarray, d: int, order: int, limit: float, c: np.ndarray,
+                  stored: str) -> np.ndarray:
+    """The law whose own float run is closest to the middle of the floats the logged whole
+    counts allow (``stored``: v + sign(v)/2 truncated, v rounded; least squares on the rows
+    inside the clamp, from ``c``): least squares with the logged integers as the history
+    biases the poles by their rounding (a lead's pole 6 % off, past the round number's
+    neighbours), the law's own history does not. ``c`` itself when the fit fails."""
+    from scipy.optimize import least_squares  # lazy: start-up time
+
+    inside = np.abs(v[d:]) < limit
+    if not np.any(inside):
+        return c
+    middle = v[d:] + (0.5 * np.sign(v[d:]) if stored == "trunc" else 0.0)
+
+    def resid(p):
+        return (_clamped_float(e, p, order, limit, d)[d:] - middle)[inside]
+
+    try:
+        fit = least_squares(resid, c, x_scale=np.maximum(np.abs(c), 1e-3), max_nfev=60 * c.size)
+    except (ValueError, FloatingPointError):
+        return c
+    return fit.x if np.all(np.isfinite(fit.x)) else c
+
+
+SENT_SLACK = 0.5
+"""Counts a float law's least-squares residual on the logged whole counts may exceed its
+quantization's reach by (its coefficients' bias) before the log is taken as no such law."""
+
+
+def _sent_design(rows: LawRows, e: np.ndarray, d: int, log, dt: float, rig_limit: float, alignments,
+                 prefer) -> IdentifiedController | None:
+    """A continuous design whose recursion ran on the float while its whole count was sent and
+    logged (:data:`station.control.compensator.SENT`): its poles and zeros from least squares
+    on the logged integers (their rounding biases the law, not its round numbers), its gain
+    from the rows' exact bounds given the poles (:func:`station.analysis.law_rows.sent_gain_interval`);
+    accepted only when, run as the rig ran it, it gives every logged v exactly. A law with no
+    round numbers behind it is not found this way (its float history is not in the log)."""
+    c = rows.least_squares("none")
+    if c is None:
+        return None
+    order, v = rows.order, log[3]
+    # the float law explains the logged integers to their quantization or is not this law:
+    # v[k] = x[k] − r[k] with |r| < 1, so the residual is −r[k] − Σ a_j r[k−j] (and the fit's
+    # bias), never past 1 + Σ|a_j|; a log no law made is not searched for designs (18 s a log)
+    keep = ~rows.clamped
+    resid = rows.v[keep] - rows.X[keep] @ c
+    reach = 1.0 + float(np.sum(np.abs(c[order + 1:])))
+    if not resid.size or np.max(np.abs(resid)) > reach + SENT_SLACK or np.sqrt(np.mean(resid ** 2)) > 0.5 * reach:
+        return None
+    first = c
+    for stored in STORED:
+        c = _output_error(e, v, d, order, rows.limit, first, stored)
+        def interval(num, den, stored=stored):
+            return sent_gain_interval(e, v, d, rows.limit, stored, num, den, c[0] / num[:, 0])
+
+        design = recognize(c[:order + 1], np.concatenate(([1.0], c[order + 1:])), dt, interval)
+        if design is None:
+            continue
+        num_z, den_z = design.discretize(dt)
+        recursion = f"float-{stored}"
+        law_c = np.concatenate([num_z, den_z[1:]])
+        try:
+            ctl = _compensator(num_z, den_z, rows.limit, dt, f"linear-{order}", {"design": design.to_json()},
+                               recursion, design.text)
+        except ValueError:
+            continue
+        law = _law_text(order, law_c, design, dt, recursion, rows.limit, rig_limit)
+        hit = _check(ctl, *log, law, alignments, design, prefer)
+        if hit is not None and hit.max_abs_dv <= TOLERANCE:
+            return hit
     return None
 
 

@@ -240,3 +240,84 @@ def tie_rows(rows: LawRows, c: np.ndarray, recursion: str) -> int:
     if np.any((rows.predict(c, recursion) != rows.v) & ~near):
         return 0
     return int(np.count_nonzero(near))
+
+
+def sent_gain_interval(e: np.ndarray, v: np.ndarray, d: int, limit: float, stored: str, num: np.ndarray,
+                       den: np.ndarray, k_ref: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """The gains K with which laws K·num[i]/den[i], their recursion on the clamped float and the
+    whole count sent (:data:`station.control.compensator.SENT`), give every logged v.
+
+    The float the recursion remembers is not in the log, but with the law's poles fixed it is
+    affine in K, x[k] = α[k]·K + β[k], row by row (a clamped row resets it to ±limit); each
+    row's Q(x[k]) = v[k] then bounds K from both sides, and the rows together give an
+    interval, for every law at once. A row at ±limit is clamped for a truncated command; for
+    a rounded one it may be a float within half a count of the limit: clamped where every
+    gain left would clamp it, else as ``k_ref`` (within the gains left; their middle without
+    it) would (the replay decides).
+
+    Parameters
+    ----------
+    e : numpy.ndarray, shape (N,)
+        The error u[k] − θ[k-d] (0 for k < d), encoder counts.
+    v : numpy.ndarray, shape (N,)
+        The logged commands, whole DAC counts.
+    d : int
+        The alignment.
+    limit : float
+        The clamp, DAC counts.
+    stored : {"trunc", "round"}
+        How the command was made whole.
+    num, den : numpy.ndarray, shape (L, order+1)
+        Unit-gain laws, ascending powers of z⁻¹, ``den[:, 0] = 1``.
+    k_ref : numpy.ndarray, shape (L,), optional
+        A gain near each law's (e.g. its first coefficient from least squares), for the
+        rounded command's rows at the limit before any row bounds the gain.
+
+    Returns
+    -------
+    lo, hi : numpy.ndarray, shape (L,)
+        lo > hi where no gain does.
+    """
+    num, den = np.atleast_2d(num), np.atleast_2d(den)
+    n_laws, order = num.shape[0], max(num.shape[1], den.shape[1]) - 1
+    alpha = np.zeros((order, n_laws))  # x[k-1..k-order] = alpha·K + beta
+    beta = np.zeros((order, n_laws))
+    lo_k, hi_k = np.full(n_laws, -np.inf), np.full(n_laws, np.inf)
+    edge = 0.0 if stored == "trunc" else 0.5
+    with np.errstate(over="ignore", invalid="ignore", divide="ignore"):  # an unstable candidate's x grows past floats
+        for k in range(d, v.size):
+            g = sum(num[:, i] * e[k - i] for i in range(num.shape[1]) if k - i >= 0)
+            a_y = g - sum(den[:, j] * alpha[j - 1] for j in range(1, den.shape[1]))
+            b_y = -sum(den[:, j] * beta[j - 1] for j in range(1, den.shape[1]))
+            vk = v[k]
+            if vk >= limit or vk <= -limit:  # y beyond the limit (less the rounding's half count)
+                s = 1.0 if vk > 0 else -1.0
+                lo, hi = (limit - edge, np.inf) if s > 0 else (-np.inf, -limit + edge)
+                clamped = np.ones(n_laws, bool)
+                if edge:  # within half a count of it, the float is remembered as it is
+                    bounded = np.isfinite(lo_k) & np.isfinite(hi_k)
+                    guess = 0.5 * (lo_k + hi_k) if k_ref is None else k_ref
+                    ref = np.where(bounded, np.clip(guess, lo_k, hi_k), 0.0 if k_ref is None else k_ref)
+                    ends = np.stack([a_y * np.where(bounded, lo_k, ref), a_y * np.where(bounded, hi_k, ref)]) + b_y
+                    beyond = s * ends >= limit
+                    middle = s * (a_y * ref + b_y) >= limit
+                    clamped = np.where(beyond.all(axis=0) | ~beyond.any(axis=0), beyond[0], middle)
+                x_a = np.where(clamped, 0.0, a_y)
+                x_b = np.where(clamped, s * limit, b_y)
+            else:
+                if stored == "trunc":
+                    lo, hi = (vk, vk + 1.0) if vk > 0 else (vk - 1.0, vk) if vk < 0 else (-1.0, 1.0)
+                else:
+                    lo, hi = vk - 0.5, vk + 0.5
+                x_a, x_b = a_y, b_y
+            k1, k2 = (lo - b_y) / a_y, (hi - b_y) / a_y
+            low = np.where(a_y > 0, k1, np.where(a_y < 0, k2, -np.inf))
+            high = np.where(a_y > 0, k2, np.where(a_y < 0, k1, np.inf))
+            dead = (a_y == 0) & ((b_y < lo) | (b_y > hi)) | ~np.isfinite(a_y) | ~np.isfinite(b_y)
+            lo_k = np.maximum(lo_k, np.nan_to_num(low, nan=-np.inf))
+            hi_k = np.where(dead, -np.inf, np.minimum(hi_k, np.nan_to_num(high, nan=np.inf)))
+            if order:
+                alpha = np.vstack([x_a[None], alpha[:-1]])
+                beta = np.vstack([x_b[None], beta[:-1]])
+    lost = np.isnan(lo_k) | np.isnan(hi_k)
+    return np.where(lost, np.inf, lo_k), np.where(lost, -np.inf, hi_k)

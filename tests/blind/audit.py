@@ -20,7 +20,9 @@ lead printed in the header, another pole in the data); integer recursions with n
 accelerometer feedback θ̂_d = u − Ga(a) (DESIGN.md's Ga(s), its gain and frequency scaled),
 under a header that leaves Ga out (open loop, or the lead alone), its recursion on the float
 command (as the thesis's software ran it), at either alignment; the lab's third session ("session":
-an open-loop header on a lead run on the truncated integer at alignment 0); truthful headers
+an open-loop header on a lead run on the truncated integer at alignment 0); "lie:sent": an
+open-loop header on a lead whose recursion runs on the float while the whole count it sends
+is logged, at either alignment; truthful headers
 the audit must confirm ("honest:p", "honest:lead_int"; "honest:lead_sent": a lead whose
 recursion runs on the float while the whole count it sends is logged, "float-trunc" or
 "float-round"). A class joined with "+" to
@@ -44,7 +46,7 @@ N = 2000
 """Samples per run (4 s at 500 Hz)."""
 
 CLASSES = ("lie:open_loop", "lie:p_kp", "lie:lead_pole", "lie:accel_fb", "int:trunc_d0", "int:trunc_d1",
-           "int:round_d0", "int:round_d1", "session", "honest:p", "honest:lead_int", "honest:lead_sent")
+           "int:round_d0", "int:round_d1", "session", "lie:sent", "honest:p", "honest:lead_int", "honest:lead_sent")
 """The audit's blind classes, in the validation table's order."""
 
 PHYSICAL = ("coulomb_friction",)
@@ -115,7 +117,7 @@ class AuditCase:
     @property
     def lies(self) -> bool:
         """Whether the header names another controller than the data's."""
-        return self.name.split("+")[0] in ("lie:open_loop", "lie:p_kp", "lie:lead_pole", "lie:accel_fb", "session")
+        return self.name.split("+")[0] in ("lie:open_loop", "lie:p_kp", "lie:lead_pole", "lie:accel_fb", "session", "lie:sent")
 
 
 def _rng(name: str, seed: int) -> np.random.Generator:
@@ -180,6 +182,9 @@ def draw_case(name: str, seed: int) -> AuditCase:
         return AuditCase(**common, **lead, recursion=recursion, alignment=int(d), header="none")
     if base == "session":
         return AuditCase(**common, **lead, recursion="trunc", alignment=0, header="open-loop")
+    if base == "lie:sent":
+        return AuditCase(**common, **lead, recursion=str(rng.choice(["float-trunc", "float-round"])),
+                         alignment=int(rng.integers(0, 2)), header="open-loop")
     if base == "honest:p":
         return AuditCase(**{**common, "header_kp": kp}, **p_law, recursion=str(rng.choice(["none", "trunc"])),
                          alignment=int(rng.integers(0, 2)), header="p")
