@@ -164,7 +164,8 @@ def table(outcomes: list[Outcome], seeds: str, elapsed: float) -> str:
         "recursions with no "
         "header (the 2014 layout); `session`: the lab's third session (open-loop header, a lead on the "
         "truncated integer at alignment 0); `lie:sent`: an open-loop header on a lead whose recursion runs on the "
-        "float while the whole count it sends is logged; `honest:*`: true headers (P, or a lead on the stored integer, or "
+        "float while the whole count it sends is logged; `lie:accel_int`: an open-loop header on a lead with "
+        "DESIGN.md's Ga as it stands, the command stored or sent as a whole count; `honest:*`: true headers (P, or a lead on the stored integer, or "
         "`honest:lead_sent` a lead on the float logging the whole count it sends) the audit must confirm. `+coulomb_friction`: beside a hidden Coulomb friction of 3–30 DAC counts.",
         "",
         "Bar (issue 26): in at least 9 of 10 seeds, a lying header contradicted (and a true or absent one not), "

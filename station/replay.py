@@ -18,7 +18,8 @@ import numpy as np
 
 from station.analysis.beam import BeamTestReport, analyze_beam_test, model_first_mode
 from station.analysis.metrics import StepMetrics
-from station.analysis.continuous_design import STORED, alternatives_phrase, on_integer
+from station.analysis.continuous_design import alternatives_phrase
+from station.control.compensator import STORED, on_integer
 from station.errors import StationError
 from station.logged import REPRODUCED_TOLERANCE, LoggedRun
 from station.logged.audit import Audit

@@ -80,6 +80,8 @@ BLIND = [("lie:open_loop", 0), ("lie:open_loop", 1), ("lie:p_kp", 0), ("lie:lead
          # a lead on the float logging the whole count it sent, under an open-loop header: a step
          # whose least squares on the counts puts the pole 6 % off; a truncated one
          ("lie:sent", 2), ("lie:sent+coulomb_friction", 4),
+         # DESIGN.md's Ga beside a lead on whole counts (rounded integer recursion; sent as rounded)
+         ("lie:accel_int", 0), ("lie:accel_int", 1),
          # honest headers on what they state: a P header with no clamp over a ±150 clamp; leads printed
          # to 8 digits whose integer recursion the printing moves by a count (were "contradicted")
          ("honest:p", 8), ("honest:lead_int", 6), ("honest:lead_int", 7),
@@ -187,20 +189,24 @@ def test_integer_recursion_simulated_as_the_lab_ran_it(tmp_path):
 
 @pytest.mark.parametrize("stored", ["trunc", "round"])
 @pytest.mark.parametrize("lying", [False, True])
-def test_the_rigs_lead_logged_as_the_whole_counts_it_sent(rig_data, tmp_path, stored, lying):
+@pytest.mark.parametrize("step", ["lead", "lead+accel"])
+def test_the_rigs_lead_logged_as_the_whole_counts_it_sent(rig_data, tmp_path, stored, lying, step):
     """Lab software that recurses on the float and logs the whole count it sends: the thesis's
     lead step with each v truncated (or rounded) as such software would. The header's law
     reproduces every logged v exactly with that recursion, said in the audit and in the
     notes, and the model run sends what the log holds; before, replay said "does NOT
     reproduce the logged v: max |dv| = 0.999 counts" and used the float law. Under an
     open-loop header the data's law is the thesis's design, found from the counts alone
-    (before: "no law found")."""
+    (before: "no law found"); beside the accelerometer feedback, the thesis's Ga (whole
+    counts cannot pin Ga's own coefficients)."""
     import math
 
     from station.control.compensator import SENT
     from station.rounding import half_away
 
-    src = rig_data / "step_response_Gth_comp_no_accel_FB_amp_100_duration_1000_SLFR_RTP_Motor_Comp_Gth.txt"
+    src = rig_data / {"lead": "step_response_Gth_comp_no_accel_FB_amp_100_duration_1000_SLFR_RTP_Motor_Comp_Gth.txt",
+                      "lead+accel": "step_response_Gth_comp_Ga_opt_amp_200_duration_1000_opt_case43_SLFR_RTP_Motor_"
+                                    "Comp_Gth.txt"}[step]
     q = math.trunc if stored == "trunc" else half_away
     lines = src.read_text().splitlines()
     names = [x for x in lines if x.startswith("#")][-1][1:].split("\t")
@@ -222,8 +228,9 @@ def test_the_rigs_lead_logged_as_the_whole_counts_it_sent(rig_data, tmp_path, st
     assert run.reproduced and run.max_abs_dv == 0.0 and run.alignment == 1
     if lying:
         assert run.audit.controller_source == "inferred (header contradicted)"
+        ga = ", with the thesis's accelerometer feedback Ga" if step == "lead+accel" else ""
         assert run.audit.lines()[0] == (f"header: open loop; data: 20(s+2π·5)/(s+2π·20) (Tustin, 0.002 s), its "
-                                        f"recursion on the float, the command sent as its {said} integer at "
+                                        f"recursion on the float, the command sent as its {said} integer{ga} at "
                                         f"alignment 1, reproduces every logged v exactly")
     else:
         assert run.audit.controller_source == "header" and run.audit.lines() == []

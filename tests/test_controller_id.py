@@ -86,7 +86,7 @@ def test_the_sent_gain_interval_holds_exactly_the_gains_that_reproduce(seed):
     """sent_gain_interval against the generator's lab recursion run at gains on both sides of
     each end: inside (by a part in 10^6 of the width) every logged v is given, outside (by a
     tenth of the width) some row differs; and the hidden gain is inside."""
-    from station.analysis.law_rows import sent_gain_interval
+    from station.analysis.sent_law import sent_gain_interval
 
     rng = np.random.default_rng(seed)
     k, z = float(rng.choice([1.0, 1.5, 2.0, 3.0])), float(rng.integers(5, 30))

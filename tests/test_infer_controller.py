@@ -5,7 +5,8 @@ a standard discretization or say that none does."""
 import numpy as np
 import pytest
 
-from station.analysis.controller_id import TOLERANCE, infer_controller, match_pid, pid_controllers
+from station.analysis.controller_id import TOLERANCE, infer_controller
+from station.analysis.pid_law import match_pid, pid_controllers
 from station.control import make_controller
 from station.control.rerun import replay_commands
 from station.replay import replay

@@ -23,6 +23,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 from numpy.polynomial import polynomial as P
 
+from station.control.compensator import on_integer
 from station.control.tf import tustin
 
 METHODS = ("Tustin", "ZOH", "backward Euler", "forward Euler")
@@ -33,50 +34,6 @@ _ALPHA = {"Tustin": 0.5, "backward Euler": 1.0, "forward Euler": 0.0}
 
 MAX_DIGITS = 5
 """Most significant digits a recognised design's numbers may have."""
-
-STORED = {"trunc": "truncated", "round": "rounded"}
-"""How a recursion's stored integer is named in reports."""
-
-
-def on_integer(recursion: str) -> str:
-    """The words for the stored integer a recursion runs on: ``"on the truncated integer"``.
-
-    Parameters
-    ----------
-    recursion : str
-        "trunc" or "round" (a key of :data:`STORED`).
-
-    Returns
-    -------
-    str
-
-    Raises
-    ------
-    KeyError
-        Any other recursion ("none" has no integer).
-    """
-    return f"on the {STORED[recursion]} integer"
-
-
-def recursion_words(recursion: str) -> str:
-    """How a report says a quantized recursion, after a law's text:
-    ``"its recursion on the truncated integer command"`` (the integer remembered) or
-    ``"its recursion on the float, the command sent as its truncated integer"`` (the float
-    remembered, :data:`station.control.compensator.SENT`).
-
-    Parameters
-    ----------
-    recursion : str
-        A key of :data:`STORED`, or "float-" and one.
-
-    Raises
-    ------
-    KeyError
-        Any other recursion ("none" has no integer).
-    """
-    if recursion.startswith("float-"):
-        return f"its recursion on the float, the command sent as its {STORED[recursion[6:]]} integer"
-    return f"its recursion {on_integer(recursion)} command"
 
 MAX_ALTERNATIVES = 3
 """Most equally simple designs named beside a recognised one (:attr:`ContinuousDesign.alternatives`)."""

@@ -35,10 +35,8 @@ is accepted only when, run as the rig ran it (:func:`station.control.rerun.repla
 it reproduces every logged v: to ``tolerance`` (1e-6 DAC counts), the logged integer
 exactly for an integer recursion. The identification claims nothing the data do not prove.
 
-A PID header with ki or kd != 0 does not say how the rig discretized it;
-:func:`pid_controllers` gives the standard choices (integral by backward Euler, forward
-Euler or Tustin; derivative by backward difference; Franklin, Powell & Workman, Digital
-Control of Dynamic Systems, ch. 6) to try against the data.
+A PID header's law is matched in :mod:`station.analysis.pid_law`; a law whose recursion ran
+on the float while its whole count was logged is recognised in :mod:`station.analysis.sent_law`.
 """
 
 from __future__ import annotations
@@ -47,11 +45,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from station.analysis.accel_law import AccelFeedback, accel_feedback
-from station.analysis.continuous_design import (STORED, ContinuousDesign, alternatives_phrase, nicest_between,
-                                                recognize, recursion_words, to_continuous)
-from station.analysis.law_rows import BOUNDARY, TOLERANCE, LawRows, sent_gain_interval, tie_rows
-from station.control.compensator import SENT
+from station.analysis.accel_law import AccelFeedback, accel_feedback, lagged
+from station.analysis.continuous_design import (ContinuousDesign, alternatives_phrase, nicest_between, recognize,
+                                                to_continuous)
+from station.analysis.law_rows import BOUNDARY, TOLERANCE, LawRows, tie_rows
+from station.analysis.sent_law import sent_designs
+from station.control.compensator import SENT, STORED, recursion_words
 from station.control import DAC_LIMIT, Compensator, DiscreteTF, OpenLoop, lead_controller  # DAC_LIMIT: the clamp assumed when v exceeds the rig's ±200
 from station.control.rerun import ALIGNMENTS, AlignmentFit, detect_alignment
 from station.rig import CLAMP, DT
@@ -107,8 +106,16 @@ def _limits(v: np.ndarray, rig_limit: float) -> list[float]:
     return [first, vmax] if 0 < vmax < first else [first]
 
 
-def _compensator(num, den, limit: float | None, dt: float, kind: str, extra: dict | None = None,
-                 recursion: str = "none", name: str | None = None, ga=None) -> Compensator:
+def law_compensator(num, den, limit: float | None, dt: float, kind: str, extra: dict | None = None,
+                    recursion: str = "none", name: str | None = None, ga=None) -> Compensator:
+    """A compensator for a law found in a log: its z-law (and Ga's), clamp and recursion, its
+    spec saying where it came from ("inferred from the data") and ``extra`` (a design, kp).
+
+    Raises
+    ------
+    ValueError
+        As :class:`station.control.tf.DiscreteTF` (a leading denominator of 0).
+    """
     tf = DiscreteTF(num, den)
     ga_tf = None if ga is None else DiscreteTF(*ga)
     spec = {"kind": kind, "name": name or kind, "dt": dt, "limit": limit, "source": "inferred from the data",
@@ -175,9 +182,10 @@ def fit_alignments(controller, u, theta, a, v, alignments=ALIGNMENTS, skipped=No
     return min(fits, key=lambda f: f.max_abs_dv), exact
 
 
-def _check(controller, u, theta, a, v, law: str, alignments, design=None,
-           prefer: int | None = PREFERRED_ALIGNMENT, primed: int = 0) -> IdentifiedController | None:
-    """``controller`` at its best alignment (:func:`fit_alignments`)."""
+def check_law(controller, u, theta, a, v, law: str, alignments, design=None,
+              prefer: int | None = PREFERRED_ALIGNMENT, primed: int = 0) -> IdentifiedController | None:
+    """``controller`` at its best alignment (:func:`fit_alignments`), as an IdentifiedController
+    named ``law``; None when no alignment was tried."""
     fit, exact = fit_alignments(controller, u, theta, a, v, alignments, prefer=prefer, primed=primed)
     return None if fit is None else IdentifiedController(controller, *fit, law, design, exact)  # None: no alignment tried
 
@@ -378,7 +386,7 @@ def infer_controller(u, theta, v, a=None, dt: float = DT, rig_limit: float = CLA
 
     if np.array_equal(v, u) or np.array_equal(v[1:], u[1:]) and v[0] == 0:
         ol = OpenLoop(limit=None)
-        return _check(ol, u, theta, a, v, "open loop, v = u", alignments, prefer=prefer)
+        return check_law(ol, u, theta, a, v, "open loop, v = u", alignments, prefer=prefer)
 
     recursions = ("none", *STORED) if whole_counts(v) else ("none",)
     for order in range(MAX_ORDER + 1):
@@ -404,8 +412,10 @@ def infer_controller(u, theta, v, a=None, dt: float = DT, rig_limit: float = CLA
                                        alignments, prefer)
                     if hit is not None:
                         return hit
-    if cut or not np.any(a != a[0]) or whole_counts(v):  # Ga beside a recursion on the stored integer: not yet
+    if cut or not np.any(a != a[0]):
         return None
+    if whole_counts(v):  # Ga is not pinned by whole counts: the thesis's, beside a law on them
+        return _with_thesis_ga(u, theta, a, v, dt, rig_limit, alignments, prefer)
     return _with_accel_feedback(u, theta, a, v, dt, rig_limit, alignments, prefer)
 
 
@@ -431,12 +441,12 @@ def _accepted(rows: LawRows, recursion: str, d: int, log, dt: float, rig_limit: 
     name = kind if design is None else design.text + ("" if ga is None else " with Ga")
     limit = rows.limit
     try:
-        ctl = _compensator(c[:order + 1], np.concatenate(([1.0], c[order + 1:])), limit, dt, kind, extra,
+        ctl = law_compensator(c[:order + 1], np.concatenate(([1.0], c[order + 1:])), limit, dt, kind, extra,
                            recursion, name, ga=None if ga is None else (ga.num, ga.den))
     except ValueError:
         return None
     law = _law_text(order, c, design, dt, recursion, limit, rig_limit, ctl.ga)
-    hit = _check(ctl, *log, law, alignments, design, prefer, primed)
+    hit = check_law(ctl, *log, law, alignments, design, prefer, primed)
     if hit is not None and hit.max_abs_dv <= TOLERANCE:
         return hit
     ties = tie_rows(rows, c, recursion)
@@ -446,87 +456,56 @@ def _accepted(rows: LawRows, recursion: str, d: int, log, dt: float, rig_limit: 
     return None
 
 
-def _clamped_float(e: np.ndarray, c: np.ndarray, order: int, limit: float, d: int) -> np.ndarray:
-    """x[k] = sat(Σ b_i e[k-i] − Σ a_j x[k-j]) from rest at row d: what a recursion on the float remembers."""
-    num, den = c[:order + 1], c[order + 1:]
-    x = np.zeros(e.size)
-    for k in range(d, e.size):
-        acc = sum(num[i] * e[k - i] for i in range(order + 1) if k - i >= 0)
-        acc -= sum(den[j - 1] * x[k - j] for j in range(1, order + 1) if k - j >= d)
-        x[k] = min(max(acc, -limit), limit)
-    return x
-
-
-def _output_error(e: np.ndarray, v: np.ndarray, d: int, order: int, limit: float, c: np.ndarray,
-                  stored: str) -> np.ndarray:
-    """The law whose own float run is closest to the middle of the floats the logged whole
-    counts allow (``stored``: v + sign(v)/2 truncated, v rounded; least squares on the rows
-    inside the clamp, from ``c``): least squares with the logged integers as the history
-    biases the poles by their rounding (a lead's pole 6 % off, past the round number's
-    neighbours), the law's own history does not. ``c`` itself when the fit fails."""
-    from scipy.optimize import least_squares  # lazy: start-up time
-
-    inside = np.abs(v[d:]) < limit
-    if not np.any(inside):
-        return c
-    middle = v[d:] + (0.5 * np.sign(v[d:]) if stored == "trunc" else 0.0)
-
-    def resid(p):
-        return (_clamped_float(e, p, order, limit, d)[d:] - middle)[inside]
-
-    try:
-        fit = least_squares(resid, c, x_scale=np.maximum(np.abs(c), 1e-3), max_nfev=60 * c.size)
-    except (ValueError, FloatingPointError):
-        return c
-    return fit.x if np.all(np.isfinite(fit.x)) else c
-
-
-SENT_SLACK = 0.5
-"""Counts a float law's least-squares residual on the logged whole counts may exceed its
-quantization's reach by (its coefficients' bias) before the log is taken as no such law."""
-
-
 def _sent_design(rows: LawRows, e: np.ndarray, d: int, log, dt: float, rig_limit: float, alignments,
-                 prefer) -> IdentifiedController | None:
+                 prefer, ga: AccelFeedback | None = None) -> IdentifiedController | None:
     """A continuous design whose recursion ran on the float while its whole count was sent and
-    logged (:data:`station.control.compensator.SENT`): its poles and zeros from least squares
-    on the logged integers (their rounding biases the law, not its round numbers), its gain
-    from the rows' exact bounds given the poles (:func:`station.analysis.law_rows.sent_gain_interval`);
-    accepted only when, run as the rig ran it, it gives every logged v exactly. A law with no
-    round numbers behind it is not found this way (its float history is not in the log)."""
-    c = rows.least_squares("none")
-    if c is None:
-        return None
-    order, v = rows.order, log[3]
-    # the float law explains the logged integers to their quantization or is not this law:
-    # v[k] = x[k] − r[k] with |r| < 1, so the residual is −r[k] − Σ a_j r[k−j] (and the fit's
-    # bias), never past 1 + Σ|a_j|; a log no law made is not searched for designs (18 s a log)
-    keep = ~rows.clamped
-    resid = rows.v[keep] - rows.X[keep] @ c
-    reach = 1.0 + float(np.sum(np.abs(c[order + 1:])))
-    if not resid.size or np.max(np.abs(resid)) > reach + SENT_SLACK or np.sqrt(np.mean(resid ** 2)) > 0.5 * reach:
-        return None
-    first = c
-    for stored in STORED:
-        c = _output_error(e, v, d, order, rows.limit, first, stored)
-        def interval(num, den, stored=stored):
-            return sent_gain_interval(e, v, d, rows.limit, stored, num, den, c[0] / num[:, 0])
-
-        design = recognize(c[:order + 1], np.concatenate(([1.0], c[order + 1:])), dt, interval)
-        if design is None:
-            continue
+    logged (:func:`station.analysis.sent_law.sent_designs`), with ``ga`` beside it when given;
+    accepted only when, run as the rig ran it, it gives every logged v exactly."""
+    order = rows.order
+    for design, recursion in sent_designs(rows, e, log[3], d, dt):
         num_z, den_z = design.discretize(dt)
-        recursion = f"float-{stored}"
-        law_c = np.concatenate([num_z, den_z[1:]])
         try:
-            ctl = _compensator(num_z, den_z, rows.limit, dt, f"linear-{order}", {"design": design.to_json()},
-                               recursion, design.text)
+            kind = f"linear-{order}" + ("" if ga is None else f"+accel-{ga.den.size - 1}")
+            ctl = law_compensator(num_z, den_z, rows.limit, dt, kind, {"design": design.to_json()}, recursion,
+                               design.text + ("" if ga is None else " with Ga"),
+                               ga=None if ga is None else (ga.num, ga.den))
         except ValueError:
             continue
-        law = _law_text(order, law_c, design, dt, recursion, rows.limit, rig_limit)
-        hit = _check(ctl, *log, law, alignments, design, prefer)
+        law = _law_text(order, np.concatenate([num_z, den_z[1:]]), design, dt, recursion, rows.limit, rig_limit,
+                        ctl.ga)
+        hit = check_law(ctl, *log, law, alignments, design, prefer)
         if hit is not None and hit.max_abs_dv <= TOLERANCE:
             return hit
+    return None
+
+
+def _with_thesis_ga(u, theta, a, v, dt: float, rig_limit: float, alignments, prefer) -> IdentifiedController | None:
+    """The thesis's accelerometer feedback Ga (DESIGN.md) beside a Gth whose command was stored
+    or sent as a whole count: on such a log Ga's own coefficients (not round numbers) cannot
+    be found to the quantization, but the lab's software ran the thesis's. Gth of order 0 to
+    3, its recursion on the stored integer, then on the float with the whole count sent
+    (:func:`_sent_design`); accepted only when the replay gives every logged v."""
+    from scipy.signal import lfilter  # lazy: start-up time
+
+    thesis = lead_controller(CLAMP, dt, accel=True).ga
+    log = (u, theta, a, v)
+    for order in range(MAX_ORDER + 1):
+        for d in alignments:
+            if d < 0:
+                continue
+            x = lfilter(thesis.num, thesis.den, lagged(a, d))
+            ga = AccelFeedback(thesis.num, thesis.den, x)
+            e = _errors(u, theta, d) - x
+            for limit in _limits(v, rig_limit):
+                rows = LawRows(e, v, d, order, limit)
+                for recursion in STORED:
+                    hit = _accepted(rows, recursion, d, log, dt, rig_limit, alignments, prefer, ga=ga)
+                    if hit is not None:
+                        return hit
+                if order:
+                    hit = _sent_design(rows, e, d, log, dt, rig_limit, alignments, prefer, ga)
+                    if hit is not None:
+                        return hit
     return None
 
 
@@ -548,88 +527,3 @@ def _with_accel_feedback(u, theta, a, v, dt: float, rig_limit: float, alignments
                     if hit is not None:
                         return hit
     return None
-
-
-PID_INTEGRALS = {
-    "backward Euler": lambda ki, dt: ([ki * dt, 0.0], [1.0, -1.0]),
-    "forward Euler": lambda ki, dt: ([0.0, ki * dt], [1.0, -1.0]),
-    "Tustin": lambda ki, dt: ([ki * dt / 2, ki * dt / 2], [1.0, -1.0]),
-}
-"""Integral term ki/s discretized three standard ways: (num, den) in z^-1."""
-
-
-def pid_controllers(kp: float, ki: float, kd: float, dt: float = DT,
-                    limit: float | None = CLAMP) -> list[tuple[str, Compensator]]:
-    """The standard discretizations of a PID law v = kp e + ki ∫e + kd de/dt.
-
-    Parameters
-    ----------
-    kp, ki, kd : float
-        Gains (DAC counts per encoder count, per count·s, per count/s).
-    dt : float
-        Sample time, s.
-    limit : float or None
-        Clamp of v, DAC counts.
-
-    Returns
-    -------
-    list of (str, Compensator)
-        One per integral rule (backward Euler, forward Euler, Tustin; one entry when
-        ki = 0), the derivative always by backward difference kd (1 - z^-1)/dt; the name
-        says which. A rule whose coefficients overflow (gains near the float's limit) is
-        left out: it runs no law.
-    """
-    deriv = np.array([kd / dt, -kd / dt])
-    out = []
-    rules = PID_INTEGRALS.items() if ki != 0 else [("none", None)]
-    for rule, make in rules:
-        if make is None:
-            num = np.array([kp, 0.0]) + deriv
-            den = np.array([1.0])
-        else:
-            inum, den = make(ki, dt)
-            # common denominator (1 - z^-1): kp (1 - z^-1) + I + kd/dt (1 - z^-1)^2
-            num = np.zeros(3)
-            num[:2] += kp * np.array([1.0, -1.0]) + np.asarray(inum)
-            num += (kd / dt) * np.array([1.0, -2.0, 1.0])
-            den = np.asarray(den)
-        what = ("derivative by backward difference" if make is None
-                else f"integral by {rule}" + (", derivative by backward difference" if kd else ""))
-        if not (np.all(np.isfinite(num)) and np.all(np.isfinite(den))):
-            continue  # finite gains whose discretization overflows (kd = 1.8e308 over dt) run no law
-        extra = {"kp": kp, "ki": ki, "kd": kd, "discretization": what}
-        ctl = _compensator(num, den, limit, dt, "pid", extra)
-        ctl.spec["source"] = "rig header"
-        out.append((what, ctl))
-    return out
-
-
-def match_pid(kp: float, ki: float, kd: float, u, theta, v, a=None, dt: float = DT,
-              limit: float | None = CLAMP, alignments=(0, 1)) -> tuple[IdentifiedController | None, float]:
-    """The standard PID discretization that reproduces the logged v, if one does.
-
-    Parameters
-    ----------
-    kp, ki, kd : float
-        The header's gains.
-    u, theta, v, a : array_like, shape (N,)
-    dt, limit, alignments
-        As :func:`infer_controller`.
-
-    Returns
-    -------
-    (IdentifiedController or None, float)
-        The first of :func:`pid_controllers` that reproduces v to :data:`TOLERANCE`
-        (None if none does) and the smallest max |dv| seen, DAC counts.
-    """
-    u, theta, v = (np.asarray(x, dtype=float) for x in (u, theta, v))
-    a = np.zeros_like(v) if a is None else np.where(np.isfinite(a), np.asarray(a, dtype=float), 0.0)
-    best_err = float("inf")
-    for what, ctl in pid_controllers(kp, ki, kd, dt, limit):
-        hit = _check(ctl, u, theta, a, v, what, alignments)
-        if hit is None:
-            continue
-        best_err = min(best_err, hit.max_abs_dv)
-        if hit.max_abs_dv <= TOLERANCE:
-            return hit, best_err
-    return None, best_err

@@ -27,6 +27,51 @@ SENT = ("float-trunc", "float-round")
 sends): the recursion remembers the clamped float, the command is Q(that)."""
 
 
+STORED = {"trunc": "truncated", "round": "rounded"}
+"""How a recursion's stored integer is named in reports."""
+
+
+def on_integer(recursion: str) -> str:
+    """The words for the stored integer a recursion runs on: ``"on the truncated integer"``.
+
+    Parameters
+    ----------
+    recursion : str
+        "trunc" or "round" (a key of :data:`STORED`).
+
+    Returns
+    -------
+    str
+
+    Raises
+    ------
+    KeyError
+        Any other recursion ("none" has no integer).
+    """
+    return f"on the {STORED[recursion]} integer"
+
+
+def recursion_words(recursion: str) -> str:
+    """How a report says a quantized recursion, after a law's text:
+    ``"its recursion on the truncated integer command"`` (the integer remembered) or
+    ``"its recursion on the float, the command sent as its truncated integer"`` (the float
+    remembered, :data:`SENT`).
+
+    Parameters
+    ----------
+    recursion : str
+        A key of :data:`STORED`, or "float-" and one.
+
+    Raises
+    ------
+    KeyError
+        Any other recursion ("none" has no integer).
+    """
+    if recursion.startswith("float-"):
+        return f"its recursion on the float, the command sent as its {STORED[recursion[6:]]} integer"
+    return f"its recursion {on_integer(recursion)} command"
+
+
 def saturate(v: float, limit: float | None) -> float:
     """Clamp ``v`` to ±limit (DAC counts); None means no clamp.
 

@@ -19,16 +19,16 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
-from station.analysis.continuous_design import recursion_words
 from station.analysis.controller_id import (
     PREFERRED_ALIGNMENT,
     TOLERANCE,
     ga_text,
     infer_controller,
-    match_pid,
     variant_of,
 )
+from station.analysis.pid_law import match_pid
 from station.control import Compensator, DiscreteTF, OpenLoop, controller_from_spec, lead_controller, p_controller
+from station.control.compensator import recursion_words
 from station.control.designs import MAX_ORDER, z_problem
 from station.control.rerun import ALIGNMENTS, AlignmentFit, is_closed_loop
 from station.errors import StationError
@@ -284,7 +284,7 @@ def identify_controller(log: RunLog, skipped=None) -> ControllerId:
     audit of the header's claim.
 
     The header's controller (a PID header with ki or kd != 0 matched against the standard
-    discretizations, :func:`station.analysis.controller_id.match_pid`) is replayed over the
+    discretizations, :func:`station.analysis.pid_law.match_pid`) is replayed over the
     log (:func:`station.analysis.controller_id.variant_of`: as it is, or with its recursion on
     the stored integer when every logged v is a whole count). It is confirmed when it
     reproduces every logged v (to 1e-6 DAC counts; exactly for an integer recursion). When it
@@ -413,7 +413,8 @@ def identify_controller(log: RunLog, skipped=None) -> ControllerId:
             "controller", said, data_says, "unchecked", "the log names no controller; inferred from the data"),
             hit.alignments, cut=cut)
     tried = ("open loop, P, linear e -> v up to order 3, on the float or the stored integer command, "
-             "Gth with accelerometer feedback Ga up to order 3 each on the float command, alignments 0 and 1")
+             "designs on the float with the whole count sent, Gth with accelerometer feedback Ga up to order 3 "
+             "each on the float command, the thesis's Ga beside a Gth on whole counts, alignments 0 and 1")
     if not stated:
         notes.append(f"the log names no controller and none could be inferred from the data ({tried}): "
                      f"commands not replayed, model driven by the logged v")

@@ -22,7 +22,9 @@ under a header that leaves Ga out (open loop, or the lead alone), its recursion 
 command (as the thesis's software ran it), at either alignment; the lab's third session ("session":
 an open-loop header on a lead run on the truncated integer at alignment 0); "lie:sent": an
 open-loop header on a lead whose recursion runs on the float while the whole count it sends
-is logged, at either alignment; truthful headers
+is logged, at either alignment; "lie:accel_int": an open-loop header on a lead with DESIGN.md's
+accelerometer feedback Ga as it stands, the command stored or sent as a whole count (any of
+the four ways); truthful headers
 the audit must confirm ("honest:p", "honest:lead_int"; "honest:lead_sent": a lead whose
 recursion runs on the float while the whole count it sends is logged, "float-trunc" or
 "float-round"). A class joined with "+" to
@@ -46,7 +48,8 @@ N = 2000
 """Samples per run (4 s at 500 Hz)."""
 
 CLASSES = ("lie:open_loop", "lie:p_kp", "lie:lead_pole", "lie:accel_fb", "int:trunc_d0", "int:trunc_d1",
-           "int:round_d0", "int:round_d1", "session", "lie:sent", "honest:p", "honest:lead_int", "honest:lead_sent")
+           "int:round_d0", "int:round_d1", "session", "lie:sent", "lie:accel_int", "honest:p", "honest:lead_int",
+           "honest:lead_sent")
 """The audit's blind classes, in the validation table's order."""
 
 PHYSICAL = ("coulomb_friction",)
@@ -117,7 +120,8 @@ class AuditCase:
     @property
     def lies(self) -> bool:
         """Whether the header names another controller than the data's."""
-        return self.name.split("+")[0] in ("lie:open_loop", "lie:p_kp", "lie:lead_pole", "lie:accel_fb", "session", "lie:sent")
+        return self.name.split("+")[0] in ("lie:open_loop", "lie:p_kp", "lie:lead_pole", "lie:accel_fb", "session", "lie:sent",
+                                              "lie:accel_int")
 
 
 def _rng(name: str, seed: int) -> np.random.Generator:
@@ -182,6 +186,9 @@ def draw_case(name: str, seed: int) -> AuditCase:
         return AuditCase(**common, **lead, recursion=recursion, alignment=int(d), header="none")
     if base == "session":
         return AuditCase(**common, **lead, recursion="trunc", alignment=0, header="open-loop")
+    if base == "lie:accel_int":
+        return AuditCase(**common, **lead, recursion=str(rng.choice(["trunc", "round", "float-trunc", "float-round"])),
+                         alignment=int(rng.integers(0, 2)), header="open-loop", ga_s=GA_S)
     if base == "lie:sent":
         return AuditCase(**common, **lead, recursion=str(rng.choice(["float-trunc", "float-round"])),
                          alignment=int(rng.integers(0, 2)), header="open-loop")

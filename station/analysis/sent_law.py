@@ -1,0 +1,236 @@
+"""Laws whose recursion ran on the float while the whole count it sent was logged
+(:data:`station.control.compensator.SENT`): lab software that logs what it sends.
+
+The float such a law remembers is not in the log, so no regression on the logged counts gives
+its coefficients to the quantization (least squares with the counts as the history put the
+thesis lead's b0 at 18.16 against 18.33, and a blind lead's pole 6 % off, past the round
+number's neighbours). The law's own float run fitted to the counts (:func:`output_error`)
+gives poles and zeros near enough to recognise the round numbers of a continuous design
+(:func:`station.analysis.continuous_design.recognize`); with the poles fixed the remembered
+float is affine in the gain, so every row bounds the gain exactly (:func:`sent_gain_interval`).
+:func:`sent_designs` gives the candidates; :mod:`station.analysis.controller_id` accepts one
+only when its replay gives every logged v. A law with no round numbers behind it is not
+found this way.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterator
+
+import numpy as np
+
+from station.analysis.continuous_design import ContinuousDesign, recognize
+from station.analysis.law_rows import LawRows
+from station.control.compensator import STORED
+
+
+def clamped_float(e: np.ndarray, c: np.ndarray, order: int, limit: float, d: int) -> np.ndarray:
+    """x[k] = sat(Σ b_i e[k-i] − Σ a_j x[k-j]) from rest at row d: what a recursion on the float remembers."""
+    from scipy.signal import lfilter, lfiltic  # lazy: start-up time
+
+    num, den = c[:order + 1], np.concatenate(([1.0], c[order + 1:]))
+    x = np.zeros(e.size)
+    k = d
+    while k < e.size:  # the linear run from row k, restarted after each row the clamp held
+        past = slice(max(k - order, d), k)
+        zi = lfiltic(num, den, x[past][::-1], e[max(k - order, 0):k][::-1]) if order and k > d else None
+        run = lfilter(num, den, e[k:], zi=zi)[0] if zi is not None else lfilter(num, den, e[k:])
+        over = np.flatnonzero(np.abs(run) > limit)
+        if not over.size:
+            x[k:] = run
+            break
+        j = int(over[0])
+        x[k:k + j] = run[:j]
+        x[k + j] = np.clip(run[j], -limit, limit)
+        k += j + 1
+        while k < e.size:  # row by row while the clamp holds, then linear again
+            acc = sum(num[i] * e[k - i] for i in range(order + 1) if k - i >= 0)
+            acc -= sum(den[j] * x[k - j] for j in range(1, order + 1) if k - j >= d)
+            if abs(acc) <= limit:
+                break
+            x[k] = limit if acc > 0 else -limit
+            k += 1
+    return x
+
+
+def output_error(e: np.ndarray, v: np.ndarray, d: int, order: int, limit: float, c: np.ndarray,
+                  stored: str) -> np.ndarray:
+    """The law whose own float run is closest to the middle of the floats the logged whole
+    counts allow (``stored``: v + sign(v)/2 truncated, v rounded; least squares on the rows
+    inside the clamp, from ``c``): least squares with the logged integers as the history
+    biases the poles by their rounding (a lead's pole 6 % off, past the round number's
+    neighbours), the law's own history does not.
+
+    Returns
+    -------
+    (numpy.ndarray, float)
+        The law (``c`` itself when the fit fails) and its largest distance, counts, from the
+        middles on the rows inside the clamp (at most 1/2 for the law that made the counts,
+        its coefficients exact; inf when the fit fails).
+    """
+    from scipy.optimize import least_squares  # lazy: start-up time
+
+    inside = np.abs(v[d:]) < limit
+    if not np.any(inside):
+        return c, np.inf
+    middle = v[d:] + (0.5 * np.sign(v[d:]) if stored == "trunc" else 0.0)
+
+    def resid(p):
+        return (clamped_float(e, p, order, limit, d)[d:] - middle)[inside]
+
+    try:
+        fit = least_squares(resid, c, x_scale=np.maximum(np.abs(c), 1e-3), max_nfev=60 * c.size)
+    except (ValueError, FloatingPointError):
+        return c, np.inf
+    if not np.all(np.isfinite(fit.x)) or not np.all(np.isfinite(fit.fun)):
+        return c, np.inf
+    return fit.x, float(np.max(np.abs(fit.fun)))
+
+
+SENT_MISS = 2.0
+"""Counts the law's own float run, fitted to the middles the logged counts allow, may stray
+from them (1/2 for the exact law; its fitted coefficients' error on top) before the law is
+taken as not the one that made the log."""
+
+SENT_SLACK = 0.5
+"""Counts a float law's least-squares residual on the logged whole counts may exceed its
+quantization's reach by (its coefficients' bias) before the log is taken as no such law."""
+
+
+def _gain_guess(c: np.ndarray, num: np.ndarray) -> np.ndarray:
+    """Each unit law's gain near the fitted law ``c``, from its largest numerator coefficient
+    (a ZOH law's first is 0)."""
+    idx = np.argmax(np.abs(num), axis=1)
+    return c[idx] / num[np.arange(num.shape[0]), idx]
+
+
+def sent_designs(rows: LawRows, e: np.ndarray, v: np.ndarray, d: int, dt: float
+                 ) -> Iterator[tuple[ContinuousDesign, str]]:
+    """The continuous designs (and their recursion, "float-trunc" or "float-round") whose
+    float run, its whole count sent, may have made the logged v: recognised from the law's
+    own float run fitted to the counts, each gain the rows' exact bounds allow.
+
+    Parameters
+    ----------
+    rows : LawRows
+        The log's rows for one order, alignment and clamp (the logged counts as history).
+    e : numpy.ndarray, shape (N,)
+        The error u[k] − θ[k-d] (less Ga(a) beside an accelerometer feedback), encoder counts.
+    v : numpy.ndarray, shape (N,)
+        The logged commands, whole DAC counts.
+    d : int
+        The alignment.
+    dt : float
+        Sample time, s.
+
+    Yields
+    ------
+    (ContinuousDesign, str)
+        Truncated first; none when the counts' least-squares residual is past what whole
+        counts make (a log no such law made), or the law's own run strays from them.
+    """
+    c = rows.least_squares("none")
+    if c is None:
+        return
+    order = rows.order
+    # the float law explains the logged integers to their quantization or is not this law:
+    # v[k] = x[k] − r[k] with |r| < 1, so the residual is −r[k] − Σ a_j r[k−j] (and the fit's
+    # bias), never past 1 + Σ|a_j|; a log no law made is not searched for designs (18 s a log)
+    keep = ~rows.clamped
+    resid = rows.v[keep] - rows.X[keep] @ c
+    reach = 1.0 + float(np.sum(np.abs(c[order + 1:])))
+    if not resid.size or np.max(np.abs(resid)) > reach + SENT_SLACK or np.sqrt(np.mean(resid ** 2)) > 0.5 * reach:
+        return
+    first = c
+    for stored in STORED:
+        c, miss = output_error(e, v, d, order, rows.limit, first, stored)
+        if miss > SENT_MISS:  # its own float run strays from the counts: not this law
+            continue
+
+        def interval(num, den, stored=stored):
+            return sent_gain_interval(e, v, d, rows.limit, stored, num, den, _gain_guess(c, num))
+
+        design = recognize(c[:order + 1], np.concatenate(([1.0], c[order + 1:])), dt, interval)
+        if design is not None:
+            yield design, f"float-{stored}"
+
+
+def sent_gain_interval(e: np.ndarray, v: np.ndarray, d: int, limit: float, stored: str, num: np.ndarray,
+                       den: np.ndarray, k_ref: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """The gains K with which laws K·num[i]/den[i], their recursion on the clamped float and the
+    whole count sent (:data:`station.control.compensator.SENT`), give every logged v.
+
+    The float the recursion remembers is not in the log, but with the law's poles fixed it is
+    affine in K, x[k] = α[k]·K + β[k], row by row (a clamped row resets it to ±limit); each
+    row's Q(x[k]) = v[k] then bounds K from both sides, and the rows together give an
+    interval, for every law at once. A row at ±limit is clamped for a truncated command; for
+    a rounded one it may be a float within half a count of the limit: clamped where every
+    gain left would clamp it, else as ``k_ref`` (within the gains left; their middle without
+    it) would (the replay decides).
+
+    Parameters
+    ----------
+    e : numpy.ndarray, shape (N,)
+        The error u[k] − θ[k-d] (0 for k < d), encoder counts.
+    v : numpy.ndarray, shape (N,)
+        The logged commands, whole DAC counts.
+    d : int
+        The alignment.
+    limit : float
+        The clamp, DAC counts.
+    stored : {"trunc", "round"}
+        How the command was made whole.
+    num, den : numpy.ndarray, shape (L, order+1)
+        Unit-gain laws, ascending powers of z⁻¹, ``den[:, 0] = 1``.
+    k_ref : numpy.ndarray, shape (L,), optional
+        A gain near each law's (e.g. its first coefficient from least squares), for the
+        rounded command's rows at the limit before any row bounds the gain.
+
+    Returns
+    -------
+    lo, hi : numpy.ndarray, shape (L,)
+        lo > hi where no gain does.
+    """
+    num, den = np.atleast_2d(num), np.atleast_2d(den)
+    n_laws, order = num.shape[0], max(num.shape[1], den.shape[1]) - 1
+    alpha = np.zeros((order, n_laws))  # x[k-1..k-order] = alpha·K + beta
+    beta = np.zeros((order, n_laws))
+    lo_k, hi_k = np.full(n_laws, -np.inf), np.full(n_laws, np.inf)
+    edge = 0.0 if stored == "trunc" else 0.5
+    with np.errstate(over="ignore", invalid="ignore", divide="ignore"):  # an unstable candidate's x grows past floats
+        for k in range(d, v.size):
+            g = sum(num[:, i] * e[k - i] for i in range(num.shape[1]) if k - i >= 0)
+            a_y = g - sum(den[:, j] * alpha[j - 1] for j in range(1, den.shape[1]))
+            b_y = -sum(den[:, j] * beta[j - 1] for j in range(1, den.shape[1]))
+            vk = v[k]
+            if vk >= limit or vk <= -limit:  # y beyond the limit (less the rounding's half count)
+                s = 1.0 if vk > 0 else -1.0
+                lo, hi = (limit - edge, np.inf) if s > 0 else (-np.inf, -limit + edge)
+                clamped = np.ones(n_laws, bool)
+                if edge:  # within half a count of it, the float is remembered as it is
+                    bounded = np.isfinite(lo_k) & np.isfinite(hi_k)
+                    guess = 0.5 * (lo_k + hi_k) if k_ref is None else k_ref
+                    ref = np.where(bounded, np.clip(guess, lo_k, hi_k), 0.0 if k_ref is None else k_ref)
+                    ends = np.stack([a_y * np.where(bounded, lo_k, ref), a_y * np.where(bounded, hi_k, ref)]) + b_y
+                    beyond = s * ends >= limit
+                    middle = s * (a_y * ref + b_y) >= limit
+                    clamped = np.where(beyond.all(axis=0) | ~beyond.any(axis=0), beyond[0], middle)
+                x_a = np.where(clamped, 0.0, a_y)
+                x_b = np.where(clamped, s * limit, b_y)
+            else:
+                if stored == "trunc":
+                    lo, hi = (vk, vk + 1.0) if vk > 0 else (vk - 1.0, vk) if vk < 0 else (-1.0, 1.0)
+                else:
+                    lo, hi = vk - 0.5, vk + 0.5
+                x_a, x_b = a_y, b_y
+            k1, k2 = (lo - b_y) / a_y, (hi - b_y) / a_y
+            low = np.where(a_y > 0, k1, np.where(a_y < 0, k2, -np.inf))
+            high = np.where(a_y > 0, k2, np.where(a_y < 0, k1, np.inf))
+            dead = (a_y == 0) & ((b_y < lo) | (b_y > hi)) | ~np.isfinite(a_y) | ~np.isfinite(b_y)
+            lo_k = np.maximum(lo_k, np.nan_to_num(low, nan=-np.inf))
+            hi_k = np.where(dead, -np.inf, np.minimum(hi_k, np.nan_to_num(high, nan=np.inf)))
+            if order:
+                alpha = np.vstack([x_a[None], alpha[:-1]])
+                beta = np.vstack([x_b[None], beta[:-1]])
+    lost = np.isnan(lo_k) | np.isnan(hi_k)
+    return np.where(lost, np.inf, lo_k), np.where(lost, -np.inf, hi_k)
