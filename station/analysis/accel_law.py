@@ -22,9 +22,10 @@ projection), and last the law itself with every factor free over every unclamped
 (:func:`scipy.optimize.least_squares`), to the data's last digits (the thesis's Ga to 1e-12
 of its design from its 10-digit log).
 
-A recursion on the stored integer is not identified beside Ga: the least-squares D is off
-by enough that no Gth reproduces the integers (on a blind case the deepest linear program's
-margin was −0.021 counts at that D, −0.0034 after 400 programs searching D's poles).
+A recursion on the stored integer is not identified beside Ga here: the least-squares D is
+off by enough that no Gth reproduces the integers (on a blind case the deepest linear
+program's margin was −0.021 counts at that D, −0.0034 after 400 programs searching D's
+poles); beside whole counts :mod:`station.analysis.controller_id` tries the thesis's Ga.
 """
 
 from __future__ import annotations

@@ -10,8 +10,9 @@ each for both alignments d (DESIGN.md "Timing and log rows": v[k] = C(u[k], θ[k
 - then, where a moved and v is no whole count, the rig's two-input law: a P or linear Gth
   of order 0 to 3 with accelerometer feedback Ga of order 0 to 3, θ̂_d = u − Ga(a)
   (DESIGN.md "Compensators"; :mod:`station.analysis.accel_law` finds Ga, then Gth is found
-  from e = u − θ − Ga(a) as any one-input law). Ga beside a recursion on the stored integer
-  is not tried.
+  from e = u − θ − Ga(a) as any one-input law). Beside whole-count commands (a recursion on
+  the stored integer, or on the float with its whole count sent) only the thesis's Ga is
+  tried: another Ga's coefficients are not found to the quantization (:mod:`station.analysis.accel_law`).
 
 Each at the rig's clamp (±200, or the DAC's when v exceeds it) or the log's own (a level
 |v| sits at on several rows), and with the recursion as lab software ran it
