@@ -25,7 +25,25 @@ from station.control.compensator import STORED
 
 
 def clamped_float(e: np.ndarray, c: np.ndarray, order: int, limit: float, d: int) -> np.ndarray:
-    """x[k] = sat(Σ b_i e[k-i] − Σ a_j x[k-j]) from rest at row d: what a recursion on the float remembers."""
+    """x[k] = sat(Σ b_i e[k-i] − Σ a_j x[k-j]) from rest at row d: what a recursion on the
+    float remembers (linear stretches by scipy's ``lfilter``, restarted after the clamp).
+
+    Parameters
+    ----------
+    e : numpy.ndarray, shape (N,)
+        The error, encoder counts (0 before d).
+    c : numpy.ndarray, shape (2·order + 1,)
+        [b_0..b_m, a_1..a_m].
+    order : int
+    limit : float
+        The clamp, DAC counts.
+    d : int
+        The alignment: rows before it are 0.
+
+    Returns
+    -------
+    numpy.ndarray, shape (N,)
+    """
     from scipy.signal import lfilter, lfiltic  # lazy: start-up time
 
     num, den = c[:order + 1], np.concatenate(([1.0], c[order + 1:]))
@@ -54,7 +72,7 @@ def clamped_float(e: np.ndarray, c: np.ndarray, order: int, limit: float, d: int
 
 
 def output_error(e: np.ndarray, v: np.ndarray, d: int, order: int, limit: float, c: np.ndarray,
-                  stored: str) -> np.ndarray:
+                 stored: str) -> tuple[np.ndarray, float]:
     """The law whose own float run is closest to the middle of the floats the logged whole
     counts allow (``stored``: v + sign(v)/2 truncated, v rounded; least squares on the rows
     inside the clamp, from ``c``): least squares with the logged integers as the history
@@ -147,7 +165,7 @@ def sent_designs(rows: LawRows, e: np.ndarray, v: np.ndarray, d: int, dt: float
         if miss > SENT_MISS:  # its own float run strays from the counts: not this law
             continue
 
-        def interval(num, den, stored=stored):
+        def interval(num, den, stored=stored, c=c):
             return sent_gain_interval(e, v, d, rows.limit, stored, num, den, _gain_guess(c, num))
 
         design = recognize(c[:order + 1], np.concatenate(([1.0], c[order + 1:])), dt, interval)
