@@ -112,6 +112,29 @@ def law_compensator(num, den, limit: float | None, dt: float, kind: str, extra: 
     """A compensator for a law found in a log: its z-law (and Ga's), clamp and recursion, its
     spec saying where it came from ("inferred from the data") and ``extra`` (a design, kp).
 
+    Parameters
+    ----------
+    num, den : array_like
+        Gth's z-law, ascending powers of z⁻¹.
+    limit : float or None
+        The clamp, DAC counts.
+    dt : float
+        Sample time, s.
+    kind : str
+        The spec's kind ("p", "linear-1", "linear-1+accel-3", "pid").
+    extra : dict, optional
+        More of the spec (``design``, ``kp``).
+    recursion : str
+        One of :data:`station.control.compensator.RECURSIONS`.
+    name : str, optional
+        The compensator's name (the kind without it).
+    ga : (array_like, array_like), optional
+        Ga's z-law (num, den).
+
+    Returns
+    -------
+    Compensator
+
     Raises
     ------
     ValueError
@@ -186,7 +209,27 @@ def fit_alignments(controller, u, theta, a, v, alignments=ALIGNMENTS, skipped=No
 def check_law(controller, u, theta, a, v, law: str, alignments, design=None,
               prefer: int | None = PREFERRED_ALIGNMENT, primed: int = 0) -> IdentifiedController | None:
     """``controller`` at its best alignment (:func:`fit_alignments`), as an IdentifiedController
-    named ``law``; None when no alignment was tried."""
+    named ``law``.
+
+    Parameters
+    ----------
+    controller : Compensator or OpenLoop
+    u, theta, a, v : array_like, shape (N,)
+        The log's reference, samples and commands.
+    law : str
+        The law's words for reports.
+    alignments : sequence of int
+    design : ContinuousDesign, optional
+    prefer : int or None
+        As :func:`fit_alignments`.
+    primed : int
+        As :func:`fit_alignments`.
+
+    Returns
+    -------
+    IdentifiedController or None
+        None when no alignment was tried.
+    """
     fit, exact = fit_alignments(controller, u, theta, a, v, alignments, prefer=prefer, primed=primed)
     return None if fit is None else IdentifiedController(controller, *fit, law, design, exact)  # None: no alignment tried
 

@@ -79,6 +79,22 @@ def output_error(e: np.ndarray, v: np.ndarray, d: int, order: int, limit: float,
     biases the poles by their rounding (a lead's pole 6 % off, past the round number's
     neighbours), the law's own history does not.
 
+    Parameters
+    ----------
+    e : numpy.ndarray, shape (N,)
+        The error, encoder counts (0 before d).
+    v : numpy.ndarray, shape (N,)
+        The logged commands, whole DAC counts.
+    d : int
+        The alignment.
+    order : int
+    limit : float
+        The clamp, DAC counts.
+    c : numpy.ndarray, shape (2·order + 1,)
+        The start, [b_0..b_m, a_1..a_m] (least squares on the counts).
+    stored : {"trunc", "round"}
+        How the command was made whole.
+
     Returns
     -------
     (numpy.ndarray, float)
