@@ -241,6 +241,10 @@ def test_the_rigs_lead_logged_as_the_whole_counts_it_sent(rig_data, tmp_path, st
     assert np.all(sim["v"] == np.round(sim["v"]))  # the model is sent whole counts as the rig was
     float_law = LoggedRun.from_path(src)
     assert float_law.controller.recursion == "none" and float_law.max_abs_dv < 1e-6  # the rig's own log: the float
+    if stored == "trunc":  # the same loop the rig ran: its device truncated the float it was sent
+        ours, rigs = run.simulate(DiscretePlant(), sensors=False), float_law.simulate(DiscretePlant(), sensors=False)
+        np.testing.assert_array_equal(ours.prediction["theta"], rigs.prediction["theta"])
+        np.testing.assert_array_equal(ours.prediction["a"], rigs.prediction["a"])
 
 
 def _rewrite(src, dst, column, scale, digits=None):
