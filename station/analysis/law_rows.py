@@ -240,4 +240,3 @@ def tie_rows(rows: LawRows, c: np.ndarray, recursion: str) -> int:
     if np.any((rows.predict(c, recursion) != rows.v) & ~near):
         return 0
     return int(np.count_nonzero(near))
-

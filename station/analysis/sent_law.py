@@ -57,10 +57,10 @@ def clamped_float(e: np.ndarray, c: np.ndarray, order: int, limit: float, d: int
         if not over.size:
             x[k:] = run
             break
-        j = int(over[0])
-        x[k:k + j] = run[:j]
-        x[k + j] = np.clip(run[j], -limit, limit)
-        k += j + 1
+        first = int(over[0])
+        x[k:k + first] = run[:first]
+        x[k + first] = np.clip(run[first], -limit, limit)
+        k += first + 1
         while k < e.size:  # row by row while the clamp holds, then linear again
             acc = sum(num[i] * e[k - i] for i in range(order + 1) if k - i >= 0)
             acc -= sum(den[j] * x[k - j] for j in range(1, order + 1) if k - j >= d)

@@ -123,7 +123,9 @@ class Compensator:
         if recursion not in RECURSIONS:
             raise ValueError(f"recursion must be one of {', '.join(RECURSIONS)}, got {recursion!r}")
         self.recursion = recursion
-        self._store = RECURSIONS[recursion]
+        sent = recursion in SENT  # decided once: step() runs in the real-time loop
+        self._store = None if sent else RECURSIONS[recursion]  # the whole count remembered
+        self._send = RECURSIONS[recursion] if sent else None  # the float remembered, its whole count sent
         self.gth = gth
         self.ga = ga
         self.limit = None if limit is None else float(limit)
@@ -165,13 +167,12 @@ class Compensator:
         e = theta_d_hat - theta
         gth = self.gth
         v = gth.output(e)
-        sent = self.recursion in SENT
-        if self._store is not None and not sent:  # the integer the lab's software stored, then its clamp
+        if self._store is not None:  # the integer the lab's software stored, then its clamp
             v = self._store(v)
         v = saturate(v, self.limit)
         gth.commit(e, v)
-        if sent:  # the float remembered, its whole count sent
-            v = self._store(v)
+        if self._send is not None:  # the float remembered, its whole count sent
+            v = self._send(v)
         return v, theta_d_hat
 
     def prime(self, u: float, theta: float, a: float, v: float) -> tuple[float, float]:

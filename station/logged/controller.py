@@ -286,7 +286,8 @@ def identify_controller(log: RunLog, skipped=None) -> ControllerId:
     The header's controller (a PID header with ki or kd != 0 matched against the standard
     discretizations, :func:`station.analysis.pid_law.match_pid`) is replayed over the
     log (:func:`station.analysis.controller_id.variant_of`: as it is, or with its recursion on
-    the stored integer when every logged v is a whole count). It is confirmed when it
+    the stored integer, or on the float with that whole count sent, when every logged v is a
+    whole count). It is confirmed when it
     reproduces every logged v (to 1e-6 DAC counts; exactly for an integer recursion). When it
     does not, or the log names none, a law is identified from u, θ and v
     (:func:`station.analysis.controller_id.infer_controller`: open loop, P, linear e -> v up

@@ -373,7 +373,7 @@ NO_FAULTS = SensorFaults()
 
 
 def decide_faults(evidence: Sequence[SensorEvidence], accel_gain: float | None = None,
-                  trends: bool = True, refined_by: str | None = None) -> SensorFaults:
+                  trends: bool = True, refined_by: str = REFINED_BY_FIT) -> SensorFaults:
     """Decide the sensors' signs and scales from the runs' evidence (module docstring).
 
     Parameters
@@ -467,7 +467,7 @@ def decide_faults(evidence: Sequence[SensorEvidence], accel_gain: float | None =
         drift_claim = _trend_claim("accel_drift", [e.accel_slope for e in ev], DRIFT_COUNTS_PER_S, effects,
                                    DRIFT_HEADER, "counts per s")
     claims = [_theta_claim(s_th, th_cos, th_ratio, a_ratio, effects),
-              _accel_claim(s_a, a_cos, effects, first, refined_by or REFINED_BY_FIT),
+              _accel_claim(s_a, a_cos, effects, first, refined_by),
               bias_claim, drift_claim]
     if hint:
         claims.append(AuditClaim("columns", "θ: 1024 encoder counts per revolution", "undecided", "unchecked", hint))
