@@ -7,7 +7,8 @@ samples; ``station.logged.LoggedRun`` sees only the file. Judged per case:
 
 - contradiction: a header that lies (``lie:*``, ``session``) is contradicted (the audit's
   controller row "contradicted", ``controller_source`` "inferred (header contradicted)"); a
-  header that does not (``int:*`` name none, ``honest:*`` tell the truth) is not;
+  header that does not (``int:*`` name none, ``honest:*`` tell the truth) is not; and the
+  columns written as unsigned 16-bit words (``words``) are contradicted, each, and no other;
 - reproduced: the controller used reproduces every logged v to the device's quantization
   (1e-6 counts, the logged integer exactly for an integer recursion) at the hidden alignment;
 - design: the law the data gave is the hidden one: the continuous design (num/den in s, to
@@ -97,7 +98,7 @@ def run_case(case: str, seed: int) -> Outcome:
             f"{hidden.reference} {hidden.amplitude:g}, header {hidden.header}"
             + (f" kp {hidden.header_kp:g}" if hidden.header_kp is not None else ""))
     with tempfile.TemporaryDirectory(prefix="blind_audit_") as tmp:
-        path, _ = write_audit_case(Path(tmp), case, seed)
+        path, hidden = write_audit_case(Path(tmp), case, seed)
         t0 = time.perf_counter()
         try:
             run = LoggedRun.from_path(path)
@@ -109,6 +110,11 @@ def run_case(case: str, seed: int) -> Outcome:
     contradicted = any(c.claim == "controller" and c.verdict == "contradicted" for c in audit.claims)
     lied = hidden.lies
     contradiction_ok = (contradicted and run.source == "inferred (header contradicted)") if lied else not contradicted
+    # the columns the lab's client read as unsigned 16-bit words: contradicted, each, and no other
+    shown = {"u": "u", "v": "v", "theta": "θ", "a": "a", "theta_d_hat": "θ̂d"}
+    words = {c.header for c in audit.claims if c.claim == "columns" and c.verdict == "contradicted"
+             and "16-bit" in c.data}
+    contradiction_ok = contradiction_ok and words == {f"{shown[c]} in signed counts" for c in hidden.wrapped}
     reproduced = run.reproduced and (run.alignment == hidden.alignment or hidden.alignment in run.identified.alignments)
     spec = getattr(run.controller, "spec", {}) or {}
     design = spec.get("design")
@@ -165,7 +171,7 @@ def table(outcomes: list[Outcome], seeds: str, elapsed: float) -> str:
         "header (the 2014 layout); `session`: the lab's third session (open-loop header, a lead on the "
         "truncated integer at alignment 0); `lie:sent`: an open-loop header on a lead whose recursion runs on the "
         "float while the whole count it sends is logged; `lie:accel_int`: an open-loop header on a lead with "
-        "DESIGN.md's Ga as it stands, the command stored or sent as a whole count; `honest:*`: true headers (P, or a lead on the stored integer, or "
+        "DESIGN.md's Ga as it stands, the command stored or sent as a whole count; `words`: a true header (P, or a lead on the stored integer) over columns the lab's client read from the legacy protocol's 16-bit two's-complement words as unsigned (a negative x written as 65536 + x; each such column must be contradicted, and no column of any other class); `honest:*`: true headers (P, or a lead on the stored integer, or "
         "`honest:lead_sent` a lead on the float logging the whole count it sends) the audit must confirm. `+coulomb_friction`: beside a hidden Coulomb friction of 3–30 DAC counts.",
         "",
         "Bar (issue 26): in at least 9 of 10 seeds, a lying header contradicted (and a true or absent one not), "

@@ -13,6 +13,8 @@ import math
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from station.analysis.continuous_design import to_continuous
 from station.compare import compare_run, format_comparison
@@ -20,6 +22,7 @@ from station.logged import LoggedRun
 from station.logged.accelerometer import MOUNTED_CLAIM
 from station.logged.audit import ACCEL_CLAIM, ACCEL_DRIFT_COUNTS, CLAIMS, SOURCES, VERDICTS, file_name_claims
 from station.logged.start import START_CLAIM
+from station.logged.units import unsigned_words, word_claims
 from station.plant import DiscretePlant
 from station.replay import format_report, replay
 from station.survey import format_table, survey
@@ -275,6 +278,79 @@ def test_t_in_ms_and_theta_in_radians_are_found_and_converted(rig_data, tmp_path
     assert rows[("columns", "θ in radians")] == "contradicted"
     np.testing.assert_array_equal(rad.data["theta"], truth.data["theta"])
     assert rad.reproduced and rad.source == "header"
+
+
+def _as_words(src, dst, columns):
+    """The log with each named column's values written as the legacy protocol's 16-bit words
+    read unsigned (x mod 65536), as a lab client that decodes them so writes them."""
+    lines = src.read_text().splitlines()
+    head = [x for x in lines if x.startswith("#")]
+    names = head[-1][1:].split("\t")
+    cols = [names.index(c) for c in columns]
+    out = []
+    for line in lines[len(head):]:
+        cells = line.split("\t")
+        for col in cols:
+            cells[col] = f"{int(float(cells[col])) % 65536}"
+        out.append("\t".join(cells))
+    dst.write_text("\n".join(head + out) + "\n")
+    return dst
+
+
+@pytest.mark.parametrize("name, columns", [(RIG_LOGS[0], ("v", "$\\theta$", "a")), (RIG_LOGS[1], ("v", "a")),
+                                           (RIG_LOGS[7], ("u", "v", "$\\theta$", "a"))])
+def test_columns_read_as_unsigned_words_are_found_and_read_signed(rig_data, tmp_path, name, columns):
+    # The rig's logs with columns as a client writes them that reads the legacy protocol's
+    # two's-complement words as unsigned (the lab's own system-ID files hold v = 65472 for -64):
+    # every column that went negative is contradicted and read back exactly; the rest as the log
+    src = rig_data / name
+    truth = LoggedRun.from_path(src)
+    run = LoggedRun.from_path(_as_words(src, tmp_path / src.name, columns))
+    std = {"$\\theta$": "theta"}
+    wrapped = [c for c in columns if np.any(truth.data[std.get(c, c)] < 0)]
+    assert wrapped  # each of these logs goes negative somewhere
+    said = [c.header for c in run.audit.contradicted]
+    shown = {"$\\theta$": "θ"}
+    assert said == [f"{shown.get(c, c)} in signed counts" for c in wrapped], said
+    assert run.audit.lines()[0].startswith(f"header: {said[0]}; data: ")
+    for col in ("u", "v", "theta", "a"):
+        np.testing.assert_array_equal(run.data[col], truth.data[col])
+    assert (run.reproduced, run.alignment, run.source) == (truth.reproduced, truth.alignment, truth.source)
+    assert run.step_metrics() == truth.step_metrics()
+
+
+@given(st.lists(st.integers(-2048, 2047), min_size=2, max_size=300))
+@settings(max_examples=300, deadline=None)
+def test_unsigned_words_decided_from_the_numbers(values):
+    # Truth: a signed column of the rig's range written as words is found exactly when it goes
+    # negative, and read back exactly; a column that never does is left as it is.
+    x = np.array(values, dtype=float)
+    claims, signed = word_claims({"v": np.mod(x, 65536.0)})
+    assert bool(claims) is bool(np.any(x < 0))
+    if claims:
+        np.testing.assert_array_equal(signed["v"], x)
+    assert not unsigned_words(x)  # signed counts are never words
+
+
+@given(st.integers(32768 - 500, 32768 + 500), st.integers(600, 3000), st.integers(0, 2**32 - 1))
+@settings(max_examples=100, deadline=None)
+def test_an_unsigned_channel_around_mid_scale_is_not_words(centre, swing, seed):
+    # An ADC read unsigned around 32768 (no zeroing), crossing the middle, is no word column:
+    # read as two's complement it would jump by 65535 there
+    x = np.round(centre + swing * np.sin(np.linspace(0.0, 20.0, 500))
+                 + np.random.default_rng(seed).normal(0.0, 2.0, 500))
+    assert np.min(x) < 32768 <= np.max(x)
+    assert not unsigned_words(x)
+
+
+@pytest.mark.parametrize("case, seed", [("words", 0), ("words", 1), ("words", 4), ("words+coulomb_friction", 8)])
+def test_blind_columns_read_as_unsigned_words(tmp_path, case, seed):
+    path, hidden = write_audit_case(tmp_path, case, seed)
+    run = LoggedRun.from_path(path)
+    shown = {"u": "u", "v": "v", "theta": "θ", "a": "a", "theta_d_hat": "θ̂d"}
+    said = [c.header for c in run.audit.contradicted]
+    assert hidden.wrapped and said == [f"{shown[c]} in signed counts" for c in hidden.wrapped]
+    assert run.reproduced and run.source == "header" and all(np.max(run.data[c]) < 32768 for c in hidden.wrapped)
 
 
 def test_a_stated_amplitude_the_data_contradict(rig_data, tmp_path):

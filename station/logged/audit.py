@@ -19,14 +19,12 @@ the log decides it.
 from __future__ import annotations
 
 import dataclasses
-import math
 import re
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
-from station.rig import COUNTS_PER_REV, DT
 from station.runlog import RunLog
 
 CLAIMS = ("controller", "alignment", "reference", "sample_time", "columns")
@@ -37,9 +35,6 @@ VERDICTS = ("confirmed", "contradicted", "unchecked")
 
 SOURCES = ("header", "inferred", "inferred (header contradicted)")
 """Where a log's controller came from (``controller_source``; None: no controller)."""
-
-THETA_UNITS = {"radians": 2.0 * math.pi / COUNTS_PER_REV, "degrees": 360.0 / COUNTS_PER_REV}
-"""θ columns in another unit than counts, by one encoder count in that unit."""
 
 ACCEL_DRIFT_WINDOW_S = 2.0
 """Window of :func:`accel_drift`, s."""
@@ -53,10 +48,6 @@ counts with no accelerometer behind it."""
 
 ACCEL_CLAIM = "a: tip acceleration"
 """What every log's a column claims (the header of its "columns" audit claim)."""
-
-QUANTUM_TOLERANCE = 1e-3
-"""How far (in counts) a θ value may sit from a whole count of a unit and still be one
-(values printed to a few decimals)."""
 
 
 @dataclass(frozen=True)
@@ -260,32 +251,7 @@ def file_kp_claims(path: str | Path, controller_text: str, kp: float | None) -> 
     return out
 
 
-# --- time base and units -----------------------------------------------------------------
-
-@dataclass(frozen=True)
-class TimeBase:
-    """The sample-time and column-unit claims of a log and the log its data say it is
-    (:func:`time_base`).
-
-    Attributes
-    ----------
-    claims : tuple of AuditClaim
-    log : RunLog
-        The log itself when every claim holds or is unchecked; else a copy with the data's
-        answer (t in s, θ and u in encoder counts, the header's dt replaced) and a note.
-    """
-
-    claims: tuple[AuditClaim, ...]
-    log: RunLog
-
-
-def _quantum_fits(x: np.ndarray, quantum: float) -> bool:
-    q = x / quantum
-    return bool(np.all(np.abs(q - np.round(q)) <= QUANTUM_TOLERANCE))
-
-
-def _whole(x: np.ndarray) -> bool:
-    return bool(np.all(x == np.round(x)))
+# --- the accelerometer column ------------------------------------------------------------
 
 
 def accel_drift(a, dt: float, rest: float = 0.0) -> float:
@@ -430,88 +396,6 @@ def accel_claims(a, dt: float, rest: float, rest_samples: int = 0) -> list[Audit
            f"stands {ACCEL_SIGNAL_RATIO:g} times above it)")
     return [AuditClaim("columns", ACCEL_CLAIM, "a is no tip acceleration (its accelerometer is not used)",
                        "contradicted", f"{moves}; {why}")]
-
-
-def time_base(log: RunLog) -> TimeBase:
-    """Check a log's sample time (our header's ``dt``, else the rig's 0.002 s with t in s)
-    against its t column, and its θ column's unit (encoder counts) against θ's quantization.
-
-    Parameters
-    ----------
-    log : RunLog
-
-    Returns
-    -------
-    TimeBase
-        A t column in ms (steps 1000 times the claimed sample time) and a θ column in
-        radians or degrees (multiples of one encoder count in that unit, not whole) are
-        contradicted and converted; a header dt the t column contradicts is replaced by t's.
-    """
-    claims: list[AuditClaim] = []
-    data = log.data
-    changes: dict[str, np.ndarray] = {}
-    meta = log.meta
-    notes: list[str] = []
-    sample_time = log.sample_time
-    header_dt = meta.get("dt") if log.format == "station" else None
-    stated = header_dt if isinstance(header_dt, (int, float)) and not isinstance(header_dt, bool) else None
-    claimed = float(stated) if stated is not None else DT
-    where = f"dt = {claimed:g} s" if stated is not None else f"{claimed:g} s (the rig's rate; t in s)"
-    t = np.asarray(data["t"], dtype=float)
-    has_t = sample_time is not None and not any("no time column" in n for n in log.notes)
-    new_meta = None
-    if has_t:
-        steps = np.diff(t)
-        spread = f"steps {np.min(steps):.6g} .. {np.max(steps):.6g} s, median {sample_time:.6g} s"
-        if math.isclose(sample_time, claimed, rel_tol=1e-6):
-            claims.append(AuditClaim("sample_time", where, f"{sample_time:g} s", "confirmed", f"t {spread}"))
-        elif math.isclose(sample_time, 1000.0 * claimed, rel_tol=1e-6):
-            claims.append(AuditClaim("columns", "t in s", "t in ms", "contradicted",
-                                     f"t steps by {sample_time:g} per row, {claimed:g} s in ms"))
-            changes["t"] = t / 1000.0
-            sample_time = round(sample_time / 1000.0, 9)
-            notes.append("the t column is in ms (the audit): divided by 1000")
-        else:
-            claims.append(AuditClaim("sample_time", where, f"{sample_time:g} s", "contradicted",
-                                     f"t {spread}; the data's {sample_time:g} s is used"))
-            if stated is not None:
-                new_meta = {**meta, "dt": sample_time}
-        n = np.asarray(data["n"], dtype=float)
-        if n.size > 1 and np.all(np.isfinite(n)) and not np.all(np.diff(n) == 1):
-            gaps = int(np.count_nonzero(np.diff(n) != 1))
-            claims.append(AuditClaim("sample_time", "one row per tick", f"n jumps at {gaps} rows", "contradicted",
-                                     f"n steps {np.min(np.diff(n)):g} .. {np.max(np.diff(n)):g}: rows are missing "
-                                     f"or repeated"))
-    theta = np.asarray(data["theta"], dtype=float)
-    if theta.size and np.all(np.isfinite(theta)) and np.any(theta):
-        if _whole(theta):
-            claims.append(AuditClaim("columns", "θ in encoder counts", "θ in encoder counts", "confirmed",
-                                     "every θ is a whole count"))
-        else:
-            unit = next((name for name, q in THETA_UNITS.items() if _quantum_fits(theta, q)), None)
-            if unit is None:
-                claims.append(AuditClaim("columns", "θ in encoder counts", "θ not quantized", "unchecked",
-                                         f"θ is not whole counts (e.g. {theta[np.flatnonzero(theta != np.round(theta))[0]]:.6g})"
-                                         f" nor whole counts of radians or degrees: its unit is not decided"))
-            else:
-                q = THETA_UNITS[unit]
-                changes["theta"] = np.round(theta / q)
-                u = np.asarray(data["u"], dtype=float)
-                also = ""
-                if u.size and np.all(np.isfinite(u)) and not _whole(u):
-                    changes["u"] = u / q
-                    also = "; u, not whole counts, taken in the same unit"
-                claims.append(AuditClaim("columns", "θ in encoder counts", f"θ in {unit}", "contradicted",
-                                         f"every θ is a multiple of {q:.6g} ({unit} per encoder count of "
-                                         f"{COUNTS_PER_REV}/rev), none of 1{also}"))
-                notes.append(f"θ is in {unit} (the audit): converted to encoder counts{also}")
-    if not changes and new_meta is None:
-        return TimeBase(tuple(claims), log)
-    fixed = dict(data)
-    fixed.update(changes)
-    corrected = dataclasses.replace(log, data=fixed, sample_time=sample_time, meta=new_meta or meta,
-                                    notes=list(log.notes) + notes)
-    return TimeBase(tuple(claims), corrected)
 
 
 # --- the alignment ------------------------------------------------------------------------

@@ -13,13 +13,14 @@ from station.analysis.metrics import StepMetrics, step_metrics
 from station.control.rerun import AlignmentFit, detect_alignment, is_closed_loop
 from station.errors import StationError
 from station.logged.accelerometer import ON_THE_TIP, Mounting, decide_mounting, motion_ratio, silent_claims
-from station.logged.audit import (ACCEL_CLAIM, Audit, AuditClaim, TimeBase, accel_claims, alignment_claim,
-                                  file_kp_claims, reference_claims, time_base)
+from station.logged.audit import (ACCEL_CLAIM, Audit, AuditClaim, accel_claims, alignment_claim,
+                                  file_kp_claims, reference_claims)
 from station.logged.controller import ControllerId, describe_controller, identify_controller
 from station.logged.sensors import NO_FAULTS, REFINED_BY_MODEL, SensorFaults, decide_faults, sensor_evidence
-from station.logged.simulate import ModelRun, compared_theta, simulate_log
 from station.logged.reference import Reference, classify_reference
+from station.logged.simulate import ModelRun, compared_theta, simulate_log
 from station.logged.start import Start, start_claims
+from station.logged.units import TimeBase, time_base
 from station.plant.effects import SENSOR_SIGNS
 from station.runlog import SKIPPED, RunLog, read_log
 
@@ -39,7 +40,7 @@ class LoggedRun:
     and log rows" and "Compensators". Every claim the log makes is checked against its
     data first (DESIGN.md "Log audit", :attr:`audit`), and where the data contradict it
     their answer is what this class gives: the columns' units and the sample time
-    (:func:`station.logged.audit.time_base`), the controller, whether it was closed loop
+    (:func:`station.logged.units.time_base`), the controller, whether it was closed loop
     and its alignment (:func:`station.logged.controller.identify_controller`).
 
     Parameters

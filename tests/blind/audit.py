@@ -27,12 +27,15 @@ accelerometer feedback Ga as it stands, the command stored or sent as a whole co
 the four ways); truthful headers
 the audit must confirm ("honest:p", "honest:lead_int"; "honest:lead_sent": a lead whose
 recursion runs on the float while the whole count it sends is logged, "float-trunc" or
-"float-round"). A class joined with "+" to
+"float-round"); "words": a true header (a P or a lead on the stored integer) over a log whose
+signed columns (u, v, θ, a, θ̂_d where whole) the lab's client read from the legacy protocol's
+16-bit two's-complement words as unsigned, a negative x written as 65536 + x. A class joined with "+" to
 "coulomb_friction" hides that friction too (drawn as :func:`tests.blind.cases.draw` draws it).
 """
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import zlib
 from dataclasses import dataclass, field
@@ -49,7 +52,7 @@ N = 2000
 
 CLASSES = ("lie:open_loop", "lie:p_kp", "lie:lead_pole", "lie:accel_fb", "int:trunc_d0", "int:trunc_d1",
            "int:round_d0", "int:round_d1", "session", "lie:sent", "lie:accel_int", "honest:p", "honest:lead_int",
-           "honest:lead_sent")
+           "honest:lead_sent", "words")
 """The audit's blind classes, in the validation table's order."""
 
 PHYSICAL = ("coulomb_friction",)
@@ -99,6 +102,11 @@ class AuditCase:
         Hidden physical effects.
     ga_s : (tuple, tuple) or None
         The accelerometer feedback's continuous design (num, den, descending powers of s).
+    words : bool
+        Whether the signed columns are written as unsigned 16-bit words.
+    wrapped : tuple of str
+        The columns that held a negative value, so written as 65536 + x ("u", "v", "theta",
+        "a", "theta_d_hat"): filled in by :func:`write_audit_case`.
     """
 
     name: str
@@ -116,6 +124,8 @@ class AuditCase:
     amplitude: float
     effects: dict = field(default_factory=dict)
     ga_s: tuple | None = None
+    words: bool = False
+    wrapped: tuple = ()
 
     @property
     def lies(self) -> bool:
@@ -195,6 +205,12 @@ def draw_case(name: str, seed: int) -> AuditCase:
     if base == "honest:p":
         return AuditCase(**{**common, "header_kp": kp}, **p_law, recursion=str(rng.choice(["none", "trunc"])),
                          alignment=int(rng.integers(0, 2)), header="p")
+    if base == "words":
+        if rng.random() < 0.5:
+            return AuditCase(**{**common, "header_kp": kp}, **p_law, recursion="trunc",
+                             alignment=int(rng.integers(0, 2)), header="p", words=True)
+        return AuditCase(**common, **lead, recursion=str(rng.choice(["trunc", "round"])),
+                         alignment=int(rng.integers(0, 2)), header="lead", words=True)
     if base == "honest:lead_sent":
         return AuditCase(**common, **lead, recursion=str(rng.choice(["float-trunc", "float-round"])),
                          alignment=int(rng.integers(0, 2)), header="lead")
@@ -296,6 +312,21 @@ def header(case: AuditCase) -> list[str]:
     return []
 
 
+WORD_COLUMNS = ("u", "v", "theta", "a", "theta_d_hat")
+"""The signed columns a client may read as unsigned 16-bit words (the "words" class)."""
+
+
+def as_words(sim: Run, written: tuple[str, ...] = WORD_COLUMNS) -> tuple[Run, tuple[str, ...]]:
+    """The run with each whole-count signed column of ``written`` that goes negative written
+    as an unsigned 16-bit word (x mod 65536), and the names of those columns."""
+    cols = {}
+    for name in written:
+        x = np.asarray(getattr(sim, name), dtype=float)
+        if np.all(x == np.round(x)) and np.any(x < 0):
+            cols[name] = np.mod(x, 65536.0)
+    return dataclasses.replace(sim, **cols), tuple(cols)
+
+
 def format_audit_run(case: AuditCase, sim: Run) -> str:
     """The log text: the rig's ``#`` layout, or the 2014 layout (no header, columns
     ``Time (sec.) u theta accel v``) when the header names nothing."""
@@ -326,7 +357,8 @@ def write_audit_case(folder: Path, name: str, seed: int) -> tuple[Path, AuditCas
     -------
     (Path, AuditCase)
         The file, named like the lab's (``audit_<class>_<seed>_SLFR_RTP_<test>.txt``; no
-        kp, amplitude or other claim in the name), and what it hides.
+        kp, amplitude or other claim in the name), and what it hides (with ``wrapped``, the
+        columns written as words).
     """
     case = draw_case(name, seed)
     folder = Path(folder)
@@ -334,5 +366,9 @@ def write_audit_case(folder: Path, name: str, seed: int) -> tuple[Path, AuditCas
     test = {"open-loop": "OL_Test", "p": "P_control_Test", "lead": "Motor_Comp_Gth", "none": "run"}[case.header]
     tag = name.replace(":", "-").replace("+", "-").replace("_", "-")  # no "kp_", "amp_" claims in the name
     path = folder / f"audit_{tag}_{seed}_SLFR_RTP_{test}.txt"
-    path.write_text(format_audit_run(case, simulate_audit_case(case, seed)))
+    sim = simulate_audit_case(case, seed)
+    if case.words:
+        sim, wrapped = as_words(sim, WORD_COLUMNS if case.header == "lead" else WORD_COLUMNS[:-1])
+        case = dataclasses.replace(case, wrapped=wrapped)
+    path.write_text(format_audit_run(case, sim))
     return path, case

@@ -1,0 +1,216 @@
+"""The log audit's sample time and column units: the claims a log's numbers make by their
+form (DESIGN.md "Log audit": the sample time, the columns' units).
+
+A log claims its sample time (our header's dt, else the rig's 0.002 s with t in s) and that
+its columns hold counts: θ whole encoder counts, u, v, a and θ̂d signed counts. The data
+contradict the first when t steps by another time (or by ms), θ's unit when its values are
+whole multiples of a radian's or a degree's share of one count, and a column's sign when it
+holds the rig's 16-bit two's-complement words (the legacy protocol's, ``../shared/spec/
+protocol.md``) read as unsigned: a negative x written as 65536 + x. Each contradiction is
+converted, and said.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from station.logged.audit import AuditClaim
+from station.rig import COUNTS_PER_REV, DT
+from station.runlog import RunLog
+
+THETA_UNITS = {"radians": 2.0 * math.pi / COUNTS_PER_REV, "degrees": 360.0 / COUNTS_PER_REV}
+"""θ columns in another unit than counts, by one encoder count in that unit."""
+
+QUANTUM_TOLERANCE = 1e-3
+"""How far (in counts) a θ value may sit from a whole count of a unit and still be one
+(values printed to a few decimals)."""
+
+
+
+@dataclass(frozen=True)
+class TimeBase:
+    """The sample-time and column-unit claims of a log and the log its data say it is
+    (:func:`time_base`).
+
+    Attributes
+    ----------
+    claims : tuple of AuditClaim
+    log : RunLog
+        The log itself when every claim holds or is unchecked; else a copy with the data's
+        answer (t in s, θ and u in encoder counts, signed counts, the header's dt replaced)
+        and a note.
+    """
+
+    claims: tuple[AuditClaim, ...]
+    log: RunLog
+
+
+def _quantum_fits(x: np.ndarray, quantum: float) -> bool:
+    q = x / quantum
+    return bool(np.all(np.abs(q - np.round(q)) <= QUANTUM_TOLERANCE))
+
+
+def _whole(x: np.ndarray) -> bool:
+    return bool(np.all(x == np.round(x)))
+
+
+WORD = 65536
+"""One more than the largest unsigned 16-bit word: a two's-complement word x < 0 read as
+unsigned is ``WORD + x`` (the legacy protocol's words, ``../shared/spec/protocol.md``)."""
+
+WORD_COLUMNS = {"u": "u", "v": "v", "theta": "θ", "a": "a", "theta_d_hat": "θ̂d"}
+"""Columns of signed counts that a client may have read as unsigned words, by their printed name."""
+
+
+def unsigned_words(x) -> bool:
+    """Whether a column of signed counts holds 16-bit two's-complement words read as unsigned.
+
+    Decided from the numbers alone: every value a whole count in [0, 65536), some at or above
+    32768, and read as two's complement (x − 65536 for x ≥ 32768) the column is at most half
+    as large and no less continuous (its largest step between rows no larger). A signal near
+    zero that goes negative comes back (64, 65472 → 64, −64); an unsigned channel centred on
+    32768 does not (its signed reading jumps by 65535 where it crosses the middle).
+
+    Parameters
+    ----------
+    x : array_like, shape (N,)
+        One column, counts.
+
+    Returns
+    -------
+    bool
+    """
+    x = np.asarray(x, dtype=float)
+    if x.size == 0 or not np.all(np.isfinite(x)) or not _whole(x):
+        return False
+    high = x >= WORD // 2
+    if not np.any(high) or np.min(x) < 0 or np.max(x) >= WORD:
+        return False
+    signed = np.where(high, x - WORD, x)
+    if np.max(np.abs(signed)) > 0.5 * np.max(np.abs(x)):
+        return False
+    return x.size < 2 or np.max(np.abs(np.diff(signed))) <= np.max(np.abs(np.diff(x)))
+
+
+def word_claims(data: dict[str, np.ndarray]) -> tuple[list[AuditClaim], dict[str, np.ndarray]]:
+    """The columns of ``data`` that hold 16-bit words read as unsigned (:func:`unsigned_words`),
+    each a contradicted "columns" claim, and the columns read as two's complement.
+
+    Parameters
+    ----------
+    data : dict of str to ndarray
+        A log's columns (:attr:`station.runlog.RunLog.data`).
+
+    Returns
+    -------
+    claims : list of AuditClaim
+    signed : dict of str to ndarray
+        The converted columns, by name.
+    """
+    claims: list[AuditClaim] = []
+    signed: dict[str, np.ndarray] = {}
+    for name, shown in WORD_COLUMNS.items():
+        if name not in data or not unsigned_words(data[name]):
+            continue
+        x = np.asarray(data[name], dtype=float)
+        high = x >= WORD // 2
+        signed[name] = np.where(high, x - WORD, x)
+        claims.append(AuditClaim(
+            "columns", f"{shown} in signed counts", f"{shown} as unsigned 16-bit words", "contradicted",
+            f"{int(np.count_nonzero(high))} of its {x.size} values are {int(np.min(x[high]))}..{int(np.max(x[high]))}; "
+            f"read as two's complement (x - {WORD}) the column is {int(np.min(signed[name]))}.."
+            f"{int(np.max(signed[name]))} counts, no less continuous"))
+    return claims, signed
+
+
+def time_base(log: RunLog) -> TimeBase:
+    """Check a log's sample time (our header's ``dt``, else the rig's 0.002 s with t in s)
+    against its t column, its θ column's unit (encoder counts) against θ's quantization, and
+    every column of signed counts against 16-bit words read as unsigned (:func:`word_claims`).
+
+    Parameters
+    ----------
+    log : RunLog
+
+    Returns
+    -------
+    TimeBase
+        A t column in ms (steps 1000 times the claimed sample time) and a θ column in
+        radians or degrees (multiples of one encoder count in that unit, not whole) and a
+        column of unsigned 16-bit words (:func:`unsigned_words`) are contradicted and
+        converted; a header dt the t column contradicts is replaced by t's.
+    """
+    claims: list[AuditClaim] = []
+    data = log.data
+    changes: dict[str, np.ndarray] = {}
+    meta = log.meta
+    notes: list[str] = []
+    sample_time = log.sample_time
+    header_dt = meta.get("dt") if log.format == "station" else None
+    stated = header_dt if isinstance(header_dt, (int, float)) and not isinstance(header_dt, bool) else None
+    claimed = float(stated) if stated is not None else DT
+    where = f"dt = {claimed:g} s" if stated is not None else f"{claimed:g} s (the rig's rate; t in s)"
+    t = np.asarray(data["t"], dtype=float)
+    has_t = sample_time is not None and not any("no time column" in n for n in log.notes)
+    new_meta = None
+    if has_t:
+        steps = np.diff(t)
+        spread = f"steps {np.min(steps):.6g} .. {np.max(steps):.6g} s, median {sample_time:.6g} s"
+        if math.isclose(sample_time, claimed, rel_tol=1e-6):
+            claims.append(AuditClaim("sample_time", where, f"{sample_time:g} s", "confirmed", f"t {spread}"))
+        elif math.isclose(sample_time, 1000.0 * claimed, rel_tol=1e-6):
+            claims.append(AuditClaim("columns", "t in s", "t in ms", "contradicted",
+                                     f"t steps by {sample_time:g} per row, {claimed:g} s in ms"))
+            changes["t"] = t / 1000.0
+            sample_time = round(sample_time / 1000.0, 9)
+            notes.append("the t column is in ms (the audit): divided by 1000")
+        else:
+            claims.append(AuditClaim("sample_time", where, f"{sample_time:g} s", "contradicted",
+                                     f"t {spread}; the data's {sample_time:g} s is used"))
+            if stated is not None:
+                new_meta = {**meta, "dt": sample_time}
+        n = np.asarray(data["n"], dtype=float)
+        if n.size > 1 and np.all(np.isfinite(n)) and not np.all(np.diff(n) == 1):
+            gaps = int(np.count_nonzero(np.diff(n) != 1))
+            claims.append(AuditClaim("sample_time", "one row per tick", f"n jumps at {gaps} rows", "contradicted",
+                                     f"n steps {np.min(np.diff(n)):g} .. {np.max(np.diff(n)):g}: rows are missing "
+                                     f"or repeated"))
+    words, signed = word_claims(data)
+    claims += words
+    changes.update(signed)
+    notes += [f"{WORD_COLUMNS[name]} holds 16-bit two's-complement words read as unsigned (the audit): "
+              f"values of {WORD // 2} and more taken as x - {WORD}" for name in signed]
+    theta = np.asarray(changes.get("theta", data["theta"]), dtype=float)
+    if theta.size and np.all(np.isfinite(theta)) and np.any(theta):
+        if _whole(theta):
+            claims.append(AuditClaim("columns", "θ in encoder counts", "θ in encoder counts", "confirmed",
+                                     "every θ is a whole count"))
+        else:
+            unit = next((name for name, q in THETA_UNITS.items() if _quantum_fits(theta, q)), None)
+            if unit is None:
+                claims.append(AuditClaim("columns", "θ in encoder counts", "θ not quantized", "unchecked",
+                                         f"θ is not whole counts (e.g. {theta[np.flatnonzero(theta != np.round(theta))[0]]:.6g})"
+                                         f" nor whole counts of radians or degrees: its unit is not decided"))
+            else:
+                q = THETA_UNITS[unit]
+                changes["theta"] = np.round(theta / q)
+                u = np.asarray(changes.get("u", data["u"]), dtype=float)
+                also = ""
+                if u.size and np.all(np.isfinite(u)) and not _whole(u):
+                    changes["u"] = u / q
+                    also = "; u, not whole counts, taken in the same unit"
+                claims.append(AuditClaim("columns", "θ in encoder counts", f"θ in {unit}", "contradicted",
+                                         f"every θ is a multiple of {q:.6g} ({unit} per encoder count of "
+                                         f"{COUNTS_PER_REV}/rev), none of 1{also}"))
+                notes.append(f"θ is in {unit} (the audit): converted to encoder counts{also}")
+    if not changes and new_meta is None:
+        return TimeBase(tuple(claims), log)
+    fixed = dict(data)
+    fixed.update(changes)
+    corrected = dataclasses.replace(log, data=fixed, sample_time=sample_time, meta=new_meta or meta,
+                                    notes=list(log.notes) + notes)
+    return TimeBase(tuple(claims), corrected)
