@@ -17,6 +17,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from station.analysis.continuous_design import to_continuous
+from station.analysis.controller_id import infer_controller
 from station.compare import compare_run, format_comparison
 from station.logged import LoggedRun
 from station.logged.accelerometer import MOUNTED_CLAIM
@@ -351,6 +352,26 @@ def test_blind_columns_read_as_unsigned_words(tmp_path, case, seed):
     said = [c.header for c in run.audit.contradicted]
     assert hidden.wrapped and said == [f"{shown[c]} in signed counts" for c in hidden.wrapped]
     assert run.reproduced and run.source == "header" and all(np.max(run.data[c]) < 32768 for c in hidden.wrapped)
+
+
+def test_a_command_column_of_two_levels_identifies_no_law(rig_data, tmp_path):
+    # The P step with its u and v columns swapped: the "v" column is the step itself, 0 then 50.
+    # Any law of high gain clamped at ±50 gives it, so none is named (before: an "inferred"
+    # 300(s-2)/(s-3000) with Ga at a ±50 clamp, "reproducing every logged v", fit -3690 %)
+    src = rig_data / RIG_LOGS[1]
+    lines = src.read_text().splitlines()
+    rows = [x.split("\t") for x in lines if not x.startswith("#")]
+    swapped = ["\t".join([r[0], r[1], r[3], r[2], *r[4:]]) for r in rows]
+    path = tmp_path / src.name
+    path.write_text("\n".join([x for x in lines if x.startswith("#")] + swapped) + "\n")
+    run = LoggedRun.from_path(path)
+    assert run.source == "header" and not run.reproduced
+    assert run.audit.lines()[0].startswith("header: P, kp = 2; data: not this law") and "no law found" in \
+        run.audit.lines()[0]
+    step = np.where(np.arange(300) >= 20, 50.0, 0.0)
+    assert infer_controller(np.zeros(300), np.zeros(300), step) is None
+    bang = np.sign(np.sin(np.arange(300) / 7.0)) * 200.0
+    assert infer_controller(bang / 10.0, np.zeros(300), bang) is None
 
 
 def test_a_stated_amplitude_the_data_contradict(rig_data, tmp_path):

@@ -60,6 +60,11 @@ from station.rig import CLAMP, DT
 MAX_ORDER = 3
 """Highest order of the linear compensators tried."""
 
+MIN_FREE_ROWS = 10
+"""Rows a law must be judged on, where the logged v is neither 0 nor at its largest |v|: a log
+whose commands are only 0 and one level (a step column, a bang-bang run) is reproduced by
+any law of high enough gain at a clamp of that level, and identifies none."""
+
 
 @dataclass(frozen=True)
 class IdentifiedController:
@@ -417,8 +422,8 @@ def infer_controller(u, theta, v, a=None, dt: float = DT, rig_limit: float = CLA
     IdentifiedController or None
         The simplest law (open loop, P, then linear of order 1..3; a float recursion before
         an integer one; then Gth with accelerometer feedback Ga) that reproduces every logged v (to :data:`TOLERANCE`; exactly for an
-        integer recursion); None when none does, or the log lacks u, θ or v (NaN) or never
-        commands anything.
+        integer recursion); None when none does, or the log lacks u, θ or v (NaN), never
+        commands anything, or commands nothing but 0 and one level (:data:`MIN_FREE_ROWS`).
     """
     u = np.asarray(u, dtype=float)
     theta = np.asarray(theta, dtype=float)
@@ -431,6 +436,8 @@ def infer_controller(u, theta, v, a=None, dt: float = DT, rig_limit: float = CLA
     if np.array_equal(v, u) or np.array_equal(v[1:], u[1:]) and v[0] == 0:
         ol = OpenLoop(limit=None)
         return check_law(ol, u, theta, a, v, "open loop, v = u", alignments, prefer=prefer)
+    if np.count_nonzero((v != 0) & (np.abs(v) < np.max(np.abs(v)))) < MIN_FREE_ROWS:
+        return None  # nothing but 0 and a clamp's level: no law is pinned (MIN_FREE_ROWS)
 
     recursions = ("none", *STORED) if whole_counts(v) else ("none",)
     for order in range(MAX_ORDER + 1):
