@@ -374,6 +374,29 @@ def test_a_command_column_of_two_levels_identifies_no_law(rig_data, tmp_path):
     assert infer_controller(bang / 10.0, np.zeros(300), bang) is None
 
 
+@pytest.mark.parametrize("name", [RIG_LOGS[1], RIG_LOGS[4]])
+@pytest.mark.parametrize("cut", ["drop", "repeat"])
+def test_a_true_header_over_missing_or_repeated_rows_is_not_contradicted(rig_data, tmp_path, name, cut):
+    # The P and lead steps with 20 rows deleted, or 10 rows repeated, at row 500: the rows say so
+    # ("n jumps"), and the header's law, which gives every row before the gap, is not judged
+    # across it (before: "contradicted", its first miss the row after the gap)
+    src = rig_data / name
+    lines = src.read_text().splitlines()
+    head = [x for x in lines if x.startswith("#")]
+    rows = lines[len(head):]
+    rows = rows[:500] + rows[520:] if cut == "drop" else rows[:500] + rows[490:500] + rows[500:]
+    path = tmp_path / src.name
+    path.write_text("\n".join(head + rows) + "\n")
+    run = LoggedRun.from_path(path)
+    verdicts = {c.claim: c for c in run.audit.claims if c.claim in ("controller", "sample_time") and
+                c.verdict != "confirmed"}
+    assert verdicts["sample_time"].data == "n jumps at 1 rows"
+    if "controller" in verdicts:  # the lead's float memory or the P's lag crosses the gap
+        assert verdicts["controller"].verdict == "unchecked" and "row 500" in verdicts["controller"].data
+    assert run.source == "header" and run.alignment == 1
+    assert not any(c.claim == "controller" for c in run.audit.contradicted)
+
+
 def test_a_stated_amplitude_the_data_contradict(rig_data, tmp_path):
     src = rig_data / RIG_LOGS[1]  # a step of 50
     path = tmp_path / "step_amp_100_SLFR_RTP_P_control_kp=2.0.txt"

@@ -30,7 +30,7 @@ from station.analysis.pid_law import match_pid
 from station.control import Compensator, DiscreteTF, OpenLoop, controller_from_spec, lead_controller, p_controller
 from station.control.compensator import recursion_words
 from station.control.designs import MAX_ORDER, z_problem
-from station.control.rerun import ALIGNMENTS, AlignmentFit, is_closed_loop
+from station.control.rerun import ALIGNMENTS, AlignmentFit, detect_alignment, is_closed_loop
 from station.errors import StationError
 from station.logged.audit import AuditClaim
 from station.logged.start import start_claims
@@ -424,12 +424,37 @@ def identify_controller(log: RunLog, skipped=None) -> ControllerId:
     verdict = "contradicted" if header_dv >= 1.0 else "unchecked"
     evidence = (f"the header's controller replays v to max |dv| = {header_dv:.3g} counts at best, and no law "
                 f"tried ({tried}) reproduces it")
+    data_says = f"not this law (max |dv| = {header_dv:.3g} counts); no law found"
+    gap = None if controller is None else _miss_at_gap(used, u, theta, a, v, data["n"], skipped)
+    if gap is not None:  # the law is judged on rows it never saw together: not a contradiction
+        gap, fit = gap
+        verdict = "unchecked"
+        data_says = f"this law up to row {gap}, where n jumps; not judged across it"
+        evidence += (f"; but it reproduces every row before row {gap}, where n jumps (rows missing or repeated): "
+                     f"across the gap its inputs are not the log's ticks, so the data cannot judge it")
     if verdict == "contradicted":
         notes.append(f"{evidence}: the header's controller is used, but the data contradict it")
     return ControllerId(controller, "header" if controller is not None else None, notes,
                         None if controller is None else fit, AuditClaim(
-                            "controller", said, f"not this law (max |dv| = {header_dv:.3g} counts); no law found",
-                            verdict, evidence))
+                            "controller", said, data_says, verdict, evidence))
+
+
+def _miss_at_gap(controller, u, theta, a, v, n, skipped) -> tuple[int, AlignmentFit] | None:
+    """The row where n jumps (a tick missing or repeated) at which, or within its alignment
+    after which, the controller replayed at some alignment first misses the logged v, and
+    that alignment's fit; None when at every alignment it first misses elsewhere, or n does
+    not jump."""
+    n = np.asarray(n, dtype=float)
+    if n.size < 2 or not np.all(np.isfinite(n)):
+        return None
+    gaps = np.flatnonzero(np.diff(n) != 1) + 1
+    for d in ALIGNMENTS if gaps.size else ():
+        fit = detect_alignment(controller, u, theta, a, v, (d,), skipped)
+        miss = np.flatnonzero(np.abs(np.asarray(fit.v_replayed, float) - np.asarray(v, float)) > TOLERANCE)
+        near = gaps[(miss[0] >= gaps) & (miss[0] <= gaps + d)] if miss.size else gaps[:0]
+        if near.size:
+            return int(near[0]), fit
+    return None
 
 
 _CUT_NOTE = ("the law reproduces the log with its first {} row(s) of memory taken as logged: a copy cut from a "
