@@ -68,6 +68,8 @@ def test_real_logs_contradict_nothing(rig_data, name):
         assert f"file name: kp = {kp:g}" in confirmed
     for amp in stated.get("amp", []):
         assert f"file name: amplitude {amp:g}" in confirmed
+    for n in stated.get("stopn", []) + stated.get("duration", []):
+        assert f"file name: {n:g} samples" in confirmed
 
 
 def test_file_name_claims():
@@ -76,6 +78,7 @@ def test_file_name_claims():
         "amp": [25.0], "kp": [1.0], "stopn": [20000.0]}
     assert file_name_claims("log_dec_hold_and_release_1_SLFR_RTP_OL_Test_uend=77.txt") == {"uend": [77.0]}
     assert file_name_claims("audit_lie-p-kp_0_SLFR_RTP_P_control_Test.txt") == {}
+    assert file_name_claims(RIG_LOGS[4]) == {"amp": [100.0], "duration": [1000.0]}
 
 
 BLIND = [("lie:open_loop", 0), ("lie:open_loop", 1), ("lie:p_kp", 0), ("lie:lead_pole", 2), ("int:trunc_d0", 1),

@@ -143,12 +143,13 @@ _FILE_CLAIMS = {
     "kp": re.compile(r"(?:^|_)kp[_=]" + _NUMBER + r"(?=_|$)"),
     "uend": re.compile(r"(?:^|_)uend=" + _NUMBER + r"(?=_|$)"),
     "stopn": re.compile(r"(?:^|_)stopn=" + _NUMBER + r"(?=_|$)"),
+    "duration": re.compile(r"(?:^|_)duration[_=]" + _NUMBER + r"(?=_|$)"),
 }
 
 
 def file_name_claims(path: str | Path) -> dict[str, list[float]]:
     """What a lab's file name states, by the rig's naming (``..._kp_2_...``, ``amp=100``,
-    ``uend=77``, ``stopn=20000``).
+    ``uend=77``, ``stopn=20000``, ``duration_1000``).
 
     Parameters
     ----------
@@ -158,8 +159,9 @@ def file_name_claims(path: str | Path) -> dict[str, list[float]]:
     Returns
     -------
     dict
-        "amp" (reference amplitude, counts), "kp" (P gain), "uend" (the last u), "stopn" (the
-        run's samples) -> the distinct values stated, in order; absent keys are not stated.
+        "amp" (reference amplitude, counts), "kp" (P gain), "uend" (the last u), "stopn" and
+        "duration" (the run's samples: the thesis's 2 s steps are ``duration_1000``) -> the
+        distinct values stated, in order; absent keys are not stated.
     """
     stem = Path(path).name
     stem = stem[:-4] if stem.lower().endswith(".txt") else stem
@@ -218,7 +220,7 @@ def reference_claims(log: RunLog, reference) -> list[AuditClaim]:
         ok = u[-1] == uend
         out.append(AuditClaim("reference", f"file name: last u = {uend:g}", f"last u = {u[-1]:g}",
                               "confirmed" if ok else "contradicted", f"u[{u.size - 1}] = {u[-1]:g}"))
-    for stopn in stated.get("stopn", []):
+    for stopn in stated.get("stopn", []) + stated.get("duration", []):
         ok = u.size == stopn
         out.append(AuditClaim("reference", f"file name: {stopn:g} samples", f"{u.size} samples",
                               "confirmed" if ok else "contradicted", f"the log holds {u.size} rows"))
