@@ -357,20 +357,50 @@ def test_blind_columns_read_as_unsigned_words(tmp_path, case, seed):
     assert run.reproduced and run.source == "header" and all(np.max(run.data[c]) < 32768 for c in hidden.wrapped)
 
 
-def test_a_command_column_of_two_levels_identifies_no_law(rig_data, tmp_path):
-    # The P step with its u and v columns swapped: the "v" column is the step itself, 0 then 50.
-    # Any law of high gain clamped at ±50 gives it, so none is named (before: an "inferred"
-    # 300(s-2)/(s-3000) with Ga at a ±50 clamp, "reproducing every logged v", fit -3690 %)
-    src = rig_data / RIG_LOGS[1]
+def _swap_columns(src, dst, first, second, header=True):
     lines = src.read_text().splitlines()
-    rows = [x.split("\t") for x in lines if not x.startswith("#")]
-    swapped = ["\t".join([r[0], r[1], r[3], r[2], *r[4:]]) for r in rows]
-    path = tmp_path / src.name
-    path.write_text("\n".join([x for x in lines if x.startswith("#")] + swapped) + "\n")
-    run = LoggedRun.from_path(path)
-    assert run.source == "header" and not run.reproduced
-    assert run.audit.lines()[0].startswith("header: P, kp = 2; data: not this law") and "no law found" in \
-        run.audit.lines()[0]
+    head = [x for x in lines if x.startswith("#")]
+    names = head[-1][1:].split("\t")
+    i, j = names.index(first), names.index(second)
+    rows = []
+    for line in lines[len(head):]:
+        cells = line.split("\t")
+        cells[i], cells[j] = cells[j], cells[i]
+        rows.append("\t".join(cells))
+    dst.write_text("\n".join((head if header else ["\t".join(names)]) + rows) + "\n")
+    return dst
+
+
+@pytest.mark.parametrize("name, first, second", [(RIG_LOGS[1], "u", "v"), (RIG_LOGS[1], "$\\theta$", "a"),
+                                                 (RIG_LOGS[4], "u", "v"), (RIG_LOGS[4], "$\\theta$", "a"),
+                                                 (RIG_LOGS[7], "$\\theta$", "a")])
+def test_two_columns_swapped_under_a_true_header_are_found(rig_data, tmp_path, name, first, second):
+    # The header's law gives every logged v only with the two columns exchanged: the column
+    # line is contradicted, said first, and the log read swapped (before, the P step with u and
+    # v swapped was "inferred" a 300(s-2)/(s-3000) with Ga at a ±50 clamp, θ fit -3690 %)
+    src = rig_data / name
+    truth = LoggedRun.from_path(src)
+    run = LoggedRun.from_path(_swap_columns(src, tmp_path / src.name, first, second))
+    shown = {"$\\theta$": "θ"}
+    pair = f"{shown.get(first, first)} and {shown.get(second, second)}"
+    assert run.audit.lines()[0] == f"header: {pair} as the column line names them; data: {pair} swapped"
+    assert [c.claim for c in run.audit.contradicted] == ["columns"]
+    for col in ("u", "v", "theta", "a"):
+        np.testing.assert_array_equal(run.data[col], truth.data[col])
+    assert (run.reproduced, run.alignment, run.source) == (True, truth.alignment, "header")
+    assert run.step_metrics() == truth.step_metrics()
+    plain = LoggedRun.from_path(src)  # the log as it is: nothing swapped
+    assert not plain.audit.contradicted
+
+
+def test_a_command_column_of_two_levels_identifies_no_law(rig_data, tmp_path):
+    # The P step with its u and v columns swapped and no header to name its law: the "v" column
+    # is the step itself, 0 then 50. Any law of high gain clamped at ±50 gives it, so none is
+    # inferred (before: 300(s-2)/(s-3000) with Ga at a ±50 clamp, "reproducing every logged v")
+    src = rig_data / RIG_LOGS[1]
+    run = LoggedRun.from_path(_swap_columns(src, tmp_path / "p_step_no_header.txt", "u", "v", header=False))
+    assert run.source is None and run.controller is None
+    assert [c.data for c in run.audit.claims if c.claim == "controller"] == ["no law found"]
     step = np.where(np.arange(300) >= 20, 50.0, 0.0)
     assert infer_controller(np.zeros(300), np.zeros(300), step) is None
     bang = np.sign(np.sin(np.arange(300) / 7.0)) * 200.0

@@ -156,19 +156,25 @@ def law_compensator(num, den, limit: float | None, dt: float, kind: str, extra: 
     return Compensator(tf, ga_tf, limit=limit, name=name or kind, spec=spec, recursion=recursion)
 
 
-def with_recursion(controller: Compensator, recursion: str) -> Compensator:
-    """The same compensator (fresh filters) with its recursion on ``recursion``'s command.
+def with_recursion(controller: Compensator, recursion: str, limit: float | None = None) -> Compensator:
+    """The same compensator (fresh filters) with its recursion on ``recursion``'s command
+    (and its clamp at ``limit`` when given).
 
     Parameters
     ----------
     controller : Compensator
     recursion : {"none", "trunc", "round", "float-trunc", "float-round"}
+    limit : float, optional
+        Another clamp, DAC counts.
     """
     spec = {**controller.spec, "recursion": recursion}
     if recursion == "none":
         spec.pop("recursion")
+    if limit is not None:
+        spec["limit"] = limit
     ga = None if controller.ga is None else DiscreteTF(controller.ga.num, controller.ga.den)
-    return Compensator(DiscreteTF(controller.gth.num, controller.gth.den), ga, limit=controller.limit,
+    limit = controller.limit if limit is None else limit
+    return Compensator(DiscreteTF(controller.gth.num, controller.gth.den), ga, limit=limit,
                        name=controller.name, spec=spec, shaper=controller.shaper, recursion=recursion)
 
 

@@ -25,6 +25,7 @@ from station.analysis.controller_id import (
     ga_text,
     infer_controller,
     variant_of,
+    with_recursion,
 )
 from station.analysis.pid_law import match_pid
 from station.control import Compensator, DiscreteTF, OpenLoop, controller_from_spec, lead_controller, p_controller
@@ -277,6 +278,42 @@ def log_controller(log: RunLog) -> tuple[Compensator | OpenLoop | None, list[str
     """
     cid = identify_controller(log)
     return cid.controller, cid.notes
+
+
+def header_law_dv(log: RunLog, skipped=None) -> float | None:
+    """How near the closed-loop law a log's header names comes to its logged commands: max
+    |v_replayed − v_logged| at its best alignment and recursion (:func:`variant_of`) and clamp
+    (its own, or the log's largest |v|), DAC counts; None when the header names no closed-loop law, the log is sampled at another rate
+    than the rig's, or u, θ or v are not finite. The header's coefficients as given: no law is
+    inferred (:func:`identify_controller` does that).
+
+    Parameters
+    ----------
+    log : RunLog
+    skipped : array_like of bool, optional
+        As :func:`identify_controller`.
+    """
+    if _custom_controller(log) is not None:
+        return None
+    try:
+        controller, _ = _named_controller(log)
+    except StationError:
+        return None
+    data = log.data
+    if (controller is None or not is_closed_loop(controller) or log.format == "rig" and abs(log.dt - DT) > 1e-9
+            or not all(np.all(np.isfinite(data[c])) for c in ("u", "theta", "v"))):
+        return None
+    a = np.where(np.isfinite(data["a"]), data["a"], 0.0)
+    best = None
+    peak = float(np.max(np.abs(data["v"]))) if len(log) else 0.0
+    for limit in dict.fromkeys((controller.limit, peak if 0 < peak < (controller.limit or np.inf) else None)):
+        if limit is None:
+            continue  # the rig's clamp, then the log's own (a header does not state its clamp)
+        law = controller if limit == controller.limit else with_recursion(controller, controller.recursion, limit)
+        _, fit, _ = variant_of(law, data["u"], data["theta"], a, data["v"], ALIGNMENTS, skipped)
+        if fit is not None and (best is None or fit.max_abs_dv < best):
+            best = float(fit.max_abs_dv)
+    return best
 
 
 def identify_controller(log: RunLog, skipped=None) -> ControllerId:

@@ -15,6 +15,7 @@ from station.errors import StationError
 from station.logged.accelerometer import ON_THE_TIP, Mounting, decide_mounting, motion_ratio, silent_claims
 from station.logged.audit import (ACCEL_CLAIM, Audit, AuditClaim, accel_claims, alignment_claim,
                                   file_kp_claims, reference_claims)
+from station.logged.columns import Columns, check_columns
 from station.logged.controller import ControllerId, describe_controller, identify_controller
 from station.logged.sensors import NO_FAULTS, REFINED_BY_MODEL, SensorFaults, decide_faults, sensor_evidence
 from station.logged.reference import Reference, classify_reference
@@ -60,7 +61,8 @@ class LoggedRun:
     def __init__(self, log: RunLog):
         self.raw_log = log
         self._time_base: TimeBase = time_base(log)
-        self.log = self._time_base.log
+        self._columns: Columns = check_columns(self._time_base.log, _skipped(self._time_base.log))
+        self.log = self._columns.log
         self._simulable = False
 
     @classmethod
@@ -107,6 +109,8 @@ class LoggedRun:
         StationError
             Our header's controller spec is malformed, or a rig header's gain is not a number.
         """
+        if self._columns.identified is not None:  # the column check identified it already
+            return self._columns.identified
         return identify_controller(self.log, self.skipped) if len(self) else ControllerId(None, None, [])
 
     @cached_property
@@ -134,6 +138,7 @@ class LoggedRun:
         claims += reference_claims(self.log, self.reference)
         claims += self.start.claims
         claims += self._time_base.claims
+        claims += self._columns.claims
         claims += self._accel_claims
         if self.mounting.claim is not None:
             claims.append(self.mounting.claim)
@@ -363,11 +368,7 @@ class LoggedRun:
     def skipped(self) -> np.ndarray | None:
         """Rows whose sample the station did not answer (our logs' :data:`station.runlog.SKIPPED`
         status bit; None for a log without a status column or without skips)."""
-        status = self.data.get("status")
-        if status is None or self.log.format != "station":
-            return None
-        mask = (np.nan_to_num(status).astype(np.int64) & SKIPPED) != 0
-        return mask if mask.any() else None
+        return _skipped(self.log)
 
     @property
     def alignment(self) -> int | None:
@@ -540,3 +541,11 @@ class LoggedRun:
             sim = dataclasses.replace(sim, how=sim.how + f"; with the sensor faults the audit decided from the "
                                       f"data ({said})")
         return sim
+
+
+def _skipped(log: RunLog) -> np.ndarray | None:
+    status = log.data.get("status")
+    if status is None or log.format != "station":
+        return None
+    mask = (np.nan_to_num(status).astype(np.int64) & SKIPPED) != 0
+    return mask if mask.any() else None

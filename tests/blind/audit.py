@@ -29,7 +29,10 @@ the audit must confirm ("honest:p", "honest:lead_int"; "honest:lead_sent": a lea
 recursion runs on the float while the whole count it sends is logged, "float-trunc" or
 "float-round"); "words": a true header (a P or a lead on the stored integer) over a log whose
 signed columns (u, v, θ, a, θ̂_d where whole) the lab's client read from the legacy protocol's
-16-bit two's-complement words as unsigned, a negative x written as 65536 + x. A class joined with "+" to
+16-bit two's-complement words as unsigned, a negative x written as 65536 + x; "swap": a true
+header (a P, or a lead on the stored integer) over a log whose columns u and v, or θ and a,
+hold each other's values (a script that wrote them in another order than it named them). A
+class joined with "+" to
 "coulomb_friction" hides that friction too (drawn as :func:`tests.blind.cases.draw` draws it).
 """
 
@@ -52,7 +55,7 @@ N = 2000
 
 CLASSES = ("lie:open_loop", "lie:p_kp", "lie:lead_pole", "lie:accel_fb", "int:trunc_d0", "int:trunc_d1",
            "int:round_d0", "int:round_d1", "session", "lie:sent", "lie:accel_int", "honest:p", "honest:lead_int",
-           "honest:lead_sent", "words")
+           "honest:lead_sent", "words", "swap")
 """The audit's blind classes, in the validation table's order."""
 
 PHYSICAL = ("coulomb_friction",)
@@ -107,6 +110,8 @@ class AuditCase:
     wrapped : tuple of str
         The columns that held a negative value, so written as 65536 + x ("u", "v", "theta",
         "a", "theta_d_hat"): filled in by :func:`write_audit_case`.
+    swap : tuple of str
+        Two columns written in each other's place (("u", "v") or ("theta", "a")), else ().
     """
 
     name: str
@@ -126,6 +131,7 @@ class AuditCase:
     ga_s: tuple | None = None
     words: bool = False
     wrapped: tuple = ()
+    swap: tuple = ()
 
     @property
     def lies(self) -> bool:
@@ -205,6 +211,13 @@ def draw_case(name: str, seed: int) -> AuditCase:
     if base == "honest:p":
         return AuditCase(**{**common, "header_kp": kp}, **p_law, recursion=str(rng.choice(["none", "trunc"])),
                          alignment=int(rng.integers(0, 2)), header="p")
+    if base == "swap":
+        pair = ("u", "v") if rng.random() < 0.5 else ("theta", "a")
+        if rng.random() < 0.5:
+            return AuditCase(**{**common, "header_kp": kp}, **p_law, recursion=str(rng.choice(["none", "trunc"])),
+                             alignment=int(rng.integers(0, 2)), header="p", swap=pair)
+        return AuditCase(**common, **lead, recursion=str(rng.choice(["trunc", "round"])),
+                         alignment=int(rng.integers(0, 2)), header="lead", swap=pair)
     if base == "words":
         if rng.random() < 0.5:
             return AuditCase(**{**common, "header_kp": kp}, **p_law, recursion="trunc",
@@ -370,5 +383,8 @@ def write_audit_case(folder: Path, name: str, seed: int) -> tuple[Path, AuditCas
     if case.words:
         sim, wrapped = as_words(sim, WORD_COLUMNS if case.header == "lead" else WORD_COLUMNS[:-1])
         case = dataclasses.replace(case, wrapped=wrapped)
+    if case.swap:
+        first, second = case.swap
+        sim = dataclasses.replace(sim, **{first: getattr(sim, second), second: getattr(sim, first)})
     path.write_text(format_audit_run(case, sim))
     return path, case

@@ -1,0 +1,115 @@
+"""Which column holds what: the column line's names checked against the header's law.
+
+A log's column line is a claim too (DESIGN.md "Log audit": the columns' units and signs, and
+so their names): a lab script that wrote its columns in another order than it named them
+gives a log whose header names the right law and whose "v" is not that law's output. When
+the header's closed-loop law reproduces no logged v as the columns are named but every one
+with two columns swapped (u and v, θ and a), the data say which column is which: the claim is
+contradicted, said first, and the log is read with the columns swapped. The law is the
+header's own, its coefficients as given; a swap is never inferred beside an inferred law.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from typing import NamedTuple
+
+from station.analysis.law_rows import TOLERANCE
+from station.logged.audit import AuditClaim
+from station.logged.controller import ControllerId, header_law_dv, identify_controller
+from station.runlog import RunLog
+
+SWAPS = (("u", "v"), ("theta", "a"))
+"""Column pairs a swap is tried for: the reference and the command, the two sensors."""
+
+NEAR_COUNTS = 2.0
+"""A swap is identified from the data (its law completed: printed coefficients, a recursion
+the printing moves by a count) only where the header's law as given comes this near, DAC
+counts, and nearer than as the columns are named."""
+
+SHOWN = {"u": "u", "v": "v", "theta": "θ", "a": "a"}
+"""How a column's name is printed."""
+
+
+class Columns(NamedTuple):
+    """The column claim of a log and the log its data say it is (:func:`check_columns`).
+
+    Attributes
+    ----------
+    claims : tuple of AuditClaim
+        One contradicted "columns" claim when two columns were found swapped, else empty.
+    log : RunLog
+        The log itself, or a copy with the two columns swapped back and a note.
+    identified : ControllerId or None
+        The log's controller (:func:`station.logged.controller.identify_controller`) when
+        deciding needed it, else None.
+    """
+
+    claims: tuple[AuditClaim, ...]
+    log: RunLog
+    identified: ControllerId | None = None
+
+
+def swapped(log: RunLog, first: str, second: str) -> RunLog:
+    """A copy of ``log`` with two of its columns exchanged.
+
+    Parameters
+    ----------
+    log : RunLog
+    first, second : str
+        Standard column names (``station.runlog.COLUMNS``).
+    """
+    data = dict(log.data)
+    data[first], data[second] = log.data[second], log.data[first]
+    return dataclasses.replace(log, data=data)
+
+
+def check_columns(log: RunLog, skipped=None) -> Columns:
+    """Check the column line against the header's closed-loop law (:data:`SWAPS`).
+
+    Parameters
+    ----------
+    log : RunLog
+    skipped : array_like of bool, optional
+        As :func:`station.logged.controller.identify_controller`.
+
+    Returns
+    -------
+    Columns
+        The log as it is when the header names no closed-loop law, when its law reproduces
+        the log as named, or when no swap makes it; else the swapped copy and its claim.
+    """
+    as_named = header_law_dv(log, skipped)
+    if as_named is None or as_named <= TOLERANCE:
+        return Columns((), log)
+    trials = []
+    for first, second in SWAPS:  # the header's law as given
+        trial = swapped(log, first, second)
+        dv = header_law_dv(trial, skipped)
+        if dv is not None and dv <= TOLERANCE:
+            return _swapped_back(log, first, second, trial, as_named, f"to {dv:.2g}")
+        if dv is not None and dv <= NEAR_COUNTS < as_named:
+            trials.append((first, second, trial))
+    if not trials:
+        return Columns((), log)
+    # completed from the data (printed coefficients, a recursion the printing moves by a count)
+    cid = identify_controller(log, skipped)
+    if cid.claim is None or cid.claim.verdict != "contradicted":
+        return Columns((), log, cid)
+    for first, second, trial in trials:
+        found = identify_controller(trial, skipped)
+        if found.claim is not None and found.claim.verdict == "confirmed":
+            return _swapped_back(log, first, second, trial, as_named, f"completed from the data ({found.claim.data})",
+                                 found)
+    return Columns((), log, cid)
+
+
+def _swapped_back(log: RunLog, first: str, second: str, trial: RunLog, as_named: float, how: str,
+                  identified: ControllerId | None = None) -> Columns:
+    a, b = SHOWN[first], SHOWN[second]
+    claim = AuditClaim(
+        "columns", f"{a} and {b} as the column line names them", f"{a} and {b} swapped", "contradicted",
+        f"the header's law replays v to max |dv| = {as_named:.3g} counts as the columns are named, and "
+        f"{how} with the columns named {a} and {b} exchanged")
+    note = f"the columns named {a} and {b} hold {b} and {a} (the audit): read swapped"
+    return Columns((claim,), dataclasses.replace(trial, notes=list(log.notes) + [note]), identified)
