@@ -407,6 +407,19 @@ def test_a_command_column_of_two_levels_identifies_no_law(rig_data, tmp_path):
     assert infer_controller(bang / 10.0, np.zeros(300), bang) is None
 
 
+def test_a_header_law_over_two_levels_of_v_is_not_confirmed(tmp_path):
+    # A P header (kp = 2) over a held hub and a step of 150: v = clamp(2·150) = 200 on every row
+    # after the step. kp = 2 gives it, and so does any kp >= 1.34: the data cannot confirm the
+    # header's gain (before: "confirmed")
+    rows = [f"{k * 0.002:g}\t{k}\t{150 if k >= 20 else 0}\t{200 if k >= 20 else 0}\t0\t0" for k in range(400)]
+    path = tmp_path / "held_SLFR_RTP_P_control_Test.txt"
+    path.write_text("\n".join(["#SLFR RTP P_control_Test", "#kp=2.0", "#t\tn\tu\tv\t$\\theta$\ta"] + rows) + "\n")
+    run = LoggedRun.from_path(path)
+    claim = next(c for c in run.audit.claims if c.claim == "controller")
+    assert run.reproduced and run.source == "header"
+    assert claim.verdict == "unchecked" and "cannot confirm" in claim.evidence
+
+
 @pytest.mark.parametrize("name", [RIG_LOGS[1], RIG_LOGS[4]])
 @pytest.mark.parametrize("cut", ["drop", "repeat"])
 def test_a_true_header_over_missing_or_repeated_rows_is_not_contradicted(rig_data, tmp_path, name, cut):

@@ -49,7 +49,7 @@ import numpy as np
 from station.analysis.accel_law import AccelFeedback, accel_feedback, lagged
 from station.analysis.continuous_design import (ContinuousDesign, alternatives_phrase, nicest_between, recognize,
                                                 to_continuous)
-from station.analysis.law_rows import BOUNDARY, TOLERANCE, LawRows, tie_rows
+from station.analysis.law_rows import BOUNDARY, TOLERANCE, LawRows, pins_a_law, tie_rows
 from station.analysis.sent_law import sent_designs
 from station.control.compensator import SENT, STORED, recursion_words
 from station.control import DAC_LIMIT, Compensator, DiscreteTF, OpenLoop, lead_controller  # DAC_LIMIT: the clamp assumed when v exceeds the rig's ±200
@@ -60,10 +60,6 @@ from station.rig import CLAMP, DT
 MAX_ORDER = 3
 """Highest order of the linear compensators tried."""
 
-MIN_FREE_ROWS = 10
-"""Rows a law must be judged on, where the logged v is neither 0 nor at its largest |v|: a log
-whose commands are only 0 and one level (a step column, a bang-bang run) is reproduced by
-any law of high enough gain at a clamp of that level, and identifies none."""
 
 
 @dataclass(frozen=True)
@@ -429,7 +425,8 @@ def infer_controller(u, theta, v, a=None, dt: float = DT, rig_limit: float = CLA
         The simplest law (open loop, P, then linear of order 1..3; a float recursion before
         an integer one; then Gth with accelerometer feedback Ga) that reproduces every logged v (to :data:`TOLERANCE`; exactly for an
         integer recursion); None when none does, or the log lacks u, θ or v (NaN), never
-        commands anything, or commands nothing but 0 and one level (:data:`MIN_FREE_ROWS`).
+        commands anything, or commands nothing but 0 and one level
+        (:func:`station.analysis.law_rows.pins_a_law`).
     """
     u = np.asarray(u, dtype=float)
     theta = np.asarray(theta, dtype=float)
@@ -442,8 +439,8 @@ def infer_controller(u, theta, v, a=None, dt: float = DT, rig_limit: float = CLA
     if np.array_equal(v, u) or np.array_equal(v[1:], u[1:]) and v[0] == 0:
         ol = OpenLoop(limit=None)
         return check_law(ol, u, theta, a, v, "open loop, v = u", alignments, prefer=prefer)
-    if np.count_nonzero((v != 0) & (np.abs(v) < np.max(np.abs(v)))) < MIN_FREE_ROWS:
-        return None  # nothing but 0 and a clamp's level: no law is pinned (MIN_FREE_ROWS)
+    if not pins_a_law(v):
+        return None  # nothing but 0 and a clamp's level: no law is pinned
 
     recursions = ("none", *STORED) if whole_counts(v) else ("none",)
     for order in range(MAX_ORDER + 1):

@@ -19,6 +19,26 @@ BOUNDARY = 1e-9
 it while a continuous design is recognised: the lab's discretization and ours may differ in
 the last bit, and a row whose x falls on a whole count is decided by that bit."""
 
+MIN_FREE_ROWS = 10
+"""Rows a law must be judged on, where the logged v is neither 0 nor at its largest |v|: a log
+whose commands are only 0 and one level (a step column, a bang-bang run) is reproduced by
+any law of high enough gain at a clamp of that level, and identifies none."""
+
+
+def pins_a_law(v) -> bool:
+    """Whether logged commands can pin a closed-loop law: at least :data:`MIN_FREE_ROWS` rows
+    of v neither 0 nor at its largest |v|.
+
+    Parameters
+    ----------
+    v : array_like, shape (N,)
+        The logged commands, DAC counts.
+    """
+    v = np.asarray(v, dtype=float)
+    if not v.size or not np.all(np.isfinite(v)):
+        return False
+    return int(np.count_nonzero((v != 0) & (np.abs(v) < np.max(np.abs(v))))) >= MIN_FREE_ROWS
+
 
 class LawRows:
     """The rows of a log as one candidate law sees them: x[k] = Σ b_i e[k-i] − Σ a_j v[k-j]

@@ -15,6 +15,7 @@ import dataclasses
 from typing import NamedTuple
 
 from station.analysis.law_rows import TOLERANCE
+from station.errors import StationError
 from station.logged.audit import AuditClaim
 from station.logged.controller import ControllerId, header_law_dv, identify_controller
 from station.runlog import RunLog
@@ -93,11 +94,17 @@ def check_columns(log: RunLog, skipped=None) -> Columns:
     if not trials:
         return Columns((), log)
     # completed from the data (printed coefficients, a recursion the printing moves by a count)
-    cid = identify_controller(log, skipped)
+    try:
+        cid = identify_controller(log, skipped)
+    except StationError:  # said where the controller is asked for (LoggedRun.identified)
+        return Columns((), log)
     if cid.claim is None or cid.claim.verdict != "contradicted":
         return Columns((), log, cid)
     for first, second, trial in trials:
-        found = identify_controller(trial, skipped)
+        try:
+            found = identify_controller(trial, skipped)
+        except StationError:
+            continue
         if found.claim is not None and found.claim.verdict == "confirmed":
             return _swapped_back(log, first, second, trial, as_named, f"completed from the data ({found.claim.data})",
                                  found)

@@ -27,6 +27,7 @@ from station.analysis.controller_id import (
     variant_of,
     with_recursion,
 )
+from station.analysis.law_rows import pins_a_law
 from station.analysis.pid_law import match_pid
 from station.control import Compensator, DiscreteTF, OpenLoop, controller_from_spec, lead_controller, p_controller
 from station.control.compensator import recursion_words
@@ -293,7 +294,7 @@ def header_law_dv(log: RunLog, skipped=None) -> float | None:
     skipped : array_like of bool, optional
         As :func:`identify_controller`.
     """
-    if _custom_controller(log) is not None:
+    if not len(log) or _custom_controller(log) is not None:
         return None
     try:
         controller, _ = _named_controller(log)
@@ -407,9 +408,12 @@ def identify_controller(log: RunLog, skipped=None) -> ControllerId:
             if used is not controller:
                 notes.append(f"the header's controller reproduces the logged v with "
                              f"{recursion_words(used.recursion)} (the lab's software stored it)")
+            pinned = not is_closed_loop(used) or pins_a_law(v)
             return ControllerId(used, "header", notes, fit, AuditClaim(
-                "controller", said, describe_controller(used) + at, "confirmed",
-                f"replays every logged v {_how_close(fit.max_abs_dv)}{at}"), exact, cut=cut)
+                "controller", said, describe_controller(used) + at, "confirmed" if pinned else "unchecked",
+                f"replays every logged v {_how_close(fit.max_abs_dv)}{at}" + (
+                    "" if pinned else f"; but v is only 0 and ±{np.max(np.abs(v)):g}, which any law of high gain "
+                                      f"gives at that clamp: the data cannot confirm this one")), exact, cut=cut)
         header_dv = fit.max_abs_dv
     if missing:
         if pid is None and controller is None:
