@@ -371,35 +371,43 @@ def _swap_columns(src, dst, first, second, header=True):
     return dst
 
 
-@pytest.mark.parametrize("name, first, second", [(RIG_LOGS[1], "u", "v"), (RIG_LOGS[1], "$\\theta$", "a"),
-                                                 (RIG_LOGS[4], "u", "v"), (RIG_LOGS[4], "$\\theta$", "a"),
-                                                 (RIG_LOGS[7], "$\\theta$", "a")])
-def test_two_columns_swapped_under_a_true_header_are_found(rig_data, tmp_path, name, first, second):
-    # The header's law gives every logged v only with the two columns exchanged: the column
-    # line is contradicted, said first, and the log read swapped (before, the P step with u and
-    # v swapped was "inferred" a 300(s-2)/(s-3000) with Ga at a ±50 clamp, θ fit -3690 %)
+@pytest.mark.parametrize("name, first, second, header", [
+    (RIG_LOGS[1], "u", "v", True), (RIG_LOGS[1], "$\\theta$", "a", True), (RIG_LOGS[4], "u", "v", True),
+    (RIG_LOGS[4], "$\\theta$", "a", True), (RIG_LOGS[7], "$\\theta$", "a", True),
+    (RIG_LOGS[1], "u", "v", False), (RIG_LOGS[1], "$\\theta$", "a", False)])
+def test_two_columns_swapped_are_found(rig_data, tmp_path, name, first, second, header):
+    # The header's law (or, with no header, the law the data give) reproduces every logged v
+    # only with the two columns exchanged: the column line is contradicted, said first, and the
+    # log read swapped (before, the P step with u and v swapped was "inferred" a
+    # 300(s-2)/(s-3000) with Ga at a ±50 clamp, θ fit -3690 %)
     src = rig_data / name
     truth = LoggedRun.from_path(src)
-    run = LoggedRun.from_path(_swap_columns(src, tmp_path / src.name, first, second))
+    run = LoggedRun.from_path(_swap_columns(src, tmp_path / src.name, first, second, header))
     shown = {"$\\theta$": "θ"}
     pair = f"{shown.get(first, first)} and {shown.get(second, second)}"
     assert run.audit.lines()[0] == f"header: {pair} as the column line names them; data: {pair} swapped"
     assert [c.claim for c in run.audit.contradicted] == ["columns"]
     for col in ("u", "v", "theta", "a"):
         np.testing.assert_array_equal(run.data[col], truth.data[col])
-    assert (run.reproduced, run.alignment, run.source) == (True, truth.alignment, "header")
-    assert run.step_metrics() == truth.step_metrics()
+    assert (run.reproduced, run.alignment, run.source) == (True, truth.alignment, "header" if header else "inferred")
+    if header:
+        assert run.step_metrics() == truth.step_metrics()
+    else:
+        assert run.controller.spec["kp"] == 2.0
     plain = LoggedRun.from_path(src)  # the log as it is: nothing swapped
     assert not plain.audit.contradicted
 
 
-def test_a_command_column_of_two_levels_identifies_no_law(rig_data, tmp_path):
-    # The P step with its u and v columns swapped and no header to name its law: the "v" column
-    # is the step itself, 0 then 50. Any law of high gain clamped at ±50 gives it, so none is
-    # inferred (before: 300(s-2)/(s-3000) with Ga at a ±50 clamp, "reproducing every logged v")
-    src = rig_data / RIG_LOGS[1]
-    run = LoggedRun.from_path(_swap_columns(src, tmp_path / "p_step_no_header.txt", "u", "v", header=False))
-    assert run.source is None and run.controller is None
+def test_a_command_column_of_two_levels_identifies_no_law(tmp_path):
+    # A log with no header over a held hub, a step of 150 and v of 0 then 200: any law of high
+    # gain clamped at ±200 gives it, so none is inferred, nor a swap of its columns (before: the
+    # P step with u and v swapped, so v was the step itself, was "inferred" a 300(s-2)/(s-3000)
+    # with Ga at a ±50 clamp, "reproducing every logged v")
+    rows = [f"{k * 0.002:g}\t{k}\t{150 if k >= 20 else 0}\t{200 if k >= 20 else 0}\t0\t0" for k in range(400)]
+    path = tmp_path / "held_no_header.txt"
+    path.write_text("\n".join(["t\tn\tu\tv\ttheta\ta"] + rows) + "\n")
+    run = LoggedRun.from_path(path)
+    assert run.source is None and run.controller is None and not run.audit.contradicted
     assert [c.data for c in run.audit.claims if c.claim == "controller"] == ["no law found"]
     step = np.where(np.arange(300) >= 20, 50.0, 0.0)
     assert infer_controller(np.zeros(300), np.zeros(300), step) is None

@@ -1,4 +1,4 @@
-"""Which column holds what: the column line's names checked against the header's law.
+"""Which column holds what: the column line's names checked against the log's law.
 
 A log's column line is a claim too (DESIGN.md "Log audit": the columns' units and signs, and
 so their names): a lab script that wrote its columns in another order than it named them
@@ -6,7 +6,9 @@ gives a log whose header names the right law and whose "v" is not that law's out
 the header's closed-loop law reproduces no logged v as the columns are named but every one
 with two columns swapped (u and v, θ and a), the data say which column is which: the claim is
 contradicted, said first, and the log is read with the columns swapped. The law is the
-header's own, its coefficients as given; a swap is never inferred beside an inferred law.
+header's own (as given, at its clamp or the log's, or completed from the data where it comes
+within :data:`NEAR_COUNTS`); a log with no header is checked the same way against the law
+inferred from its data, tried on the swaps only when none is found as the columns are named.
 """
 
 from __future__ import annotations
@@ -17,7 +19,7 @@ from typing import NamedTuple
 from station.analysis.law_rows import TOLERANCE
 from station.errors import StationError
 from station.logged.audit import AuditClaim
-from station.logged.controller import ControllerId, header_law_dv, identify_controller
+from station.logged.controller import NO_LAW, ControllerId, header_law_dv, identify_controller
 from station.runlog import RunLog
 
 SWAPS = (("u", "v"), ("theta", "a"))
@@ -66,7 +68,8 @@ def swapped(log: RunLog, first: str, second: str) -> RunLog:
 
 
 def check_columns(log: RunLog, skipped=None) -> Columns:
-    """Check the column line against the header's closed-loop law (:data:`SWAPS`).
+    """Check the column line against the header's closed-loop law, or with no header against
+    the law the data give (:data:`SWAPS`).
 
     Parameters
     ----------
@@ -77,11 +80,16 @@ def check_columns(log: RunLog, skipped=None) -> Columns:
     Returns
     -------
     Columns
-        The log as it is when the header names no closed-loop law, when its law reproduces
-        the log as named, or when no swap makes it; else the swapped copy and its claim.
+        The log as it is when its law (the header's closed-loop law; with no header, the law
+        the data give) reproduces it as named, or when no swap makes one reproduce it; else
+        the swapped copy and its claim.
     """
+    if len(log) < 2:
+        return Columns((), log)
     as_named = header_law_dv(log, skipped)
-    if as_named is None or as_named <= TOLERANCE:
+    if as_named is None:
+        return _inferred_swap(log, skipped)
+    if as_named <= TOLERANCE:
         return Columns((), log)
     trials = []
     for first, second in SWAPS:  # the header's law as given
@@ -111,12 +119,34 @@ def check_columns(log: RunLog, skipped=None) -> Columns:
     return Columns((), log, cid)
 
 
-def _swapped_back(log: RunLog, first: str, second: str, trial: RunLog, as_named: float, how: str,
+def _inferred_swap(log: RunLog, skipped) -> Columns:
+    """A log that names no controller: when no law reproduces it as its columns are named
+    and one does with two of them exchanged, that swap (the law inferred on it)."""
+    try:
+        cid = identify_controller(log, skipped)
+    except StationError:  # said where the controller is asked for (LoggedRun.identified)
+        return Columns((), log)
+    if cid.controller is not None or cid.claim is None or cid.claim.header != "not stated" \
+            or cid.claim.data != NO_LAW:
+        return Columns((), log, cid)
+    for first, second in SWAPS:
+        trial = swapped(log, first, second)
+        try:
+            found = identify_controller(trial, skipped)
+        except StationError:
+            continue
+        if found.controller is not None and found.source == "inferred" and found.fit is not None:
+            return _swapped_back(log, first, second, trial, None, f"{found.claim.data}", found)
+    return Columns((), log, cid)
+
+
+def _swapped_back(log: RunLog, first: str, second: str, trial: RunLog, as_named: float | None, how: str,
                   identified: ControllerId | None = None) -> Columns:
     a, b = SHOWN[first], SHOWN[second]
+    said = ("no law reproduces v as the columns are named" if as_named is None else
+            f"the header's law replays v to max |dv| = {as_named:.3g} counts as the columns are named")
     claim = AuditClaim(
         "columns", f"{a} and {b} as the column line names them", f"{a} and {b} swapped", "contradicted",
-        f"the header's law replays v to max |dv| = {as_named:.3g} counts as the columns are named, and "
-        f"{how} with the columns named {a} and {b} exchanged")
+        f"{said}, and {how} with the columns named {a} and {b} exchanged")
     note = f"the columns named {a} and {b} hold {b} and {a} (the audit): read swapped"
     return Columns((claim,), dataclasses.replace(trial, notes=list(log.notes) + [note]), identified)

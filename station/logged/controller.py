@@ -174,6 +174,10 @@ def rig_controller(meta: dict[str, Any], dt: float = DT) -> tuple[Compensator | 
     return None, notes
 
 
+NO_LAW = "no law found"
+"""The controller claim's data when the log names no controller and no law reproduces it."""
+
+
 class ControllerId(NamedTuple):
     """Which controller ran a log, where that came from, and its audit (:func:`identify_controller`).
 
@@ -461,7 +465,7 @@ def identify_controller(log: RunLog, skipped=None) -> ControllerId:
         notes.append(f"the log names no controller and none could be inferred from the data ({tried}): "
                      f"commands not replayed, model driven by the logged v")
         return ControllerId(None, None, notes, None, AuditClaim(
-            "controller", said, "no law found", "unchecked", f"none reproduces the logged v ({tried})"))
+            "controller", said, NO_LAW, "unchecked", f"none reproduces the logged v ({tried})"))
     verdict = "contradicted" if header_dv >= 1.0 else "unchecked"
     evidence = (f"the header's controller replays v to max |dv| = {header_dv:.3g} counts at best, and no law "
                 f"tried ({tried}) reproduces it")

@@ -30,7 +30,7 @@ recursion runs on the float while the whole count it sends is logged, "float-tru
 "float-round"); "words": a true header (a P or a lead on the stored integer) over a log whose
 signed columns (u, v, θ, a, θ̂_d where whole) the lab's client read from the legacy protocol's
 16-bit two's-complement words as unsigned, a negative x written as 65536 + x; "swap": a true
-header (a P, or a lead on the stored integer) over a log whose columns u and v, or θ and a,
+header (a P, or a lead on the stored integer), or none (the 2014 layout), over a log whose columns u and v, or θ and a,
 hold each other's values (a script that wrote them in another order than it named them). A
 class joined with "+" to
 "coulomb_friction" hides that friction too (drawn as :func:`tests.blind.cases.draw` draws it).
@@ -213,11 +213,12 @@ def draw_case(name: str, seed: int) -> AuditCase:
                          alignment=int(rng.integers(0, 2)), header="p")
     if base == "swap":
         pair = ("u", "v") if rng.random() < 0.5 else ("theta", "a")
-        if rng.random() < 0.5:
+        which = rng.random()
+        if which < 1 / 3:
             return AuditCase(**{**common, "header_kp": kp}, **p_law, recursion=str(rng.choice(["none", "trunc"])),
                              alignment=int(rng.integers(0, 2)), header="p", swap=pair)
         return AuditCase(**common, **lead, recursion=str(rng.choice(["trunc", "round"])),
-                         alignment=int(rng.integers(0, 2)), header="lead", swap=pair)
+                         alignment=int(rng.integers(0, 2)), header="lead" if which < 2 / 3 else "none", swap=pair)
     if base == "words":
         if rng.random() < 0.5:
             return AuditCase(**{**common, "header_kp": kp}, **p_law, recursion="trunc",
