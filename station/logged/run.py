@@ -41,8 +41,9 @@ class LoggedRun:
     and log rows" and "Compensators". Every claim the log makes is checked against its
     data first (DESIGN.md "Log audit", :attr:`audit`), and where the data contradict it
     their answer is what this class gives: the columns' units and the sample time
-    (:func:`station.logged.units.time_base`), the controller, whether it was closed loop
-    and its alignment (:func:`station.logged.controller.identify_controller`).
+    (:func:`station.logged.units.time_base`), which column holds what
+    (:func:`station.logged.columns.check_columns`), the controller, whether it was closed
+    loop and its alignment (:func:`station.logged.controller.identify_controller`).
 
     Parameters
     ----------
@@ -52,8 +53,9 @@ class LoggedRun:
     Attributes
     ----------
     log : RunLog
-        The log as its data say it is: ``raw_log`` itself, or a copy with t in s and θ in
-        encoder counts when the audit found them in other units.
+        The log as its data say it is: ``raw_log`` itself, or a copy with t in s, θ in
+        encoder counts, signed counts and its columns in their places when the audit found
+        them otherwise.
     raw_log : RunLog
         The log as read.
     """
