@@ -236,7 +236,8 @@ def open_regular(path: str | Path, what: str, text: bool = False, errors: str = 
     except BaseException:
         os.close(fd)
         raise
-    return io.TextIOWrapper(raw, encoding="utf-8", errors=errors, newline=newline) if text else raw
+    # utf-8-sig: a byte-order mark (Windows editors, Excel's "CSV UTF-8") is no part of the text
+    return io.TextIOWrapper(raw, encoding="utf-8-sig", errors=errors, newline=newline) if text else raw
 
 
 def read_text(path: str | Path, what: str, max_bytes: int = MAX_TOML_BYTES) -> str:
@@ -273,7 +274,7 @@ def read_text(path: str | Path, what: str, max_bytes: int = MAX_TOML_BYTES) -> s
     if len(data) > max_bytes:  # it grew since it was examined
         raise StationError(f"{path}: more than {max_bytes} bytes; a {what} is at most {max_bytes} bytes", file=path)
     try:
-        return data.decode("utf-8")
+        return data.decode("utf-8-sig")  # a byte-order mark (Windows editors) is no part of the text
     except UnicodeDecodeError as exc:
         line = data[:exc.start].count(b"\n") + 1
         raise StationError(f"{path}: line {line}: not UTF-8 text ({exc.reason} at byte {exc.start}); "

@@ -116,6 +116,31 @@ def test_comma_separated_with_synonyms(tmp_path):
     assert list(log.data["n"]) == [0, 1, 2]
 
 
+@pytest.mark.parametrize("layout", ["rig", "csv"])
+def test_a_byte_order_mark_is_no_part_of_the_text(tmp_path, layout):
+    # Windows editors and Excel's "CSV UTF-8" write a byte-order mark first; it made the rig's
+    # header line '\ufeff#SLFR' and the file "no usable columns"
+    text = ("#SLFR RTP P_control_Test\n#kp=1.0\n#t\tn\tu\tv\t$\\theta$\ta\n0\t0\t0\t0\t0\t0\n"
+            "0.002\t1\t50\t50\t0\t0\n0.004\t2\t50\t50\t0\t1\n" if layout == "rig" else
+            "time,theta,v\n0,0,0\n0.002,1,5\n0.004,3,5\n")
+    plain, marked = tmp_path / f"plain.{layout}", tmp_path / f"marked.{layout}"
+    plain.write_text(text, encoding="utf-8")
+    marked.write_text(text, encoding="utf-8-sig")
+    assert marked.read_bytes()[:3] == b"\xef\xbb\xbf"
+    a, b = read_log(plain), read_log(marked)
+    assert (a.format, a.meta, a.header) == (b.format, b.meta, b.header)
+    for name in a.data:
+        np.testing.assert_array_equal(a.data[name], b.data[name])
+
+
+def test_a_compensator_file_with_a_byte_order_mark(tmp_path):
+    from station.control import load_compensator_file
+    text = 'name = "p2"\nlimit = 200.0\n\n[gth]\ndomain = "z"\nnum = [2.0]\nden = [1.0]\n'
+    path = tmp_path / "p2.toml"
+    path.write_text(text, encoding="utf-8-sig")
+    assert load_compensator_file(path).gth.num[0] == 2.0
+
+
 def test_end_record_is_the_outcome(tmp_path):
     path = tmp_path / "ours.tsv"
     from station.runlog import RunLogWriter

@@ -119,7 +119,7 @@ def open_log(path: Path, errors: str = "strict"):
     Returns
     -------
     file object
-        Text, UTF-8, lines as written.
+        Text, UTF-8 (a leading byte-order mark dropped), lines as written.
 
     Raises
     ------
