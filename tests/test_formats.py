@@ -141,6 +141,22 @@ def test_a_compensator_file_with_a_byte_order_mark(tmp_path):
     assert load_compensator_file(path).gth.num[0] == 2.0
 
 
+@pytest.mark.parametrize("field", ["#Kp=1", "#KP = 1.0", "#kp=1"])
+def test_a_header_field_in_another_case_is_the_same_field(tmp_path, field):
+    # The rig's software writes "#kp=1.0"; a script that wrote "#Kp=1" (and a line of free text)
+    # names the same P law: before, its kp was not read and the law was only inferred
+    theta, v = _p_run(kp=1.0, d=1)
+    rows = [f"{t:g}\t{k}\t{u:g}\t{float(vv)!r}\t{float(th)!r}\t0"
+            for k, (t, u, vv, th) in enumerate(zip(T, U, v, theta))]
+    path = tmp_path / "step_SLFR_RTP_P_control_Test.txt"
+    path.write_text("\n".join(["#SLFR RTP P_control_Test", "# run by the lab, beam 0.41 m", field,
+                               "#t\tn\tu\tv\t$\\theta$\ta"] + rows) + "\n")
+    from station.logged import LoggedRun
+    run = LoggedRun.from_path(path)
+    assert run.source == "header" and run.controller.spec["kp"] == 1.0 and run.reproduced
+    assert [c.verdict for c in run.audit.claims if c.claim == "controller"] == ["confirmed"]
+
+
 def test_end_record_is_the_outcome(tmp_path):
     path = tmp_path / "ours.tsv"
     from station.runlog import RunLogWriter

@@ -38,6 +38,9 @@ class Header(NamedTuple):
 
 _KV = re.compile(r"^\s*([A-Za-z_]\w*)\s*=\s*(.*?)\s*$")
 _COEF = re.compile(r"^\s*(\w+)\s+(num|den)\s*=\s*\[(.*)\]\s*$")
+_KEYS = {name.lower(): name for name in ("kp", "ki", "kd", "b0", "b1", "a1", "Gth", "Ga")}
+"""The controller's fields by their lower case: a header's ``#Kp=2`` or ``#GTH num=`` is the
+rig software's ``#kp=2`` and ``#Gth num=``."""
 
 
 def _split_names(line: str) -> tuple[list[str], str | None]:
@@ -115,10 +118,12 @@ def parse_rig_header(path: Path, comment_lines: list[str]) -> Header:
                 raise log_error(path, i + 1, f"{coef.group(1)} {coef.group(2)}={values}: expected finite "
                                 f"coefficients" + (", den[0] not 0 (the filter would be non-causal)"
                                                    if coef.group(2) == "den" else ""), key=coef.group(1))
-            meta.setdefault(coef.group(1), {})[coef.group(2)] = values
-            coef_lines[coef.group(1)] = i + 1
+            name = _KEYS.get(coef.group(1).lower(), coef.group(1))
+            meta.setdefault(name, {})[coef.group(2)] = values
+            coef_lines[name] = i + 1
         elif kv:
             key, val = kv.groups()
+            key = _KEYS.get(key.lower(), key)
             try:
                 meta[key] = float(val)
             except ValueError:
