@@ -31,6 +31,19 @@ def test_synonyms():
         ["t", "theta", "theta", "a", "a", "t", "v", "foo"]
 
 
+def test_names_in_quotes_or_with_their_units(tmp_path):
+    # A spreadsheet's CSV quotes its names; exports print units after them. Before: "no usable
+    # columns: found '"t (s)"', ..." and "no 'v', 'theta', 'a' column" beside 'cmd [DAC]'
+    assert [standard_column(c) for c in ('"t (s)"', "'theta'", "theta (counts)", "cmd [DAC]", "Time [s]",
+                                         "accel [counts]", "Time (sec.)", "foo (bar)")] == \
+        ["t", "theta", "theta", "v", "t", "a", "t", "foo (bar)"]
+    path = tmp_path / "export.csv"
+    path.write_text('"t (s)","u (counts)","v (DAC counts)","theta (counts)","a (counts)"\n'
+                    "0,0,0,0,0\n0.002,50,100,0,0\n0.004,50,98,1,2\n")
+    log = read_log(path)
+    assert log.sample_time == 0.002 and list(log.data["v"]) == [0, 100, 98] and list(log.data["a"]) == [0, 0, 2]
+
+
 def test_2014_layout_maps_columns_and_derives_n(tmp_path):
     theta, v = _p_run()
     a = np.round(np.sin(T) * 5) - 39

@@ -6,6 +6,7 @@ Imports only :mod:`station.errors`.
 
 from __future__ import annotations
 
+import re
 from pathlib import Path
 from typing import NamedTuple
 
@@ -88,6 +89,7 @@ whitespace-trimmed): ours, the rig's (``$\\theta$``), its 2014 logs (``Time (sec
 ``accel``) and cut-down copies (``t v theta a``)."""
 
 _SYNONYM_OF = {alias.lower(): std for std, aliases in COLUMN_SYNONYMS.items() for alias in aliases}
+_UNIT = re.compile(r"\s*[(\[][^()\[\]]*[)\]]\s*$")  # a trailing "(unit)" or "[unit]"
 
 SIGNAL_COLUMNS = ("u", "v", "theta", "a")
 """A log is usable when it has a time base (t or n) and at least one of these."""
@@ -115,10 +117,17 @@ def standard_column(name: str) -> str:
     Returns
     -------
     str
-        One of :data:`COLUMNS` (see :data:`COLUMN_SYNONYMS`), else ``name`` stripped.
+        One of :data:`COLUMNS` (see :data:`COLUMN_SYNONYMS`), else ``name`` stripped. A name
+        in quotes (a spreadsheet's CSV) or with its unit after it (``"theta (counts)"``,
+        ``cmd [DAC]``) is its synonym's too.
     """
     key = name.strip()
-    return _SYNONYM_OF.get(key.lower(), key)
+    if len(key) > 1 and key[0] == key[-1] and key[0] in "\"'":
+        key = key[1:-1].strip()
+    std = _SYNONYM_OF.get(key.lower())
+    if std is None:
+        std = _SYNONYM_OF.get(_UNIT.sub("", key).lower())
+    return key if std is None else std
 
 
 class RunLogError(StationError):
