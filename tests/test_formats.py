@@ -44,6 +44,23 @@ def test_names_in_quotes_or_with_their_units(tmp_path):
     assert log.sample_time == 0.002 and list(log.data["v"]) == [0, 100, 98] and list(log.data["a"]) == [0, 0, 2]
 
 
+@pytest.mark.parametrize("names_end, row_end", [("", "\t"), ("\t", "\t")])
+def test_a_delimiter_after_the_last_field(tmp_path, names_end, row_end):
+    # A lab script that writes "%g\t" for every field, the last too: before, "expected 6
+    # tab-separated numbers, got 7" or "expected a number in column '', got ''"
+    rows = ["0\t0\t0\t0\t0\t0", "0.002\t1\t50\t100\t0\t0", "0.004\t2\t50\t98\t1\t2"]
+    plain, ended = tmp_path / "plain_SLFR_RTP_P_control_Test.txt", tmp_path / "ended_SLFR_RTP_P_control_Test.txt"
+    head = ["#SLFR RTP P_control_Test", "#kp=2.0"]
+    plain.write_text("\n".join(head + ["#t\tn\tu\tv\t$\\theta$\ta"] + rows) + "\n")
+    ended.write_text("\n".join(head + ["#t\tn\tu\tv\t$\\theta$\ta" + names_end] + [r + row_end for r in rows]) + "\n")
+    a, b = read_log(plain), read_log(ended)
+    for name in a.data:
+        np.testing.assert_array_equal(a.data[name], b.data[name])
+    csv = tmp_path / "ended.csv"
+    csv.write_text("t,theta,v,\n0,0,0,\n0.002,1,5,\n0.004,3,5,\n")
+    assert list(read_log(csv).data["theta"]) == [0, 1, 3]
+
+
 def test_2014_layout_maps_columns_and_derives_n(tmp_path):
     theta, v = _p_run()
     a = np.round(np.sin(T) * 5) - 39

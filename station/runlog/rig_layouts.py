@@ -48,7 +48,8 @@ def _split_names(line: str) -> tuple[list[str], str | None]:
     whitespace)."""
     for sep in ("\t", ",", ";"):
         if sep in line:
-            return [c.strip() for c in line.split(sep)], sep
+            names = [c.strip() for c in line.split(sep)]
+            return (names[:-1] if len(names) > 1 and not names[-1] else names), sep  # a trailing delimiter
     return line.split(), None
 
 

@@ -140,8 +140,8 @@ class Lines:
 
 class DataLines:
     """The data lines of a log, for numpy's parser or a row-by-row pass: blank and ``#``
-    lines left out (the last non-blank line is kept for the end record) and a torn last
-    line skipped with a warning.
+    lines left out (the last non-blank line is kept for the end record), a rig log's row
+    ending in its delimiter taken without it, and a torn last line skipped with a warning.
 
     A last line without a newline is torn (the writer was interrupted mid-row) in our
     format, whose writer ends every row; in the rig's formats only when it is not a whole
@@ -189,6 +189,8 @@ class DataLines:
                 continue
             if self.first_lineno is None:
                 self.first_lineno = lineno
+            if self.sep and self.fmt != "station" and line.endswith(self.sep):
+                line = line[:-len(self.sep)]  # a lab script's `"%g\t" % x` for every field, the last too
             if not terminated and (self.fmt == "station" or parse_row(line, self.names, self.sep)[1] is not None):
                 self.torn += 1
                 warnings.warn(f"{self.path}: line {lineno}: torn last line (no newline; the writer was "
