@@ -61,6 +61,22 @@ def test_a_delimiter_after_the_last_field(tmp_path, names_end, row_end):
     assert list(read_log(csv).data["theta"]) == [0, 1, 3]
 
 
+def test_a_file_holding_two_runs_is_one_line_error(rig_data, tmp_path):
+    # Two runs appended to one file (the second with its own header): before, read as one run
+    # of 2000 rows whose t jumps back, replayed to max |dv| = 98 counts. A '#' line among rows
+    # that go on in time is no second run.
+    src = rig_data / "SFLR_P_control_step_kp_2_SLFR_RTP_P_control_kp=2.0.txt"
+    twice = tmp_path / "twice_SLFR_RTP_P_control_kp=2.0.txt"
+    twice.write_text(src.read_text() * 2)
+    with pytest.raises(RunLogError, match=r"line 1004: a second header: the file holds more than one run "
+                                          r"\(after 1000 rows, t starts again at 0\); split it at line 1004"):
+        read_log(twice)
+    lines = src.read_text().splitlines()
+    noted = tmp_path / "noted_SLFR_RTP_P_control_kp=2.0.txt"
+    noted.write_text("\n".join(lines[:500] + ["# the hub touched here"] + lines[500:]) + "\n")
+    np.testing.assert_array_equal(read_log(noted).data["theta"], read_log(src).data["theta"])
+
+
 def test_2014_layout_maps_columns_and_derives_n(tmp_path):
     theta, v = _p_run()
     a = np.round(np.sin(T) * 5) - 39

@@ -180,6 +180,7 @@ def _read_stream(path: Path, lines: Lines) -> RunLog:
         data[name] = arr[:, j]
     del arr
     _check_finite(path, data, names, fmt, data_lines.first_lineno)
+    _one_run(path, data, data_lines.resumed)
     sample_time = complete_time_base(data, names, notes)
     outcome = None if data_lines.last is None else _end_record(path, *data_lines.last)
     return RunLog(path=path, format=fmt, meta=found.meta, data=data, header=header, layout=layout,
@@ -213,6 +214,17 @@ def _station_header(path: Path, texts: list[str]) -> Header:
     if tuple(names[:len(COLUMNS)]) != COLUMNS:
         raise log_error(path, col_no, f"expected the column names {COLUMN_LINE!r}, got {col_line!r}")
     return Header(meta, names, "\t", [])
+
+
+def _one_run(path: Path, data: dict[str, np.ndarray], resumed: list[tuple[int, int]]) -> None:
+    """Refuse a file that holds more than one run: rows that start again after ``#`` lines
+    with t (or n) back at or before the file's first."""
+    clock = next((data[c] for c in ("t", "n") if np.all(np.isfinite(data[c]))), None)
+    for lineno, before in resumed:
+        if clock is not None and 0 < before < clock.size and clock[before] <= clock[0]:
+            raise log_error(path, lineno, f"a second header: the file holds more than one run (after {before} rows, "
+                            f"{'t' if clock is data['t'] else 'n'} starts again at {clock[before]:g}); split it "
+                            f"at line {lineno}")
 
 
 def _check_finite(path: Path, data: dict[str, np.ndarray], names: list[str], fmt: str,

@@ -170,6 +170,9 @@ class DataLines:
         The last non-blank line seen, as :meth:`Lines.next` returns it.
     torn : int
         Torn lines skipped (0 or 1).
+    resumed : list of (int, int)
+        Where rows start again after ``#`` lines among them: the first such line's number and
+        the rows before it.
     """
 
     def __init__(self, path: Path, lines: Lines, fmt: str, names: list[str], sep: str | None) -> None:
@@ -178,6 +181,9 @@ class DataLines:
         self.first_lineno: int | None = None
         self.last: tuple[int, str, bool] | None = None
         self.torn = 0
+        self.resumed: list[tuple[int, int]] = []
+        self._comment: int | None = None
+        self._rows = 0
 
     def __iter__(self):
         while (item := self.lines.next()) is not None:
@@ -186,7 +192,12 @@ class DataLines:
                 continue
             self.last = item
             if line.startswith("#"):
+                if self.first_lineno is not None and self._comment is None:
+                    self._comment = lineno
                 continue
+            if self._comment is not None:  # rows again after '#' lines among the rows
+                self.resumed.append((self._comment, self._rows))
+                self._comment = None
             if self.first_lineno is None:
                 self.first_lineno = lineno
             if self.sep and self.fmt != "station" and line.endswith(self.sep):
@@ -197,6 +208,7 @@ class DataLines:
                               f"interrupted mid-row) skipped", RuntimeWarning, stacklevel=4)
                 continue
             self.lineno = lineno
+            self._rows += 1
             yield line
 
 
