@@ -469,6 +469,33 @@ def test_a_true_header_over_missing_or_repeated_rows_is_not_contradicted(rig_dat
     assert not any(c.claim == "controller" for c in run.audit.contradicted)
 
 
+@pytest.mark.parametrize("offset, jitter", [(1764072000.0, 2e-4), (1234.5, 0.0), (0.002, 0.0)])
+def test_a_clock_that_does_not_start_at_zero_or_jitters(rig_data, tmp_path, offset, jitter):
+    # The P step with t as a lab script stamps it: the host's wall clock at each sample's arrival
+    # (jittered by up to 0.1 ms), a clock since boot, 1-based ticks. Before: "sampled at
+    # 0.00199699 s, not the rig's": no controller replayed, the model at the wrong rate; and
+    # "settling (1 %) 1235.750 s"
+    src = rig_data / RIG_LOGS[1]
+    truth = LoggedRun.from_path(src)
+    lines = src.read_text().splitlines()
+    head = [x for x in lines if x.startswith("#")]
+    rng = np.random.default_rng(3)
+    rows = []
+    for line in lines[len(head):]:
+        cells = line.split("\t")
+        cells[0] = f"{float(cells[0]) + offset + jitter * rng.uniform(-0.5, 0.5):.7f}"
+        rows.append("\t".join(cells))
+    path = tmp_path / src.name
+    path.write_text("\n".join(head + rows) + "\n")
+    run = LoggedRun.from_path(path)
+    assert run.dt == 0.002 and run.reproduced and run.source == "header" and not run.audit.contradicted
+    assert run.step_metrics() == truth.step_metrics()
+    if jitter:
+        rows = {c.claim: c for c in run.audit.claims}
+        assert rows["sample_time"].verdict == "confirmed" and "host's time stamps" in rows["sample_time"].data
+        np.testing.assert_allclose(np.diff(run.data["t"]), 0.002, rtol=1e-9)
+
+
 def test_a_stated_amplitude_the_data_contradict(rig_data, tmp_path):
     src = rig_data / RIG_LOGS[1]  # a step of 50
     path = tmp_path / "step_amp_100_SLFR_RTP_P_control_kp=2.0.txt"

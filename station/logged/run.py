@@ -455,7 +455,8 @@ class LoggedRun:
         theta : array_like, shape (N,), optional
             The response, encoder counts (default: the logged θ; e.g. a simulation's).
         t : array_like, shape (N,), optional
-            Its sample times, s (default: the logged t).
+            Its sample times, s (default: the logged t). Times are taken from the first row's:
+            the run starts there, whatever its clock read (a host's time stamps, 1-based ticks).
 
         Returns
         -------
@@ -465,8 +466,8 @@ class LoggedRun:
         """
         if not (self.closed and self.reference.is_step and len(self)) or self.start.at_rest is False:
             return None  # a copy cut after the step: its overshoot is not the run's
-        return step_metrics(self.data["t"] if t is None else t, self.data["theta"] if theta is None else theta,
-                            self.reference.amplitude)
+        t = np.asarray(self.data["t"] if t is None else t, dtype=float)
+        return step_metrics(t - t[0], self.data["theta"] if theta is None else theta, self.reference.amplitude)
 
     def found_faults(self, model) -> dict[str, float]:
         """The sensor and wiring faults this run's data decided (:attr:`sensors`), for a model

@@ -127,6 +127,24 @@ def word_claims(data: dict[str, np.ndarray]) -> tuple[list[AuditClaim], dict[str
     return claims, signed
 
 
+HOST_STAMP_TOLERANCE = 0.005
+"""How near a log's t must come, over the whole run, to one claimed sample time a row for its
+jittered steps to be a host's time stamps of the rig's ticks (0.5 %: a 4 s run ends within
+20 ms of 2000 ticks)."""
+
+
+def _host_stamps(t: np.ndarray, claimed: float) -> float | None:
+    """t's mean step over the run when t is a host's time stamps of ticks ``claimed`` s apart:
+    its steps jitter (by more than 1 % of a tick; each within half a tick of ``claimed``: no
+    row missing or repeated) and its mean is ``claimed`` to :data:`HOST_STAMP_TOLERANCE`;
+    else None (an even clock at another rate is that rate)."""
+    steps = np.diff(t)
+    mean = (t[-1] - t[0]) / (t.size - 1)
+    jitter = np.max(np.abs(steps - np.median(steps))) > 0.01 * claimed  # an even clock at another rate is that rate
+    whole = np.all(np.abs(steps - claimed) < 0.5 * claimed)
+    return float(mean) if jitter and whole and abs(mean / claimed - 1.0) <= HOST_STAMP_TOLERANCE else None
+
+
 def time_base(log: RunLog) -> TimeBase:
     """Check a log's sample time (our header's ``dt``, else the rig's 0.002 s with t in s)
     against its t column, its θ column's unit (encoder counts) against θ's quantization, and
@@ -168,6 +186,19 @@ def time_base(log: RunLog) -> TimeBase:
             changes["t"] = t / 1000.0
             sample_time = round(sample_time / 1000.0, 9)
             notes.append("the t column is in ms (the audit): divided by 1000")
+        elif (host := _host_stamps(t, claimed)) is not None:
+            claims.append(AuditClaim("sample_time", where, f"{claimed:g} s (t a host's time stamps)", "confirmed",
+                                     f"t {spread}; over the run {host:.7g} s a row, {claimed:g} s to "
+                                     f"{abs(host / claimed - 1):.2%}: the rows are the rig's ticks, t the time "
+                                     f"each reached the computer"))
+            n = np.arange(t.size, dtype=float) if any("no sample column" in x for x in log.notes) else \
+                np.asarray(data["n"], dtype=float)
+            changes["n"] = n
+            changes["t"] = (n - n[0]) * claimed
+            sample_time = claimed
+            notes.append(f"t holds a host's time stamps (from {t[0]:.10g} s, steps {np.min(steps):.6g} .. "
+                         f"{np.max(steps):.6g} s; the audit): the rig's {claimed:g} s a tick used, "
+                         f"t = {claimed:g}·(n - n[0])")
         else:
             claims.append(AuditClaim("sample_time", where, f"{sample_time:g} s", "contradicted",
                                      f"t {spread}; the data's {sample_time:g} s is used"))
