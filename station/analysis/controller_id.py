@@ -61,7 +61,6 @@ MAX_ORDER = 3
 """Highest order of the linear compensators tried."""
 
 
-
 @dataclass(frozen=True)
 class IdentifiedController:
     """A control law that reproduces a log's commands (:func:`infer_controller`,

@@ -19,7 +19,7 @@ from typing import NamedTuple
 from station.analysis.law_rows import TOLERANCE
 from station.errors import StationError
 from station.logged.audit import AuditClaim
-from station.logged.controller import NO_LAW, ControllerId, header_law_dv, identify_controller
+from station.logged.controller import NO_LAW, NOT_STATED, ControllerId, header_law_dv, identify_controller
 from station.runlog import RunLog
 
 SWAPS = (("u", "v"), ("theta", "a"))
@@ -126,7 +126,7 @@ def _inferred_swap(log: RunLog, skipped) -> Columns:
         cid = identify_controller(log, skipped)
     except StationError:  # said where the controller is asked for (LoggedRun.identified)
         return Columns((), log)
-    if cid.controller is not None or cid.claim is None or cid.claim.header != "not stated" \
+    if cid.controller is not None or cid.claim is None or cid.claim.header != NOT_STATED \
             or cid.claim.data != NO_LAW:
         return Columns((), log, cid)
     for first, second in SWAPS:

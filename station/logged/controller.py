@@ -177,6 +177,9 @@ def rig_controller(meta: dict[str, Any], dt: float = DT) -> tuple[Compensator | 
 NO_LAW = "no law found"
 """The controller claim's data when the log names no controller and no law reproduces it."""
 
+NOT_STATED = "not stated"
+"""The controller claim's header when the log names no controller."""
+
 
 class ControllerId(NamedTuple):
     """Which controller ran a log, where that came from, and its audit (:func:`identify_controller`).
@@ -288,9 +291,9 @@ def log_controller(log: RunLog) -> tuple[Compensator | OpenLoop | None, list[str
 def header_law_dv(log: RunLog, skipped=None) -> float | None:
     """How near the closed-loop law a log's header names comes to its logged commands: max
     |v_replayed − v_logged| at its best alignment and recursion (:func:`variant_of`) and clamp
-    (its own, or the log's largest |v|), DAC counts; None when the header names no closed-loop law, the log is sampled at another rate
-    than the rig's, or u, θ or v are not finite. The header's coefficients as given: no law is
-    inferred (:func:`identify_controller` does that).
+    (its own, or the log's largest |v|), DAC counts; None when the header names no closed-loop
+    law, the log is sampled at another rate than the rig's, or u, θ or v are not finite. The
+    header's coefficients as given: no law is inferred (:func:`identify_controller` does that).
 
     Parameters
     ----------
@@ -310,11 +313,11 @@ def header_law_dv(log: RunLog, skipped=None) -> float | None:
         return None
     a = np.where(np.isfinite(data["a"]), data["a"], 0.0)
     best = None
-    peak = float(np.max(np.abs(data["v"]))) if len(log) else 0.0
-    for limit in dict.fromkeys((controller.limit, peak if 0 < peak < (controller.limit or np.inf) else None)):
-        if limit is None:
-            continue  # the rig's clamp, then the log's own (a header does not state its clamp)
-        law = controller if limit == controller.limit else with_recursion(controller, controller.recursion, limit)
+    peak = float(np.max(np.abs(data["v"])))
+    laws = [controller]  # at the rig's clamp, then the log's own (a header does not state its clamp)
+    if 0 < peak < (controller.limit or np.inf):
+        laws.append(with_recursion(controller, controller.recursion, peak))
+    for law in laws:
         _, fit, _ = variant_of(law, data["u"], data["theta"], a, data["v"], ALIGNMENTS, skipped)
         if fit is not None and (best is None or fit.max_abs_dv < best):
             best = float(fit.max_abs_dv)
@@ -371,7 +374,7 @@ def identify_controller(log: RunLog, skipped=None) -> ControllerId:
     stated_d = log.meta.get("alignment") if log.format == "station" else None
     prefer = stated_d if isinstance(stated_d, int) and not isinstance(stated_d, bool) else PREFERRED_ALIGNMENT
     said = (describe_controller(controller) if controller is not None else
-            f"PID kp = {pid[0]:g}, ki = {pid[1]:g}, kd = {pid[2]:g}" if pid is not None else "not stated")
+            f"PID kp = {pid[0]:g}, ki = {pid[1]:g}, kd = {pid[2]:g}" if pid is not None else NOT_STATED)
     if log.format == "rig" and abs(dt - DT) > 1e-9 and not isinstance(controller, OpenLoop):
         notes.append(f"sampled at {dt:g} s, not the rig's {DT:g} s: closed-loop commands cannot be "
                      f"replayed or inferred (the rig's controllers ran at {DT:g} s, on rows this log "
