@@ -10,6 +10,7 @@ samples; ``station.logged.LoggedRun`` sees only the file. Judged per case:
   header that does not (``int:*`` name none, ``honest:*`` tell the truth) is not; and the
   columns written as unsigned 16-bit words (``words``) are contradicted, each, and no other;
   two columns written in each other's place (``swap``) are said swapped, and no others;
+  rows lost or written again (``rows``) are said (n jumps), and in no other class;
 - reproduced: the controller used reproduces every logged v to the device's quantization
   (1e-6 counts, the logged integer exactly for an integer recursion) at the hidden alignment;
 - design: the law the data gave is the hidden one: the continuous design (num/den in s, to
@@ -120,6 +121,9 @@ def run_case(case: str, seed: int) -> Outcome:
     swaps = {c.data for c in audit.claims if c.claim == "columns" and c.data.endswith(" swapped")}
     contradiction_ok = contradiction_ok and swaps == ({f"{shown[hidden.swap[0]]} and {shown[hidden.swap[1]]} swapped"}
                                                       if hidden.swap else set())
+    # rows lost or written again: said (n jumps), and never where every tick is there once
+    jumps = any(c.claim == "sample_time" and c.data.startswith("n jumps") for c in audit.claims)
+    contradiction_ok = contradiction_ok and jumps == bool(hidden.rows)
     reproduced = run.reproduced and (run.alignment == hidden.alignment or hidden.alignment in run.identified.alignments)
     spec = getattr(run.controller, "spec", {}) or {}
     design = spec.get("design")
@@ -176,7 +180,7 @@ def table(outcomes: list[Outcome], seeds: str, elapsed: float) -> str:
         "header (the 2014 layout); `session`: the lab's third session (open-loop header, a lead on the "
         "truncated integer at alignment 0); `lie:sent`: an open-loop header on a lead whose recursion runs on the "
         "float while the whole count it sends is logged; `lie:accel_int`: an open-loop header on a lead with "
-        "DESIGN.md's Ga as it stands, the command stored or sent as a whole count; `words`: a true header (P, or a lead on the stored integer) over columns the lab's client read from the legacy protocol's 16-bit two's-complement words as unsigned (a negative x written as 65536 + x; each such column must be contradicted, and no column of any other class); `swap`: a true header (P, or a lead on the stored integer) or none (the 2014 layout) over columns u and v, or θ and a, written in each other's place (the swap must be said, and none in any other class); `honest:*`: true headers (P, or a lead on the stored integer, or "
+        "DESIGN.md's Ga as it stands, the command stored or sent as a whole count; `words`: a true header (P, or a lead on the stored integer) over columns the lab's client read from the legacy protocol's 16-bit two's-complement words as unsigned (a negative x written as 65536 + x; each such column must be contradicted, and no column of any other class); `swap`: a true header (P, or a lead on the stored integer) or none (the 2014 layout) over columns u and v, or θ and a, written in each other's place (the swap must be said, and none in any other class); `rows`: a true header (P, or a lead on the stored integer) or none (the 2014 layout, where t jumps) over a log that lost one to three spans of 1–30 rows while the hub moves, or holds a block of rows written again (n jumps must be said, and in no other class, and the law reproduce every row it can judge: replayed again from each jump with its memory as logged); `honest:*`: true headers (P, or a lead on the stored integer, or "
         "`honest:lead_sent` a lead on the float logging the whole count it sends) the audit must confirm. `+coulomb_friction`: beside a hidden Coulomb friction of 3–30 DAC counts.",
         "",
         "Bar (issue 26): in at least 9 of 10 seeds, a lying header contradicted (and a true or absent one not), "

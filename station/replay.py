@@ -50,7 +50,11 @@ class ReplayReport:
         Detected computational delay d, samples (None: open loop or not replayed).
     samples : int
     max_abs_dv : float or None
-        max |v_replayed - v_logged|, DAC counts.
+        max |v_replayed - v_logged|, DAC counts, over the rows judged.
+    judged_to : int or None
+        The row where n jumps past which the controller could not be judged (its memory is
+        not in the log: :attr:`station.logged.controller.ControllerId.judged_to`);
+        ``max_abs_dv`` is over the rows before it. None: every row judged.
     metrics : StepMetrics or None
         Of the logged theta against the step's amplitude, for closed-loop step logs.
     reference : station.logged.reference.Reference
@@ -103,6 +107,7 @@ class ReplayReport:
     beam_test: BeamTestReport | None = None
     outcome: dict[str, Any] | None = None
     audit: Audit | None = None
+    judged_to: int | None = None
     v_replayed: np.ndarray | None = field(default=None, repr=False)
     prediction: dict[str, np.ndarray] | None = field(default=None, repr=False)
     log: RunLog | None = field(default=None, repr=False)
@@ -119,7 +124,7 @@ class ReplayReport:
         Keys: file, format, layout, sample_time_s, controller, controller_source
         ("header" | "inferred" | "inferred (header contradicted)" | null), audit (DESIGN.md
         "Log audit": [{claim, header, data, verdict, evidence}]), controller_spec, alignment, samples, max_abs_dv,
-        reproduced, reference, metrics {overshoot_pct, settling_time_s} (nulls when not a
+        judged_to_row, reproduced, reference, metrics {overshoot_pct, settling_time_s} (nulls when not a
         closed-loop step), model {fit_pct {theta, accel}, n_elements} or null, beam_test
         {f1_hz, f1_hz_std, zeta1, zeta1_std, f1_model_hz, zeta1_model, ...} or null,
         outcome, notes.
@@ -137,6 +142,7 @@ class ReplayReport:
             "alignment": self.alignment,
             "samples": self.samples,
             "max_abs_dv": self.max_abs_dv,
+            "judged_to_row": self.judged_to,
             "reproduced": self.reproduced if self.max_abs_dv is not None else None,
             "reference": self.reference.to_json(),
             "metrics": {"overshoot_pct": None if m is None else m.overshoot_pct,
@@ -188,6 +194,7 @@ def replay(path: str | Path, model=True, n_elements: int | None = None) -> Repla
         report.controller, report.controller_spec = controller.name, controller.spec
         report.controller_source = run.source
         report.max_abs_dv, report.v_replayed = run.max_abs_dv, run.replayed.v_replayed
+        report.judged_to = run.identified.judged_to
         report.alignment = run.alignment
         if not run.closed:
             report.notes.append("open loop: v = u")
@@ -288,7 +295,9 @@ def format_report(report: ReplayReport) -> str:
     if report.max_abs_dv is not None:
         verdict = "reproduces" if report.reproduced else "does NOT reproduce"
         align = "" if report.alignment is None else f", alignment d = {report.alignment}"
-        lines.append(f"  replay {verdict} the logged v: max |dv| = {report.max_abs_dv:.3g} counts{align}")
+        upto = "" if report.judged_to is None else (f" up to row {report.judged_to}, where n jumps (its memory "
+                                                    f"is not in the log's rows: not judged across it)")
+        lines.append(f"  replay {verdict} the logged v{upto}: max |dv| = {report.max_abs_dv:.3g} counts{align}")
     ref = report.reference
     if ref.is_step:
         lines.append(f"  reference: step of {ref.amplitude:g} at tick {ref.step_tick}")

@@ -22,9 +22,10 @@ from station.compare import compare_run, format_comparison
 from station.logged import LoggedRun
 from station.logged.accelerometer import MOUNTED_CLAIM
 from station.logged.audit import ACCEL_CLAIM, ACCEL_DRIFT_COUNTS, CLAIMS, SOURCES, VERDICTS, file_name_claims
+from station.runlog.timebase import row_ticks
 from station.logged.start import START_CLAIM
 from station.logged.units import unsigned_words, word_claims
-from station.plant import DiscretePlant
+from station.plant import DiscretePlant, load_model
 from station.replay import format_report, replay
 from station.survey import format_table, survey
 from tests.blind.audit import LabController, draw_case, reference, write_audit_case
@@ -446,12 +447,14 @@ def test_a_header_law_over_two_levels_of_v_is_not_confirmed(tmp_path):
     assert claim.verdict == "unchecked" and "cannot confirm" in claim.evidence
 
 
-@pytest.mark.parametrize("name", [RIG_LOGS[1], RIG_LOGS[4]])
+@pytest.mark.parametrize("name", [RIG_LOGS[1], RIG_LOGS[4], RIG_LOGS[3]])
 @pytest.mark.parametrize("cut", ["drop", "repeat"])
 def test_a_true_header_over_missing_or_repeated_rows_is_not_contradicted(rig_data, tmp_path, name, cut):
-    # The P and lead steps with 20 rows deleted, or 10 rows repeated, at row 500: the rows say so
-    # ("n jumps"), and the header's law, which gives every row before the gap, is not judged
-    # across it (before: "contradicted", its first miss the row after the gap)
+    # The P, lead and lead + accelerometer steps with 20 rows deleted, or 10 rows repeated, at row
+    # 500: the rows say so ("n jumps"). The P and the lead are replayed again from the jump with
+    # their memory as logged and reproduce every other row: confirmed. Ga's memory is a's whole
+    # past, which the log lacks across the gap: judged up to it, "unchecked" (before: the P and
+    # lead "unchecked", and every law "contradicted" before that, its first miss after the gap)
     src = rig_data / name
     lines = src.read_text().splitlines()
     head = [x for x in lines if x.startswith("#")]
@@ -463,10 +466,71 @@ def test_a_true_header_over_missing_or_repeated_rows_is_not_contradicted(rig_dat
     verdicts = {c.claim: c for c in run.audit.claims if c.claim in ("controller", "sample_time") and
                 c.verdict != "confirmed"}
     assert verdicts["sample_time"].data == "n jumps at 1 rows"
-    if "controller" in verdicts:  # the lead's float memory or the P's lag crosses the gap
-        assert verdicts["controller"].verdict == "unchecked" and "row 500" in verdicts["controller"].data
-    assert run.source == "header" and run.alignment == 1
+    assert run.source == "header" and run.alignment == 1 and run.reproduced
     assert not any(c.claim == "controller" for c in run.audit.contradicted)
+    if name == RIG_LOGS[3]:
+        assert verdicts["controller"].verdict == "unchecked" and "row 500" in verdicts["controller"].data
+        assert run.identified.judged_to == 500
+        report = format_report(replay(path, model=False))
+        assert "reproduces the logged v up to row 500, where n jumps" in report
+    else:
+        assert "controller" not in verdicts and run.identified.judged_to is None
+        assert run.max_abs_dv <= 1e-6
+
+
+@pytest.mark.parametrize("name", [RIG_LOGS[0], RIG_LOGS[1], RIG_LOGS[4], RIG_LOGS[3]])
+@pytest.mark.parametrize("cut", ["drop", "repeat"])
+def test_rows_missing_or_repeated_are_simulated_on_their_ticks(rig_data, tmp_path, name, cut):
+    # Rows lost (or written twice) while the hub moves: the model runs on every tick and is
+    # compared at the rows there are, so at each kept row it predicts what it predicts on the
+    # whole log (independent truth: the log before the cut). Before: the rows were taken as
+    # consecutive ticks, the model 15 ticks ahead of the log after the gap.
+    src = rig_data / name
+    whole = LoggedRun.from_path(src)
+    u, v = whole.data["u"], whole.data["v"]
+    # a span in the motion where u (and, open loop, v) stay what the row before held: the held
+    # values are then exact (a closed loop's v is the model's own)
+    start = next(k for k in range(60, 1000) if np.all(u[k - 1:k + 15] == u[k - 1]) and np.ptp(whole.data["theta"][k:k + 15])
+                 and (whole.closed or np.all(v[k - 1:k + 15] == v[k - 1])))
+    lines = src.read_text().splitlines()
+    head = [x for x in lines if x.startswith("#")]
+    rows = lines[len(head):]
+    kept = np.r_[0:start, start + 15:len(rows)] if cut == "drop" else np.r_[0:start, start - 5:start, start:len(rows)]
+    path = tmp_path / src.name
+    path.write_text("\n".join(head + [rows[k] for k in kept]) + "\n")
+    run = LoggedRun.from_path(path)
+    assert run.source == whole.source and run.alignment == whole.alignment
+    model = load_model("rig")
+    sim, truth = run.simulate(model), whole.simulate(model)
+    assert "on the log's ticks (n jumps: " in sim.how
+    for key in ("theta", "a", "v", "t"):
+        np.testing.assert_array_equal(sim.prediction[key], truth.prediction[key][kept], err_msg=key)
+    np.testing.assert_array_equal(sim.theta_measured, truth.theta_measured[kept])
+
+
+def test_a_law_is_inferred_across_rows_missing_from_a_log_that_names_none(rig_data, tmp_path):
+    # The 2014 sweep (no header, no n: t jumps) with 15 rows deleted mid-run: P kp = 1 is
+    # inferred from the rows whose lags do not cross the jump and replays every other row
+    # (before: no law found, the model driven open loop by the logged v, θ fit -3062 %)
+    src = rig_data / RIG_LOGS[6]
+    lines = src.read_text().splitlines()
+    path = tmp_path / src.name
+    path.write_text("\n".join(lines[:2001] + lines[2016:]) + "\n")
+    run = LoggedRun.from_path(path)
+    assert run.source == "inferred" and run.controller.spec["kind"] == "p" and run.controller.spec["kp"] == 1.0
+    assert run.reproduced and run.alignment == 1
+    assert run.data["n"][2000] - run.data["n"][1999] == 16
+
+
+def test_row_ticks_places_rows_only_where_it_can():
+    assert row_ticks(np.arange(5.0)) is None                       # consecutive
+    assert row_ticks([0, 1, 3, 4]).tolist() == [0, 1, 3, 4]       # a tick lost
+    assert row_ticks([7, 8, 8, 9]).tolist() == [0, 1, 1, 2]       # a row written twice
+    assert row_ticks([0, 1, 2, 1, 2, 3]).tolist() == [0, 1, 2, 1, 2, 3]  # rows written again
+    assert row_ticks([5, 6, 0, 1]) is None                        # a counter that wraps: not placed
+    assert row_ticks([0, 1.5, 3]) is None                         # not ticks
+    assert row_ticks([0, 1, 1000]) is None                        # more missing than there are rows
+    assert row_ticks([0, np.nan, 2]) is None
 
 
 @pytest.mark.parametrize("offset, jitter", [(1764072000.0, 2e-4), (1234.5, 0.0), (0.002, 0.0)])

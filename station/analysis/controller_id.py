@@ -178,7 +178,8 @@ PREFERRED_ALIGNMENT = 1
 
 
 def fit_alignments(controller, u, theta, a, v, alignments=ALIGNMENTS, skipped=None,
-                   prefer: int | None = PREFERRED_ALIGNMENT, primed: int = 0) -> tuple[AlignmentFit | None, tuple[int, ...]]:
+                   prefer: int | None = PREFERRED_ALIGNMENT, primed: int = 0,
+                   restarts=()) -> tuple[AlignmentFit | None, tuple[int, ...]]:
     """A controller replayed over a log at each alignment: the best fit, and every alignment
     at which it reproduces every logged v (to :data:`TOLERANCE`).
 
@@ -195,6 +196,8 @@ def fit_alignments(controller, u, theta, a, v, alignments=ALIGNMENTS, skipped=No
     primed : int
         Rows taken into the controller's history as logged (a copy cut from a longer run:
         :func:`station.control.rerun.replay_commands`).
+    restarts : sequence of int
+        Rows where the log's ticks jump (:func:`station.control.rerun.detect_alignment`).
 
     Returns
     -------
@@ -202,8 +205,8 @@ def fit_alignments(controller, u, theta, a, v, alignments=ALIGNMENTS, skipped=No
         The preferred reproducing alignment's fit, else the closest (the first on a tie);
         None when no alignment was tried.
     """
-    fits = [f for d in alignments if (f := detect_alignment(controller, u, theta, a, v, (d,), skipped, primed))
-            is not None]
+    fits = [f for d in alignments if (f := detect_alignment(controller, u, theta, a, v, (d,), skipped, primed,
+                                                           restarts)) is not None]
     if not fits:
         return None, ()
     exact = tuple(f.alignment for f in fits if f.max_abs_dv <= TOLERANCE)
@@ -213,7 +216,7 @@ def fit_alignments(controller, u, theta, a, v, alignments=ALIGNMENTS, skipped=No
 
 
 def check_law(controller, u, theta, a, v, law: str, alignments, design=None,
-              prefer: int | None = PREFERRED_ALIGNMENT, primed: int = 0) -> IdentifiedController | None:
+              prefer: int | None = PREFERRED_ALIGNMENT, primed: int = 0, restarts=()) -> IdentifiedController | None:
     """``controller`` at its best alignment (:func:`fit_alignments`), as an IdentifiedController
     named ``law``.
 
@@ -230,13 +233,16 @@ def check_law(controller, u, theta, a, v, law: str, alignments, design=None,
         As :func:`fit_alignments`.
     primed : int
         As :func:`fit_alignments`.
+    restarts : sequence of int
+        As :func:`fit_alignments`.
 
     Returns
     -------
     IdentifiedController or None
         None when no alignment was tried.
     """
-    fit, exact = fit_alignments(controller, u, theta, a, v, alignments, prefer=prefer, primed=primed)
+    fit, exact = fit_alignments(controller, u, theta, a, v, alignments, prefer=prefer, primed=primed,
+                                restarts=restarts)
     return None if fit is None else IdentifiedController(controller, *fit, law, design, exact)  # None: no alignment tried
 
 
@@ -260,7 +266,7 @@ def _variants(controller, v):
 
 
 def variant_of(controller, u, theta, a, v, alignments=ALIGNMENTS, skipped=None,
-               prefer: int | None = PREFERRED_ALIGNMENT, cut: bool = False):
+               prefer: int | None = PREFERRED_ALIGNMENT, cut: bool = False, restarts=()):
     """The variant of ``controller`` that reproduces a log best, its fit and every alignment
     at which it reproduces the log (:func:`fit_alignments`).
 
@@ -275,6 +281,8 @@ def variant_of(controller, u, theta, a, v, alignments=ALIGNMENTS, skipped=None,
     cut : bool
         The log is a copy cut from a longer run: the law's first rows of history are taken
         as logged (:func:`fit_alignments` ``primed``).
+    restarts : sequence of int
+        Rows where the log's ticks jump (:func:`fit_alignments`).
 
     Returns
     -------
@@ -288,7 +296,7 @@ def variant_of(controller, u, theta, a, v, alignments=ALIGNMENTS, skipped=None,
     best = None
     for candidate in _variants(controller, v):
         primed = getattr(candidate, "history", 0) if cut else 0
-        fit, exact = fit_alignments(candidate, u, theta, a, v, alignments, skipped, prefer, primed)
+        fit, exact = fit_alignments(candidate, u, theta, a, v, alignments, skipped, prefer, primed, restarts)
         if fit is not None and (best is None or fit.max_abs_dv < best[1].max_abs_dv):
             best = (candidate, fit, exact)
         if best is not None and best[1].max_abs_dv <= TOLERANCE:
@@ -396,7 +404,7 @@ def _law(rows: LawRows, recursion: str, dt: float) -> tuple[np.ndarray, Continuo
 
 def infer_controller(u, theta, v, a=None, dt: float = DT, rig_limit: float = CLAMP,
                      alignments=(0, 1), prefer: int | None = PREFERRED_ALIGNMENT,
-                     cut: bool = False) -> IdentifiedController | None:
+                     cut: bool = False, restarts=()) -> IdentifiedController | None:
     """Identify the controller that produced a log's commands from u, θ and v.
 
     Parameters
@@ -417,6 +425,12 @@ def infer_controller(u, theta, v, a=None, dt: float = DT, rig_limit: float = CLA
     cut : bool
         The log is a copy cut from a longer run: a law of order m is fitted and judged from
         its m-th row on, its history before taken as logged.
+    restarts : sequence of int
+        Rows where the log's ticks jump (rows missing or repeated:
+        :func:`station.runlog.timebase.restart_rows`): P and linear laws are fitted on the rows
+        whose lags do not reach across a jump and replayed again from each
+        (:func:`station.control.rerun.replay_commands`); the laws with accelerometer
+        feedback or a sent whole count are not tried across a jump.
 
     Returns
     -------
@@ -437,7 +451,7 @@ def infer_controller(u, theta, v, a=None, dt: float = DT, rig_limit: float = CLA
 
     if np.array_equal(v, u) or np.array_equal(v[1:], u[1:]) and v[0] == 0:
         ol = OpenLoop(limit=None)
-        return check_law(ol, u, theta, a, v, "open loop, v = u", alignments, prefer=prefer)
+        return check_law(ol, u, theta, a, v, "open loop, v = u", alignments, prefer=prefer, restarts=restarts)
     if not pins_a_law(v):
         return None  # nothing but 0 and a clamp's level: no law is pinned
 
@@ -448,12 +462,14 @@ def infer_controller(u, theta, v, a=None, dt: float = DT, rig_limit: float = CLA
                 continue
             e = _errors(u, theta, d)
             for limit in _limits(v, rig_limit):
-                rows = LawRows(e, v, d, order, limit, order if cut else 0)
+                rows = LawRows(e, v, d, order, limit, order if cut else 0, restarts)
                 for recursion in recursions:
                     hit = _accepted(rows, recursion, d, (u, theta, a, v), dt, rig_limit, alignments, prefer,
-                                    order if cut else 0)
+                                    order if cut else 0, restarts=restarts)
                     if hit is not None:
                         return hit
+    if len(restarts):  # the laws below are not tried across a jump of n
+        return None
     if len(recursions) > 1 and not cut:  # the float with its whole count sent: after every law the log holds
         for order in range(1, MAX_ORDER + 1):
             for d in alignments:
@@ -473,7 +489,7 @@ def infer_controller(u, theta, v, a=None, dt: float = DT, rig_limit: float = CLA
 
 
 def _accepted(rows: LawRows, recursion: str, d: int, log, dt: float, rig_limit: float, alignments, prefer,
-              primed: int = 0, ga: AccelFeedback | None = None) -> IdentifiedController | None:
+              primed: int = 0, ga: AccelFeedback | None = None, restarts=()) -> IdentifiedController | None:
     """The law ``rows`` hold (with the accelerometer feedback ``ga`` when given), when, run as
     the rig ran it, it reproduces the log ``(u, θ, a, v)``: to :data:`TOLERANCE`, or with rows
     on a quantization boundary only (:func:`tie_rows`); else None."""
@@ -499,7 +515,7 @@ def _accepted(rows: LawRows, recursion: str, d: int, log, dt: float, rig_limit: 
     except ValueError:
         return None
     law = _law_text(order, c, design, dt, recursion, limit, rig_limit, ctl.ga)
-    hit = check_law(ctl, *log, law, alignments, design, prefer, primed)
+    hit = check_law(ctl, *log, law, alignments, design, prefer, primed, restarts)
     if hit is not None and hit.max_abs_dv <= TOLERANCE:
         return hit
     ties = tie_rows(rows, c, recursion)

@@ -11,6 +11,8 @@ from fractions import Fraction
 
 import numpy as np
 
+from station.control.rerun import judged_rows
+
 TOLERANCE = 1e-6
 """max |v_replayed - v_logged| (DAC counts) a law must meet to be accepted."""
 
@@ -58,10 +60,17 @@ class LawRows:
     skip : int
         Rows from d on left out (a copy cut from a longer run: their lags reach before its
         first row).
+    restarts : sequence of int
+        Rows where the log's ticks jump (:func:`station.runlog.timebase.restart_rows`): the
+        rows whose lags reach across a jump are left out
+        (:func:`station.control.rerun.judged_rows`).
     """
 
-    def __init__(self, e: np.ndarray, v: np.ndarray, d: int, order: int, limit: float, skip: int = 0):
+    def __init__(self, e: np.ndarray, v: np.ndarray, d: int, order: int, limit: float, skip: int = 0,
+                 restarts=()):
         rows = np.arange(d + skip, v.size)
+        if len(restarts):
+            rows = np.flatnonzero(judged_rows(v.size, d, skip, restarts, order))
         lag = lambda x, j: np.where(rows - j >= 0, x[np.maximum(rows - j, 0)], 0.0)  # noqa: E731
         cols = [lag(e, i) for i in range(order + 1)] + [-lag(v, j) for j in range(1, order + 1)]
         self.X = np.column_stack(cols)

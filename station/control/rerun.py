@@ -42,7 +42,7 @@ def is_closed_loop(controller: Any) -> bool:
 
 
 def replay_commands(controller, u, theta, a, alignment: int, skipped=None, v=None,
-                    primed: int = 0) -> tuple[np.ndarray, np.ndarray]:
+                    primed: int = 0, restarts=()) -> tuple[np.ndarray, np.ndarray]:
     """Run a controller over logged samples: v[k] = C(u[k], theta[k-d], a[k-d]).
 
     Before the first sample (k < d) there is nothing to compute from: v[k] = 0 and
@@ -71,6 +71,12 @@ def replay_commands(controller, u, theta, a, alignment: int, skipped=None, v=Non
         go into the controller's history (:meth:`station.control.compensator.Compensator.prime`),
         as a copy cut from a longer run had it; their v is the logged one. 0 (default):
         the controller starts at rest. Controllers without ``prime`` start at rest.
+    restarts : sequence of int, optional
+        Rows where the log's ticks jump (rows missing or repeated before them:
+        :func:`station.runlog.timebase.restart_rows`). The replay starts again at each as on a
+        copy cut from a longer run: its first d rows' v are the logged ones (computed from
+        samples the log lacks), and the next :func:`memory` rows go into the controller's
+        history as logged. Needs ``v``.
 
     Returns
     -------
@@ -87,6 +93,20 @@ def replay_commands(controller, u, theta, a, alignment: int, skipped=None, v=Non
     if d < 0:
         raise ValueError(f"alignment must be >= 0, got {alignment}")
     u = np.asarray(u, dtype=float)
+    rows_back = memory(controller)
+    restarts = () if v is None or rows_back is None else restarts
+    bounds = [0, *sorted(int(r) for r in restarts if 0 < r < u.size), u.size]
+    if len(bounds) > 2:
+        theta, a, v = (np.asarray(x, dtype=float) for x in (theta, a, v))
+        v_out, hat_out = np.zeros(u.size), u.copy()
+        for i, (lo, hi) in enumerate(zip(bounds[:-1], bounds[1:])):
+            part = slice(lo, hi)
+            v_out[part], hat_out[part] = replay_commands(
+                controller, u[part], theta[part], a[part], d, None if skipped is None else np.asarray(skipped)[part],
+                v[part], primed if i == 0 else rows_back)
+            if i:  # computed from samples of ticks the log lacks: the logged commands
+                v_out[lo:min(lo + d, hi)] = v[lo:min(lo + d, hi)]
+        return v_out, hat_out
     n = u.size
     theta = np.asarray(theta, dtype=float)
     a = np.asarray(a, dtype=float)
@@ -122,6 +142,63 @@ def replay_commands(controller, u, theta, a, alignment: int, skipped=None, v=Non
     return v_out, hat_out
 
 
+def memory(controller) -> int | None:
+    """Rows of e and v a controller's recursion remembers, all of which a log holds: its
+    ``history`` when it has ``prime`` and no accelerometer feedback; 0 for a law without
+    memory (open loop); None when its memory is not all in the log (Ga's state is a's whole
+    past, a custom controller's is its own): a replay cannot start again from logged rows.
+
+    Parameters
+    ----------
+    controller : Compensator, OpenLoop or an object with step/reset
+
+    Returns
+    -------
+    int or None
+    """
+    if isinstance(controller, OpenLoop):
+        return 0
+    if not callable(getattr(controller, "prime", None)) or getattr(controller, "ga", None) is not None:
+        return None
+    return int(getattr(controller, "history", 0))
+
+
+def judged_rows(n: int, alignment: int, primed: int = 0, restarts=(), memory_rows: int = 0) -> np.ndarray:
+    """The rows whose replayed command a log can judge, as a mask.
+
+    Rows k < d were computed from samples before the log (0 on a run logged from its start,
+    the earlier run's on a copy cut from one), and the ``primed`` rows after them were taken
+    as logged; after each restart (:func:`replay_commands`) the same d + ``memory_rows`` rows.
+    At least the last row is judged.
+
+    Parameters
+    ----------
+    n : int
+        Rows.
+    alignment : int
+        d, samples.
+    primed : int
+        Rows primed at the start.
+    restarts : sequence of int
+        Rows where the replay starts again.
+    memory_rows : int
+        Rows primed after each restart (:func:`memory`).
+
+    Returns
+    -------
+    numpy.ndarray of bool, shape (n,)
+    """
+    mask = np.ones(n, dtype=bool)
+    d = max(int(alignment), 0)
+    mask[:min(d + primed, max(n - 1, 0))] = False
+    for r in restarts:
+        if 0 < r < n:
+            mask[r:r + d + memory_rows] = False
+    if n and not mask.any():
+        mask[-1] = True
+    return mask
+
+
 class AlignmentFit(NamedTuple):
     """The alignment with which a controller best reproduces logged commands (:func:`detect_alignment`).
 
@@ -141,7 +218,7 @@ class AlignmentFit(NamedTuple):
 
 
 def detect_alignment(controller, u, theta, a, v, alignments=ALIGNMENTS, skipped=None,
-                     primed: int = 0) -> AlignmentFit:
+                     primed: int = 0, restarts=()) -> AlignmentFit:
     """The computational delay d with which ``controller`` best reproduces the logged
     commands ``v`` (DESIGN.md: headers do not say; the data do).
 
@@ -157,23 +234,22 @@ def detect_alignment(controller, u, theta, a, v, alignments=ALIGNMENTS, skipped=
     primed : int
         Rows from d on taken into the controller's history as logged and not judged
         (:func:`replay_commands`: a copy cut from a longer run).
+    restarts : sequence of int
+        Rows where the log's ticks jump: the replay starts again there
+        (:func:`replay_commands`), and the rows it takes as logged are not judged.
 
     Returns
     -------
     AlignmentFit
-        The best alignment (the first tried on a tie), its max |dv| over rows k >= d (the
-        first d rows' commands came from samples before the log: 0 on a run logged from its
-        start, the earlier run's on a copy cut from one) and the replayed v; unpacks as
-        ``(d, max_abs_dv, v_replayed)``.
+        The best alignment (the first tried on a tie), its max |dv| over the rows judged
+        (:func:`judged_rows`) and the replayed v; unpacks as ``(d, max_abs_dv, v_replayed)``.
     """
     v = np.asarray(v, dtype=float)
     best = None
     for d in alignments:
-        v_hat, _ = replay_commands(controller, u, theta, a, d, skipped, v, primed)
-        # rows k < d were computed from samples the log does not hold (0 on a run logged from
-        # its start; a copy cut from a longer run keeps their commands): not judged, nor
-        # the primed rows after them
-        judged = slice(min(max(int(d), 0) + primed, max(v.size - 1, 0)), None)
+        v_hat, _ = replay_commands(controller, u, theta, a, d, skipped, v, primed, restarts)
+        rows_back = memory(controller)
+        judged = judged_rows(v.size, d, primed, () if rows_back is None else restarts, rows_back or 0)
         err = float(np.max(np.abs(v_hat[judged] - v[judged])))
         if best is None or err < best.max_abs_dv:
             best = AlignmentFit(d, err, v_hat)

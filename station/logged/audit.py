@@ -26,6 +26,7 @@ from pathlib import Path
 import numpy as np
 
 from station.runlog import RunLog
+from station.runlog.timebase import row_ticks
 
 CLAIMS = ("controller", "alignment", "reference", "sample_time", "columns")
 """What a log can claim (DESIGN.md "Log audit")."""
@@ -220,10 +221,13 @@ def reference_claims(log: RunLog, reference) -> list[AuditClaim]:
         ok = u[-1] == uend
         out.append(AuditClaim("reference", f"file name: last u = {uend:g}", f"last u = {u[-1]:g}",
                               "confirmed" if ok else "contradicted", f"u[{u.size - 1}] = {u[-1]:g}"))
+    ticks = row_ticks(log.data["n"])  # rows missing or repeated: the run's samples are its ticks
+    span = u.size if ticks is None else int(ticks.max()) + 1
     for stopn in stated.get("stopn", []) + stated.get("duration", []):
-        ok = u.size == stopn
-        out.append(AuditClaim("reference", f"file name: {stopn:g} samples", f"{u.size} samples",
-                              "confirmed" if ok else "contradicted", f"the log holds {u.size} rows"))
+        ok = span == stopn
+        held = f"{u.size} rows" if ticks is None else f"{u.size} rows over {span} ticks (n jumps)"
+        out.append(AuditClaim("reference", f"file name: {stopn:g} samples", f"{span} samples",
+                              "confirmed" if ok else "contradicted", f"the log holds {held}"))
     return out
 
 

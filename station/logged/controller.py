@@ -36,6 +36,7 @@ from station.control.rerun import ALIGNMENTS, AlignmentFit, detect_alignment, is
 from station.errors import StationError
 from station.logged.audit import AuditClaim
 from station.logged.start import start_claims
+from station.runlog.timebase import restart_rows
 from station.rig import CLAMP, DT  # the rig's clamp and sample time: its compensators ran at them
 from station.runlog import RunLog
 
@@ -206,6 +207,10 @@ class ControllerId(NamedTuple):
     cut : bool
         The log is a copy cut from a longer run: the law reproduces it only with its first
         rows of memory taken as logged (or the hub moved at its first row).
+    judged_to : int or None
+        The row where n jumps past which the law could not be judged (its memory, such as
+        Ga's, is not in the log's rows): ``fit.max_abs_dv`` is over the rows before it. None:
+        judged on every row.
     """
 
     controller: Compensator | OpenLoop | None
@@ -215,6 +220,7 @@ class ControllerId(NamedTuple):
     claim: AuditClaim | None = None
     alignments: tuple[int, ...] = ()
     cut: bool = False
+    judged_to: int | None = None
 
 
 def describe_controller(controller) -> str:
@@ -317,8 +323,9 @@ def header_law_dv(log: RunLog, skipped=None) -> float | None:
     laws = [controller]  # at the rig's clamp, then the log's own (a header does not state its clamp)
     if 0 < peak < (controller.limit or np.inf):
         laws.append(with_recursion(controller, controller.recursion, peak))
+    restarts = restart_rows(data["n"])
     for law in laws:
-        _, fit, _ = variant_of(law, data["u"], data["theta"], a, data["v"], ALIGNMENTS, skipped)
+        _, fit, _ = variant_of(law, data["u"], data["theta"], a, data["v"], ALIGNMENTS, skipped, restarts=restarts)
         if fit is not None and (best is None or fit.max_abs_dv < best):
             best = float(fit.max_abs_dv)
     return best
@@ -370,6 +377,8 @@ def identify_controller(log: RunLog, skipped=None) -> ControllerId:
     data = log.data
     u, theta, v, a = data["u"], data["theta"], data["v"], data["a"]
     a = np.where(np.isfinite(a), a, 0.0)
+    # rows missing or repeated: a law replayed again from each jump of n, its memory as logged
+    restarts = restart_rows(data["n"])
     pid = _header_pid(log)
     stated_d = log.meta.get("alignment") if log.format == "station" else None
     prefer = stated_d if isinstance(stated_d, int) and not isinstance(stated_d, bool) else PREFERRED_ALIGNMENT
@@ -403,10 +412,10 @@ def identify_controller(log: RunLog, skipped=None) -> ControllerId:
         if missing:  # LoggedRun.replayed names the column
             return ControllerId(controller, "header", notes, None, AuditClaim(
                 "controller", said, "not replayable", "unchecked", f"the log has no usable {', '.join(missing)}"))
-        used, fit, exact = variant_of(controller, u, theta, a, v, ALIGNMENTS, skipped, prefer, cut)
+        used, fit, exact = variant_of(controller, u, theta, a, v, ALIGNMENTS, skipped, prefer, cut, restarts)
         if fit.max_abs_dv > TOLERANCE and not cut and getattr(controller, "history", 0):
             # a copy cut while the hub rested but the controller's memory did not
-            retry = variant_of(controller, u, theta, a, v, ALIGNMENTS, skipped, prefer, True)
+            retry = variant_of(controller, u, theta, a, v, ALIGNMENTS, skipped, prefer, True, restarts)
             if retry[1].max_abs_dv <= TOLERANCE:
                 (used, fit, exact), cut = retry, True
                 notes.append(_CUT_NOTE.format(used.history))
@@ -428,9 +437,9 @@ def identify_controller(log: RunLog, skipped=None) -> ControllerId:
                          f"infer one from: commands not replayed, model driven by the logged v")
         return ControllerId(None, None, notes, None, AuditClaim(
             "controller", said, "not replayable", "unchecked", f"the log has no usable {', '.join(missing)}"))
-    hit = infer_controller(u, theta, v, a, dt, CLAMP, prefer=prefer, cut=cut)
+    hit = infer_controller(u, theta, v, a, dt, CLAMP, prefer=prefer, cut=cut, restarts=restarts)
     if hit is None and not cut:  # a copy cut while the hub rested but the controller's memory did not
-        hit = infer_controller(u, theta, v, a, dt, CLAMP, prefer=prefer, cut=True)
+        hit = infer_controller(u, theta, v, a, dt, CLAMP, prefer=prefer, cut=True, restarts=restarts)
         if hit is not None and getattr(hit.controller, "history", 0):
             notes.append(_CUT_NOTE.format(hit.controller.history))
             cut = True
@@ -476,6 +485,8 @@ def identify_controller(log: RunLog, skipped=None) -> ControllerId:
     gap = None if controller is None else _miss_at_gap(used, u, theta, a, v, data["n"], skipped)
     if gap is not None:  # the law is judged on rows it never saw together: not a contradiction
         gap, fit = gap
+        before = np.abs(np.asarray(fit.v_replayed[:gap], float) - np.asarray(v[:gap], float))[fit.alignment:]
+        fit = fit._replace(max_abs_dv=float(np.max(before, initial=0.0)))
         verdict = "unchecked"
         data_says = f"this law up to row {gap}, where n jumps; not judged across it"
         evidence += (f"; but it reproduces every row before row {gap}, where n jumps (rows missing or repeated): "
@@ -484,14 +495,14 @@ def identify_controller(log: RunLog, skipped=None) -> ControllerId:
         notes.append(f"{evidence}: the header's controller is used, but the data contradict it")
     return ControllerId(controller, "header" if controller is not None else None, notes,
                         None if controller is None else fit, AuditClaim(
-                            "controller", said, data_says, verdict, evidence))
+                            "controller", said, data_says, verdict, evidence), judged_to=gap)
 
 
 def _miss_at_gap(controller, u, theta, a, v, n, skipped) -> tuple[int, AlignmentFit] | None:
     """The row where n jumps (a tick missing or repeated) at which, or within its alignment
-    after which, the controller replayed at some alignment first misses the logged v, and
-    that alignment's fit; None when at every alignment it first misses elsewhere, or n does
-    not jump."""
+    after which, the controller replayed straight through at some alignment first misses the
+    logged v, and that alignment's fit (over every row); None when at every alignment it
+    first misses elsewhere, or n does not jump."""
     n = np.asarray(n, dtype=float)
     if n.size < 2 or not np.all(np.isfinite(n)):
         return None

@@ -22,6 +22,7 @@ from station.logged.reference import Reference, classify_reference
 from station.logged.simulate import ModelRun, compared_theta, simulate_log
 from station.logged.start import Start, start_claims
 from station.logged.units import TimeBase, time_base
+from station.runlog.timebase import restart_rows
 from station.plant.effects import SENSOR_SIGNS
 from station.runlog import SKIPPED, RunLog, read_log
 
@@ -364,7 +365,8 @@ class LoggedRun:
         if self.identified.fit is not None:  # replayed when the audit checked it
             return self.identified.fit
         d = self.data
-        return detect_alignment(self.controller, d["u"], d["theta"], d["a"], d["v"], skipped=self.skipped)
+        return detect_alignment(self.controller, d["u"], d["theta"], d["a"], d["v"], skipped=self.skipped,
+                                restarts=restart_rows(d["n"]))
 
     @property
     def skipped(self) -> np.ndarray | None:

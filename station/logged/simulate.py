@@ -17,6 +17,7 @@ from station.analysis.fit import fit_pct
 from station.control import OpenLoop
 from station.control.rerun import is_closed_loop
 from station.logged.device import command_quantization
+from station.runlog.timebase import row_ticks, tick_time
 from station.runlog import RunLog
 
 
@@ -113,6 +114,18 @@ def parting(t, theta_measured, theta_model) -> Parting:
     return Parting(followed, float(t[k]), t_part, float(y[-1]), float(m[-1]))
 
 
+def _on_ticks(ticks: np.ndarray, *columns):
+    """The columns on every tick from the first row's to the last: a tick's value is its
+    first row's; a missing tick holds the tick before's (the device holds its command, a
+    reference is held)."""
+    order = np.argsort(ticks, kind="stable")
+    ordered = ticks[order]
+    first = order[np.r_[True, ordered[1:] != ordered[:-1]]]  # each tick's first row, by tick
+    grid = np.arange(int(ticks.max()) + 1)
+    src = first[np.searchsorted(ticks[first], grid, side="right") - 1]
+    return tuple(np.asarray(c, float)[src] for c in columns)
+
+
 @dataclass
 class ModelRun:
     """A logged run simulated on the plant (:func:`simulate_log`).
@@ -175,21 +188,23 @@ def simulate_log(log: RunLog, controller, alignment: int | None, model) -> Model
     from station.plant import DiscretePlant, simulate
 
     data = log.data
-    u = data["u"]
+    ticks = row_ticks(data["n"])
+    u, v, applied = data["u"], data["v"], data["v_applied"]
+    if ticks is not None:  # rows missing or repeated: the model runs on every tick
+        u, v, applied = _on_ticks(ticks, u, v, applied)
     kw = {}
     if isinstance(model, DiscretePlant):
         model.reset()
-    else:  # a Model: simulated at the log's sample time
-        kw["dt"] = log.dt
+    else:  # a Model: simulated at the log's sample time (a tick's, when rows skip ticks)
+        kw["dt"] = log.dt if ticks is None else tick_time(data["t"], data["n"], log.dt)
     command = command_quantization(log)
     closed = is_closed_loop(controller)
     if not closed:
-        applied = data["v_applied"]
         if applied.size and np.all(np.isfinite(applied)):
             pred = simulate(model, OpenLoop(), u, alignment=0, v_open=applied, **kw)
             how = "the logged v_applied (open loop)"
         else:
-            pred = simulate(model, OpenLoop(), u, alignment=0, v_open=data["v"], command=command, **kw)
+            pred = simulate(model, OpenLoop(), u, alignment=0, v_open=v, command=command, **kw)
             how = f"the logged v (open loop), quantized as the device did ({command})"
     else:
         d = 1 if alignment is None else alignment
@@ -201,6 +216,13 @@ def simulate_log(log: RunLog, controller, alignment: int | None, model) -> Model
         if theta0 != 0.0:
             pred = pred._replace(u=np.asarray(u, float), theta=pred.theta + theta0, theta_d_hat=pred.theta_d_hat + theta0)
             how += f", from rest at θ = {theta0:g} (the log's first θ: the encoder was not zeroed)"
+    if ticks is not None:
+        missing = int(ticks.max()) + 1 - np.unique(ticks).size
+        repeated = int(ticks.size - np.unique(ticks).size)
+        pred = type(pred)(*(np.asarray(x)[ticks] for x in pred))
+        said = [f"{missing} tick(s) missing (the row before's u and v held there)"] if missing else []
+        said += [f"{repeated} row(s) repeating a tick"] if repeated else []
+        how += f"; on the log's ticks (n jumps: {', '.join(said)})"
     theta = compared_theta(data["theta"], closed)
     part = None if closed or not theta.size else parting(data["t"], theta, pred["theta"])
     return ModelRun(pred, theta, data["a"], how, part)

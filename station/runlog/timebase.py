@@ -74,3 +74,83 @@ def complete_time_base(data: dict[str, np.ndarray], names: list[str], notes: lis
         notes.append(f"t is not evenly spaced (steps {np.min(steps):g} .. {np.max(steps):g} s; "
                      f"median {dt:g} s used)")
     return dt
+
+
+MISSING_SHARE = 1.0
+"""At most this many missing ticks per row for a log to be simulated on its ticks
+(:func:`row_ticks`); beyond it the rows are taken as consecutive ticks (the audit says n jumps)."""
+
+
+def row_ticks(n) -> np.ndarray | None:
+    """Each row's tick counted from the first row's, when rows are missing or repeated.
+
+    A log's n is the device's tick counter (or derived from t: :mod:`station.runlog.timebase`).
+    Rows the logger lost leave n jumping by more than one; rows written again repeat
+    earlier n.
+
+    Parameters
+    ----------
+    n : array_like, shape (N,)
+        The log's n column.
+
+    Returns
+    -------
+    numpy.ndarray of int64, shape (N,), or None
+        ``n - n[0]``, when n is whole, no row is before the first's tick, n steps by other
+        than 1 somewhere and at most :data:`MISSING_SHARE` ticks per row are missing; None
+        otherwise (rows that are consecutive ticks, or whose ticks cannot be placed, such as a
+        counter that wraps: taken as consecutive).
+    """
+    n = np.asarray(n, dtype=float)
+    if n.size < 2 or not np.all(np.isfinite(n)) or np.any(n != np.round(n)):
+        return None
+    ticks = (n - n[0]).astype(np.int64)
+    if np.all(np.diff(ticks) == 1) or np.any(ticks < 0):
+        return None
+    if ticks.max() + 1 - np.unique(ticks).size > MISSING_SHARE * n.size:
+        return None
+    return ticks
+
+
+def tick_time(t, n, dt: float) -> float:
+    """Seconds per tick of a log whose rows skip ticks: the median of t's steps over n's, to 1 ns.
+
+    Parameters
+    ----------
+    t, n : array_like, shape (N,)
+        The log's t (s) and n columns.
+    dt : float
+        The log's sample time (:attr:`station.runlog.RunLog.dt`): the answer when t and n
+        cannot give one.
+
+    Returns
+    -------
+    float
+        0.002 on a copy of the rig's run that keeps every other row (t steps 0.004, n 2).
+    """
+    t, n = np.asarray(t, float), np.asarray(n, float)
+    steps = np.diff(n)
+    ok = (steps > 0) & np.isfinite(steps) & np.isfinite(np.diff(t))
+    if not ok.any():
+        return dt
+    per = float(round(float(np.median(np.diff(t)[ok] / steps[ok])), 9))
+    return per if per > 0 else dt
+
+
+def restart_rows(n) -> tuple[int, ...]:
+    """The rows where a log's ticks jump (the row before is not the tick before), where a
+    replay of its controller starts again (:func:`station.control.rerun.replay_commands`).
+
+    Parameters
+    ----------
+    n : array_like, shape (N,)
+        The log's n column.
+
+    Returns
+    -------
+    tuple of int
+        Empty when :func:`row_ticks` cannot place the rows or they are consecutive.
+    """
+    ticks = row_ticks(n)
+    return () if ticks is None else tuple(int(r) for r in np.flatnonzero(np.diff(ticks) != 1) + 1)
+

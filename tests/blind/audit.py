@@ -31,8 +31,11 @@ recursion runs on the float while the whole count it sends is logged, "float-tru
 signed columns (u, v, θ, a, θ̂_d where whole) the lab's client read from the legacy protocol's
 16-bit two's-complement words as unsigned, a negative x written as 65536 + x; "swap": a true
 header (a P, or a lead on the stored integer), or none (the 2014 layout), over a log whose columns u and v, or θ and a,
-hold each other's values (a script that wrote them in another order than it named them). A
-class joined with "+" to
+hold each other's values (a script that wrote them in another order than it named them);
+"rows": a true header (a P, or a lead on the stored integer), or none (the 2014 layout,
+t jumping), over a log that lost rows (one to
+three spans of 1-30 ticks while the hub moves, n and t jumping over them) or holds a span of
+rows written again (a logger that re-sent a block). A class joined with "+" to
 "coulomb_friction" hides that friction too (drawn as :func:`tests.blind.cases.draw` draws it).
 """
 
@@ -55,7 +58,7 @@ N = 2000
 
 CLASSES = ("lie:open_loop", "lie:p_kp", "lie:lead_pole", "lie:accel_fb", "int:trunc_d0", "int:trunc_d1",
            "int:round_d0", "int:round_d1", "session", "lie:sent", "lie:accel_int", "honest:p", "honest:lead_int",
-           "honest:lead_sent", "words", "swap")
+           "honest:lead_sent", "words", "swap", "rows")
 """The audit's blind classes, in the validation table's order."""
 
 PHYSICAL = ("coulomb_friction",)
@@ -112,6 +115,8 @@ class AuditCase:
         "a", "theta_d_hat"): filled in by :func:`write_audit_case`.
     swap : tuple of str
         Two columns written in each other's place (("u", "v") or ("theta", "a")), else ().
+    rows : tuple of int
+        The ticks the log's rows hold, in the order written ((): every tick once, in order).
     """
 
     name: str
@@ -132,6 +137,7 @@ class AuditCase:
     words: bool = False
     wrapped: tuple = ()
     swap: tuple = ()
+    rows: tuple = ()
 
     @property
     def lies(self) -> bool:
@@ -219,6 +225,24 @@ def draw_case(name: str, seed: int) -> AuditCase:
                              alignment=int(rng.integers(0, 2)), header="p", swap=pair)
         return AuditCase(**common, **lead, recursion=str(rng.choice(["trunc", "round"])),
                          alignment=int(rng.integers(0, 2)), header="lead" if which < 2 / 3 else "none", swap=pair)
+    if base == "rows":
+        ticks = np.arange(N)
+        if rng.random() < 0.75:  # rows lost while the hub moves (after the step, in the sine or sweep)
+            lost = np.zeros(N, dtype=bool)
+            for _ in range(int(rng.integers(1, 4))):
+                start = int(rng.integers(20, 500))
+                lost[start:start + int(rng.integers(1, 31))] = True
+            ticks = ticks[~lost]
+        else:  # a block of rows written again
+            start, width = int(rng.integers(20, 500)), int(rng.integers(2, 31))
+            ticks = np.r_[ticks[:start + width], ticks[start:start + width], ticks[start + width:]]
+        rows = tuple(int(k) for k in ticks)
+        which = rng.random()
+        if which < 1 / 3:
+            return AuditCase(**{**common, "header_kp": kp}, **p_law, recursion=str(rng.choice(["none", "trunc"])),
+                             alignment=int(rng.integers(0, 2)), header="p", rows=rows)
+        return AuditCase(**common, **lead, recursion=str(rng.choice(["trunc", "round"])),
+                         alignment=int(rng.integers(0, 2)), header="lead" if which < 2 / 3 else "none", rows=rows)
     if base == "words":
         if rng.random() < 0.5:
             return AuditCase(**{**common, "header_kp": kp}, **p_law, recursion="trunc",
@@ -345,13 +369,14 @@ def format_audit_run(case: AuditCase, sim: Run) -> str:
     """The log text: the rig's ``#`` layout, or the 2014 layout (no header, columns
     ``Time (sec.) u theta accel v``) when the header names nothing."""
     lines = header(case)
+    ticks = case.rows or range(N)
     if case.header == "none":
         lines = ["Time (sec.)\tu\ttheta\taccel\tv"]
-        rows = ([k * DT, sim.u[k], sim.theta[k], sim.a[k], sim.v[k]] for k in range(N))
+        rows = ([k * DT, sim.u[k], sim.theta[k], sim.a[k], sim.v[k]] for k in ticks)
     else:
         accel = case.header == "lead"
         rows = ([k * DT, k, sim.u[k], sim.v[k], sim.theta[k], sim.a[k]] + ([sim.theta_d_hat[k]] if accel else [])
-                for k in range(N))
+                for k in ticks)
     lines += ["\t".join(_num(float(x)) for x in row) for row in rows]
     return "\n".join(lines) + "\n"
 
