@@ -22,7 +22,7 @@ from station.logged.reference import Reference, classify_reference
 from station.logged.simulate import ModelRun, compared_theta, simulate_log
 from station.logged.start import Start, start_claims
 from station.logged.units import TimeBase, time_base
-from station.runlog.timebase import restart_rows
+from station.runlog.timebase import restart_rows, row_ticks
 from station.plant.effects import SENSOR_SIGNS
 from station.runlog import SKIPPED, RunLog, read_log
 
@@ -368,6 +368,12 @@ class LoggedRun:
         return detect_alignment(self.controller, d["u"], d["theta"], d["a"], d["v"], skipped=self.skipped,
                                 restarts=restart_rows(d["n"]))
 
+    @cached_property
+    def ticks(self) -> np.ndarray | None:
+        """Each row's tick from the first row's when rows are missing or repeated, else None
+        (:func:`station.runlog.timebase.row_ticks`)."""
+        return row_ticks(self.data["n"])
+
     @property
     def skipped(self) -> np.ndarray | None:
         """Rows whose sample the station did not answer (our logs' :data:`station.runlog.SKIPPED`
@@ -537,7 +543,8 @@ class LoggedRun:
             self.check_columns(self.model_columns, "simulating it on a model")
             self._simulable = True
         found = self.found_faults(model) if sensors else {}
-        sim = simulate_log(self.log, self.controller, self.alignment, self.model_as_found(model, sensors))
+        sim = simulate_log(self.log, self.controller, self.alignment, self.model_as_found(model, sensors),
+                           self.ticks)
         if self.mounting.mounted is False:
             sim = dataclasses.replace(sim, how=sim.how + "; without the accelerometer's mass (the audit: no "
                                       "accelerometer on the beam)")

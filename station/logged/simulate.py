@@ -160,7 +160,11 @@ class ModelRun:
         return fit_pct(self.theta_measured, p["theta"], self.accel_measured, p["a"])
 
 
-def simulate_log(log: RunLog, controller, alignment: int | None, model) -> ModelRun:
+FROM_N = "from n"
+""":func:`simulate_log`'s ``ticks`` default: placed from the log's n (:func:`station.runlog.timebase.row_ticks`)."""
+
+
+def simulate_log(log: RunLog, controller, alignment: int | None, model, ticks=FROM_N) -> ModelRun:
     """Simulate a logged run on a model as the rig ran it, and fit it to the log.
 
     Closed loop: the log's controller, reference, clamp and alignment, the device's
@@ -179,6 +183,11 @@ def simulate_log(log: RunLog, controller, alignment: int | None, model) -> Model
     model : station.plant.model.Model or station.plant.DiscretePlant
         A Model is simulated at the log's sample time with its effects; a DiscretePlant
         (reset here) should have the log's dt.
+    ticks : numpy.ndarray, None or :data:`FROM_N`
+        Each row's tick when rows are missing or repeated (the model then runs on every
+        tick and is compared at the rows there are), None for consecutive rows; by default
+        placed from n (:func:`station.runlog.timebase.row_ticks`; a caller that simulates one
+        log thousands of times passes it once placed).
 
     Returns
     -------
@@ -188,7 +197,8 @@ def simulate_log(log: RunLog, controller, alignment: int | None, model) -> Model
     from station.plant import DiscretePlant, simulate
 
     data = log.data
-    ticks = row_ticks(data["n"])
+    if isinstance(ticks, str):
+        ticks = row_ticks(data["n"])
     u, v, applied = data["u"], data["v"], data["v_applied"]
     if ticks is not None:  # rows missing or repeated: the model runs on every tick
         u, v, applied = _on_ticks(ticks, u, v, applied)
