@@ -219,12 +219,7 @@ def draw_case(name: str, seed: int) -> AuditCase:
                          alignment=int(rng.integers(0, 2)), header="p")
     if base == "swap":
         pair = ("u", "v") if rng.random() < 0.5 else ("theta", "a")
-        which = rng.random()
-        if which < 1 / 3:
-            return AuditCase(**{**common, "header_kp": kp}, **p_law, recursion=str(rng.choice(["none", "trunc"])),
-                             alignment=int(rng.integers(0, 2)), header="p", swap=pair)
-        return AuditCase(**common, **lead, recursion=str(rng.choice(["trunc", "round"])),
-                         alignment=int(rng.integers(0, 2)), header="lead" if which < 2 / 3 else "none", swap=pair)
+        return _true_or_no_header(rng, common, p_law, lead, kp, swap=pair)
     if base == "rows":
         ticks = np.arange(N)
         if rng.random() < 0.75:  # rows lost while the hub moves (after the step, in the sine or sweep)
@@ -237,12 +232,7 @@ def draw_case(name: str, seed: int) -> AuditCase:
             start, width = int(rng.integers(20, 500)), int(rng.integers(2, 31))
             ticks = np.r_[ticks[:start + width], ticks[start:start + width], ticks[start + width:]]
         rows = tuple(int(k) for k in ticks)
-        which = rng.random()
-        if which < 1 / 3:
-            return AuditCase(**{**common, "header_kp": kp}, **p_law, recursion=str(rng.choice(["none", "trunc"])),
-                             alignment=int(rng.integers(0, 2)), header="p", rows=rows)
-        return AuditCase(**common, **lead, recursion=str(rng.choice(["trunc", "round"])),
-                         alignment=int(rng.integers(0, 2)), header="lead" if which < 2 / 3 else "none", rows=rows)
+        return _true_or_no_header(rng, common, p_law, lead, kp, rows=rows)
     if base == "words":
         if rng.random() < 0.5:
             return AuditCase(**{**common, "header_kp": kp}, **p_law, recursion="trunc",
@@ -254,6 +244,19 @@ def draw_case(name: str, seed: int) -> AuditCase:
                          alignment=int(rng.integers(0, 2)), header="lead")
     return AuditCase(**common, **lead, recursion=str(rng.choice(["trunc", "round"])),
                      alignment=int(rng.integers(0, 2)), header="lead")  # honest:lead_int
+
+
+def _true_or_no_header(rng: np.random.Generator, common: dict, p_law: dict, lead: dict, kp: float,
+                       **hidden) -> AuditCase:
+    """A case under a true header or none (the "swap" and "rows" classes): a third a P law
+    under its P header, else a lead on the stored integer under its lead header or no header
+    (the 2014 layout), with what the class hides (``hidden``: ``swap=`` or ``rows=``)."""
+    which = rng.random()
+    if which < 1 / 3:
+        return AuditCase(**{**common, "header_kp": kp}, **p_law, recursion=str(rng.choice(["none", "trunc"])),
+                         alignment=int(rng.integers(0, 2)), header="p", **hidden)
+    return AuditCase(**common, **lead, recursion=str(rng.choice(["trunc", "round"])),
+                     alignment=int(rng.integers(0, 2)), header="lead" if which < 2 / 3 else "none", **hidden)
 
 
 def _quantize(x: float, recursion: str) -> float:
