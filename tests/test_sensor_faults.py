@@ -46,11 +46,13 @@ def test_the_faults_are_in_the_vocabulary_with_design_units_and_neutral_values()
 
 
 @pytest.mark.parametrize("name, good, bad", [
-    ("accel_gain", [-3.0, -1.2, -0.3, 0.3, 1.0, 2.5, 3.0], [0.0, 0.29, -0.29, 3.1, -3.1, 0.1]),
+    # a model holds what the data may decide (the search spans 0.3..3, ±30 and ±20: below)
+    ("accel_gain", [-3.0, -1.2, -0.3, 0.3, 1.0, 2.5, 3.0, 0.01, -6.0, 100.0], [0.0, 0.0099, -0.0099, 101.0, -101.0]),
     ("encoder_scale", [4.0, -1.0, -4.0, 0.25, 16.0, -0.25, 1.0], [0.0, 0.2, -0.2, 17.0, -17.0]),
     ("motor_polarity", [1.0, -1.0], [0.0, 0.5, -0.5, 2.0, -2.0, -0.999]),
-    ("accel_offset", [-30.0, -2.5, 0.0, 7.0, 30.0], [-31.0, 30.5]),
-    ("accel_drift", [-20.0, -0.5, 0.0, 3.0, 20.0], [-21.0, 20.1]),
+    # the protocol's SAMPLE accel field is an i16: an unzeroed channel reads anywhere in it
+    ("accel_offset", [-32768.0, -30.0, -2.5, 0.0, 7.0, 30.0, 512.0, 32767.0], [-32769.0, 32767.5]),
+    ("accel_drift", [-32768.0, -20.0, -0.5, 0.0, 3.0, 20.0, 30.0, 32767.0], [-32769.0, 32768.0]),
 ])
 def test_ranges_either_sign_and_never_through_zero(name, good, bad):
     for x in good:
@@ -61,6 +63,17 @@ def test_ranges_either_sign_and_never_through_zero(name, good, bad):
         assert "\n" not in str(info.value) and str(info.value).startswith("m.toml: ")
         if EFFECTS[name].signed:
             assert "±" in str(info.value)
+
+
+def test_the_search_spans_less_than_a_model_may_hold_and_searches_about_a_decided_value():
+    spec = EFFECTS["accel_gain"]
+    assert (spec.lower, spec.upper) == (0.3, 3.0) and spec.bounds == (0.01, 100.0)
+    assert spec.searched(-1.2) and not spec.searched(6.0) and not spec.searched(-0.2)
+    assert spec.search_about(-1.2) == (0.3, 3.0)
+    lo, hi = spec.search_about(-6.0)  # the search's factor of 10, geometrically about 6
+    assert lo == pytest.approx(6.0 / 10 ** 0.5) and hi == pytest.approx(6.0 * 10 ** 0.5)
+    assert spec.search_about(0.02)[0] == 0.01  # within what a model may hold
+    assert EFFECTS["coulomb_friction"].bounds == (0.0, 40.0)  # no held range: the search's
 
 
 def test_a_model_file_carries_the_faults_and_reads_them_back(tmp_path, nominal):

@@ -17,7 +17,8 @@ import sys
 import pytest
 
 from station.logged import LoggedRun
-from station.logged.sensors import SIGN_COSINE, SensorEvidence, decide_faults, sensor_evidence
+from station.logged.sensor_evidence import SIGN_COSINE, SensorEvidence, sensor_evidence
+from station.logged.sensors import decide_faults
 from station.plant.model import load_model
 from station.replay import replay
 from tests.blind.cases import case_effects

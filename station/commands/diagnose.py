@@ -247,13 +247,15 @@ def format_diagnosis(diag) -> str:
     diag : Diagnosis
         What :func:`station.diagnosis.diagnose` returned.
     """
+    from station.logged.sensors import fault_text  # lazy: start-up time (the log audit: numpy)
+
     pct = lambda x: "n/a" if x is None else f"{x:.1f} %"  # noqa: E731
 
     u = diag.unexplained
     lines = diag.audit_lines()
     faults = diag.decided_faults
     lines += [f"model: {diag.nominal_model.name}" + (
-        " with the sensor faults decided from the data (" + ", ".join(f"{k} {v:.3g}" for k, v in faults.items()) + ")"
+        " with the sensor faults decided from the data (" + ", ".join(fault_text(k, v) for k, v in faults.items()) + ")"
         if faults else "") + f"; judged by {diag.validation}",
              f"cause: {diag.cause}" + (f"   (causes: {', '.join(diag.causes)})" if len(diag.causes) > 1 else ""),
              f"θ fit {pct(diag.baseline_fit.get('theta'))} -> {pct(diag.extended_fit.get('theta'))}, "

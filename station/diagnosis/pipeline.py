@@ -22,7 +22,8 @@ from station.diagnosis.search.stepwise import forward_select
 from station.diagnosis.search.workbench import Bench, nominal_trial, workbench
 from station.diagnosis.honesty.unexplained import check_unexplained
 from station.errors import StationError
-from station.logged.sensors import SIGN_HEADERS, decide_faults, sensor_evidence
+from station.logged.sensor_evidence import sensor_evidence
+from station.logged.sensors import SESSION_HEADERS, decide_faults
 from station.plant.effects import EFFECTS
 from station.plant.model import as_model
 
@@ -179,12 +180,13 @@ def accel_scale(faults, cases) -> tuple[float, float] | None:
     """The range a's scale is free in during the search (a factor on the base model's a,
     :class:`station.diagnosis.runs.cost.Evaluator`'s ``accel_scale``), or None.
 
-    A reversed accelerometer's gain is decided from the data against the nominal model
+    A reversed accelerometer's gain, or one beyond the fit's search, is decided from the data against the nominal model
     (:func:`station.logged.sensors.decide_faults`: a's ratio over θ's); the effects the search
     accepts change the model's a, and a gain held at that first estimate steers it (the lab's
     April 2009 session: held at −1.22 the third step took the beam's damping for the
     actuator's gain, 56.8 % against 67.5 % on the 13 held-out logs). So a is judged up to each
-    run's own scale, within the vocabulary's range of the gain, and the gain is refitted
+    run's own scale, within the gain's search range (about the decided gain where that lies
+    beyond it: :meth:`station.plant.effects.EffectSpec.search_about`), and the gain is refitted
     beside the accepted effects at the end (:func:`station.diagnosis.search.selection.with_accel_gain`).
 
     Where a run's controller feeds a back (Ga) the gain shapes its loop, and its θ pins it:
@@ -199,13 +201,14 @@ def accel_scale(faults, cases) -> tuple[float, float] | None:
     Returns
     -------
     (float, float) or None
-        None where no reversed accelerometer was decided or a run feeds a back.
+        None where no accelerometer gain was decided or a run feeds a back.
     """
     g0 = faults.effects.get("accel_gain")
-    if g0 is None or g0 >= 0 or any(feeds_back_a(c) for c in cases):
+    if g0 is None or any(feeds_back_a(c) for c in cases):
         return None
     spec = EFFECTS["accel_gain"]
-    return spec.lower / abs(g0), spec.upper / abs(g0)
+    lo, hi = spec.search_about(g0)
+    return lo / abs(g0), hi / abs(g0)
 
 
 def _diagnose(runs, validate, model, progress, bench: Bench, simulate, likelihood_values) -> Diagnosis:
@@ -227,7 +230,7 @@ def _diagnose(runs, validate, model, progress, bench: Bench, simulate, likelihoo
     ev = Evaluator(cases, base, simulate, accel_scale=scale)
     search = bench.search(ev, folds, range(n_fit), progress or (lambda msg: None))
     for c in cases:
-        for line in c.run.audit.lines(skip=SIGN_HEADERS):  # the signs: said once, decided over the runs
+        for line in c.run.audit.lines(skip=SESSION_HEADERS):  # the signs: said once, decided over the runs
             search.say(f"audit: {c.name}: {line}")
     for line in faults.said():
         search.say(line)
@@ -274,7 +277,7 @@ def _diagnose(runs, validate, model, progress, bench: Bench, simulate, likelihoo
         alternatives=doubt.alternatives, interval_method=doubt.method, notes=notes,
         sensor_faults=faults.refined(extended.effect_dict()),  # the values the saved model holds
         audit=[{"run": c.name, "audit": c.run.audit.to_json(), "controller_source": c.run.source,
-                "contradicted": c.run.audit.lines(skip=SIGN_HEADERS)} for c in cases])
+                "contradicted": c.run.audit.lines(skip=SESSION_HEADERS)} for c in cases])
     search.say(f"done: cause {diag.cause}, θ gain {gain:.1f} %, {ev.simulations} "  # the cause the answer prints
                f"simulations in {time.perf_counter() - t0:.1f} s")
     return diag

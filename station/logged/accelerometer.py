@@ -4,9 +4,9 @@
 One that reads its noise at rest all through a run that moved the beam is no tip acceleration
 either (:func:`silent_claims`): its 1-40 Hz band (:func:`station.logged.audit.accel_band`)
 stays under :data:`station.logged.audit.ACCEL_SIGNAL_RATIO` times its noise at rest while the
-nominal model, driven as the rig ran the run and scaled by how far the hub moved against the
-model's, puts :data:`SILENT_MODEL_RATIO` (6.7) times that noise there: an accelerometer of the
-vocabulary's least gain, 0.3, would read at least the 2 times that makes a signal. (Scaled so,
+nominal model, driven open loop by the command the run applied and scaled by how far the hub
+moved against the model's, puts :data:`SILENT_MODEL_RATIO` (6.7) times that noise there: an accelerometer of the
+fit's least gain, 0.3, would read at least the 2 times that makes a signal. (Scaled so,
 the model's 11.7 counts on the blind 21 s sweep become 3.7 under a Coulomb friction of 28 DAC
 counts, what an accelerometer there reads.) The rig's logs with the accelerometer read 4-58
 times their noise.
@@ -42,8 +42,9 @@ import numpy as np
 from station.logged.audit import ACCEL_CLAIM, ACCEL_SIGNAL_RATIO, AuditClaim, accel_band
 
 ACCEL_GAIN_LEAST = 0.3
-"""The least accelerometer gain of the vocabulary (accel_gain's magnitude,
-:data:`station.plant.effects.EFFECTS`)."""
+"""The least accelerometer gain a still channel is told from (accel_gain's magnitude where the fit
+searches it, :data:`station.plant.effects.EFFECTS`): a quieter accelerometer reads under twice
+its noise on the rig's runs and cannot be told from an unplugged one."""
 
 SILENT_MODEL_RATIO = ACCEL_SIGNAL_RATIO / ACCEL_GAIN_LEAST
 """A still a column is no tip acceleration when the model puts this many times its noise at

@@ -123,7 +123,7 @@ class Audit:
         ----------
         skip : tuple of str, optional
             Headers of claims not to say (a diagnosis says the sensors' signs it decided over
-            all its runs instead of each run's: :data:`station.logged.sensors.SIGN_HEADERS`).
+            all its runs instead of each run's: :data:`station.logged.sensors.SESSION_HEADERS`).
 
         Returns
         -------
@@ -307,8 +307,12 @@ ACCEL_BASELINE_CLAIM = "a: the tip's acceleration about a steady zero"
 
 def accel_band(a, dt: float, rest_samples: int) -> tuple[float, float] | None:
     """a's RMS in :data:`ACCEL_BAND_HZ` after the rest, and at rest (floored at
-    :data:`ACCEL_NOISE_FLOOR`), counts; None with fewer than :data:`ACCEL_REST_MIN` samples at
-    rest or a band past the Nyquist frequency.
+    :data:`ACCEL_NOISE_FLOOR`), counts. With fewer than :data:`ACCEL_REST_MIN` samples at rest
+    (a loop that answers a's first sample: Ga fed an unzeroed or dead channel), the band over the
+    whole run and :data:`ACCEL_NOISE_FLOOR` as its noise: a still channel reads less (the 2014
+    log without an accelerometer: 0.21 counts over the run), a live one on a moving beam far more
+    (the thesis's lead + accelerometer step: 18.8). None for a run shorter than
+    :data:`ACCEL_REST_MIN` past its rest or a band past the Nyquist frequency.
 
     Parameters
     ----------
@@ -328,10 +332,12 @@ def accel_band(a, dt: float, rest_samples: int) -> tuple[float, float] | None:
     from scipy.signal import butter, sosfiltfilt
 
     a = np.asarray(a, float)
-    if rest_samples < ACCEL_REST_MIN or a.size < rest_samples + ACCEL_REST_MIN or ACCEL_BAND_HZ[1] >= 0.5 / dt \
-            or not np.all(np.isfinite(a)):
+    if a.size < rest_samples + ACCEL_REST_MIN or ACCEL_BAND_HZ[1] >= 0.5 / dt or not np.all(np.isfinite(a)):
         return None
     sos = butter(2, ACCEL_BAND_HZ, "bandpass", fs=1.0 / dt, output="sos")
+    if rest_samples < ACCEL_REST_MIN:
+        band = sosfiltfilt(sos, a[1:] - np.mean(a[1:]))
+        return float(np.sqrt(np.mean(band ** 2))), ACCEL_NOISE_FLOOR
     band = sosfiltfilt(sos, a[1:] - np.mean(a[1:rest_samples]))  # row 0 of the 2014 layout is a zero
     at_rest = max(float(np.sqrt(np.mean(band[:rest_samples - 1] ** 2))), ACCEL_NOISE_FLOOR)
     return float(np.sqrt(np.mean(band[rest_samples - 1:] ** 2))), at_rest
@@ -365,8 +371,9 @@ def accel_claims(a, dt: float, rest: float, rest_samples: int = 0) -> list[Audit
     :data:`ACCEL_BAND_HZ` then stands :data:`ACCEL_SIGNAL_RATIO` times above its noise at rest the
     channel still reads the tip (a ring-down, the run's motion) on a baseline that moves (the
     accelerometer's offset or drift, or a shift at an impact): its baseline claim is
-    contradicted and a stays in use; else (or with no rest to tell noise from signal) a is no
-    tip acceleration. A smaller drift decides nothing, so no claim is listed.
+    contradicted and a stays in use; else a is no tip acceleration (with no rest, the noise is
+    :data:`ACCEL_NOISE_FLOOR`: :func:`accel_band`). A smaller drift decides nothing, so no claim
+    is listed.
 
     Parameters
     ----------
@@ -388,17 +395,20 @@ def accel_claims(a, dt: float, rest: float, rest_samples: int = 0) -> list[Audit
     drift = accel_drift(a, dt, rest)
     if drift < ACCEL_DRIFT_COUNTS:
         return []
-    moves = (f"a's mean over {ACCEL_DRIFT_WINDOW_S:g} s moves {drift:.0f} counts from rest ({rest:.3g} counts): no "
+    no_rest = rest_samples < ACCEL_REST_MIN
+    zero = "0 (no rest to read its zero)" if no_rest else f"rest ({rest:.3g} counts)"
+    moves = (f"a's mean over {ACCEL_DRIFT_WINDOW_S:g} s moves {drift:.0f} counts from {zero}: no "
              f"tip acceleration does that (at most 2.6 counts on the rig's logs; the bound is {ACCEL_DRIFT_COUNTS:g})")
     ratio = accel_signal(a, dt, rest_samples)
+    noise = f"the most a still channel reads ({ACCEL_NOISE_FLOOR:g} counts; no rest)" if no_rest else "its noise at rest"
     if ratio is not None and ratio >= ACCEL_SIGNAL_RATIO:
         return [AuditClaim("columns", ACCEL_BASELINE_CLAIM,
                            f"the tip's acceleration on a baseline that moves {drift:.0f} counts (the accelerometer's "
                            f"offset or drift)", "contradicted",
                            f"{moves}; but its {ACCEL_BAND_HZ[0]:g}-{ACCEL_BAND_HZ[1]:g} Hz band stands {ratio:.0f} "
-                           f"times above its noise at rest: the tip's acceleration on a moving baseline (a kept)")]
-    why = ("no rest to tell its noise from a signal" if ratio is None else
-           f"its {ACCEL_BAND_HZ[0]:g}-{ACCEL_BAND_HZ[1]:g} Hz band is {ratio:.1f} times its noise at rest (a signal "
+                           f"times above {noise}: the tip's acceleration on a moving baseline (a kept)")]
+    why = ("too short a run to tell its noise from a signal" if ratio is None else
+           f"its {ACCEL_BAND_HZ[0]:g}-{ACCEL_BAND_HZ[1]:g} Hz band is {ratio:.1f} times {noise} (a signal "
            f"stands {ACCEL_SIGNAL_RATIO:g} times above it)")
     return [AuditClaim("columns", ACCEL_CLAIM, "a is no tip acceleration (its accelerometer is not used)",
                        "contradicted", f"{moves}; {why}")]

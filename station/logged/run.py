@@ -17,7 +17,8 @@ from station.logged.audit import (ACCEL_CLAIM, Audit, AuditClaim, accel_claims, 
                                   file_kp_claims, reference_claims)
 from station.logged.columns import Columns, check_columns
 from station.logged.controller import ControllerId, describe_controller, identify_controller
-from station.logged.sensors import NO_FAULTS, REFINED_BY_MODEL, SensorFaults, decide_faults, sensor_evidence
+from station.logged.sensor_evidence import sensor_evidence
+from station.logged.sensors import NO_FAULTS, REFINED_BY_MODEL, SensorFaults, decide_faults, fault_text
 from station.logged.reference import Reference, classify_reference
 from station.logged.simulate import ModelRun, compared_theta, simulate_log
 from station.logged.start import Start, start_claims
@@ -183,16 +184,19 @@ class LoggedRun:
         return silent_claims(self.data["a"], dt, rest, self._nominal_a)
 
     def _nominal_a(self) -> tuple[np.ndarray, float] | None:
-        """The nominal model's a for this run, as the rig ran it, and how far the hub moved
-        against the model's (:func:`station.logged.accelerometer.silent_claims`); None when the
-        run cannot be simulated."""
+        """The nominal model's a for this run, driven open loop by the command the log applied,
+        and how far the hub moved against the model's (:func:`station.logged.accelerometer.silent_claims`);
+        None when the run cannot be simulated. The logged command, not the log's controller: a
+        loop fed back from a biased or dead a moved the rig otherwise than the nominal loop would
+        (blind, an unzeroed accelerometer's 114 counts through Ga's DC gain of 18 drifted the hub
+        352 counts away from a step of 200: the nominal loop's a was 'expected' there)."""
         # lazy: start-up time (the FEM, only for a log whose a stays still)
         from station.plant.model import load_model
 
         if any(not self.has_column(n) for n in self.model_columns):
             return None
         try:
-            sim = simulate_log(self.log, self.controller, self.alignment, load_model("tmm-fit"))
+            sim = simulate_log(self.log, None, None, load_model("tmm-fit"))
         except (StationError, ArithmeticError, ValueError):  # a run the model cannot replay decides nothing here
             return None
         return sim.prediction["a"], motion_ratio(sim.theta_measured, sim.prediction["theta"], self.dt)
@@ -208,8 +212,9 @@ class LoggedRun:
     def sensors(self) -> SensorFaults:
         """This run's sensors' and motor's signs and scales, decided from its own data against
         the nominal model driven by its applied command (:func:`station.logged.sensors.decide_faults`
-        on this run alone, signs and scales only: an accelerometer's bias or drift is decided
-        over a session's runs, by a diagnosis). Its "columns" claims are in :attr:`audit`, and
+        on this run alone, signs and scales, and a bias only far past what the rig's zeroing
+        leaves: otherwise an accelerometer's bias or drift is decided over a session's runs, by a
+        diagnosis). Its "columns" claims are in :attr:`audit`, and
         :meth:`simulate` uses its decided faults. :data:`station.logged.sensors.NO_FAULTS` for a
         run without rows, a hub-held beam test or one the nominal model cannot simulate."""
         if not len(self) or self.held is not None or any(not self.has_column(n) for n in self.model_columns):
@@ -263,7 +268,7 @@ class LoggedRun:
         there (:func:`station.logged.start.start_claims`)."""
         d = self.data
         return start_claims(d["theta"], d["a"], d["u"], d["v"], self.dt, self.closed, self.accel_is_tip,
-                            self.identified.cut)
+                            self.identified.cut, self.sensors.effects.get("accel_gain", 1.0))
 
     @property
     def audit_lines(self) -> list[str]:
@@ -492,12 +497,14 @@ class LoggedRun:
         -------
         dict of str to float
             Effect -> value; empty for a DiscretePlant (no effects) or a model that holds a
-            sign or scale (:data:`station.plant.effects.SENSOR_SIGNS`).
+            sign or scale (:data:`station.plant.effects.SENSOR_SIGNS`); without an
+            accelerometer bias the model holds (its own value stands).
         """
         held = model.effect_dict() if hasattr(model, "effect_dict") else None
         if held is None or any(k in held for k in SENSOR_SIGNS):
             return {}
-        return dict(self.sensors.effects)  # one run decides signs and scales only: none held here
+        # one run decides signs, scales and a large bias; a bias the model holds is its own
+        return {k: v for k, v in self.sensors.effects.items() if k not in held}
 
     def model_as_found(self, model, sensors: bool = True):
         """The model as the audit found this run's rig: :meth:`model_for` (the accelerometer's
@@ -549,7 +556,7 @@ class LoggedRun:
             sim = dataclasses.replace(sim, how=sim.how + "; without the accelerometer's mass (the audit: no "
                                       "accelerometer on the beam)")
         if found:
-            said = ", ".join(f"{k} {v:g}" for k, v in found.items())
+            said = ", ".join(fault_text(k, v) for k, v in found.items())
             sim = dataclasses.replace(sim, how=sim.how + f"; with the sensor faults the audit decided from the "
                                       f"data ({said})")
         return sim

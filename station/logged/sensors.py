@@ -5,16 +5,15 @@ A log claims, without saying so, that its θ counts 1024 per revolution in the m
 direction, that its a reads the tip's acceleration with the model's sign, and that a
 positive command turns the motor the model's way. Driven open loop by the command the log
 applied (its own v, so a closed loop's own feedback, right or wrong, is in it), the nominal
-model moves as the rig moved if those claims hold. Two numbers per run test them:
+model moves as the rig moved if those claims hold. Two numbers per run test them
+(:mod:`station.logged.sensor_evidence`):
 
-- θ: the cosine between the measured and the modelled θ's changes over
-  :data:`THETA_HORIZON_S` where the measured hub moved (short, and moving, so the model's
-  drift without friction does not count), and the least-squares ratio of the measured to
-  the modelled changes;
-- a: the cosine between the measured and the modelled a in each octave of
-  :data:`ACCEL_OCTAVES_HZ` (1-40 Hz: the accelerometer's offset and drift, and the beam's
-  rigid motion, removed) where the model's a has :data:`OCTAVE_SHARE` of its largest octave's
-  RMS, the median over those octaves; and a's least-squares ratio over the whole band, or,
+- θ: the cosine between the measured and the modelled θ's changes over 50 ms where the
+  measured hub moved (short, and moving, so the model's drift without friction does not
+  count), and the least-squares ratio of the measured to the modelled changes;
+- a: the cosine between the measured and the modelled a in each octave from 1 to 40 Hz (the
+  accelerometer's offset and drift, and the beam's rigid motion, removed) where the model's a
+  has a tenth of its largest octave's RMS, the median over those octaves; and a's least-squares ratio over the whole band, or,
   where the whole band's cosine (the runs' median) is below :data:`SIGN_COSINE`, over the
   octaves whose cosine reaches it. One cosine over the whole band is the largest octave's: a
   lightly damped mode the model puts off the rig's turns the phase around it, and where a
@@ -36,7 +35,13 @@ gain is the median ratio of a; an encoder of another resolution is decided when 
 θ ratio, and θ's over a's, are within :data:`SCALE_TOLERANCE` of one power of two other than 1 (a
 4096-count encoder reads 4; the motion itself, and so a, as the model's), or when every run's
 θ ratio over its a ratio is, within :data:`RATIO_TOLERANCE` (the motion's scale, friction's,
-cancels), and the inverse of their median is no accelerometer gain of the vocabulary (0.3-3).
+cancels), the inverse of their median is no accelerometer gain the fit searches (0.3-3), and
+the encoder leaves the motion nearer the model's than an accelerometer gain would (θ's ratio
+over the scale nearer 1 than θ's own). Otherwise a gain beyond the fit's search (another
+sensitivity: 0.2 or 6, a model may hold 0.01-100) is decided from a's ratio over θ's where θ
+itself moves within :data:`MOTION_RATIO` of the model's; past that the ratios do not decide and
+it is said. One run alone decides a bias only where it reaches :data:`RUN_OFFSET_COUNTS` (a
+channel stored without the rig's zeroing), far past what a model off in shape leaks into it.
 
 On the rig's own logs (2009, 2013-14) every cosine is +0.74 or more where the channel
 moves (``tests/test_sensor_signs.py``), on the lab's April 2009 session (its accelerometer
@@ -52,43 +57,20 @@ import statistics
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 
-import numpy as np
-
-from station.control.rerun import OpenLoop
-from station.logged.audit import ACCEL_BAND_HZ, AuditClaim
-from station.logged.device import command_quantization
+from station.logged.audit import AuditClaim
+from station.logged.sensor_evidence import ACCEL_OCTAVES_HZ, SIGN_COSINE, THETA_HORIZON_S, SensorEvidence
 from station.plant.effects import EFFECTS
 from station.rig import COUNTS_PER_REV
 
-THETA_HORIZON_S = 0.05
-"""Horizon of the θ changes compared, s."""
-
-ACCEL_OCTAVES_HZ = (1.0, 2.0, 4.0, 8.0, 16.0, 40.0)
-"""Edges of the bands a's cosines are taken in, Hz (second-order Butterworth, forward and
-backward): octaves across :data:`station.logged.audit.ACCEL_BAND_HZ`, the last one wider."""
-
-OCTAVE_SHARE = 0.1
-"""An octave's cosine counts where the model's a there has at least this share of its largest
-octave's RMS (and at least :data:`OCTAVE_FLOOR_COUNTS`): an octave the run hardly moves is the
-noise's."""
-
-OCTAVE_FLOOR_COUNTS = 0.6
-"""Least RMS of the model's a in an octave whose cosine counts, counts (twice the
-accelerometer's noise)."""
-
-MOVING_COUNTS = 2.0
-"""θ changes are compared where the measured hub moved at least this many counts over
-:data:`THETA_HORIZON_S` (a sticking hub while the frictionless model drifts says nothing about
-the encoder)."""
-
-MIN_WINDOWS = 20
-"""Fewest moving windows a run's θ comparison needs."""
-
-SIGN_COSINE = 0.5
-"""|cosine| at or above which a sign is decided."""
-
 SCALE_TOLERANCE = 1.2
 """An encoder scale 2**k (k != 0) is decided when θ's ratio over a's is within this factor of it."""
+
+RUN_OFFSET_COUNTS = 10.0
+"""One run decides an accelerometer bias alone (its ``accel_bias``: a's rest value before the
+first command plus the fit beside the model's a) when it is at least this large, counts: a
+channel stored without the rig's zeroing, or a loop fed from it (Ga answers an unzeroed a from
+its first sample: no rest). On the rig's 2009 and 2013-14 logs with the accelerometer on the tip
+every run's is -1.93..+1.55; a model off in shape leaks 1.25 into one run's."""
 
 OFFSET_COUNTS = 1.0
 """An accelerometer bias is decided when every run's has one sign and their median is at least
@@ -110,166 +92,27 @@ does not slow θ and a quite alike (3.2-4.2 for a 4096-count encoder beside 26-2
 
 THETA_HEADER = "θ: encoder counts, 1024 per revolution, turning with the command as the model's"
 ACCEL_HEADER = "a: the tip's acceleration with the model's sign"
-SIGN_HEADERS = (THETA_HEADER, ACCEL_HEADER)
-"""The headers of the signs' and scales' "columns" claims: a diagnosis decides them over all its
-runs and says that decision, not each run's (:attr:`station.logged.LoggedRun.sensors`)."""
 OFFSET_HEADER = "a: zero at rest (the rig zeroes it before a test)"
 DRIFT_HEADER = "a: no drift over a run"
 """The headers of the accelerometer's bias and drift claims (decided over a session's runs)."""
+SESSION_HEADERS = (THETA_HEADER, ACCEL_HEADER, OFFSET_HEADER, DRIFT_HEADER)
+"""The headers of the sensors' "columns" claims a diagnosis decides over all its runs and says
+once, not each run's (:attr:`station.logged.LoggedRun.sensors`): the signs and scales, and the
+accelerometer's bias and drift."""
 REFINED_BY_FIT = "; the decision's first estimate {first}, refined by the fit"
 REFINED_BY_MODEL = ", the model's; this run alone gives {first}"
 """How a reversed accelerometer's claim says a gain found otherwise beside the data's own
 estimate: a diagnosis's fit refines it; a saved model holds its session's."""
 
+MOTION_RATIO = 2.5
+"""An accelerometer gain beyond the fit's search is decided only where θ's ratio is within this
+factor of the model's (θ read right, the motion is the model's up to friction or the actuator's
+gain, whose search spans 0.4-2.5 blind); past it, θ's scale is in doubt too and the ratios do not
+decide which (a θ written 32 times over: an encoder of 32768 counts past :data:`ENCODER_SCALES`,
+said as the hint, not an accelerometer gain of 0.04)."""
+
 ENCODER_SCALES = (0.25, 0.5, 2.0, 4.0, 8.0, 16.0)
 """Encoder resolutions decided, relative to the model's 1024 counts per revolution."""
-
-
-@dataclass(frozen=True)
-class SensorEvidence:
-    """One run's θ and a against the nominal model driven by the run's applied command.
-
-    Attributes
-    ----------
-    name : str
-        The run's file name.
-    theta_cosine, theta_ratio : float or None
-        Cosine and least-squares ratio (measured / model) of θ's changes over
-        :data:`THETA_HORIZON_S`; None when either did not move.
-    accel_cosine : float or None
-        The same for a, the median over the octaves that count (:func:`octave_compare`);
-        None when either is flat, the band reaches the Nyquist frequency or the log's a is
-        no tip acceleration (its audit).
-    accel_ratio : float or None
-        a's least-squares ratio over all of :data:`ACCEL_BAND_HZ` at once; None as
-        ``accel_cosine``.
-    accel_bias, accel_slope : float or None
-        a's bias (counts: its rest value before the first command plus what remains) and its
-        drift (counts per s) beside the model's a: the least-squares fit of the measured a on
-        [1, t, the model's a] over the whole run; None as ``accel_cosine``.
-    accel_band_cosine : float or None
-        a's cosine over all of :data:`ACCEL_BAND_HZ` at once, where its ratio measures a gain
-        (:func:`decide_faults`); None as ``accel_cosine``.
-    accel_shaped_ratio : float or None
-        a's ratio over the octaves whose shape the model has (:func:`octave_compare`); None as
-        ``accel_cosine``.
-    """
-
-    name: str
-    theta_cosine: float | None
-    theta_ratio: float | None
-    accel_cosine: float | None
-    accel_ratio: float | None
-    accel_bias: float | None = None
-    accel_slope: float | None = None
-    accel_band_cosine: float | None = None
-    accel_shaped_ratio: float | None = None
-
-
-def _compare(measured: np.ndarray, model: np.ndarray) -> tuple[float | None, float | None]:
-    nm, ns = float(np.linalg.norm(measured)), float(np.linalg.norm(model))
-    if not (nm > 0 and ns > 0 and math.isfinite(nm) and math.isfinite(ns)):
-        return None, None
-    dot = float(measured @ model)
-    return dot / (nm * ns), dot / (ns * ns)
-
-
-def sensor_evidence(run, model) -> SensorEvidence:
-    """Compare a run's θ and a with the model driven open loop by the run's applied command.
-
-    Parameters
-    ----------
-    run : station.logged.LoggedRun
-        With t, u, v, θ and a.
-    model : station.plant.model.Model
-        The nominal model (its effects apply).
-
-    Returns
-    -------
-    SensorEvidence
-    """
-    # lazy: start-up time (scipy's filters)
-    from scipy.signal import butter, sosfiltfilt
-
-    # lazy: start-up time (the FEM and its compiled kernels, loaded when used)
-    from station.plant import simulate
-
-    log, dt = run.log, run.log.dt
-    d = log.data
-    name = log.path.name if log.path is not None else "log"
-    if len(run) < 50:
-        return SensorEvidence(name, None, None, None, None)
-    model = run.model_for(model)  # the accelerometer's mass off the beam when the audit says so
-    applied = d["v_applied"]
-    if applied.size and np.all(np.isfinite(applied)):
-        pred = simulate(model, OpenLoop(), d["u"], alignment=0, v_open=applied, dt=dt)
-    else:
-        pred = simulate(model, OpenLoop(), d["u"], alignment=0, v_open=d["v"], command=command_quantization(log),
-                        dt=dt)
-    h = max(1, int(round(THETA_HORIZON_S / dt)))
-    theta, theta_m = np.asarray(d["theta"], float), np.asarray(pred["theta"], float)
-    dm, ds = theta[h:] - theta[:-h], theta_m[h:] - theta_m[:-h]
-    moving = np.abs(dm) >= MOVING_COUNTS  # a stuck hub is friction's, not the sensor's: not compared
-    th = _compare(dm[moving], ds[moving]) if np.count_nonzero(moving) >= MIN_WINDOWS else (None, None)
-    nyquist = 0.5 / dt
-    a_raw = np.asarray(d["a"], float)
-    if run.accel_is_tip and len(run) > 30 and ACCEL_BAND_HZ[1] < nyquist and np.all(np.isfinite(a_raw)):
-        sos = butter(2, ACCEL_BAND_HZ, "bandpass", fs=1.0 / dt, output="sos")
-        rest = run.accel_rest_offset
-        a, a_m = a_raw - rest, np.asarray(pred["a"], float)
-        band = _compare(sosfiltfilt(sos, a), sosfiltfilt(sos, a_m))
-        octaves = octave_compare(a, a_m, dt)
-        if band[0] is not None and octaves[0] is not None:
-            t = np.arange(a.size) * dt  # the plant's drift runs from the run's first sample
-            (bias, slope, _), *_ = np.linalg.lstsq(np.column_stack([np.ones_like(t), t, a_m]), a, rcond=None)
-            return SensorEvidence(name, *th, octaves[0], band[1], float(rest + bias), float(slope), band[0],
-                                  octaves[1])
-    return SensorEvidence(name, *th, None, None)
-
-
-def octave_compare(measured, model, dt: float) -> tuple[float | None, float | None]:
-    """The cosine and the least-squares ratio (measured / model) of a, from the octaves of
-    :data:`ACCEL_OCTAVES_HZ` where the model's a has :data:`OCTAVE_SHARE` of its largest
-    octave's RMS and at least :data:`OCTAVE_FLOOR_COUNTS` (the largest always counts): the
-    median of their cosines, and the ratio over those whose cosine reaches
-    :data:`SIGN_COSINE` either way (all of them when none does), each weighted by its energy
-    as one least-squares fit.
-
-    Parameters
-    ----------
-    measured, model : array_like, shape (N,)
-        a, counts, the measured one less its rest offset.
-    dt : float
-        Sample time, s (octaves at or past the Nyquist frequency are left out).
-
-    Returns
-    -------
-    (float, float) or (None, None)
-        The cosine in [-1, 1] and the ratio; None when no octave has both signals.
-    """
-    # lazy: start-up time (scipy's filters)
-    from scipy.signal import butter, sosfiltfilt
-
-    x, y = np.asarray(measured, float), np.asarray(model, float)
-    nyquist = 0.5 / dt
-    octaves = []  # (cosine, ratio, the model's RMS)
-    for lo, hi in zip(ACCEL_OCTAVES_HZ[:-1], ACCEL_OCTAVES_HZ[1:]):
-        if hi >= nyquist:
-            break
-        sos = butter(2, (lo, hi), "bandpass", fs=1.0 / dt, output="sos")
-        xb, yb = sosfiltfilt(sos, x), sosfiltfilt(sos, y)
-        c = _compare(xb, yb)[0]
-        if c is not None:
-            octaves.append((c, float(xb @ yb), float(yb @ yb)))
-    if not octaves:
-        return None, None
-    least = max(OCTAVE_SHARE ** 2 * max(o[2] for o in octaves), OCTAVE_FLOOR_COUNTS ** 2 * x.size)
-    counted = [o for o in octaves if o[2] >= least] or [max(octaves, key=lambda o: o[2])]
-    cosine = float(statistics.median(o[0] for o in counted))
-    # the ratio over the octaves whose shape the model has (least squares across them): an
-    # octave the model's mode misses would pull it toward 0
-    shaped = [o for o in counted if abs(o[0]) >= SIGN_COSINE] or counted
-    return cosine, sum(o[1] for o in shaped) / sum(o[2] for o in shaped)
 
 
 def _sign(cosines: list[float]) -> int:
@@ -333,7 +176,7 @@ class SensorFaults:
             Itself when the model holds the decided values.
         """
         g, first = values.get("accel_gain"), self.effects.get("accel_gain")
-        if g is None or first is None or not (g < 0 and first < 0) or f"{g:.3g}" == f"{first:.3g}":
+        if g is None or first is None or (g < 0) != (first < 0) or f"{g:.3g}" == f"{first:.3g}":
             return self
         return decide_faults(self.evidence, accel_gain=g, trends=self._trends, refined_by=by)
 
@@ -389,6 +232,8 @@ def decide_faults(evidence: Sequence[SensorEvidence], accel_gain: float | None =
         (:attr:`station.logged.LoggedRun.sensors`): a model's a that is off in shape leaks
         into one run's fit of bias and slope (the thesis's lead + accelerometer step: −1.25
         counts and 0.98 counts per s), where a session's runs agreeing in sign do not.
+        Without them, a bias is still decided where every run's reaches
+        :data:`RUN_OFFSET_COUNTS`, far past any such leak.
     refined_by : str, default :data:`REFINED_BY_FIT`
         How the accelerometer's claim says ``accel_gain`` beside the first estimate (a
         format with ``{first}``).
@@ -423,16 +268,17 @@ def decide_faults(evidence: Sequence[SensorEvidence], accel_gain: float | None =
     ratios = [e.accel_shaped_ratio if shaped else e.accel_ratio for e in ev]
     a_ratio = [r * motor for r in ratios if r is not None]
     th_ratio = [e.theta_ratio * motor for e in ev if e.theta_ratio is not None]
+    spec = EFFECTS["accel_gain"]
     if s_a != 0 and a_ratio:
         g_a = statistics.median(a_ratio)
+        # a's ratio over θ's per run: the motion's own scale (friction, the actuator) cancels
+        per_run = [r * motor / abs(e.theta_ratio) for e, r in zip(ev, ratios) if r is not None
+                   and e.theta_ratio is not None and abs(e.theta_ratio) >= 0.1]
+        lo, hi = spec.bounds
+        size = min(max(abs(statistics.median(per_run) if per_run else g_a), lo), hi)
+        own = float(f"{math.copysign(size, g_a):.3g}")
         if effects.get("accel_gain", 1.0) < 0 and g_a < 0:
-            # a's ratio over θ's per run: the motion's own scale (friction, the actuator) cancels
-            per_run = [r / abs(e.theta_ratio) for e, r in zip(ev, ratios) if r is not None
-                       and e.theta_ratio is not None and abs(e.theta_ratio) >= 0.1]
-            own = float(f"{min(statistics.median(per_run) if per_run else g_a, -0.3):.3g}")
-            effects["accel_gain"] = own
-            if accel_gain is not None and f"{accel_gain:.3g}" != f"{own:.3g}":
-                effects["accel_gain"], first["accel_gain"] = float(accel_gain), own
+            _decide_gain(own, accel_gain, effects, first)
         if s_th != 0 and th_ratio and g_a != 0:
             g_th = abs(statistics.median(th_ratio))
             scale = min(ENCODER_SCALES, key=lambda s: abs(math.log(g_th / s)))
@@ -447,13 +293,20 @@ def decide_faults(evidence: Sequence[SensorEvidence], accel_gain: float | None =
                   if e.theta_ratio is not None and r not in (None, 0.0)]
             if not near and qs:
                 by_q = min(ENCODER_SCALES, key=lambda s: abs(math.log(statistics.median(qs) / s)))
-                spec = EFFECTS["accel_gain"]
                 med = statistics.median(qs)
+                # ... and the encoder leaves the motion nearer the model's than an accelerometer
+                # gain would: θ read right, the motion is θ's ratio; a read right, it is a's
                 near = (all(abs(math.log(x / by_q)) <= math.log(RATIO_TOLERANCE) for x in qs)
-                        and not spec.lower <= 1.0 / med <= spec.upper)
+                        and not spec.searched(1.0 / med)
+                        and abs(math.log(g_th / by_q)) < abs(math.log(g_th)))
                 scale = by_q if near else scale
             if near:
                 effects["encoder_scale"] = scale * (-1.0 if effects.get("encoder_scale", 1.0) < 0 else 1.0)
+            elif s_a > 0 and "accel_gain" not in effects and not spec.searched(own) and \
+                    abs(math.log(g_th)) <= math.log(MOTION_RATIO):
+                # a read at a gain beyond the fit's search (another sensitivity), θ moving as the
+                # model's up to what an effect gives: the data decide it
+                _decide_gain(own, accel_gain, effects, first)
             elif q >= 2.0 / SCALE_TOLERANCE or q <= 0.5 * SCALE_TOLERANCE:
                 # θ off from a by a power of two, but the motion is off too: an encoder of another
                 # resolution beside friction or an actuator gain, or the accelerometer's gain
@@ -461,6 +314,13 @@ def decide_faults(evidence: Sequence[SensorEvidence], accel_gain: float | None =
                         f"an encoder of {q * COUNTS_PER_REV:.0f} counts per revolution, or the accelerometer's gain; "
                         f"the ratios do not decide it")
     bias_claim = drift_claim = None
+    biases = [e.accel_bias for e in ev if e.accel_bias is not None and math.isfinite(e.accel_bias)]
+    if not trends and biases and all(abs(b) >= RUN_OFFSET_COUNTS for b in biases) and \
+            (all(b > 0 for b in biases) or all(b < 0 for b in biases)):
+        effects["accel_offset"] = _counts(statistics.median(biases))
+        bias_claim = AuditClaim("columns", OFFSET_HEADER, f"accel_offset {effects['accel_offset']:g} counts",
+                                "contradicted", f"bias per run beside the model's a: {_fmt(biases)} counts (the "
+                                f"rig's zeroing leaves under {RUN_OFFSET_COUNTS:g}): a channel stored without it")
     if trends:
         bias_claim = _trend_claim("accel_offset", [e.accel_bias for e in ev], OFFSET_COUNTS, effects,
                                   OFFSET_HEADER, "counts")
@@ -475,6 +335,34 @@ def decide_faults(evidence: Sequence[SensorEvidence], accel_gain: float | None =
                         ("encoder_scale",) if hint else (), first)
 
 
+def fault_text(name: str, value: float) -> str:
+    """A sensor fault as every output says it: "accel_offset 114.36" (a bias or drift to a
+    hundredth, :func:`_counts`), "accel_gain -1.36" (a gain or scale to three figures).
+
+    Parameters
+    ----------
+    name : str
+        A sensor or wiring fault (:data:`station.plant.effects.SENSOR_FAULTS`).
+    value : float
+    """
+    return f"{name} {_counts(value):g}" if name in ("accel_offset", "accel_drift") else f"{name} {value:.3g}"
+
+
+def _counts(x: float) -> float:
+    """A decided bias (counts) or drift (counts per s) to a hundredth: three significant figures
+    of an unzeroed channel's 114.37 counts leave 0.37, which Ga's DC gain of 18 makes a 7-count
+    offset of the loop's reference."""
+    return round(float(x), 2)
+
+
+def _decide_gain(own: float, accel_gain: float | None, effects: dict, first: dict) -> None:
+    """Hold the accelerometer's gain the data decide (``own``), or the one found otherwise
+    (``accel_gain``: a fit refined it) with ``own`` as the first estimate."""
+    effects["accel_gain"] = own
+    if accel_gain is not None and f"{accel_gain:.3g}" != f"{own:.3g}":
+        effects["accel_gain"], first["accel_gain"] = float(accel_gain), own
+
+
 def _trend_claim(name: str, values, least: float, effects: dict, header: str, unit: str) -> AuditClaim | None:
     """Decide an accelerometer bias or drift (into ``effects``) when every run's has one sign,
     their median reaches ``least`` and every run's is at least :data:`TREND_AGREEMENT` of it;
@@ -487,7 +375,7 @@ def _trend_claim(name: str, values, least: float, effects: dict, header: str, un
     evidence = f"{name.split('_')[1]} per run beside the model's a: {_fmt(v)} {unit}"
     if abs(med) >= least and (all(x > 0 for x in v) or all(x < 0 for x in v)):
         if min(abs(x) for x in v) >= TREND_AGREEMENT * abs(med):
-            effects[name] = float(f"{med:.3g}")
+            effects[name] = _counts(med)
             return AuditClaim("columns", header, f"{name} {effects[name]:g} {unit}", "contradicted", evidence)
         return AuditClaim("columns", header, "undecided", "unchecked",
                           evidence + f" (a sensor's is in every run: some runs show less than "
@@ -527,10 +415,12 @@ def _accel_claim(sign: int, cosines, effects, first, refined_by: str) -> AuditCl
     if sign == 0:
         return AuditClaim("columns", header, "undecided", "unchecked", evidence)
     g = effects.get("accel_gain", 1.0)
-    if g < 0:
+    if "accel_gain" in effects:
         value = f"accel_gain {g:.3g}" + (refined_by.format(first=f"{first['accel_gain']:.3g}")
                                          if "accel_gain" in first else "")
-        return AuditClaim("columns", header, f"the accelerometer reads the other way ({value})", "contradicted",
-                          evidence)
+        data = ("the accelerometer reads the other way" if g < 0 else
+                f"the accelerometer reads {g:.3g}× the model's a, beyond the fit's search "
+                f"({EFFECTS['accel_gain'].lower:g}..{EFFECTS['accel_gain'].upper:g})")
+        return AuditClaim("columns", header, f"{data} ({value})", "contradicted", evidence)
     return AuditClaim("columns", header, "as claimed" + (" (the motor's reversal aside)" if
                                                          "motor_polarity" in effects else ""), "confirmed", evidence)

@@ -73,7 +73,8 @@ def start_window(u, v) -> int:
     return min(first) if first else 0
 
 
-def start_claims(theta, a, u, v, dt: float, closed: bool, accel_is_tip: bool, remembered: bool = False) -> Start:
+def start_claims(theta, a, u, v, dt: float, closed: bool, accel_is_tip: bool, remembered: bool = False,
+                 accel_gain: float = 1.0) -> Start:
     """Check that the run starts at rest at t = 0, and where θ's zero is.
 
     Under the first command (:func:`start_window`, :data:`START_WINDOW_S` at most) a hub at rest
@@ -100,6 +101,11 @@ def start_claims(theta, a, u, v, dt: float, closed: bool, accel_is_tip: bool, re
         The controller's law reproduces the log only with its first rows of memory taken as
         logged (:attr:`station.logged.controller.ControllerId.cut`): a copy cut from a longer
         run, its hub perhaps at rest.
+    accel_gain : float, default 1.0
+        The accelerometer's gain decided from the run's data (:attr:`station.logged.LoggedRun.sensors`):
+        its noise at rest is that many times the rig's, and so is the quiet peak-to-peak (an
+        accelerometer at 6x the model's a swung 18 counts at rest over the thesis's lead step's
+        first 10 rows).
 
     Returns
     -------
@@ -114,28 +120,29 @@ def start_claims(theta, a, u, v, dt: float, closed: bool, accel_is_tip: bool, re
     w = max(min(start_window(u, v), cap), min(START_MIN_ROWS, theta.size))
     th0 = float(theta[0])
     still = bool(np.all(theta[:w] == th0))
+    quiet = ACCEL_QUIET_COUNTS * max(1.0, abs(accel_gain))
     swing = (float(np.ptp(a[1:w])) if accel_is_tip and w > 2 and np.all(np.isfinite(a[1:w])) else 0.0)
     idle = v.size >= w and np.all(np.isfinite(v[:w])) and np.all(v[:w] == 0)
     span = f"the first {w} rows ({w * dt:g} s, before the command first changes)"
     early = not np.all(theta[:START_MIN_ROWS] == th0)  # sooner than any command of row 0 moves the hub
     claims = []
-    if remembered and still and swing <= ACCEL_QUIET_COUNTS:
+    if remembered and still and swing <= quiet:
         claims.append(AuditClaim(
             "reference", START_CLAIM, "cut from a longer run (at rest, the controller's memory not)", "contradicted",
             f"the controller's law reproduces the logged v only with its first rows of memory taken as logged (the "
             f"earlier run's); θ keeps one count over {span}"))
         at_rest = False
-    elif (not still and (idle or early)) or swing > ACCEL_QUIET_COUNTS:
+    elif (not still and (idle or early)) or swing > quiet:
         what = []
         if not still:
             what.append(f"θ moves {np.ptp(theta[:w]):g} counts" + (f" (within its first {START_MIN_ROWS} rows: sooner "
                                                                     f"than a command moves the hub)" if early else ""))
-        if swing > ACCEL_QUIET_COUNTS:
+        if swing > quiet:
             what.append(f"a swings {swing:g} counts")
         claims.append(AuditClaim(
             "reference", START_CLAIM, "moving at t = 0 (a copy cut from a longer run)", "contradicted",
             f"over {span} {' and '.join(what)}{' with v = 0' if idle else ''}: an earlier motion still going on "
-            f"(at rest θ keeps one count and a's noise stays within {ACCEL_QUIET_COUNTS:g} counts); the model "
+            f"(at rest θ keeps one count and a's noise stays within {quiet:g} counts); the model "
             f"starts at rest, so the start of its fit is that motion's"))
         at_rest = False
     elif not still:
@@ -149,7 +156,7 @@ def start_claims(theta, a, u, v, dt: float, closed: bool, accel_is_tip: bool, re
                                    + ("): the loop's error was u - θ from there" if closed else
                                       "; open loop: θ compared relative to its first sample)"))
         claims.append(AuditClaim("reference", START_CLAIM, "at rest at t = 0", "confirmed",
-                                 f"θ keeps one count and a's noise stays within {ACCEL_QUIET_COUNTS:g} counts over "
+                                 f"θ keeps one count and a's noise stays within {quiet:g} counts over "
                                  f"{span}{off}"))
     if closed and th0 != 0 and at_rest:
         claims.append(AuditClaim("columns", ZERO_CLAIM, f"θ starts at {th0:g} counts (the encoder not zeroed)",

@@ -24,7 +24,8 @@ Where each acts:
 Signed effects (accel_gain, encoder_scale, motor_polarity; :attr:`EffectSpec.signed`): the
 range is of the magnitude and either sign is allowed, a negative value meaning a sensor or
 motor wired the other way: accel_gain 0.3..3 either sign (a diagnosis never fits through
-0), encoder_scale 0.25..16 either sign (256- to 16384-count encoders against the model's
+0; a model may hold 0.01..100, :attr:`EffectSpec.held`, where the data decide a gain beyond the
+search's reach), encoder_scale 0.25..16 either sign (256- to 16384-count encoders against the model's
 1024), motor_polarity ±1 only (never between). A search over such an effect's range
 (``lower``..``upper``) covers the positive side; its sign is decided from the data.
 
@@ -62,12 +63,16 @@ class EffectSpec(NamedTuple):
     neutral : float
         The value that means "no effect".
     lower, upper : float
-        The range a fit may search (and a model file may hold, besides ``neutral``); of
-        the magnitude when ``signed``.
+        The range a fit may search (and a model file may hold, besides ``neutral``, unless
+        ``held`` is wider); of the magnitude when ``signed``.
     kind : {"amplifier", "plant", "linear", "output", "wiring", "setting"}
         Where it acts (module docstring).
     signed : bool, default False
         Either sign is allowed, ``lower <= |value| <= upper`` (a reversed sensor or motor).
+    held : (float, float) or None, default None
+        The range a model may hold and the data may decide, where it is wider than the fit's
+        search (a sensor fault: an accelerometer of another sensitivity, a channel stored
+        without its zeroing); of the magnitude when ``signed``. None: ``lower``, ``upper``.
     """
 
     name: str
@@ -77,9 +82,16 @@ class EffectSpec(NamedTuple):
     upper: float
     kind: str
     signed: bool = False
+    held: tuple[float, float] | None = None
+
+    @property
+    def bounds(self) -> tuple[float, float]:
+        """The range a model may hold (``held``, else ``lower``, ``upper``); of the magnitude
+        when ``signed``."""
+        return self.held if self.held is not None else (self.lower, self.upper)
 
     def admits(self, value: float) -> bool:
-        """True when ``value`` (a float, not NaN) is the neutral value or in range.
+        """True when ``value`` (a float, not NaN) is the neutral value or within :attr:`bounds`.
 
         Parameters
         ----------
@@ -87,15 +99,58 @@ class EffectSpec(NamedTuple):
             In the effect's unit.
         """
         size = abs(value) if self.signed else value
-        return value == self.neutral or self.lower <= size <= self.upper
+        lo, hi = self.bounds
+        return value == self.neutral or lo <= size <= hi
+
+    def searched(self, value: float) -> bool:
+        """True when ``value`` lies within the fit's search range (``lower``..``upper``, of the
+        magnitude when ``signed``): a decided value outside it is out of the search's reach.
+
+        Parameters
+        ----------
+        value : float
+            In the effect's unit.
+        """
+        size = abs(value) if self.signed else value
+        return self.lower <= size <= self.upper
+
+    def search_about(self, value: float) -> tuple[float, float]:
+        """The range a fit searches beside a model that holds ``value``: ``lower``, ``upper``
+        when the search reaches it (:meth:`searched`), else the search's span (the factor
+        upper/lower) centred on it, geometrically, within :attr:`bounds`. Of the magnitude when
+        ``signed`` (the sign is the held value's).
+
+        Parameters
+        ----------
+        value : float
+            The value the model holds (a sensor fault decided from the data), in the effect's unit.
+
+        Returns
+        -------
+        (float, float)
+
+        Raises
+        ------
+        ValueError
+            Off the search's reach for an effect whose search range is not of one sign.
+        """
+        if self.searched(value) or value == self.neutral:
+            return self.lower, self.upper
+        if not self.lower > 0:
+            raise ValueError(f"effect '{self.name}': no search about {value:g}")
+        half = math.sqrt(self.upper / self.lower)
+        size, (lo, hi) = abs(value), self.bounds
+        return max(size / half, lo), min(size * half, hi)
 
     def range_text(self) -> str:
-        """The range as an error message says it ("0..40", "±0.3..3", "±1", "0 or 1")."""
-        if not self.signed and self.lower == self.upper:
-            return f"{self.lower:g} or {self.neutral:g}"
+        """The range a model may hold as an error message says it ("0..40", "±0.01..100",
+        "±1", "0 or 1")."""
+        lo, hi = self.bounds
+        if not self.signed and lo == hi:
+            return f"{lo:g} or {self.neutral:g}"
         if not self.signed:
-            return f"{self.lower:g}..{self.upper:g}"
-        return f"±{self.lower:g}" if self.lower == self.upper else f"±{self.lower:g}..{self.upper:g}"
+            return f"{lo:g}..{hi:g}"
+        return f"±{lo:g}" if lo == hi else f"±{lo:g}..{hi:g}"
 
 
 PARAM_NAMES = ("mu", "EI", "drive_k", "drive_c", "clamp_k", "clamp_c", "J_base", "m_accel", "J_accel",
@@ -129,6 +184,14 @@ def _nominal_beam_damping() -> float:
         "zeta": np.asarray(modal_summary(params, 4).antiresonance_damping[0])})["zeta"])
 
 
+ACCEL_GAIN_HELD = (0.01, 100.0)
+"""The accelerometer gain's magnitude a model may hold (decided from the data): two decades
+either way of the thesis's sensitivity, where the fit searches 0.3..3."""
+
+ACCEL_I16 = (-32768.0, 32767.0)
+"""The accelerometer's bias (counts) and drift (counts per s) a model may hold: the protocol's
+SAMPLE accel field is an i16 (spec/protocol.md), where the fit's search spans ±30 and ±20."""
+
 PARAM_RATIO_RANGE = (0.1, 10.0)
 """The range of a param:NAME ratio (fit search and model files). DESIGN.md fixes only its
 meaning; on the rig's four thesis logs a 0.25..4 range stopped four of the eleven single
@@ -155,11 +218,13 @@ EFFECTS: dict[str, EffectSpec] = {
         EffectSpec("delay", "samples", 0.0, 0.0, 6.0, "amplifier"),
         EffectSpec("backlash", "encoder counts", 0.0, 0.0, 30.0, "plant"),
         EffectSpec("beam_damping", "1", BEAM_DAMPING_NOMINAL, BEAM_DAMPING_NOMINAL, 0.2, "linear"),
-        EffectSpec("accel_gain", "1", 1.0, 0.3, 3.0, "output", signed=True),
-        # beyond the rig's pre-test zeroing; the rig's a spans about ±125 counts
-        EffectSpec("accel_offset", "accelerometer counts", 0.0, -30.0, 30.0, "output"),
+        # held: another accelerometer's sensitivity, or its amplifier's (decided from the data)
+        EffectSpec("accel_gain", "1", 1.0, 0.3, 3.0, "output", signed=True, held=ACCEL_GAIN_HELD),
+        # beyond the rig's pre-test zeroing; the rig's a spans about ±125 counts; held: a channel
+        # stored without its zeroing reads anywhere in the sample's i16 field
+        EffectSpec("accel_offset", "accelerometer counts", 0.0, -30.0, 30.0, "output", held=ACCEL_I16),
         # a linear bias from the run's first sample: ±20 counts/s is ±40 counts over a 2 s run
-        EffectSpec("accel_drift", "accelerometer counts per s", 0.0, -20.0, 20.0, "output"),
+        EffectSpec("accel_drift", "accelerometer counts per s", 0.0, -20.0, 20.0, "output", held=ACCEL_I16),
         EffectSpec("encoder_scale", "1", 1.0, 0.25, 16.0, "output", signed=True),
         EffectSpec("motor_polarity", "1", 1.0, 1.0, 1.0, "wiring", signed=True),
         EffectSpec("accel_mounted", "1", 1.0, 0.0, 0.0, "linear"),  # 1 or 0 only (CONFIGURATIONS)

@@ -29,6 +29,12 @@ by :func:`draw_sensor`; :data:`SENSOR_PAIRS` beside a physical effect):
 - accel_offset: 1.5-10 accelerometer counts in size, either sign (beyond the zeroing; the
   rig's a spans about +-50 counts in these runs, its noise is 0.3 counts);
 - accel_drift: 1-8 accelerometer counts per s in size, either sign (2-16 counts over a run);
+- accel_unzeroed: accel_offset 15-500 accelerometer counts in size, either sign (a channel
+  stored without the rig's zeroing: past the fit's search of ±30; where a feeds back, Ga's DC
+  gain of 18 turns it into a reference offset and the lead + accelerometer step runs to the clamp,
+  as the rig's loop would);
+- accel_sensitivity: accel_gain of 0.1-0.25 or 4-10 in size (log-uniform, either band), either
+  sign (another accelerometer or its amplifier's gain: past the fit's search of 0.3-3);
 - encoder_4096: encoder_scale 4 (a 4096-count encoder against the model's 1024);
 - encoder_reversed: encoder_scale -1; motor_reversed: motor_polarity -1 (each alone runs the
   closed loops away to the clamp: positive feedback, as the rig would).
@@ -149,6 +155,8 @@ SENSOR_CASES: dict[str, str] = {
     "accel_reversed": "accel_gain",
     "accel_offset": "accel_offset",
     "accel_drift": "accel_drift",
+    "accel_unzeroed": "accel_offset",
+    "accel_sensitivity": "accel_gain",
     "encoder_4096": "encoder_scale",
     "encoder_reversed": "encoder_scale",
     "motor_reversed": "motor_polarity",
@@ -159,18 +167,26 @@ SENSOR_MAGNITUDES: dict[str, tuple[float, float]] = {
     "accel_reversed": (-2.0, -0.5),
     "accel_offset": (1.5, 10.0),
     "accel_drift": (1.0, 8.0),
+    "accel_unzeroed": (15.0, 500.0),
+    "accel_sensitivity": (0.1, 10.0),
     "encoder_4096": (4.0, 4.0),
     "encoder_reversed": (-1.0, -1.0),
     "motor_reversed": (-1.0, -1.0),
 }
-"""Sensor fault case part -> (lowest, highest) hidden value; accel_offset's and accel_drift's
-ranges are their sizes (either sign)."""
+"""Sensor fault case part -> (lowest, highest) hidden value; accel_offset's, accel_drift's and
+accel_unzeroed's ranges are their sizes (either sign); accel_sensitivity's is its size's outer
+bounds (drawn in :data:`SENSITIVITY_BANDS`, either sign)."""
+
+SENSITIVITY_BANDS = ((0.1, 0.25), (4.0, 10.0))
+"""The sizes an accel_sensitivity case part draws its gain in (log-uniform, one band at random)."""
 
 SENSOR_PAIRS = (
     "accel_reversed+coulomb_friction",
     "accel_reversed+param:drive_c",
     "accel_offset+coulomb_friction",
     "accel_drift+param:drive_c",
+    "accel_unzeroed+coulomb_friction",
+    "accel_sensitivity+param:drive_c",
     "encoder_4096+coulomb_friction",
     "encoder_reversed+param:drive_c",
     "motor_reversed+coulomb_friction",
@@ -263,6 +279,10 @@ def draw_sensor(part: str, seed: int) -> float:
         return float(lo)
     if part == "accel_reversed":
         return -float(math.exp(rng.uniform(math.log(-hi), math.log(-lo))))
+    if part == "accel_sensitivity":
+        lo, hi = SENSITIVITY_BANDS[int(rng.integers(len(SENSITIVITY_BANDS)))]
+        size = float(math.exp(rng.uniform(math.log(lo), math.log(hi))))
+        return size if rng.random() < 0.5 else -size
     value = float(rng.uniform(lo, hi))
     return value if rng.random() < 0.5 else -value
 

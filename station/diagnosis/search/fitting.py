@@ -89,7 +89,9 @@ def effect_axes(model=None) -> dict[str, Axis]:
     ----------
     model : station.plant.model.Model, optional
         The base model: a signed effect it holds negative (a reversed accelerometer decided
-        from the data, :mod:`station.logged.sensors`) is searched on its negative side.
+        from the data, :mod:`station.logged.sensors`) is searched on its negative side, and
+        about its value where that lies beyond the search's range
+        (:meth:`station.plant.effects.EffectSpec.search_about`).
 
     Returns
     -------
@@ -98,9 +100,9 @@ def effect_axes(model=None) -> dict[str, Axis]:
     held = model.effect_dict() if model is not None else {}
     axes = {}
     for name, s in EFFECTS.items():
+        lo, hi = s.search_about(held[name]) if s.signed and name in held else (s.lower, s.upper)
         flip = s.signed and held.get(name, s.neutral) < 0
-        axes[name] = (axis_for(name, -s.upper, -s.lower, -s.neutral) if flip else
-                      axis_for(name, s.lower, s.upper, s.neutral))
+        axes[name] = (axis_for(name, -hi, -lo, -s.neutral) if flip else axis_for(name, lo, hi, s.neutral))
     return axes
 
 

@@ -21,7 +21,8 @@ from station.diagnosis.sessions.drift import DriftResult, decide_drift, finite, 
 from station.diagnosis.sessions.layout import Layout, PerSession, key, sensor_sign
 from station.diagnosis.sessions.logs import SessionLogs, accel_drift, load_sessions, simulate_cut
 from station.logged.audit import ACCEL_DRIFT_COUNTS, ACCEL_DRIFT_WINDOW_S
-from station.logged.sensors import SIGN_HEADERS, decide_faults, sensor_evidence
+from station.logged.sensor_evidence import sensor_evidence
+from station.logged.sensors import SESSION_HEADERS, decide_faults
 from station.plant.model import as_model
 from station.rig import SESSIONS_MAX_SAMPLES
 
@@ -240,7 +241,7 @@ def audit_said(cases, faults) -> list[str]:
     """
     where: dict[str, list[str]] = {}
     for case in cases:
-        for line in case.run.audit.lines(skip=SIGN_HEADERS):
+        for line in case.run.audit.lines(skip=SESSION_HEADERS):
             where.setdefault(line, []).append(case.name)
     out = [f"audit: {len(names)} of {len(cases)} runs: {line}" if len(names) > 1 else
            f"audit: {names[0]}: {line}" for line, names in where.items()]
