@@ -166,3 +166,13 @@ def test_an_accelerometer_gain_or_an_encoder_whichever_leaves_the_motion_nearer_
     check_effects(f.effects)
     if not decided:
         assert f.to_fit == ("encoder_scale",)
+
+
+def test_the_null_perturbation_stays_in_the_search_about_a_decided_gain():
+    # the luck floor perturbs by 0.2-0.4 %: inward at the search's own bound, as before a model
+    # could hold more, and about a gain the data decided past the search
+    from station.diagnosis.search.selection import perturbed
+
+    assert perturbed("accel_gain", {"accel_gain": 0.3}, 0.996) == pytest.approx(0.3 / 0.996)
+    assert perturbed("accel_gain", {"accel_gain": -6.0}, 0.996) == pytest.approx(-6.0 * 0.996)
+    assert perturbed("accel_gain", {"accel_gain": 0.01}, 0.996) == pytest.approx(0.01 / 0.996)

@@ -102,7 +102,7 @@ class EffectSpec(NamedTuple):
         lo, hi = self.bounds
         return value == self.neutral or lo <= size <= hi
 
-    def searched(self, value: float) -> bool:
+    def searched(self, value: float, about: float | None = None) -> bool:
         """True when ``value`` lies within the fit's search range (``lower``..``upper``, of the
         magnitude when ``signed``): a decided value outside it is out of the search's reach.
 
@@ -110,9 +110,13 @@ class EffectSpec(NamedTuple):
         ----------
         value : float
             In the effect's unit.
+        about : float, optional
+            The value a model holds: the range is then the one searched beside it
+            (:meth:`search_about`).
         """
         size = abs(value) if self.signed else value
-        return self.lower <= size <= self.upper
+        lo, hi = (self.lower, self.upper) if about is None else self.search_about(about)
+        return lo <= size <= hi
 
     def search_about(self, value: float) -> tuple[float, float]:
         """The range a fit searches beside a model that holds ``value``: ``lower``, ``upper``
@@ -134,12 +138,13 @@ class EffectSpec(NamedTuple):
         ValueError
             Off the search's reach for an effect whose search range is not of one sign.
         """
-        if self.searched(value) or value == self.neutral:
+        size = abs(value) if self.signed else value
+        if self.lower <= size <= self.upper or value == self.neutral:
             return self.lower, self.upper
         if not self.lower > 0:
             raise ValueError(f"effect '{self.name}': no search about {value:g}")
         half = math.sqrt(self.upper / self.lower)
-        size, (lo, hi) = abs(value), self.bounds
+        lo, hi = self.bounds
         return max(size / half, lo), min(size * half, hi)
 
     def range_text(self) -> str:

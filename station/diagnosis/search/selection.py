@@ -351,8 +351,9 @@ def screen_points(name: str, axes: Mapping[str, Axis], fixed: Mapping[str, float
 
 
 def perturbed(name: str, values: Mapping[str, float], factor: float) -> float:
-    """An effect's value scaled by a tiny factor, kept inside its range: a value fitted on
-    its bound is perturbed inward (divided by the factor instead).
+    """An effect's value scaled by a tiny factor, kept inside the range the fit searches (about
+    the value where a model holds one past it, a gain the data decided): a value fitted on its
+    bound is perturbed inward (divided by the factor instead).
 
     Parameters
     ----------
@@ -371,7 +372,7 @@ def perturbed(name: str, values: Mapping[str, float], factor: float) -> float:
     spec = EFFECTS[name]
     v = values.get(name, spec.neutral)
     for x in (v * factor, v / factor):
-        if spec.admits(x):
+        if x == spec.neutral or spec.searched(x, about=v):
             return x
     return v
 
