@@ -305,13 +305,81 @@ ACCEL_BASELINE_CLAIM = "a: the tip's acceleration about a steady zero"
 """What a log's a column claims about its baseline (a contradicted baseline keeps a in use)."""
 
 
+ACCEL_FIELD_COUNTS = 65536
+"""Counts the rig's accelerometer sample can span (a signed 16-bit field)."""
+
+QUANTUM_TOLERANCE = 1e-3
+"""How far (in counts) a θ value may sit from a whole count of a unit and still be one
+(values printed to a few decimals)."""
+
+
+def quantum_fits(x: np.ndarray, quantum: float) -> bool:
+    """Whether every value of ``x`` is a whole multiple of ``quantum`` (to
+    :data:`QUANTUM_TOLERANCE` of it).
+
+    Parameters
+    ----------
+    x : ndarray, shape (N,)
+    quantum : float
+    """
+    q = x / quantum
+    return bool(np.all(np.abs(q - np.round(q)) <= QUANTUM_TOLERANCE))
+
+
+def accel_step(a) -> float | None:
+    """The size of one accelerometer count in a's column: the smallest change between rows, when
+    every change is a whole multiple of it (to :data:`QUANTUM_TOLERANCE` of it); None when a
+    never changes, its changes have no common size (a filtered or computed float) or that size
+    would span more than the sample's 16-bit field over a's range (the printing's last digit).
+
+    A converter's reading scaled into another unit steps by its scale (a count of the rig's is
+    1/1.145 m/s², DESIGN.md's a_gain); an offset (the thesis's lead + accelerometer log stores
+    counts + 0.04) moves no step.
+
+    Parameters
+    ----------
+    a : array_like, shape (N,)
+
+    Returns
+    -------
+    float or None
+    """
+    a = np.asarray(a, dtype=float)
+    if a.size < 2 or not np.all(np.isfinite(a)):
+        return None
+    steps = np.abs(np.diff(a))
+    steps = steps[steps > 1e-9 * max(1.0, float(np.max(np.abs(a))))]
+    if not steps.size:
+        return None
+    size = float(np.min(steps))
+    if np.ptp(a) / size > ACCEL_FIELD_COUNTS or not quantum_fits(steps, size):  # the printing's last digit
+        return None
+    counts = np.round(steps / size)
+    return float(np.sum(steps * counts) / np.sum(counts ** 2))  # least squares over every step, not the least
+
+
+def in_counts(a) -> bool:
+    """Whether a's column is in the rig's accelerometer counts: it changes by whole counts (or
+    never changes), whatever its offset. A column that steps by whole multiples of 2 or more is
+    counts too (a sensor of another gain read in whole counts: the gain says it, not the unit);
+    False for a column that changes by fractions of a count.
+
+    Parameters
+    ----------
+    a : array_like, shape (N,)
+    """
+    a = np.asarray(a, dtype=float)
+    return a.size < 2 or not np.all(np.isfinite(a)) or quantum_fits(np.diff(a), 1.0)
+
+
 def accel_band(a, dt: float, rest_samples: int) -> tuple[float, float] | None:
     """a's RMS in :data:`ACCEL_BAND_HZ` after the rest, and at rest (floored at
-    :data:`ACCEL_NOISE_FLOOR`), counts. With fewer than :data:`ACCEL_REST_MIN` samples at rest
+    :data:`ACCEL_NOISE_FLOOR` where a is in counts, :func:`in_counts`; a column in another unit
+    is judged by its own noise), counts. With fewer than :data:`ACCEL_REST_MIN` samples at rest
     (a loop that answers a's first sample: Ga fed an unzeroed or dead channel), the band over the
     whole run and :data:`ACCEL_NOISE_FLOOR` as its noise: a still channel reads less (the 2014
     log without an accelerometer: 0.21 counts over the run), a live one on a moving beam far more
-    (the thesis's lead + accelerometer step: 18.8). None for a run shorter than
+    (the thesis's lead + accelerometer step: 18.8). None for a run too short to filter or shorter than
     :data:`ACCEL_REST_MIN` past its rest or a band past the Nyquist frequency.
 
     Parameters
@@ -335,11 +403,15 @@ def accel_band(a, dt: float, rest_samples: int) -> tuple[float, float] | None:
     if a.size < rest_samples + ACCEL_REST_MIN or ACCEL_BAND_HZ[1] >= 0.5 / dt or not np.all(np.isfinite(a)):
         return None
     sos = butter(2, ACCEL_BAND_HZ, "bandpass", fs=1.0 / dt, output="sos")
+    if a.size - 1 <= 3 * (2 * len(sos) + 1):  # shorter than sosfiltfilt's padding
+        return None
+    # half a count is the least a channel of whole counts reads; one in another unit has no count
+    floor = ACCEL_NOISE_FLOOR if in_counts(a) else 0.0
     if rest_samples < ACCEL_REST_MIN:
         band = sosfiltfilt(sos, a[1:] - np.mean(a[1:]))
-        return float(np.sqrt(np.mean(band ** 2))), ACCEL_NOISE_FLOOR
+        return float(np.sqrt(np.mean(band ** 2))), floor
     band = sosfiltfilt(sos, a[1:] - np.mean(a[1:rest_samples]))  # row 0 of the 2014 layout is a zero
-    at_rest = max(float(np.sqrt(np.mean(band[:rest_samples - 1] ** 2))), ACCEL_NOISE_FLOOR)
+    at_rest = max(float(np.sqrt(np.mean(band[:rest_samples - 1] ** 2))), floor)
     return float(np.sqrt(np.mean(band[rest_samples - 1:] ** 2))), at_rest
 
 

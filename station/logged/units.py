@@ -4,7 +4,9 @@ form (DESIGN.md "Log audit": the sample time, the columns' units).
 A log claims its sample time (our header's dt, else the rig's 0.002 s with t in s) and that
 its columns hold counts: θ whole encoder counts, u, v, a and θ̂d signed counts. The data
 contradict the first when t steps by another time (or by ms), θ's unit when its values are
-whole multiples of a radian's or a degree's share of one count, and a column's sign when it
+whole multiples of a radian's or a degree's share of one count, a's unit when it steps by whole
+multiples of another size than one count (a's reading scaled into g, m/s² or volts), and a
+column's sign when it
 holds the rig's 16-bit two's-complement words (the legacy protocol's, ``../shared/spec/
 protocol.md``) read as unsigned: a negative x written as 65536 + x. Each contradiction is
 converted, and said.
@@ -15,21 +17,16 @@ from __future__ import annotations
 import dataclasses
 import math
 from dataclasses import dataclass
+from typing import NamedTuple
 
 import numpy as np
 
-from station.logged.audit import AuditClaim
+from station.logged.audit import AuditClaim, accel_step, in_counts, quantum_fits
 from station.rig import COUNTS_PER_REV, DT
 from station.runlog import RunLog
 
 THETA_UNITS = {"radians": 2.0 * math.pi / COUNTS_PER_REV, "degrees": 360.0 / COUNTS_PER_REV}
 """θ columns in another unit than counts, by one encoder count in that unit."""
-
-QUANTUM_TOLERANCE = 1e-3
-"""How far (in counts) a θ value may sit from a whole count of a unit and still be one
-(values printed to a few decimals)."""
-
-
 
 @dataclass(frozen=True)
 class TimeBase:
@@ -47,11 +44,6 @@ class TimeBase:
 
     claims: tuple[AuditClaim, ...]
     log: RunLog
-
-
-def _quantum_fits(x: np.ndarray, quantum: float) -> bool:
-    q = x / quantum
-    return bool(np.all(np.abs(q - np.round(q)) <= QUANTUM_TOLERANCE))
 
 
 def _whole(x: np.ndarray) -> bool:
@@ -125,6 +117,66 @@ def word_claims(data: dict[str, np.ndarray]) -> tuple[list[AuditClaim], dict[str
             f"read as two's complement (x - {WORD}) the column is {int(np.min(signed[name]))}.."
             f"{int(np.max(signed[name]))} counts, no less continuous"))
     return claims, signed
+
+
+ACCEL_UNIT_CLAIM = "a in accelerometer counts"
+"""What every log's a column claims about its unit (the header of :func:`accel_unit`'s claim)."""
+
+
+class AccelUnit(NamedTuple):
+    """a's unit as its data give it (:func:`accel_unit`).
+
+    Attributes
+    ----------
+    claim : AuditClaim
+    counts : ndarray or None
+        a in counts, shape (N,), when a count's size was found; else None.
+    step : float or None
+        That size, in a's unit.
+    """
+
+    claim: AuditClaim
+    counts: np.ndarray | None
+    step: float | None
+
+
+def accel_unit(a) -> AccelUnit | None:
+    """a's claim to be in accelerometer counts (the rig's 16-bit readings, steps of whole
+    counts), checked by the size of its steps (:func:`accel_step`).
+
+    Parameters
+    ----------
+    a : array_like, shape (N,)
+
+    Returns
+    -------
+    AccelUnit or None
+        None when a steps by whole counts (or never changes). Otherwise a contradicted claim
+        and a in counts (a divided by its step) when a steps by another size, or an unchecked
+        claim when its steps have no common size: its scale is then the accelerometer's gain,
+        decided against the model (:mod:`station.logged.sensors`).
+    """
+    a = np.asarray(a, dtype=float)
+    if in_counts(a):
+        return None
+    step = accel_step(a)
+    if step is None:
+        changes = np.abs(np.diff(a))
+        return AccelUnit(AuditClaim(
+            "columns", ACCEL_UNIT_CLAIM, "a not in whole counts", "unchecked",
+            f"a changes by amounts with no common size (e.g. {changes[changes > 0][0]:.6g}): a count's size is "
+            f"not decided; its scale is the accelerometer's gain"), None, None)
+    return AccelUnit(AuditClaim(
+        "columns", ACCEL_UNIT_CLAIM, f"a in steps of {step:.6g}", "contradicted",
+        f"every change of a is a whole multiple of {step:.6g}, not of one count: a count read in another unit "
+        f"({1.0 / step:.6g} counts per unit)"), _whole_counts(a / step), step)
+
+
+def _whole_counts(x: np.ndarray) -> np.ndarray:
+    """``x`` (counts read back from another unit, off whole by the printing's last digits) on
+    whole counts about its common offset (the thesis's lead + accelerometer log's 0.04)."""
+    offset = float(np.median(x - np.round(x)))
+    return np.round(x - offset) + offset
 
 
 HOST_STAMP_TOLERANCE = 0.005
@@ -221,7 +273,7 @@ def time_base(log: RunLog) -> TimeBase:
             claims.append(AuditClaim("columns", "θ in encoder counts", "θ in encoder counts", "confirmed",
                                      "every θ is a whole count"))
         else:
-            unit = next((name for name, q in THETA_UNITS.items() if _quantum_fits(theta, q)), None)
+            unit = next((name for name, q in THETA_UNITS.items() if quantum_fits(theta, q)), None)
             if unit is None:
                 claims.append(AuditClaim("columns", "θ in encoder counts", "θ not quantized", "unchecked",
                                          f"θ is not whole counts (e.g. {theta[np.flatnonzero(theta != np.round(theta))[0]]:.6g})"
@@ -238,6 +290,12 @@ def time_base(log: RunLog) -> TimeBase:
                                          f"every θ is a multiple of {q:.6g} ({unit} per encoder count of "
                                          f"{COUNTS_PER_REV}/rev), none of 1{also}"))
                 notes.append(f"θ is in {unit} (the audit): converted to encoder counts{also}")
+    accel = accel_unit(np.asarray(changes.get("a", data["a"]), dtype=float))
+    if accel is not None:
+        claims.append(accel.claim)
+        if accel.counts is not None:
+            changes["a"] = accel.counts
+            notes.append(f"a is in steps of {accel.step:.6g} a count (the audit): divided by it")
     if not changes and new_meta is None:
         return TimeBase(tuple(claims), log)
     fixed = dict(data)
