@@ -9,12 +9,20 @@ contradicted, said first, and the log is read with the columns swapped. The law 
 header's own (as given, at its clamp or the log's, or completed from the data where it comes
 within :data:`NEAR_COUNTS`); a log with no header is checked the same way against the law
 inferred from its data, tried on the swaps only when none is found as the columns are named.
+
+An open-loop run (v = u: no law feeds θ or a back) cannot say θ from a by a law. There the
+sensors themselves say it (:func:`check_sensor_swap`): at rest before the first command the
+encoder reads one count and the accelerometer its noise, and the hub's angle follows the
+nominal model's driven by the logged command where the tip's acceleration does not.
 """
 
 from __future__ import annotations
 
 import dataclasses
+from collections.abc import Callable
 from typing import NamedTuple
+
+import numpy as np
 
 from station.analysis.law_rows import TOLERANCE
 from station.errors import StationError
@@ -24,6 +32,17 @@ from station.runlog import RunLog
 
 SWAPS = (("u", "v"), ("theta", "a"))
 """Column pairs a swap is tried for: the reference and the command, the two sensors."""
+
+SWAP_COSINE = 0.9
+"""An open-loop run's θ and a are read swapped when the column named a follows the nominal
+model's θ this closely (the cosine of their changes from row 0; the rig's own open-loop pulses
+as named: 0.98) and the column named θ does not (under :data:`UNLIKE_COSINE`)."""
+
+UNLIKE_COSINE = 0.5
+"""A column no closer than this to the model's θ is not the hub's angle."""
+
+REST_ROWS = 10
+"""Fewest rows at rest before the first command the open-loop check needs."""
 
 NEAR_COUNTS = 2.0
 """A swap is identified from the data (its law completed: printed coefficients, a recursion
@@ -150,3 +169,56 @@ def _swapped_back(log: RunLog, first: str, second: str, trial: RunLog, as_named:
         f"{said}, and {how} with the columns named {a} and {b} exchanged")
     note = f"the columns named {a} and {b} hold {b} and {a} (the audit): read swapped"
     return Columns((claim,), dataclasses.replace(trial, notes=list(log.notes) + [note]), identified)
+
+
+def _cosine(x: np.ndarray, y: np.ndarray) -> float:
+    x, y = x - x[0], y - y[0]
+    den = float(np.linalg.norm(x) * np.linalg.norm(y))
+    return 0.0 if den == 0.0 else abs(float(np.dot(x, y)) / den)
+
+
+def check_sensor_swap(columns: Columns, model_theta: Callable[[RunLog], np.ndarray | None]) -> Columns:
+    """θ and a of an open-loop run (v = u) checked by the sensors themselves (module docstring).
+
+    Asked only where the rest before the first command says it may be (the column named θ moves
+    there more than the column named a: an encoder at rest reads one count); decided by the
+    nominal model's θ driven by the logged command (:data:`SWAP_COSINE`, :data:`UNLIKE_COSINE`).
+
+    Parameters
+    ----------
+    columns : Columns
+        What :func:`check_columns` found; returned as it is when it found a swap, the run is
+        closed loop, or its rest is shorter than :data:`REST_ROWS`.
+    model_theta : callable
+        ``model_theta(log) -> θ`` (encoder counts, shape (N,)): the nominal model's θ for the
+        log driven open loop by its command; None when the log cannot be simulated.
+
+    Returns
+    -------
+    Columns
+    """
+    log = columns.log
+    if columns.claims or len(log) < 2 * REST_ROWS:
+        return columns
+    d = log.data
+    u, v, theta, a = (np.asarray(d[k], dtype=float) for k in ("u", "v", "theta", "a"))
+    if not all(np.all(np.isfinite(x)) for x in (u, v, theta, a)) or not np.array_equal(u, v):
+        return columns
+    moved = np.flatnonzero(v != v[0])
+    rest = int(moved[0]) if moved.size else 0
+    if rest < REST_ROWS or np.ptp(theta[:rest]) <= np.ptp(a[:rest]):
+        return columns
+    expected = model_theta(log)
+    if expected is None:
+        return columns
+    named, crossed = _cosine(theta, expected), _cosine(a, expected)
+    if crossed < SWAP_COSINE or named >= UNLIKE_COSINE:
+        return columns
+    claim = AuditClaim(
+        "columns", "θ and a as the column line names them", "θ and a swapped", "contradicted",
+        f"open loop: at rest before the first command the column named θ moves {np.ptp(theta[:rest]):g} counts and "
+        f"the one named a {np.ptp(a[:rest]):g}; the nominal model's θ driven by the logged command has a cosine "
+        f"of {crossed:.2f} with the column named a and {named:.2f} with the one named θ")
+    note = "the columns named θ and a hold a and θ (the audit): read swapped"
+    trial = swapped(log, "theta", "a")
+    return Columns((claim,), dataclasses.replace(trial, notes=list(log.notes) + [note]))  # its controller asked again

@@ -35,7 +35,9 @@ hold each other's values (a script that wrote them in another order than it name
 "rows": a true header (a P, or a lead on the stored integer), or none (the 2014 layout,
 t jumping), over a log that lost rows (one to
 three spans of 1-30 ticks while the hub moves, n and t jumping over them) or holds a span of
-rows written again (a logger that re-sent a block). A class joined with "+" to
+rows written again (a logger that re-sent a block); "a_unit": a true header (a P, or a lead on the
+stored integer) or none over a log whose a column a script scaled into m/s², g or mV (a count
+1/1.145 m/s², 1/11.23 g or 3300/4096 mV) and printed to 7 digits. A class joined with "+" to
 "coulomb_friction" hides that friction too (drawn as :func:`tests.blind.cases.draw` draws it).
 """
 
@@ -58,7 +60,7 @@ N = 2000
 
 CLASSES = ("lie:open_loop", "lie:p_kp", "lie:lead_pole", "lie:accel_fb", "int:trunc_d0", "int:trunc_d1",
            "int:round_d0", "int:round_d1", "session", "lie:sent", "lie:accel_int", "honest:p", "honest:lead_int",
-           "honest:lead_sent", "words", "swap", "rows")
+           "honest:lead_sent", "words", "swap", "rows", "a_unit")
 """The audit's blind classes, in the validation table's order."""
 
 PHYSICAL = ("coulomb_friction",)
@@ -74,6 +76,10 @@ HEADER_KP = 2.0
 
 GA_S = ((467.22634242, 281.56096177), (1.0, 36.49022971, 172.1552844, 15.39673089))
 """DESIGN.md's accelerometer feedback Ga(s) = (b1 s + b0)/(s³ + a2 s² + a1 s + a0)."""
+
+A_UNITS = {"m/s²": 1.0 / 1.1452654922936827, "g": 1.0 / (1.1452654922936827 * 9.80665), "mV": 3300.0 / 4096}
+"""One accelerometer count in the units the "a_unit" class writes a in (DESIGN.md's a_gain, counts
+per m/s²; a 3.3 V 12-bit converter's mV)."""
 
 GA_GAINS = (0.5, 0.75, 1.0, 1.5)
 GA_FREQUENCIES = (0.7, 1.0, 1.4)
@@ -117,6 +123,8 @@ class AuditCase:
         Two columns written in each other's place (("u", "v") or ("theta", "a")), else ().
     rows : tuple of int
         The ticks the log's rows hold, in the order written ((): every tick once, in order).
+    a_unit : str or None
+        The unit a is written in (:data:`A_UNITS`), else None (counts).
     """
 
     name: str
@@ -138,6 +146,7 @@ class AuditCase:
     wrapped: tuple = ()
     swap: tuple = ()
     rows: tuple = ()
+    a_unit: str | None = None
 
     @property
     def lies(self) -> bool:
@@ -233,6 +242,8 @@ def draw_case(name: str, seed: int) -> AuditCase:
             ticks = np.r_[ticks[:start + width], ticks[start:start + width], ticks[start + width:]]
         rows = tuple(int(k) for k in ticks)
         return _true_or_no_header(rng, common, p_law, lead, kp, rows=rows)
+    if base == "a_unit":
+        return _true_or_no_header(rng, common, p_law, lead, kp, a_unit=str(rng.choice(sorted(A_UNITS))))
     if base == "words":
         if rng.random() < 0.5:
             return AuditCase(**{**common, "header_kp": kp}, **p_law, recursion="trunc",
@@ -412,6 +423,8 @@ def write_audit_case(folder: Path, name: str, seed: int) -> tuple[Path, AuditCas
     if case.words:
         sim, wrapped = as_words(sim, WORD_COLUMNS if case.header == "lead" else WORD_COLUMNS[:-1])
         case = dataclasses.replace(case, wrapped=wrapped)
+    if case.a_unit is not None:  # a script's scaling, printed to 7 digits
+        sim = dataclasses.replace(sim, a=np.array([float(f"{x:.7g}") for x in sim.a * A_UNITS[case.a_unit]]))
     if case.swap:
         first, second = case.swap
         sim = dataclasses.replace(sim, **{first: getattr(sim, second), second: getattr(sim, first)})
