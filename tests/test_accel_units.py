@@ -125,3 +125,16 @@ def test_accel_step(a, step):
 ])
 def test_in_counts(a, counts):
     assert in_counts(a) is counts
+
+
+def test_a_diagnosis_of_logs_with_a_in_g_is_the_rigs_own(rig_data, tmp_path):
+    """The diagnosis sees the rig's counts again: the same causes and values as on the logs
+    themselves (before: every run's a 'no tip acceleration', the a evidence lost)."""
+    from station.diagnosis import diagnose
+
+    scale = SCALES["g"]
+    paths = [_rewrite(rig_data / name, tmp_path / name, lambda t, a: _printed(a * scale, 7)) for name in THESIS]
+    scaled, clean = (diagnose([str(p) for p in ps], workers=1) for ps in (paths, [rig_data / n for n in THESIS]))
+    assert scaled.causes == clean.causes and not scaled.decided_faults
+    assert scaled.extended_model.effect_dict() == pytest.approx(clean.extended_model.effect_dict(), rel=1e-9)
+    assert scaled.gain_pct == pytest.approx(clean.gain_pct, abs=1e-9)
