@@ -12,6 +12,7 @@ samples; ``station.logged.LoggedRun`` sees only the file. Judged per case:
   two columns written in each other's place (``swap``) are said swapped, and no others;
   rows lost or written again (``rows``) are said (n jumps), and in no other class; an a column
   written in another unit (``a_unit``) is said, its count's size to 0.1 %, and in no other class;
+  so is a v column written in volts (``v_unit``);
 - reproduced: the controller used reproduces every logged v to the device's quantization
   (1e-6 counts, the logged integer exactly for an integer recursion) at the hidden alignment;
 - design: the law the data gave is the hidden one: the continuous design (num/den in s, to
@@ -42,7 +43,7 @@ REPO = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(REPO))  # tests.blind is not installed with the package
 
 from station.ranges import number  # noqa: E402
-from tests.blind.audit import A_UNITS, CLASSES, PHYSICAL, draw_case  # noqa: E402
+from tests.blind.audit import A_UNITS, CLASSES, PHYSICAL, V_UNITS, draw_case  # noqa: E402
 
 KNOWN = tuple(c for base in CLASSES for c in (base, *(f"{base}+{p}" for p in PHYSICAL)))
 """Every case this script runs (the default), in the table's order."""
@@ -127,6 +128,11 @@ def run_case(case: str, seed: int) -> Outcome:
     step = A_UNITS.get(hidden.a_unit) if hidden.a_unit else None
     contradiction_ok = contradiction_ok and (
         not units if step is None else len(units) == 1 and abs(float(units[0].split()[-1]) / step - 1) < 1e-3)
+    # v written in another unit: its count's size found (to 0.1 %), and never where v is in counts
+    units = [c.data for c in audit.claims if c.claim == "columns" and c.header == "v in DAC counts"]
+    step = V_UNITS.get(hidden.v_unit) if hidden.v_unit else None
+    contradiction_ok = contradiction_ok and (
+        not units if step is None else len(units) == 1 and abs(float(units[0].split()[-1]) / step - 1) < 1e-3)
     # rows lost or written again: said (n jumps), and never where every tick is there once
     jumps = any(c.claim == "sample_time" and c.data.startswith("n jumps") for c in audit.claims)
     contradiction_ok = contradiction_ok and jumps == bool(hidden.rows)
@@ -186,7 +192,7 @@ def table(outcomes: list[Outcome], seeds: str, elapsed: float) -> str:
         "header (the 2014 layout); `session`: the lab's third session (open-loop header, a lead on the "
         "truncated integer at alignment 0); `lie:sent`: an open-loop header on a lead whose recursion runs on the "
         "float while the whole count it sends is logged; `lie:accel_int`: an open-loop header on a lead with "
-        "DESIGN.md's Ga as it stands, the command stored or sent as a whole count; `words`: a true header (P, or a lead on the stored integer) over columns the lab's client read from the legacy protocol's 16-bit two's-complement words as unsigned (a negative x written as 65536 + x; each such column must be contradicted, and no column of any other class); `swap`: a true header (P, or a lead on the stored integer) or none (the 2014 layout) over columns u and v, or θ and a, written in each other's place (the swap must be said, and none in any other class); `rows`: a true header (P, or a lead on the stored integer) or none (the 2014 layout, where t jumps) over a log that lost one to three spans of 1–30 rows while the hub moves, or holds a block of rows written again (n jumps must be said, and in no other class, and the law reproduce every row it can judge: replayed again from each jump with its memory as logged); `a_unit`: a true header (P, or a lead on the stored integer) or none over a log whose a a script scaled into m/s², g or mV and printed to 7 digits (a's unit must be said, its count's size to 0.1 %, and in no other class); `honest:*`: true headers (P, or a lead on the stored integer, or "
+        "DESIGN.md's Ga as it stands, the command stored or sent as a whole count; `words`: a true header (P, or a lead on the stored integer) over columns the lab's client read from the legacy protocol's 16-bit two's-complement words as unsigned (a negative x written as 65536 + x; each such column must be contradicted, and no column of any other class); `swap`: a true header (P, or a lead on the stored integer) or none (the 2014 layout) over columns u and v, or θ and a, written in each other's place (the swap must be said, and none in any other class); `rows`: a true header (P, or a lead on the stored integer) or none (the 2014 layout, where t jumps) over a log that lost one to three spans of 1–30 rows while the hub moves, or holds a block of rows written again (n jumps must be said, and in no other class, and the law reproduce every row it can judge: replayed again from each jump with its memory as logged); `a_unit`: a true header (P, or a lead on the stored integer) or none over a log whose a a script scaled into m/s², g or mV and printed to 7 digits (a's unit must be said, its count's size to 0.1 %, and in no other class); `v_unit`: a true header (P, or a lead on the stored integer) over a log whose v a script wrote in volts of a ±5 V 12-bit or ±10 V 16-bit converter, 7 digits (said as a's, and the law then confirmed; a command in mV within the DAC's range is another gain as much as another unit and is not drawn); `honest:*`: true headers (P, or a lead on the stored integer, or "
         "`honest:lead_sent` a lead on the float logging the whole count it sends) the audit must confirm. `+coulomb_friction`: beside a hidden Coulomb friction of 3–30 DAC counts.",
         "",
         "Bar (issue 26): in at least 9 of 10 seeds, a lying header contradicted (and a true or absent one not), "

@@ -305,11 +305,15 @@ ACCEL_BASELINE_CLAIM = "a: the tip's acceleration about a steady zero"
 """What a log's a column claims about its baseline (a contradicted baseline keeps a in use)."""
 
 
-ACCEL_FIELD_COUNTS = 65536
-"""Counts the rig's accelerometer sample can span (a signed 16-bit field)."""
+STEP_DIVISORS = 10
+"""Most counts a column's smallest change between rows may span for :func:`count_step` (a P
+law's command trunc(kp·e) changes by 2 or 3 counts at kp = 2.5)."""
+
+FIELD_COUNTS = 65536
+"""Counts a sample of the rig's can span (a signed 16-bit field)."""
 
 QUANTUM_TOLERANCE = 1e-3
-"""How far (in counts) a θ value may sit from a whole count of a unit and still be one
+"""How far a value may sit from a whole multiple of a quantum (in quanta) and still be one
 (values printed to a few decimals)."""
 
 
@@ -326,50 +330,62 @@ def quantum_fits(x: np.ndarray, quantum: float) -> bool:
     return bool(np.all(np.abs(q - np.round(q)) <= QUANTUM_TOLERANCE))
 
 
-def accel_step(a) -> float | None:
-    """The size of one accelerometer count in a's column: the smallest change between rows, when
-    every change is a whole multiple of it (to :data:`QUANTUM_TOLERANCE` of it); None when a
-    never changes, its changes have no common size (a filtered or computed float) or that size
-    would span more than the sample's 16-bit field over a's range (the printing's last digit).
+def count_step(x) -> float | None:
+    """The size of one count in a column of counts written in another unit: the largest size
+    every change between rows is a whole multiple of (to :data:`QUANTUM_TOLERANCE` of it), the
+    smallest change or a :data:`STEP_DIVISORS`-th of it at most, refined by least squares over
+    every change; None when the column never changes, its changes have no common size (a
+    filtered or computed float) or that size would span more than a sample's 16-bit field over
+    the column's range (the printing's last digit).
 
-    A converter's reading scaled into another unit steps by its scale (a count of the rig's is
-    1/1.145 m/s², DESIGN.md's a_gain); an offset (the thesis's lead + accelerometer log stores
-    counts + 0.04) moves no step.
+    A converter's reading scaled into another unit steps by its scale (an accelerometer count of
+    the rig's is 1/1.145 m/s², DESIGN.md's a_gain; a DAC count 5/2048 V of a ±5 V 12-bit
+    converter); an offset (the thesis's lead + accelerometer log stores a as counts + 0.04)
+    moves no step.
 
     Parameters
     ----------
-    a : array_like, shape (N,)
+    x : array_like, shape (N,)
 
     Returns
     -------
     float or None
     """
-    a = np.asarray(a, dtype=float)
-    if a.size < 2 or not np.all(np.isfinite(a)):
+    x = np.asarray(x, dtype=float)
+    if x.size < 2 or not np.all(np.isfinite(x)):
         return None
-    steps = np.abs(np.diff(a))
-    steps = steps[steps > 1e-9 * max(1.0, float(np.max(np.abs(a))))]
+    steps = np.abs(np.diff(x))
+    steps = steps[steps > 1e-9 * max(1.0, float(np.max(np.abs(x))))]
     if not steps.size:
         return None
-    size = float(np.min(steps))
-    if np.ptp(a) / size > ACCEL_FIELD_COUNTS or not quantum_fits(steps, size):  # the printing's last digit
-        return None
-    counts = np.round(steps / size)
-    return float(np.sum(steps * counts) / np.sum(counts ** 2))  # least squares over every step, not the least
+    least = float(np.min(steps))
+    for k in range(1, STEP_DIVISORS + 1):  # a column whose least change spans k counts (2 or 3 of trunc(2.5 e))
+        size = least / k
+        if np.ptp(x) / size > FIELD_COUNTS:  # the printing's last digit
+            return None
+        small = steps[steps <= 10.5 * size]  # refined on the small changes first: the least is printed short
+        if not quantum_fits(small, size):
+            continue
+        counts = np.round(small / size)
+        size = float(np.sum(small * counts) / np.sum(counts ** 2))
+        if quantum_fits(steps, size):
+            counts = np.round(steps / size)
+            return float(np.sum(steps * counts) / np.sum(counts ** 2))  # least squares over every step
+    return None
 
 
-def in_counts(a) -> bool:
-    """Whether a's column is in the rig's accelerometer counts: it changes by whole counts (or
-    never changes), whatever its offset. A column that steps by whole multiples of 2 or more is
-    counts too (a sensor of another gain read in whole counts: the gain says it, not the unit);
-    False for a column that changes by fractions of a count.
+def in_counts(x) -> bool:
+    """Whether a column is in whole counts: it changes by whole counts (or never changes),
+    whatever its offset. A column that steps by whole multiples of 2 or more is counts too (an
+    accelerometer of another gain read in whole counts: the gain says it, not the unit); False
+    for a column that changes by fractions of a count.
 
     Parameters
     ----------
-    a : array_like, shape (N,)
+    x : array_like, shape (N,)
     """
-    a = np.asarray(a, dtype=float)
-    return a.size < 2 or not np.all(np.isfinite(a)) or quantum_fits(np.diff(a), 1.0)
+    x = np.asarray(x, dtype=float)
+    return x.size < 2 or not np.all(np.isfinite(x)) or quantum_fits(np.diff(x), 1.0)
 
 
 def accel_band(a, dt: float, rest_samples: int) -> tuple[float, float] | None:

@@ -10,6 +10,13 @@ header's own (as given, at its clamp or the log's, or completed from the data wh
 within :data:`NEAR_COUNTS`); a log with no header is checked the same way against the law
 inferred from its data, tried on the swaps only when none is found as the columns are named.
 
+The command's unit is checked the same way: a v the header's law does not reproduce, whose
+changes are all whole multiples of one size other than a DAC count (a script that wrote the
+command in volts), is read in counts when its law then reproduces it and the DAC's range says
+so too (:func:`check_command_unit`). A P law's v scaled is also another kp, so only a v that can
+be no DAC command as written is read so: under one count everywhere while the hub moved (the
+device would apply nothing), or past the DAC's ±255 counts.
+
 An open-loop run (v = u: no law feeds θ or a back) cannot say θ from a by a law. There the
 sensors themselves say it (:func:`check_sensor_swap`): at rest before the first command the
 encoder reads one count and the accelerometer its noise, and the hub's angle follows the
@@ -26,9 +33,16 @@ import numpy as np
 
 from station.analysis.law_rows import TOLERANCE
 from station.errors import StationError
-from station.logged.audit import AuditClaim
-from station.logged.controller import NO_LAW, NOT_STATED, ControllerId, header_law_dv, identify_controller
+from station.logged.audit import AuditClaim, count_step, in_counts, quantum_fits
+from station.logged.controller import (NO_LAW, NOT_STATED, ControllerId, header_law_dv, header_reproduces,
+                                       identify_controller)
+from station.logged.units import whole_counts
+from station.rig import DAC_LIMIT
 from station.runlog import RunLog
+
+ModelTheta = Callable[[RunLog], "np.ndarray | None"]
+"""``model_theta(log) -> θ``: the nominal model's θ for a log driven open loop by its v (encoder
+counts, shape (N,)), None when the log cannot be simulated (``LoggedRun``'s ``_nominal_theta``)."""
 
 SWAPS = (("u", "v"), ("theta", "a"))
 """Column pairs a swap is tried for: the reference and the command, the two sensors."""
@@ -40,6 +54,10 @@ as named: 0.98) and the column named θ does not (under :data:`UNLIKE_COSINE`)."
 
 UNLIKE_COSINE = 0.5
 """A column no closer than this to the model's θ is not the hub's angle."""
+
+COMMAND_STEP_COUNTS = 10
+"""Most DAC counts v's least change may span when it is written in another unit (a P law's v
+steps by kp counts: :func:`check_command_unit` tries each)."""
 
 REST_ROWS = 10
 """Fewest rows at rest before the first command the open-loop check needs."""
@@ -101,10 +119,14 @@ def check_columns(log: RunLog, skipped=None) -> Columns:
     Columns
         The log as it is when its law (the header's closed-loop law; with no header, the law
         the data give) reproduces it as named, or when no swap makes one reproduce it; else
-        the swapped copy and its claim.
+        the swapped copy and its claim; first, a command written in another unit read in
+        counts (:func:`check_command_unit`).
     """
     if len(log) < 2:
         return Columns((), log)
+    unit = check_command_unit(log, skipped)
+    if unit is not None:
+        return unit
     as_named = header_law_dv(log, skipped)
     if as_named is None:
         return _inferred_swap(log, skipped)
@@ -171,13 +193,88 @@ def _swapped_back(log: RunLog, first: str, second: str, trial: RunLog, as_named:
     return Columns((claim,), dataclasses.replace(trial, notes=list(log.notes) + [note]), identified)
 
 
+def check_command_unit(log: RunLog, skipped=None) -> Columns | None:
+    """The command's unit (DAC counts) checked by the header's law and the DAC's range
+    (module docstring).
+
+    Parameters
+    ----------
+    log : RunLog
+    skipped : array_like of bool, optional
+        As :func:`station.logged.controller.identify_controller`.
+
+    Returns
+    -------
+    Columns or None
+        The log with v (and u, where it steps by the same size: an open-loop run's command) in
+        counts and a contradicted "columns" claim, when v steps by another size than a count,
+        the header's law does not reproduce it as written and does in counts, and v as written
+        is no DAC command (under one count everywhere while the hub moved, or past the DAC's
+        ±255); else None.
+    """
+    v = np.asarray(log.data["v"], dtype=float)
+    least = None if in_counts(v) else count_step(v)
+    if least is None or header_reproduces(log, skipped) is not False:
+        return None
+    u = np.asarray(log.data["u"], dtype=float)
+    u_least = None if in_counts(u) else count_step(u)
+    steps = [least / k for k in range(1, COMMAND_STEP_COUNTS + 1)]  # v's least change may be k counts (kp·e)
+    commanded = np.isfinite(u) & (u != 0)
+    if u_least is None and np.any(commanded):  # an open-loop command in counts as u, in another unit as v
+        steps.append(float(np.median(v[commanded] / u[commanded])))
+    for step in steps:
+        if not step > 0:
+            continue
+        data = dict(log.data)
+        data["v"] = whole_counts(v / step)
+        also = u_least is not None and quantum_fits(np.array([u_least / step]), 1.0)
+        if also:
+            data["u"] = whole_counts(u / step)
+        trial = dataclasses.replace(log, data=data)
+        if not _law_confirms(trial, skipped):
+            continue
+        peak = float(np.max(np.abs(v)))
+        if peak < 1.0 and np.ptp(np.asarray(log.data["theta"], dtype=float)) > 0:
+            why = f"as written v stays under one DAC count (|v| ≤ {peak:.3g}: the device would apply 0) while the hub moved"
+        elif peak > DAC_LIMIT:
+            why = f"as written v reaches {peak:.4g}, past the DAC's ±{DAC_LIMIT:g} counts"
+        else:  # as written v could be a command too: another gain of the law as much as another unit
+            return None
+        both = "v and u" if also else "v"
+        claim = AuditClaim(
+            "columns", "v in DAC counts", f"{both} in steps of {step:.6g}", "contradicted",
+            f"every change of v is a whole multiple of {step:.6g}, not of one count; the header's law does not "
+            f"reproduce v as written and reproduces it in counts (÷ {step:.6g}), and {why}: a command written in "
+            f"another unit")
+        note = f"{both} in steps of {step:.6g} a DAC count (the audit): divided by it"
+        return Columns((claim,), dataclasses.replace(trial, notes=list(log.notes) + [note]))
+    return None
+
+
+def _law_confirms(log: RunLog, skipped) -> bool:
+    """Whether the header's law reproduces the log: as given (v = u in open loop), or, where it
+    comes within :data:`NEAR_COUNTS` (printed coefficients, a recursion the printing moves by a
+    count), a law the data give reproduces every logged v (whether that is the header's own
+    the controller's audit says after)."""
+    if header_reproduces(log, skipped):
+        return True
+    dv = header_law_dv(log, skipped)
+    if dv is None or dv > NEAR_COUNTS:
+        return False
+    try:
+        found = identify_controller(log, skipped)
+    except StationError:
+        return False
+    return found.fit is not None and found.judged_to is None and found.fit.max_abs_dv <= TOLERANCE
+
+
 def _cosine(x: np.ndarray, y: np.ndarray) -> float:
     x, y = x - x[0], y - y[0]
     den = float(np.linalg.norm(x) * np.linalg.norm(y))
     return 0.0 if den == 0.0 else abs(float(np.dot(x, y)) / den)
 
 
-def check_sensor_swap(columns: Columns, model_theta: Callable[[RunLog], np.ndarray | None]) -> Columns:
+def check_sensor_swap(columns: Columns, model_theta: ModelTheta) -> Columns:
     """θ and a of an open-loop run (v = u) checked by the sensors themselves (module docstring).
 
     Asked only where the rest before the first command says it may be (the column named θ moves

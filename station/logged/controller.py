@@ -294,6 +294,38 @@ def log_controller(log: RunLog) -> tuple[Compensator | OpenLoop | None, list[str
     return cid.controller, cid.notes
 
 
+def _header_law(log: RunLog):
+    """The law a log's header names, as given (None: no rows, a custom controller, none named,
+    or a malformed header, which :func:`identify_controller` says)."""
+    if not len(log) or _custom_controller(log) is not None:
+        return None
+    try:
+        return _named_controller(log)[0]
+    except StationError:
+        return None
+
+
+def header_reproduces(log: RunLog, skipped=None) -> bool | None:
+    """Whether the law a log's header names reproduces its logged v: v = u for an open-loop
+    header, :func:`header_law_dv` within the device's quantization for a closed-loop one; None
+    when the header names no law (or a malformed one) or the log cannot be replayed.
+
+    Parameters
+    ----------
+    log : RunLog
+    skipped : array_like of bool, optional
+        As :func:`identify_controller`.
+    """
+    controller = _header_law(log)
+    if controller is None:
+        return None
+    if not is_closed_loop(controller):
+        u, v = (np.asarray(log.data[c], dtype=float) for c in ("u", "v"))
+        return bool(np.all(np.isfinite(u)) and np.all(np.isfinite(v)) and np.max(np.abs(v - u)) <= TOLERANCE)
+    dv = header_law_dv(log, skipped)
+    return None if dv is None else dv <= TOLERANCE
+
+
 def header_law_dv(log: RunLog, skipped=None) -> float | None:
     """How near the closed-loop law a log's header names comes to its logged commands: max
     |v_replayed − v_logged| at its best alignment and recursion (:func:`variant_of`) and clamp
@@ -307,12 +339,7 @@ def header_law_dv(log: RunLog, skipped=None) -> float | None:
     skipped : array_like of bool, optional
         As :func:`identify_controller`.
     """
-    if not len(log) or _custom_controller(log) is not None:
-        return None
-    try:
-        controller, _ = _named_controller(log)
-    except StationError:
-        return None
+    controller = _header_law(log)
     data = log.data
     if (controller is None or not is_closed_loop(controller) or log.format == "rig" and abs(log.dt - DT) > 1e-9
             or not all(np.all(np.isfinite(data[c])) for c in ("u", "theta", "v"))):

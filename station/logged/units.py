@@ -6,10 +6,10 @@ its columns hold counts: θ whole encoder counts, u, v, a and θ̂d signed count
 contradict the first when t steps by another time (or by ms), θ's unit when its values are
 whole multiples of a radian's or a degree's share of one count, a's unit when it steps by whole
 multiples of another size than one count (a's reading scaled into g, m/s² or volts), and a
-column's sign when it
-holds the rig's 16-bit two's-complement words (the legacy protocol's, ``../shared/spec/
-protocol.md``) read as unsigned: a negative x written as 65536 + x. Each contradiction is
-converted, and said.
+column's sign when it holds the rig's 16-bit two's-complement words (the legacy protocol's,
+``../shared/spec/protocol.md``) read as unsigned: a negative x written as 65536 + x. Each
+contradiction is converted, and said. (The command's unit needs its law: a float P law's v
+steps by kp; :mod:`station.logged.columns` decides it.)
 """
 
 from __future__ import annotations
@@ -21,12 +21,13 @@ from typing import NamedTuple
 
 import numpy as np
 
-from station.logged.audit import AuditClaim, accel_step, in_counts, quantum_fits
+from station.logged.audit import QUANTUM_TOLERANCE, AuditClaim, count_step, in_counts, quantum_fits
 from station.rig import COUNTS_PER_REV, DT
 from station.runlog import RunLog
 
 THETA_UNITS = {"radians": 2.0 * math.pi / COUNTS_PER_REV, "degrees": 360.0 / COUNTS_PER_REV}
 """θ columns in another unit than counts, by one encoder count in that unit."""
+
 
 @dataclass(frozen=True)
 class TimeBase:
@@ -142,7 +143,7 @@ class AccelUnit(NamedTuple):
 
 def accel_unit(a) -> AccelUnit | None:
     """a's claim to be in accelerometer counts (the rig's 16-bit readings, steps of whole
-    counts), checked by the size of its steps (:func:`accel_step`).
+    counts), checked by the size of its steps (:func:`count_step`).
 
     Parameters
     ----------
@@ -159,7 +160,7 @@ def accel_unit(a) -> AccelUnit | None:
     a = np.asarray(a, dtype=float)
     if in_counts(a):
         return None
-    step = accel_step(a)
+    step = count_step(a)
     if step is None:
         changes = np.abs(np.diff(a))
         return AccelUnit(AuditClaim(
@@ -169,13 +170,24 @@ def accel_unit(a) -> AccelUnit | None:
     return AccelUnit(AuditClaim(
         "columns", ACCEL_UNIT_CLAIM, f"a in steps of {step:.6g}", "contradicted",
         f"every change of a is a whole multiple of {step:.6g}, not of one count: a count read in another unit "
-        f"({1.0 / step:.6g} counts per unit)"), _whole_counts(a / step), step)
+        f"({1.0 / step:.6g} counts per unit)"), whole_counts(a / step), step)
 
 
-def _whole_counts(x: np.ndarray) -> np.ndarray:
+def whole_counts(x: np.ndarray) -> np.ndarray:
     """``x`` (counts read back from another unit, off whole by the printing's last digits) on
-    whole counts about its common offset (the thesis's lead + accelerometer log's 0.04)."""
+    whole counts about its common offset (the thesis's lead + accelerometer log's a: 0.04).
+
+    Parameters
+    ----------
+    x : ndarray, shape (N,)
+
+    Returns
+    -------
+    ndarray, shape (N,)
+    """
     offset = float(np.median(x - np.round(x)))
+    if abs(offset) <= QUANTUM_TOLERANCE:  # the printing's last digits, not an offset
+        offset = 0.0
     return np.round(x - offset) + offset
 
 

@@ -37,7 +37,9 @@ t jumping), over a log that lost rows (one to
 three spans of 1-30 ticks while the hub moves, n and t jumping over them) or holds a span of
 rows written again (a logger that re-sent a block); "a_unit": a true header (a P, or a lead on the
 stored integer) or none over a log whose a column a script scaled into m/s², g or mV (a count
-1/1.145 m/s², 1/11.23 g or 3300/4096 mV) and printed to 7 digits. A class joined with "+" to
+1/1.145 m/s², 1/11.23 g or 3300/4096 mV) and printed to 7 digits; "v_unit": a true header (a P
+or a lead on the stored integer) over a log whose v a script wrote in volts of a ±5 V 12-bit or a
+±10 V 16-bit converter (a count 5/2048 or 10/32768 V), 7 digits. A class joined with "+" to
 "coulomb_friction" hides that friction too (drawn as :func:`tests.blind.cases.draw` draws it).
 """
 
@@ -60,7 +62,7 @@ N = 2000
 
 CLASSES = ("lie:open_loop", "lie:p_kp", "lie:lead_pole", "lie:accel_fb", "int:trunc_d0", "int:trunc_d1",
            "int:round_d0", "int:round_d1", "session", "lie:sent", "lie:accel_int", "honest:p", "honest:lead_int",
-           "honest:lead_sent", "words", "swap", "rows", "a_unit")
+           "honest:lead_sent", "words", "swap", "rows", "a_unit", "v_unit")
 """The audit's blind classes, in the validation table's order."""
 
 PHYSICAL = ("coulomb_friction",)
@@ -80,6 +82,9 @@ GA_S = ((467.22634242, 281.56096177), (1.0, 36.49022971, 172.1552844, 15.3967308
 A_UNITS = {"m/s²": 1.0 / 1.1452654922936827, "g": 1.0 / (1.1452654922936827 * 9.80665), "mV": 3300.0 / 4096}
 """One accelerometer count in the units the "a_unit" class writes a in (DESIGN.md's a_gain, counts
 per m/s²; a 3.3 V 12-bit converter's mV)."""
+
+V_UNITS = {"V of ±5 V, 12 bits": 5.0 / 2048, "V of ±10 V, 16 bits": 10.0 / 32768}
+"""One DAC count in the volts the "v_unit" class writes v in."""
 
 GA_GAINS = (0.5, 0.75, 1.0, 1.5)
 GA_FREQUENCIES = (0.7, 1.0, 1.4)
@@ -125,6 +130,8 @@ class AuditCase:
         The ticks the log's rows hold, in the order written ((): every tick once, in order).
     a_unit : str or None
         The unit a is written in (:data:`A_UNITS`), else None (counts).
+    v_unit : str or None
+        The unit v is written in (:data:`V_UNITS`), else None (counts).
     """
 
     name: str
@@ -147,6 +154,7 @@ class AuditCase:
     swap: tuple = ()
     rows: tuple = ()
     a_unit: str | None = None
+    v_unit: str | None = None
 
     @property
     def lies(self) -> bool:
@@ -244,6 +252,13 @@ def draw_case(name: str, seed: int) -> AuditCase:
         return _true_or_no_header(rng, common, p_law, lead, kp, rows=rows)
     if base == "a_unit":
         return _true_or_no_header(rng, common, p_law, lead, kp, a_unit=str(rng.choice(sorted(A_UNITS))))
+    if base == "v_unit":
+        unit = str(rng.choice(sorted(V_UNITS)))
+        if rng.random() < 0.5:
+            return AuditCase(**{**common, "header_kp": kp}, **p_law, recursion="trunc",
+                             alignment=int(rng.integers(0, 2)), header="p", v_unit=unit)
+        return AuditCase(**common, **lead, recursion=str(rng.choice(["trunc", "round"])),
+                         alignment=int(rng.integers(0, 2)), header="lead", v_unit=unit)
     if base == "words":
         if rng.random() < 0.5:
             return AuditCase(**{**common, "header_kp": kp}, **p_law, recursion="trunc",
@@ -425,6 +440,8 @@ def write_audit_case(folder: Path, name: str, seed: int) -> tuple[Path, AuditCas
         case = dataclasses.replace(case, wrapped=wrapped)
     if case.a_unit is not None:  # a script's scaling, printed to 7 digits
         sim = dataclasses.replace(sim, a=np.array([float(f"{x:.7g}") for x in sim.a * A_UNITS[case.a_unit]]))
+    if case.v_unit is not None:
+        sim = dataclasses.replace(sim, v=np.array([float(f"{x:.7g}") for x in sim.v * V_UNITS[case.v_unit]]))
     if case.swap:
         first, second = case.swap
         sim = dataclasses.replace(sim, **{first: getattr(sim, second), second: getattr(sim, first)})

@@ -1,4 +1,4 @@
-"""The a column's unit: a claim checked against its data like θ's.
+"""The a and v columns' units: claims checked against their data like θ's.
 
 The class of defect: the audit checked θ's unit (radians, degrees) and t's (ms) but took a for
 the rig's accelerometer counts on trust, and judged it with thresholds in counts (half a count
@@ -20,7 +20,7 @@ import numpy as np
 import pytest
 
 from station.logged import LoggedRun
-from station.logged.audit import ACCEL_CLAIM, accel_step, in_counts
+from station.logged.audit import ACCEL_CLAIM, count_step, in_counts
 from station.logged.sensor_evidence import sensor_evidence
 from station.plant.model import load_model
 from station.logged.units import ACCEL_UNIT_CLAIM, accel_unit
@@ -108,11 +108,11 @@ def test_the_rigs_own_a_is_in_counts(rig_data):
     (np.array([0.0, 6.0, -12.0, 0.0]), 6.0),               # whole counts of a sensor 6x the gain (in counts)
     (np.array([0.0, 0.25, 0.5, -0.75, 0.0]), 0.25),
     (np.array([3.0, 3.0, 3.0]), None),                     # never changes
-    (np.array([0.1, 0.35, 0.2, 0.9]), None),               # no common step
+    (np.array([0.0, 0.1414214, 0.3146264, 0.1732051]), None),  # no common step (√2, π, √3 tenths)
     (np.round(np.linspace(-1.0, 1.0, 50) ** 3, 6), None),  # the printing's last digit: 2e6 steps over its range
 ])
-def test_accel_step(a, step):
-    got = accel_step(a)
+def test_count_step(a, step):
+    got = count_step(a)
     assert (got is None) if step is None else got == pytest.approx(step, rel=1e-9)
 
 
@@ -138,3 +138,74 @@ def test_a_diagnosis_of_logs_with_a_in_g_is_the_rigs_own(rig_data, tmp_path):
     assert scaled.causes == clean.causes and not scaled.decided_faults
     assert scaled.extended_model.effect_dict() == pytest.approx(clean.extended_model.effect_dict(), rel=1e-9)
     assert scaled.gain_pct == pytest.approx(clean.gain_pct, abs=1e-9)
+
+
+VOLTS = {"V of a ±5 V 12-bit converter": 5.0 / 2048, "V of a ±10 V 16-bit converter": 10.0 / 32768}
+
+COMMAND_LOGS = ("OL_pulse_test_sys_check_SLFR_RTP_OL_Test_uend=0.txt",
+                "SFLR_P_control_step_kp_2_SLFR_RTP_P_control_kp=2.0.txt")
+
+
+def _rewrite_v(src, dst, scale):
+    """The rig's log with its v column (the fourth) written in another unit, 7 digits."""
+    lines = src.read_text().splitlines()
+    head = [ln for ln in lines if ln.startswith("#")]
+    rows = np.array([[float(x) for x in ln.split()] for ln in lines if ln and not ln.startswith("#")])
+    rows[:, 3] = _printed(rows[:, 3] * scale, 7)
+    dst.write_text("\n".join(head + ["\t".join(f"{x:.12g}" for x in r) for r in rows]) + "\n")
+    return dst
+
+
+@pytest.mark.parametrize("unit", VOLTS)
+@pytest.mark.parametrize("name", COMMAND_LOGS)
+def test_a_command_written_in_volts_is_read_back_in_dac_counts(rig_data, tmp_path, unit, name):
+    """v in volts (the P step's steps by 2 counts: kp·e; the pulses' by 100): the header's law
+    reproduces it in counts, and as written it stays under one DAC count while the hub moves
+    (the device would apply nothing), so it is read in counts and said (before: the P step's kp
+    'contradicted' as 0.0049 and a θ fit of -252 %; the pulses 'not this law', θ fit -64 %)."""
+    src = rig_data / name
+    path = _rewrite_v(src, tmp_path / name, VOLTS[unit])
+    run, clean = LoggedRun.from_path(path), LoggedRun.from_path(src)
+    (claim,) = [c for c in run.audit.claims if c.header == "v in DAC counts"]
+    assert claim.verdict == "contradicted" and float(claim.data.split()[-1]) == pytest.approx(VOLTS[unit], rel=1e-5)
+    assert np.array_equal(run.data["v"], clean.data["v"])
+    assert run.source == "header" and run.reproduced
+    assert replay(path).fit_pct == replay(src).fit_pct
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_a_p_header_with_another_gain_is_not_taken_for_another_unit(tmp_path, seed):
+    """The other side: v = kp'·e on the float under a header of kp = 2 also steps by a size
+    other than a count, and v/(kp'/2) would fit the header's law; the hub's motion says it is
+    another gain, as it is (the blind audit's generator, ``lie:p_kp``)."""
+    from tests.blind.audit import write_audit_case
+
+    path, hidden = write_audit_case(tmp_path, "lie:p_kp", seed)
+    run = LoggedRun.from_path(path)
+    assert not [c for c in run.audit.claims if c.header == "v in DAC counts"], hidden
+    assert run.source == "inferred (header contradicted)" and run.controller.spec["kp"] == hidden.kp
+
+
+@pytest.mark.parametrize("name", COMMAND_LOGS)
+def test_a_command_in_millivolts_within_the_dacs_range_is_left_to_the_law(rig_data, tmp_path, name):
+    """The limit, on purpose: v in mV (2.44 per count) stays within the DAC's ±255 on these runs,
+    where it could as well be another gain of the law (a P law's v scaled is another kp): not
+    read as another unit; the law found on v as written is said."""
+    path = _rewrite_v(rig_data / name, tmp_path / name, 5000.0 / 2048)
+    run = LoggedRun.from_path(path)
+    assert not [c for c in run.audit.claims if c.header == "v in DAC counts"]
+    assert run.audit.lines(), "the header's law is contradicted, as before"
+
+
+COMMANDS = np.array([0, 1, 88, 87, 85, 86, 84, 2, -1, -3, -2, 150, 149, 60, 61, 59, 0])
+"""A command in DAC counts with changes of 1-2 counts and of 60-150 (a step, a reversal)."""
+
+
+@pytest.mark.parametrize("counts, size", [
+    (COMMANDS, 10.0 / 32768),                       # 7 digits of a 16-bit converter's volts: refined on small steps
+    (COMMANDS, 5.0 / 2048),
+    (np.trunc(2.5 * np.array([0, 5, 3, 1, -1, -4, 2, 0])), 5000.0 / 2048),  # trunc(2.5 e): its least change 2 counts
+])
+def test_count_step_of_printed_commands(counts, size):
+    printed = np.array([float(f"{c * size:.7g}") for c in counts])
+    assert count_step(printed) == pytest.approx(size, rel=1e-5)
