@@ -176,3 +176,30 @@ def test_the_null_perturbation_stays_in_the_search_about_a_decided_gain():
     assert perturbed("accel_gain", {"accel_gain": 0.3}, 0.996) == pytest.approx(0.3 / 0.996)
     assert perturbed("accel_gain", {"accel_gain": -6.0}, 0.996) == pytest.approx(-6.0 * 0.996)
     assert perturbed("accel_gain", {"accel_gain": 0.01}, 0.996) == pytest.approx(0.01 / 0.996)
+
+
+@pytest.mark.parametrize("gain, bounds", [(0.2, (0.15, 0.3)), (6.0, (4.5, 9.0))])
+def test_a_gain_past_the_search_is_decided_through_a_reversed_motor(rig_data, tmp_path, nominal, gain, bounds):
+    """θ and a both reversed (the motor wired the other way) and a read at another sensitivity:
+    both decided (before: the motor alone, the gain left to the fit's 0.3-3). The rig's open-loop
+    pulses, which a reversed motor leaves as they are but for the signs of θ and a."""
+    name = THESIS[0]
+    lines = (rig_data / name).read_text().splitlines()
+    head = [ln for ln in lines if ln.startswith("#")]
+    rows = np.array([[float(x) for x in ln.split()] for ln in lines if ln and not ln.startswith("#")])
+    rows[:, 4], rows[:, 5] = -rows[:, 4], np.round(-gain * rows[:, 5])
+    path = tmp_path / name
+    path.write_text("\n".join(head + ["\t".join(f"{x:.12g}" for x in r) for r in rows]) + "\n")
+    faults = decide_faults([sensor_evidence(LoggedRun.from_path(path), nominal)])
+    assert faults.effects["motor_polarity"] == -1.0
+    assert bounds[0] <= faults.effects["accel_gain"] <= bounds[1], faults.effects
+
+
+@pytest.mark.parametrize("seed", [0, 1])
+def test_blind_reversed_motor_and_a_weak_accelerometer(tmp_path, nominal, seed):
+    """The blind generator's four runs with the motor reversed and the accelerometer at 0.2x:
+    both decided over the session, the gain within 25 %."""
+    paths = write_case(tmp_path, {"motor_polarity": -1.0, "accel_gain": 0.2}, seed)
+    faults = decide_faults([sensor_evidence(LoggedRun.from_path(p), nominal) for p in paths])
+    assert faults.effects.get("motor_polarity") == -1.0, faults.effects
+    assert 0.15 <= faults.effects.get("accel_gain", 1.0) <= 0.25, faults.effects

@@ -302,10 +302,11 @@ def decide_faults(evidence: Sequence[SensorEvidence], accel_gain: float | None =
                 scale = by_q if near else scale
             if near:
                 effects["encoder_scale"] = scale * (-1.0 if effects.get("encoder_scale", 1.0) < 0 else 1.0)
-            elif s_a > 0 and "accel_gain" not in effects and not spec.searched(own) and \
+            elif s_a * motor > 0 and "accel_gain" not in effects and not spec.searched(own) and \
                     abs(math.log(g_th)) <= math.log(MOTION_RATIO):
                 # a read at a gain beyond the fit's search (another sensitivity), θ moving as the
-                # model's up to what an effect gives: the data decide it
+                # model's up to what an effect gives (both read through a reversed motor too): the
+                # data decide it
                 _decide_gain(own, accel_gain, effects, first)
             elif q >= 2.0 / SCALE_TOLERANCE or q <= 0.5 * SCALE_TOLERANCE:
                 # θ off from a by a power of two, but the motion is off too: an encoder of another
