@@ -259,11 +259,12 @@ def test_rig_header_gain_that_is_not_a_number_names_file_and_line(tmp_path):
 
 @settings(max_examples=40, deadline=None)
 @given(order=st.integers(0, 3), d=st.integers(0, 1), seed=st.integers(0, 2**31 - 1),
-       cuts=st.lists(st.tuples(st.integers(5, 380), st.integers(1, 30)), min_size=1, max_size=3))
+       cuts=st.lists(st.tuples(st.integers(5, 360), st.integers(1, 30)), min_size=1, max_size=3))
 def test_a_law_replayed_again_from_each_jump_of_n_reproduces_the_rows_left(order, d, seed, cuts):
     # A log of a linear law (order 0..3) with spans of rows deleted: replayed again from each
     # jump of n with its memory taken as logged, it gives every row it can judge as the whole
-    # log had it (the independent truth: the whole log's own commands)
+    # log had it (the independent truth: the whole log's own commands). Every cut ends at least
+    # 10 rows before the log does: a cut at the end leaves no jump (CI drew (370, 30) of 400)
     rng = np.random.default_rng(seed)
     poles = rng.uniform(-0.9, 0.9, order)
     den = np.poly(poles) if order else np.array([1.0])

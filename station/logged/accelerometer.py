@@ -40,8 +40,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from station.logged.audit import ACCEL_CLAIM, ACCEL_SIGNAL_RATIO, AuditClaim, accel_band
+from station.plant.effects import EFFECTS
 
-ACCEL_GAIN_LEAST = 0.3
+ACCEL_GAIN_LEAST = EFFECTS["accel_gain"].lower
 """The least accelerometer gain a still channel is told from (accel_gain's magnitude where the fit
 searches it, :data:`station.plant.effects.EFFECTS`): a quieter accelerometer reads under twice
 its noise on the rig's runs and cannot be told from an unplugged one."""
