@@ -294,6 +294,24 @@ def log_controller(log: RunLog) -> tuple[Compensator | OpenLoop | None, list[str
     return cid.controller, cid.notes
 
 
+def replayable_rate(log: RunLog) -> bool:
+    """Whether a log's commands can be replayed at its own sample time: ours (the header's dt),
+    a rig log at the rig's 0.002 s, or a rig log at another rate whose n column counts every
+    tick (a loop run at that rate: its law replayed there); not a rig log at another rate with
+    n jumping or derived from t (rows kept from a 500 Hz loop: a law with memory ran on rows
+    the log lacks).
+
+    Parameters
+    ----------
+    log : RunLog
+    """
+    if log.format != "rig" or abs(log.dt - DT) <= 1e-9:
+        return True
+    n = np.asarray(log.data["n"], dtype=float)
+    own_n = not any("no sample column" in note for note in log.notes)
+    return own_n and n.size > 1 and bool(np.all(np.isfinite(n))) and bool(np.all(np.diff(n) == 1))
+
+
 def _header_law(log: RunLog):
     """The law a log's header names, as given (None: no rows, a custom controller, none named,
     or a malformed header, which :func:`identify_controller` says)."""
@@ -341,7 +359,7 @@ def header_law_dv(log: RunLog, skipped=None) -> float | None:
     """
     controller = _header_law(log)
     data = log.data
-    if (controller is None or not is_closed_loop(controller) or log.format == "rig" and abs(log.dt - DT) > 1e-9
+    if (controller is None or not is_closed_loop(controller) or not replayable_rate(log)
             or not all(np.all(np.isfinite(data[c])) for c in ("u", "theta", "v"))):
         return None
     a = np.where(np.isfinite(data["a"]), data["a"], 0.0)
@@ -411,10 +429,11 @@ def identify_controller(log: RunLog, skipped=None) -> ControllerId:
     prefer = stated_d if isinstance(stated_d, int) and not isinstance(stated_d, bool) else PREFERRED_ALIGNMENT
     said = (describe_controller(controller) if controller is not None else
             f"PID kp = {pid[0]:g}, ki = {pid[1]:g}, kd = {pid[2]:g}" if pid is not None else NOT_STATED)
-    if log.format == "rig" and abs(dt - DT) > 1e-9 and not isinstance(controller, OpenLoop):
-        notes.append(f"sampled at {dt:g} s, not the rig's {DT:g} s: closed-loop commands cannot be "
-                     f"replayed or inferred (the rig's controllers ran at {DT:g} s, on rows this log "
-                     f"lacks); the model is driven by the logged v at {dt:g} s")
+    if not replayable_rate(log) and not isinstance(controller, OpenLoop):
+        notes.append(f"sampled at {dt:g} s, not the rig's {DT:g} s, and its rows are not every tick of a loop "
+                     f"at that rate (n jumps, or no n column): closed-loop commands cannot be replayed or "
+                     f"inferred (the rig's controllers ran at {DT:g} s, on rows this log may lack); the model "
+                     f"is driven by the logged v at {dt:g} s")
         return ControllerId(None, None, notes, None, AuditClaim("controller", said, "not replayable", "unchecked",
                                                                 notes[-1]))
     missing = [name for name in ("u", "v") + (("theta",) if is_closed_loop(controller) or controller is None

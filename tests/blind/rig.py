@@ -129,10 +129,10 @@ class Controller:
     """P (kp) or lead Gth, optionally with accelerometer feedback Ga:
     theta_d_hat = u - Ga(a); e = theta_d_hat - theta; v = sat(Gth(e)) at +-LIMIT."""
 
-    def __init__(self, kind: str, kp: float = 2.0):
+    def __init__(self, kind: str, kp: float = 2.0, dt: float = DT):
         self.kind = kind
-        self.gth = Filter([kp], [1.0], LIMIT) if kind == "p" else Filter(*gth_design(), LIMIT)
-        self.ga = Filter(*ga_design()) if kind == "lead-accel" else None
+        self.gth = Filter([kp], [1.0], LIMIT) if kind == "p" else Filter(*gth_design(dt), LIMIT)
+        self.ga = Filter(*ga_design(dt)) if kind == "lead-accel" else None
 
     def step(self, u: float, theta: float, a: float) -> tuple[float, float]:
         th_d = u - (self.ga.step(a) if self.ga is not None else 0.0)
@@ -451,7 +451,8 @@ class Run:
     motor: np.ndarray = field(repr=False)
 
 
-def make_plant(effects: dict[str, float] | Effects, n_elements: int = 4, substeps: int = 100) -> tuple[Plant, float]:
+def make_plant(effects: dict[str, float] | Effects, n_elements: int = 4, substeps: int = 100,
+               dt: float = DT) -> tuple[Plant, float]:
     """The plant with the effects that act inside it, and the accelerometer gain (counts per m/s^2)."""
     eff = effects if isinstance(effects, Effects) else Effects.parse(effects)
     params = Params().scaled(eff.ratios)
@@ -461,13 +462,13 @@ def make_plant(effects: dict[str, float] | Effects, n_elements: int = 4, substep
     plant = Plant(params, n_elements, beta, friction=eff.coulomb_friction, backlash=eff.backlash,
                   substeps=substeps, static_friction=eff.static_friction, stribeck_speed=eff.stribeck_speed,
                   viscous=eff.viscous_friction, cogging=eff.cogging, cogging_cycles=eff.cogging_cycles,
-                  ground_spring=eff.position_spring)
+                  ground_spring=eff.position_spring, dt=dt)
     return plant, params.a_gain * eff.accel_gain
 
 
 def simulate(kind: str, u: np.ndarray, effects: dict[str, float], rng: np.random.Generator,
              n_elements: int = 4, substeps: int = 100, accel_noise: float = ACCEL_NOISE,
-             kp: float = 2.0, alignment: int = 1) -> Run:
+             kp: float = 2.0, alignment: int = 1, dt: float = DT) -> Run:
     """Simulate one run of the rig.
 
     Parameters
@@ -489,13 +490,16 @@ def simulate(kind: str, u: np.ndarray, effects: dict[str, float], rng: np.random
         Gain of the P controller.
     alignment : {1, 0}
         1: the command of row k from row k-1's samples (v[0] = 0); 0: from row k's own.
+    dt : float
+        Sample time, s: the loop's and the plant's (a rig run at another rate than 500 Hz; the
+        lead and Ga by Tustin at it).
     """
     if alignment not in (0, 1):
         raise ValueError(f"alignment {alignment!r}: expected 0 or 1")
     eff = Effects.parse(effects)
-    plant, a_gain = make_plant(eff, n_elements, substeps)
+    plant, a_gain = make_plant(eff, n_elements, substeps, dt)
     amp = Amplifier(eff.saturation, eff.deadzone, eff.delay, eff.amp_offset)
-    ctrl = None if kind == "open-loop" else Controller(kind, kp)
+    ctrl = None if kind == "open-loop" else Controller(kind, kp, dt)
     n = len(u)
     out = np.zeros((8, n))
     noise = rng.normal(0.0, accel_noise, n) if accel_noise > 0 else np.zeros(n)
