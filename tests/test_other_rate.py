@@ -16,7 +16,7 @@ import numpy as np
 import pytest
 
 from station.logged import LoggedRun
-from station.logged.controller import replayable_rate
+from station.logged.units import replayable_rate
 from station.replay import replay
 from tests.blind.generator import COLUMNS, COLUMNS_ACCEL, _coeffs
 from tests.blind.rig import gth_design, simulate

@@ -36,6 +36,7 @@ from station.control.rerun import ALIGNMENTS, AlignmentFit, detect_alignment, is
 from station.errors import StationError
 from station.logged.audit import AuditClaim
 from station.logged.start import start_claims
+from station.logged.units import replayable_rate
 from station.runlog.timebase import restart_rows
 from station.rig import CLAMP, DT  # the rig's clamp and sample time: its compensators ran at them
 from station.runlog import RunLog
@@ -292,24 +293,6 @@ def log_controller(log: RunLog) -> tuple[Compensator | OpenLoop | None, list[str
     """
     cid = identify_controller(log)
     return cid.controller, cid.notes
-
-
-def replayable_rate(log: RunLog) -> bool:
-    """Whether a log's commands can be replayed at its own sample time: ours (the header's dt),
-    a rig log at the rig's 0.002 s, or a rig log at another rate whose n column counts every
-    tick (a loop run at that rate: its law replayed there); not a rig log at another rate with
-    n jumping or derived from t (rows kept from a 500 Hz loop: a law with memory ran on rows
-    the log lacks).
-
-    Parameters
-    ----------
-    log : RunLog
-    """
-    if log.format != "rig" or abs(log.dt - DT) <= 1e-9:
-        return True
-    n = np.asarray(log.data["n"], dtype=float)
-    own_n = not any("no sample column" in note for note in log.notes)
-    return own_n and n.size > 1 and bool(np.all(np.isfinite(n))) and bool(np.all(np.diff(n) == 1))
 
 
 def _header_law(log: RunLog):

@@ -191,6 +191,24 @@ def whole_counts(x: np.ndarray) -> np.ndarray:
     return np.round(x - offset) + offset
 
 
+def replayable_rate(log: RunLog) -> bool:
+    """Whether a log's commands can be replayed at its own sample time: ours (the header's dt),
+    a rig log at the rig's 0.002 s, or a rig log at another rate whose n column counts every
+    tick (a loop run at that rate: its law replayed there); not a rig log at another rate with
+    n jumping or derived from t (rows kept from a 500 Hz loop: a law with memory ran on rows
+    the log lacks).
+
+    Parameters
+    ----------
+    log : RunLog
+    """
+    if log.format != "rig" or abs(log.dt - DT) <= 1e-9:
+        return True
+    n = np.asarray(log.data["n"], dtype=float)
+    own_n = not any("no sample column" in note for note in log.notes)
+    return own_n and n.size > 1 and bool(np.all(np.isfinite(n))) and bool(np.all(np.diff(n) == 1))
+
+
 HOST_STAMP_TOLERANCE = 0.005
 """How near a log's t must come, over the whole run, to one claimed sample time a row for its
 jittered steps to be a host's time stamps of the rig's ticks (0.5 %: a 4 s run ends within
