@@ -36,6 +36,7 @@ from station.errors import StationError
 from station.logged.audit import AuditClaim, count_step, in_counts, quantum_fits
 from station.logged.controller import (NO_LAW, NOT_STATED, ControllerId, header_law_dv, header_reproduces,
                                        identify_controller)
+from station.logged.sensor_evidence import cosine_ratio
 from station.logged.units import whole_counts
 from station.rig import DAC_LIMIT
 from station.runlog import RunLog
@@ -256,10 +257,12 @@ def _law_confirms(log: RunLog, skipped) -> bool:
     comes within :data:`NEAR_COUNTS` (printed coefficients, a recursion the printing moves by a
     count), a law the data give reproduces every logged v (whether that is the header's own
     the controller's audit says after)."""
-    if header_reproduces(log, skipped):
+    dv = header_law_dv(log, skipped)  # replayed once; None for an open-loop header (v = u)
+    if dv is None:
+        return bool(header_reproduces(log, skipped))
+    if dv <= TOLERANCE:
         return True
-    dv = header_law_dv(log, skipped)
-    if dv is None or dv > NEAR_COUNTS:
+    if dv > NEAR_COUNTS:
         return False
     try:
         found = identify_controller(log, skipped)
@@ -269,9 +272,9 @@ def _law_confirms(log: RunLog, skipped) -> bool:
 
 
 def _cosine(x: np.ndarray, y: np.ndarray) -> float:
-    x, y = x - x[0], y - y[0]
-    den = float(np.linalg.norm(x) * np.linalg.norm(y))
-    return 0.0 if den == 0.0 else abs(float(np.dot(x, y)) / den)
+    """|cosine| of two signals' changes from their row 0 (0 where either never changes)."""
+    cos, _ = cosine_ratio(x - x[0], y - y[0])
+    return 0.0 if cos is None else abs(cos)
 
 
 def check_sensor_swap(columns: Columns, model_theta: ModelTheta) -> Columns:

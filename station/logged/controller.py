@@ -331,7 +331,8 @@ def header_law_dv(log: RunLog, skipped=None) -> float | None:
     """How near the closed-loop law a log's header names comes to its logged commands: max
     |v_replayed − v_logged| at its best alignment and recursion (:func:`variant_of`) and clamp
     (its own, or the log's largest |v|), DAC counts; None when the header names no closed-loop
-    law, the log is sampled at another rate than the rig's, or u, θ or v are not finite. The
+    law, the log's rows are no loop's every tick (:func:`station.logged.units.replayable_rate`),
+    or u, θ or v are not finite. The
     header's coefficients as given: no law is inferred (:func:`identify_controller` does that).
 
     Parameters

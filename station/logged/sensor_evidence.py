@@ -95,7 +95,18 @@ class SensorEvidence:
     accel_shaped_ratio: float | None = None
 
 
-def _compare(measured: np.ndarray, model: np.ndarray) -> tuple[float | None, float | None]:
+def cosine_ratio(measured: np.ndarray, model: np.ndarray) -> tuple[float | None, float | None]:
+    """The cosine of two signals and the least-squares ratio of the first over the second.
+
+    Parameters
+    ----------
+    measured, model : ndarray, shape (N,)
+
+    Returns
+    -------
+    (float, float) or (None, None)
+        (None, None) when either is all zero or not finite.
+    """
     nm, ns = float(np.linalg.norm(measured)), float(np.linalg.norm(model))
     if not (nm > 0 and ns > 0 and math.isfinite(nm) and math.isfinite(ns)):
         return None, None
@@ -139,14 +150,14 @@ def sensor_evidence(run, model) -> SensorEvidence:
     theta, theta_m = np.asarray(d["theta"], float), np.asarray(pred["theta"], float)
     dm, ds = theta[h:] - theta[:-h], theta_m[h:] - theta_m[:-h]
     moving = np.abs(dm) >= MOVING_COUNTS  # a stuck hub is friction's, not the sensor's: not compared
-    th = _compare(dm[moving], ds[moving]) if np.count_nonzero(moving) >= MIN_WINDOWS else (None, None)
+    th = cosine_ratio(dm[moving], ds[moving]) if np.count_nonzero(moving) >= MIN_WINDOWS else (None, None)
     nyquist = 0.5 / dt
     a_raw = np.asarray(d["a"], float)
     if run.accel_is_tip and len(run) > 30 and ACCEL_BAND_HZ[1] < nyquist and np.all(np.isfinite(a_raw)):
         sos = butter(2, ACCEL_BAND_HZ, "bandpass", fs=1.0 / dt, output="sos")
         rest = run.accel_rest_offset
         a, a_m = a_raw - rest, np.asarray(pred["a"], float)
-        band = _compare(sosfiltfilt(sos, a), sosfiltfilt(sos, a_m))
+        band = cosine_ratio(sosfiltfilt(sos, a), sosfiltfilt(sos, a_m))
         octaves = octave_compare(a, a_m, dt)
         if band[0] is not None and octaves[0] is not None:
             t = np.arange(a.size) * dt  # the plant's drift runs from the run's first sample
@@ -187,7 +198,7 @@ def octave_compare(measured, model, dt: float) -> tuple[float | None, float | No
             break
         sos = butter(2, (lo, hi), "bandpass", fs=1.0 / dt, output="sos")
         xb, yb = sosfiltfilt(sos, x), sosfiltfilt(sos, y)
-        c = _compare(xb, yb)[0]
+        c = cosine_ratio(xb, yb)[0]
         if c is not None:
             octaves.append((c, float(xb @ yb), float(yb @ yb)))
     if not octaves:
