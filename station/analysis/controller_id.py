@@ -47,9 +47,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from station.analysis.accel_law import AccelFeedback, accel_feedback, lagged
-from station.analysis.continuous_design import (ContinuousDesign, alternatives_phrase, nicest_between, recognize,
-                                                to_continuous)
-from station.analysis.law_rows import BOUNDARY, TOLERANCE, LawRows, pins_a_law, tie_rows
+from station.analysis.continuous_design import ContinuousDesign, alternatives_phrase, to_continuous
+from station.analysis.law_rows import TOLERANCE, LawRows, pinned_law, pins_a_law, tie_rows
 from station.analysis.sent_law import sent_designs
 from station.control.compensator import SENT, STORED, recursion_words
 from station.control import DAC_LIMIT, Compensator, DiscreteTF, OpenLoop, lead_controller  # DAC_LIMIT: the clamp assumed when v exceeds the rig's ±200
@@ -370,38 +369,6 @@ def _law_text(order: int, c: np.ndarray, design: ContinuousDesign | None, dt: fl
     return text
 
 
-def _law(rows: LawRows, recursion: str, dt: float) -> tuple[np.ndarray, ContinuousDesign | None] | None:
-    """A law's coefficients (the nicest numbers that still reproduce every row), and its design."""
-    c = rows.least_squares("none") if recursion == "none" else rows.integer_fit(recursion)
-    if c is None or not (rows.reproduces(c, recursion) or tie_rows(rows, c, recursion)):
-        return None
-    order = rows.order
-    if order == 0:  # the gain with the fewest digits among those that reproduce the log
-        lo, hi = rows.gain_interval(np.ones((1, 1)), np.ones((1, 1)), recursion)
-        nice = nicest_between(float(lo[0]), float(hi[0]), 9)
-        if nice is not None and rows.reproduces(np.array([nice[0]]), recursion):
-            return np.array([nice[0]]), None
-        return c, None
-
-    def interval(num, den):
-        return rows.gain_interval(num, den, recursion, BOUNDARY)
-
-    design = recognize(c[:order + 1], np.concatenate(([1.0], c[order + 1:])), dt, interval)
-    if design is None:
-        return c, None
-    num_z, den_z = design.discretize(dt)
-    exact = np.concatenate([num_z, den_z[1:]])
-    # a row on the boundary: our discretization's last bit differs from the lab's; step
-    # towards the law deepest inside the inequalities (convex: every row keeps its side)
-    for step in [0.0] + [10.0 ** -k for k in range(13, 0, -1)]:
-        nudged = exact + step * (c - exact)
-        if rows.reproduces(nudged, recursion):
-            return nudged, design
-    if recursion != "none" and rows.reproduces(exact, recursion, BOUNDARY):
-        return exact, design  # rows on a boundary from both sides: the replay decides
-    return c, None
-
-
 def infer_controller(u, theta, v, a=None, dt: float = DT, rig_limit: float = CLAMP,
                      alignments=(0, 1), prefer: int | None = PREFERRED_ALIGNMENT,
                      cut: bool = False, restarts=()) -> IdentifiedController | None:
@@ -493,13 +460,13 @@ def _accepted(rows: LawRows, recursion: str, d: int, log, dt: float, rig_limit: 
     """The law ``rows`` hold (with the accelerometer feedback ``ga`` when given), when, run as
     the rig ran it, it reproduces the log ``(u, θ, a, v)``: to :data:`TOLERANCE`, or with rows
     on a quantization boundary only (:func:`tie_rows`); else None."""
-    found = _law(rows, recursion, dt)
+    found = pinned_law(rows, recursion, dt)
     if found is None:
         return None
     c, design = found
     if design is not None and recursion in STORED:  # a law on the other stored integer may reproduce it too
         other = next(q for q in STORED if q != recursion)
-        beside = _law(rows, other, dt)
+        beside = pinned_law(rows, other, dt)
         if beside is not None and beside[1] is not None:
             design = design.with_alternatives(beside[1], other)
     order = rows.order

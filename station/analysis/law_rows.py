@@ -1,17 +1,20 @@
 """The rows of a log as one candidate control law sees them (:class:`LawRows`): the
-regression and the linear program that fit a law's coefficients to the logged commands, and
-the rows only the lab's floating-point arithmetic decided (:func:`tie_rows`).
+regression and the linear program that fit a law's coefficients to the logged commands, the
+rows only the lab's floating-point arithmetic decided (:func:`tie_rows`), and the law the rows
+pin with its continuous design (:func:`pinned_law`).
 
 Used by :mod:`station.analysis.controller_id`; see its docstring for the laws tried.
 """
 
 from __future__ import annotations
 
+from dataclasses import replace
 from fractions import Fraction
 
 import numpy as np
 
-from station.control.rerun import judged_rows
+from station.analysis.continuous_design import ContinuousDesign, nicest_between, recognize
+from station.control.rerun import judged_rows, print_allowance, printed_commands
 
 TOLERANCE = 1e-6
 """max |v_replayed - v_logged| (DAC counts) a law must meet to be accepted."""
@@ -77,6 +80,11 @@ class LawRows:
         self.v = v[rows]
         self.order, self.limit = order, float(limit)
         self.clamped = np.abs(self.v) >= self.limit
+        printing = printed_commands(v)
+        # a float law on a printed v: the row's own printing and its history's (command_error's allowance)
+        self.printed = printing is not None
+        self.tolerance = np.full(self.v.shape, TOLERANCE) if printing is None else \
+            TOLERANCE + print_allowance(v, printing, history=True)[rows]
 
     def predict(self, c: np.ndarray, recursion: str) -> np.ndarray:
         """The commands the law gives, row by row (its history the logged v).
@@ -98,7 +106,8 @@ class LawRows:
 
     def reproduces(self, c: np.ndarray, recursion: str, slack: float = 0.0) -> bool:
         """Whether ``c`` gives every logged v: exactly for an integer recursion, to
-        :data:`TOLERANCE` for a float one.
+        :data:`TOLERANCE` for a float one (or, for a v printed to fewer digits, to its
+        printing and its history's: :func:`station.control.rerun.command_error`).
 
         Parameters
         ----------
@@ -115,7 +124,7 @@ class LawRows:
             lo, hi = self.bounds(recursion)
             return bool(np.all((x >= lo - slack) & (x <= hi + slack)))
         dv = np.abs(self.predict(c, recursion) - self.v)
-        return bool(np.all(dv == 0.0)) if recursion != "none" else bool(np.all(dv <= TOLERANCE))
+        return bool(np.all(dv == 0.0)) if recursion != "none" else bool(np.all(dv <= self.tolerance))
 
     def least_squares(self, recursion: str) -> np.ndarray | None:
         """Coefficients by least squares over the unclamped rows (for a truncated integer,
@@ -153,13 +162,8 @@ class LawRows:
             lo > hi where no gain does.
         """
         m = self.order + 1
-        if recursion == "none":
-            lo = np.where(self.clamped & (self.v > 0), self.limit, self.v - TOLERANCE)
-            hi = np.where(self.clamped & (self.v < 0), -self.limit, self.v + TOLERANCE)
-            lo = np.where(self.clamped & (self.v < 0), -np.inf, lo)
-            hi = np.where(self.clamped & (self.v > 0), np.inf, hi)
-        else:
-            lo, hi = self.bounds(recursion)
+        lo, hi = self.bounds(recursion)
+        if recursion != "none":
             lo, hi = lo - slack, hi + slack
         out_lo, out_hi = np.empty(num.shape[0]), np.empty(num.shape[0])
         for start in range(0, num.shape[0], 256):  # rows x laws at a time: bounded memory
@@ -177,13 +181,18 @@ class LawRows:
         return out_lo, out_hi
 
     def bounds(self, recursion: str) -> tuple[np.ndarray, np.ndarray]:
-        """(lo, hi) of x per row for the logged integer: Q(x) = v, or x beyond the clamp.
+        """(lo, hi) of x per row for the logged v: Q(x) = v for an integer recursion, within
+        :attr:`tolerance` of v for a float one, or x beyond the clamp.
 
         Parameters
         ----------
-        recursion : {"trunc", "round"}
+        recursion : {"none", "trunc", "round"}
         """
         v, lim = self.v, self.limit
+        if recursion == "none":
+            lo = np.where(self.clamped & (v > 0), lim, v - self.tolerance)
+            hi = np.where(self.clamped & (v < 0), -lim, v + self.tolerance)
+            return np.where(self.clamped & (v < 0), -np.inf, lo), np.where(self.clamped & (v > 0), np.inf, hi)
         if recursion == "trunc":
             lo = np.where(v > 0, v, np.where(v < 0, v - 1.0, -1.0))
             hi = np.where(v > 0, v + 1.0, np.where(v < 0, v, 1.0))
@@ -195,10 +204,11 @@ class LawRows:
         hi = np.where(v <= -lim, -lim + edge, np.where(v >= lim, np.inf, hi))
         return lo, hi
 
-    def integer_fit(self, recursion: str) -> np.ndarray | None:
-        """Coefficients deepest inside the inequalities the logged integers set (a linear
-        program: maximise the margin t with lo - BOUNDARY + t <= x <= hi + BOUNDARY - t), None
-        when there are none.
+    def deepest_fit(self, recursion: str) -> np.ndarray | None:
+        """Coefficients deepest inside the inequalities the logged v sets (:meth:`bounds`; a
+        linear program: maximise the margin t with lo - BOUNDARY + t <= x <= hi + BOUNDARY - t),
+        None when there are none: an integer recursion's law, or a float one's where least
+        squares on a v printed to few digits (:attr:`tolerance`) misses the band.
 
         The inequalities are widened by :data:`BOUNDARY`: a law with round numbers (Tustin of
         integer poles and zeros gives rational coefficients) puts some rows' x exactly on a
@@ -207,9 +217,9 @@ class LawRows:
 
         Parameters
         ----------
-        recursion : {"trunc", "round"}
+        recursion : {"none", "trunc", "round"}
         """
-        from scipy.optimize import linprog  # lazy: start-up time (scipy.optimize), loaded when an integer recursion is looked for
+        from scipy.optimize import linprog  # lazy: start-up time (scipy.optimize), loaded when an integer recursion, or a float one on a printed v, is looked for
 
         guess = self.least_squares(recursion)  # the scale of the coefficients (its bias can be several counts)
         if guess is None:
@@ -269,3 +279,77 @@ def tie_rows(rows: LawRows, c: np.ndarray, recursion: str) -> int:
     if np.any((rows.predict(c, recursion) != rows.v) & ~near):
         return 0
     return int(np.count_nonzero(near))
+
+
+SAME_MISS = 1.5
+"""An equally simple design is named beside the one nearest a printed v while its squared miss
+is within this factor of that one's (:func:`pinned_law`)."""
+
+
+def _nearest_first(rows: LawRows, design: ContinuousDesign, dt: float) -> ContinuousDesign:
+    """Of a design and its equally simple alternatives, the one nearest the printed v
+    (least squares over the unclamped rows) first: a v printed to few digits leaves them all
+    in its band, and only the true law replays to its last digit."""
+    pool = [replace(design, alternatives=(), more=0)] + [d for d in design.alternatives if not d.recursion]
+    if len(pool) < 2:
+        return design
+    keep = ~rows.clamped
+
+    def miss(d: ContinuousDesign) -> float:
+        num_z, den_z = d.discretize(dt)
+        return float(np.sum((rows.X[keep] @ np.concatenate([num_z, den_z[1:]]) - rows.v[keep]) ** 2))
+
+    ranked = sorted((miss(d), i, d) for i, d in enumerate(pool))
+    floor = ranked[0][0]
+    # kept beside it only where the log cannot tell them apart: the same print noise, its
+    # squared miss within SAME_MISS of the best's (a pole 0.05 % off misses 3x here)
+    rest = [d for m, _, d in ranked[1:] if m <= SAME_MISS * floor + 1e-12 * rows.v.size]
+    others = [d for d in design.alternatives if d.recursion]
+    return replace(ranked[0][2], alternatives=tuple(rest + others), more=design.more)
+
+
+def pinned_law(rows: LawRows, recursion: str, dt: float) -> tuple[np.ndarray, ContinuousDesign | None] | None:
+    """The law the rows pin: its coefficients (the nicest numbers that still reproduce every
+    row) and its continuous design when one is recognised
+    (:func:`station.analysis.continuous_design.recognize`); None when no law of the rows'
+    order reproduces them.
+
+    Parameters
+    ----------
+    rows : LawRows
+    recursion : {"none", "trunc", "round"}
+    dt : float
+        Sample time, s.
+    """
+    c = rows.least_squares("none") if recursion == "none" else rows.deepest_fit(recursion)
+    if recursion == "none" and c is not None and not rows.reproduces(c, recursion) and rows.printed:
+        c = rows.deepest_fit(recursion)  # a v printed to few digits: least squares' errors can leave its band
+    if c is None or not (rows.reproduces(c, recursion) or tie_rows(rows, c, recursion)):
+        return None
+    order = rows.order
+    if order == 0:  # the gain with the fewest digits among those that reproduce the log
+        lo, hi = rows.gain_interval(np.ones((1, 1)), np.ones((1, 1)), recursion)
+        nice = nicest_between(float(lo[0]), float(hi[0]), 9)
+        if nice is not None and rows.reproduces(np.array([nice[0]]), recursion):
+            return np.array([nice[0]]), None
+        return c, None
+
+    def interval(num, den):
+        return rows.gain_interval(num, den, recursion, BOUNDARY)
+
+    design = recognize(c[:order + 1], np.concatenate(([1.0], c[order + 1:])), dt, interval)
+    if design is None:
+        return c, None
+    if rows.printed and recursion == "none":
+        design = _nearest_first(rows, design, dt)
+    num_z, den_z = design.discretize(dt)
+    exact = np.concatenate([num_z, den_z[1:]])
+    # a row on the boundary: our discretization's last bit differs from the lab's; step
+    # towards the law deepest inside the inequalities (convex: every row keeps its side)
+    for step in [0.0] + [10.0 ** -k for k in range(13, 0, -1)]:
+        nudged = exact + step * (c - exact)
+        if rows.reproduces(nudged, recursion):
+            return nudged, design
+    if recursion != "none" and rows.reproduces(exact, recursion, BOUNDARY):
+        return exact, design  # rows on a boundary from both sides: the replay decides
+    return c, None

@@ -14,6 +14,7 @@ from typing import Any, NamedTuple
 import numpy as np
 
 from station.control.compensator import OpenLoop
+from station.runlog.printing import Printing, printing_of
 
 ALIGNMENTS = (0, 1)
 """Computational delays tried, samples (the rig's 2009 logs d = 0, its later logs and protocol v1 d = 1)."""
@@ -207,14 +208,113 @@ class AlignmentFit(NamedTuple):
     alignment : int
         The computational delay d, samples.
     max_abs_dv : float
-        max |v_replayed - v_logged| with it, DAC counts.
+        max |v_replayed - v_logged| with it, DAC counts, less what the log's printing of v
+        allows (:func:`command_error`; nothing for whole counts and full floats).
     v_replayed : numpy.ndarray, shape (N,)
-        The replayed commands, DAC counts.
+        The replayed commands, DAC counts (as computed).
     """
 
     alignment: int
     max_abs_dv: float
     v_replayed: np.ndarray
+
+
+_OF_V = object()  # command_error's default: v's printing decided there
+
+COMMAND_PRINT_FLOOR = 5e-7
+"""A logged v printed this finely or finer is compared as computed (half the 1e-6 counts a
+law must meet: :data:`station.analysis.law_rows.TOLERANCE`; ``%.6f``, the lab's ``%0.10g``)."""
+
+
+def printed_commands(v) -> Printing | None:
+    """How the log printed its commands, when coarser than :data:`COMMAND_PRINT_FLOOR`
+    (:func:`station.runlog.printing.printing_of`); None otherwise (whole counts, full floats,
+    the lab's ``%0.10g`` of a lead's float command).
+
+    Parameters
+    ----------
+    v : array_like, shape (N,)
+        The logged commands, DAC counts.
+    """
+    return printing_of(v, COMMAND_PRINT_FLOOR)
+
+
+PRINT_HISTORY = 8
+"""The most last-digit halves a law's value may be from a printed v when the law's history is
+the printed v too (:func:`print_allowance`): one for the row's own printing, and up to 2^3 - 1
+more through a recursion of order 3 (a stable denominator's sum of |a_j| is at most
+2^order - 1)."""
+
+
+def print_allowance(v, printing: Printing, history: bool = False) -> np.ndarray:
+    """How far a law's value may be from each printed v, DAC counts.
+
+    Parameters
+    ----------
+    v : array_like, shape (N,)
+        The logged commands.
+    printing : Printing
+        Their printing (:func:`printed_commands`).
+    history : bool
+        False: a law replayed on its own values, whose only error is the row's printing
+        (half its last digit, and a float's rounding); True: a law whose history is the
+        printed v (:class:`station.analysis.law_rows.LawRows`), :data:`PRINT_HISTORY` halves of
+        the coarsest last digit among the row and the three before it.
+
+    Returns
+    -------
+    numpy.ndarray, shape (N,)
+    """
+    v = np.asarray(v, dtype=float)
+    res = printing.resolution(v)
+    if not history:
+        return res * (1.0 + 1e-9) + 4.0 * np.finfo(float).eps * np.abs(v)
+    back = res.copy()
+    for j in range(1, 4):
+        back[j:] = np.maximum(back[j:], res[:-j])
+    return PRINT_HISTORY * back
+
+
+SEEDED_ROWS = 100
+"""Rows after a replay takes its memory from the printed v (a cut copy's first rows, a jump of
+n) over which the printed memory's error is allowed to die out (:data:`PRINT_HISTORY`)."""
+
+
+def command_error(v_replayed, v, printing=_OF_V, seeded=()) -> np.ndarray:
+    """|v_replayed - v|, less what the log's printing of v allows (:func:`printed_commands`:
+    a float command written to 6 significant digits is 183.255 where the law gives
+    183.2547182: half its last digit is allowed, :func:`print_allowance`; nothing for whole
+    counts and full floats).
+
+    Parameters
+    ----------
+    v_replayed, v : array_like, shape (N,)
+        The replayed and the logged commands, DAC counts.
+    printing : Printing or None, optional
+        v's printing when already decided (None: printed in full); by default
+        :func:`printed_commands`.
+    seeded : sequence of int
+        Rows where the replay took its memory from the printed v: for :data:`SEEDED_ROWS`
+        from each, the history's allowance (:func:`print_allowance`).
+
+    Returns
+    -------
+    numpy.ndarray, shape (N,)
+        0 where the replay is within the printing.
+    """
+    v = np.asarray(v, dtype=float)
+    err = np.abs(np.asarray(v_replayed, dtype=float) - v)
+    if printing is _OF_V:
+        printing = printed_commands(v)
+    if printing is None:
+        return err
+    allowed = print_allowance(v, printing)
+    if len(seeded):
+        near = np.zeros(v.size, dtype=bool)
+        for r in seeded:
+            near[max(int(r), 0):int(r) + SEEDED_ROWS] = True
+        allowed = np.where(near, print_allowance(v, printing, history=True), allowed)
+    return np.maximum(err - allowed, 0.0)
 
 
 def detect_alignment(controller, u, theta, a, v, alignments=ALIGNMENTS, skipped=None,
@@ -245,12 +345,14 @@ def detect_alignment(controller, u, theta, a, v, alignments=ALIGNMENTS, skipped=
         (:func:`judged_rows`) and the replayed v; unpacks as ``(d, max_abs_dv, v_replayed)``.
     """
     v = np.asarray(v, dtype=float)
+    printing = printed_commands(v)
     best = None
     for d in alignments:
         v_hat, _ = replay_commands(controller, u, theta, a, d, skipped, v, primed, restarts)
         rows_back = memory(controller)
         judged = judged_rows(v.size, d, primed, () if rows_back is None else restarts, rows_back or 0)
-        err = float(np.max(np.abs(v_hat[judged] - v[judged])))
+        seeded = (d + primed,) * bool(primed) + tuple(restarts)
+        err = float(np.max(command_error(v_hat, v, printing, seeded)[judged]))
         if best is None or err < best.max_abs_dv:
             best = AlignmentFit(d, err, v_hat)
     return best

@@ -32,11 +32,13 @@ from station.analysis.pid_law import match_pid
 from station.control import Compensator, DiscreteTF, OpenLoop, controller_from_spec, lead_controller, p_controller
 from station.control.compensator import recursion_words
 from station.control.designs import MAX_ORDER, z_problem
-from station.control.rerun import ALIGNMENTS, AlignmentFit, detect_alignment, is_closed_loop
+from station.control.rerun import (ALIGNMENTS, AlignmentFit, command_error, detect_alignment, is_closed_loop,
+                                   printed_commands)
 from station.errors import StationError
 from station.logged.audit import AuditClaim
 from station.logged.start import start_claims
 from station.logged.units import replayable_rate
+from station.runlog.printing import Printing
 from station.runlog.timebase import restart_rows
 from station.rig import CLAMP, DT  # the rig's clamp and sample time: its compensators ran at them
 from station.runlog import RunLog
@@ -264,7 +266,9 @@ def describe_controller(controller) -> str:
     return text
 
 
-def _how_close(dv: float) -> str:
+def _how_close(dv: float, printing: Printing | None = None) -> str:
+    if printing is not None:
+        return (f"to {dv:.2g} counts beyond" if dv else "to") + f" its printing ({printing.text()})"
     return "exactly" if dv == 0 else f"to {dv:.2g} counts"
 
 
@@ -406,6 +410,10 @@ def identify_controller(log: RunLog, skipped=None) -> ControllerId:
     data = log.data
     u, theta, v, a = data["u"], data["theta"], data["v"], data["a"]
     a = np.where(np.isfinite(a), a, 0.0)
+    printing = printed_commands(v)
+    if printing is not None:
+        notes.append(f"v is printed to {printing.text()} (up to {np.max(printing.resolution(v)):.2g} counts off "
+                     f"the value computed): a law is judged to that printing")
     # rows missing or repeated: a law replayed again from each jump of n, its memory as logged
     restarts = restart_rows(data["n"])
     pid = _header_pid(log)
@@ -457,7 +465,7 @@ def identify_controller(log: RunLog, skipped=None) -> ControllerId:
             pinned = not is_closed_loop(used) or pins_a_law(v)
             return ControllerId(used, "header", notes, fit, AuditClaim(
                 "controller", said, describe_controller(used) + at, "confirmed" if pinned else "unchecked",
-                f"replays every logged v {_how_close(fit.max_abs_dv)}{at}" + (
+                f"replays every logged v {_how_close(fit.max_abs_dv, printing)}{at}" + (
                     "" if pinned else f"; but v is only 0 and ±{np.max(np.abs(v)):g}, which any law of high gain "
                                       f"gives at that clamp: the data cannot confirm this one")), exact, cut=cut)
         header_dv = fit.max_abs_dv
@@ -477,7 +485,7 @@ def identify_controller(log: RunLog, skipped=None) -> ControllerId:
     if hit is not None:
         fit = AlignmentFit(hit.alignment, hit.max_abs_dv, hit.v_replayed)
         at = f" at alignment {hit.alignment}" if is_closed_loop(hit.controller) else ""
-        data_says = f"{hit.law}{at}, reproduces every logged v {_how_close(hit.max_abs_dv)}"
+        data_says = f"{hit.law}{at}, reproduces every logged v {_how_close(hit.max_abs_dv, printing)}"
         if controller is not None and same_law(controller, hit.controller):
             # what the header states holds; the data complete what it does not (the clamp,
             # the recursion on the stored integer, coefficients past their printed digits)
@@ -487,16 +495,16 @@ def identify_controller(log: RunLog, skipped=None) -> ControllerId:
                 "controller", said, data_says, "confirmed",
                 f"the data's law has the header's coefficients (to {SAME_LAW_RTOL:g} relative); as printed it "
                 f"replays v to max |dv| = {header_dv:.3g} counts, completed from the data "
-                f"{_how_close(hit.max_abs_dv)}{at}"), hit.alignments, cut=cut)
+                f"{_how_close(hit.max_abs_dv, printing)}{at}"), hit.alignments, cut=cut)
         if stated:
             notes.append(f"the header's controller ({said}) does not reproduce the logged v (max |dv| = "
                          f"{header_dv:.3g} counts); the data's is used: {data_says}")
             return ControllerId(hit.controller, "inferred (header contradicted)", notes, fit, AuditClaim(
                 "controller", said, data_says, "contradicted",
                 f"the header's controller replays v to max |dv| = {header_dv:.3g} counts at best; the data's law "
-                f"reproduces every logged v {_how_close(hit.max_abs_dv)}{at}"), hit.alignments, cut=cut)
+                f"reproduces every logged v {_how_close(hit.max_abs_dv, printing)}{at}"), hit.alignments, cut=cut)
         notes.append(f"controller inferred from the data: {hit.law}, alignment {hit.alignment} "
-                     f"(reproduces the logged v {_how_close(hit.max_abs_dv)})")
+                     f"(reproduces the logged v {_how_close(hit.max_abs_dv, printing)})")
         return ControllerId(hit.controller, "inferred", notes, fit, AuditClaim(
             "controller", said, data_says, "unchecked", "the log names no controller; inferred from the data"),
             hit.alignments, cut=cut)
@@ -539,7 +547,7 @@ def _miss_at_gap(controller, u, theta, a, v, n, skipped) -> tuple[int, Alignment
     gaps = np.flatnonzero(np.diff(n) != 1) + 1
     for d in ALIGNMENTS if gaps.size else ():
         fit = detect_alignment(controller, u, theta, a, v, (d,), skipped)
-        miss = np.flatnonzero(np.abs(np.asarray(fit.v_replayed, float) - np.asarray(v, float)) > TOLERANCE)
+        miss = np.flatnonzero(command_error(fit.v_replayed, v) > TOLERANCE)
         near = gaps[(miss[0] >= gaps) & (miss[0] <= gaps + d)] if miss.size else gaps[:0]
         if near.size:
             return int(near[0]), fit
