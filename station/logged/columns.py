@@ -4,8 +4,9 @@ A log's column line is a claim too (DESIGN.md "Log audit": the columns' units an
 so their names): a lab script that wrote its columns in another order than it named them
 gives a log whose header names the right law and whose "v" is not that law's output. When
 the header's closed-loop law reproduces no logged v as the columns are named but every one
-with two columns swapped (u and v, θ and a), the data say which column is which: the claim is
-contradicted, said first, and the log is read with the columns swapped. The law is the
+with two columns swapped (u and v, θ and a), or with θ negated (a script that wrote the
+loop's angle with the other sign), the data say which column is which: the claim is
+contradicted, said first, and the log is read with the columns swapped or θ negated. The law is the
 header's own (as given, at its clamp or the log's, or completed from the data where it comes
 within :data:`NEAR_COUNTS`); a log with no header is checked the same way against the law
 inferred from its data, tried on the swaps only when none is found as the columns are named.
@@ -31,7 +32,8 @@ from typing import NamedTuple
 
 import numpy as np
 
-from station.analysis.law_rows import TOLERANCE
+from station.analysis.law_rows import TOLERANCE, pins_a_law
+from station.control import OpenLoop
 from station.errors import StationError
 from station.logged.audit import AuditClaim, count_step, in_counts, quantum_fits
 from station.logged.controller import (NO_LAW, NOT_STATED, ControllerId, header_law_dv, header_reproduces,
@@ -47,6 +49,10 @@ counts, shape (N,)), None when the log cannot be simulated (``LoggedRun``'s ``_n
 
 SWAPS = (("u", "v"), ("theta", "a"))
 """Column pairs a swap is tried for: the reference and the command, the two sensors."""
+
+TRIALS = SWAPS + (("theta",),)
+"""What a closed-loop law is tried on when it reproduces no v as the columns are named: each
+swap, and θ negated (a script that wrote the loop's angle with the other sign)."""
 
 SWAP_COSINE = 0.9
 """An open-loop run's θ and a are read swapped when the column named a follows the nominal
@@ -105,6 +111,21 @@ def swapped(log: RunLog, first: str, second: str) -> RunLog:
     return dataclasses.replace(log, data=data)
 
 
+def rewritten(log: RunLog, columns: tuple[str, ...]) -> RunLog:
+    """A copy of ``log`` with a pair of :data:`TRIALS` swapped, or its one column negated.
+
+    Parameters
+    ----------
+    log : RunLog
+    columns : tuple of str
+        Two standard column names to exchange, or one to negate.
+    """
+    if len(columns) == 2:
+        return swapped(log, *columns)
+    (name,) = columns
+    return dataclasses.replace(log, data={**log.data, name: -np.asarray(log.data[name], dtype=float)})
+
+
 def check_columns(log: RunLog, skipped=None) -> Columns:
     """Check the column line against the header's closed-loop law, or with no header against
     the law the data give (:data:`SWAPS`).
@@ -134,13 +155,15 @@ def check_columns(log: RunLog, skipped=None) -> Columns:
     if as_named <= TOLERANCE:
         return Columns((), log)
     trials = []
-    for first, second in SWAPS:  # the header's law as given
-        trial = swapped(log, first, second)
+    for columns in TRIALS:  # the header's law as given
+        trial = rewritten(log, columns)
+        if not pins_a_law(trial.data["v"]):  # a step column for v: any law of high gain at its clamp gives it
+            continue
         dv = header_law_dv(trial, skipped)
         if dv is not None and dv <= TOLERANCE:
-            return _swapped_back(log, first, second, trial, as_named, f"to {dv:.2g}")
+            return _swapped_back(log, columns, trial, as_named, f"to {dv:.2g}")
         if dv is not None and dv <= NEAR_COUNTS < as_named:
-            trials.append((first, second, trial))
+            trials.append((columns, trial))
     if not trials:
         return Columns((), log)
     # completed from the data (printed coefficients, a recursion the printing moves by a count)
@@ -150,47 +173,57 @@ def check_columns(log: RunLog, skipped=None) -> Columns:
         return Columns((), log)
     if cid.claim is None or cid.claim.verdict != "contradicted":
         return Columns((), log, cid)
-    for first, second, trial in trials:
+    for columns, trial in trials:
         try:
             found = identify_controller(trial, skipped)
         except StationError:
             continue
         if found.claim is not None and found.claim.verdict == "confirmed":
-            return _swapped_back(log, first, second, trial, as_named, f"completed from the data ({found.claim.data})",
+            return _swapped_back(log, columns, trial, as_named, f"completed from the data ({found.claim.data})",
                                  found)
     return Columns((), log, cid)
 
 
 def _inferred_swap(log: RunLog, skipped) -> Columns:
-    """A log that names no controller: when no law reproduces it as its columns are named
-    and one does with two of them exchanged, that swap (the law inferred on it)."""
+    """A log that names no controller, or open loop: when no law reproduces it as its columns
+    are named and one does with two of them exchanged, that swap (the law inferred on it)."""
     try:
         cid = identify_controller(log, skipped)
     except StationError:  # said where the controller is asked for (LoggedRun.identified)
         return Columns((), log)
-    if cid.controller is not None or cid.claim is None or cid.claim.header != NOT_STATED \
-            or cid.claim.data != NO_LAW:
+    # no header, or an open-loop one (v = u) that no law found in the data replaces
+    said_none = cid.controller is None and cid.claim is not None and cid.claim.header == NOT_STATED
+    said_open = isinstance(cid.controller, OpenLoop) and cid.source == "header"
+    if cid.claim is None or not cid.claim.data.endswith(NO_LAW) or not (said_none or said_open):
         return Columns((), log, cid)
-    for first, second in SWAPS:
-        trial = swapped(log, first, second)
+    for columns in TRIALS:
+        trial = rewritten(log, columns)
         try:
             found = identify_controller(trial, skipped)
         except StationError:
             continue
-        if found.controller is not None and found.source == "inferred" and found.fit is not None:
-            return _swapped_back(log, first, second, trial, None, f"{found.claim.data}", found)
+        if found.controller is not None and found.source in ("inferred", "inferred (header contradicted)") \
+                and found.fit is not None:
+            return _swapped_back(log, columns, trial, None, f"{found.claim.data}", found)
     return Columns((), log, cid)
 
 
-def _swapped_back(log: RunLog, first: str, second: str, trial: RunLog, as_named: float | None, how: str,
+def _swapped_back(log: RunLog, columns: tuple[str, ...], trial: RunLog, as_named: float | None, how: str,
                   identified: ControllerId | None = None) -> Columns:
-    a, b = SHOWN[first], SHOWN[second]
     said = ("no law reproduces v as the columns are named" if as_named is None else
             f"the header's law replays v to max |dv| = {as_named:.3g} counts as the columns are named")
-    claim = AuditClaim(
-        "columns", f"{a} and {b} as the column line names them", f"{a} and {b} swapped", "contradicted",
-        f"{said}, and {how} with the columns named {a} and {b} exchanged")
-    note = f"the columns named {a} and {b} hold {b} and {a} (the audit): read swapped"
+    if len(columns) == 2:
+        a, b = SHOWN[columns[0]], SHOWN[columns[1]]
+        claim = AuditClaim(
+            "columns", f"{a} and {b} as the column line names them", f"{a} and {b} swapped", "contradicted",
+            f"{said}, and {how} with the columns named {a} and {b} exchanged")
+        note = f"the columns named {a} and {b} hold {b} and {a} (the audit): read swapped"
+    else:
+        a = SHOWN[columns[0]]
+        claim = AuditClaim(
+            "columns", f"{a} with the sign the loop fed back", f"{a} written with the other sign", "contradicted",
+            f"{said}, and {how} with {a} negated: the column holds -{a}")
+        note = f"the column named {a} holds -{a} (the audit): read negated"
     return Columns((claim,), dataclasses.replace(trial, notes=list(log.notes) + [note]), identified)
 
 
@@ -217,6 +250,13 @@ def check_command_unit(log: RunLog, skipped=None) -> Columns | None:
     least = None if in_counts(v) else count_step(v)
     if least is None or header_reproduces(log, skipped) is not False:
         return None
+    peak = float(np.max(np.abs(v)))
+    if peak < 1.0 and np.ptp(np.asarray(log.data["theta"], dtype=float)) > 0:
+        why = f"as written v stays under one DAC count (|v| ≤ {peak:.3g}: the device would apply 0) while the hub moved"
+    elif peak > DAC_LIMIT:
+        why = f"as written v reaches {peak:.4g}, past the DAC's ±{DAC_LIMIT:g} counts"
+    else:  # as written v could be a command too: another gain of the law as much as another unit
+        return None
     u = np.asarray(log.data["u"], dtype=float)
     u_least = None if in_counts(u) else count_step(u)
     steps = [least / k for k in range(1, COMMAND_STEP_COUNTS + 1)]  # v's least change may be k counts (kp·e)
@@ -234,19 +274,16 @@ def check_command_unit(log: RunLog, skipped=None) -> Columns | None:
         trial = dataclasses.replace(log, data=data)
         if not _law_confirms(trial, skipped):
             continue
-        peak = float(np.max(np.abs(v)))
-        if peak < 1.0 and np.ptp(np.asarray(log.data["theta"], dtype=float)) > 0:
-            why = f"as written v stays under one DAC count (|v| ≤ {peak:.3g}: the device would apply 0) while the hub moved"
-        elif peak > DAC_LIMIT:
-            why = f"as written v reaches {peak:.4g}, past the DAC's ±{DAC_LIMIT:g} counts"
-        else:  # as written v could be a command too: another gain of the law as much as another unit
-            return None
         both = "v and u" if also else "v"
+        law = (f"the header's law does not reproduce v as written and reproduces it in counts (÷ {step:.6g})"
+               if header_law_dv(log, skipped) is not None else
+               f"the header's open loop (v = u) reproduces neither, and the law the data give reproduces v in counts "
+               f"(÷ {step:.6g}; with no law named, its gain and v's unit are one: gain k·g on steps of "
+               f"{step:.6g}/k gives the same v, and the largest step is taken)")
         claim = AuditClaim(
             "columns", "v in DAC counts", f"{both} in steps of {step:.6g}", "contradicted",
-            f"every change of v is a whole multiple of {step:.6g}, not of one count; the header's law does not "
-            f"reproduce v as written and reproduces it in counts (÷ {step:.6g}), and {why}: a command written in "
-            f"another unit")
+            f"every change of v is a whole multiple of {step:.6g}, not of one count; {law}, and {why}: a command "
+            f"written in another unit")
         note = f"{both} in steps of {step:.6g} a DAC count (the audit): divided by it"
         return Columns((claim,), dataclasses.replace(trial, notes=list(log.notes) + [note]))
     return None
@@ -255,14 +292,17 @@ def check_command_unit(log: RunLog, skipped=None) -> Columns | None:
 def _law_confirms(log: RunLog, skipped) -> bool:
     """Whether the header's law reproduces the log: as given (v = u in open loop), or, where it
     comes within :data:`NEAR_COUNTS` (printed coefficients, a recursion the printing moves by a
-    count), a law the data give reproduces every logged v (whether that is the header's own
-    the controller's audit says after)."""
+    count) or is an open-loop header's v = u that does not, a law the data give reproduces
+    every logged v (whether that is the header's own the controller's audit says after)."""
     dv = header_law_dv(log, skipped)  # replayed once; None for an open-loop header (v = u)
     if dv is None:
-        return bool(header_reproduces(log, skipped))
-    if dv <= TOLERANCE:
+        said = header_reproduces(log, skipped)
+        if said is not False:
+            return bool(said)
+        # an open-loop header v = u does not: the law the data give, as for a lying header
+    elif dv <= TOLERANCE:
         return True
-    if dv > NEAR_COUNTS:
+    elif dv > NEAR_COUNTS:
         return False
     try:
         found = identify_controller(log, skipped)

@@ -227,6 +227,16 @@ def _host_stamps(t: np.ndarray, claimed: float) -> float | None:
     return float(mean) if jitter and whole and abs(mean / claimed - 1.0) <= HOST_STAMP_TOLERANCE else None
 
 
+def _in_unit(u: np.ndarray, theta_counts: np.ndarray, q: float) -> bool:
+    """Whether a reference u that is not whole counts is in θ's unit ``q`` rather than in
+    counts: its span so converted is nearer θ's in counts (θ follows u in a closed loop; a
+    command written in u's place, such as a lead's float v, is in counts already)."""
+    su, st = float(np.ptp(u)), float(np.ptp(theta_counts))
+    if su == 0.0 or st == 0.0:
+        return True
+    return abs(math.log(su / q / st)) < abs(math.log(su / st))
+
+
 def time_base(log: RunLog) -> TimeBase:
     """Check a log's sample time (our header's ``dt``, else the rig's 0.002 s with t in s)
     against its t column, its θ column's unit (encoder counts) against θ's quantization, and
@@ -313,7 +323,7 @@ def time_base(log: RunLog) -> TimeBase:
                 changes["theta"] = np.round(theta / q)
                 u = np.asarray(changes.get("u", data["u"]), dtype=float)
                 also = ""
-                if u.size and np.all(np.isfinite(u)) and not _whole(u):
+                if u.size and np.all(np.isfinite(u)) and not _whole(u) and _in_unit(u, changes["theta"], q):
                     changes["u"] = u / q
                     also = "; u, not whole counts, taken in the same unit"
                 claims.append(AuditClaim("columns", "θ in encoder counts", f"θ in {unit}", "contradicted",

@@ -1,0 +1,117 @@
+"""Column faults found under a header that lies, and θ written with the other sign.
+
+The audit found each column fault under a true header (a swap, v in volts) and each lying
+header over true columns; two at once were left standing. The rig's own logs, rewritten by
+a script written from the format, with the fault a lab script could make, and the blind
+generator's ``sign`` and ``double`` classes (its own FEM, lab controller and writer).
+Before: θ negated under a true P header gave a false "u and v swapped" and a θ fit of
+−312 %; the thesis's lead under an open-loop header with u and v swapped, "no law found"
+and −6348 %; the lab's session step with v in volts, "no law found" and −406 % (its v steps
+by one count: the unit is decided; a P step's v steps by kp counts, and with no law named
+its gain and v's unit are one).
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+from station.logged import LoggedRun
+from station.plant import load_model
+from tests.blind.audit import write_audit_case
+
+P = "SFLR_P_control_step_kp_2_SLFR_RTP_P_control_kp=2.0.txt"
+LEAD = "step_response_Gth_comp_no_accel_FB_amp_100_duration_1000_SLFR_RTP_Motor_Comp_Gth.txt"
+OPEN_LOOP = ["#SLFR RTP OL_Test"]
+
+
+def _rewrite(src: Path, dst: Path, header=None, negate=False, swap=False, volts=None) -> Path:
+    """The log with its header replaced (the column line kept), θ negated, u and v swapped, or v
+    written in volts of ``volts`` per count (7 digits), every other field as it was."""
+    lines = src.read_text().splitlines()
+    head = [ln for ln in lines if ln.startswith("#")]
+    out = []
+    for ln in lines:
+        if not ln.strip() or ln.startswith("#"):
+            continue
+        f = ln.split()
+        if negate:
+            f[4] = f"{-float(f[4]):g}"
+        if swap:
+            f[2], f[3] = f[3], f[2]
+        if volts is not None:
+            f[3] = f"{float(f[3]) * volts:.7g}"
+        out.append("\t".join(f))
+    dst.write_text("\n".join((head if header is None else header + head[-1:]) + out) + "\n")
+    return dst
+
+
+def _said(run: LoggedRun) -> set[str]:
+    return {c.data for c in run.audit.claims if c.verdict == "contradicted" and c.claim == "columns"}
+
+
+@pytest.mark.parametrize("name, header", [(P, None), (LEAD, None), (P, OPEN_LOOP), (LEAD, OPEN_LOOP)])
+def test_theta_written_negated_is_read_back(rig_data, tmp_path, name, header):
+    clean = LoggedRun.from_path(rig_data / name)
+    run = LoggedRun.from_path(_rewrite(rig_data / name, tmp_path / "neg.txt", header, negate=True))
+    assert _said(run) == {"θ written with the other sign"}
+    assert run.reproduced and run.source == ("header" if header is None else "inferred (header contradicted)")
+    model = load_model("tmm-fit")
+    assert run.simulate(model).fit_pct["theta"] == pytest.approx(clean.simulate(model).fit_pct["theta"], abs=0.05)
+    # the sensors then see the encoder as the model's: no encoder reversal claimed on top
+    assert "encoder_scale" not in run.sensors.effects and "motor_polarity" not in run.sensors.effects
+
+
+@pytest.mark.parametrize("name", [P, LEAD])
+def test_a_true_log_is_never_read_negated_or_swapped(rig_data, name):
+    assert not _said(LoggedRun.from_path(rig_data / name))
+
+
+def test_the_thesis_lead_under_an_open_loop_header_with_u_and_v_swapped(rig_data, tmp_path):
+    run = LoggedRun.from_path(_rewrite(rig_data / LEAD, tmp_path / "ol_swap.txt", OPEN_LOOP, swap=True))
+    assert _said(run) == {"u and v swapped"}
+    assert run.source == "inferred (header contradicted)" and run.reproduced
+    assert run.controller.spec["design"]["text"] == "20(s+2π·5)/(s+2π·20)"
+
+
+def test_a_p_step_with_theta_negated_is_not_a_swap(rig_data, tmp_path):
+    # with u and v swapped back, v is the 0/50 step: any law of high gain at a ±50 clamp gives it
+    run = LoggedRun.from_path(_rewrite(rig_data / P, tmp_path / "neg.txt", negate=True))
+    assert "u and v swapped" not in _said(run)
+
+
+@pytest.mark.parametrize("volts", [5 / 2048, 10 / 32768])
+def test_the_thesis_p_step_in_volts_under_an_open_loop_header(rig_data, tmp_path, volts):
+    clean = LoggedRun.from_path(rig_data / P)
+    run = LoggedRun.from_path(_rewrite(rig_data / P, tmp_path / "volts.txt", OPEN_LOOP, volts=volts))
+    (said,) = _said(run)
+    step = float(said.split()[-1])
+    claim = next(c for c in run.audit.claims if c.data == said)
+    assert "the header's open loop (v = u) reproduces neither" in claim.evidence
+    assert run.source == "inferred (header contradicted)" and run.reproduced
+    # a P law's v scaled is another kp: with no law named only the law in volts is decided
+    # (kp 2 on steps of one count, or kp 1 on steps of two: the largest step is taken)
+    assert step == pytest.approx(2 * volts, rel=1e-3) and run.controller.spec["kp"] == 1.0
+    assert run.controller.spec["kp"] * step == pytest.approx(2.0 * volts, rel=1e-3)
+
+
+# seeds that draw each header (sign: none, open loop, P, lead) and each fault beside the
+# session's lie (double: u/v swap, v in volts, printed to 5 digits); all ten of each in
+# scripts/validate_audit.py
+@pytest.mark.parametrize("case, seed", [("sign", s) for s in (0, 2, 4, 9)] + [("double", s) for s in (0, 2, 7)])
+def test_blind_sign_and_double_faults(tmp_path, case, seed):
+    path, hidden = write_audit_case(tmp_path, case, seed)
+    run = LoggedRun.from_path(path)
+    controller = next(c for c in run.audit.claims if c.claim == "controller")
+    assert (controller.verdict == "contradicted") is hidden.lies
+    assert run.reproduced and run.alignment == hidden.alignment
+    said = _said(run)
+    if hidden.negate:
+        assert said == {"θ written with the other sign"}
+    elif hidden.swap:
+        assert said == {"u and v swapped"}
+    elif hidden.v_unit is not None:
+        assert len(said) == 1 and next(iter(said)).startswith("v in steps of")
+    else:  # printed to few digits: judged to its printing, no column contradicted
+        assert not said
