@@ -12,9 +12,13 @@ samples; ``station.logged.LoggedRun`` sees only the file. Judged per case:
   two columns written in each other's place (``swap``) are said swapped, and no others;
   rows lost or written again (``rows``) are said (n jumps), and in no other class; an a column
   written in another unit (``a_unit``) is said, its count's size to 0.1 %, and in no other class;
-  so is a v column written in volts (``v_unit``);
+  so is a v column written in volts (``v_unit``); a lead's float command printed to 5 or 6
+  significant digits (``printed``) is contradicted only under its open-loop header; θ written
+  with the other sign (``sign``) is said, and in no other class; the session's lie with one of
+  those column faults beside it (``double``) is contradicted and the fault said;
 - reproduced: the controller used reproduces every logged v to the device's quantization
-  (1e-6 counts, the logged integer exactly for an integer recursion) at the hidden alignment;
+  (1e-6 counts, the logged integer exactly for an integer recursion, half the last printed
+  digit for a v printed to fewer digits) at the hidden alignment;
 - design: the law the data gave is the hidden one: the continuous design (num/den in s, to
   1e-9, Tustin) of a lead, the gain of a P law (not judged where the header's law is
   confirmed: the header's own coefficients are used).
@@ -123,6 +127,9 @@ def run_case(case: str, seed: int) -> Outcome:
     swaps = {c.data for c in audit.claims if c.claim == "columns" and c.data.endswith(" swapped")}
     contradiction_ok = contradiction_ok and swaps == ({f"{shown[hidden.swap[0]]} and {shown[hidden.swap[1]]} swapped"}
                                                       if hidden.swap else set())
+    # θ written with the other sign than the loop fed back: said, and never where it is not
+    signs = {c.data for c in audit.claims if c.claim == "columns" and c.data.endswith("written with the other sign")}
+    contradiction_ok = contradiction_ok and signs == ({"θ written with the other sign"} if hidden.negate else set())
     # a written in another unit: its count's size found (to 0.1 %), and never where a is in counts
     units = [c.data for c in audit.claims if c.claim == "columns" and c.data.startswith("a in steps of")]
     step = A_UNITS.get(hidden.a_unit) if hidden.a_unit else None
@@ -192,7 +199,7 @@ def table(outcomes: list[Outcome], seeds: str, elapsed: float) -> str:
         "header (the 2014 layout); `session`: the lab's third session (open-loop header, a lead on the "
         "truncated integer at alignment 0); `lie:sent`: an open-loop header on a lead whose recursion runs on the "
         "float while the whole count it sends is logged; `lie:accel_int`: an open-loop header on a lead with "
-        "DESIGN.md's Ga as it stands, the command stored or sent as a whole count; `words`: a true header (P, or a lead on the stored integer) over columns the lab's client read from the legacy protocol's 16-bit two's-complement words as unsigned (a negative x written as 65536 + x; each such column must be contradicted, and no column of any other class); `swap`: a true header (P, or a lead on the stored integer) or none (the 2014 layout) over columns u and v, or θ and a, written in each other's place (the swap must be said, and none in any other class); `rows`: a true header (P, or a lead on the stored integer) or none (the 2014 layout, where t jumps) over a log that lost one to three spans of 1–30 rows while the hub moves, or holds a block of rows written again (n jumps must be said, and in no other class, and the law reproduce every row it can judge: replayed again from each jump with its memory as logged); `a_unit`: a true header (P, or a lead on the stored integer) or none over a log whose a a script scaled into m/s², g or mV and printed to 7 digits (a's unit must be said, its count's size to 0.1 %, and in no other class); `v_unit`: a true header (P, or a lead on the stored integer) over a log whose v a script wrote in volts of a ±5 V 12-bit or ±10 V 16-bit converter, 7 digits (said as a's, and the law then confirmed; a command in mV within the DAC's range is another gain as much as another unit and is not drawn); `honest:*`: true headers (P, or a lead on the stored integer, or "
+        "DESIGN.md's Ga as it stands, the command stored or sent as a whole count; `words`: a true header (P, or a lead on the stored integer) over columns the lab's client read from the legacy protocol's 16-bit two's-complement words as unsigned (a negative x written as 65536 + x; each such column must be contradicted, and no column of any other class); `swap`: a true header (P, or a lead on the stored integer) or none (the 2014 layout) over columns u and v, or θ and a, written in each other's place (the swap must be said, and none in any other class); `rows`: a true header (P, or a lead on the stored integer) or none (the 2014 layout, where t jumps) over a log that lost one to three spans of 1–30 rows while the hub moves, or holds a block of rows written again (n jumps must be said, and in no other class, and the law reproduce every row it can judge: replayed again from each jump with its memory as logged); `a_unit`: a true header (P, or a lead on the stored integer) or none over a log whose a a script scaled into m/s², g or mV and printed to 7 digits (a's unit must be said, its count's size to 0.1 %, and in no other class); `v_unit`: a true header (P, or a lead on the stored integer) over a log whose v a script wrote in volts of a ±5 V 12-bit or ±10 V 16-bit converter, 7 digits (said as a's, and the law then confirmed; a command in mV within the DAC's range is another gain as much as another unit and is not drawn); `printed`: a lead on the float command under its true header or an open-loop one, every number printed to 5 significant digits (MATLAB's csvwrite) or 6 (C's %g): the law judged to that printing, confirmed or inferred, and no column contradicted; `sign`: θ written with the other sign than the loop fed back, under a true header (P, or a lead on the stored integer), none, or an open-loop one (said, and in no other class); `double`: the lab's session (an open-loop header on a lead on the truncated integer) with one column fault beside it — v in volts, θ negated, u and v swapped, or (on the float) every number printed to 5 or 6 digits — the lie contradicted, the law inferred and the fault said; `honest:*`: true headers (P, or a lead on the stored integer, or "
         "`honest:lead_sent` a lead on the float logging the whole count it sends) the audit must confirm. `+coulomb_friction`: beside a hidden Coulomb friction of 3–30 DAC counts.",
         "",
         "Bar (issue 26): in at least 9 of 10 seeds, a lying header contradicted (and a true or absent one not), "

@@ -39,7 +39,12 @@ rows written again (a logger that re-sent a block); "a_unit": a true header (a P
 stored integer) or none over a log whose a column a script scaled into m/s², g or mV (a count
 1/1.145 m/s², 1/11.23 g or 3300/4096 mV) and printed to 7 digits; "v_unit": a true header (a P
 or a lead on the stored integer) over a log whose v a script wrote in volts of a ±5 V 12-bit or a
-±10 V 16-bit converter (a count 5/2048 or 10/32768 V), 7 digits. A class joined with "+" to
+±10 V 16-bit converter (a count 5/2048 or 10/32768 V), 7 digits; "printed": a lead on the float
+command under its true header or an open-loop one, every number printed to 5 significant digits
+(MATLAB's csvwrite) or 6 (C's %g); "sign": θ written with the other sign than the loop fed back,
+under a true header, none or an open-loop one; "double": the lab's session (an open-loop header
+on a lead on the truncated integer) with one column fault beside it (v in volts, θ negated, u
+and v swapped, or, on the float, every number printed to 5 or 6 digits). A class joined with "+" to
 "coulomb_friction" hides that friction too (drawn as :func:`tests.blind.cases.draw` draws it).
 """
 
@@ -62,7 +67,7 @@ N = 2000
 
 CLASSES = ("lie:open_loop", "lie:p_kp", "lie:lead_pole", "lie:accel_fb", "int:trunc_d0", "int:trunc_d1",
            "int:round_d0", "int:round_d1", "session", "lie:sent", "lie:accel_int", "honest:p", "honest:lead_int",
-           "honest:lead_sent", "words", "swap", "rows", "a_unit", "v_unit")
+           "honest:lead_sent", "words", "swap", "rows", "a_unit", "v_unit", "printed", "sign", "double")
 """The audit's blind classes, in the validation table's order."""
 
 PHYSICAL = ("coulomb_friction",)
@@ -132,6 +137,10 @@ class AuditCase:
         The unit a is written in (:data:`A_UNITS`), else None (counts).
     v_unit : str or None
         The unit v is written in (:data:`V_UNITS`), else None (counts).
+    digits : int or None
+        The significant digits every number is printed to ("printed"), else None (in full).
+    negate : bool
+        Whether θ is written with the other sign than the loop fed back ("sign").
     """
 
     name: str
@@ -155,10 +164,14 @@ class AuditCase:
     rows: tuple = ()
     a_unit: str | None = None
     v_unit: str | None = None
+    digits: int | None = None
+    negate: bool = False
 
     @property
     def lies(self) -> bool:
         """Whether the header names another controller than the data's."""
+        if self.name.startswith(("printed", "sign", "double")):
+            return self.header == "open-loop"
         return self.name.split("+")[0] in ("lie:open_loop", "lie:p_kp", "lie:lead_pole", "lie:accel_fb", "session", "lie:sent",
                                               "lie:accel_int")
 
@@ -259,6 +272,20 @@ def draw_case(name: str, seed: int) -> AuditCase:
                              alignment=int(rng.integers(0, 2)), header="p", v_unit=unit)
         return AuditCase(**common, **lead, recursion=str(rng.choice(["trunc", "round"])),
                          alignment=int(rng.integers(0, 2)), header="lead", v_unit=unit)
+    if base == "printed":  # MATLAB's csvwrite (5 significant digits) or C's %g (6)
+        return AuditCase(**common, **lead, recursion="none", alignment=int(rng.integers(0, 2)),
+                         header=str(rng.choice(["lead", "open-loop"])), digits=int(rng.choice([5, 6])))
+    if base == "sign":  # θ written negated under a true header, none, or an open-loop one
+        if rng.random() < 0.25:
+            return AuditCase(**common, **lead, recursion="trunc", alignment=int(rng.integers(0, 2)),
+                             header="open-loop", negate=True)
+        return _true_or_no_header(rng, common, p_law, lead, kp, negate=True)
+    if base == "double":  # the session's lie and one column fault beside it
+        fault = str(rng.choice(["v_unit", "negate", "swap", "digits"]))
+        hidden = {"v_unit": {"v_unit": str(rng.choice(sorted(V_UNITS)))}, "negate": {"negate": True},
+                  "swap": {"swap": ("u", "v")}, "digits": {"digits": int(rng.choice([5, 6]))}}[fault]
+        return AuditCase(**common, **lead, recursion="none" if fault == "digits" else "trunc",
+                         alignment=int(rng.integers(0, 2)), header="open-loop", **hidden)
     if base == "words":
         if rng.random() < 0.5:
             return AuditCase(**{**common, "header_kp": kp}, **p_law, recursion="trunc",
@@ -406,7 +433,8 @@ def format_audit_run(case: AuditCase, sim: Run) -> str:
         accel = case.header == "lead"
         rows = ([k * DT, k, sim.u[k], sim.v[k], sim.theta[k], sim.a[k]] + ([sim.theta_d_hat[k]] if accel else [])
                 for k in ticks)
-    lines += ["\t".join(_num(float(x)) for x in row) for row in rows]
+    num = _num if case.digits is None else (lambda x: f"{x:.{case.digits}g}")
+    lines += ["\t".join(num(float(x)) for x in row) for row in rows]
     return "\n".join(lines) + "\n"
 
 
@@ -442,6 +470,8 @@ def write_audit_case(folder: Path, name: str, seed: int) -> tuple[Path, AuditCas
         sim = dataclasses.replace(sim, a=np.array([float(f"{x:.7g}") for x in sim.a * A_UNITS[case.a_unit]]))
     if case.v_unit is not None:
         sim = dataclasses.replace(sim, v=np.array([float(f"{x:.7g}") for x in sim.v * V_UNITS[case.v_unit]]))
+    if case.negate:  # a script that wrote the loop's angle with the other sign
+        sim = dataclasses.replace(sim, theta=-np.asarray(sim.theta, dtype=float))
     if case.swap:
         first, second = case.swap
         sim = dataclasses.replace(sim, **{first: getattr(sim, second), second: getattr(sim, first)})
