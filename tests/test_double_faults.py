@@ -23,12 +23,13 @@ from tests.blind.audit import write_audit_case
 
 P = "SFLR_P_control_step_kp_2_SLFR_RTP_P_control_kp=2.0.txt"
 LEAD = "step_response_Gth_comp_no_accel_FB_amp_100_duration_1000_SLFR_RTP_Motor_Comp_Gth.txt"
+LEAD_ACCEL = "step_response_Gth_comp_Ga_opt_amp_200_duration_1000_opt_case43_SLFR_RTP_Motor_Comp_Gth.txt"
 OPEN_LOOP = ["#SLFR RTP OL_Test"]
 
 
-def _rewrite(src: Path, dst: Path, header=None, negate=False, swap=False, volts=None) -> Path:
-    """The log with its header replaced (the column line kept), θ negated, u and v swapped, or v
-    written in volts of ``volts`` per count (7 digits), every other field as it was."""
+def _rewrite(src: Path, dst: Path, header=None, negate=False, swap=False, volts=None, negate_a=False) -> Path:
+    """The log with its header replaced (the column line kept), θ (or a) negated, u and v
+    swapped, or v written in volts of ``volts`` per count (7 digits), every other field as it was."""
     lines = src.read_text().splitlines()
     head = [ln for ln in lines if ln.startswith("#")]
     out = []
@@ -38,6 +39,8 @@ def _rewrite(src: Path, dst: Path, header=None, negate=False, swap=False, volts=
         f = ln.split()
         if negate:
             f[4] = f"{-float(f[4]):g}"
+        if negate_a:
+            f[5] = f"{-float(f[5]):.10g}"
         if swap:
             f[2], f[3] = f[3], f[2]
         if volts is not None:
@@ -63,7 +66,17 @@ def test_theta_written_negated_is_read_back(rig_data, tmp_path, name, header):
     assert "encoder_scale" not in run.sensors.effects and "motor_polarity" not in run.sensors.effects
 
 
-@pytest.mark.parametrize("name", [P, LEAD])
+def test_a_written_negated_under_the_header_that_feeds_it_back(rig_data, tmp_path):
+    # the thesis's lead + accelerometer step: its Ga reproduces v only on -a
+    clean = LoggedRun.from_path(rig_data / LEAD_ACCEL)
+    run = LoggedRun.from_path(_rewrite(rig_data / LEAD_ACCEL, tmp_path / "neg_a.txt", negate_a=True))
+    assert _said(run) == {"a written with the other sign"}
+    assert run.source == "header" and run.reproduced
+    model = load_model("tmm-fit")
+    assert run.simulate(model).fit_pct == pytest.approx(clean.simulate(model).fit_pct, abs=0.05)
+
+
+@pytest.mark.parametrize("name", [P, LEAD, LEAD_ACCEL])
 def test_a_true_log_is_never_read_negated_or_swapped(rig_data, name):
     assert not _said(LoggedRun.from_path(rig_data / name))
 

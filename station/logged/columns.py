@@ -5,8 +5,9 @@ so their names): a lab script that wrote its columns in another order than it na
 gives a log whose header names the right law and whose "v" is not that law's output. When
 the header's closed-loop law reproduces no logged v as the columns are named but every one
 with two columns swapped (u and v, θ and a), or with θ negated (a script that wrote the
-loop's angle with the other sign), the data say which column is which: the claim is
-contradicted, said first, and the log is read with the columns swapped or θ negated. The law is the
+loop's angle with the other sign; a too, where the law feeds it back through Ga), the data
+say which column is which: the claim is contradicted, said first, and the log is read with
+the columns swapped or negated. The law is the
 header's own (as given, at its clamp or the log's, or completed from the data where it comes
 within :data:`NEAR_COUNTS`); a log with no header is checked the same way against the law
 inferred from its data, tried on the swaps only when none is found as the columns are named.
@@ -50,9 +51,14 @@ counts, shape (N,)), None when the log cannot be simulated (``LoggedRun``'s ``_n
 SWAPS = (("u", "v"), ("theta", "a"))
 """Column pairs a swap is tried for: the reference and the command, the two sensors."""
 
-TRIALS = SWAPS + (("theta",),)
-"""What a closed-loop law is tried on when it reproduces no v as the columns are named: each
-swap, and θ negated (a script that wrote the loop's angle with the other sign)."""
+TRIALS = SWAPS + (("theta",), ("a",))
+"""What the header's closed-loop law is tried on when it reproduces no v as the columns are
+named: each swap, θ negated (a script that wrote the loop's angle with the other sign) and a
+negated (the accelerometer's, where the law feeds it back through Ga)."""
+
+INFERRED_TRIALS = SWAPS + (("theta",),)
+"""What a law is inferred on when none is found as the columns are named (no header, or an
+open-loop one): a negated a needs no trial, Ga is inferred with either sign."""
 
 SWAP_COSINE = 0.9
 """An open-loop run's θ and a are read swapped when the column named a follows the nominal
@@ -196,7 +202,7 @@ def _inferred_swap(log: RunLog, skipped) -> Columns:
     said_open = isinstance(cid.controller, OpenLoop) and cid.source == "header"
     if cid.claim is None or not cid.claim.data.endswith(NO_LAW) or not (said_none or said_open):
         return Columns((), log, cid)
-    for columns in TRIALS:
+    for columns in INFERRED_TRIALS:
         trial = rewritten(log, columns)
         try:
             found = identify_controller(trial, skipped)
