@@ -237,6 +237,50 @@ def _in_unit(u: np.ndarray, theta_counts: np.ndarray, q: float) -> bool:
     return abs(math.log(su / q / st)) < abs(math.log(su / st))
 
 
+MIN_RUN_ROWS = 10
+"""Fewest rows after n starts again for them to be taken as another run written after the first."""
+
+
+def run_starts(log: RunLog) -> tuple[int, ...]:
+    """The rows where a file's n (and t) start again at its first row's: runs written one
+    after another into one file (a logger that appended), each at least :data:`MIN_RUN_ROWS`
+    long; () for one run (a block of rows written again goes back less far).
+
+    Parameters
+    ----------
+    log : RunLog
+    """
+    n, t = (np.asarray(log.data[c], dtype=float) for c in ("n", "t"))
+    if n.size < 2 * MIN_RUN_ROWS or not np.all(np.isfinite(n)):
+        return ()
+    back = np.flatnonzero((np.diff(n) < 0) & (n[1:] <= n[0]))
+    if np.all(np.isfinite(t)):
+        back = back[t[back + 1] <= t[0] + 0.5 * (log.dt or DT)]
+    starts = [int(k) + 1 for k in back]
+    return tuple(k for k, end in zip(starts, starts[1:] + [n.size]) if end - k >= MIN_RUN_ROWS)
+
+
+def first_run(log: RunLog) -> tuple[AuditClaim | None, RunLog]:
+    """A file of runs written one after another (:func:`run_starts`) read as its first, and the
+    contradicted claim that says so; the log itself and None for one run.
+
+    Parameters
+    ----------
+    log : RunLog
+    """
+    starts = run_starts(log)
+    if not starts:
+        return None, log
+    k = starts[0]
+    claim = AuditClaim("sample_time", "one run", f"{len(starts) + 1} runs (n starts again at row "
+                       f"{', '.join(str(r) for r in starts)})", "contradicted",
+                       f"n and t go back to the first row's: runs written one after another into one file; the first "
+                       f"(rows 0-{k - 1}) is used, the others are not (split the file to use them)")
+    notes = [x for x in log.notes if not x.startswith("t is not evenly spaced")]
+    notes.append(f"the file holds {len(starts) + 1} runs (the audit): the first, rows 0-{k - 1}, used")
+    return claim, dataclasses.replace(log, data={c: x[:k] for c, x in log.data.items()}, notes=notes)
+
+
 def time_base(log: RunLog) -> TimeBase:
     """Check a log's sample time (our header's ``dt``, else the rig's 0.002 s with t in s)
     against its t column, its θ column's unit (encoder counts) against θ's quantization, and
@@ -255,6 +299,8 @@ def time_base(log: RunLog) -> TimeBase:
         converted; a header dt the t column contradicts is replaced by t's.
     """
     claims: list[AuditClaim] = []
+    runs, log = first_run(log)
+    claims += [runs] if runs is not None else []
     data = log.data
     changes: dict[str, np.ndarray] = {}
     meta = log.meta
