@@ -24,9 +24,26 @@ from station.analysis.law_rows import LawRows
 from station.control.compensator import STORED
 
 
+def _clamped_loop(e, num, den, limit, d):  # pragma: no cover - compiled by numba
+    x = np.zeros(e.size)
+    m = num.size - 1
+    for k in range(d, e.size):
+        acc = 0.0
+        for i in range(min(m, k) + 1):
+            acc += num[i] * e[k - i]
+        for j in range(1, min(m, k - d) + 1):
+            acc -= den[j] * x[k - j]
+        x[k] = min(max(acc, -limit), limit)
+    return x
+
+
+_COMPILED = []  # the loop compiled by numba (or plain Python without it), made on first use
+
+
 def clamped_float(e: np.ndarray, c: np.ndarray, order: int, limit: float, d: int) -> np.ndarray:
     """x[k] = sat(Σ b_i e[k-i] − Σ a_j x[k-j]) from rest at row d: what a recursion on the
-    float remembers (linear stretches by scipy's ``lfilter``, restarted after the clamp).
+    float remembers (the recursion row by row, compiled by numba: an output-error fit runs it
+    thousands of times).
 
     Parameters
     ----------
@@ -44,31 +61,16 @@ def clamped_float(e: np.ndarray, c: np.ndarray, order: int, limit: float, d: int
     -------
     numpy.ndarray, shape (N,)
     """
-    from scipy.signal import lfilter, lfiltic  # lazy: start-up time
-
-    num, den = c[:order + 1], np.concatenate(([1.0], c[order + 1:]))
-    x = np.zeros(e.size)
-    k = d
-    while k < e.size:  # the linear run from row k, restarted after each row the clamp held
-        past = slice(max(k - order, d), k)
-        zi = lfiltic(num, den, x[past][::-1], e[max(k - order, 0):k][::-1]) if order and k > d else None
-        run = lfilter(num, den, e[k:], zi=zi)[0] if zi is not None else lfilter(num, den, e[k:])
-        over = np.flatnonzero(np.abs(run) > limit)
-        if not over.size:
-            x[k:] = run
-            break
-        first = int(over[0])
-        x[k:k + first] = run[:first]
-        x[k + first] = np.clip(run[first], -limit, limit)
-        k += first + 1
-        while k < e.size:  # row by row while the clamp holds, then linear again
-            acc = sum(num[i] * e[k - i] for i in range(order + 1) if k - i >= 0)
-            acc -= sum(den[j] * x[k - j] for j in range(1, order + 1) if k - j >= d)
-            if abs(acc) <= limit:
-                break
-            x[k] = limit if acc > 0 else -limit
-            k += 1
-    return x
+    if not _COMPILED:
+        try:
+            import numba  # lazy: start-up time (numba compiles the loop on first use)
+        except ImportError:  # pragma: no cover - numba is a dependency; plain Python without it
+            _COMPILED.append(_clamped_loop)
+        else:
+            _COMPILED.append(numba.njit(cache=True, nogil=True)(_clamped_loop))
+    num = np.ascontiguousarray(c[:order + 1], dtype=float)
+    den = np.concatenate(([1.0], np.asarray(c[order + 1:], dtype=float)))
+    return _COMPILED[0](np.ascontiguousarray(e, dtype=float), num, den, float(limit), int(d))
 
 
 def output_error(e: np.ndarray, v: np.ndarray, d: int, order: int, limit: float, c: np.ndarray,
