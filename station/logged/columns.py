@@ -133,8 +133,9 @@ def rewritten(log: RunLog, columns: tuple[str, ...]) -> RunLog:
 
 
 def check_columns(log: RunLog, skipped=None) -> Columns:
-    """Check the column line against the header's closed-loop law, or with no header against
-    the law the data give (:data:`SWAPS`).
+    """Check the column line against the header's closed-loop law, or with no header (or an
+    open-loop one no law replaces) against the law the data give (:data:`TRIALS`,
+    :data:`INFERRED_TRIALS`).
 
     Parameters
     ----------
@@ -146,8 +147,8 @@ def check_columns(log: RunLog, skipped=None) -> Columns:
     -------
     Columns
         The log as it is when its law (the header's closed-loop law; with no header, the law
-        the data give) reproduces it as named, or when no swap makes one reproduce it; else
-        the swapped copy and its claim; first, a command written in another unit read in
+        the data give) reproduces it as named, or when no swap or sign makes one reproduce it;
+        else the rewritten copy and its claim; first, a command written in another unit read in
         counts (:func:`check_command_unit`).
     """
     if len(log) < 2:
@@ -192,7 +193,8 @@ def check_columns(log: RunLog, skipped=None) -> Columns:
 
 def _inferred_swap(log: RunLog, skipped) -> Columns:
     """A log that names no controller, or open loop: when no law reproduces it as its columns
-    are named and one does with two of them exchanged, that swap (the law inferred on it)."""
+    are named and one does with two of them exchanged or θ negated, that rewrite (the law
+    inferred on it)."""
     try:
         cid = identify_controller(log, skipped)
     except StationError:  # said where the controller is asked for (LoggedRun.identified)
