@@ -47,6 +47,18 @@ def test_a_few_rows_after_a_run_are_no_second_run(rig_data, tmp_path):
     assert not [c for c in run.audit.claims if c.header == "one run"]
 
 
+def test_a_block_written_again_at_the_start_is_no_second_run(rig_data, tmp_path):
+    # a logger that re-sent its first 30 rows: n goes back to 0 once, then on to new ticks
+    lines = (rig_data / P).read_text().splitlines()
+    head = [ln for ln in lines if ln.startswith("#")]
+    rows = [ln for ln in lines if ln.strip() and not ln.startswith("#")]
+    path = tmp_path / "resent.txt"
+    path.write_text("\n".join(head + rows[:30] + rows) + "\n")
+    run = LoggedRun.from_path(path)
+    assert not [c for c in run.audit.claims if c.header == "one run"]
+    assert [c for c in run.audit.claims if c.data.startswith("n jumps")]
+
+
 def test_one_run_is_one_run(rig_data):
     for name in sorted(p.name for p in rig_data.glob("*.txt")):
         run = LoggedRun.from_path(rig_data / name)

@@ -244,7 +244,8 @@ MIN_RUN_ROWS = 10
 def run_starts(log: RunLog) -> tuple[int, ...]:
     """The rows where a file's n (and t) start again at its first row's: runs written one
     after another into one file (a logger that appended), each at least :data:`MIN_RUN_ROWS`
-    long; () for one run (a block of rows written again goes back less far).
+    long and going over ticks before it for at least half its rows; () for one run (a block of
+    rows written again goes back less far, or, at the start, goes on to new ticks after it).
 
     Parameters
     ----------
@@ -257,7 +258,10 @@ def run_starts(log: RunLog) -> tuple[int, ...]:
     if np.all(np.isfinite(t)):
         back = back[t[back + 1] <= t[0] + 0.5 * (log.dt or DT)]
     starts = [int(k) + 1 for k in back]
-    return tuple(k for k, end in zip(starts, starts[1:] + [n.size]) if end - k >= MIN_RUN_ROWS)
+    # another run goes over the ticks before it again for most of its length; a block written
+    # again at the start goes over a few, then on to new ticks
+    return tuple(k for k, end in zip(starts, starts[1:] + [n.size])
+                 if end - k >= MIN_RUN_ROWS and np.count_nonzero(n[k:end] <= np.max(n[:k])) >= 0.5 * (end - k))
 
 
 def first_run(log: RunLog) -> tuple[AuditClaim | None, RunLog]:
