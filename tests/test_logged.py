@@ -111,3 +111,30 @@ def test_the_labs_b_and_a_header_lines_are_a_claim_checked_against_the_data(rig_
         assert run.controller.name == "lead"
     else:
         assert "Gth num [2.970297" in " ".join(run.audit.lines())
+
+
+@pytest.mark.parametrize("seed", [0, 3, 4])
+def test_a_headers_lead_is_named_by_the_design_the_lab_discretized(tmp_path, seed):
+    """A lab header printing another lead than the thesis's (ryanGT's Motor_Comp '#b0=' lines,
+    Python 2's 12 digits) and confirmed on its data is named by its continuous design, as an
+    inferred law is; its printed coefficients are still the ones replayed. Before, such a
+    header's law was "rig-printed" in replay and survey, and only a law the data had to
+    complete (another path) got its design's name."""
+    from tests.blind.audit import draw_case, simulate_audit_case
+    from tests.blind.rig import tustin
+
+    case = draw_case("honest:lead_int", seed)
+    num, den = tustin(list(case.num_s), list(case.den_s))
+    sim = simulate_audit_case(case, seed)
+    body = [f"{k * 0.002:.10g}\t{k}\t{sim.u[k]:.10g}\t{sim.v[k]:.10g}\t{sim.theta[k]:.10g}\t{sim.a[k]:.10g}"
+            for k in range(len(sim.u))]
+    path = tmp_path / "lab_motor_comp.txt"
+    path.write_text("\n".join(["#SLFR RTP Motor_Comp", f"#b0={num[0]:.12g}", f"#b1={num[1]:.12g}",
+                               f"#a1={den[1]:.12g}", "#t\tn\tu\tv\t$\\theta$\ta", *body]) + "\n")
+    run = LoggedRun.from_path(path)
+    assert run.source == "header" and run.reproduced and run.alignment == case.alignment
+    assert run.controller.name == case.design_text
+    assert run.controller.spec["design"]["text"] == case.design_text
+    assert run.controller.gth.num.tolist() == [float(f"{x:.12g}") for x in num]  # as printed, not the design's
+    report = replay(path)
+    assert report.controller == case.design_text and report.controller_source == "header"

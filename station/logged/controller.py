@@ -27,6 +27,7 @@ from station.analysis.controller_id import (
     variant_of,
     with_recursion,
 )
+from station.analysis.header_law import PRINTED_TOLERANCE, SAME_LAW_RTOL, named_design, same_law
 from station.analysis.law_rows import pins_a_law
 from station.analysis.pid_law import match_pid
 from station.control import Compensator, DiscreteTF, OpenLoop, controller_from_spec, lead_controller, p_controller
@@ -43,51 +44,8 @@ from station.runlog.timebase import restart_rows
 from station.rig import CLAMP, DT  # the rig's clamp and sample time: its compensators ran at them
 from station.runlog import RunLog
 
-PRINTED_TOLERANCE = 5.0001e-9
-"""Largest difference between a coefficient and its 8-decimal print (half a unit in the 8th place)."""
-
-
 def _matches_printed(printed: list[float], exact: np.ndarray) -> bool:
     return len(printed) == exact.size and bool(np.all(np.abs(np.asarray(printed) - exact) <= PRINTED_TOLERANCE))
-
-
-SAME_LAW_RTOL = 1e-6
-"""Relative agreement of a header's coefficients with the data's law under which the header
-states that law (printed to 8 significant digits; a lying header is off by percent)."""
-
-
-def _coefficients(controller) -> list[np.ndarray] | None:
-    gth = getattr(controller, "gth", None)
-    if gth is None:
-        return None
-    out = []
-    for tf in (gth, getattr(controller, "ga", None)):
-        if tf is not None:
-            num, den = np.asarray(tf.num, float), np.asarray(tf.den, float)
-            out += [num / den[0], den / den[0]]
-    return out
-
-
-def same_law(stated, found) -> bool:
-    """Whether two closed-loop controllers run the same linear law (Gth and Ga coefficients
-    within :data:`SAME_LAW_RTOL`), whatever their clamps and integer recursions.
-
-    Parameters
-    ----------
-    stated, found : Compensator, OpenLoop or None
-        The header's controller and the data's.
-
-    Returns
-    -------
-    bool
-    """
-    if not (is_closed_loop(stated) and is_closed_loop(found)):
-        return False
-    a, b = _coefficients(stated), _coefficients(found)
-    if a is None or b is None or len(a) != len(b):
-        return False
-    return all(x.shape == y.shape and np.allclose(x, y, rtol=SAME_LAW_RTOL, atol=PRINTED_TOLERANCE)
-               for x, y in zip(a, b))
 
 
 def _rig_stage(meta: dict, key: str, design: DiscreteTF, notes: list[str]) -> tuple[DiscreteTF | None, bool]:
@@ -463,6 +421,7 @@ def identify_controller(log: RunLog, skipped=None) -> ControllerId:
                 notes.append(f"the header's controller reproduces the logged v with "
                              f"{recursion_words(used.recursion)} (the lab's software stored it)")
             pinned = not is_closed_loop(used) or pins_a_law(v)
+            used = named_design(used, u, theta, v, fit.alignment, dt) if pinned else used
             return ControllerId(used, "header", notes, fit, AuditClaim(
                 "controller", said, describe_controller(used) + at, "confirmed" if pinned else "unchecked",
                 f"replays every logged v {_how_close(fit.max_abs_dv, printing)}{at}" + (
