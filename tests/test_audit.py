@@ -688,3 +688,20 @@ def test_a_law_on_the_other_stored_integer_is_named_beside_it(tmp_path):
     line = next(x for x in format_report(replay(path)).splitlines() if x.startswith("  controller: "))
     assert all(d["text"] in line for d in named) and "(on the rounded integer)" in line, line
     assert "(inferred from the data; on the truncated integer)" in line, line  # the answer's own integer too
+
+
+def test_a_claim_several_runs_share_is_said_once_with_the_runs_it_holds_for():
+    """A diagnosis of the lab's April 2009 session said its lying header 16 times, once per
+    run, before its answer; each claim is said once now, the runs named where not all hold it."""
+    from station.logged.audit import NAMED_RUNS, said_once
+
+    lie, zero = "header: open loop; data: a lead", "header: θ: 0; data: θ starts at 1 count"
+    runs = [(f"run{k}.txt", [lie] + ([zero] if k in (2, 5) else []) + ([f"only {k}"] if k == 7 else []))
+            for k in range(10)]
+    out = said_once(runs)
+    assert out == ["audit: 10 of 10 runs: " + lie, f"audit: 2 of 10 runs (run2.txt, run5.txt): {zero}",
+                   "audit: run7.txt: only 7"]
+    many = said_once([(f"r{k}", [zero] if k < NAMED_RUNS + 2 else []) for k in range(9)])
+    named = ", ".join(f"r{k}" for k in range(NAMED_RUNS))
+    assert many == [f"audit: {NAMED_RUNS + 2} of 9 runs ({named} and 2 more): {zero}"]
+    assert said_once([("a", []), ("b", [])]) == [] and said_once([("a", [lie])]) == [f"audit: a: {lie}"]

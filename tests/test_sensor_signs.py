@@ -204,8 +204,13 @@ def test_the_labs_third_session_in_miniature(tmp_path):
                          capture_output=True, text=True, timeout=900)
     assert out.returncode == 0, out.stderr[-2000:]
     lines = out.stdout.splitlines()
-    assert all(x.startswith("audit: session_") and "header: open loop; data: " in x for x in lines[:3])
-    assert lines[3].startswith("sensor fault, decided from the data: ") and "accel_gain -1." in lines[3]
+    # each claim said once, with the runs it holds for (logged.audit.said_once)
+    claims = lines[:lines.index(next(x for x in lines if x.startswith("sensor fault, decided from the data: ")))]
+    assert claims and all(re.match(r"audit: (session_\d_\S+|[23] of 3 runs( \(session_.*\))?): header: open loop; "
+                                   r"data: ", x) for x in claims), claims
+    assert sum(int(x.split()[1]) if " of 3 runs" in x else 1 for x in claims) == 3
+    fault = lines[len(claims)]
+    assert "accel_gain -1." in fault, fault
     d = json.loads((tmp_path / "d.json").read_text())
     assert [r["controller_source"] for r in d["audit"]] == ["inferred (header contradicted)"] * 3
     assert d["causes"][:2] == ["accel_gain", "coulomb_friction"], d["causes"]
@@ -213,11 +218,11 @@ def test_the_labs_third_session_in_miniature(tmp_path):
     assert abs(found["accel_gain"] + 1.2) <= 0.25 * 1.2 and abs(found["coulomb_friction"] - 6.0) <= 0.25 * 6.0
     # one record: the line, the JSON and the saved model say the gain the model holds (the
     # decision's first estimate beside it when the fit refined it)
-    said = float(re.search(r"accel_gain (-[\d.]+)", lines[3]).group(1))
+    said = float(re.search(r"accel_gain (-[\d.]+)", fault).group(1))
     assert said == pytest.approx(found["accel_gain"], abs=0.006)
     assert d["sensor_faults"]["effects"]["accel_gain"] == found["accel_gain"]
     first = d["sensor_faults"]["first_estimates"].get("accel_gain")
-    assert (first is not None) == ("the decision's first estimate" in lines[3])
+    assert (first is not None) == ("the decision's first estimate" in fault)
     assert d["gain_pct"] > 50.0
     # the report leads the same way: the contradictions, the sensor fault, then the cause
     page = (tmp_path / "rep" / "report.html").read_text()

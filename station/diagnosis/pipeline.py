@@ -22,6 +22,7 @@ from station.diagnosis.search.stepwise import forward_select
 from station.diagnosis.search.workbench import Bench, nominal_trial, workbench
 from station.diagnosis.honesty.unexplained import check_unexplained
 from station.errors import StationError
+from station.logged.audit import said_once
 from station.logged.sensor_evidence import sensor_evidence
 from station.logged.sensors import SESSION_HEADERS, decide_faults
 from station.plant.effects import EFFECTS
@@ -229,9 +230,9 @@ def _diagnose(runs, validate, model, progress, bench: Bench, simulate, likelihoo
         names = [n for n in names if n != "accel_gain"]
     ev = Evaluator(cases, base, simulate, accel_scale=scale)
     search = bench.search(ev, folds, range(n_fit), progress or (lambda msg: None))
-    for c in cases:
-        for line in c.run.audit.lines(skip=SESSION_HEADERS):  # the signs: said once, decided over the runs
-            search.say(f"audit: {c.name}: {line}")
+    # the signs: said once, decided over the runs
+    for line in said_once([(c.name, c.run.audit.lines(skip=SESSION_HEADERS)) for c in cases]):
+        search.say(line)
     for line in faults.said():
         search.say(line)
     for note in notes:

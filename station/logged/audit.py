@@ -136,6 +136,41 @@ class Audit:
         return [c.to_json() for c in self.claims]
 
 
+NAMED_RUNS = 3
+"""Most runs named beside a claim several of a diagnosis's runs (not all) share."""
+
+
+def said_once(runs) -> list[str]:
+    """The contradicted claims of several runs (a diagnosis's, a session's), each said once:
+    ``"audit: 16 of 16 runs: header: open loop; data: ..."``, the runs named where some hold it
+    and others do not (``"audit: 2 of 16 runs (step1.txt, step2.txt): ..."``, at most
+    :data:`NAMED_RUNS` names), ``"audit: step1.txt: ..."`` where one run alone holds it.
+
+    Parameters
+    ----------
+    runs : sequence of (str, sequence of str)
+        Each run's name and its :meth:`Audit.lines`.
+
+    Returns
+    -------
+    list of str
+        In the order the claims were first met; empty when nothing was contradicted.
+    """
+    where: dict[str, list[str]] = {}
+    for name, lines in runs:
+        for line in lines:
+            where.setdefault(line, []).append(name)
+    out = []
+    for line, names in where.items():
+        if len(names) == 1:
+            out.append(f"audit: {names[0]}: {line}")
+            continue
+        listed = "" if len(names) == len(runs) else " (" + ", ".join(names[:NAMED_RUNS]) + (
+            f" and {len(names) - NAMED_RUNS} more" if len(names) > NAMED_RUNS else "") + ")"
+        out.append(f"audit: {len(names)} of {len(runs)} runs{listed}: {line}")
+    return out
+
+
 # --- the file name's claims --------------------------------------------------------------
 
 _NUMBER = r"(-?\d+(?:\.\d+)?)"

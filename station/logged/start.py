@@ -152,14 +152,15 @@ def start_claims(theta, a, u, v, dt: float, closed: bool, accel_is_tip: bool, re
         at_rest = None
     else:
         at_rest = True
-        off = "" if th0 == 0 else (f"; θ starts at {th0:g} counts (the encoder not zeroed"
+        counts = f"{th0:g} count" + ("" if abs(th0) == 1 else "s")
+        off = "" if th0 == 0 else (f"; θ starts at {counts} (the encoder not zeroed"
                                    + ("): the loop's error was u - θ from there" if closed else
                                       "; open loop: θ compared relative to its first sample)"))
         claims.append(AuditClaim("reference", START_CLAIM, "at rest at t = 0", "confirmed",
                                  f"θ keeps one count and a's noise stays within {quiet:g} counts over "
                                  f"{span}{off}"))
     if closed and th0 != 0 and at_rest:
-        claims.append(AuditClaim("columns", ZERO_CLAIM, f"θ starts at {th0:g} counts (the encoder not zeroed)",
+        claims.append(AuditClaim("columns", ZERO_CLAIM, f"θ starts at {counts} (the encoder not zeroed)",
                                  "contradicted", f"θ[0] = {th0:g}: the controller's error was u - θ from there; the "
                                  f"model starts at rest at θ = {th0:g}"))
     return Start(tuple(claims), at_rest, th0)

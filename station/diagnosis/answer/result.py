@@ -13,6 +13,7 @@ from typing import Any
 import numpy as np
 
 from station.analysis.residuals import RunResiduals
+from station.logged.audit import said_once
 
 
 @dataclass(frozen=True)
@@ -273,11 +274,12 @@ class Diagnosis:
         Returns
         -------
         list of str
-            The lines, without final periods: "audit: RUN: claim" per contradicted claim, then
+            The lines, without final periods: each contradicted claim once, with the runs it
+            holds for ("audit: 3 of 3 runs: claim", :func:`station.logged.audit.said_once`), then
             "sensor fault, decided from the data: ..." per sensor fault; empty when nothing was
             contradicted.
         """
-        lines = [f"audit: {r['run']}: {line}" for r in self.audit for line in r["contradicted"]]
+        lines = said_once([(r["run"], r["contradicted"]) for r in self.audit])
         if self.sensor_faults is not None:
             lines += self.sensor_faults.said()
         return lines

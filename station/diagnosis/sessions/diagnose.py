@@ -20,7 +20,7 @@ from station.diagnosis.search.workbench import Bench, nominal_trial, workbench
 from station.diagnosis.sessions.drift import DriftResult, decide_drift, finite, select_structure, session_axes
 from station.diagnosis.sessions.layout import Layout, PerSession, key, sensor_sign
 from station.diagnosis.sessions.logs import SessionLogs, accel_drift, load_sessions, simulate_cut
-from station.logged.audit import ACCEL_DRIFT_COUNTS, ACCEL_DRIFT_WINDOW_S
+from station.logged.audit import ACCEL_DRIFT_COUNTS, ACCEL_DRIFT_WINDOW_S, said_once
 from station.logged.sensor_evidence import sensor_evidence
 from station.logged.sensors import SESSION_HEADERS, decide_faults
 from station.plant.model import as_model
@@ -224,8 +224,8 @@ class SessionsDiagnosis:
 
 def audit_said(cases, faults) -> list[str]:
     """What a session's runs' data contradicted, in the words of the log audit, said once per
-    claim: ``"audit: 16 of 16 runs: header: open loop; data: ..."`` (the runs named where one
-    holds it alone), then ``"sensor fault, decided from the data: ..."`` per sensor fault.
+    claim (:func:`station.logged.audit.said_once`: ``"audit: 16 of 16 runs: header: open loop;
+    data: ..."``), then ``"sensor fault, decided from the data: ..."`` per sensor fault.
 
     Parameters
     ----------
@@ -239,13 +239,7 @@ def audit_said(cases, faults) -> list[str]:
     list of str
         In the order the claims were first met; empty when nothing was contradicted.
     """
-    where: dict[str, list[str]] = {}
-    for case in cases:
-        for line in case.run.audit.lines(skip=SESSION_HEADERS):
-            where.setdefault(line, []).append(case.name)
-    out = [f"audit: {len(names)} of {len(cases)} runs: {line}" if len(names) > 1 else
-           f"audit: {names[0]}: {line}" for line, names in where.items()]
-    return out + faults.said()
+    return said_once([(c.name, c.run.audit.lines(skip=SESSION_HEADERS)) for c in cases]) + faults.said()
 
 
 def diagnose_sessions(sessions: Sequence[SessionLogs], model=None, progress: Callable[[str], None] | None = None,
