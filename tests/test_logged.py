@@ -138,3 +138,17 @@ def test_a_headers_lead_is_named_by_the_design_the_lab_discretized(tmp_path, see
     assert run.controller.gth.num.tolist() == [float(f"{x:.12g}") for x in num]  # as printed, not the design's
     report = replay(path)
     assert report.controller == case.design_text and report.controller_source == "header"
+
+
+def test_a_station_logs_lead_keeps_the_name_its_compensator_file_gave_it(tmp_path):
+    """Only a rig header's printed law is renamed by its design: our own log's controller is
+    the compensator file's, and replay says the name the user gave it."""
+    from station.cli import main
+
+    toml = tmp_path / "mylead.toml"
+    toml.write_text('name = "my lead"\nlimit = 200\n[gth]\ndomain = "s"\nnum = [3.0, 39.0]\nden = [1.0, 20.0]\n')
+    log = tmp_path / "mylead.tsv"
+    assert main(["step", "--controller", str(toml), "--duration", "0.5", "--out", str(log)]) == 0
+    run = LoggedRun.from_path(log)
+    assert run.source == "header" and run.reproduced and run.controller.name == "my lead"
+    assert "design" not in run.controller.spec

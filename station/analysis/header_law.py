@@ -85,11 +85,13 @@ def named_design(controller, u, theta, v, d: int, dt: float = DT):
     -------
     Compensator, OpenLoop or None
         ``controller`` itself (open loop, a P law, a known design, one with Ga or with its
-        whole count sent, or no design recognised), else a copy named by the design's text
-        whose spec holds the design.
+        whole count sent, no design recognised, or a station log's controller, which keeps
+        the name its compensator file gave it), else a copy named by the design's text whose
+        spec holds the design.
     """
-    if (not isinstance(controller, Compensator) or controller.ga is not None or controller.spec.get("design")
-            or controller.name in ("lead", "lead-accel") or controller.recursion not in ("none", *STORED)):
+    if (not isinstance(controller, Compensator) or controller.spec.get("source") != "rig header"
+            or controller.ga is not None or controller.spec.get("design") or controller.name in ("lead", "lead-accel")
+            or controller.recursion not in ("none", *STORED)):
         return controller
     den = np.asarray(controller.gth.den, float)
     order = den.size - 1
