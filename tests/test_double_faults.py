@@ -128,3 +128,32 @@ def test_blind_sign_and_double_faults(tmp_path, case, seed):
         assert len(said) == 1 and next(iter(said)).startswith("v in steps of")
     else:  # printed to few digits: judged to its printing, no column contradicted
         assert not said
+
+
+def test_a_p_header_with_the_wrong_kp_over_swapped_columns(rig_data, tmp_path):
+    """The header's law reproduces no rewrite when it lies too: the data's law is inferred on
+    each rewrite as under an open-loop header. Before: 'P, kp = 1.5; data: not this law, no law
+    found', the model driven by u as v."""
+    run = LoggedRun.from_path(_rewrite(rig_data / P, tmp_path / "kp_swap.txt",
+                                       ["#SLFR RTP P_control_Test", "#kp=1.5"], swap=True))
+    assert _said(run) == {"u and v swapped"}
+    assert run.source == "inferred (header contradicted)" and run.reproduced
+    assert run.controller.spec["kp"] == 2.0
+
+
+@pytest.mark.parametrize("seed, pair", [(32, ("u", "v")), (55, ("theta", "a")), (3, ("u", "v"))])
+def test_blind_p_header_lies_and_columns_swapped(tmp_path, seed, pair):
+    import dataclasses
+
+    import tests.blind.audit as blind
+
+    case = dataclasses.replace(blind.draw_case("lie:p_kp", seed), swap=pair)
+    sim = blind.simulate_audit_case(case, seed)
+    sim = dataclasses.replace(sim, **{pair[0]: getattr(sim, pair[1]), pair[1]: getattr(sim, pair[0])})
+    path = tmp_path / f"p_swap_{seed}_SLFR_RTP_P_control_Test.txt"
+    path.write_text(blind.format_audit_run(case, sim))
+    run = LoggedRun.from_path(path)
+    shown = {"theta": "θ"}
+    assert _said(run) == {f"{shown.get(pair[0], pair[0])} and {shown.get(pair[1], pair[1])} swapped"}
+    assert run.source == "inferred (header contradicted)" and run.reproduced
+    assert run.controller.spec["kp"] == case.kp and run.alignment == case.alignment

@@ -9,8 +9,10 @@ loop's angle with the other sign; a too, where the law feeds it back through Ga)
 say which column is which: the claim is contradicted, said first, and the log is read with
 the columns swapped or negated. The law is the
 header's own (as given, at its clamp or the log's, or completed from the data where it comes
-within :data:`NEAR_COUNTS`); a log with no header is checked the same way against the law
-inferred from its data, tried on the swaps only when none is found as the columns are named.
+within :data:`NEAR_COUNTS`); a log with no header, an open-loop one, or a header whose law
+reproduces it on no rewrite either (a header that lies about the law as well: a P header's kp
+over another gain, the columns swapped) is checked the same way against the law inferred from
+its data, tried on the swaps only when none is found as the columns are named.
 
 The command's unit is checked the same way: a v the header's law does not reproduce, whose
 changes are all whole multiples of one size other than a DAC count (a script that wrote the
@@ -34,10 +36,9 @@ from typing import NamedTuple
 import numpy as np
 
 from station.analysis.law_rows import TOLERANCE, pins_a_law
-from station.control import OpenLoop
 from station.errors import StationError
 from station.logged.audit import AuditClaim, count_step, in_counts, quantum_fits
-from station.logged.controller import (NO_LAW, NOT_STATED, ControllerId, header_law_dv, header_reproduces,
+from station.logged.controller import (NO_LAW, ControllerId, header_law_dv, header_reproduces,
                                        identify_controller)
 from station.logged.sensor_evidence import cosine_ratio
 from station.logged.units import whole_counts
@@ -171,8 +172,8 @@ def check_columns(log: RunLog, skipped=None) -> Columns:
             return _swapped_back(log, columns, trial, as_named, f"to {dv:.2g}")
         if dv is not None and dv <= NEAR_COUNTS < as_named:
             trials.append((columns, trial))
-    if not trials:
-        return Columns((), log)
+    if not trials:  # a header that lies about the law too: the data's law, on the rewrites
+        return _inferred_swap(log, skipped)
     # completed from the data (printed coefficients, a recursion the printing moves by a count)
     try:
         cid = identify_controller(log, skipped)
@@ -192,17 +193,16 @@ def check_columns(log: RunLog, skipped=None) -> Columns:
 
 
 def _inferred_swap(log: RunLog, skipped) -> Columns:
-    """A log that names no controller, or open loop: when no law reproduces it as its columns
-    are named and one does with two of them exchanged or θ negated, that rewrite (the law
-    inferred on it)."""
+    """A log that names no controller, open loop, or a law that reproduces it on no rewrite (a
+    header that lies about the law as well as the columns): when no law reproduces it as its
+    columns are named and one does with two of them exchanged or θ negated, that rewrite (the
+    law inferred on it)."""
     try:
         cid = identify_controller(log, skipped)
     except StationError:  # said where the controller is asked for (LoggedRun.identified)
         return Columns((), log)
-    # no header, or an open-loop one (v = u) that no law found in the data replaces
-    said_none = cid.controller is None and cid.claim is not None and cid.claim.header == NOT_STATED
-    said_open = isinstance(cid.controller, OpenLoop) and cid.source == "header"
-    if cid.claim is None or not cid.claim.data.endswith(NO_LAW) or not (said_none or said_open):
+    # no header, an open-loop one (v = u), or a law the data contradict, and no law found in the data
+    if cid.claim is None or not cid.claim.data.endswith(NO_LAW):
         return Columns((), log, cid)
     for columns in INFERRED_TRIALS:
         trial = rewritten(log, columns)
