@@ -209,3 +209,44 @@ COMMANDS = np.array([0, 1, 88, 87, 85, 86, 84, 2, -1, -3, -2, 150, 149, 60, 61, 
 def test_count_step_of_printed_commands(counts, size):
     printed = np.array([float(f"{c * size:.7g}") for c in counts])
     assert count_step(printed) == pytest.approx(size, rel=1e-5)
+
+
+LEAD_FLOAT = "step_response_Gth_comp_no_accel_FB_amp_100_duration_1000_SLFR_RTP_Motor_Comp_Gth.txt"
+"""The thesis's lead step: its recursion on the float command, v logged as a float."""
+
+
+@pytest.mark.parametrize("unit", VOLTS)
+def test_a_float_command_in_volts_is_said_and_no_law_is_fitted_to_it(rig_data, tmp_path, unit):
+    """The thesis's lead logged its float v; written in volts it has no whole-count steps to read
+    its unit by. Before: a law of order 3 in volts with a cancelled pole pair, 0.0009155(s^2+2000s
+    +1e+06)(s+2π·2.069)/..., 'inferred (header contradicted)' and a θ fit of -573 %: laws fitted
+    to a v of 0.3 'counts' pass tolerances of 1e-6 counts a thousand times too wide. Now the unit
+    is said to be unknown, and no law is inferred on a v that is no DAC command
+    (``analysis.law_rows.no_dac_command``)."""
+    path = _rewrite_v(rig_data / LEAD_FLOAT, tmp_path / LEAD_FLOAT, VOLTS[unit])
+    run = LoggedRun.from_path(path)
+    (claim,) = [c for c in run.audit.claims if c.header == "v in DAC counts"]
+    assert claim.verdict == "contradicted" and claim.data == "v in another unit, its size not found"
+    assert "under one DAC count" in claim.evidence and "no law is inferred" in claim.evidence
+    assert run.source == "header" and not run.reproduced  # the header's lead, as named: no law of volts
+
+
+@pytest.mark.parametrize("seed", range(2))
+def test_a_command_in_volts_with_no_header_is_read_by_the_law_the_data_give(tmp_path, seed):
+    """The 2014 layout names no law; its v in volts steps by a converter's count, and the law the
+    data give reproduces it in counts (before: nothing said, and no law found on the volts)."""
+    import dataclasses
+
+    import tests.blind.audit as blind
+
+    unit = sorted(blind.V_UNITS)[seed]
+    case = dataclasses.replace(blind.draw_case("int:trunc_d0", seed), v_unit=unit)
+    sim = blind.simulate_audit_case(case, seed)
+    sim = dataclasses.replace(sim, v=np.array([float(f"{x:.7g}") for x in sim.v * blind.V_UNITS[unit]]))
+    path = tmp_path / f"volts_{seed}.txt"
+    path.write_text(blind.format_audit_run(case, sim))
+    run = LoggedRun.from_path(path)
+    (claim,) = [c for c in run.audit.claims if c.header == "v in DAC counts"]
+    assert float(claim.data.split()[-1]) == pytest.approx(blind.V_UNITS[unit], rel=1e-5)
+    assert run.source == "inferred" and run.reproduced and run.alignment == case.alignment
+    assert run.controller.spec["design"]["text"] == case.design_text

@@ -48,7 +48,7 @@ import numpy as np
 
 from station.analysis.accel_law import AccelFeedback, accel_feedback, lagged
 from station.analysis.continuous_design import ContinuousDesign, alternatives_phrase, to_continuous
-from station.analysis.law_rows import TOLERANCE, LawRows, pinned_law, pins_a_law, tie_rows
+from station.analysis.law_rows import TOLERANCE, LawRows, no_dac_command, pinned_law, pins_a_law, tie_rows
 from station.analysis.sent_law import sent_designs
 from station.control.compensator import SENT, STORED, recursion_words
 from station.control import DAC_LIMIT, Compensator, DiscreteTF, OpenLoop, lead_controller  # DAC_LIMIT: the clamp assumed when v exceeds the rig's ±200
@@ -405,8 +405,9 @@ def infer_controller(u, theta, v, a=None, dt: float = DT, rig_limit: float = CLA
         The simplest law (open loop, P, then linear of order 1..3; a float recursion before
         an integer one; then Gth with accelerometer feedback Ga) that reproduces every logged v (to :data:`TOLERANCE`; exactly for an
         integer recursion); None when none does, or the log lacks u, θ or v (NaN), never
-        commands anything, or commands nothing but 0 and one level
-        (:func:`station.analysis.law_rows.pins_a_law`).
+        commands anything, commands nothing but 0 and one level
+        (:func:`station.analysis.law_rows.pins_a_law`), or commands under one count while the
+        hub moved (:func:`station.analysis.law_rows.no_dac_command`: v in another unit).
     """
     u = np.asarray(u, dtype=float)
     theta = np.asarray(theta, dtype=float)
@@ -419,8 +420,8 @@ def infer_controller(u, theta, v, a=None, dt: float = DT, rig_limit: float = CLA
     if np.array_equal(v, u) or np.array_equal(v[1:], u[1:]) and v[0] == 0:
         ol = OpenLoop(limit=None)
         return check_law(ol, u, theta, a, v, "open loop, v = u", alignments, prefer=prefer, restarts=restarts)
-    if not pins_a_law(v):
-        return None  # nothing but 0 and a clamp's level: no law is pinned
+    if not pins_a_law(v) or no_dac_command(v, theta):
+        return None  # nothing but 0 and a clamp's level, or no DAC command: no law is pinned
 
     recursions = ("none", *STORED) if whole_counts(v) else ("none",)
     for order in range(MAX_ORDER + 1):

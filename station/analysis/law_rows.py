@@ -45,6 +45,23 @@ def pins_a_law(v) -> bool:
     return int(np.count_nonzero((v != 0) & (np.abs(v) < np.max(np.abs(v))))) >= MIN_FREE_ROWS
 
 
+def no_dac_command(v, theta) -> bool:
+    """Whether logged commands can be no DAC command as written: every |v| under one count
+    (the device applies whole counts, so 0) while the hub moved. Such a v is written in another
+    unit (volts of a converter: a count is 5/2048 V), and a law fitted to it as counts is judged
+    with tolerances a thousand times too wide: none is inferred on it.
+
+    Parameters
+    ----------
+    v, theta : array_like, shape (N,)
+        The logged commands (DAC counts, as claimed) and hub angle (encoder counts).
+    """
+    v, theta = np.asarray(v, dtype=float), np.asarray(theta, dtype=float)
+    finite = np.isfinite(theta)
+    return bool(v.size) and bool(np.all(np.isfinite(v))) and float(np.max(np.abs(v))) < 1.0 \
+        and np.any(v != 0) and np.count_nonzero(finite) > 1 and float(np.ptp(theta[finite])) > 0
+
+
 class LawRows:
     """The rows of a log as one candidate law sees them: x[k] = Σ b_i e[k-i] − Σ a_j v[k-j]
     with the logged v as the recursion's history (exact for an integer recursion, whose

@@ -35,7 +35,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from station.analysis.law_rows import TOLERANCE, pins_a_law
+from station.analysis.law_rows import TOLERANCE, no_dac_command, pins_a_law
 from station.errors import StationError
 from station.logged.audit import AuditClaim, count_step, in_counts, quantum_fits
 from station.logged.controller import (NO_LAW, ControllerId, header_law_dv, header_reproduces,
@@ -248,29 +248,36 @@ def check_command_unit(log: RunLog, skipped=None) -> Columns | None:
     Returns
     -------
     Columns or None
-        The log with v (and u, where it steps by the same size: an open-loop run's command) in
-        counts and a contradicted "columns" claim, when v steps by another size than a count,
-        the header's law does not reproduce it as written and does in counts, and v as written
-        is no DAC command (under one count everywhere while the hub moved, or past the DAC's
-        ±255); else None.
+        When v as written is no DAC command (under one count everywhere while the hub moved,
+        or past the DAC's ±255) and no law named reproduces it as written: the log with v (and
+        u, where it steps by the same size: an open-loop run's command) in counts and a
+        contradicted "columns" claim, when v steps by another size than a count and the
+        header's law (with none named or an open-loop one, the law the data give) reproduces
+        it in counts; else the log as it is with the claim that v is in a unit the data do
+        not give (:func:`_unknown_unit`). None when v is in counts or could be a command.
     """
     v = np.asarray(log.data["v"], dtype=float)
-    least = None if in_counts(v) else count_step(v)
-    if least is None or header_reproduces(log, skipped) is not False:
+    if in_counts(v) or not np.all(np.isfinite(v)) or header_reproduces(log, skipped) is True:
         return None
     peak = float(np.max(np.abs(v)))
-    if peak < 1.0 and np.ptp(np.asarray(log.data["theta"], dtype=float)) > 0:
+    small = no_dac_command(v, log.data["theta"])
+    if small:
         why = f"as written v stays under one DAC count (|v| ≤ {peak:.3g}: the device would apply 0) while the hub moved"
     elif peak > DAC_LIMIT:
         why = f"as written v reaches {peak:.4g}, past the DAC's ±{DAC_LIMIT:g} counts"
     else:  # as written v could be a command too: another gain of the law as much as another unit
         return None
+    least = count_step(v)
+    if least is None:  # no size to read it in
+        return _unknown_unit(log, why, "its changes are no whole multiples of one size (a float, or printed to few "
+                                       "digits)", small)
     u = np.asarray(log.data["u"], dtype=float)
     u_least = None if in_counts(u) else count_step(u)
     steps = [least / k for k in range(1, COMMAND_STEP_COUNTS + 1)]  # v's least change may be k counts (kp·e)
     commanded = np.isfinite(u) & (u != 0)
     if u_least is None and np.any(commanded):  # an open-loop command in counts as u, in another unit as v
         steps.append(float(np.median(v[commanded] / u[commanded])))
+    named = header_law_dv(log, skipped) is not None
     for step in steps:
         if not step > 0:
             continue
@@ -283,31 +290,45 @@ def check_command_unit(log: RunLog, skipped=None) -> Columns | None:
         if not _law_confirms(trial, skipped):
             continue
         both = "v and u" if also else "v"
+        header = ("the header's open loop (v = u) reproduces neither" if header_reproduces(log, skipped) is False
+                  else "the log names no law")
         law = (f"the header's law does not reproduce v as written and reproduces it in counts (÷ {step:.6g})"
-               if header_law_dv(log, skipped) is not None else
-               f"the header's open loop (v = u) reproduces neither, and the law the data give reproduces v in counts "
-               f"(÷ {step:.6g}; with no law named, its gain and v's unit are one: gain k·g on steps of "
-               f"{step:.6g}/k gives the same v, and the largest step is taken)")
+               if named else
+               f"{header}, and the law the data give reproduces v in counts (÷ {step:.6g}; with no law named, its "
+               f"gain and v's unit are one: gain k·g on steps of {step:.6g}/k gives the same v, and the largest step "
+               f"is taken)")
         claim = AuditClaim(
             "columns", "v in DAC counts", f"{both} in steps of {step:.6g}", "contradicted",
             f"every change of v is a whole multiple of {step:.6g}, not of one count; {law}, and {why}: a command "
             f"written in another unit")
         note = f"{both} in steps of {step:.6g} a DAC count (the audit): divided by it"
         return Columns((claim,), dataclasses.replace(trial, notes=list(log.notes) + [note]))
-    return None
+    return _unknown_unit(log, why, f"its changes are whole multiples of {least:.6g}, but no law reproduces it in "
+                                   f"counts of that size or of its fractions", small)
+
+
+def _unknown_unit(log: RunLog, why: str, detail: str, small: bool) -> Columns:
+    """A v that is no DAC command as written, in a unit the data do not give: said, and the log
+    as it is (a v under one count gets no law inferred on it:
+    :func:`station.analysis.law_rows.no_dac_command`)."""
+    then = ("no law is inferred on it, and the model is driven by v as written" if small else
+            "it is read as written")
+    claim = AuditClaim("columns", "v in DAC counts", "v in another unit, its size not found", "contradicted",
+                       f"{why}: a command written in another unit; {detail}; {then}")
+    note = f"v is in another unit than DAC counts, its size not found (the audit): {then}"
+    return Columns((claim,), dataclasses.replace(log, notes=list(log.notes) + [note]))
 
 
 def _law_confirms(log: RunLog, skipped) -> bool:
     """Whether the header's law reproduces the log: as given (v = u in open loop), or, where it
     comes within :data:`NEAR_COUNTS` (printed coefficients, a recursion the printing moves by a
-    count) or is an open-loop header's v = u that does not, a law the data give reproduces
-    every logged v (whether that is the header's own the controller's audit says after)."""
-    dv = header_law_dv(log, skipped)  # replayed once; None for an open-loop header (v = u)
+    count), is an open-loop header's v = u that does not, or none is named, a law the data give
+    reproduces every logged v (whether that is the header's own the controller's audit says after)."""
+    dv = header_law_dv(log, skipped)  # replayed once; None for an open-loop header (v = u) or none
     if dv is None:
-        said = header_reproduces(log, skipped)
-        if said is not False:
-            return bool(said)
-        # an open-loop header v = u does not: the law the data give, as for a lying header
+        if header_reproduces(log, skipped) is True:
+            return True
+        # an open-loop header's v = u does not, or none is named: the law the data give
     elif dv <= TOLERANCE:
         return True
     elif dv > NEAR_COUNTS:
