@@ -44,7 +44,9 @@ command under its true header or an open-loop one, every number printed to 5 sig
 (MATLAB's csvwrite) or 6 (C's %g); "sign": θ written with the other sign than the loop fed back,
 under a true header, none or an open-loop one; "double": the lab's session (an open-loop header
 on a lead on the truncated integer) with one column fault beside it (v in volts, θ negated, u
-and v swapped, or, on the float, every number printed to 5 or 6 digits). A class joined with "+" to
+and v swapped, or, on the float, every number printed to 5 or 6 digits); "lie:swap": a closed-loop
+header that lies (a P header's kp over another gain, or the thesis's lead printed over another
+pole) with u and v, or θ and a, written in each other's place. A class joined with "+" to
 "coulomb_friction" hides that friction too (drawn as :func:`tests.blind.cases.draw` draws it).
 """
 
@@ -67,7 +69,7 @@ N = 2000
 
 CLASSES = ("lie:open_loop", "lie:p_kp", "lie:lead_pole", "lie:accel_fb", "int:trunc_d0", "int:trunc_d1",
            "int:round_d0", "int:round_d1", "session", "lie:sent", "lie:accel_int", "honest:p", "honest:lead_int",
-           "honest:lead_sent", "words", "swap", "rows", "a_unit", "v_unit", "printed", "sign", "double")
+           "honest:lead_sent", "words", "swap", "rows", "a_unit", "v_unit", "printed", "sign", "double", "lie:swap")
 """The audit's blind classes, in the validation table's order."""
 
 PHYSICAL = ("coulomb_friction",)
@@ -173,7 +175,7 @@ class AuditCase:
         if self.name.startswith(("printed", "sign", "double")):
             return self.header == "open-loop"
         return self.name.split("+")[0] in ("lie:open_loop", "lie:p_kp", "lie:lead_pole", "lie:accel_fb", "session", "lie:sent",
-                                              "lie:accel_int")
+                                              "lie:accel_int", "lie:swap")
 
 
 def _rng(name: str, seed: int) -> np.random.Generator:
@@ -286,6 +288,18 @@ def draw_case(name: str, seed: int) -> AuditCase:
                   "swap": {"swap": ("u", "v")}, "digits": {"digits": int(rng.choice([5, 6]))}}[fault]
         return AuditCase(**common, **lead, recursion="none" if fault == "digits" else "trunc",
                          alignment=int(rng.integers(0, 2)), header="open-loop", **hidden)
+    if base == "lie:swap":  # a closed-loop header that lies (a P's kp, a lead's pole) over two columns swapped
+        pair = ("u", "v") if rng.random() < 0.5 else ("theta", "a")
+        if rng.random() < 0.5:
+            kp = float(rng.choice([g for g in P_GAINS if g != HEADER_KP]))
+            p_law.update(kp=kp, design_text=f"P, kp = {kp:g}")
+            return AuditCase(**{**common, "header_kp": HEADER_KP}, **p_law, recursion=str(rng.choice(["none", "trunc"])),
+                             alignment=int(rng.integers(0, 2)), header="p", swap=pair)
+        zz, pp = 2 * math.pi * 5, 2 * math.pi * float(rng.choice(OTHER_POLES_HZ))
+        kk = 5.0 * pp / zz
+        return AuditCase(**common, law="lead", kp=None, num_s=(kk, kk * zz), den_s=(1.0, pp),
+                         design_text=_lead_text(kk, zz, pp, hz=True), recursion="none", alignment=1, header="lead",
+                         swap=pair)
     if base == "words":
         if rng.random() < 0.5:
             return AuditCase(**{**common, "header_kp": kp}, **p_law, recursion="trunc",
@@ -397,7 +411,7 @@ def header(case: AuditCase) -> list[str]:
     if case.header == "p":
         return ["#SLFR RTP P_control_Test", f"#kp={case.header_kp!r}", COLUMNS]
     if case.header == "lead":
-        if case.name.startswith("lie:lead_pole"):
+        if case.name.startswith(("lie:lead_pole", "lie:swap")):
             num, den = gth_design()  # the thesis's lead; the data's has another pole
         else:
             num, den = tustin(list(case.num_s), list(case.den_s), DT)
