@@ -303,7 +303,16 @@ def variant_of(controller, u, theta, a, v, alignments=ALIGNMENTS, skipped=None,
     return best if best is not None else (controller, None, ())
 
 
-def _errors(u: np.ndarray, theta: np.ndarray, d: int) -> np.ndarray:
+def aligned_error(u: np.ndarray, theta: np.ndarray, d: int) -> np.ndarray:
+    """The error a law saw at alignment ``d``: e[k] = u[k] − θ[k−d], 0 for k < d.
+
+    Parameters
+    ----------
+    u, theta : numpy.ndarray, shape (N,)
+        Reference and hub angle, encoder counts.
+    d : int
+        The alignment (0: v[k] from θ[k], the 2009 software; 1: from θ[k−1]).
+    """
     e = np.zeros(u.size)
     e[d:] = u[d:] - theta[:u.size - d]
     return e
@@ -428,7 +437,7 @@ def infer_controller(u, theta, v, a=None, dt: float = DT, rig_limit: float = CLA
         for d in alignments:
             if d < 0:
                 continue
-            e = _errors(u, theta, d)
+            e = aligned_error(u, theta, d)
             for limit in _limits(v, rig_limit):
                 rows = LawRows(e, v, d, order, limit, order if cut else 0, restarts)
                 for recursion in recursions:
@@ -443,7 +452,7 @@ def infer_controller(u, theta, v, a=None, dt: float = DT, rig_limit: float = CLA
             for d in alignments:
                 if d < 0:
                     continue
-                e = _errors(u, theta, d)
+                e = aligned_error(u, theta, d)
                 for limit in _limits(v, rig_limit):
                     hit = _sent_design(LawRows(e, v, d, order, limit), e, d, (u, theta, a, v), dt, rig_limit,
                                        alignments, prefer)
@@ -532,7 +541,7 @@ def _with_thesis_ga(u, theta, a, v, dt: float, rig_limit: float, alignments, pre
                 continue
             x = lfilter(thesis.num, thesis.den, lagged(a, d))
             ga = AccelFeedback(thesis.num, thesis.den, x)
-            e = _errors(u, theta, d) - x
+            e = aligned_error(u, theta, d) - x
             for limit in _limits(v, rig_limit):
                 rows = LawRows(e, v, d, order, limit)
                 for recursion in STORED:
@@ -559,7 +568,7 @@ def _with_accel_feedback(u, theta, a, v, dt: float, rig_limit: float, alignments
                     ga = accel_feedback(u, theta, a, v, d, order, total - order, limit, dt)
                     if ga is None:
                         continue
-                    rows = LawRows(_errors(u, theta, d) - ga.x, v, d, order, limit)
+                    rows = LawRows(aligned_error(u, theta, d) - ga.x, v, d, order, limit)
                     hit = _accepted(rows, "none", d, (u, theta, a, v), dt, rig_limit, alignments, prefer, ga=ga)
                     if hit is not None:
                         return hit

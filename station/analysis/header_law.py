@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from station.analysis.controller_id import MAX_ORDER, law_compensator
+from station.analysis.controller_id import MAX_ORDER, aligned_error, law_compensator
 from station.analysis.law_rows import LawRows, pinned_law
 from station.control import Compensator, DiscreteTF
 from station.control.compensator import STORED
@@ -97,9 +97,7 @@ def named_design(controller, u, theta, v, d: int, dt: float = DT):
     order = den.size - 1
     if not 1 <= order <= MAX_ORDER or np.asarray(controller.gth.num).size != den.size:
         return controller
-    u, theta = np.asarray(u, float), np.asarray(theta, float)
-    e = np.zeros(u.size)
-    e[d:] = u[d:] - theta[:u.size - d]  # the error the law saw at alignment d
+    e = aligned_error(np.asarray(u, float), np.asarray(theta, float), d)
     rows = LawRows(e, np.asarray(v, float), d, order, controller.limit)
     pinned = pinned_law(rows, controller.recursion, dt)
     if pinned is None or pinned[1] is None:

@@ -257,7 +257,11 @@ def check_command_unit(log: RunLog, skipped=None) -> Columns | None:
         not give (:func:`_unknown_unit`). None when v is in counts or could be a command.
     """
     v = np.asarray(log.data["v"], dtype=float)
-    if in_counts(v) or not np.all(np.isfinite(v)) or header_reproduces(log, skipped) is True:
+    if in_counts(v) or not np.all(np.isfinite(v)):
+        return None
+    dv = header_law_dv(log, skipped)  # the header's law replayed once; None: open loop or none named
+    stated = dv <= TOLERANCE if dv is not None else header_reproduces(log, skipped)
+    if stated is True:
         return None
     peak = float(np.max(np.abs(v)))
     small = no_dac_command(v, log.data["theta"])
@@ -277,7 +281,6 @@ def check_command_unit(log: RunLog, skipped=None) -> Columns | None:
     commanded = np.isfinite(u) & (u != 0)
     if u_least is None and np.any(commanded):  # an open-loop command in counts as u, in another unit as v
         steps.append(float(np.median(v[commanded] / u[commanded])))
-    named = header_law_dv(log, skipped) is not None
     for step in steps:
         if not step > 0:
             continue
@@ -290,10 +293,9 @@ def check_command_unit(log: RunLog, skipped=None) -> Columns | None:
         if not _law_confirms(trial, skipped):
             continue
         both = "v and u" if also else "v"
-        header = ("the header's open loop (v = u) reproduces neither" if header_reproduces(log, skipped) is False
-                  else "the log names no law")
+        header = "the header's open loop (v = u) reproduces neither" if stated is False else "the log names no law"
         law = (f"the header's law does not reproduce v as written and reproduces it in counts (÷ {step:.6g})"
-               if named else
+               if dv is not None else
                f"{header}, and the law the data give reproduces v in counts (÷ {step:.6g}; with no law named, its "
                f"gain and v's unit are one: gain k·g on steps of {step:.6g}/k gives the same v, and the largest step "
                f"is taken)")
