@@ -41,10 +41,10 @@ def _rewrite(src: Path, dst: Path, header=None, negate=False, swap=False, volts=
             f[4] = f"{-float(f[4]):g}"
         if negate_a:
             f[5] = f"{-float(f[5]):.10g}"
-        if swap:
-            f[2], f[3] = f[3], f[2]
         if volts is not None:
             f[3] = f"{float(f[3]) * volts:.7g}"
+        if swap:  # after volts: the command's column, in volts, moves
+            f[2], f[3] = f[3], f[2]
         out.append("\t".join(f))
     dst.write_text("\n".join((head if header is None else header + head[-1:]) + out) + "\n")
     return dst
@@ -157,3 +157,81 @@ def test_blind_p_header_lies_and_columns_swapped(tmp_path, seed, pair):
     assert _said(run) == {f"{shown.get(pair[0], pair[0])} and {shown.get(pair[1], pair[1])} swapped"}
     assert run.source == "inferred (header contradicted)" and run.reproduced
     assert run.controller.spec["kp"] == case.kp and run.alignment == case.alignment
+
+
+# --- two column faults at once under a true header ----------------------------------------
+
+@pytest.mark.parametrize("name", [LEAD, LEAD_ACCEL])
+def test_u_and_v_swapped_and_theta_negated_under_a_true_header(rig_data, tmp_path, name):
+    """Two faults of one script: its columns in another order and the angle with the other sign.
+    Before: 'not this law; no law found', the model driven by u as v. (The P step is no test of
+    a u/v swap: its u is a 0/50 step, which any law of high gain at a ±50 clamp gives.)"""
+    clean = LoggedRun.from_path(rig_data / name)
+    run = LoggedRun.from_path(_rewrite(rig_data / name, tmp_path / "two.txt", swap=True, negate=True))
+    assert _said(run) == {"u and v swapped", "θ written with the other sign"}
+    assert run.source == "header" and run.reproduced and run.alignment == clean.alignment
+    model = load_model("tmm-fit")
+    assert run.simulate(model).fit_pct["theta"] == pytest.approx(clean.simulate(model).fit_pct["theta"], abs=0.05)
+
+
+@pytest.mark.parametrize("volts", [5 / 2048, 10 / 32768])
+def test_u_and_v_swapped_and_v_in_volts_under_a_true_header(rig_data, tmp_path, volts):
+    # the column named u holds the P step's command in volts, the one named v the reference in counts
+    run = LoggedRun.from_path(_rewrite(rig_data / P, tmp_path / "two.txt", volts=volts, swap=True))
+    said = _said(run)
+    (unit,) = [s for s in said if s.startswith("v in steps of")]
+    assert said == {"u and v swapped", unit} and float(unit.split()[-1]) == pytest.approx(volts, rel=1e-3)
+    assert run.source == "header" and run.reproduced
+
+
+def test_a_p_law_of_gain_one_is_not_read_as_its_own_mirror(tmp_path):
+    """v = u − θ is u = v + θ: with u and v swapped and θ negated a P law of gain 1 reproduces a
+    log as well as it does as named. A log that no law reproduces as named (its v moved by 0.01
+    counts: a float command printed) must not be 'read' as that mirror: the tracking says which
+    column is the reference (u − θ the smaller RMS)."""
+    import numpy as np
+
+    from station.control import make_controller
+    from tests.test_infer_controller import _closed_loop
+
+    u, theta, v = _closed_loop(make_controller("p", kp=1.0), 1)
+    v = v + 0.01 * np.sign(v)
+    rows = "".join(f"{0.002 * i!r}\t{i}\t{float(u[i])!r}\t{float(v[i])!r}\t{float(theta[i])!r}\t0\n"
+                   for i in range(u.size))
+    path = tmp_path / "p.txt"
+    path.write_text("#SLFR RTP PID_control_Test\n#kp = 1.0\n#ki = 0.3\n#kd = 0.0\n#t\tn\tu\tv\t$\\theta$\ta\n" + rows)
+    run = LoggedRun.from_path(path)
+    assert not {c for c in _said(run) if not c.startswith("a is no tip")}  # a: zeros here
+    assert np.array_equal(run.data["u"], u) and run.controller is None
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2, 5])  # θ/a and u/v, each beside θ negated or v in volts; all ten in scripts/validate_audit.py
+def test_blind_pairs_of_column_faults(tmp_path, seed):
+    path, hidden = write_audit_case(tmp_path, "pair", seed)
+    run = LoggedRun.from_path(path)
+    assert run.reproduced and run.source == "header"
+    shown = {"theta": "θ"}
+    swap = f"{shown.get(hidden.swap[0], hidden.swap[0])} and {shown.get(hidden.swap[1], hidden.swap[1])} swapped"
+    said = _said(run)
+    assert swap in said and len(said) == 2
+    assert ("θ written with the other sign" in said) is hidden.negate
+
+
+def test_a_true_lead_header_a_count_off_is_completed_not_contradicted(tmp_path):
+    """The header prints 3(s+30)/(s+35) to 8 digits; on the truncated integer that print replays a
+    count off, and the data's own simplest law, 3(s+2π·6)/(s+2π·7), reproduces a 25-count sine as
+    well. Before: the true header 'contradicted' by the other design; now the design its print
+    rounds is the one judged, and it reproduces every v."""
+    path, hidden = write_audit_case(tmp_path, "pair", 5)  # this seed's law, columns as named
+    lines = path.read_text().splitlines()
+    head = [ln for ln in lines if ln.startswith("#")]
+    rows = [ln.split("\t") for ln in lines if ln and not ln.startswith("#")]
+    for f in rows:  # the faults undone: u and v back, θ its sign
+        f[2], f[3] = f[3], f[2]
+        f[4] = f"{-float(f[4]):g}"
+    path.write_text("\n".join(head + ["\t".join(f) for f in rows]) + "\n")
+    run = LoggedRun.from_path(path)
+    controller = next(c for c in run.audit.claims if c.claim == "controller")
+    assert controller.verdict == "confirmed" and run.source == "header" and run.reproduced
+    assert run.controller.spec["design"]["text"] == hidden.design_text == "3(s+30)/(s+35)"
+    assert not _said(run)

@@ -356,8 +356,12 @@ def ga_text(ga: DiscreteTF, dt: float) -> str:
     return f"accelerometer feedback Ga ≈ ({_s_poly(back[0])})/({_s_poly(back[1])}) (Tustin, {dt:g} s)"
 
 
-def _law_text(order: int, c: np.ndarray, design: ContinuousDesign | None, dt: float, recursion: str,
-              limit: float, rig_limit: float, ga: DiscreteTF | None = None) -> str:
+def law_text(order: int, c: np.ndarray, design: ContinuousDesign | None, dt: float, recursion: str,
+             limit: float, rig_limit: float, ga: DiscreteTF | None = None) -> str:
+    """A law found in a log in one line for reports (:attr:`IdentifiedController.law`): the P
+    gain, the continuous design and its discretization, or the z-coefficients; its recursion,
+    the designs the log does not tell apart from it, Ga, and a clamp other than ``rig_limit``.
+    """
     if order == 0:
         text = f"P, kp = {c[0]:g}"
     elif design is not None:
@@ -491,7 +495,7 @@ def _accepted(rows: LawRows, recursion: str, d: int, log, dt: float, rig_limit: 
                            recursion, name, ga=None if ga is None else (ga.num, ga.den))
     except ValueError:
         return None
-    law = _law_text(order, c, design, dt, recursion, limit, rig_limit, ctl.ga)
+    law = law_text(order, c, design, dt, recursion, limit, rig_limit, ctl.ga)
     hit = check_law(ctl, *log, law, alignments, design, prefer, primed, restarts)
     if hit is not None and hit.max_abs_dv <= TOLERANCE:
         return hit
@@ -517,7 +521,7 @@ def _sent_design(rows: LawRows, e: np.ndarray, d: int, log, dt: float, rig_limit
                                ga=None if ga is None else (ga.num, ga.den))
         except ValueError:
             continue
-        law = _law_text(order, np.concatenate([num_z, den_z[1:]]), design, dt, recursion, rows.limit, rig_limit,
+        law = law_text(order, np.concatenate([num_z, den_z[1:]]), design, dt, recursion, rows.limit, rig_limit,
                         ctl.ga)
         hit = check_law(ctl, *log, law, alignments, design, prefer)
         if hit is not None and hit.max_abs_dv <= TOLERANCE:

@@ -1,5 +1,6 @@
-"""A header's law against the data's: the same law (:func:`same_law`), and its continuous
-design (:func:`named_design`).
+"""A header's law against the data's: the same law (:func:`same_law`), its continuous
+design (:func:`named_design`), and the law its printed coefficients round
+(:func:`completed_law`).
 
 A rig header prints its compensator's z-coefficients; the data's law is found to more
 digits (:mod:`station.analysis.controller_id`). These say when the two are one law and name
@@ -11,8 +12,10 @@ from __future__ import annotations
 
 import numpy as np
 
-from station.analysis.controller_id import MAX_ORDER, aligned_error, law_compensator
-from station.analysis.law_rows import LawRows, pinned_law
+from station.analysis.continuous_design import recognize
+from station.analysis.controller_id import (MAX_ORDER, IdentifiedController, aligned_error, check_law,
+                                            law_compensator, law_text)
+from station.analysis.law_rows import BOUNDARY, TOLERANCE, LawRows, nudged_inside, pinned_law
 from station.control import Compensator, DiscreteTF
 from station.control.compensator import STORED
 from station.control.rerun import is_closed_loop
@@ -20,6 +23,12 @@ from station.rig import DT
 
 PRINTED_TOLERANCE = 5.0001e-9
 """Largest difference between a coefficient and its 8-decimal print (half a unit in the 8th place)."""
+
+NEAR_COUNTS = 2.0
+"""A header's law that replays a log this near, DAC counts, and no nearer than a count off, is
+completed from the data (printed coefficients, a recursion the printing moves by a count:
+:func:`completed_law`); so is one that does with two columns swapped
+(:func:`station.logged.columns.check_columns`)."""
 
 SAME_LAW_RTOL = 1e-6
 """Relative agreement of a header's coefficients with the data's law under which the header
@@ -109,3 +118,84 @@ def named_design(controller, u, theta, v, d: int, dt: float = DT):
     return Compensator(DiscreteTF(controller.gth.num, controller.gth.den), None, limit=controller.limit, name=text,
                        spec={**controller.spec, "name": text, "design": pinned[1].to_json()},
                        shaper=controller.shaper, recursion=controller.recursion)
+
+
+def completed_law(controller, u, theta, a, v, d: int, dt: float = DT, rig_limit: float | None = None,
+                  prefer: int | None = None, restarts=()) -> IdentifiedController | None:
+    """The continuous design a header's printed Gth rounds, where its exact discretization
+    reproduces the log that the printed coefficients miss by a count.
+
+    A lab script prints a design's z-coefficients to 8 digits; a recursion on the stored integer
+    whose exact value falls on a whole count (round numbers give rational coefficients) then
+    replays a count off where the print's last digit moves it across. The data's law found on its
+    own may be another design of fewer digits that the log does not tell from the header's (a
+    sine of 25 counts leaves a band of laws): the header's claim is judged by the simplest design
+    within its print (:data:`SAME_LAW_RTOL`, :data:`PRINTED_TOLERANCE`) that reproduces the rows
+    (:func:`station.analysis.continuous_design.recognize`), run as the rig ran it.
+
+    Parameters
+    ----------
+    controller : Compensator
+        The rig header's controller as replayed (its recursion the one that came nearest).
+    u, theta, a, v : array_like, shape (N,)
+        The log's reference, hub angle, accelerometer and commands (counts).
+    d : int
+        The alignment the header's law came nearest at.
+    dt : float
+        Sample time, s.
+    rig_limit : float, optional
+        The clamp a law's words leave unsaid (default: the controller's).
+    prefer : int or None
+        As :func:`station.analysis.controller_id.fit_alignments`.
+    restarts : sequence of int
+        Rows where the log's ticks jump.
+
+    Returns
+    -------
+    IdentifiedController or None
+        The design's law, named by its text and holding it in its spec, when it reproduces every
+        logged v (to :data:`station.analysis.law_rows.TOLERANCE`); None for open loop, a P
+        law, a law with Ga, a station log's (its compensator file's coefficients are whole), or
+        no design within the print that does.
+    """
+    if (not isinstance(controller, Compensator) or controller.spec.get("source") != "rig header"
+            or controller.ga is not None or controller.recursion not in ("none", *STORED)):
+        return None
+    num = np.asarray(controller.gth.num, float) / controller.gth.den[0]
+    den = np.asarray(controller.gth.den, float) / controller.gth.den[0]
+    order = den.size - 1
+    if not 1 <= order <= MAX_ORDER or num.size != den.size:
+        return None
+    rows = LawRows(aligned_error(np.asarray(u, float), np.asarray(theta, float), d), np.asarray(v, float), d, order,
+                   controller.limit)
+    tol_num = PRINTED_TOLERANCE + SAME_LAW_RTOL * np.abs(num)
+    tol_den = PRINTED_TOLERANCE + SAME_LAW_RTOL * np.abs(den)
+
+    def within_print(n_unit: np.ndarray, d_unit: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        lo, hi = rows.gain_interval(n_unit, d_unit, controller.recursion, BOUNDARY)
+        same_den = np.all(np.abs(d_unit - den) <= tol_den, axis=1)
+        with np.errstate(divide="ignore", invalid="ignore"):  # the gains K with K·n_unit within the print
+            k1, k2 = (num - tol_num) / n_unit, (num + tol_num) / n_unit
+        k_lo = np.where(n_unit > 0, k1, np.where(n_unit < 0, k2, -np.inf))
+        k_hi = np.where(n_unit > 0, k2, np.where(n_unit < 0, k1, np.inf))
+        dead = np.any((n_unit == 0) & (np.abs(num) > tol_num), axis=1)
+        lo = np.where(same_den & ~dead, np.maximum(lo, np.max(k_lo, axis=1)), np.inf)
+        hi = np.where(same_den & ~dead, np.minimum(hi, np.min(k_hi, axis=1)), -np.inf)
+        return lo, hi
+
+    design = recognize(num, den, dt, within_print)
+    if design is None:
+        return None
+    num_z, den_z = design.discretize(dt)
+    deep = rows.least_squares("none") if controller.recursion == "none" else rows.deepest_fit(controller.recursion)
+    c = None if deep is None else nudged_inside(rows, np.concatenate([num_z, den_z[1:]]), deep, controller.recursion)
+    if c is None:
+        return None
+    num_z, den_z = c[:order + 1], np.concatenate(([1.0], c[order + 1:]))
+    law = Compensator(DiscreteTF(num_z, den_z), None, limit=controller.limit, name=design.text,
+                      spec={**controller.spec, "name": design.text, "design": design.to_json()},
+                      shaper=controller.shaper, recursion=controller.recursion)
+    limit = controller.limit if rig_limit is None else rig_limit
+    words = law_text(order, np.concatenate([num_z, den_z[1:]]), design, dt, controller.recursion, law.limit, limit)
+    hit = check_law(law, u, theta, a, v, words, (d,), design, prefer, restarts=restarts)
+    return hit if hit is not None and hit.max_abs_dv <= TOLERANCE else None

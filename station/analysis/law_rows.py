@@ -360,13 +360,35 @@ def pinned_law(rows: LawRows, recursion: str, dt: float) -> tuple[np.ndarray, Co
     if rows.printed and recursion == "none":
         design = _nearest_first(rows, design, dt)
     num_z, den_z = design.discretize(dt)
-    exact = np.concatenate([num_z, den_z[1:]])
-    # a row on the boundary: our discretization's last bit differs from the lab's; step
-    # towards the law deepest inside the inequalities (convex: every row keeps its side)
+    inside = nudged_inside(rows, np.concatenate([num_z, den_z[1:]]), c, recursion)
+    return (c, None) if inside is None else (inside, design)
+
+
+def nudged_inside(rows: LawRows, exact: np.ndarray, c: np.ndarray, recursion: str) -> np.ndarray | None:
+    """A design's exact coefficients as the rows take them: on a row whose exact value is a
+    quantization boundary our discretization's last bit may differ from the lab's, so the law is
+    stepped towards ``c`` (one deep inside the rows' inequalities: convex, every row keeps its
+    side) by the least of 1e-13..0.1 of the way that reproduces every row.
+
+    Parameters
+    ----------
+    rows : LawRows
+    exact : numpy.ndarray, shape (2·order + 1,)
+        The design's discretization, [b_0..b_m, a_1..a_m].
+    c : numpy.ndarray, shape (2·order + 1,)
+        A law that reproduces the rows (:meth:`LawRows.deepest_fit`).
+    recursion : {"none", "trunc", "round"}
+
+    Returns
+    -------
+    numpy.ndarray or None
+        The coefficients; ``exact`` itself where rows sit on a boundary from both sides (the
+        replay decides); None when neither reproduces the rows.
+    """
     for step in [0.0] + [10.0 ** -k for k in range(13, 0, -1)]:
         nudged = exact + step * (c - exact)
         if rows.reproduces(nudged, recursion):
-            return nudged, design
+            return nudged
     if recursion != "none" and rows.reproduces(exact, recursion, BOUNDARY):
-        return exact, design  # rows on a boundary from both sides: the replay decides
-    return c, None
+        return exact  # rows on a boundary from both sides: the replay decides
+    return None

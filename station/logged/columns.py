@@ -35,6 +35,7 @@ from typing import NamedTuple
 
 import numpy as np
 
+from station.analysis.header_law import NEAR_COUNTS
 from station.analysis.law_rows import TOLERANCE, no_dac_command, pins_a_law
 from station.errors import StationError
 from station.logged.audit import AuditClaim, count_step, in_counts, quantum_fits
@@ -61,6 +62,14 @@ INFERRED_TRIALS = SWAPS + (("theta",),)
 """What a law is inferred on when none is found as the columns are named (no header, or an
 open-loop one): a negated a needs no trial, Ga is inferred with either sign."""
 
+PAIRS = tuple((pair, (sign,)) for pair in SWAPS for sign in ("theta", "a"))
+"""Two column faults at once, tried when no one of :data:`TRIALS` makes the header's law
+reproduce the log: a swap, then a sensor negated (a script that wrote its columns in another
+order and the loop's angle with the other sign, or the accelerometer's where Ga feeds it back)."""
+
+INFERRED_PAIRS = tuple((pair, ("theta",)) for pair in SWAPS)
+"""The same for a law inferred from the data (:data:`INFERRED_TRIALS`)."""
+
 SWAP_COSINE = 0.9
 """An open-loop run's θ and a are read swapped when the column named a follows the nominal
 model's θ this closely (the cosine of their changes from row 0; the rig's own open-loop pulses
@@ -76,10 +85,10 @@ steps by kp counts: :func:`check_command_unit` tries each)."""
 REST_ROWS = 10
 """Fewest rows at rest before the first command the open-loop check needs."""
 
-NEAR_COUNTS = 2.0
-"""A swap is identified from the data (its law completed: printed coefficients, a recursion
-the printing moves by a count) only where the header's law as given comes this near, DAC
-counts, and nearer than as the columns are named."""
+
+UNKNOWN_UNIT = "v in another unit, its size not found"
+"""The "columns" claim's data for a v that is no DAC command as written, in a size the data do
+not give (:func:`check_command_unit`)."""
 
 SHOWN = {"u": "u", "v": "v", "theta": "θ", "a": "a"}
 """How a column's name is printed."""
@@ -133,6 +142,13 @@ def rewritten(log: RunLog, columns: tuple[str, ...]) -> RunLog:
     return dataclasses.replace(log, data={**log.data, name: -np.asarray(log.data[name], dtype=float)})
 
 
+def rewritten_all(log: RunLog, rewrites: tuple[tuple[str, ...], ...]) -> RunLog:
+    """A copy of ``log`` with each of ``rewrites`` (:func:`rewritten`'s) applied in turn."""
+    for columns in rewrites:
+        log = rewritten(log, columns)
+    return log
+
+
 def check_columns(log: RunLog, skipped=None) -> Columns:
     """Check the column line against the header's closed-loop law, or with no header (or an
     open-loop one no law replaces) against the law the data give (:data:`TRIALS`,
@@ -155,23 +171,37 @@ def check_columns(log: RunLog, skipped=None) -> Columns:
     if len(log) < 2:
         return Columns((), log)
     unit = check_command_unit(log, skipped)
-    if unit is not None:
+    if unit is not None and unit.claims[0].data != UNKNOWN_UNIT:
         return unit
     as_named = header_law_dv(log, skipped)
+    if unit is None and as_named is not None and as_named <= TOLERANCE:
+        return Columns((), log)
+    for columns in SWAPS:  # a swap beside v in another unit (the swap's v is not in counts)
+        trial = rewritten(log, columns)
+        if in_counts(np.asarray(trial.data["v"], dtype=float)):
+            continue
+        sized = check_command_unit(trial, skipped)
+        if sized is not None and sized.claims[0].data != UNKNOWN_UNIT:
+            return _swapped_back(log, (columns,), sized.log, as_named, "reproduces it in counts", also=sized.claims)
+    if unit is not None:
+        return unit
     if as_named is None:
         return _inferred_swap(log, skipped)
-    if as_named <= TOLERANCE:
-        return Columns((), log)
     trials = []
-    for columns in TRIALS:  # the header's law as given
-        trial = rewritten(log, columns)
-        if not pins_a_law(trial.data["v"]):  # a step column for v: any law of high gain at its clamp gives it
-            continue
-        dv = header_law_dv(trial, skipped)
-        if dv is not None and dv <= TOLERANCE:
-            return _swapped_back(log, columns, trial, as_named, f"to {dv:.2g}")
-        if dv is not None and dv <= NEAR_COUNTS < as_named:
-            trials.append((columns, trial))
+    for tried in (tuple((c,) for c in TRIALS), PAIRS):  # one fault, else two at once
+        for rewrites in tried:  # the header's law as given
+            trial = rewritten_all(log, rewrites)
+            if not pins_a_law(trial.data["v"]):  # a step column for v: any law of high gain at its clamp gives it
+                continue
+            if len(rewrites) > 1 and rewrites[0] == ("u", "v") and not _tracks_better(trial, log):
+                continue
+            dv = header_law_dv(trial, skipped)
+            if dv is not None and dv <= TOLERANCE:
+                return _swapped_back(log, rewrites, trial, as_named, f"to {dv:.2g}")
+            if dv is not None and dv <= NEAR_COUNTS < as_named:
+                trials.append((rewrites, trial))
+        if trials:
+            break
     if not trials:  # a header that lies about the law too: the data's law, on the rewrites
         return _inferred_swap(log, skipped)
     # completed from the data (printed coefficients, a recursion the printing moves by a count)
@@ -181,13 +211,13 @@ def check_columns(log: RunLog, skipped=None) -> Columns:
         return Columns((), log)
     if cid.claim is None or cid.claim.verdict != "contradicted":
         return Columns((), log, cid)
-    for columns, trial in trials:
+    for rewrites, trial in trials:
         try:
             found = identify_controller(trial, skipped)
         except StationError:
             continue
         if found.claim is not None and found.claim.verdict == "confirmed":
-            return _swapped_back(log, columns, trial, as_named, f"completed from the data ({found.claim.data})",
+            return _swapped_back(log, rewrites, trial, as_named, f"completed from the data ({found.claim.data})",
                                  found)
     return Columns((), log, cid)
 
@@ -204,35 +234,55 @@ def _inferred_swap(log: RunLog, skipped) -> Columns:
     # no header, an open-loop one (v = u), or a law the data contradict, and no law found in the data
     if cid.claim is None or not cid.claim.data.endswith(NO_LAW):
         return Columns((), log, cid)
-    for columns in INFERRED_TRIALS:
-        trial = rewritten(log, columns)
+    for rewrites in tuple((c,) for c in INFERRED_TRIALS) + INFERRED_PAIRS:
+        trial = rewritten_all(log, rewrites)
+        if not pins_a_law(trial.data["v"]):  # a step as v (u swapped in): a law of the right gain gives any
+            continue
+        if len(rewrites) > 1 and rewrites[0] == ("u", "v") and not _tracks_better(trial, log):
+            continue
         try:
             found = identify_controller(trial, skipped)
         except StationError:
             continue
         if found.controller is not None and found.source in ("inferred", "inferred (header contradicted)") \
                 and found.fit is not None:
-            return _swapped_back(log, columns, trial, None, f"{found.claim.data}", found)
+            return _swapped_back(log, rewrites, trial, None, f"{found.claim.data}", found)
     return Columns((), log, cid)
 
 
-def _swapped_back(log: RunLog, columns: tuple[str, ...], trial: RunLog, as_named: float | None, how: str,
-                  identified: ControllerId | None = None) -> Columns:
+def _tracks_better(trial: RunLog, log: RunLog) -> bool:
+    """Whether a rewrite's θ follows its u more closely than as named (RMS of u − θ): a closed
+    loop's angle follows its reference. Asked of u and v swapped beside a sign, where a law
+    cannot decide: a P law of gain 1 (v = u − θ) is the same law with u and v swapped and θ
+    negated (u = v + θ), and only the tracking tells which column is the reference."""
+    def rms_error(x: RunLog) -> float:
+        e = np.asarray(x.data["u"], dtype=float) - np.asarray(x.data["theta"], dtype=float)
+        e = e[np.isfinite(e)]
+        return float(np.sqrt(np.mean(e * e))) if e.size else np.inf
+    return rms_error(trial) < rms_error(log)
+
+
+def _swapped_back(log: RunLog, rewrites: tuple[tuple[str, ...], ...], trial: RunLog, as_named: float | None,
+                  how: str, identified: ControllerId | None = None, also: tuple[AuditClaim, ...] = ()) -> Columns:
+    """The rewritten log (``trial``: ``log`` with ``rewrites`` applied, :func:`rewritten_all`)
+    with one contradicted "columns" claim and note per rewrite, ``also``'s claims after them."""
     said = ("no law reproduces v as the columns are named" if as_named is None else
             f"the header's law replays v to max |dv| = {as_named:.3g} counts as the columns are named")
-    if len(columns) == 2:
-        a, b = SHOWN[columns[0]], SHOWN[columns[1]]
-        claim = AuditClaim(
-            "columns", f"{a} and {b} as the column line names them", f"{a} and {b} swapped", "contradicted",
-            f"{said}, and {how} with the columns named {a} and {b} exchanged")
-        note = f"the columns named {a} and {b} hold {b} and {a} (the audit): read swapped"
-    else:
-        a = SHOWN[columns[0]]
-        claim = AuditClaim(
-            "columns", f"{a} with the sign the loop fed back", f"{a} written with the other sign", "contradicted",
-            f"{said}, and {how} with {a} negated: the column holds -{a}")
-        note = f"the column named {a} holds -{a} (the audit): read negated"
-    return Columns((claim,), dataclasses.replace(trial, notes=list(log.notes) + [note]), identified)
+    done = " and ".join(f"the columns named {SHOWN[c[0]]} and {SHOWN[c[1]]} exchanged" if len(c) == 2 else
+                        f"{SHOWN[c[0]]} negated" for c in rewrites)
+    claims, notes = [], []
+    for columns in rewrites:
+        if len(columns) == 2:
+            a, b = SHOWN[columns[0]], SHOWN[columns[1]]
+            claims.append(AuditClaim("columns", f"{a} and {b} as the column line names them", f"{a} and {b} swapped",
+                                     "contradicted", f"{said}, and {how} with {done}"))
+            notes.append(f"the columns named {a} and {b} hold {b} and {a} (the audit): read swapped")
+        else:
+            a = SHOWN[columns[0]]
+            claims.append(AuditClaim("columns", f"{a} with the sign the loop fed back", f"{a} written with the other sign",
+                                     "contradicted", f"{said}, and {how} with {done}: the column holds -{a}"))
+            notes.append(f"the column named {a} holds -{a} (the audit): read negated")
+    return Columns(tuple(claims) + tuple(also), dataclasses.replace(trial, notes=list(trial.notes) + notes), identified)
 
 
 def check_command_unit(log: RunLog, skipped=None) -> Columns | None:
@@ -315,7 +365,7 @@ def _unknown_unit(log: RunLog, why: str, detail: str, small: bool) -> Columns:
     :func:`station.analysis.law_rows.no_dac_command`)."""
     then = ("no law is inferred on it, and the model is driven by v as written" if small else
             "it is read as written")
-    claim = AuditClaim("columns", "v in DAC counts", "v in another unit, its size not found", "contradicted",
+    claim = AuditClaim("columns", "v in DAC counts", UNKNOWN_UNIT, "contradicted",
                        f"{why}: a command written in another unit; {detail}; {then}")
     note = f"v is in another unit than DAC counts, its size not found (the audit): {then}"
     return Columns((claim,), dataclasses.replace(log, notes=list(log.notes) + [note]))

@@ -27,7 +27,8 @@ from station.analysis.controller_id import (
     variant_of,
     with_recursion,
 )
-from station.analysis.header_law import PRINTED_TOLERANCE, SAME_LAW_RTOL, named_design, same_law
+from station.analysis.header_law import (NEAR_COUNTS, PRINTED_TOLERANCE, SAME_LAW_RTOL, completed_law, named_design,
+                                        same_law)
 from station.analysis.law_rows import pins_a_law
 from station.analysis.pid_law import match_pid
 from station.control import Compensator, DiscreteTF, OpenLoop, controller_from_spec, lead_controller, p_controller
@@ -388,7 +389,7 @@ def identify_controller(log: RunLog, skipped=None) -> ControllerId:
                                                                 notes[-1]))
     missing = [name for name in ("u", "v") + (("theta",) if is_closed_loop(controller) or controller is None
                                               else ()) if not np.all(np.isfinite(data[name]))]
-    header_dv = None
+    header_dv = completed = None
     # a copy cut from a longer run: a law's first rows of history are the logged ones
     cut = not missing and start_claims(theta, a, u, v, dt, False, False).at_rest is False
     if pid is not None and controller is None and not missing:
@@ -428,13 +429,15 @@ def identify_controller(log: RunLog, skipped=None) -> ControllerId:
                     "" if pinned else f"; but v is only 0 and ±{np.max(np.abs(v)):g}, which any law of high gain "
                                       f"gives at that clamp: the data cannot confirm this one")), exact, cut=cut)
         header_dv = fit.max_abs_dv
+        if header_dv <= NEAR_COUNTS and not cut:  # printed coefficients a count off: the design they round
+            completed = completed_law(used, u, theta, a, v, fit.alignment, dt, CLAMP, prefer, restarts)
     if missing:
         if pid is None and controller is None:
             notes.append(f"the log names no controller and has no usable {', '.join(missing)} column to "
                          f"infer one from: commands not replayed, model driven by the logged v")
         return ControllerId(None, None, notes, None, AuditClaim(
             "controller", said, "not replayable", "unchecked", f"the log has no usable {', '.join(missing)}"))
-    hit = infer_controller(u, theta, v, a, dt, CLAMP, prefer=prefer, cut=cut, restarts=restarts)
+    hit = completed or infer_controller(u, theta, v, a, dt, CLAMP, prefer=prefer, cut=cut, restarts=restarts)
     if hit is None and not cut:  # a copy cut while the hub rested but the controller's memory did not
         hit = infer_controller(u, theta, v, a, dt, CLAMP, prefer=prefer, cut=True, restarts=restarts)
         if hit is not None and getattr(hit.controller, "history", 0):
@@ -445,7 +448,7 @@ def identify_controller(log: RunLog, skipped=None) -> ControllerId:
         fit = AlignmentFit(hit.alignment, hit.max_abs_dv, hit.v_replayed)
         at = f" at alignment {hit.alignment}" if is_closed_loop(hit.controller) else ""
         data_says = f"{hit.law}{at}, reproduces every logged v {_how_close(hit.max_abs_dv, printing)}"
-        if controller is not None and same_law(controller, hit.controller):
+        if controller is not None and (hit is completed or same_law(controller, hit.controller)):
             # what the header states holds; the data complete what it does not (the clamp,
             # the recursion on the stored integer, coefficients past their printed digits)
             notes.append(f"the header's controller ({said}) is the data's law, completed from the data: "

@@ -46,7 +46,9 @@ under a true header, none or an open-loop one; "double": the lab's session (an o
 on a lead on the truncated integer) with one column fault beside it (v in volts, θ negated, u
 and v swapped, or, on the float, every number printed to 5 or 6 digits); "lie:swap": a closed-loop
 header that lies (a P header's kp over another gain, or the thesis's lead printed over another
-pole) with u and v, or θ and a, written in each other's place. A class joined with "+" to
+pole) with u and v, or θ and a, written in each other's place; "pair": two column faults at once under
+a true header (a P, or a lead on the stored integer) or none: two columns swapped and θ negated, or
+(under a true header) two columns swapped and v written in volts. A class joined with "+" to
 "coulomb_friction" hides that friction too (drawn as :func:`tests.blind.cases.draw` draws it).
 """
 
@@ -69,7 +71,7 @@ N = 2000
 
 CLASSES = ("lie:open_loop", "lie:p_kp", "lie:lead_pole", "lie:accel_fb", "int:trunc_d0", "int:trunc_d1",
            "int:round_d0", "int:round_d1", "session", "lie:sent", "lie:accel_int", "honest:p", "honest:lead_int",
-           "honest:lead_sent", "words", "swap", "rows", "a_unit", "v_unit", "printed", "sign", "double", "lie:swap")
+           "honest:lead_sent", "words", "swap", "rows", "a_unit", "v_unit", "printed", "sign", "double", "lie:swap", "pair")
 """The audit's blind classes, in the validation table's order."""
 
 PHYSICAL = ("coulomb_friction",)
@@ -300,6 +302,16 @@ def draw_case(name: str, seed: int) -> AuditCase:
         return AuditCase(**common, law="lead", kp=None, num_s=(kk, kk * zz), den_s=(1.0, pp),
                          design_text=_lead_text(kk, zz, pp, hz=True), recursion="none", alignment=1, header="lead",
                          swap=pair)
+    if base == "pair":  # two column faults at once: a swap beside θ negated, or beside v in volts
+        pair = ("u", "v") if rng.random() < 0.5 else ("theta", "a")
+        if rng.random() < 0.5:
+            return _true_or_no_header(rng, common, p_law, lead, kp, swap=pair, negate=True)
+        unit = str(rng.choice(sorted(V_UNITS)))
+        if rng.random() < 0.5:
+            return AuditCase(**{**common, "header_kp": kp}, **p_law, recursion="trunc",
+                             alignment=int(rng.integers(0, 2)), header="p", v_unit=unit, swap=pair)
+        return AuditCase(**common, **lead, recursion=str(rng.choice(["trunc", "round"])),
+                         alignment=int(rng.integers(0, 2)), header="lead", v_unit=unit, swap=pair)
     if base == "words":
         if rng.random() < 0.5:
             return AuditCase(**{**common, "header_kp": kp}, **p_law, recursion="trunc",
