@@ -17,7 +17,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 
-from station.analysis.metrics import SETTLE_HOLD_S, THESIS_BAND_PCT, StepMetrics, settling_label
+from station.analysis.metrics import FROM_START, SETTLE_HOLD_S, THESIS_BAND_PCT, StepMetrics, settling_label
 from station.errors import StationError
 from station.logged import LoggedRun
 from station.logged.audit import Audit
@@ -65,6 +65,9 @@ class RunComparison:
         "inferred (header contradicted)").
     audit : station.logged.audit.Audit or None
         The log's claims checked against its data.
+    step_time_s : float or None
+        When the step starts, s from the log's t = 0 (the thesis's settling (1 %) counts from
+        t = 0); None when not a step.
     """
 
     file: str
@@ -82,6 +85,7 @@ class RunComparison:
     outcome: dict | None = None
     controller_source: str | None = None
     audit: Audit | None = field(default=None, repr=False)
+    step_time_s: float | None = None
 
     def to_json(self) -> dict:
         """JSON-able summary (metrics as {overshoot_pct, settling_time_s} or null). ``rig``
@@ -89,7 +93,8 @@ class RunComparison:
         j = lambda m: None if m is None else m.to_json()  # noqa: E731
         return {"file": self.file, "source": self.source, "outcome": self.outcome,
                 "controller": self.controller, "controller_source": self.controller_source,
-                "audit": [] if self.audit is None else self.audit.to_json(), "step": self.step, "rig": j(self.rig),
+                "audit": [] if self.audit is None else self.audit.to_json(), "step": self.step,
+                "step_time_s": self.step_time_s, "rig": j(self.rig),
                 "model": j(self.model), "thesis_experiment": j(self.thesis_experiment),
                 "thesis_fem": j(self.thesis_fem), "fit_pct": dict(self.fit_pct), "notes": list(self.notes)}
 
@@ -127,11 +132,13 @@ def compare_run(path, plant) -> RunComparison:
         notes.append(f"alignment {run.alignment} detected: the replay reproduces the logged v to "
                      f"{run.max_abs_dv:.3g} counts; {clamp}")
     step = run.reference.amplitude if run.closed else None  # station.logged.reference: the one definition of a step
+    tick = run.reference.step_tick
+    step_time = None if step is None or tick is None else float(data["t"][tick])
     if run.held is not None:
         notes.append(f"{run.held_note}; `station replay` analyzes the beam's free vibration after the release")
         return RunComparison(str(path), name, step, run.step_metrics(), None, None, None,
                              {"theta": None, "accel": None}, data, None, notes, source=source, outcome=log.outcome,
-                             controller_source=run.source, audit=run.audit)
+                             controller_source=run.source, audit=run.audit, step_time_s=step_time)
     sim = run.simulate(plant)
     pred, fits = sim.prediction, sim.fit_pct
     notes.append(f"model: driven by {sim.how}")
@@ -146,7 +153,8 @@ def compare_run(path, plant) -> RunComparison:
             (eo, es), (fo, fs) = THESIS_TABLE[name]
             exp, fem = StepMetrics(eo, es), StepMetrics(fo, fs)
     return RunComparison(str(path), name, step, rig, model, exp, fem, fits, data, pred, notes,
-                         source=source, outcome=log.outcome, controller_source=run.source, audit=run.audit_for(plant))
+                         source=source, outcome=log.outcome, controller_source=run.source, audit=run.audit_for(plant),
+                         step_time_s=step_time)
 
 
 def format_comparison(c: RunComparison) -> str:
@@ -183,6 +191,9 @@ def format_comparison(c: RunComparison) -> str:
         lines += [f"  {'thesis experiment':<20} {fmt(c.thesis_experiment)}",
                   f"  {'thesis FEM':<20} {fmt(c.thesis_fem)}"]
     lines += [f"  {'model':<20} {fmt(c.model)} {pct(c.fit_pct['theta']):>8} {pct(c.fit_pct['accel']):>8}"]
+    if c.rig is not None and c.step is not None:
+        start = "" if c.step_time_s is None else f"; this log's step at {c.step_time_s:.3f} s"
+        lines.append(f"  {settling_label(THESIS_BAND_PCT)} s: {FROM_START} of the log (the thesis's definition{start})")
     if c.rig is not None and (c.rig.settling_time_s is None or (c.model and c.model.settling_time_s is None)):
         lines.append(f"  not settled = outside the 1 % band at the run's end, or inside it for less than "
                      f"{SETTLE_HOLD_S:g} s (not settled within the run)")

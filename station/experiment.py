@@ -20,10 +20,12 @@ from pathlib import Path
 import numpy as np
 
 from station import __version__
-from station.analysis.metrics import (NOT_SETTLED, THESIS_BAND_PCT, StepInfo, StepMetrics, settling_label, step_info,
-                                      step_metrics)
+from station.analysis.metrics import (FROM_START, NOT_SETTLED, THESIS_BAND_PCT, StepInfo, StepMetrics, settling_label,
+                                      step_info, step_metrics)
+from station.control.rerun import is_closed_loop
 from station.errors import StationError
 from station.link import open_session
+from station.logged.reference import classify_reference
 from station.loop import RunResult, run_loop
 from station.outputs import is_device
 from station.plots import plot_runs, run_title, save_figure
@@ -262,7 +264,9 @@ def run_step(plan: StepPlan | None = None, *, sinks=(), progress: bool = False, 
                 bar.close()
     result.extra["setup_s"] = plan.planning_s + (result.extra["first_sample_at"] - planned_at)
     # step metrics compare θ with the step in encoder counts: closed-loop completed steps only
-    wants_metrics = plan.closed_step and result.ok
+    # (a reference taken from a log is one when it is a step: station.logged.reference's definition)
+    from_file = plan.amplitude is None  # a file's reference has no amplitude of ours
+    wants_metrics = result.ok and is_closed_loop(plan.controller) and (plan.closed_step or from_file)
     log = _read_back(log_path) if (wants_metrics or plan.figure_path is not None) and not is_device(log_path) else None
     metrics, info = _metrics_of(log, plan) if wants_metrics and log is not None else (None, None)
     report = StepReport(log_path, result, metrics, info=info)
@@ -325,11 +329,19 @@ def _write_figure(log: RunLog, metrics: StepMetrics | None, png: Path) -> Path |
 
 
 def _metrics_of(log: RunLog, plan: StepPlan) -> tuple[StepMetrics | None, StepInfo | None]:
+    """The run's step metrics: the planned step's, or, for a reference taken from a log, the step
+    the run's u is (:func:`station.logged.reference.classify_reference`); None otherwise."""
     t, theta = log.data["t"], log.data["theta"]
     if t.size == 0:
         return None, None
-    return (step_metrics(t, theta, plan.amplitude),
-            step_info(t, theta, plan.amplitude, plan.step_time, v=log.data["v"], limit=plan.limit))
+    amplitude, step_time = plan.amplitude, plan.step_time
+    if not plan.closed_step:
+        ref = classify_reference(log.data["u"])
+        if not ref.is_step or ref.step_tick >= t.size:
+            return None, None
+        amplitude, step_time = ref.amplitude, float(t[ref.step_tick])
+    return (step_metrics(t, theta, amplitude),
+            step_info(t, theta, amplitude, step_time, v=log.data["v"], limit=plan.limit))
 
 
 def format_report(report: StepReport) -> str:
@@ -360,7 +372,7 @@ def format_report(report: StepReport) -> str:
     if not r.ok:
         lines.append("no step metrics: the run was cut short")
     if m is not None:
-        settle = NOT_SETTLED if m.settling_time_s is None else f"{m.settling_time_s:.3f} s"
+        settle = NOT_SETTLED if m.settling_time_s is None else f"{m.settling_time_s:.3f} s {FROM_START}"
         lines.append(f"overshoot {m.overshoot_pct:.2f} %   {settling_label(THESIS_BAND_PCT)} {settle}   "
                      f"(thesis definitions)")
     if report.info is not None:

@@ -23,7 +23,7 @@ from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Any
 
-from station.analysis.metrics import THESIS_BAND_PCT, settling_label
+from station.analysis.metrics import FROM_START, NOT_SETTLED, SETTLE_HOLD_S, THESIS_BAND_PCT, settling_label
 from station.errors import StationError
 from station.inputs import exists, is_folder, open_regular
 from station.outputs import WRITTEN_SUFFIXES, Transaction
@@ -368,14 +368,19 @@ def format_table(rows: Sequence[SurveyRow], root: str | Path | None = None) -> s
         else:
             last = "-"
         lines.append([name, r.format, _cell(r.rows), _cell(r.sample_time_s, "g"), ctl, _cell(r.alignment),
-                      _cell(r.max_abs_dv, ".2g"), _cell(r.overshoot_pct, ".2f"), _cell(r.settling_time_s, ".3f"),
-                      last])
+                      _cell(r.max_abs_dv, ".2g"), _cell(r.overshoot_pct, ".2f"),
+                      "not settled" if r.overshoot_pct is not None and r.settling_time_s is None
+                      else _cell(r.settling_time_s, ".3f"), last])
     widths = [max(len(head[i]), *(len(line[i]) for line in lines)) if lines else len(head[i])
               for i in range(len(head) - 1)]
     fmt_line = lambda cells: "  ".join(c.ljust(w) for c, w in zip(cells, widths)) + "  " + cells[-1]  # noqa: E731
     used, bad = sum(r.usable for r in rows), sum(r.status == "unusable" for r in rows)
     out = first + [fmt_line(head), fmt_line(["-" * w for w in widths] + ["-" * 17])]
     out += [fmt_line(line) for line in lines]
+    if any(r.overshoot_pct is not None for r in rows):
+        out.append(f"{settling_label(THESIS_BAND_PCT)} s: {FROM_START} of the log (the thesis's definition); not "
+                   f"settled: {NOT_SETTLED} (outside the band at its end, or inside it for less than "
+                   f"{SETTLE_HOLD_S:g} s); -: not a step")
     summary = f"{len(rows)} files: {used} replayed, {bad} unusable"
     if others:
         n = sum(others.values())

@@ -21,7 +21,11 @@ def test_thesis_rows_for_the_thesis_log_only(rig_data, tmp_path, capsys):
     sim = compare_run(ours, load_model())
     assert (rig.source, sim.source) == ("rig", "simulated")
     assert rig.thesis_experiment is not None and sim.thesis_experiment is None
-    assert "thesis FEM" in format_comparison(rig) and "thesis" not in format_comparison(sim)
+    assert "thesis FEM" in format_comparison(rig)
+    assert "thesis FEM" not in format_comparison(sim) and "thesis experiment" not in format_comparison(sim)
+    # each settling (1 %) said with where it counts from (a new user met 1.092 s and 1.172 s for one response)
+    assert "settling (1 %) s: from t = 0 of the log (the thesis's definition; this log's step at 0.100 s)" \
+        in format_comparison(rig)
     assert "simulated (this log)" in format_comparison(sim) and "outcome completed" in format_comparison(sim)
     out = tmp_path / "c.json"
     assert main(["compare", str(rig_data / P_STEP), str(ours), "--out-dir", str(tmp_path), "--json", str(out)]) == 0

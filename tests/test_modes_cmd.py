@@ -13,14 +13,13 @@ def test_modes_converge_and_compare_with_the_rig(tmp_path, capsys):
     assert main(["modes", "--elements", "2", "10", "50", "100", "--json", str(out)]) == 0
     text = capsys.readouterr().out
     models = {m["n_elements"]: m for m in json.loads(out.read_text())["models"]}
-    # the comparison line: the finest model's antiresonances against the rig's (DESIGN.md
-    # "Measured dynamics": 2.5 and 17.7 Hz), with the relative error worked out here
-    line = next(x for x in text.splitlines() if x.startswith("model (n = 100) vs rig antiresonances: "))
-    printed = re.findall(r"([\d.]+) vs ([\d.]+) Hz \(([+-][\d.]+) %\)", line)
-    assert len(printed) == 2
-    for (model_hz, rig_hz, err), mine, rig in zip(printed, models[100]["antiresonances_hz"], (2.5, 17.7)):
-        assert float(model_hz) == pytest.approx(mine, abs=5e-4) and float(rig_hz) == rig
-        assert float(err) == pytest.approx(100 * (mine / rig - 1), abs=0.05)
+    # the comparison line: the finest model's antiresonances as the JSON holds them, and no
+    # percentage against DESIGN.md's rounded "≈ 2.5" (the rig's sweep measures 2.56 Hz, above
+    # the model's 2.55: a percentage against 2.5 would put it below)
+    line = next(x for x in text.splitlines() if x.startswith("model (n = 100) antiresonances "))
+    printed = [float(x) for x in re.findall(r"(\d+\.\d{3})", line)]
+    assert printed == pytest.approx(models[100]["antiresonances_hz"], abs=5e-4) and "%" not in line
+    assert "station bode" in line
     for key in ("frequencies_hz", "antiresonances_hz"):
         coarse, fine, finest = (models[n][key][1] for n in (2, 50, 100))
         assert abs(fine - finest) < 1e-3 < abs(coarse - finest)  # converged by 50, not at 2

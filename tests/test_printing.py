@@ -209,6 +209,17 @@ def test_an_interval_wide_without_rivals_is_not_called_narrow(monkeypatch, tmp_p
     _agrees(ident)
 
 
+def test_an_ending_with_rivals_left_names_them(monkeypatch, tmp_path):
+    """A new user's contradiction: "4 rival(s) remain" and then "alternatives: none", the rivals
+    (a wide interval's ends) never named. The ending names each."""
+    diag = _record({"coulomb_friction": 6.0}, ["coulomb_friction"],
+                   {"coulomb_friction": Interval(3.0, 9.0, False, False)}, {"coulomb_friction": 6.0})
+    ident = _identify(monkeypatch, tmp_path, [diag], budget=0)
+    assert "2 rival(s) remain: coulomb_friction 3 DAC counts (the 95 % interval's lower end); coulomb_friction 9 " \
+           "DAC counts (the 95 % interval's upper end)" in ident.stopped, ident.stopped
+    _agrees(ident)
+
+
 def test_a_settled_diagnosis_reads_the_same_everywhere(monkeypatch, tmp_path):
     diag = _record({"static_friction": 12.0, "coulomb_friction": 5.0}, ["static_friction"],
                    {"static_friction": Interval(11.5, 12.5, False, False)},

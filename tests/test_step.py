@@ -108,6 +108,20 @@ def test_file_reference_replays_the_rig_pulse_test_open_loop(tmp_path, rig_data)
     assert np.array_equal(d["v_applied"], d["v"])
 
 
+def test_a_step_taken_from_a_log_has_the_step_metrics_of_the_same_step_planned(tmp_path, rig_data):
+    """A new user's contradiction: the rig's P step replayed as a reference printed no metrics,
+    where `station replay` of its own log said 40 %. The metrics are the planned step's: the
+    rig's reference is 50 counts from tick 50, so the same run planned gives the same numbers."""
+    src = rig_data / "SFLR_P_control_step_kp_2_SLFR_RTP_P_control_kp=2.0.txt"
+    logged = run_step(controller="p", reference=f"{src}:u", out=tmp_path / "file.tsv")
+    planned = run_step(controller="p", amplitude=50, step_tick=50, out=tmp_path / "plan.tsv")
+    assert logged.metrics is not None and logged.metrics == planned.metrics
+    assert logged.info == planned.info
+    sweep = run_step(controller="p", kp=1.0, reference=f"{rig_data / 'swept_sine_kp_1_amp_50.txt'}:u",
+                     out=tmp_path / "sweep.tsv", duration=2.0)
+    assert sweep.result.ok and sweep.metrics is None  # not a step: no step metrics
+
+
 def test_pulse_reference_and_bad_reference(tmp_path, capsys):
     report = run_step(controller="open-loop", reference="pulse", amplitude=80, duration=0.5, out=tmp_path / "p.tsv")
     u = read_log(report.log_path).data["u"]

@@ -45,9 +45,10 @@ class StepMetrics:
         return asdict(self)
 
     def summary(self) -> str:
-        """``overshoot 10.00 %, settling (1 %) 0.608 s`` (or "... settling (1 %) not settled within the run")."""
+        """``overshoot 10.00 %, settling (1 %) 0.608 s from t = 0`` (or "... settling (1 %) not
+        settled within the run")."""
         label = settling_label(THESIS_BAND_PCT)
-        settle = NOT_SETTLED if self.settling_time_s is None else f"{self.settling_time_s:.3f} s"
+        settle = NOT_SETTLED if self.settling_time_s is None else f"{self.settling_time_s:.3f} s {FROM_START}"
         return f"overshoot {self.overshoot_pct:.2f} %, {label} {settle}"
 
 
@@ -83,6 +84,14 @@ THESIS_BAND_PCT = 100 * THESIS_BAND
 
 STEP_INFO_BAND_PCT = 100 * STEP_INFO_BAND
 """The 2 % settling band, percent of the step (:func:`step_info`)."""
+
+FROM_START = "from t = 0"
+"""Where the thesis's settling (1 %) counts from, said beside every such time printed: the log's
+t = 0, not the step (DESIGN.md's definition: the rig's logs step at 0.1 s, ``station step`` at
+0.02 s; the 2 % time and rise and peak count from the step, :data:`AFTER_STEP`)."""
+
+AFTER_STEP = "after the step"
+"""Where :class:`StepInfo`'s times count from, said where they are printed."""
 
 NOT_SETTLED = "not settled within the run"
 """What a report says when θ has not settled (:func:`settled_index`): outside the band at the
@@ -160,8 +169,8 @@ class StepInfo:
         return asdict(self)
 
     def summary(self, unsettled: str = NOT_SETTLED) -> str:
-        """One line: rise, peak, 2 % settling (named by :func:`settling_label`), steady-state
-        error, saturation.
+        """One line: rise, peak, 2 % settling (named by :func:`settling_label`), each after the
+        step (:data:`AFTER_STEP`), steady-state error, saturation.
 
         Parameters
         ----------
@@ -177,7 +186,7 @@ class StepInfo:
         settle = (f"{settling_label(STEP_INFO_BAND_PCT)} "
                   f"{unsettled if self.settling_time_2pct_s is None else f(self.settling_time_2pct_s)}")
         sat = "" if self.saturation_time_s is None else f"   saturated {self.saturation_time_s:.3f} s"
-        return (f"rise {f(self.rise_time_s)}   peak {f(self.peak_time_s)}   {settle}   "
+        return (f"{AFTER_STEP}: rise {f(self.rise_time_s)}   peak {f(self.peak_time_s)}   {settle}   "
                 f"steady-state error {self.steady_state_error:.1f} counts{sat}")
 
 

@@ -129,9 +129,7 @@ def file_reference(path: str | Path, column: str = "u") -> np.ndarray:
         If the log cannot be read or has no such column (or it is empty there).
     """
     log = read_log(path)
-    if column not in log.data:
-        raise StationError(f"{path}: no column {column!r} (columns: {', '.join(log.data)})")
-    u = np.asarray(log.data[column], dtype=float)
-    if u.size and np.all(np.isnan(u)):
-        raise StationError(f"{path}: column {column!r} holds no values in this log format")
-    return u.copy()
+    held = [name for name, x in log.data.items() if np.asarray(x).size and not np.all(np.isnan(np.asarray(x, float)))]
+    if column not in held:  # a standard column the format lacks is all NaN
+        raise StationError(f"{path}: no column {column!r} with values (the log's columns: {', '.join(held) or 'none'})")
+    return np.asarray(log.data[column], dtype=float).copy()

@@ -377,12 +377,13 @@ def _identify(loop: _Loop, names: list[str], budget: int) -> Identification:
             stopped = settled(diag, rv)
             break
         if designed >= budget:
-            stopped = f"budget of {budget} designed experiment(s) spent; {len(rv.rivals)} rival(s) remain"
+            stopped = f"budget of {budget} designed experiment(s) spent; {len(rv.rivals)} rival(s) remain: {named(rv)}"
             break
         aimed = [r for r in rv.rivals if survived.get(_structure(r), 0) < SURVIVALS]
         if not aimed:
             stopped = (f"{len(rv.rivals)} alternative(s) fitted every run as well as the answer after "
-                       f"{SURVIVALS} experiments designed against each: the data cannot tell them apart")
+                       f"{SURVIVALS} experiments designed against each: the data cannot tell them apart "
+                       f"({named(rv)})")
             break
         design = loop.design(rv._replace(rivals=aimed), [c for c in candidate_experiments() if c not in tried])
         if design.experiment is None:
@@ -404,6 +405,18 @@ def _identify(loop: _Loop, names: list[str], budget: int) -> Identification:
         for key in {_structure(r) for r in aimed if r.kind == "alternative"} & still:
             survived[key] = survived.get(key, 0) + 1
     return loop.result(diag, stopped, budget, 0)
+
+
+NAMED_RIVALS = 4
+"""Most rivals an ending names (the rest counted)."""
+
+
+def named(rv) -> str:
+    """The rivals left open, in words: each alternative, and each wide interval's ends
+    (``rv``: :func:`station.diagnosis.honesty.rivals.rivals`'s record)."""
+    labels = [r.label for r in rv.rivals]
+    more = len(labels) - NAMED_RIVALS
+    return "; ".join(labels[:NAMED_RIVALS]) + (f"; and {more} more" if more > 0 else "")
 
 
 def _structure(rival) -> frozenset:

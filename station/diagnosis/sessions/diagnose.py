@@ -305,8 +305,8 @@ def _diagnose_sessions(sessions, model, say, bench: Bench, max_samples, simulate
             if drift >= ACCEL_DRIFT_COUNTS:
                 cases[i].sigma_a = IGNORED_SIGMA
                 notes.append(f"{s}: {cases[i].name}: its accelerometer is not used (a's mean over "
-                             f"{ACCEL_DRIFT_WINDOW_S:g} s moves {drift:.0f} counts from rest: no tip acceleration "
-                             f"does that); its θ is still used")
+                             f"{ACCEL_DRIFT_WINDOW_S:g} s moves {drift:.0f} counts from rest in the {cases[i].n} "
+                             f"samples used: no tip acceleration does that); its θ is still used")
                 say(notes[-1])
     for s, g in zip(loaded.names, layout.groups):
         if len(g) == 1 and layout.sessions > 1:

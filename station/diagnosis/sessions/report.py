@@ -54,10 +54,8 @@ def decision_words(result, d: Decision) -> str:
     str
         The sentence, without a final period: "NAME drifts: ..." or "NAME is shared: ...".
     """
-    pay = (f"per-session values lower the held-out θ + a cost by {d.cost_gain_pct:.1f} % (θ RMS "
-           f"{d.theta_gain_pct:.1f} %) against one shared value ({_shared(result, d.name, d.shared_value)})"
-           if d.cost_gain_pct >= 0 else
-           f"per-session values raise the held-out θ + a cost by {-d.cost_gain_pct:.1f} % against one shared value")
+    # a shared effect's value is said once, the final model's (the test's shared fit differs in its last digits)
+    pay = d.pay(_shared(result, d.name, d.shared_value) if d.drifts else None)
     luck = f", tiny perturbations of the shared model by {d.luck_gain_pct:.1f} % (luck alone)"
     ranges = ", ".join(f"{_range(s, d.name, lo, hi)} in {s.name}" for (lo, hi), s in zip(d.ranges, result.sessions))
     if d.drifts:
