@@ -373,7 +373,7 @@ def format_report(report: StepReport) -> str:
         lines.append("no step metrics: the run was cut short")
     if m is not None:
         settle = NOT_SETTLED if m.settling_time_s is None else f"{m.settling_time_s:.3f} s {FROM_START}"
-        lines.append(f"overshoot {m.overshoot_pct:.2f} %   {settling_label(THESIS_BAND_PCT)} {settle}   "
+        lines.append(f"{m.overshoot_words()}   {settling_label(THESIS_BAND_PCT)} {settle}   "
                      f"(thesis definitions)")
     if report.info is not None:
         lines.append(report.info.summary(

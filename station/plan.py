@@ -487,6 +487,10 @@ def plan_step(port: str = DEFAULT_PORT, protocol: str = "v1", controller: Any = 
             when = f"--step-time {step_time:g} s" if timing == "--step-time" else f"step tick {tick}"
             raise StationError(f"{when}: the step must start before the run ends ({n_ticks * dt:g} s)")
 
+    for option, value in (("--out", out), ("--out-dir", out_dir)):
+        if value is not None and not str(value).strip():  # Path("") is the working folder, silently
+            raise StationError(f"{option}: an empty path: expected a file name" if option == "--out" else
+                               f"{option}: an empty path: expected a folder")
     url, folder = run_url(port, model, n_elements, seed)  # a real port refuses the rig's options
     try:
         if out is None:  # (first: a name the file system cannot hold is refused here)

@@ -80,6 +80,30 @@ def test_bode_command_writes_figure_and_json(rig_data, tmp_path, capsys):
     assert "measured Hz" in capsys.readouterr().out
 
 
+@pytest.mark.parametrize("zeroed, said", [((3,), "v never changes"), ((2, 3, 4, 5), "v never changes"),
+                                          ((4,), "θ never changes")])
+def test_bode_refuses_a_run_nothing_drove(rig_data, tmp_path, zeroed, said):
+    """A fuzzing round: the swept sine with v (or every column) zeroed gave 'measured' antiresonances
+    of 1.95 and 13.8 Hz from 0/0, exit 0. θ/v needs a v that moves and a θ that answers."""
+    from station.errors import StationError
+
+    lines = (rig_data / SWEPT).read_text().splitlines()
+    out = []
+    for ln in lines:
+        f = ln.split("\t")
+        if ln and not ln.startswith(("#", "Time")) and len(f) > 5:
+            for k in zeroed:
+                f[k] = "0"
+        out.append("\t".join(f))
+    path = tmp_path / "zeroed.txt"
+    path.write_text("\n".join(out) + "\n")
+    parser = argparse.ArgumentParser()
+    bode.configure(parser)
+    with pytest.raises(StationError, match=said):
+        bode.run(parser.parse_args([str(path), "--png", str(tmp_path / "b.png")]))
+    assert not (tmp_path / "b.png").exists()
+
+
 def test_measured_phase_is_drawn_on_the_models_branch():
     # Across a lightly damped antiresonance the phase jumps by about +180° within one bin:
     # the model by +170°, the noisy measurement by +195°, which np.unwrap takes as -165°.

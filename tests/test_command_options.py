@@ -98,3 +98,34 @@ def test_run_step_says_when_a_compensator_file_limit_wins(tmp_path):
     assert read_log(rep.log_path).meta["controller"]["limit"] == 150.0
     named = run_step(controller=str(path), duration=0.1, out_dir=tmp_path / "runs", figure=False, lean=False)
     assert named.log_path.name.startswith("step-c-")  # the file's stem names the log
+
+
+def test_an_empty_value_is_refused_for_every_option_of_every_command(capsys):
+    """A fuzzing round's traceback: `station step --out ''` (Path('') is the working folder, and
+    its figure's name then fails). Every option and argument that takes a value, of every
+    command, refuses '' in one line naming it, exit 2, before anything starts."""
+    for name, parser in _subparsers().items():
+        required = [a for a in parser._actions if not a.option_strings and a.nargs != 0]
+        for action in parser._actions:
+            if action.nargs == 0 or isinstance(action, argparse._HelpAction):
+                continue
+            if action.option_strings:  # the positionals given a stand-in, the option empty
+                argv = [name, *(["x.txt"] * len(required)), action.option_strings[0], ""]
+                shown = action.option_strings[0]
+            else:
+                argv = [name, ""]
+                shown = action.metavar or action.dest
+            with pytest.raises(SystemExit) as exc:
+                build_parser().parse_args(argv)
+            err = capsys.readouterr().err.strip()
+            assert exc.value.code == 2 and len(err.splitlines()) == 1, (argv, err)
+            assert f"argument {shown}: an empty value ''" in err, (argv, err)
+
+
+def test_the_python_api_refuses_an_empty_out_too(tmp_path):
+    from station.errors import StationError
+    from station.experiment import run_step
+
+    for kw, said in (({"out": ""}, "--out: an empty path"), ({"out_dir": " "}, "--out-dir: an empty path")):
+        with pytest.raises(StationError, match=said):
+            run_step(duration=0.1, **kw)

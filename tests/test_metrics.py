@@ -108,3 +108,16 @@ def test_settled_needs_the_minimum_hold():
     for inside, settled in ((need, True), (need - 1, False)):
         y = np.r_[np.full(200 - inside, 10.0), np.zeros(inside)]
         assert (settled_index(t, y, 0.0, 1.0) == 200 - inside) if settled else settled_index(t, y, 0.0, 1.0) is None
+
+
+def test_a_response_that_never_reached_the_step_says_so():
+    """A fuzzing round: a 0.1 s step printed 'overshoot -29.00 %' beside 'rise n/a'."""
+    import numpy as np
+
+    from station.analysis.metrics import step_metrics
+
+    t = np.arange(50) * 0.002
+    m = step_metrics(t, np.minimum(np.arange(50.0), 35.5), 50.0)  # peaks at 71 % of the step
+    assert m.overshoot_pct == pytest.approx(-29.0)
+    assert m.overshoot_words() == "overshoot -29.00 % (θ never reached the step: its peak 71 % of it)"
+    assert step_metrics(t, np.full(50, 60.0), 50.0).overshoot_words() == "overshoot 20.00 %"

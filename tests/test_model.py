@@ -182,3 +182,15 @@ def test_viscous_friction_adds_exactly_k_tau_b_to_the_motor_damping():
     assert not m.with_effects({"viscous_friction": 3.0}).has_plant_effects
     assert not m.with_effects({"amp_offset": 3.0, "stribeck_speed": 0.2}).has_plant_effects
     assert m.with_effects({"static_friction": 3.0}).has_plant_effects
+
+
+@pytest.mark.parametrize("text", ["", "# a comment only\n"])
+def test_an_empty_model_or_parameter_file_is_refused(tmp_path, text):
+    """A fuzzing round: a 0-byte --model ran as tmm-fit, silently (and `tune --robust` counted it
+    as a model of its set)."""
+    path = tmp_path / "m.toml"
+    path.write_text(text)
+    with pytest.raises(StationError, match="an empty model file"):
+        load_model(path)
+    with pytest.raises(StationError, match="an empty parameter file"):
+        load_params(path)

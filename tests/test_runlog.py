@@ -3,6 +3,7 @@ the rig's logs read with their header variants."""
 
 import json
 import math
+import re
 import os
 import signal
 import subprocess
@@ -409,3 +410,48 @@ def test_read_errors_carry_their_place_as_attributes(tmp_path):
     with pytest.raises(RunLogError) as info:
         read_log(empty)
     assert (info.value.file, info.value.line) == (str(empty), None)
+
+
+LEAD_ACCEL_LOG = "step_response_Gth_comp_Ga_opt_amp_200_duration_1000_opt_case43_SLFR_RTP_Motor_Comp_Gth.txt"
+
+
+@pytest.mark.parametrize("line, edit, said", [
+    (2, lambda s: s.rstrip("]"), "line 2: expected Gth num=[c0 c1 ...]"),       # no closing bracket
+    (2, lambda s: "#Gth num", "line 2: expected Gth num=[c0 c1 ...]"),           # no coefficients at all
+    (4, lambda s: s.rstrip("]"), "line 4: expected Ga num=[c0 c1 ...]"),        # Ga's, which was dropped
+    (5, lambda s: s.rstrip("]"), "line 5: expected Ga num=[c0 c1 ...] or Ga den=[...]"),  # (was blamed on line 4)
+    (3, lambda s: "#Gth num=[ 1. 2.]", "line 3: Gth num given twice"),
+], ids=["Gth unclosed", "Gth bare", "Ga num unclosed", "Ga den unclosed", "Gth num twice"])
+def test_a_malformed_filter_line_is_named_not_dropped(rig_data, tmp_path, line, edit, said):
+    """A fuzzing round: '#Gth num=[1,2' was read as an empty Gth ('controller unknown'), an
+    unclosed Ga as no Ga at all (the lead + accelerometer run taken for a lead)."""
+    lines = (rig_data / LEAD_ACCEL_LOG).read_text().splitlines()
+    lines[line - 1] = edit(lines[line - 1])
+    path = tmp_path / "bad.txt"
+    path.write_text("\n".join(lines) + "\n")
+    with pytest.raises(RunLogError, match=re.escape(said)):
+        read_log(path)
+
+
+def test_a_gain_printed_twice_is_named(tmp_path):
+    path = tmp_path / "kp.txt"
+    path.write_text("#SLFR RTP P_control_Test\n#kp=2.0\n#kp=3.0\n#t\tn\tu\tv\t$\\theta$\ta\n0\t0\t0\t0\t0\t0\n"
+                    "0.002\t1\t50\t100\t0\t0\n")
+    with pytest.raises(RunLogError, match=r"line 3: kp given twice \(lines 2 and 3\)"):
+        read_log(path)
+
+
+@pytest.mark.parametrize("digits", ["١٢", "１２", "٣.٥", "12\u00a0"])
+@pytest.mark.parametrize("column", [0, 4, 5])
+def test_digits_of_other_scripts_are_named_not_read(rig_data, tmp_path, digits, column):
+    """A fuzzing round: float() reads Arabic-Indic "١٢" (and fullwidth "１２") as 12, so such a
+    field in t, θ or a was taken for a number; no log writes them."""
+    lines = (rig_data / "SFLR_P_control_step_kp_2_SLFR_RTP_P_control_kp=2.0.txt").read_text().splitlines()
+    k = next(i for i, ln in enumerate(lines) if not ln.startswith("#")) + 100
+    f = lines[k].split("\t")
+    f[column] = digits
+    lines[k] = "\t".join(f)
+    path = tmp_path / "digits.txt"
+    path.write_text("\n".join(lines) + "\n", encoding="utf-8")
+    with pytest.raises(RunLogError, match=f"line {k + 1}: expected a number in column .*characters outside ASCII"):
+        read_log(path)

@@ -72,3 +72,30 @@ def test_to_jsonable():
     json.dumps(out, allow_nan=False)
     with pytest.raises(TypeError, match="object"):
         to_jsonable({"x": object()})
+
+
+@pytest.mark.parametrize("t_of", [lambda i: 0.0 * i, lambda i: 2.0 - 0.002 * i, lambda i: 1000.0 * i,
+                                  lambda i: 1e-9 * i],
+                         ids=["all zero", "backwards", "1000 s a row", "1 ns a row"])
+def test_a_t_column_that_is_no_time_base_is_not_used(rig_data, tmp_path, t_of):
+    """A fuzzing round: t all 0 gave 'settling (1 %) 0.000 s', t backwards -1.250 s, t of 1000 s a
+    row 625000 s and a θ fit of -15 million %. The claimed time base is used, and said."""
+    from station.logged import LoggedRun
+
+    src = rig_data / "SFLR_P_control_step_kp_2_SLFR_RTP_P_control_kp=2.0.txt"
+    lines, i = [], 0
+    for ln in src.read_text().splitlines():
+        if ln.startswith("#") or not ln.strip():
+            lines.append(ln)
+            continue
+        f = ln.split()
+        f[0] = repr(t_of(i))
+        lines.append("\t".join(f))
+        i += 1
+    path = tmp_path / "t.txt"
+    path.write_text("\n".join(lines) + "\n")
+    clean, run = LoggedRun.from_path(src), LoggedRun.from_path(path)
+    assert run.step_metrics() == clean.step_metrics() and run.dt == 0.002
+    (claim,) = [c for c in run.audit.claims if c.claim == "sample_time"]
+    assert claim.verdict == "contradicted" and ("does not increase" in claim.data or "not a sample time" in claim.data)
+    np.testing.assert_allclose(run.data["t"], clean.data["t"], rtol=0, atol=1e-12)

@@ -47,10 +47,11 @@ from dataclasses import dataclass
 import numpy as np
 
 from station.analysis.accel_law import AccelFeedback, accel_feedback, lagged
-from station.analysis.continuous_design import ContinuousDesign, alternatives_phrase, to_continuous
+from station.analysis.continuous_design import ContinuousDesign
 from station.analysis.law_rows import TOLERANCE, LawRows, no_dac_command, pinned_law, pins_a_law, tie_rows
+from station.analysis.law_words import law_text
 from station.analysis.sent_law import sent_designs
-from station.control.compensator import SENT, STORED, recursion_words
+from station.control.compensator import SENT, STORED
 from station.control import DAC_LIMIT, Compensator, DiscreteTF, OpenLoop, lead_controller  # DAC_LIMIT: the clamp assumed when v exceeds the rig's ±200
 from station.control.rerun import ALIGNMENTS, AlignmentFit, detect_alignment
 from station.rig import CLAMP, DT
@@ -318,70 +319,6 @@ def aligned_error(u: np.ndarray, theta: np.ndarray, d: int) -> np.ndarray:
     return e
 
 
-def _s_poly(c: np.ndarray) -> str:
-    """A polynomial in s (descending powers) to 4 significant digits, negligible terms left out."""
-    n, big = c.size - 1, float(np.max(np.abs(c)))
-    terms = []
-    for i, x in enumerate(c):
-        if abs(x) <= 1e-9 * big:
-            continue
-        power = n - i
-        s_part = "" if power == 0 else "s" if power == 1 else f"s^{power}"
-        mag = "" if abs(abs(x) - 1.0) < 1e-12 and power else f"{abs(x):.4g}"
-        terms.append(("-" if x < 0 else "+") + mag + s_part)
-    text = "".join(terms).lstrip("+")
-    return text or "0"
-
-
-def ga_text(ga: DiscreteTF, dt: float) -> str:
-    """Accelerometer feedback in a few words: the thesis's Ga when it is that law, else its
-    continuous form by the Tustin inverse (4 digits; the z-law itself is in the spec).
-
-    Parameters
-    ----------
-    ga : DiscreteTF
-    dt : float
-        Sample time, s.
-    """
-    thesis = lead_controller(CLAMP, dt, accel=True).ga
-    if (ga.num.size == thesis.num.size and ga.den.size == thesis.den.size
-            and np.allclose(ga.num, thesis.num, rtol=1e-6, atol=0.0)
-            and np.allclose(ga.den, thesis.den, rtol=1e-6, atol=0.0)):
-        return "the thesis's accelerometer feedback Ga"
-    order = max(ga.num.size, ga.den.size) - 1
-    back = to_continuous(ga.num, ga.den, dt, "Tustin") if order else None
-    if back is None:
-        fmt = lambda x: "[" + ", ".join(f"{y:.8g}" for y in x) + "]"  # noqa: E731
-        return f"accelerometer feedback Ga num {fmt(ga.num)}, den {fmt(ga.den)} (z^-1)"
-    return f"accelerometer feedback Ga ≈ ({_s_poly(back[0])})/({_s_poly(back[1])}) (Tustin, {dt:g} s)"
-
-
-def law_text(order: int, c: np.ndarray, design: ContinuousDesign | None, dt: float, recursion: str,
-             limit: float, rig_limit: float, ga: DiscreteTF | None = None) -> str:
-    """A law found in a log in one line for reports (:attr:`IdentifiedController.law`): the P
-    gain, the continuous design and its discretization, or the z-coefficients; its recursion,
-    the designs the log does not tell apart from it, Ga, and a clamp other than ``rig_limit``.
-    """
-    if order == 0:
-        text = f"P, kp = {c[0]:g}"
-    elif design is not None:
-        text = f"{design.text} ({design.method}, {dt:g} s)"
-    else:
-        fmt = lambda x: "[" + ", ".join(f"{y:.8g}" for y in x) + "]"  # noqa: E731
-        text = (f"linear compensator e -> v of order {order}, num {fmt(c[:order + 1])}, "
-                f"den {fmt(np.concatenate(([1.0], c[order + 1:])))} (z^-1)")
-    if recursion != "none":  # before the alternatives: theirs is said where it differs
-        text += f", {recursion_words(recursion)}"
-    if design is not None and design.alternatives:  # the log does not tell them apart: said, never hidden
-        text += alternatives_phrase([(d.text, d.method, d.recursion) for d in design.alternatives], design.method,
-                                    design.more)
-    if ga is not None:
-        text += f", with {ga_text(ga, dt)}"
-    if limit != rig_limit:
-        text += f", clamp ±{limit:g}"
-    return text
-
-
 def infer_controller(u, theta, v, a=None, dt: float = DT, rig_limit: float = CLAMP,
                      alignments=(0, 1), prefer: int | None = PREFERRED_ALIGNMENT,
                      cut: bool = False, restarts=()) -> IdentifiedController | None:
@@ -496,6 +433,36 @@ def _accepted(rows: LawRows, recursion: str, d: int, log, dt: float, rig_limit: 
     except ValueError:
         return None
     law = law_text(order, c, design, dt, recursion, limit, rig_limit, ctl.ga)
+    return replayed_or_tied(ctl, log, law, alignments, design, prefer, primed, restarts, rows, c, recursion, d)
+
+
+def replayed_or_tied(ctl, log, law: str, alignments, design, prefer, primed: int, restarts, rows: LawRows,
+                     c: np.ndarray, recursion: str, d: int) -> IdentifiedController | None:
+    """A law found on a log's rows, run as the rig ran it (:func:`check_law`): accepted when it
+    reproduces every logged v, or when it differs only on rows whose exact value is a quantization
+    boundary, which the lab's arithmetic decided (:func:`station.analysis.law_rows.tie_rows`).
+
+    Parameters
+    ----------
+    ctl : Compensator
+    log : tuple of array_like
+        (u, θ, a, v).
+    law : str
+        Its words (:func:`law_text`).
+    alignments, design, prefer, primed, restarts
+        As :func:`check_law`.
+    rows : LawRows
+        The log's rows at alignment ``d``.
+    c : numpy.ndarray
+        The law's coefficients, [b_0..b_m, a_1..a_m].
+    recursion : {"none", "trunc", "round"}
+    d : int
+        The rows' alignment.
+
+    Returns
+    -------
+    IdentifiedController or None
+    """
     hit = check_law(ctl, *log, law, alignments, design, prefer, primed, restarts)
     if hit is not None and hit.max_abs_dv <= TOLERANCE:
         return hit

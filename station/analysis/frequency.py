@@ -291,7 +291,19 @@ def compare_bode(v, theta, a, dt: float, model, nperseg: int = 4096, max_hz: flo
     Returns
     -------
     BodeComparison
+
+    Raises
+    ------
+    ValueError
+        v or θ never changes (nothing drove the plant, or the hub never moved: θ/v is 0/0 or
+        0 in every bin), or a run shorter than one segment.
     """
+    for name, x, why in (("v", v, "nothing drove the plant"), ("θ", theta, "the hub never moved")):
+        x = np.asarray(x, dtype=float)
+        finite = x[np.isfinite(x)]
+        if x.size and not (finite.size and np.ptp(finite) > 0):
+            raise ValueError(f"{name} never changes (it holds {x[0]:g} throughout): {why}, there is no θ/v "
+                             f"to estimate")
     plant = model if isinstance(model, DiscretePlant) else model.linear_plant(dt)
     est_theta = h1_estimate(v, theta, 1.0 / dt, nperseg)
     est_accel = h1_estimate(v, a, 1.0 / dt, nperseg)

@@ -13,12 +13,13 @@ from __future__ import annotations
 import numpy as np
 
 from station.analysis.continuous_design import recognize
-from station.analysis.controller_id import (MAX_ORDER, IdentifiedController, aligned_error, check_law,
-                                            law_compensator, law_text)
-from station.analysis.law_rows import BOUNDARY, TOLERANCE, LawRows, nudged_inside, pinned_law
+from station.analysis.controller_id import (MAX_ORDER, IdentifiedController, aligned_error, law_compensator,
+                                            replayed_or_tied)
+from station.analysis.law_words import law_text
+from station.analysis.law_rows import BOUNDARY, LawRows, nudged_inside, pinned_law
 from station.control import Compensator, DiscreteTF
 from station.control.compensator import STORED
-from station.control.rerun import is_closed_loop
+from station.control.rerun import ALIGNMENTS, is_closed_loop
 from station.rig import DT
 
 PRINTED_TOLERANCE = 5.0001e-9
@@ -140,7 +141,8 @@ def completed_law(controller, u, theta, a, v, d: int, dt: float = DT, rig_limit:
     u, theta, a, v : array_like, shape (N,)
         The log's reference, hub angle, accelerometer and commands (counts).
     d : int
-        The alignment the header's law came nearest at.
+        The alignment the header's law came nearest at (tried first; then the other: a print a
+        count off may come nearest at the wrong one).
     dt : float
         Sample time, s.
     rig_limit : float, optional
@@ -154,7 +156,8 @@ def completed_law(controller, u, theta, a, v, d: int, dt: float = DT, rig_limit:
     -------
     IdentifiedController or None
         The design's law, named by its text and holding it in its spec, when it reproduces every
-        logged v (to :data:`station.analysis.law_rows.TOLERANCE`); None for open loop, a P
+        logged v (to :data:`station.analysis.law_rows.TOLERANCE`, or but on rows whose exact value
+        is a quantization boundary: :func:`station.analysis.controller_id.replayed_or_tied`); None for open loop, a P
         law, a law with Ga, a station log's (its compensator file's coefficients are whole), or
         no design within the print that does.
     """
@@ -166,6 +169,16 @@ def completed_law(controller, u, theta, a, v, d: int, dt: float = DT, rig_limit:
     order = den.size - 1
     if not 1 <= order <= MAX_ORDER or num.size != den.size:
         return None
+    for at in (d, *(x for x in ALIGNMENTS if x != d)):  # the print's miss may have chosen the other alignment
+        hit = _completed_at(controller, num, den, order, u, theta, a, v, at, dt, rig_limit, prefer, restarts)
+        if hit is not None:
+            return hit
+    return None
+
+
+def _completed_at(controller, num, den, order: int, u, theta, a, v, d: int, dt: float, rig_limit, prefer,
+                  restarts) -> IdentifiedController | None:
+    """:func:`completed_law` at one alignment."""
     rows = LawRows(aligned_error(np.asarray(u, float), np.asarray(theta, float), d), np.asarray(v, float), d, order,
                    controller.limit)
     tol_num = PRINTED_TOLERANCE + SAME_LAW_RTOL * np.abs(num)
@@ -197,5 +210,5 @@ def completed_law(controller, u, theta, a, v, d: int, dt: float = DT, rig_limit:
                       shaper=controller.shaper, recursion=controller.recursion)
     limit = controller.limit if rig_limit is None else rig_limit
     words = law_text(order, np.concatenate([num_z, den_z[1:]]), design, dt, controller.recursion, law.limit, limit)
-    hit = check_law(law, u, theta, a, v, words, (d,), design, prefer, restarts=restarts)
-    return hit if hit is not None and hit.max_abs_dv <= TOLERANCE else None
+    return replayed_or_tied(law, (u, theta, a, v), words, (d,), design, prefer, 0, restarts, rows, c,
+                            controller.recursion, d)

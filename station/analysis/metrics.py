@@ -49,7 +49,15 @@ class StepMetrics:
         settled within the run")."""
         label = settling_label(THESIS_BAND_PCT)
         settle = NOT_SETTLED if self.settling_time_s is None else f"{self.settling_time_s:.3f} s {FROM_START}"
-        return f"overshoot {self.overshoot_pct:.2f} %, {label} {settle}"
+        return f"{self.overshoot_words()}, {label} {settle}"
+
+    def overshoot_words(self) -> str:
+        """``overshoot 24.00 %``; below 0 with why: ``overshoot -92.00 % (θ never reached the step:
+        its peak 8 % of it)`` (a run that ended before the response rose)."""
+        text = f"overshoot {self.overshoot_pct:.2f} %"
+        if self.overshoot_pct < 0:
+            text += f" (θ never reached the step: its peak {100 + self.overshoot_pct:.0f} % of it)"
+        return text
 
 
 def settling_label(band_pct: float) -> str:

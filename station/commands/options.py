@@ -43,6 +43,16 @@ class StationParser(argparse.ArgumentParser):
         """
         self.exit(2, f"{self.prog}: error: {message}\n")
 
+    def _get_value(self, action: argparse.Action, arg_string: str):
+        # argparse's one place where each value's text is converted: an empty value is refused
+        # for every option and argument alike (Path("") is the working folder, silently; a
+        # model, controller or reference of "" names nothing)
+        if isinstance(arg_string, str) and not arg_string.strip() and action.nargs not in (argparse.PARSER,
+                                                                                          argparse.REMAINDER):
+            raise argparse.ArgumentError(action, f"an empty value {arg_string!r}: expected "
+                                                 f"{action.metavar or action.dest.replace('_', ' ')}")
+        return super()._get_value(action, arg_string)
+
 
 def document_ranges(parser: argparse.ArgumentParser) -> None:
     """Append each :class:`Number` option's range to its help text (idempotent).

@@ -22,13 +22,13 @@ import numpy as np
 from station.analysis.controller_id import (
     PREFERRED_ALIGNMENT,
     TOLERANCE,
-    ga_text,
     infer_controller,
     variant_of,
     with_recursion,
 )
 from station.analysis.header_law import (NEAR_COUNTS, PRINTED_TOLERANCE, SAME_LAW_RTOL, completed_law, named_design,
                                         same_law)
+from station.analysis.law_words import ga_text
 from station.analysis.law_rows import pins_a_law
 from station.analysis.pid_law import match_pid
 from station.control import Compensator, DiscreteTF, OpenLoop, controller_from_spec, lead_controller, p_controller

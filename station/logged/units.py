@@ -285,6 +285,19 @@ def first_run(log: RunLog) -> tuple[AuditClaim | None, RunLog]:
     return claim, dataclasses.replace(log, data={c: x[:k] for c, x in log.data.items()}, notes=notes)
 
 
+SAMPLE_TIMES = (1e-5, 0.1)
+"""Sample times a log's t may step by, s: from a 100 kHz loop to 10 Hz (the beam's first mode,
+2.5 Hz, needs faster). Outside, t is no time base and the claimed one is used."""
+
+
+def _ticks_times(log: RunLog, dt: float) -> dict[str, np.ndarray]:
+    """n (the sample column, or the rows' index where the log has none) and t = dt·(n − n[0])."""
+    n = np.asarray(log.data["n"], dtype=float)
+    if any("no sample column" in x for x in log.notes) or not (n.size and np.all(np.isfinite(n))):
+        n = np.arange(len(log), dtype=float)
+    return {"n": n, "t": (n - n[0]) * dt}
+
+
 def time_base(log: RunLog) -> TimeBase:
     """Check a log's sample time (our header's ``dt``, else the rig's 0.002 s with t in s)
     against its t column, its θ column's unit (encoder counts) against θ's quantization, and
@@ -315,8 +328,18 @@ def time_base(log: RunLog) -> TimeBase:
     claimed = float(stated) if stated is not None else DT
     where = f"dt = {claimed:g} s" if stated is not None else f"{claimed:g} s (the rig's rate; t in s)"
     t = np.asarray(data["t"], dtype=float)
-    has_t = sample_time is not None and not any("no time column" in n for n in log.notes)
+    no_t = any("no time column" in n for n in log.notes)
+    has_t = sample_time is not None and not no_t
     new_meta = None
+    if not has_t and not no_t and t.size > 1 and np.all(np.isfinite(t)):  # a t that does not increase
+        back = int(np.flatnonzero(np.diff(t) <= 0)[0]) + 1
+        claims.append(AuditClaim("sample_time", where, "t does not increase", "contradicted",
+                                 f"t goes from {t[back - 1]:.6g} to {t[back]:.6g} s at row {back} and increases on "
+                                 f"{np.count_nonzero(np.diff(t) > 0)} of {t.size - 1} rows: no time base; "
+                                 f"{claimed:g} s a tick is used"))
+        changes.update(_ticks_times(log, claimed))
+        sample_time = claimed
+        notes.append(f"t does not increase (the audit): {claimed:g} s a tick used, t = {claimed:g}·(n - n[0])")
     if has_t:
         steps = np.diff(t)
         spread = f"steps {np.min(steps):.6g} .. {np.max(steps):.6g} s, median {sample_time:.6g} s"
@@ -333,14 +356,20 @@ def time_base(log: RunLog) -> TimeBase:
                                      f"t {spread}; over the run {host:.7g} s a row, {claimed:g} s to "
                                      f"{abs(host / claimed - 1):.2%}: the rows are the rig's ticks, t the time "
                                      f"each reached the computer"))
-            n = np.arange(t.size, dtype=float) if any("no sample column" in x for x in log.notes) else \
-                np.asarray(data["n"], dtype=float)
-            changes["n"] = n
-            changes["t"] = (n - n[0]) * claimed
+            changes.update(_ticks_times(log, claimed))
             sample_time = claimed
             notes.append(f"t holds a host's time stamps (from {t[0]:.10g} s, steps {np.min(steps):.6g} .. "
                          f"{np.max(steps):.6g} s; the audit): the rig's {claimed:g} s a tick used, "
                          f"t = {claimed:g}·(n - n[0])")
+        elif not SAMPLE_TIMES[0] <= sample_time <= SAMPLE_TIMES[1]:  # no loop's, no beam's
+            claims.append(AuditClaim("sample_time", where, f"t steps by {sample_time:g} s: not a sample time",
+                                     "contradicted", f"t {spread}: no rig or simulation samples at that rate "
+                                     f"({SAMPLE_TIMES[0]:g} .. {SAMPLE_TIMES[1]:g} s: the beam's 2.5 Hz mode needs "
+                                     f"under {SAMPLE_TIMES[1]:g} s); t is not used, {claimed:g} s a tick is"))
+            notes.append(f"t steps by {sample_time:g} s, no sample time (the audit): {claimed:g} s a tick used, "
+                         f"t = {claimed:g}·(n - n[0])")
+            changes.update(_ticks_times(log, claimed))
+            sample_time = claimed
         else:
             claims.append(AuditClaim("sample_time", where, f"{sample_time:g} s", "contradicted",
                                      f"t {spread}; the data's {sample_time:g} s is used"))

@@ -322,6 +322,9 @@ def load_model(name_or_path: str | Path = "tmm-fit", n_elements: int | None = No
                            file=path)
     doc = load_toml(path, "model file")
     raw = doc.data
+    if not raw:  # nothing said: it would run as tmm-fit, silently (a file emptied by mistake)
+        raise StationError(f"{path}: an empty model file: expected at least one of {', '.join(_KEYS)} "
+                           f"(a file that names nothing is no model)", file=path)
     unknown = [k for k in raw if k not in _KEYS]
     if unknown:
         raise doc.error(unknown[0], f"unknown key (expected {', '.join(_KEYS)})")

@@ -159,6 +159,8 @@ def load_params(name_or_path: str | Path = "tmm-fit") -> Params:
         raise StationError(f"{path}: parameter file not found (packaged sets: {', '.join(builtin_params())})",
                            file=path)
     doc = load_toml(path, "parameter file")
+    if not doc.data:  # nothing said: every field its default, silently
+        raise StationError(f"{path}: an empty parameter file: expected the parameters it sets", file=path)
     return params_from_dict(doc.data, path, doc.line_of)
 
 

@@ -38,6 +38,8 @@ class Header(NamedTuple):
 
 _KV = re.compile(r"^\s*([A-Za-z_]\w*)\s*=\s*(.*?)\s*$")
 _COEF = re.compile(r"^\s*(\w+)\s+(num|den)\s*=\s*\[(.*)\]\s*$")
+_COEF_START = re.compile(r"^\s*(gth|ga)\b\s*(num|den)?", re.IGNORECASE)
+"""The start of a filter's coefficient line, however it goes on (:data:`_COEF` is its whole form)."""
 _KEYS = {name.lower(): name for name in ("kp", "ki", "kd", "b0", "b1", "a1", "Gth", "Ga")}
 """The controller's fields by their lower case: a header's ``#Kp=2`` or ``#GTH num=`` is the
 rig software's ``#kp=2`` and ``#Gth num=``."""
@@ -101,10 +103,14 @@ def parse_rig_header(path: Path, comment_lines: list[str]) -> Header:
     meta["columns"] = names
     other = []
     coef_lines: dict[str, int] = {}
+    kv_lines: dict[str, int] = {}
     for i, line in enumerate(info):
         body = line[1:].strip()
         coef = _COEF.match(body)
         kv = _KV.match(body)
+        if not coef and i > 0 and (start := _COEF_START.match(body)) is not None:
+            raise log_error(path, i + 1, f"expected {start.group(1)} num=[c0 c1 ...] or {start.group(1)} den=[...] "
+                            f"(numbers between brackets, on one line), got {line[:80]!r}", key=start.group(1))
         if i == 0 and not kv and not coef:
             meta["title"] = body
             parts = body.split()
@@ -120,11 +126,17 @@ def parse_rig_header(path: Path, comment_lines: list[str]) -> Header:
                                 f"coefficients" + (", den[0] not 0 (the filter would be non-causal)"
                                                    if coef.group(2) == "den" else ""), key=coef.group(1))
             name = _KEYS.get(coef.group(1).lower(), coef.group(1))
+            if coef.group(2) in meta.get(name, {}):
+                raise log_error(path, i + 1, f"{name} {coef.group(2)} given twice: expected one", key=name)
             meta.setdefault(name, {})[coef.group(2)] = values
             coef_lines[name] = i + 1
         elif kv:
             key, val = kv.groups()
             key = _KEYS.get(key.lower(), key)
+            if key in kv_lines:
+                raise log_error(path, i + 1, f"{key} given twice (lines {kv_lines[key]} and {i + 1}): expected one",
+                                key=key)
+            kv_lines[key] = i + 1
             try:
                 meta[key] = float(val)
             except ValueError:

@@ -60,6 +60,9 @@ def parse_row(line: str, names: list[str], sep: str | None) -> tuple[list[float]
     parts = line.split(sep)
     if len(parts) != len(names):
         return None, f"expected {len(names)} {SEPARATOR_NAMES[sep]}-separated numbers, got {len(parts)}"
+    wide = next((j for j, p in enumerate(parts) if not p.isascii()), None)
+    if wide is not None:  # float() reads other scripts' digits ("١٢" is 12): no log writes them
+        return None, f"expected a number in column {names[wide]!r}, got {parts[wide]!r} (characters outside ASCII)"
     try:
         return [float(p) for p in parts], None
     except ValueError:
@@ -184,6 +187,7 @@ class DataLines:
         self.resumed: list[tuple[int, int]] = []
         self._comment: int | None = None
         self._rows = 0
+        self.non_ascii = False
 
     def __iter__(self):
         while (item := self.lines.next()) is not None:
@@ -207,6 +211,8 @@ class DataLines:
                 warnings.warn(f"{self.path}: line {lineno}: torn last line (no newline; the writer was "
                               f"interrupted mid-row) skipped", RuntimeWarning, stacklevel=4)
                 continue
+            if not line.isascii():  # Python reads "١٢" as 12: the row-by-row pass names it (parse_row)
+                self.non_ascii = True
             self.lineno = lineno
             self._rows += 1
             yield line
@@ -248,7 +254,7 @@ def load_rows(path: Path, lines: Lines, fmt: str, names: list[str], sep: str | N
             arr = np.loadtxt(iter(data_lines), dtype=float, delimiter=sep, comments=None, ndmin=2, encoding=None)
         if arr.size == 0:
             arr = np.empty((0, len(names)))
-        if arr.shape[1] == len(names):
+        if arr.shape[1] == len(names) and not data_lines.non_ascii:
             return arr, data_lines
     except UnicodeDecodeError:
         raise

@@ -1,0 +1,77 @@
+"""A law found in a log in words: its continuous design or z-coefficients, its recursion, the
+designs the log does not tell apart from it, and an accelerometer feedback Ga
+(:attr:`station.analysis.controller_id.IdentifiedController.law`).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from station.analysis.continuous_design import ContinuousDesign, alternatives_phrase, to_continuous
+from station.control import DiscreteTF, lead_controller
+from station.control.compensator import recursion_words
+from station.rig import CLAMP
+
+
+def _s_poly(c: np.ndarray) -> str:
+    """A polynomial in s (descending powers) to 4 significant digits, negligible terms left out."""
+    n, big = c.size - 1, float(np.max(np.abs(c)))
+    terms = []
+    for i, x in enumerate(c):
+        if abs(x) <= 1e-9 * big:
+            continue
+        power = n - i
+        s_part = "" if power == 0 else "s" if power == 1 else f"s^{power}"
+        mag = "" if abs(abs(x) - 1.0) < 1e-12 and power else f"{abs(x):.4g}"
+        terms.append(("-" if x < 0 else "+") + mag + s_part)
+    text = "".join(terms).lstrip("+")
+    return text or "0"
+
+
+def ga_text(ga: DiscreteTF, dt: float) -> str:
+    """Accelerometer feedback in a few words: the thesis's Ga when it is that law, else its
+    continuous form by the Tustin inverse (4 digits; the z-law itself is in the spec).
+
+    Parameters
+    ----------
+    ga : DiscreteTF
+    dt : float
+        Sample time, s.
+    """
+    thesis = lead_controller(CLAMP, dt, accel=True).ga
+    if (ga.num.size == thesis.num.size and ga.den.size == thesis.den.size
+            and np.allclose(ga.num, thesis.num, rtol=1e-6, atol=0.0)
+            and np.allclose(ga.den, thesis.den, rtol=1e-6, atol=0.0)):
+        return "the thesis's accelerometer feedback Ga"
+    order = max(ga.num.size, ga.den.size) - 1
+    back = to_continuous(ga.num, ga.den, dt, "Tustin") if order else None
+    if back is None:
+        fmt = lambda x: "[" + ", ".join(f"{y:.8g}" for y in x) + "]"  # noqa: E731
+        return f"accelerometer feedback Ga num {fmt(ga.num)}, den {fmt(ga.den)} (z^-1)"
+    return f"accelerometer feedback Ga ≈ ({_s_poly(back[0])})/({_s_poly(back[1])}) (Tustin, {dt:g} s)"
+
+
+def law_text(order: int, c: np.ndarray, design: ContinuousDesign | None, dt: float, recursion: str,
+             limit: float, rig_limit: float, ga: DiscreteTF | None = None) -> str:
+    """A law found in a log in one line for reports (:attr:`IdentifiedController.law`): the P
+    gain, the continuous design and its discretization, or the z-coefficients; its recursion,
+    the designs the log does not tell apart from it, Ga, and a clamp other than ``rig_limit``.
+    """
+    if order == 0:
+        text = f"P, kp = {c[0]:g}"
+    elif design is not None:
+        text = f"{design.text} ({design.method}, {dt:g} s)"
+    else:
+        fmt = lambda x: "[" + ", ".join(f"{y:.8g}" for y in x) + "]"  # noqa: E731
+        text = (f"linear compensator e -> v of order {order}, num {fmt(c[:order + 1])}, "
+                f"den {fmt(np.concatenate(([1.0], c[order + 1:])))} (z^-1)")
+    if recursion != "none":  # before the alternatives: theirs is said where it differs
+        text += f", {recursion_words(recursion)}"
+    if design is not None and design.alternatives:  # the log does not tell them apart: said, never hidden
+        text += alternatives_phrase([(d.text, d.method, d.recursion) for d in design.alternatives], design.method,
+                                    design.more)
+    if ga is not None:
+        text += f", with {ga_text(ga, dt)}"
+    if limit != rig_limit:
+        text += f", clamp ±{limit:g}"
+    return text
