@@ -455,3 +455,18 @@ def test_digits_of_other_scripts_are_named_not_read(rig_data, tmp_path, digits, 
     path.write_text("\n".join(lines) + "\n", encoding="utf-8")
     with pytest.raises(RunLogError, match=f"line {k + 1}: expected a number in column .*characters outside ASCII"):
         read_log(path)
+
+
+def test_an_unstable_header_law_is_said_to_diverge_not_nan(rig_data, tmp_path):
+    """A fuzzing round: a header Ga with a pole outside the unit circle printed '(max |dv| = nan
+    counts)'. Its replay leaves the finite numbers: no match, said so; the data's law is used."""
+    from station.logged import LoggedRun
+
+    lines = (rig_data / LEAD_ACCEL_LOG).read_text().splitlines()
+    lines[4] = "#Ga den=[ 1.         -3.5         2.85853684 -0.92960052]"
+    path = tmp_path / "unstable.txt"
+    path.write_text("\n".join(lines) + "\n")
+    run = LoggedRun.from_path(path)
+    claim = next(c for c in run.audit.claims if c.claim == "controller")
+    assert "nan" not in claim.evidence and "its replay diverges: an unstable law" in claim.evidence
+    assert claim.verdict == "contradicted" and run.reproduced

@@ -51,6 +51,13 @@ def run(args: argparse.Namespace) -> int:
                            "(in-process, open the port URL sim:// instead)")
     from station.sim.pty_server import serve_pty  # lazy: start-up time (the FEM plant)
 
+    if args.model is not None:  # named by its option, as every command names it
+        from station.plant import load_model
+
+        try:
+            load_model(args.model)
+        except StationError as exc:
+            raise StationError(f"--model: {exc}") from None
     try:
         serve_pty(args.protocol, args.realtime, args.seed, args.elements, model=args.model)
     except (ValueError, StationError) as exc:  # a bad --model / --elements / --seed, before the pty is opened

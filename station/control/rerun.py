@@ -300,10 +300,13 @@ def command_error(v_replayed, v, printing=_OF_V, seeded=()) -> np.ndarray:
     Returns
     -------
     numpy.ndarray, shape (N,)
-        0 where the replay is within the printing.
+        0 where the replay is within the printing; inf where it left the finite numbers and
+        the log did not (NaN only where the log's own v is).
     """
     v = np.asarray(v, dtype=float)
-    err = np.abs(np.asarray(v_replayed, dtype=float) - v)
+    replayed = np.asarray(v_replayed, dtype=float)
+    err = np.abs(replayed - v)
+    err[np.isfinite(v) & ~np.isfinite(replayed)] = np.inf  # a replay that diverged (an unstable law): no match, not NaN
     if printing is _OF_V:
         printing = printed_commands(v)
     if printing is None:

@@ -15,6 +15,7 @@ or contradict it, and a contradicted header gives way to the data's law.
 
 from __future__ import annotations
 
+import math
 from typing import Any, NamedTuple
 
 import numpy as np
@@ -456,14 +457,14 @@ def identify_controller(log: RunLog, skipped=None) -> ControllerId:
             return ControllerId(hit.controller, "header", notes, fit, AuditClaim(
                 "controller", said, data_says, "confirmed",
                 f"the data's law has the header's coefficients (to {SAME_LAW_RTOL:g} relative); as printed it "
-                f"replays v to max |dv| = {header_dv:.3g} counts, completed from the data "
+                f"replays v to max |dv| = {_counts(header_dv)}, completed from the data "
                 f"{_how_close(hit.max_abs_dv, printing)}{at}"), hit.alignments, cut=cut)
         if stated:
             notes.append(f"the header's controller ({said}) does not reproduce the logged v (max |dv| = "
-                         f"{header_dv:.3g} counts); the data's is used: {data_says}")
+                         f"{_counts(header_dv)}); the data's is used: {data_says}")
             return ControllerId(hit.controller, "inferred (header contradicted)", notes, fit, AuditClaim(
                 "controller", said, data_says, "contradicted",
-                f"the header's controller replays v to max |dv| = {header_dv:.3g} counts at best; the data's law "
+                f"the header's controller replays v to max |dv| = {_counts(header_dv)} at best; the data's law "
                 f"reproduces every logged v {_how_close(hit.max_abs_dv, printing)}{at}"), hit.alignments, cut=cut)
         notes.append(f"controller inferred from the data: {hit.law}, alignment {hit.alignment} "
                      f"(reproduces the logged v {_how_close(hit.max_abs_dv, printing)})")
@@ -479,9 +480,9 @@ def identify_controller(log: RunLog, skipped=None) -> ControllerId:
         return ControllerId(None, None, notes, None, AuditClaim(
             "controller", said, NO_LAW, "unchecked", f"none reproduces the logged v ({tried})"))
     verdict = "contradicted" if header_dv >= 1.0 else "unchecked"
-    evidence = (f"the header's controller replays v to max |dv| = {header_dv:.3g} counts at best, and no law "
+    evidence = (f"the header's controller replays v to max |dv| = {_counts(header_dv)} at best, and no law "
                 f"tried ({tried}) reproduces it")
-    data_says = f"not this law (max |dv| = {header_dv:.3g} counts); no law found"
+    data_says = f"not this law (max |dv| = {_counts(header_dv)}); no law found"
     gap = None if controller is None else _miss_at_gap(used, u, theta, a, v, data["n"], skipped)
     if gap is not None:  # the law is judged on rows it never saw together: not a contradiction
         gap, fit = gap
@@ -514,6 +515,11 @@ def _miss_at_gap(controller, u, theta, a, v, n, skipped) -> tuple[int, Alignment
         if near.size:
             return int(near[0]), fit
     return None
+
+
+def _counts(dv: float) -> str:
+    """A replay's largest miss in words: "3 counts", or that the replay diverged (an unstable law)."""
+    return f"{dv:.3g} counts" if math.isfinite(dv) else "no finite value (its replay diverges: an unstable law)"
 
 
 _CUT_NOTE = ("the law reproduces the log with its first {} row(s) of memory taken as logged: a copy cut from a "
