@@ -53,9 +53,31 @@ def ga_text(ga: DiscreteTF, dt: float) -> str:
 
 def law_text(order: int, c: np.ndarray, design: ContinuousDesign | None, dt: float, recursion: str,
              limit: float, rig_limit: float, ga: DiscreteTF | None = None) -> str:
-    """A law found in a log in one line for reports (:attr:`IdentifiedController.law`): the P
-    gain, the continuous design and its discretization, or the z-coefficients; its recursion,
-    the designs the log does not tell apart from it, Ga, and a clamp other than ``rig_limit``.
+    """A law found in a log in one line for reports
+    (:attr:`station.analysis.controller_id.IdentifiedController.law`).
+
+    Parameters
+    ----------
+    order : int
+        The law's order (0: a P gain).
+    c : numpy.ndarray, shape (2·order + 1,)
+        [b_0..b_m, a_1..a_m].
+    design : ContinuousDesign or None
+        Its continuous design when recognised.
+    dt : float
+        Sample time, s.
+    recursion : {"none", "trunc", "round", ...}
+        What its recursion remembers (:func:`station.control.compensator.recursion_words`).
+    limit, rig_limit : float
+        Its clamp and the one left unsaid, DAC counts.
+    ga : DiscreteTF, optional
+        Its accelerometer feedback.
+
+    Returns
+    -------
+    str
+        The P gain, or the design and its discretization, or the z-coefficients; the recursion,
+        the designs the log does not tell apart from it, Ga, and a clamp other than ``rig_limit``.
     """
     if order == 0:
         text = f"P, kp = {c[0]:g}"

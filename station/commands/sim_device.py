@@ -52,7 +52,7 @@ def run(args: argparse.Namespace) -> int:
     from station.sim.pty_server import serve_pty  # lazy: start-up time (the FEM plant)
 
     if args.model is not None:  # named by its option, as every command names it
-        from station.plant import load_model
+        from station.plant import load_model  # lazy: start-up time, as serve_pty above
 
         try:
             load_model(args.model)

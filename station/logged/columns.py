@@ -143,7 +143,14 @@ def rewritten(log: RunLog, columns: tuple[str, ...]) -> RunLog:
 
 
 def rewritten_all(log: RunLog, rewrites: tuple[tuple[str, ...], ...]) -> RunLog:
-    """A copy of ``log`` with each of ``rewrites`` (:func:`rewritten`'s) applied in turn."""
+    """A copy of ``log`` with each of ``rewrites`` applied in turn.
+
+    Parameters
+    ----------
+    log : RunLog
+    rewrites : tuple of tuple of str
+        Each :func:`rewritten`'s ``columns``: two names to exchange, or one to negate.
+    """
     for columns in rewrites:
         log = rewritten(log, columns)
     return log

@@ -412,8 +412,18 @@ NAMED_RIVALS = 4
 
 
 def named(rv) -> str:
-    """The rivals left open, in words: each alternative, and each wide interval's ends
-    (``rv``: :func:`station.diagnosis.honesty.rivals.rivals`'s record)."""
+    """The rivals left open, in words: each alternative, and each wide interval's ends.
+
+    Parameters
+    ----------
+    rv : Rivals
+        :func:`station.diagnosis.honesty.rivals.rivals`'s record.
+
+    Returns
+    -------
+    str
+        Their labels joined by "; ", the first :data:`NAMED_RIVALS` of them and how many more.
+    """
     labels = [r.label for r in rv.rivals]
     more = len(labels) - NAMED_RIVALS
     return "; ".join(labels[:NAMED_RIVALS]) + (f"; and {more} more" if more > 0 else "")

@@ -88,9 +88,19 @@ class Decision:
     apart: bool
 
     def pay(self, shared: str | None = None) -> str:
-        """What per-session values pay, in words: "per-session values lower the held-out θ + a
-        cost by 43.0 % (θ RMS 25.5 %) against one shared value (6.79 DAC counts)", or "raise ...";
-        ``shared``: the shared value in words (left out where the sentence has said it)."""
+        """What per-session values pay, in words.
+
+        Parameters
+        ----------
+        shared : str or None
+            The shared value in words; None where the sentence has said it already.
+
+        Returns
+        -------
+        str
+            "per-session values lower the held-out θ + a cost by 43.0 % (θ RMS 25.5 %) against
+            one shared value (6.79 DAC counts)", or "... raise ... by ...".
+        """
         against = "one shared value" + ("" if shared is None else f" ({shared})")
         if self.cost_gain_pct >= 0:
             return (f"per-session values lower the held-out θ + a cost by {self.cost_gain_pct:.1f} % (θ RMS "
