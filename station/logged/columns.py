@@ -189,7 +189,8 @@ def check_columns(log: RunLog, skipped=None) -> Columns:
             continue
         sized = check_command_unit(trial, skipped)
         if sized is not None and sized.claims[0].data != UNKNOWN_UNIT:
-            return _swapped_back(log, (columns,), sized.log, as_named, "reproduces it in counts", also=sized.claims)
+            return _swapped_back(log, (columns,), sized.log, as_named, "the law reproduces v in counts",
+                                 also=sized.claims)
     if unit is not None:
         return unit
     if as_named is None:
