@@ -21,6 +21,7 @@ from station.analysis.metrics import FROM_START, SETTLE_HOLD_S, THESIS_BAND_PCT,
 from station.errors import StationError
 from station.logged import LoggedRun
 from station.logged.audit import Audit
+from station.logged.reproduction import reproduction_lines
 from station.plots import source_label
 from station.rig import THESIS_STEPS  # the thesis rows are shown for those step logs only
 
@@ -88,7 +89,7 @@ class RunComparison:
     step_time_s: float | None = None
 
     def to_json(self) -> dict:
-        """JSON-able summary (metrics as {overshoot_pct, settling_time_s} or null). ``rig``
+        """JSON-able summary (metrics as {overshoot_pct, settling_thesis_s} or null). ``rig``
         holds the log's own metrics whatever its ``source`` (rig / simulated / station)."""
         j = lambda m: None if m is None else m.to_json()  # noqa: E731
         return {"file": self.file, "source": self.source, "outcome": self.outcome,
@@ -129,8 +130,9 @@ def compare_run(path, plant) -> RunComparison:
     name = "none" if controller is None else controller.name  # none: the model is driven by the logged v
     if run.closed:
         clamp = "no clamp" if controller.limit is None else f"clamp ±{controller.limit:g}"
-        notes.append(f"alignment {run.alignment} detected: the replay reproduces the logged v to "
-                     f"{run.max_abs_dv:.3g} counts; {clamp}")
+        said = reproduction_lines(run.max_abs_dv, run.alignment, run.audit, run.identified.judged_to)
+        notes.append(f"{said[0]}; {clamp}")
+        notes.extend(said[1:])
     step = run.reference.amplitude if run.closed else None  # station.logged.reference: the one definition of a step
     tick = run.reference.step_tick
     step_time = None if step is None or tick is None else float(data["t"][tick])

@@ -116,9 +116,10 @@ class StepReport:
         Returns
         -------
         dict
-            JSON-able; ``metrics`` holds ``overshoot_pct`` and ``settling_time_s`` (the 1 %
-            band's, from t = 0), and :meth:`StepInfo.to_json`'s keys (``settling_time_2pct_s``
-            after the step...), None where undefined.
+            JSON-able; ``metrics`` holds ``overshoot_pct`` and ``settling_thesis_s`` (the 1 %
+            band's, from t = 0), and :meth:`StepInfo.to_json`'s keys (``settling_2pct_s``
+            after the step...), None where undefined: DESIGN.md's names, as ``station tune
+            --json``'s.
         """
         m = self.metrics
         return {
@@ -127,8 +128,7 @@ class StepReport:
             "reason": self.result.reason,
             "message": self.result.message,
             "outcome": self.result.outcome.to_json(),
-            "metrics": {"overshoot_pct": None if m is None else m.overshoot_pct,
-                        "settling_time_s": None if m is None else m.settling_time_s,
+            "metrics": {**({"overshoot_pct": None, "settling_thesis_s": None} if m is None else m.to_json()),
                         **(self.info.to_json() if self.info is not None else {})},
             "timing": self.result.timing().to_json(),
         }

@@ -24,6 +24,7 @@ from station.errors import StationError
 from station.logged import REPRODUCED_TOLERANCE, LoggedRun
 from station.logged.audit import Audit
 from station.logged.reference import Reference
+from station.logged.reproduction import reproduction_lines
 from station.runlog import RunLog
 
 
@@ -124,7 +125,7 @@ class ReplayReport:
         Keys: file, format, layout, sample_time_s, controller, controller_source
         ("header" | "inferred" | "inferred (header contradicted)" | null), audit (DESIGN.md
         "Log audit": [{claim, header, data, verdict, evidence}]), controller_spec, alignment, samples, max_abs_dv,
-        judged_to_row, reproduced, reference, metrics {overshoot_pct, settling_time_s} (nulls when not a
+        judged_to_row, reproduced, reference, metrics {overshoot_pct, settling_thesis_s} (nulls when not a
         closed-loop step), model {fit_pct {theta, accel}, n_elements} or null, beam_test
         {f1_hz, f1_hz_std, zeta1, zeta1_std, f1_model_hz, zeta1_model, ...} or null,
         outcome, notes.
@@ -145,8 +146,7 @@ class ReplayReport:
             "judged_to_row": self.judged_to,
             "reproduced": self.reproduced if self.max_abs_dv is not None else None,
             "reference": self.reference.to_json(),
-            "metrics": {"overshoot_pct": None if m is None else m.overshoot_pct,
-                        "settling_time_s": None if m is None else m.settling_time_s},
+            "metrics": {"overshoot_pct": None, "settling_thesis_s": None} if m is None else m.to_json(),
             "model": None if self.fit_pct is None else {"fit_pct": dict(self.fit_pct),
                                                         "n_elements": self.n_elements},
             "beam_test": None if self.beam_test is None else self.beam_test.to_json(),
@@ -293,11 +293,8 @@ def format_report(report: ReplayReport) -> str:
         lines.append(f"  controller: {report.controller}" + (f" ({source})" if source else "")
                      + alternatives_phrase(alts, design.get("method", ""), design.get("more_alternatives", 0)))
     if report.max_abs_dv is not None:
-        verdict = "reproduces" if report.reproduced else "does NOT reproduce"
-        align = "" if report.alignment is None else f", alignment d = {report.alignment}"
-        upto = "" if report.judged_to is None else (f" up to row {report.judged_to}, where n jumps (its memory "
-                                                    f"is not in the log's rows: not judged across it)")
-        lines.append(f"  replay {verdict} the logged v{upto}: max |dv| = {report.max_abs_dv:.3g} counts{align}")
+        lines += ["  " + line for line in reproduction_lines(report.max_abs_dv, report.alignment, report.audit,
+                                                             report.judged_to)]
     ref = report.reference
     if ref.is_step:
         lines.append(f"  reference: step of {ref.amplitude:g} at tick {ref.step_tick}")

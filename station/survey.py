@@ -35,7 +35,7 @@ STATUSES = ("ok", "unusable", "not a log")
 the station writes besides logs (:func:`not_a_log`)."""
 
 FIELDS = ("file", "status", "format", "rows", "sample_time_s", "controller", "controller_source", "alignment",
-          "max_abs_dv", "overshoot_pct", "settling_time_s", "fit_theta_pct", "fit_accel_pct", "accel_is_tip",
+          "max_abs_dv", "overshoot_pct", "settling_thesis_s", "fit_theta_pct", "fit_accel_pct", "accel_is_tip",
           "f1_hz", "zeta1", "f1_model_hz", "zeta1_model", "reason")
 """Columns of the survey table and CSV, in order."""
 
@@ -64,7 +64,7 @@ class SurveyRow:
         Computational delay detected by the replay, samples.
     max_abs_dv : float or None
         Largest |replayed v − logged v|, DAC counts.
-    overshoot_pct, settling_time_s : float or None
+    overshoot_pct, settling_thesis_s : float or None
         Step metrics of the logged θ (:class:`station.analysis.metrics.StepMetrics`).
     fit_theta_pct, fit_accel_pct : float or None
         NRMSE fit of the model to the logged θ and a, %.
@@ -96,7 +96,7 @@ class SurveyRow:
     alignment: int | None = None
     max_abs_dv: float | None = None
     overshoot_pct: float | None = None
-    settling_time_s: float | None = None
+    settling_thesis_s: float | None = None
     fit_theta_pct: float | None = None
     fit_accel_pct: float | None = None
     accel_is_tip: bool | None = None
@@ -218,7 +218,7 @@ def survey_one(path: str | Path, model: bool = True) -> SurveyRow:
         row.controller, row.controller_source = run.controller.name, run.source or ""
         row.alignment, row.max_abs_dv = run.alignment, run.max_abs_dv
     if rep.metrics is not None:
-        row.overshoot_pct, row.settling_time_s = rep.metrics.overshoot_pct, rep.metrics.settling_time_s
+        row.overshoot_pct, row.settling_thesis_s = rep.metrics.overshoot_pct, rep.metrics.settling_time_s
     if rep.fit_pct is not None:
         row.fit_theta_pct, row.fit_accel_pct = rep.fit_pct["theta"], rep.fit_pct["accel"]
     if rep.beam_test is not None:  # run.held: a hub-held beam test
@@ -369,8 +369,8 @@ def format_table(rows: Sequence[SurveyRow], root: str | Path | None = None) -> s
             last = "-"
         lines.append([name, r.format, _cell(r.rows), _cell(r.sample_time_s, "g"), ctl, _cell(r.alignment),
                       _cell(r.max_abs_dv, ".2g"), _cell(r.overshoot_pct, ".2f"),
-                      "not settled" if r.overshoot_pct is not None and r.settling_time_s is None
-                      else _cell(r.settling_time_s, ".3f"), last])
+                      "not settled" if r.overshoot_pct is not None and r.settling_thesis_s is None
+                      else _cell(r.settling_thesis_s, ".3f"), last])
     widths = [max(len(head[i]), *(len(line[i]) for line in lines)) if lines else len(head[i])
               for i in range(len(head) - 1)]
     fmt_line = lambda cells: "  ".join(c.ljust(w) for c, w in zip(cells, widths)) + "  " + cells[-1]  # noqa: E731

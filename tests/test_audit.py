@@ -705,3 +705,53 @@ def test_a_claim_several_runs_share_is_said_once_with_the_runs_it_holds_for():
     named = ", ".join(f"r{k}" for k in range(NAMED_RUNS))
     assert many == [f"audit: {NAMED_RUNS + 2} of 9 runs ({named} and 2 more): {zero}"]
     assert said_once([("a", []), ("b", [])]) == [] and said_once([("a", [lie])]) == [f"audit: a: {lie}"]
+
+
+def _p_log(tmp_path, name, u, v, theta):
+    rows = [f"{k * 0.002:g}\t{k}\t{u[k]:g}\t{v[k]:g}\t{theta[k]:g}\t0" for k in range(len(u))]
+    path = tmp_path / f"{name}_SLFR_RTP_P_control_Test.txt"
+    path.write_text("\n".join(["#SLFR RTP P_control_Test", "#kp=2.0", "#t\tn\tu\tv\t$\\theta$\ta"] + rows) + "\n")
+    return path
+
+
+@pytest.mark.parametrize("rows", [1, 2, 12, 400])
+@pytest.mark.parametrize("kind", ["rest", "bang-bang", "few"])
+def test_a_replay_the_data_cannot_judge_says_so(tmp_path, rows, kind):
+    # A P log whose v is 0 throughout (a cut of the run before its step, 1-2 rows), only 0 and one
+    # level, or free of both on under 10 rows: every law of high gain replays it, and both
+    # alignments alike. replay and compare said "reproduces ..., alignment d = 1" and no more
+    # (a 1-row log "reproduced" its header); now the audit's doubt follows the verdict in both
+    k = np.arange(rows)
+    u = np.where(k >= rows // 2, 150.0, 0.0) if kind != "rest" else np.zeros(rows)
+    v = np.where(k >= rows // 2, 200.0, 0.0) if kind != "rest" else np.zeros(rows)
+    theta = np.zeros(rows)
+    if kind == "few":  # the hub creeps 1 count on 3 rows: v = 2·(150 − 1) there... still too few rows
+        theta[-3:] = 1.0 if rows > 3 else 0.0
+        v = np.where(k >= rows // 2, np.minimum(2 * (u - np.roll(theta, 1)), 200.0), 0.0)
+    path = _p_log(tmp_path, f"{kind}{rows}", u, v, theta)
+    run = LoggedRun.from_path(path)
+    claim = run.audit.of("controller")
+    assert run.reproduced and claim.verdict == "unchecked", claim
+    text = format_report(replay(path))
+    assert "replay reproduces the logged v" in text
+    assert "the data cannot confirm this one" in text.split("replay reproduces the logged v", 1)[1]
+    notes = compare_run(path, DiscretePlant()).notes
+    assert any("the data cannot confirm this one" in n for n in notes), notes
+    if kind == "rest":
+        assert "v is 0 on every row" in text and "(0 and 1 alike: the data cannot tell them apart)" in text
+
+
+def test_a_replay_the_data_judge_says_no_doubt(tmp_path):
+    # The converse, from a separate law: v[k] = trunc(2·(u[k] − θ[k−1])) over a hub that moves every
+    # row. The law is pinned and the alignment decided: one line, no "but", no "alike"
+    rng = np.random.default_rng(7)
+    k = np.arange(300)
+    u = np.where(k >= 20, 50.0, 0.0)
+    theta = np.concatenate([[0.0] * 20, np.cumsum(rng.integers(1, 3, 280)) * 0.1]).round()
+    prev = np.concatenate([[0.0], theta[:-1]])
+    v = np.clip(np.trunc(2 * (u - prev)), -200, 200)
+    path = _p_log(tmp_path, "moving", u, v, theta)
+    text = format_report(replay(path))
+    line = next(x for x in text.splitlines() if "replay reproduces" in x)
+    assert line.endswith("alignment d = 1"), line
+    assert "cannot confirm" not in text

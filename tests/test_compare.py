@@ -51,7 +51,7 @@ def test_compare_command(rig_data, tmp_path, capsys):
     assert compare.run(args) == 0
     runs = json.loads(out.read_text())["runs"]
     assert [r["controller"] for r in runs] == ["p", "lead-accel"]
-    assert runs[0]["thesis_fem"] == {"overshoot_pct": 38.2, "settling_time_s": None}
+    assert runs[0]["thesis_fem"] == {"overshoot_pct": 38.2, "settling_thesis_s": None}
     assert len(list(tmp_path.glob("*_compare.png"))) == 2
     assert "thesis FEM" in capsys.readouterr().out
 

@@ -53,7 +53,7 @@ def test_ol_pulse_is_v_equals_u(rig_data):
 def test_step_metrics_in_report(rig_data, name, overshoot, settling):
     m = replay(rig_data / name, model=False).to_json()["metrics"]
     assert round(m["overshoot_pct"], 2) == overshoot
-    assert m["settling_time_s"] == (None if settling is None else pytest.approx(settling))
+    assert m["settling_thesis_s"] == (None if settling is None else pytest.approx(settling))
 
 
 def test_sweep_has_no_step_metrics(rig_data):
@@ -195,7 +195,7 @@ def test_command_writes_json_and_rrd(rig_data, tmp_path, capsys):
     rep = json.loads(out.read_text())
     assert {"file", "format", "controller", "alignment", "samples", "max_abs_dv", "metrics", "model"} <= set(rep)
     assert rep["samples"] == 1000 and rep["alignment"] == 1 and rep["max_abs_dv"] < 1e-6
-    assert set(rep["metrics"]) == {"overshoot_pct", "settling_time_s"}
+    assert set(rep["metrics"]) == {"overshoot_pct", "settling_thesis_s"}
     assert set(rep["model"]["fit_pct"]) == {"theta", "accel"}
     assert rrd.stat().st_size > 0
 

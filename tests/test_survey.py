@@ -55,7 +55,7 @@ def test_command_on_rig_logs_prints_table_and_writes_csv(tmp_path, rig_data, cap
     rows = {r["file"].split("/")[-1]: r for r in csv.DictReader(out.open())}
     p = rows["SFLR_P_control_step_kp_2_SLFR_RTP_P_control_kp=2.0.txt"]
     assert (p["controller"], p["controller_source"], p["alignment"]) == ("p", "header", "1")
-    assert float(p["overshoot_pct"]) == 24.0 and float(p["settling_time_s"]) == 1.25
+    assert float(p["overshoot_pct"]) == 24.0 and float(p["settling_thesis_s"]) == 1.25
     assert p["fit_theta_pct"] != "" and p["reason"] == ""
     beam = rows["log_dec_hold_and_release_1_SLFR_RTP_OL_Test_uend=77.txt"]
     assert abs(float(beam["f1_hz"]) - 2.52) < 0.03 * 2.52 and beam["fit_theta_pct"] == ""

@@ -272,7 +272,7 @@ def test_tune_writes_a_file_station_step_runs_with_the_designs_metrics(tmp_path,
                  "--out", "run.tsv"]) == 0
     step = json.loads((tmp_path / "s.json").read_text())["metrics"]
     assert step["overshoot_pct"] == doc["model"]["overshoot_pct"]
-    assert step["settling_time_2pct_s"] == pytest.approx(doc["model"]["settling_2pct_s"])
+    assert step["settling_2pct_s"] == pytest.approx(doc["model"]["settling_2pct_s"])
     assert doc["model"]["overshoot_pct"] <= 5.0 and RUN_S == 2.0  # station step's default duration
     assert math.isfinite(doc["baseline"]["overshoot_pct"])
 

@@ -258,7 +258,22 @@ def whole_counts(v) -> bool:
     return bool(v.size) and bool(np.all(v == np.round(v)))
 
 
-def _variants(controller, v):
+def law_variants(controller, v):
+    """A law as stated, then, when every logged v is a whole count and the law has no
+    recursion of its own, the same law with its recursion on the stored integer (truncated,
+    rounded) and on the float with its whole count sent (:func:`with_recursion`): the forms
+    lab software ran it in.
+
+    Parameters
+    ----------
+    controller : Compensator or OpenLoop
+    v : array_like, shape (N,)
+        The logged commands, DAC counts.
+
+    Yields
+    ------
+    Compensator or OpenLoop
+    """
     yield controller
     if isinstance(controller, Compensator) and getattr(controller, "recursion", "none") == "none" and whole_counts(v):
         for q in (*STORED, *SENT):
@@ -294,7 +309,7 @@ def variant_of(controller, u, theta, a, v, alignments=ALIGNMENTS, skipped=None,
         (to :data:`TOLERANCE`), else the closest; the fit is None without rows.
     """
     best = None
-    for candidate in _variants(controller, v):
+    for candidate in law_variants(controller, v):
         primed = getattr(candidate, "history", 0) if cut else 0
         fit, exact = fit_alignments(candidate, u, theta, a, v, alignments, skipped, prefer, primed, restarts)
         if fit is not None and (best is None or fit.max_abs_dv < best[1].max_abs_dv):

@@ -45,6 +45,32 @@ def pins_a_law(v) -> bool:
     return int(np.count_nonzero((v != 0) & (np.abs(v) < np.max(np.abs(v))))) >= MIN_FREE_ROWS
 
 
+def unpinned_words(v) -> str:
+    """Why logged commands cannot pin a closed-loop law (:func:`pins_a_law` false), in words:
+    "v is 0 on every row, which every law gives while e = 0", "v is only 0 and ±200, which any
+    law of high gain gives at that clamp", or "v is free of 0 and ±200 on only 3 rows (10
+    needed)".
+
+    Parameters
+    ----------
+    v : array_like, shape (N,)
+        The logged commands, DAC counts.
+
+    Returns
+    -------
+    str
+    """
+    v = np.asarray(v, dtype=float)
+    v = v[np.isfinite(v)]
+    peak = float(np.max(np.abs(v), initial=0.0))
+    if peak == 0:
+        return "v is 0 on every row, which every law gives while e = 0"
+    free = int(np.count_nonzero((v != 0) & (np.abs(v) < peak)))
+    if not free:
+        return f"v is only 0 and ±{peak:g}, which any law of high gain gives at that clamp"
+    return f"v is free of 0 and ±{peak:g} on only {free} row{'s' * (free != 1)} ({MIN_FREE_ROWS} needed)"
+
+
 def no_dac_command(v, theta) -> bool:
     """Whether logged commands can be no DAC command as written: every |v| under one count
     (the device applies whole counts, so 0) while the hub moved. Such a v is written in another

@@ -41,8 +41,9 @@ class StepMetrics:
     settling_time_s: float | None
 
     def to_json(self) -> dict:
-        """``{"overshoot_pct": F, "settling_time_s": F | None}``."""
-        return asdict(self)
+        """``{"overshoot_pct": F, "settling_thesis_s": F | None}`` (DESIGN.md's key for the 1 %
+        time from t = 0, the one ``station tune --json`` uses)."""
+        return {"overshoot_pct": self.overshoot_pct, "settling_thesis_s": self.settling_time_s}
 
     def summary(self) -> str:
         """``overshoot 10.00 %, settling (1 %) 0.608 s from t = 0`` (or "... settling (1 %) not
@@ -173,8 +174,11 @@ class StepInfo:
     saturation_time_s: float | None
 
     def to_json(self) -> dict:
-        """The fields as a dict (None for what is undefined)."""
-        return asdict(self)
+        """The fields as a dict (None for what is undefined); the 2 % time as
+        ``settling_2pct_s``, DESIGN.md's key (``station tune --json`` uses it too)."""
+        out = asdict(self)
+        out["settling_2pct_s"] = out.pop("settling_time_2pct_s")
+        return out
 
     def summary(self, unsettled: str = NOT_SETTLED) -> str:
         """One line: rise, peak, 2 % settling (named by :func:`settling_label`), each after the

@@ -115,6 +115,19 @@ class Audit:
         (:func:`accel_claims`): its fit and its weight in a diagnosis mean nothing."""
         return not any(c.header == ACCEL_CLAIM for c in self.contradicted)
 
+    def of(self, claim: str) -> AuditClaim | None:
+        """The audit's row for one claim (one of :data:`CLAIMS`), or None when the log made none.
+
+        Parameters
+        ----------
+        claim : str
+
+        Returns
+        -------
+        AuditClaim or None
+        """
+        return next((c for c in self.claims if c.claim == claim), None)
+
     def lines(self, skip: tuple[str, ...] = ()) -> list[str]:
         """One line per contradicted claim, e.g. ``"header: open loop; data: a lead
         3(s+13)/(s+20) ... at alignment 0, reproduces every logged v exactly"``.

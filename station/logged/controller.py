@@ -30,7 +30,8 @@ from station.analysis.controller_id import (
 from station.analysis.header_law import (NEAR_COUNTS, PRINTED_TOLERANCE, SAME_LAW_RTOL, completed_law, named_design,
                                         same_law)
 from station.analysis.law_words import ga_text
-from station.analysis.law_rows import pins_a_law
+from station.analysis.glitches import GLITCH_WORDS, glitched, isolated_misses, may_be_glitches
+from station.analysis.law_rows import pins_a_law, unpinned_words
 from station.analysis.pid_law import match_pid
 from station.control import Compensator, DiscreteTF, OpenLoop, controller_from_spec, lead_controller, p_controller
 from station.control.compensator import recursion_words
@@ -174,6 +175,9 @@ class ControllerId(NamedTuple):
         The row where n jumps past which the law could not be judged (its memory, such as
         Ga's, is not in the log's rows): ``fit.max_abs_dv`` is over the rows before it. None:
         judged on every row.
+    glitches : tuple of int
+        Rows the law misses alone, a corrupted field's (:func:`station.analysis.glitches.isolated_misses`):
+        ``fit.max_abs_dv`` is over the other rows.
     """
 
     controller: Compensator | OpenLoop | None
@@ -184,6 +188,7 @@ class ControllerId(NamedTuple):
     alignments: tuple[int, ...] = ()
     cut: bool = False
     judged_to: int | None = None
+    glitches: tuple[int, ...] = ()
 
 
 def describe_controller(controller) -> str:
@@ -390,7 +395,8 @@ def identify_controller(log: RunLog, skipped=None) -> ControllerId:
                                                                 notes[-1]))
     missing = [name for name in ("u", "v") + (("theta",) if is_closed_loop(controller) or controller is None
                                               else ()) if not np.all(np.isfinite(data[name]))]
-    header_dv = completed = None
+    header_dv = completed = glitch = None
+    aside = ""  # corrupted fields set aside, said after the controller's evidence
     # a copy cut from a longer run: a law's first rows of history are the logged ones
     cut = not missing and start_claims(theta, a, u, v, dt, False, False).at_rest is False
     if pid is not None and controller is None and not missing:
@@ -417,6 +423,14 @@ def identify_controller(log: RunLog, skipped=None) -> ControllerId:
             if retry[1].max_abs_dv <= TOLERANCE:
                 (used, fit, exact), cut = retry, True
                 notes.append(_CUT_NOTE.format(used.history))
+        glitch = None
+        if fit.max_abs_dv > TOLERANCE and not cut and may_be_glitches(controller, u, theta, a, v, ALIGNMENTS,
+                                                                      skipped, restarts):
+            glitch = isolated_misses(controller, u, theta, a, v, ALIGNMENTS, skipped, restarts, slack=NEAR_COUNTS)
+        if glitch is not None:  # a corrupted field or two, not another law: set aside, said, and put right
+            aside = f"; but {glitch.words(v, data['t'], theta, a)}: {GLITCH_WORDS}"
+            theta, a, v = glitch.repaired(v)
+            used, fit, exact = glitch.law, glitch.fit, (glitch.fit.alignment,)
         if fit.max_abs_dv <= TOLERANCE:
             at = f" at alignment {fit.alignment}" if is_closed_loop(used) else ""
             if used is not controller:
@@ -427,8 +441,8 @@ def identify_controller(log: RunLog, skipped=None) -> ControllerId:
             return ControllerId(used, "header", notes, fit, AuditClaim(
                 "controller", said, describe_controller(used) + at, "confirmed" if pinned else "unchecked",
                 f"replays every logged v {_how_close(fit.max_abs_dv, printing)}{at}" + (
-                    "" if pinned else f"; but v is only 0 and ±{np.max(np.abs(v)):g}, which any law of high gain "
-                                      f"gives at that clamp: the data cannot confirm this one")), exact, cut=cut)
+                    "" if pinned else f"; but {unpinned_words(v)}: the data cannot confirm this one") + aside),
+                exact, cut=cut, glitches=glitched(glitch))
         header_dv = fit.max_abs_dv
         if header_dv <= NEAR_COUNTS and not cut:  # printed coefficients a count off: the design they round
             completed = completed_law(used, u, theta, a, v, fit.alignment, dt, CLAMP, prefer, restarts)
@@ -458,14 +472,16 @@ def identify_controller(log: RunLog, skipped=None) -> ControllerId:
                 "controller", said, data_says, "confirmed",
                 f"the data's law has the header's coefficients (to {SAME_LAW_RTOL:g} relative); as printed it "
                 f"replays v to max |dv| = {_counts(header_dv)}, completed from the data "
-                f"{_how_close(hit.max_abs_dv, printing)}{at}"), hit.alignments, cut=cut)
+                f"{_how_close(hit.max_abs_dv, printing)}{at}{aside}"), hit.alignments, cut=cut,
+                glitches=glitched(glitch))
         if stated:
             notes.append(f"the header's controller ({said}) does not reproduce the logged v (max |dv| = "
                          f"{_counts(header_dv)}); the data's is used: {data_says}")
             return ControllerId(hit.controller, "inferred (header contradicted)", notes, fit, AuditClaim(
                 "controller", said, data_says, "contradicted",
                 f"the header's controller replays v to max |dv| = {_counts(header_dv)} at best; the data's law "
-                f"reproduces every logged v {_how_close(hit.max_abs_dv, printing)}{at}"), hit.alignments, cut=cut)
+                f"reproduces every logged v {_how_close(hit.max_abs_dv, printing)}{at}{aside}"), hit.alignments,
+                cut=cut, glitches=glitched(glitch))
         notes.append(f"controller inferred from the data: {hit.law}, alignment {hit.alignment} "
                      f"(reproduces the logged v {_how_close(hit.max_abs_dv, printing)})")
         return ControllerId(hit.controller, "inferred", notes, fit, AuditClaim(

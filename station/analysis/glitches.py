@@ -1,0 +1,279 @@
+"""Isolated rows no law gives: a corrupted field in a log a law otherwise reproduces.
+
+A serial line or a log writer can corrupt one field (a digit dropped, a bit flipped): the law
+then misses that row of v, or the rows its θ feeds, and reproduces every other row. Judged by its largest
+miss alone, such a log "contradicts" its header, and at the other alignment the miss can be a
+count smaller, so the alignment flips too. Rows the law misses alone, few and far beyond a
+printing's count, and a θ whose neighbour in its place makes the law reproduce the rows it fed,
+are set aside instead and said: they are not a law's.
+"""
+
+from __future__ import annotations
+
+from typing import NamedTuple
+
+import numpy as np
+
+from station.analysis.controller_id import law_variants
+from station.analysis.header_law import NEAR_COUNTS
+from station.analysis.law_rows import TOLERANCE, pins_a_law
+from station.control import Compensator, OpenLoop
+from station.control.rerun import (ALIGNMENTS, AlignmentFit, command_error, is_closed_loop, judged_rows, memory,
+                                   replay_commands)
+
+GLITCH_WORDS = "what no law gives, as a corrupted field has it; set aside, the law reproduces every other row"
+"""Why rows a law misses alone are set aside, said after them."""
+
+MAX_GLITCH_ROWS = 3
+"""Most rows a law may miss and still be the log's, each alone (a corrupted field); and at
+most 1 % of the rows judged."""
+
+
+class Glitches(NamedTuple):
+    """A law that reproduces every row of a log but for a few isolated corrupted fields.
+
+    Attributes
+    ----------
+    law : Compensator or OpenLoop
+        The law in the form that reproduces the other rows (:func:`station.analysis.controller_id.law_variants`).
+    fit : AlignmentFit
+        The law at that alignment, its max |dv| over the rows not set aside, replayed on the
+        log with its corrupted θ fields repaired.
+    rows : tuple of int
+        The rows whose v is set aside (a corrupted v, 0-based).
+    theta_rows : tuple of int
+        The rows whose θ was corrupted: the law reproduces every row after them with θ there
+        taken from a neighbouring row.
+    a_rows : tuple of int
+        The rows whose a was corrupted: the law reproduces every row after them with a there
+        solved from the law.
+    theta, a : numpy.ndarray, shape (N,)
+        The log's θ and a with those rows put right.
+    """
+
+    law: Compensator | OpenLoop
+    fit: AlignmentFit
+    rows: tuple[int, ...]
+    theta_rows: tuple[int, ...]
+    a_rows: tuple[int, ...]
+    theta: np.ndarray
+    a: np.ndarray
+
+    def repaired(self, v) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The log's θ, a and v with the corrupted fields put right (v: the law's there).
+
+        Parameters
+        ----------
+        v : array_like, shape (N,)
+            The logged commands.
+
+        Returns
+        -------
+        (theta, a, v) : numpy.ndarray, shape (N,) each
+        """
+        v = np.array(v, dtype=float)
+        v[list(self.rows)] = self.fit.v_replayed[list(self.rows)]
+        return self.theta, self.a, v
+
+    def words(self, v, t, theta, a) -> str:
+        """``v of row 499 at t = 0.998 s (logged 33, the law's 71)``, ``θ of row 300 at t = 0.6 s
+        (logged 72, its neighbours 52 and 52)``: each row by its index among the log's data
+        rows, from 0, and its time.
+
+        Parameters
+        ----------
+        v, t, theta, a : array_like, shape (N,)
+            The logged commands (DAC counts), times (s), hub angle (encoder counts) and
+            accelerometer (counts).
+        """
+        v_hat = self.fit.v_replayed
+        each = [f"v of row {k} at t = {t[k]:g} s (logged {v[k]:g}, the law's {v_hat[k]:.6g})" for k in self.rows]
+        each += [f"θ of row {k} at t = {t[k]:g} s (logged {theta[k]:g}, its neighbours {theta[k - 1]:g} and "
+                 f"{theta[k + 1]:g})" for k in self.theta_rows]
+        each += [f"a of row {k} at t = {t[k]:g} s (logged {a[k]:g})" for k in self.a_rows]
+        return ", ".join(each)
+
+
+def _misses(controller, u, theta, a, v, d, skipped, restarts, rows_back,
+            above: float = TOLERANCE) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The rows the law misses by more than ``above``, |dv| on every row (0 where not
+    judged), and the replayed v."""
+    v_hat, _ = replay_commands(controller, u, theta, a, d, skipped, v, 0, restarts)
+    judged = judged_rows(v.size, d, 0, () if rows_back is None else restarts, rows_back or 0)
+    err = np.where(judged, command_error(v_hat, v, seeded=tuple(restarts)), 0.0)
+    return np.flatnonzero(err > above), err, v_hat
+
+
+def isolated_misses(controller, u, theta, a, v, alignments=ALIGNMENTS, skipped=None,
+                    restarts=(), slack: float = TOLERANCE) -> Glitches | None:
+    """Corrupted fields that alone keep ``controller`` from reproducing a log: at most
+    :data:`MAX_GLITCH_ROWS` (and 1 % of the rows), each a v the law misses alone (the rows
+    beside it within ``slack``) by more than :data:`station.analysis.header_law.NEAR_COUNTS` (a
+    law a count off is a printing's, :func:`station.analysis.header_law.completed_law`), or a θ
+    whose row's neighbour, put in its place, makes the law reproduce the rows it fed (a law
+    with memory carries a corrupted θ into many rows), or an a solved so. Every other row
+    must be within ``slack``, at the alignment where the law misses fewest, and pin the law
+    (:func:`station.analysis.law_rows.pins_a_law`; not asked of an open-loop law). Of the law's
+    forms (:func:`station.analysis.controller_id.law_variants`), the one nearest the other rows.
+
+    Parameters
+    ----------
+    controller : Compensator or OpenLoop
+        A law replayed over the log (:func:`station.control.rerun.replay_commands`).
+    u, theta, a, v : array_like, shape (N,)
+        The log's reference, hub angle, accelerometer and commands, counts.
+    alignments : sequence of int
+    skipped : array_like of bool, optional
+    restarts : sequence of int
+        Rows where the log's ticks jump.
+    slack : float
+        The most the law may miss any other row by, DAC counts: the law's tolerance, or
+        :data:`station.analysis.header_law.NEAR_COUNTS` for a header's printed coefficients,
+        which :func:`station.analysis.header_law.completed_law` then completes on the
+        repaired log (:meth:`Glitches.repaired`).
+
+    Returns
+    -------
+    Glitches or None
+        None when the law misses no row, or more than a few corrupted fields explain.
+    """
+    v = np.asarray(v, dtype=float)
+    found = [g for law in law_variants(controller, v)
+             if (g := _isolated(law, u, theta, a, v, alignments, skipped, restarts, slack)) is not None]
+    return min(found, key=lambda g: g.fit.max_abs_dv, default=None)
+
+
+def _isolated(controller, u, theta, a, v, alignments, skipped, restarts, slack) -> Glitches | None:
+    rows_back = memory(controller)
+    ranked = []
+    for d in alignments:
+        small, err, _ = _misses(controller, u, theta, a, v, d, skipped, restarts, rows_back)
+        ranked.append((int(np.count_nonzero(err > slack)), small.size, d, np.flatnonzero(err > slack)))
+    best = min(ranked, key=lambda r: r[:3], default=None)
+    if best is None or not best[1]:
+        return None
+    d, miss = best[2], best[3]
+    most = min(MAX_GLITCH_ROWS, v.size // 100)
+    if _episodes(miss, _fading_rows(controller)) > most:
+        return None  # misses spread past what a few fields' fading echoes reach: a law's, not a field's
+    theta, a = np.array(theta, dtype=float), np.array(a, dtype=float)
+    bad_v: list[int] = []
+    bad_theta: list[int] = []
+    bad_a: list[int] = []
+    while miss.size and len(bad_v) + len(bad_theta) + len(bad_a) < most:
+        first = int(miss[0])
+        j = first - d  # the θ row the law read there
+        fixed = _repaired(controller, u, theta, a, v, d, j, first, bad_v, skipped, restarts, rows_back, slack)
+        if fixed is not None:
+            (theta, a), miss, column = fixed
+            (bad_theta if column == "theta" else bad_a).append(j)
+            continue
+        if miss.size > 1 and miss[1] == first + 1:
+            return None  # rows missed together: a law's miss, not a field's
+        bad_v.append(first)
+        miss = miss[1:]
+    if miss.size or not (bad_v or bad_theta or bad_a):
+        return None
+    _, err, v_hat = _misses(controller, u, theta, a, v, d, skipped, restarts, rows_back)
+    kept = np.ones(v.size, bool)
+    kept[bad_v] = False
+    if np.any(err[bad_v] <= NEAR_COUNTS) or (is_closed_loop(controller) and not pins_a_law(v[kept])):
+        return None
+    return Glitches(controller, AlignmentFit(d, float(np.max(err[kept], initial=0.0)), v_hat), tuple(bad_v),
+                    tuple(bad_theta), tuple(bad_a), theta, a)
+
+
+def _fading_rows(controller) -> int:
+    """Rows over which a law's recursion carries a corrupted input, until its slowest pole has
+    faded it a thousandfold (1 for a law without memory)."""
+    poles = [np.roots(tf.den) for tf in (getattr(controller, "gth", None), getattr(controller, "ga", None))
+             if tf is not None and len(tf.den) > 1]
+    radius = max((float(np.max(np.abs(p))) for p in poles if p.size), default=0.0)
+    if radius <= 0.0:
+        return 1
+    if radius >= 1.0:
+        return 10 ** 9  # an integrator: an echo that never fades
+    return int(np.ceil(np.log(1e-3) / np.log(radius))) + 1
+
+
+def _episodes(rows, reach: int) -> int:
+    """How many windows of ``reach`` rows, each opened at a row not in the one before, cover ``rows``."""
+    count, end = 0, -1
+    for k in rows:
+        if k > end:
+            count, end = count + 1, int(k) + reach
+    return count
+
+
+def _repaired(controller, u, theta, a, v, d, j, first, bad_v, skipped, restarts, rows_back, slack):
+    """θ[j] or a[j] put right so that the law reproduces row ``first`` and the next, missing
+    fewest rows: θ from its neighbouring rows or a count between them, a (noisy between rows) solved from the law's slope in it there (rounded
+    to a whole count when a is logged in whole counts). ((θ, a), the misses left, "theta" or "a"), or None."""
+    if not 0 < j < theta.size - 1:
+        return None
+    low, high = sorted((theta[j - 1], theta[j + 1]))
+    between = np.arange(np.ceil(low), np.floor(high) + 1) if high - low <= 8 else np.array([low, high])
+    trials = [("theta", float(guess)) for guess in dict.fromkeys((low, high, *between)) if guess != theta[j]]
+    v_hat = _misses(controller, u, theta, a, v, d, skipped, restarts, rows_back)[2]
+    nudged = a.copy()
+    nudged[j] += 1.0
+    slope = _misses(controller, u, theta, nudged, v, d, skipped, restarts, rows_back)[2][first] - v_hat[first]
+    if slope:
+        guess = a[j] + (v[first] - v_hat[first]) / slope
+        whole = np.all(a[np.isfinite(a)] == np.round(a[np.isfinite(a)]))
+        guess = float(np.round(guess)) if whole else float(guess)
+        trials += [("a", guess)] if guess != a[j] else []
+    best = None
+    for column, guess in trials:
+        trial_theta, trial_a = theta.copy(), a.copy()
+        (trial_theta if column == "theta" else trial_a)[j] = guess
+        _, err, _ = _misses(controller, u, trial_theta, trial_a, v, d, skipped, restarts, rows_back)
+        err[bad_v] = 0.0
+        left = np.flatnonzero(err > slack)
+        score = int(np.count_nonzero(err > TOLERANCE))
+        if (not left.size or left[0] > first + 1) and (best is None or score < best[0]):
+            best = (score, ((trial_theta, trial_a), left, column))
+    return None if best is None else best[1]
+
+
+def may_be_glitches(controller, u, theta, a, v, alignments=ALIGNMENTS, skipped=None, restarts=(),
+                    slack: float = NEAR_COUNTS) -> bool:
+    """Whether a law could miss a log for a few corrupted fields alone: in one of its forms
+    (:func:`station.analysis.controller_id.law_variants`), at some alignment, its misses by
+    more than ``slack`` fall in at most :data:`MAX_GLITCH_ROWS` windows of its fading echo (a
+    gate of one replay per form and alignment before :func:`isolated_misses`, which tries
+    repairs; a lying header's law misses all over the log).
+
+    Parameters
+    ----------
+    controller : Compensator or OpenLoop
+        The law as the header states it.
+    u, theta, a, v : array_like, shape (N,)
+        The log's reference, hub angle, accelerometer and commands, counts.
+    alignments : sequence of int
+    skipped : array_like of bool, optional
+    restarts : sequence of int
+    slack : float
+
+    Returns
+    -------
+    bool
+    """
+    v = np.asarray(v, dtype=float)
+    most = min(MAX_GLITCH_ROWS, v.size // 100)
+    return any(0 < _episodes(_misses(law, u, theta, a, v, d, skipped, restarts, memory(law), slack)[0],
+                             _fading_rows(law)) <= most for law in law_variants(controller, v) for d in alignments)
+
+
+def glitched(found: Glitches | None) -> tuple[int, ...]:
+    """The rows whose v :func:`isolated_misses` set aside (() for None).
+
+    Parameters
+    ----------
+    found : Glitches or None
+
+    Returns
+    -------
+    tuple of int
+    """
+    return () if found is None else found.rows
