@@ -64,6 +64,8 @@ def test_tune_records_a_name_a_relative_path_or_the_models_own_name(tmp_path):
     (f'[design]\nmodel = ""\nmodel_sha256 = "{"a" * 64}"\n', "[design].model: expected"),
     (f'[design]\nmodel = "rig"\nmodel_sha256 = "{"a" * 64}"\nwhen = 1\n', "[design].when: unknown field"),
     ('design = 3\n', "[design]: expected a table"),
+    # a wrong model beside a missing digest: the model is said first (was "model_sha256: missing")
+    ('[design]\nmodel = 5\n', "[design].model: expected a model's name"),
 ])
 def test_a_bad_record_is_one_line_naming_the_field(tmp_path, table, words):
     path = tmp_path / "C.toml"

@@ -495,12 +495,15 @@ def _read_design(doc) -> DesignRecord | None:
     unknown = sorted(set(table) - {"model", "model_sha256"})
     if unknown:
         raise doc.error(unknown[0], "unknown field (expected model, model_sha256)", table="design")
-    for key in ("model", "model_sha256"):
-        if key not in table:
-            raise doc.error(key, "missing", table="design")
-    model, digest = table["model"], table["model_sha256"]
+    # each field in the file's order of reading: what is wrong with the first is said first
+    if "model" not in table:
+        raise doc.error("model", "missing", table="design")
+    model = table["model"]
     if not isinstance(model, str) or not model.strip() or "\n" in model:
         raise doc.error("model", f"expected a model's name or file path (one line), got {shown(model)}", table="design")
+    if "model_sha256" not in table:
+        raise doc.error("model_sha256", "missing", table="design")
+    digest = table["model_sha256"]
     if not isinstance(digest, str) or not SHA256_HEX.fullmatch(digest):
         raise doc.error("model_sha256", f"expected 64 lowercase hex digits (sha256), got {shown(digest)}",
                         table="design")
