@@ -42,7 +42,12 @@ def pins_a_law(v) -> bool:
     v = np.asarray(v, dtype=float)
     if not v.size or not np.all(np.isfinite(v)):
         return False
-    return int(np.count_nonzero((v != 0) & (np.abs(v) < np.max(np.abs(v))))) >= MIN_FREE_ROWS
+    return _free_rows(v) >= MIN_FREE_ROWS
+
+
+def _free_rows(v: np.ndarray) -> int:
+    """Rows of finite v neither 0 nor at its largest |v| (the rows that can pin a law)."""
+    return int(np.count_nonzero((v != 0) & (np.abs(v) < np.max(np.abs(v), initial=0.0))))
 
 
 def unpinned_words(v) -> str:
@@ -65,7 +70,7 @@ def unpinned_words(v) -> str:
     peak = float(np.max(np.abs(v), initial=0.0))
     if peak == 0:
         return "v is 0 on every row, which every law gives while e = 0"
-    free = int(np.count_nonzero((v != 0) & (np.abs(v) < peak)))
+    free = _free_rows(v)
     if not free:
         return f"v is only 0 and ±{peak:g}, which any law of high gain gives at that clamp"
     return f"v is free of 0 and ±{peak:g} on only {free} row{'s' * (free != 1)} ({MIN_FREE_ROWS} needed)"
