@@ -28,7 +28,7 @@ from station.logged import LoggedRun
 from station.protocol import PROTOCOLS, legacy, v1
 from station.runlog import SKIPPED, read_log
 from tests.scripted_device import MemoryPort
-from tests.stalls import timed_marks, watch
+from tests.stalls import machine_stalled, timed_marks, watch
 
 pytestmark = timed_marks()
 """A try during which the test machine froze (or a scripted device missed its own clock) is no
@@ -368,7 +368,7 @@ def test_legacy_commands_written_after_the_next_sample_count_as_late(device, tmp
         o = report.result.outcome
         assert o.reason == "completed", o.message
         assert o.late == o.late_seen + o.skipped  # each held tick counted once
-        if o.late <= 30:
+        if o.late <= 30 or machine_stalled():
             break
     # 20 steps of 3.5 ms (1.75 periods; the next sample is due 2 ms after the one in hand):
     # each answer is written after the next sample is in. The device cannot report them; the
@@ -376,7 +376,8 @@ def test_legacy_commands_written_after_the_next_sample_count_as_late(device, tmp
     # station's real-time priority holds up the pty's own delivery, and then the station
     # sees the late sample only at its next read - a limit of what it can see, docs/safety.md.)
     # (Now and then the next two are in: that sample is skipped, its tick held as well.)
-    assert 15 <= o.late <= 30, o
+    # A machine seen frozen (tests/stalls.py) makes more late: then only the slow ones are a trial.
+    assert 15 <= o.late and (o.late <= 30 or machine_stalled()), o
 
 
 def test_legacy_byte_slip_with_a_matching_tick_number_stops_on_plausibility(device, tmp_path):
