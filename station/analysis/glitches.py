@@ -115,6 +115,9 @@ def isolated_misses(controller, u, theta, a, v, alignments=ALIGNMENTS, skipped=N
     must be within ``slack``, at the alignment where the law misses fewest, and pin the law
     (:func:`station.analysis.law_rows.pins_a_law`; not asked of an open-loop law). Of the law's
     forms (:func:`station.analysis.controller_id.law_variants`), the one nearest the other rows.
+    Cheap on a law another law wrote: each form's misses must first fall in a few windows of its
+    fading echo (one replay per alignment; a law without memory is gated once, its forms
+    differing by a count at most), or no repair is tried.
 
     Parameters
     ----------
@@ -138,6 +141,11 @@ def isolated_misses(controller, u, theta, a, v, alignments=ALIGNMENTS, skipped=N
         None when the law misses no row, or more than a few corrupted fields explain.
     """
     v = np.asarray(v, dtype=float)
+    most = min(MAX_GLITCH_ROWS, v.size // 100)
+    if _fading_rows(controller) == 1 and not any(
+            0 < _episodes(_misses(controller, u, theta, a, v, d, skipped, restarts, memory(controller), slack)[0],
+                          1) <= most for d in alignments):
+        return None  # (a law with memory: each form is gated so in _isolated, before any repair)
     found = [g for law in law_variants(controller, v)
              if (g := _isolated(law, u, theta, a, v, alignments, skipped, restarts, slack)) is not None]
     return min(found, key=lambda g: g.fit.max_abs_dv, default=None)
@@ -234,37 +242,6 @@ def _repaired(controller, u, theta, a, v, d, j, first, bad_v, skipped, restarts,
         if (not left.size or left[0] > first + 1) and (best is None or score < best[0]):
             best = (score, ((trial_theta, trial_a), left, column))
     return None if best is None else best[1]
-
-
-def may_be_glitches(controller, u, theta, a, v, alignments=ALIGNMENTS, skipped=None, restarts=(),
-                    slack: float = NEAR_COUNTS) -> bool:
-    """Whether a law could miss a log for a few corrupted fields alone: in one of its forms
-    (:func:`station.analysis.controller_id.law_variants`), at some alignment, its misses by
-    more than ``slack`` fall in at most :data:`MAX_GLITCH_ROWS` windows of its fading echo (a
-    gate of one replay per form and alignment before :func:`isolated_misses`, which tries
-    repairs; a lying header's law misses all over the log).
-
-    Parameters
-    ----------
-    controller : Compensator or OpenLoop
-        The law as the header states it.
-    u, theta, a, v : array_like, shape (N,)
-        The log's reference, hub angle, accelerometer and commands, counts.
-    alignments : sequence of int
-    skipped : array_like of bool, optional
-    restarts : sequence of int
-    slack : float
-
-    Returns
-    -------
-    bool
-    """
-    v = np.asarray(v, dtype=float)
-    most = min(MAX_GLITCH_ROWS, v.size // 100)
-    # a law without memory: its forms differ by a count at most, under the slack: one will do
-    forms = law_variants(controller, v) if _fading_rows(controller) > 1 else (controller,)
-    return any(0 < _episodes(_misses(law, u, theta, a, v, d, skipped, restarts, memory(law), slack)[0],
-                             _fading_rows(law)) <= most for law in forms for d in alignments)
 
 
 def glitched(found: Glitches | None) -> tuple[int, ...]:

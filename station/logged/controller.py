@@ -30,7 +30,7 @@ from station.analysis.controller_id import (
 from station.analysis.header_law import (NEAR_COUNTS, PRINTED_TOLERANCE, SAME_LAW_RTOL, completed_law, named_design,
                                         same_law)
 from station.analysis.law_words import ga_text
-from station.analysis.glitches import GLITCH_WORDS, glitched, isolated_misses, may_be_glitches
+from station.analysis.glitches import GLITCH_WORDS, glitched, isolated_misses
 from station.analysis.law_rows import pins_a_law, unpinned_words
 from station.analysis.pid_law import match_pid
 from station.control import Compensator, DiscreteTF, OpenLoop, controller_from_spec, lead_controller, p_controller
@@ -424,8 +424,7 @@ def identify_controller(log: RunLog, skipped=None) -> ControllerId:
                 (used, fit, exact), cut = retry, True
                 notes.append(_CUT_NOTE.format(used.history))
         glitch = None
-        if fit.max_abs_dv > TOLERANCE and not cut and may_be_glitches(controller, u, theta, a, v, ALIGNMENTS,
-                                                                      skipped, restarts):
+        if fit.max_abs_dv > TOLERANCE and not cut:
             glitch = isolated_misses(controller, u, theta, a, v, ALIGNMENTS, skipped, restarts, slack=NEAR_COUNTS)
         if glitch is not None:  # a corrupted field or two, not another law: set aside, said, and put right
             aside = f"; but {glitch.words(v, data['t'], theta, a)}: {GLITCH_WORDS}"
