@@ -98,4 +98,5 @@ def test_a_t_column_that_is_no_time_base_is_not_used(rig_data, tmp_path, t_of):
     assert run.step_metrics() == clean.step_metrics() and run.dt == 0.002
     (claim,) = [c for c in run.audit.claims if c.claim == "sample_time"]
     assert claim.verdict == "contradicted" and ("does not increase" in claim.data or "not a sample time" in claim.data)
+    assert claim.line.startswith("header: not stated (the rig's 0.002 s assumed")  # the rig's header names no dt
     np.testing.assert_allclose(run.data["t"], clean.data["t"], rtol=0, atol=1e-12)

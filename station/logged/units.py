@@ -326,7 +326,7 @@ def time_base(log: RunLog) -> TimeBase:
     header_dt = meta.get("dt") if log.format == "station" else None
     stated = header_dt if isinstance(header_dt, (int, float)) and not isinstance(header_dt, bool) else None
     claimed = float(stated) if stated is not None else DT
-    where = f"dt = {claimed:g} s" if stated is not None else f"{claimed:g} s (the rig's rate; t in s)"
+    where = f"dt = {claimed:g} s" if stated is not None else f"not stated (the rig's {claimed:g} s assumed, t in s)"
     t = np.asarray(data["t"], dtype=float)
     no_t = any("no time column" in n for n in log.notes)
     has_t = sample_time is not None and not no_t
