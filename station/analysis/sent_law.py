@@ -177,6 +177,11 @@ def sent_designs(rows: LawRows, e: np.ndarray, v: np.ndarray, d: int, dt: float
     reach = 1.0 + float(np.sum(np.abs(c[order + 1:])))
     if not resid.size or np.max(np.abs(resid)) > reach + SENT_SLACK or np.sqrt(np.mean(resid ** 2)) > 0.5 * reach:
         return
+    # a row at the clamp the fitted law does not reach is no clamp of this law (the log's own
+    # largest |v| tried as a clamp: one corrupted v there sent a P log here for 90 s)
+    at_clamp = rows.clamped
+    if np.any(np.sign(rows.v[at_clamp]) * (rows.X[at_clamp] @ c) < rows.limit - reach - SENT_SLACK):
+        return
     first = c
     for stored in STORED:
         c, miss = output_error(e, v, d, order, rows.limit, first, stored)
