@@ -18,15 +18,21 @@ from station.replay import format_report, replay
 from tests.blind.audit import write_audit_case
 
 COLUMNS = {"v": 3, "theta": 4, "a": 5}  # the rig layout's columns: t n u v θ a
+NAMES = {"v": ("v",), "theta": ("theta",), "a": ("accel", "a")}  # the 2014 layout's column line
 
 
 def _corrupt(path, fields):
     """Rewrite ``path`` with ``fields`` [(column, data row, added counts)] changed."""
     lines = path.read_text().splitlines()
     head = sum(1 for x in lines if x.startswith("#"))
+    columns = COLUMNS
+    names = lines[head].split("\t")
+    if not names[0].replace(".", "", 1).lstrip("-").isdigit():  # a column line: the 2014 layout
+        columns = {key: next(i for i, name in enumerate(names) if name in said) for key, said in NAMES.items()}
+        head += 1
     for column, row, delta in fields:
         cells = lines[head + row].split("\t")
-        cells[COLUMNS[column]] = f"{float(cells[COLUMNS[column]]) + delta:g}"
+        cells[columns[column]] = f"{float(cells[columns[column]]) + delta:g}"
         lines[head + row] = "\t".join(cells)
     path.write_text("\n".join(lines) + "\n")
 
@@ -71,15 +77,38 @@ def test_a_corrupted_field_keeps_the_header_law_and_its_alignment(tmp_path, case
         assert f"{'θ' if col == 'theta' else 'v'} of row {k} at t = " in text, text
 
 
-@pytest.mark.parametrize("case, seed", [("lie:p_kp", 0), ("lie:lead_pole", 1), ("lie:open_loop", 2)])
+@pytest.mark.parametrize("case, seed", [("lie:p_kp", 0), ("lie:lead_pole", 1), ("lie:open_loop", 2), ("session", 0)])
 def test_a_corrupted_field_does_not_hide_a_lying_header(tmp_path, case, seed):
+    # the header stays contradicted, and the data's law is found past the corrupted field
     path, hidden = write_audit_case(tmp_path, case, seed)
+    clean = LoggedRun.from_path(path)
     rng = np.random.default_rng(seed)
-    (row,) = _moving_rows(LoggedRun.from_path(path), rng, 1, hidden.alignment)
+    (row,) = _moving_rows(clean, rng, 1, hidden.alignment)
     _corrupt(path, [("v", row, 80.0)])
     run = LoggedRun.from_path(path)
-    assert run.audit.of("controller").verdict == "contradicted"
-    assert not run.identified.glitches
+    claim = run.audit.of("controller")
+    assert claim.verdict == "contradicted" and run.source == "inferred (header contradicted)", claim
+    assert run.identified.glitches == (row,) and run.alignment == hidden.alignment
+    assert f"v of row {row} at t = " in claim.evidence
+    np.testing.assert_array_equal(run.identified.fit.v_replayed, clean.identified.fit.v_replayed)
+
+
+@pytest.mark.parametrize("case, seed", [("int:trunc_d0", 0), ("int:round_d1", 1), ("int:trunc_d1", 2),
+                                        ("int:round_d0", 3)])
+@pytest.mark.parametrize("column", ["v", "theta"])
+def test_a_log_that_names_no_law_is_inferred_past_a_corrupted_field(tmp_path, case, seed, column):
+    # the 2014 layout (no header) on the stored integer: before, one corrupted field and no law was found
+    path, hidden = write_audit_case(tmp_path, case, seed)
+    clean = LoggedRun.from_path(path)
+    assert clean.source == "inferred" and clean.reproduced
+    rng = np.random.default_rng(seed + 7)
+    (row,) = _moving_rows(clean, rng, 1, hidden.alignment)
+    _corrupt(path, [(column, row, float(rng.choice([-1, 1]) * rng.integers(25, 300)))])
+    run = LoggedRun.from_path(path)
+    assert run.source == "inferred" and run.reproduced and run.alignment == hidden.alignment
+    assert run.identified.glitches == ((row,) if column == "v" else ())
+    assert f"{'θ' if column == 'theta' else 'v'} of row {row} at t = " in run.audit.of("controller").evidence
+    np.testing.assert_array_equal(run.identified.fit.v_replayed, clean.identified.fit.v_replayed)
 
 
 @pytest.mark.parametrize("column, delta", [("v", 45.0), ("theta", 30.0), ("a", 250.0)])

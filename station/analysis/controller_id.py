@@ -98,10 +98,22 @@ class IdentifiedController:
         return getattr(self.controller, "recursion", "none")
 
 
-def _limits(v: np.ndarray, rig_limit: float) -> list[float]:
+def clamps_to_try(v: np.ndarray, rig_limit: float) -> list[float]:
     """The clamps worth trying: the rig's (the DAC's when v exceeds it), then the log's own
     largest |v| (a clamp the law hit, perhaps on one row only: a law that reproduces the log
-    at the first never gets to it)."""
+    at the first never gets to it).
+
+    Parameters
+    ----------
+    v : numpy.ndarray, shape (N,)
+        The logged commands, DAC counts.
+    rig_limit : float
+        The rig's clamp, DAC counts.
+
+    Returns
+    -------
+    list of float
+    """
     vmax = float(np.max(np.abs(v))) if v.size else 0.0
     first = rig_limit if vmax <= rig_limit else max(DAC_LIMIT, vmax)
     return [first, vmax] if 0 < vmax < first else [first]
@@ -349,7 +361,7 @@ def infer_controller(u, theta, v, a=None, dt: float = DT, rig_limit: float = CLA
         Sample time, s (recorded in the controller's spec; the continuous design's).
     rig_limit : float
         The clamp assumed when |v| never exceeds it (the rig's 200 DAC counts); else
-        the DAC's 255 (or max |v|). The log's own clamp is tried too (:func:`_limits`).
+        the DAC's 255 (or max |v|). The log's own clamp is tried too (:func:`clamps_to_try`).
     alignments : sequence of int
         Computational delays tried, samples.
     prefer : int or None
@@ -394,7 +406,7 @@ def infer_controller(u, theta, v, a=None, dt: float = DT, rig_limit: float = CLA
             if d < 0:
                 continue
             e = aligned_error(u, theta, d)
-            for limit in _limits(v, rig_limit):
+            for limit in clamps_to_try(v, rig_limit):
                 rows = LawRows(e, v, d, order, limit, order if cut else 0, restarts)
                 for recursion in recursions:
                     hit = _accepted(rows, recursion, d, (u, theta, a, v), dt, rig_limit, alignments, prefer,
@@ -409,7 +421,7 @@ def infer_controller(u, theta, v, a=None, dt: float = DT, rig_limit: float = CLA
                 if d < 0:
                     continue
                 e = aligned_error(u, theta, d)
-                for limit in _limits(v, rig_limit):
+                for limit in clamps_to_try(v, rig_limit):
                     hit = _sent_design(LawRows(e, v, d, order, limit), e, d, (u, theta, a, v), dt, rig_limit,
                                        alignments, prefer)
                     if hit is not None:
@@ -528,7 +540,7 @@ def _with_thesis_ga(u, theta, a, v, dt: float, rig_limit: float, alignments, pre
             x = lfilter(thesis.num, thesis.den, lagged(a, d))
             ga = AccelFeedback(thesis.num, thesis.den, x)
             e = aligned_error(u, theta, d) - x
-            for limit in _limits(v, rig_limit):
+            for limit in clamps_to_try(v, rig_limit):
                 rows = LawRows(e, v, d, order, limit)
                 for recursion in STORED:
                     hit = _accepted(rows, recursion, d, log, dt, rig_limit, alignments, prefer, ga=ga)
@@ -550,7 +562,7 @@ def _with_accel_feedback(u, theta, a, v, dt: float, rig_limit: float, alignments
             for d in alignments:
                 if d < 0:
                     continue
-                for limit in _limits(v, rig_limit):
+                for limit in clamps_to_try(v, rig_limit):
                     ga = accel_feedback(u, theta, a, v, d, order, total - order, limit, dt)
                     if ga is None:
                         continue

@@ -14,12 +14,14 @@ from typing import NamedTuple
 
 import numpy as np
 
-from station.analysis.controller_id import law_variants
+from station.analysis.controller_id import (MAX_ORDER, PREFERRED_ALIGNMENT, IdentifiedController, aligned_error,
+                                           clamps_to_try, infer_controller, law_variants)
 from station.analysis.header_law import NEAR_COUNTS
-from station.analysis.law_rows import TOLERANCE, pins_a_law
+from station.analysis.law_rows import TOLERANCE, LawRows, pins_a_law
 from station.control import Compensator, OpenLoop
 from station.control.rerun import (ALIGNMENTS, AlignmentFit, command_error, is_closed_loop, judged_rows, memory,
                                    replay_commands)
+from station.rig import CLAMP, DT
 
 GLITCH_WORDS = "what no law gives, as a corrupted field has it; set aside, the law reproduces every other row"
 """Why rows a law misses alone are set aside, said after them."""
@@ -27,6 +29,10 @@ GLITCH_WORDS = "what no law gives, as a corrupted field has it; set aside, the l
 MAX_GLITCH_ROWS = 3
 """Most rows a law may miss and still be the log's, each alone (a corrupted field); and at
 most 1 % of the rows judged."""
+
+
+MIN_STRETCH = 100
+"""Fewest rows between corrupted fields that :func:`law_past_glitches` infers a law on."""
 
 
 class Glitches(NamedTuple):
@@ -242,6 +248,84 @@ def _repaired(controller, u, theta, a, v, d, j, first, bad_v, skipped, restarts,
         if (not left.size or left[0] > first + 1) and (best is None or score < best[0]):
             best = (score, ((trial_theta, trial_a), left, column))
     return None if best is None else best[1]
+
+
+def law_past_glitches(u, theta, a, v, dt: float = DT, rig_limit: float = CLAMP, alignments=ALIGNMENTS,
+                      prefer: int | None = PREFERRED_ALIGNMENT) -> tuple[IdentifiedController, Glitches] | None:
+    """The law of a log that no law reproduces whole, for a few corrupted fields: inferred on a
+    stretch they left clean (between the rows a least-squares law misses, :func:`_rows_off`)
+    (:func:`station.analysis.controller_id.infer_controller`, the stretch's first rows of
+    history taken as logged), then accepted on the whole log only as :func:`isolated_misses`
+    accepts a law (at most :data:`MAX_GLITCH_ROWS` isolated fields, every other row reproduced).
+    A header-less log, or one whose header lies, with a serial glitch in it.
+
+    Parameters
+    ----------
+    u, theta, a, v : array_like, shape (N,)
+        The log's reference, hub angle, accelerometer and commands, counts.
+    dt : float
+        Sample time, s.
+    rig_limit : float
+        The clamp assumed where a stretch never reaches one, DAC counts.
+    alignments : sequence of int
+    prefer : int or None
+        As :func:`station.analysis.controller_id.infer_controller`.
+
+    Returns
+    -------
+    (IdentifiedController, Glitches) or None
+        The law as a stretch gave it, and the fields set aside on the whole log; None when no
+        stretch gives a law, or none holds on the whole log but for a few fields.
+    """
+    u, theta, a, v = (np.asarray(x, dtype=float) for x in (u, theta, a, v))
+    tried: set[str] = set()
+    for off in _rows_off(u, theta, v, alignments, rig_limit, min(MAX_GLITCH_ROWS, v.size // 100)):
+        # the stretches between the rows missed, longest first: a law inferred on one never read them
+        edges = np.concatenate(([-1], off, [v.size]))
+        stretches = sorted(((int(b - a - 1), int(a + 1)) for a, b in zip(edges[:-1], edges[1:])), reverse=True)
+        for length, start in stretches[:2]:
+            if length < MIN_STRETCH:
+                break
+            piece = slice(start, start + length)
+            hit = infer_controller(u[piece], theta[piece], v[piece], a[piece], dt, rig_limit, alignments, prefer,
+                                   cut=start > 0)
+            if hit is None or hit.law in tried:
+                continue
+            tried.add(hit.law)
+            found = isolated_misses(hit.controller, u, theta, a, v, alignments, slack=TOLERANCE)
+            if found is not None:
+                return hit, found
+    return None
+
+
+def _rows_off(u, theta, v, alignments, rig_limit: float, most: int) -> list[np.ndarray]:
+    """The rows a linear law with the logged v as its history misses past a whole count's reach,
+    for each order, alignment and clamp where they fall in at most ``most`` windows of its order
+    + 1 rows (with the logged history a corrupted field reaches no further): fewest first, each
+    set once ([] for a log no law of these gives, or one it gives whole). Least squares twice:
+    the second without the rows the first missed by far (a corrupted field pulls it)."""
+    found: dict[tuple[int, ...], int] = {}
+    for order in range(MAX_ORDER + 1):
+        for d in alignments:
+            e = aligned_error(u, theta, d)
+            for limit in clamps_to_try(v, rig_limit):
+                rows = LawRows(e, v, d, order, limit)
+                keep = ~rows.clamped
+                if np.count_nonzero(keep) < 4 * (2 * order + 1):
+                    continue
+                fit = keep
+                for _ in range(2):
+                    c, *_ = np.linalg.lstsq(rows.X[fit], rows.v[fit], rcond=None)
+                    x = rows.X @ c
+                    miss = np.abs(rows.v - x)
+                    reach = 1.0 + float(np.sum(np.abs(c[order + 1:])))
+                    fit = keep & (miss <= 4.0 * reach)
+                # a row at the clamp the law does not reach is missed too (a corrupted v as the log's largest)
+                short = rows.clamped & (np.sign(rows.v) * x < limit - reach - 0.5)
+                off = np.flatnonzero(keep & (miss > reach + 0.5) | short) + d
+                if off.size and _episodes(off, order + 1) <= most:
+                    found.setdefault(tuple(off.tolist()), off.size)
+    return [np.array(off) for off in sorted(found, key=len)]
 
 
 def glitched(found: Glitches | None) -> tuple[int, ...]:

@@ -23,6 +23,7 @@ import numpy as np
 from station.analysis.controller_id import (
     PREFERRED_ALIGNMENT,
     TOLERANCE,
+    IdentifiedController,
     infer_controller,
     variant_of,
     with_recursion,
@@ -30,7 +31,7 @@ from station.analysis.controller_id import (
 from station.analysis.header_law import (NEAR_COUNTS, PRINTED_TOLERANCE, SAME_LAW_RTOL, completed_law, named_design,
                                         same_law)
 from station.analysis.law_words import ga_text
-from station.analysis.glitches import GLITCH_WORDS, glitched, isolated_misses
+from station.analysis.glitches import GLITCH_WORDS, glitched, isolated_misses, law_past_glitches
 from station.analysis.law_rows import pins_a_law, unpinned_words
 from station.analysis.pid_law import match_pid
 from station.control import Compensator, DiscreteTF, OpenLoop, controller_from_spec, lead_controller, p_controller
@@ -457,6 +458,15 @@ def identify_controller(log: RunLog, skipped=None) -> ControllerId:
         if hit is not None and getattr(hit.controller, "history", 0):
             notes.append(_CUT_NOTE.format(hit.controller.history))
             cut = True
+    if hit is None and not cut and not len(restarts):  # a law but for a corrupted field or two
+        past = law_past_glitches(u, theta, a, v, dt, CLAMP, ALIGNMENTS, prefer)
+        if past is not None:
+            glitch = past[1]
+            aside = f"; but {glitch.words(v, data['t'], theta, a)}: {GLITCH_WORDS}"
+            theta, a, v = glitch.repaired(v)
+            law = past[0].law if glitch.law is past[0].controller else describe_controller(glitch.law)
+            hit = IdentifiedController(glitch.law, glitch.fit.alignment, glitch.fit.max_abs_dv, glitch.fit.v_replayed,
+                                       law, past[0].design, (glitch.fit.alignment,))
     stated = controller is not None or pid is not None
     if hit is not None:
         fit = AlignmentFit(hit.alignment, hit.max_abs_dv, hit.v_replayed)
@@ -484,8 +494,8 @@ def identify_controller(log: RunLog, skipped=None) -> ControllerId:
         notes.append(f"controller inferred from the data: {hit.law}, alignment {hit.alignment} "
                      f"(reproduces the logged v {_how_close(hit.max_abs_dv, printing)})")
         return ControllerId(hit.controller, "inferred", notes, fit, AuditClaim(
-            "controller", said, data_says, "unchecked", "the log names no controller; inferred from the data"),
-            hit.alignments, cut=cut)
+            "controller", said, data_says, "unchecked", f"the log names no controller; inferred from the data{aside}"),
+            hit.alignments, cut=cut, glitches=glitched(glitch))
     tried = ("open loop, P, linear e -> v up to order 3, on the float or the stored integer command, "
              "designs on the float with the whole count sent, Gth with accelerometer feedback Ga up to order 3 "
              "each on the float command, the thesis's Ga beside a Gth on whole counts, alignments 0 and 1")
