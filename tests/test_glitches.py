@@ -126,3 +126,16 @@ def test_the_rigs_logs_with_a_corrupted_field(rig_data, tmp_path, name, column, 
     words = {"v": "v of row 400", "theta": "θ of row 400", "a": "a of row 400"}[column]
     text = format_report(replay(path, model=False))
     assert (words in text) is (column != "a" or ga), text
+
+
+def test_the_rigs_headerless_sweep_with_two_corrupted_fields(rig_data, tmp_path):
+    # the 28 Jan 2014 sweep names no law (the 2014 layout): P kp = 1 is found past a v and a θ
+    name = "without_accel_01_28_14_test_2.txt"
+    path = tmp_path / name
+    path.write_text((rig_data / name).read_text())
+    _corrupt(path, [("v", 5000, 37.0), ("theta", 8000, -25.0)])
+    run = LoggedRun.from_path(path)
+    assert run.source == "inferred" and run.reproduced and run.alignment == 1
+    assert run.controller.spec.get("kp") == 1.0 and run.identified.glitches == (5000,)
+    text = format_report(replay(path, model=False))
+    assert "v of row 5000 at t = 10 s (logged 90, the law's 53)" in text and "θ of row 8000 at t = 16 s" in text, text
