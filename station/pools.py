@@ -114,6 +114,14 @@ def abandon(pool: cf.ProcessPoolExecutor) -> None:
             proc.join(KILL_WAIT_S)
         except (OSError, ValueError, AssertionError):
             pass
+    # the pool's own thread ends now, not in the interpreter's exit hook (Python < 3.14 joins it
+    # there, where a stop signal interrupted the join: "Exception ignored ... _python_exit")
+    thread = getattr(pool, "_executor_manager_thread", None)
+    if thread is not None:
+        with contextlib.suppress(RuntimeError):
+            thread.join(KILL_WAIT_S)
+        if not thread.is_alive():
+            getattr(cf.process, "_threads_wakeups", {}).pop(thread, None)
 
 
 @contextlib.contextmanager

@@ -139,3 +139,4 @@ def test_the_rigs_headerless_sweep_with_two_corrupted_fields(rig_data, tmp_path)
     assert run.controller.spec.get("kp") == 1.0 and run.identified.glitches == (5000,)
     text = format_report(replay(path, model=False))
     assert "v of row 5000 at t = 10 s (logged 90, the law's 53)" in text and "θ of row 8000 at t = 16 s" in text, text
+

@@ -313,13 +313,21 @@ def _rows_off(u, theta, v, alignments, rig_limit: float, most: int) -> list[np.n
                 keep = ~rows.clamped
                 if np.count_nonzero(keep) < 4 * (2 * order + 1):
                     continue
-                fit = keep
+                fit, solved = keep, 0
                 for _ in range(2):
-                    c, *_ = np.linalg.lstsq(rows.X[fit], rows.v[fit], rcond=None)
-                    x = rows.X @ c
-                    miss = np.abs(rows.v - x)
+                    if np.count_nonzero(fit) < 4 * (2 * order + 1):
+                        break
+                    with np.errstate(all="ignore"):  # numbers past a float's range: no law here
+                        try:
+                            c, *_ = np.linalg.lstsq(rows.X[fit], rows.v[fit], rcond=None)
+                        except np.linalg.LinAlgError:
+                            break
+                        x = rows.X @ c
+                        miss = np.abs(rows.v - x)
                     reach = 1.0 + float(np.sum(np.abs(c[order + 1:])))
-                    fit = keep & (miss <= 4.0 * reach)
+                    fit, solved = keep & (miss <= 4.0 * reach), solved + 1
+                if solved < 2 or not np.all(np.isfinite(miss)) or not np.isfinite(reach):
+                    continue
                 # a row at the clamp the law does not reach is missed too (a corrupted v as the log's largest)
                 short = rows.clamped & (np.sign(rows.v) * x < limit - reach - 0.5)
                 off = np.flatnonzero(keep & (miss > reach + 0.5) | short) + d
