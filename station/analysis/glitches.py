@@ -299,41 +299,47 @@ def law_past_glitches(u, theta, a, v, dt: float = DT, rig_limit: float = CLAMP, 
 
 
 def _rows_off(u, theta, v, alignments, rig_limit: float, most: int) -> list[np.ndarray]:
-    """The rows a linear law with the logged v as its history misses past a whole count's reach,
-    for each order, alignment and clamp where they fall in at most ``most`` windows of its order
-    + 1 rows (with the logged history a corrupted field reaches no further): fewest first, each
-    set once ([] for a log no law of these gives, or one it gives whole). Least squares twice:
-    the second without the rows the first missed by far (a corrupted field pulls it)."""
-    found: dict[tuple[int, ...], int] = {}
+    """The rows a linear law with the logged v as its history misses past its whole counts'
+    :meth:`~station.analysis.law_rows.LawRows.reach`, for each order, alignment and clamp where
+    they fall in at most ``most`` windows of its order + 1 rows (with the logged history a
+    corrupted field reaches no further): fewest first, each set once ([] for a log no law of
+    these gives, or one it gives whole). Least squares twice: the second without the rows the
+    first missed by far (a corrupted field pulls it)."""
+    found: set[tuple[int, ...]] = set()
     for order in range(MAX_ORDER + 1):
         for d in alignments:
             e = aligned_error(u, theta, d)
             for limit in clamps_to_try(v, rig_limit):
                 rows = LawRows(e, v, d, order, limit)
                 keep = ~rows.clamped
-                if np.count_nonzero(keep) < 4 * (2 * order + 1):
+                c = _refit(rows, keep)
+                if c is None:
                     continue
-                fit, solved = keep, 0
-                for _ in range(2):
-                    if np.count_nonzero(fit) < 4 * (2 * order + 1):
-                        break
-                    with np.errstate(all="ignore"):  # numbers past a float's range: no law here
-                        try:
-                            c, *_ = np.linalg.lstsq(rows.X[fit], rows.v[fit], rcond=None)
-                        except np.linalg.LinAlgError:
-                            break
-                        x = rows.X @ c
-                        miss = np.abs(rows.v - x)
-                    reach = 1.0 + float(np.sum(np.abs(c[order + 1:])))
-                    fit, solved = keep & (miss <= 4.0 * reach), solved + 1
-                if solved < 2 or not np.all(np.isfinite(miss)) or not np.isfinite(reach):
+                reach = rows.reach(c)
+                with np.errstate(all="ignore"):
+                    miss = np.abs(rows.v - rows.X @ c)
+                if not np.all(np.isfinite(miss)) or not np.isfinite(reach):
                     continue
-                # a row at the clamp the law does not reach is missed too (a corrupted v as the log's largest)
-                short = rows.clamped & (np.sign(rows.v) * x < limit - reach - 0.5)
-                off = np.flatnonzero(keep & (miss > reach + 0.5) | short) + d
+                off = np.flatnonzero(keep & (miss > reach + 0.5) | rows.short_of_clamp(c, 0.5)) + d
                 if off.size and _episodes(off, order + 1) <= most:
-                    found.setdefault(tuple(off.tolist()), off.size)
+                    found.add(tuple(off.tolist()))
     return [np.array(off) for off in sorted(found, key=len)]
+
+
+def _refit(rows: LawRows, keep: np.ndarray) -> np.ndarray | None:
+    """Least squares on the rows ``keep``, then again without those it missed by four times
+    its reach; None with too few rows or numbers past a float's range (no law there)."""
+    fit, c = keep, None
+    for _ in range(2):
+        if np.count_nonzero(fit) < 4 * (2 * rows.order + 1):
+            return None
+        with np.errstate(all="ignore"):
+            try:
+                c, *_ = np.linalg.lstsq(rows.X[fit], rows.v[fit], rcond=None)
+            except np.linalg.LinAlgError:
+                return None
+            fit = keep & (np.abs(rows.v - rows.X @ c) <= 4.0 * rows.reach(c))
+    return c
 
 
 def glitched(found: Glitches | None) -> tuple[int, ...]:

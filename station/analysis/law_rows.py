@@ -174,6 +174,41 @@ class LawRows:
         dv = np.abs(self.predict(c, recursion) - self.v)
         return bool(np.all(dv == 0.0)) if recursion != "none" else bool(np.all(dv <= self.tolerance))
 
+    def reach(self, c: np.ndarray) -> float:
+        """How far, in counts, a float law's fit to whole logged counts may miss a row: the
+        count's own truncation or rounding (< 1) and the history's, through the recursion
+        (v[k] = x[k] − r[k], |r| < 1, so the residual is −r[k] − Σ a_j r[k−j]): 1 + Σ|a_j|.
+
+        Parameters
+        ----------
+        c : numpy.ndarray, shape (2·order + 1,)
+            [b_0..b_m, a_1..a_m].
+
+        Returns
+        -------
+        float
+            Counts.
+        """
+        return 1.0 + float(np.sum(np.abs(c[self.order + 1:])))
+
+    def short_of_clamp(self, c: np.ndarray, slack: float) -> np.ndarray:
+        """The rows logged at the clamp that the law ``c`` does not reach by more than its
+        :meth:`reach` and ``slack``: no clamp of this law (the log's own largest |v| tried as
+        a clamp, where that v is a corrupted field).
+
+        Parameters
+        ----------
+        c : numpy.ndarray, shape (2·order + 1,)
+        slack : float
+            Counts.
+
+        Returns
+        -------
+        numpy.ndarray of bool, shape (rows,)
+        """
+        x = self.X @ c
+        return self.clamped & (np.sign(self.v) * x < self.limit - self.reach(c) - slack)
+
     def least_squares(self, recursion: str) -> np.ndarray | None:
         """Coefficients by least squares over the unclamped rows (for a truncated integer,
         against v + sign(v)/2, the middle of its interval); None with too few rows.

@@ -169,18 +169,15 @@ def sent_designs(rows: LawRows, e: np.ndarray, v: np.ndarray, d: int, dt: float
     if c is None:
         return
     order = rows.order
-    # the float law explains the logged integers to their quantization or is not this law:
-    # v[k] = x[k] − r[k] with |r| < 1, so the residual is −r[k] − Σ a_j r[k−j] (and the fit's
-    # bias), never past 1 + Σ|a_j|; a log no law made is not searched for designs (18 s a log)
+    # the float law explains the logged integers to their quantization (and the fit's bias) or
+    # is not this law: a log no law made is not searched for designs (18 s a log)
     keep = ~rows.clamped
     resid = rows.v[keep] - rows.X[keep] @ c
-    reach = 1.0 + float(np.sum(np.abs(c[order + 1:])))
+    reach = rows.reach(c)
     if not resid.size or np.max(np.abs(resid)) > reach + SENT_SLACK or np.sqrt(np.mean(resid ** 2)) > 0.5 * reach:
         return
-    # a row at the clamp the fitted law does not reach is no clamp of this law (the log's own
-    # largest |v| tried as a clamp: one corrupted v there sent a P log here for 90 s)
-    at_clamp = rows.clamped
-    if np.any(np.sign(rows.v[at_clamp]) * (rows.X[at_clamp] @ c) < rows.limit - reach - SENT_SLACK):
+    # one corrupted v as the log's largest |v|, tried as a clamp, sent a P log here for 90 s
+    if np.any(rows.short_of_clamp(c, SENT_SLACK)):
         return
     first = c
     for stored in STORED:
