@@ -65,3 +65,20 @@ def test_rows_kept_from_a_500_hz_loop_are_still_refused(rig_data, tmp_path):
     run = LoggedRun.from_path(path)
     assert not replayable_rate(run.log) and run.controller is None
     assert any("rows are not every tick" in note for note in run.notes)
+    assert any("the model is driven by the logged v" in note for note in run.notes if "rows are not every tick" in note)
+
+
+@pytest.mark.parametrize("columns", ["t\tu", "t\tu\ttheta"])
+def test_a_log_with_no_v_is_not_said_to_drive_a_model(tmp_path, columns):
+    """A file of t and u at 0.01 s (the lab's system-ID example, ryanGT/systemid
+    ``fixed_sine.txt``): no controller can be replayed, and no model can be driven by a v the
+    log does not have; before, its note said "the model is driven by the logged v"."""
+    t = np.arange(100) * 0.01
+    rows = [[x, 50.0 * np.sin(2 * np.pi * x)] + ([3.0 * x] if "theta" in columns else []) for x in t]
+    path = tmp_path / "fixed_sine.txt"
+    path.write_text(columns + "\n" + "\n".join("\t".join(f"{x:.10g}" for x in r) for r in rows) + "\n")
+    run = LoggedRun.from_path(path)
+    assert run.controller is None
+    said = [note for note in run.notes if "replayed" in note]
+    assert said and not any("driven by the logged v" in note for note in said)
+    assert any("no model can run on it (no usable v)" in note for note in said)

@@ -31,7 +31,7 @@ from station.analysis.controller_id import (
 from station.analysis.header_law import (NEAR_COUNTS, PRINTED_TOLERANCE, SAME_LAW_RTOL, completed_law, named_design,
                                         same_law)
 from station.analysis.law_words import ga_text
-from station.analysis.glitches import GLITCH_WORDS, glitched, isolated_misses, law_past_glitches
+from station.analysis.glitches import GLITCH_WORDS, Glitches, glitched, isolated_misses, law_past_glitches
 from station.analysis.law_rows import pins_a_law, unpinned_words
 from station.analysis.pid_law import match_pid
 from station.control import Compensator, DiscreteTF, OpenLoop, controller_from_spec, lead_controller, p_controller
@@ -330,6 +330,16 @@ def header_law_dv(log: RunLog, skipped=None) -> float | None:
     return best
 
 
+def _driven(v) -> str:
+    """How a model runs on the log: on its logged v, or not at all (no usable v)."""
+    return "the model is driven by the logged v" if np.all(np.isfinite(v)) else "no model can run on it (no usable v)"
+
+
+def _set_aside(glitch: Glitches, t, theta, a, v) -> tuple[str, np.ndarray, np.ndarray, np.ndarray]:
+    """The words that set a log's corrupted fields aside, and its θ, a and v put right."""
+    return (f"; but {glitch.words(v, t, theta, a)}: {GLITCH_WORDS}", *glitch.repaired(v))
+
+
 def identify_controller(log: RunLog, skipped=None) -> ControllerId:
     """The controller that ran a log, whether the header named it or the data did, and the
     audit of the header's claim.
@@ -390,8 +400,7 @@ def identify_controller(log: RunLog, skipped=None) -> ControllerId:
     if not replayable_rate(log) and not isinstance(controller, OpenLoop):
         notes.append(f"sampled at {dt:g} s, not the rig's {DT:g} s, and its rows are not every tick of a loop "
                      f"at that rate (n jumps, or no n column): closed-loop commands cannot be replayed or "
-                     f"inferred (the rig's controllers ran at {DT:g} s, on rows this log may lack); the model "
-                     f"is driven by the logged v at {dt:g} s")
+                     f"inferred (the rig's controllers ran at {DT:g} s, on rows this log may lack); {_driven(v)}")
         return ControllerId(None, None, notes, None, AuditClaim("controller", said, "not replayable", "unchecked",
                                                                 notes[-1]))
     missing = [name for name in ("u", "v") + (("theta",) if is_closed_loop(controller) or controller is None
@@ -428,8 +437,7 @@ def identify_controller(log: RunLog, skipped=None) -> ControllerId:
         if fit.max_abs_dv > TOLERANCE and not cut:
             glitch = isolated_misses(controller, u, theta, a, v, ALIGNMENTS, skipped, restarts, slack=NEAR_COUNTS)
         if glitch is not None:  # a corrupted field or two, not another law: set aside, said, and put right
-            aside = f"; but {glitch.words(v, data['t'], theta, a)}: {GLITCH_WORDS}"
-            theta, a, v = glitch.repaired(v)
+            aside, theta, a, v = _set_aside(glitch, data['t'], theta, a, v)
             used, fit, exact = glitch.law, glitch.fit, (glitch.fit.alignment,)
         if fit.max_abs_dv <= TOLERANCE:
             at = f" at alignment {fit.alignment}" if is_closed_loop(used) else ""
@@ -449,7 +457,7 @@ def identify_controller(log: RunLog, skipped=None) -> ControllerId:
     if missing:
         if pid is None and controller is None:
             notes.append(f"the log names no controller and has no usable {', '.join(missing)} column to "
-                         f"infer one from: commands not replayed, model driven by the logged v")
+                         f"infer one from: commands not replayed; {_driven(v)}")
         return ControllerId(None, None, notes, None, AuditClaim(
             "controller", said, "not replayable", "unchecked", f"the log has no usable {', '.join(missing)}"))
     hit = completed or infer_controller(u, theta, v, a, dt, CLAMP, prefer=prefer, cut=cut, restarts=restarts)
@@ -462,8 +470,7 @@ def identify_controller(log: RunLog, skipped=None) -> ControllerId:
         past = law_past_glitches(u, theta, a, v, dt, CLAMP, ALIGNMENTS, prefer)
         if past is not None:
             glitch = past[1]
-            aside = f"; but {glitch.words(v, data['t'], theta, a)}: {GLITCH_WORDS}"
-            theta, a, v = glitch.repaired(v)
+            aside, theta, a, v = _set_aside(glitch, data['t'], theta, a, v)
             law = past[0].law if glitch.law is past[0].controller else describe_controller(glitch.law)
             hit = IdentifiedController(glitch.law, glitch.fit.alignment, glitch.fit.max_abs_dv, glitch.fit.v_replayed,
                                        law, past[0].design, (glitch.fit.alignment,))
