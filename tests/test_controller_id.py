@@ -8,6 +8,7 @@ The truth comes from code that is not the station's: the blind generator's lab r
 from __future__ import annotations
 
 import math
+import warnings
 
 import numpy as np
 import pytest
@@ -176,6 +177,21 @@ def test_discretize_is_scipys_and_to_continuous_inverts_it(method):
         back = to_continuous(nz, dz, 0.002, method)
         np.testing.assert_allclose(back[0], num_s, rtol=1e-6)
         np.testing.assert_allclose(back[1], den_s, rtol=1e-6)
+
+
+@pytest.mark.parametrize("b0", [0.0, 1e-17, -3e-16])
+def test_a_law_with_b0_near_0_is_mapped_back_without_a_scipy_warning(b0):
+    """A fitted law's b_0 near 0 (the ZOH form of a strictly proper design): scipy's tf2ss
+    strips it and warns "Badly conditioned filter coefficients", which reached a user of
+    ``LoggedRun`` (a P log with one v a count off, whose search recognises designs). The
+    design is still the one ZOH sampled."""
+    nz, dz = _scipy_law([10.0], [1.0, 20.0], 0.002, "ZOH")
+    nz = np.array([b0, *np.atleast_1d(nz)[-1:]])
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        back = to_continuous(nz, dz, 0.002, "ZOH")
+    np.testing.assert_allclose(back[0][-1], 10.0, rtol=1e-6)
+    np.testing.assert_allclose(back[1], [1.0, 20.0], rtol=1e-6)
 
 
 @pytest.mark.parametrize("lo, hi, value, digits", [(2.97, 3.02, 3.0, 1), (12.91, 13.04, 13.0, 2), (-0.52, -0.48, -0.5, 1),

@@ -19,6 +19,7 @@ import itertools
 import math
 from collections.abc import Callable
 from dataclasses import dataclass, replace
+import warnings
 
 import numpy as np
 from numpy.polynomial import polynomial as P
@@ -261,11 +262,13 @@ def to_continuous(num_z, den_z, dt: float, method: str) -> tuple[np.ndarray, np.
 
 def _zoh_inverse(num_z, den_z, dt):
     from scipy.linalg import logm  # lazy: start-up time (scipy)
-    from scipy.signal import ss2tf, tf2ss  # lazy: start-up time (scipy)
+    from scipy.signal import BadCoefficients, ss2tf, tf2ss  # lazy: start-up time (scipy)
 
     if num_z.size == 1:
         return None  # a gain: no dynamics to map
-    ad, bd, c, d = tf2ss(num_z, den_z)
+    with warnings.catch_warnings():  # a fitted law's b_0 near 0: scipy strips it, and warns to stderr
+        warnings.simplefilter("ignore", BadCoefficients)
+        ad, bd, c, d = tf2ss(num_z, den_z)
     eig = np.linalg.eigvals(ad)
     if np.any((np.abs(eig.imag) < 1e-12) & (eig.real <= 0)):
         return None  # a negative real z-pole: no real continuous pole is sampled to it
