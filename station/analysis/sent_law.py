@@ -37,7 +37,84 @@ def _clamped_loop(e, num, den, limit, d):  # pragma: no cover - compiled by numb
     return x
 
 
-_COMPILED = []  # the loop compiled by numba (or plain Python without it), made on first use
+_MAX = float(np.finfo(float).max)  # numpy.nan_to_num's stand-in for an infinite bound
+
+
+def _interval_loop(e, v, d, limit, edge, trunc, num, den, k_ref, has_ref):  # pragma: no cover - compiled by numba
+    n_laws, n_num, n_den = num.shape[0], num.shape[1], den.shape[1]
+    order = max(n_num, n_den) - 1
+    lo_out, hi_out = np.empty(n_laws), np.empty(n_laws)
+    for law in range(n_laws):
+        alpha, beta = np.zeros(max(order, 1)), np.zeros(max(order, 1))  # x[k-1..k-order] = alpha·K + beta
+        lo_k, hi_k = -np.inf, np.inf
+        for k in range(d, v.size):
+            g = 0.0
+            for i in range(n_num):
+                if k - i >= 0:
+                    g += num[law, i] * e[k - i]
+            acc_a, acc_b = 0.0, 0.0
+            for j in range(1, n_den):
+                acc_a += den[law, j] * alpha[j - 1]
+                acc_b += den[law, j] * beta[j - 1]
+            a_y, b_y = g - acc_a, -acc_b
+            vk = v[k]
+            if vk >= limit or vk <= -limit:  # y beyond the limit (less the rounding's half count)
+                s = 1.0 if vk > 0 else -1.0
+                lo, hi = (limit - edge, np.inf) if s > 0 else (-np.inf, -limit + edge)
+                clamped = True
+                if edge:  # within half a count of it, the float is remembered as it is
+                    bounded = np.isfinite(lo_k) and np.isfinite(hi_k)
+                    guess = k_ref[law] if has_ref else 0.5 * (lo_k + hi_k)
+                    if bounded:  # numpy.clip's minimum(maximum(guess, lo), hi), NaN kept
+                        ref = guess if guess != guess or guess >= lo_k else lo_k
+                        ref = ref if ref != ref or ref <= hi_k else hi_k
+                    else:
+                        ref = k_ref[law] if has_ref else 0.0
+                    beyond_lo = s * (a_y * (lo_k if bounded else ref) + b_y) >= limit
+                    beyond_hi = s * (a_y * (hi_k if bounded else ref) + b_y) >= limit
+                    clamped = beyond_lo if beyond_lo == beyond_hi else s * (a_y * ref + b_y) >= limit
+                x_a, x_b = (0.0, s * limit) if clamped else (a_y, b_y)
+            else:
+                if not trunc:
+                    lo, hi = vk - 0.5, vk + 0.5
+                elif vk > 0:
+                    lo, hi = vk, vk + 1.0
+                elif vk < 0:
+                    lo, hi = vk - 1.0, vk
+                else:
+                    lo, hi = -1.0, 1.0
+                x_a, x_b = a_y, b_y
+            low, high = -np.inf, np.inf
+            if a_y > 0:
+                low, high = (lo - b_y) / a_y, (hi - b_y) / a_y
+            elif a_y < 0:
+                low, high = (hi - b_y) / a_y, (lo - b_y) / a_y
+            # numpy.nan_to_num's rule: NaN no bound, an infinite one the largest float
+            low = -np.inf if low != low else (_MAX if low == np.inf else (-_MAX if low == -np.inf else low))
+            high = np.inf if high != high else (_MAX if high == np.inf else (-_MAX if high == -np.inf else high))
+            dead = (a_y == 0 and (b_y < lo or b_y > hi)) or not np.isfinite(a_y) or not np.isfinite(b_y)
+            lo_k = low if low > lo_k else lo_k
+            hi_k = -np.inf if dead else (high if high < hi_k else hi_k)
+            for j in range(order - 1, 0, -1):
+                alpha[j], beta[j] = alpha[j - 1], beta[j - 1]
+            alpha[0], beta[0] = x_a, x_b
+        lo_out[law], hi_out[law] = lo_k, hi_k
+    return lo_out, hi_out
+
+
+_COMPILED: dict = {}  # each loop compiled by numba (or plain Python without it), made on first use
+
+
+def _compiled(loop):
+    """``loop`` compiled by numba, once (plain Python without numba)."""
+    if loop not in _COMPILED:
+        try:
+            import numba  # lazy: start-up time (numba compiles the loop on first use)
+        except ImportError:  # pragma: no cover - numba is a dependency; plain Python without it
+            _COMPILED[loop] = loop
+        else:
+            _COMPILED[loop] = numba.njit(cache=True, nogil=True, error_model="numpy")(loop)
+    return _COMPILED[loop]
 
 
 def clamped_float(e: np.ndarray, c: np.ndarray, order: int, limit: float, d: int) -> np.ndarray:
@@ -61,16 +138,9 @@ def clamped_float(e: np.ndarray, c: np.ndarray, order: int, limit: float, d: int
     -------
     numpy.ndarray, shape (N,)
     """
-    if not _COMPILED:
-        try:
-            import numba  # lazy: start-up time (numba compiles the loop on first use)
-        except ImportError:  # pragma: no cover - numba is a dependency; plain Python without it
-            _COMPILED.append(_clamped_loop)
-        else:
-            _COMPILED.append(numba.njit(cache=True, nogil=True)(_clamped_loop))
     num = np.ascontiguousarray(c[:order + 1], dtype=float)
     den = np.concatenate(([1.0], np.asarray(c[order + 1:], dtype=float)))
-    return _COMPILED[0](np.ascontiguousarray(e, dtype=float), num, den, float(limit), int(d))
+    return _compiled(_clamped_loop)(np.ascontiguousarray(e, dtype=float), num, den, float(limit), int(d))
 
 
 def output_error(e: np.ndarray, v: np.ndarray, d: int, order: int, limit: float, c: np.ndarray,
@@ -229,46 +299,10 @@ def sent_gain_interval(e: np.ndarray, v: np.ndarray, d: int, limit: float, store
     lo, hi : numpy.ndarray, shape (L,)
         lo > hi where no gain does.
     """
-    num, den = np.atleast_2d(num), np.atleast_2d(den)
-    n_laws, order = num.shape[0], max(num.shape[1], den.shape[1]) - 1
-    alpha = np.zeros((order, n_laws))  # x[k-1..k-order] = alpha·K + beta
-    beta = np.zeros((order, n_laws))
-    lo_k, hi_k = np.full(n_laws, -np.inf), np.full(n_laws, np.inf)
-    edge = 0.0 if stored == "trunc" else 0.5
-    with np.errstate(over="ignore", invalid="ignore", divide="ignore"):  # an unstable candidate's x grows past floats
-        for k in range(d, v.size):
-            g = sum(num[:, i] * e[k - i] for i in range(num.shape[1]) if k - i >= 0)
-            a_y = g - sum(den[:, j] * alpha[j - 1] for j in range(1, den.shape[1]))
-            b_y = -sum(den[:, j] * beta[j - 1] for j in range(1, den.shape[1]))
-            vk = v[k]
-            if vk >= limit or vk <= -limit:  # y beyond the limit (less the rounding's half count)
-                s = 1.0 if vk > 0 else -1.0
-                lo, hi = (limit - edge, np.inf) if s > 0 else (-np.inf, -limit + edge)
-                clamped = np.ones(n_laws, bool)
-                if edge:  # within half a count of it, the float is remembered as it is
-                    bounded = np.isfinite(lo_k) & np.isfinite(hi_k)
-                    guess = 0.5 * (lo_k + hi_k) if k_ref is None else k_ref
-                    ref = np.where(bounded, np.clip(guess, lo_k, hi_k), 0.0 if k_ref is None else k_ref)
-                    ends = np.stack([a_y * np.where(bounded, lo_k, ref), a_y * np.where(bounded, hi_k, ref)]) + b_y
-                    beyond = s * ends >= limit
-                    middle = s * (a_y * ref + b_y) >= limit
-                    clamped = np.where(beyond.all(axis=0) | ~beyond.any(axis=0), beyond[0], middle)
-                x_a = np.where(clamped, 0.0, a_y)
-                x_b = np.where(clamped, s * limit, b_y)
-            else:
-                if stored == "trunc":
-                    lo, hi = (vk, vk + 1.0) if vk > 0 else (vk - 1.0, vk) if vk < 0 else (-1.0, 1.0)
-                else:
-                    lo, hi = vk - 0.5, vk + 0.5
-                x_a, x_b = a_y, b_y
-            k1, k2 = (lo - b_y) / a_y, (hi - b_y) / a_y
-            low = np.where(a_y > 0, k1, np.where(a_y < 0, k2, -np.inf))
-            high = np.where(a_y > 0, k2, np.where(a_y < 0, k1, np.inf))
-            dead = (a_y == 0) & ((b_y < lo) | (b_y > hi)) | ~np.isfinite(a_y) | ~np.isfinite(b_y)
-            lo_k = np.maximum(lo_k, np.nan_to_num(low, nan=-np.inf))
-            hi_k = np.where(dead, -np.inf, np.minimum(hi_k, np.nan_to_num(high, nan=np.inf)))
-            if order:
-                alpha = np.vstack([x_a[None], alpha[:-1]])
-                beta = np.vstack([x_b[None], beta[:-1]])
-    lost = np.isnan(lo_k) | np.isnan(hi_k)
-    return np.where(lost, np.inf, lo_k), np.where(lost, -np.inf, hi_k)
+    num = np.ascontiguousarray(np.atleast_2d(num), dtype=float)
+    den = np.ascontiguousarray(np.atleast_2d(den), dtype=float)
+    ref = np.zeros(num.shape[0]) if k_ref is None else np.ascontiguousarray(np.broadcast_to(k_ref, num.shape[:1]),
+                                                                              dtype=float)
+    return _compiled(_interval_loop)(np.ascontiguousarray(e, dtype=float), np.ascontiguousarray(v, dtype=float),
+                                     int(d), float(limit), 0.0 if stored == "trunc" else 0.5, stored == "trunc",
+                                     num, den, ref, k_ref is not None)
