@@ -140,3 +140,27 @@ def test_the_rigs_headerless_sweep_with_two_corrupted_fields(rig_data, tmp_path)
     text = format_report(replay(path, model=False))
     assert "v of row 5000 at t = 10 s (logged 90, the law's 53)" in text and "θ of row 8000 at t = 16 s" in text, text
 
+
+
+@pytest.mark.parametrize("header", [True, False])
+@pytest.mark.parametrize("name", ["SFLR_P_control_step_kp_2_SLFR_RTP_P_control_kp=2.0.txt",
+                                  "step_response_Gth_comp_no_accel_FB_amp_100_duration_1000_SLFR_RTP_Motor_Comp_Gth.txt"])
+def test_a_v_corrupted_past_the_dac_range_is_a_field_not_a_unit(rig_data, tmp_path, name, header):
+    """One v corrupted to 9999 counts. Before, on the lead step (v printed as a float) the
+    audit read the whole v column as "in another unit, its size not found" beside the law
+    that reproduced every other row in counts; with no header, that v was tried as the clamp
+    and no law was found. Now the row is set aside and the law (the header's, or inferred)
+    reproduces the others; no column's claim is contradicted."""
+    lines = (rig_data / name).read_text().splitlines()
+    if not header:  # the column line only, as a log written by hand
+        lines = [x for x in lines if not x.startswith("#")]
+        lines.insert(0, "t\tn\tu\tv\ttheta\ta" + ("\ttheta_d_hat" if len(lines[0].split("\t")) == 7 else ""))
+    path = tmp_path / name
+    path.write_text("\n".join(lines) + "\n")
+    _corrupt(path, [("v", 400, 9999.0)])
+    run = LoggedRun.from_path(path)
+    assert run.reproduced and run.alignment == 1 and run.identified.glitches == (400,)
+    assert run.source == ("header" if header else "inferred")
+    assert not [c for c in run.audit.claims if c.claim == "columns" and c.verdict == "contradicted"]
+    assert not any("another unit" in note for note in run.notes)
+    assert "v of row 400 at t = 0.8 s" in format_report(replay(path, model=False))

@@ -21,7 +21,7 @@ from station.analysis.law_rows import TOLERANCE, LawRows, pins_a_law
 from station.control import Compensator, OpenLoop
 from station.control.rerun import (ALIGNMENTS, AlignmentFit, command_error, is_closed_loop, judged_rows, memory,
                                    replay_commands)
-from station.rig import CLAMP, DT
+from station.rig import CLAMP, DAC_LIMIT, DT
 
 GLITCH_WORDS = "what no law gives, as a corrupted field has it; set aside, the law reproduces every other row"
 """Why rows a law misses alone are set aside, said after them."""
@@ -306,10 +306,12 @@ def _rows_off(u, theta, v, alignments, rig_limit: float, most: int) -> list[np.n
     these gives, or one it gives whole). Least squares twice: the second without the rows the
     first missed by far (a corrupted field pulls it)."""
     found: set[tuple[int, ...]] = set()
+    # a corrupted v past the DAC's range is no clamp: the clamps of the rows within it too
+    limits = dict.fromkeys(clamps_to_try(v, rig_limit) + clamps_to_try(v[np.abs(v) <= DAC_LIMIT], rig_limit))
     for order in range(MAX_ORDER + 1):
         for d in alignments:
             e = aligned_error(u, theta, d)
-            for limit in clamps_to_try(v, rig_limit):
+            for limit in limits:
                 rows = LawRows(e, v, d, order, limit)
                 keep = ~rows.clamped
                 c = _refit(rows, keep)
