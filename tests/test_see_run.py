@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import os
 import pty
+import re
 import select
 import subprocess
 import sys
@@ -142,7 +143,9 @@ def _stderr_of_run(tmp_path, *extra, terminal=True) -> bytes:
 @timed
 def test_progress_line_shows_on_a_terminal_only(tmp_path):
     shown = _stderr_of_run(tmp_path).decode()
-    assert "\rstep: " in shown and "/ 1.00 s" in shown and "late 0" in shown and "dropped 0" in shown
+    assert "\rstep: " in shown and "/ 1.00 s" in shown and "dropped 0" in shown
+    # the late and skipped counts are shown, whatever a busy machine makes them (CI saw "late 1" at 0.01 s)
+    assert re.search(r"late \d+   skipped \d+   dropped \d+", shown), shown
     assert "θ" in shown
     assert "step: " not in _stderr_of_run(tmp_path, "--quiet").decode()
     assert b"step: " not in _stderr_of_run(tmp_path, terminal=False)
