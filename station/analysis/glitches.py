@@ -31,6 +31,23 @@ MAX_GLITCH_ROWS = 3
 most 1 % of the rows judged."""
 
 
+def most_glitches(rows: int) -> int:
+    """Most corrupted fields a log of ``rows`` rows may have set aside: :data:`MAX_GLITCH_ROWS`,
+    and at most 1 % of the rows (0 below 100 rows: a short log's misses are a law's).
+
+    Parameters
+    ----------
+    rows : int
+        The log's rows.
+
+    Returns
+    -------
+    int
+        The most rows whose fields may be set aside as corrupted.
+    """
+    return min(MAX_GLITCH_ROWS, rows // 100)
+
+
 MIN_STRETCH = 100
 """Fewest rows between corrupted fields that :func:`law_past_glitches` infers a law on."""
 
@@ -147,7 +164,7 @@ def isolated_misses(controller, u, theta, a, v, alignments=ALIGNMENTS, skipped=N
         None when the law misses no row, or more than a few corrupted fields explain.
     """
     v = np.asarray(v, dtype=float)
-    most = min(MAX_GLITCH_ROWS, v.size // 100)
+    most = most_glitches(v.size)
     if _fading_rows(controller) == 1 and not any(
             0 < _episodes(_misses(controller, u, theta, a, v, d, skipped, restarts, memory(controller), slack)[0],
                           1) <= most for d in alignments):
@@ -167,7 +184,7 @@ def _isolated(controller, u, theta, a, v, alignments, skipped, restarts, slack) 
     if best is None or not best[1]:
         return None
     d, miss = best[2], best[3]
-    most = min(MAX_GLITCH_ROWS, v.size // 100)
+    most = most_glitches(v.size)
     if _episodes(miss, _fading_rows(controller)) > most:
         return None  # misses spread past what a few fields' fading echoes reach: a law's, not a field's
     theta, a = np.array(theta, dtype=float), np.array(a, dtype=float)
@@ -279,7 +296,7 @@ def law_past_glitches(u, theta, a, v, dt: float = DT, rig_limit: float = CLAMP, 
     """
     u, theta, a, v = (np.asarray(x, dtype=float) for x in (u, theta, a, v))
     tried: set[str] = set()
-    for off in _rows_off(u, theta, v, alignments, rig_limit, min(MAX_GLITCH_ROWS, v.size // 100)):
+    for off in _rows_off(u, theta, v, alignments, rig_limit, most_glitches(v.size)):
         # the stretches between the rows missed, longest first: a law inferred on one never read them
         edges = np.concatenate(([-1], off, [v.size]))
         stretches = sorted(((int(b - a - 1), int(a + 1)) for a, b in zip(edges[:-1], edges[1:])), reverse=True)
@@ -314,12 +331,11 @@ def _rows_off(u, theta, v, alignments, rig_limit: float, most: int) -> list[np.n
             for limit in limits:
                 rows = LawRows(e, v, d, order, limit)
                 keep = ~rows.clamped
-                c = _refit(rows, keep)
-                if c is None:
+                law = _refit(rows, keep)
+                if law is None:
                     continue
+                c, miss = law
                 reach = rows.reach(c)
-                with np.errstate(all="ignore"):
-                    miss = np.abs(rows.v - rows.X @ c)
                 if not np.all(np.isfinite(miss)) or not np.isfinite(reach):
                     continue
                 off = np.flatnonzero(keep & (miss > reach + 0.5) | rows.short_of_clamp(c, 0.5)) + d
@@ -328,11 +344,12 @@ def _rows_off(u, theta, v, alignments, rig_limit: float, most: int) -> list[np.n
     return [np.array(off) for off in sorted(found, key=len)]
 
 
-def _refit(rows: LawRows, keep: np.ndarray) -> np.ndarray | None:
+def _refit(rows: LawRows, keep: np.ndarray) -> tuple[np.ndarray, np.ndarray] | None:
     """Least squares on the rows ``keep``, then again without those it missed by four times
-    its reach; None with too few rows or numbers past a float's range (no law there)."""
-    fit, c = keep, None
-    for _ in range(2):
+    its reach: the law and its miss |v − X c| on every row; None with too few rows or numbers
+    past a float's range (no law there)."""
+    fit = keep
+    for again in (True, False):
         if np.count_nonzero(fit) < 4 * (2 * rows.order + 1):
             return None
         with np.errstate(all="ignore"):
@@ -340,8 +357,10 @@ def _refit(rows: LawRows, keep: np.ndarray) -> np.ndarray | None:
                 c, *_ = np.linalg.lstsq(rows.X[fit], rows.v[fit], rcond=None)
             except np.linalg.LinAlgError:
                 return None
-            fit = keep & (np.abs(rows.v - rows.X @ c) <= 4.0 * rows.reach(c))
-    return c
+            miss = np.abs(rows.v - rows.X @ c)
+            if again:
+                fit = keep & (miss <= 4.0 * rows.reach(c))
+    return c, miss
 
 
 def glitched(found: Glitches | None) -> tuple[int, ...]:

@@ -35,7 +35,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from station.analysis.glitches import MAX_GLITCH_ROWS
+from station.analysis.glitches import most_glitches
 from station.analysis.header_law import NEAR_COUNTS
 from station.analysis.law_rows import TOLERANCE, no_dac_command, pins_a_law
 from station.errors import StationError
@@ -323,7 +323,7 @@ def check_command_unit(log: RunLog, skipped=None) -> Columns | None:
     if stated is True:
         return None
     peak = float(np.max(np.abs(v)))
-    if 0 < np.count_nonzero(np.abs(v) > DAC_LIMIT) <= min(MAX_GLITCH_ROWS, v.size // 100):
+    if 0 < np.count_nonzero(np.abs(v) > DAC_LIMIT) <= most_glitches(v.size):
         return None  # a field or two past the DAC's range is corrupted, not in a unit: the controller's audit says
     small = no_dac_command(v, log.data["theta"])
     if small:
