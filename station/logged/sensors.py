@@ -187,8 +187,14 @@ class SensorFaults:
     def lines(self) -> list[str]:
         """One line per contradicted claim, then the other wiring the same signs fit (never
         read as a second fault)."""
-        out = [c.line for c in self.claims if c.verdict == "contradicted"]
-        return out + ([f"the signs seen fit as well: {self.alternative}"] if self.alternative and out else [])
+        return self._claimed() + self._undecided()
+
+    def _claimed(self) -> list[str]:
+        return [c.line for c in self.claims if c.verdict == "contradicted"]
+
+    def _undecided(self) -> list[str]:
+        return [f"{self.alternative} would read the same signs; the model holds the fewest faults"
+                ] if self.alternative and self._claimed() else []
 
     def said(self) -> list[str]:
         """The lines as every output says them (diagnose, survey, the report, the progress).
@@ -196,9 +202,11 @@ class SensorFaults:
         Returns
         -------
         list of str
-            Each of :meth:`lines` after "sensor fault, decided from the data: ".
+            Each contradicted claim after "sensor fault, decided from the data: ", then the
+            wiring the data cannot tell from it after "sensor wiring, not decided by the data: ".
         """
-        return [f"sensor fault, decided from the data: {line}" for line in self.lines()]
+        return ([f"sensor fault, decided from the data: {line}" for line in self._claimed()]
+                + [f"{UNDECIDED_WIRING}{line}" for line in self._undecided()])
 
     def to_json(self) -> dict:
         """``{"effects", "first_estimates", "claims", "alternative", "to_fit", "runs"}``."""
@@ -210,6 +218,10 @@ class SensorFaults:
 def _fmt(values: list[float]) -> str:
     return ", ".join(f"{v:+.2f}" for v in values)
 
+
+UNDECIDED_WIRING = "sensor wiring, not decided by the data: "
+"""Before the other wiring that reads the signs seen: no rival a fit could tell apart (the
+same θ and a for every v), so not one of a diagnosis's alternatives."""
 
 NO_FAULTS = SensorFaults()
 """Nothing decided (a run without the evidence: no rows, a beam test)."""

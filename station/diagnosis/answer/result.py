@@ -276,8 +276,9 @@ class Diagnosis:
         list of str
             The lines, without final periods: each contradicted claim once, with the runs it
             holds for ("audit: 3 of 3 runs: claim", :func:`station.logged.audit.said_once`), then
-            "sensor fault, decided from the data: ..." per sensor fault; empty when nothing was
-            contradicted.
+            "sensor fault, decided from the data: ..." per sensor fault and "sensor wiring, not
+            decided by the data: ..." for the wiring that reads the same signs; empty when
+            nothing was contradicted.
         """
         lines = said_once([(r["run"], r["contradicted"]) for r in self.audit])
         if self.sensor_faults is not None:
