@@ -281,3 +281,39 @@ def test_unexplained_says_whether_the_extended_model_predicts_better_and_the_sav
     warned = "warning: --save-model" in err.getvalue()
     assert warned == (gain <= 0), err.getvalue()
     assert (tmp_path / "m.toml").exists()
+
+
+def test_a_decided_sensor_fault_is_said_once_and_its_undecided_wiring_is_no_decided_fault():
+    """A reversed accelerometer decided from the data and refined by the fit, beside a physical
+    effect: the answer named it twice ("the sensor faults decided from the data, accel_gain
+    -0.962; then drive_c ..., together with accel_gain -0.962"), said the wiring that reads the
+    same signs under "sensor fault, decided from the data", and then "alternatives: none: no
+    other explanation comes as close" although that wiring predicts the same θ and a."""
+    from station.diagnosis.answer.prose import answer_points
+    from station.diagnosis.answer.report import _alternatives_table
+    from station.logged.sensors import SensorEvidence, decide_faults
+
+    faults = decide_faults([SensorEvidence("x.txt", 0.95, 0.95, -0.9, -1.2)] * 3)
+    assert set(faults.effects) == {"accel_gain"} and faults.alternative
+    nominal = as_model(None)
+    effects = [_effect("coulomb_friction", 4.97, "DAC counts", 30.0, 40.0, True, 8.9, Interval(4.5, 5.4, False, False)),
+               _effect("accel_gain", -0.962, "1", 11.0, 20.0, True, -0.94, Interval(-1.03, -0.89, False, False))]
+    ext = nominal.with_effects({"coulomb_friction": 4.97, "accel_gain": -0.962})
+    diag = Diagnosis(["coulomb_friction", "accel_gain"], {"theta": 80.0}, {"theta": 90.0}, 35.0, effects, ext, nominal,
+                     [], "leave-one-run-out", sensor_faults=faults.refined({"accel_gain": -0.962}))
+    points = dict((label, text) for label, text in answer_points(diag) if label != "Audit")
+    assert points["Cause"].count("(accel_gain)") == 1 and points["Cause"].count("(coulomb_friction)") == 1
+    assert points["Cause"].startswith("the sensor faults decided from the data, the accelerometer")
+    assert "-1.03" in points["Cause"]  # the fit's interval, said with the fault
+    audit = diag.audit_lines()
+    assert not any(faults.alternative in line for line in audit if line.startswith("sensor fault, decided"))
+    assert any(line.startswith("sensor wiring, not decided by the data: " + faults.alternative) for line in audit)
+    assert faults.alternative in points["Alternatives"]
+    printed = format_diagnosis(diag)
+    assert "alternatives: none (beside the sensor wiring the data cannot decide, above)" in printed
+    assert "sensor wiring the data cannot decide" in "".join(_alternatives_table(diag))
+    # the refined fault alone accepted: no physical effect is claimed
+    alone = Diagnosis(["accel_gain"], {"theta": 80.0}, {"theta": 90.0}, 5.0, effects[1:], ext, nominal, [],
+                      "leave-one-run-out", sensor_faults=faults.refined({"accel_gain": -0.962}))
+    cause = dict(answer_points(alone))["Cause"]
+    assert cause.count("(accel_gain)") == 1 and cause.endswith("; no physical effect beside them.")

@@ -264,7 +264,8 @@ def format_diagnosis(diag) -> str:
              "unexplained: " + ("no" if u is None or not u.flag else "yes - " + whole_sentences(u.evidence)
                                 + f" ({diag.prediction_words()})")]
     if diag.accepted:
-        lines.append("alternatives: " + ("none" if not diag.alternatives else "; ".join(
+        lines.append("alternatives: " + ("none" + (" (beside the sensor wiring the data cannot decide, above)"
+                                                  if diag.wiring_alike else "") if not diag.alternatives else "; ".join(
             f"{' + '.join(a.causes)} (cost ratio {a.cost_ratio:.3f}, θ gain {a.gain_pct:.1f} %)"
             for a in diag.alternatives)))
     lines += candidate_rows(diag)

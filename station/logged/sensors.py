@@ -192,9 +192,15 @@ class SensorFaults:
     def _claimed(self) -> list[str]:
         return [c.line for c in self.claims if c.verdict == "contradicted"]
 
+    @property
+    def undecided_wiring(self) -> str:
+        """The other wiring that reads the signs of the faults decided ("" when none is
+        decided): a rival no fit can tell apart (the same θ and a for every v)."""
+        return self.alternative if self._claimed() else ""
+
     def _undecided(self) -> list[str]:
-        return [f"{self.alternative} would read the same signs; the model holds the fewest faults"
-                ] if self.alternative and self._claimed() else []
+        w = self.undecided_wiring
+        return [f"{w} would read the same signs; the model holds the fewest faults"] if w else []
 
     def said(self) -> list[str]:
         """The lines as every output says them (diagnose, survey, the report, the progress).

@@ -323,8 +323,11 @@ def answer_points(diag) -> list[tuple[str, str]]:
     """
     base = diag.nominal_model.name
     points = [("Audit", line + ".") for line in diag.audit_lines()]
-    # the causes as every output names them (Diagnosis.causes): the decided faults lead
-    faults = "; ".join(f"{plain_name(k)} {plain_value(k, v, EFFECTS[k].unit)}" for k, v in diag.decided_faults.items())
+    # the causes as every output names them (Diagnosis.causes): the decided faults lead, each
+    # said once (one the fit refined with the fit's interval)
+    accepted = {e.name: e for e in diag.effects if e.accepted}
+    faults = "; ".join(cause_words(accepted[k]) if k in accepted else
+                       f"{plain_name(k)} {plain_value(k, v, EFFECTS[k].unit)}" for k, v in diag.decided_faults.items())
     if not diag.accepted:
         best = diag.effects[0] if diag.effects else None
         extra = "" if best is None else (f" The best candidate, {plain_name(best.name)} "
@@ -335,11 +338,11 @@ def answer_points(diag) -> list[tuple[str, str]]:
                                  f"none: no effect explains the differences between {base} and the runs")
                        + f" beyond what sensor quantization and noise can ({diag.validation}).{extra}"))
     else:
-        accepted = {e.name: e for e in diag.effects if e.accepted}
-        more = [cause_words(accepted[n]) for n in diag.accepted[1:]]
-        points.append(("Cause", (f"the sensor faults decided from the data, {faults}; then " if faults else "")
-                       + cause_words(accepted[diag.accepted[0]])
-                       + (f", together with {'; '.join(more)}" if more else "") + "."))
+        physical = [cause_words(accepted[n]) for n in diag.accepted if n not in diag.decided_faults]
+        first, more = (physical or [""])[0], physical[1:]
+        points.append(("Cause", (f"the sensor faults decided from the data, {faults}" if faults else "")
+                       + ("; then " if faults and first else "" if first else "; no physical effect beside them")
+                       + first + (f", together with {'; '.join(more)}" if more else "") + "."))
         points.append(("Gain", f"on runs it was not fitted to ({diag.validation}) the extended model lowers the θ RMS "
                                f"error by {diag.gain_pct:.1f} % (θ fit {format_pct(diag.baseline_fit.get('theta'))} → "
                                f"{format_pct(diag.extended_fit.get('theta'))}, a fit "
@@ -356,7 +359,9 @@ def answer_points(diag) -> list[tuple[str, str]]:
                              f"the chosen one's, θ gain {a.gain_pct:.1f} %)" for a in diag.alternatives)
             points.append(("Alternatives", f"the validation data cannot tell this apart from {alts}."))
         else:
-            points.append(("Alternatives", "none: no other explanation comes as close on the validation data."))
+            points.append(("Alternatives", "none: no other explanation comes as close on the validation data"
+                           + (f" (beside the sensor wiring the data cannot decide: {diag.wiring_alike})"
+                              if diag.wiring_alike else "") + "."))
     for note in target_notes(diag):
         points.append(("Target missed" if note.startswith("overshoot") else "Residuals", note + "."))
     for note in diag.notes:

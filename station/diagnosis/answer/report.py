@@ -139,8 +139,10 @@ def _alternatives_table(diag) -> list[str]:
         return []
     esc = html.escape
     if not diag.alternatives:
+        alike = (f" The sensor wiring the data cannot decide, {html.escape(diag.wiring_alike)}, reads the same "
+                 "signs (the audit above).") if diag.wiring_alike else ""
         return ["<h3>Alternatives</h3><p>None: every other candidate's validation cost is further from the chosen "
-                "explanation's than luck and the data's information reach.</p>"]
+                f"explanation's than luck and the data's information reach.{alike}</p>"]
     rows = ["<h3>Alternatives the validation data cannot tell apart</h3><table><tr><th>causes</th><th>instead of</th>"
             "<th>values (refitted jointly)</th><th>θ RMS gain</th><th>validation cost / chosen</th></tr>"]
     for a in diag.alternatives:

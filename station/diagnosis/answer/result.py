@@ -228,6 +228,12 @@ class Diagnosis:
         return dict(self.sensor_faults.effects) if self.sensor_faults is not None else {}
 
     @property
+    def wiring_alike(self) -> str:
+        """The sensor wiring the data cannot tell from the decided faults' ("" when none):
+        said beside the alternatives, which it is not one of (no fit separates it)."""
+        return self.sensor_faults.undecided_wiring if self.sensor_faults is not None else ""
+
+    @property
     def held(self) -> dict:
         """Effects the extended model holds that were not accepted as causes (a breakaway's
         sliding level, a decided sensor fault) -> their value there: the one record the
