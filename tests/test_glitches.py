@@ -13,6 +13,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from station.analysis.glitches import glitched
 from station.logged import LoggedRun
 from station.replay import format_report, replay
 from tests.blind.audit import write_audit_case
@@ -69,12 +70,25 @@ def test_a_corrupted_field_keeps_the_header_law_and_its_alignment(tmp_path, case
     assert claim.verdict != "contradicted", claim.evidence
     assert run.source == "header" and run.reproduced
     assert run.alignment == hidden.alignment or hidden.alignment in run.identified.alignments
-    named = run.identified.glitches if col == "v" else ()
+    named = glitched(run.identified.corrupted) if col == "v" else ()
     if col == "v":
         assert named == tuple(sorted(rows))
     text = format_report(replay(path, model=False))
     for k in rows:
         assert f"{'θ' if col == 'theta' else 'v'} of row {k} at t = " in text, text
+    _numbers_are_the_clean_logs(run, clean)
+
+
+def _numbers_are_the_clean_logs(run, clean):
+    """No number of the run reads a field its audit set aside: the step metrics, the θ and a a
+    model is compared with (and a diagnosis fits) are the uncorrupted log's. Before, the audit
+    said "θ of row 400 ... set aside" and the overshoot read it: 288.5 % where the run's was 21.5 %."""
+    assert run.step_metrics() == clean.step_metrics()
+    np.testing.assert_allclose(run.theta, clean.theta, atol=1.0)  # θ put right within a count of the logged
+    assert np.count_nonzero(run.theta != clean.theta) <= 3
+    # the law replayed on the log put right: as on the clean log, to the replay's tolerance (an a
+    # solved from the law is the logged a to its float's last digits)
+    np.testing.assert_allclose(run.identified.fit.v_replayed, clean.identified.fit.v_replayed, atol=1e-6)
 
 
 @pytest.mark.parametrize("case, seed", [("lie:p_kp", 0), ("lie:lead_pole", 1), ("lie:open_loop", 2), ("session", 0)])
@@ -88,7 +102,7 @@ def test_a_corrupted_field_does_not_hide_a_lying_header(tmp_path, case, seed):
     run = LoggedRun.from_path(path)
     claim = run.audit.of("controller")
     assert claim.verdict == "contradicted" and run.source == "inferred (header contradicted)", claim
-    assert run.identified.glitches == (row,) and run.alignment == hidden.alignment
+    assert glitched(run.identified.corrupted) == (row,) and run.alignment == hidden.alignment
     assert f"v of row {row} at t = " in claim.evidence
     np.testing.assert_array_equal(run.identified.fit.v_replayed, clean.identified.fit.v_replayed)
 
@@ -106,7 +120,7 @@ def test_a_log_that_names_no_law_is_inferred_past_a_corrupted_field(tmp_path, ca
     _corrupt(path, [(column, row, float(rng.choice([-1, 1]) * rng.integers(25, 300)))])
     run = LoggedRun.from_path(path)
     assert run.source == "inferred" and run.reproduced and run.alignment == hidden.alignment
-    assert run.identified.glitches == ((row,) if column == "v" else ())
+    assert glitched(run.identified.corrupted) == ((row,) if column == "v" else ())
     assert f"{'θ' if column == 'theta' else 'v'} of row {row} at t = " in run.audit.of("controller").evidence
     np.testing.assert_array_equal(run.identified.fit.v_replayed, clean.identified.fit.v_replayed)
 
@@ -126,6 +140,11 @@ def test_the_rigs_logs_with_a_corrupted_field(rig_data, tmp_path, name, column, 
     words = {"v": "v of row 400", "theta": "θ of row 400", "a": "a of row 400"}[column]
     text = format_report(replay(path, model=False))
     assert (words in text) is (column != "a" or ga), text
+    if column != "a" or ga:  # a field set aside: the report's numbers are the clean log's
+        clean = LoggedRun.from_path(rig_data / name)
+        _numbers_are_the_clean_logs(run, clean)
+        assert [x for x in format_report(replay(path)).splitlines() if "overshoot" in x or "model fit" in x] == \
+            [x for x in format_report(replay(rig_data / name)).splitlines() if "overshoot" in x or "model fit" in x]
 
 
 def test_the_rigs_headerless_sweep_with_two_corrupted_fields(rig_data, tmp_path):
@@ -136,7 +155,7 @@ def test_the_rigs_headerless_sweep_with_two_corrupted_fields(rig_data, tmp_path)
     _corrupt(path, [("v", 5000, 37.0), ("theta", 8000, -25.0)])
     run = LoggedRun.from_path(path)
     assert run.source == "inferred" and run.reproduced and run.alignment == 1
-    assert run.controller.spec.get("kp") == 1.0 and run.identified.glitches == (5000,)
+    assert run.controller.spec.get("kp") == 1.0 and glitched(run.identified.corrupted) == (5000,)
     text = format_report(replay(path, model=False))
     assert "v of row 5000 at t = 10 s (logged 90, the law's 53)" in text and "θ of row 8000 at t = 16 s" in text, text
 
@@ -159,7 +178,7 @@ def test_a_v_corrupted_past_the_dac_range_is_a_field_not_a_unit(rig_data, tmp_pa
     path.write_text("\n".join(lines) + "\n")
     _corrupt(path, [("v", 400, 9999.0)])
     run = LoggedRun.from_path(path)
-    assert run.reproduced and run.alignment == 1 and run.identified.glitches == (400,)
+    assert run.reproduced and run.alignment == 1 and glitched(run.identified.corrupted) == (400,)
     assert run.source == ("header" if header else "inferred")
     assert not [c for c in run.audit.claims if c.claim == "columns" and c.verdict == "contradicted"]
     assert not any("another unit" in note for note in run.notes)

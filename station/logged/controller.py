@@ -31,7 +31,7 @@ from station.analysis.controller_id import (
 from station.analysis.header_law import (NEAR_COUNTS, PRINTED_TOLERANCE, SAME_LAW_RTOL, completed_law, named_design,
                                         same_law)
 from station.analysis.law_words import ga_text
-from station.analysis.glitches import GLITCH_WORDS, Glitches, glitched, isolated_misses, law_past_glitches
+from station.analysis.glitches import GLITCH_WORDS, Glitches, isolated_misses, law_past_glitches
 from station.analysis.law_rows import pins_a_law, unpinned_words
 from station.analysis.pid_law import match_pid
 from station.control import Compensator, DiscreteTF, OpenLoop, controller_from_spec, lead_controller, p_controller
@@ -176,9 +176,9 @@ class ControllerId(NamedTuple):
         The row where n jumps past which the law could not be judged (its memory, such as
         Ga's, is not in the log's rows): ``fit.max_abs_dv`` is over the rows before it. None:
         judged on every row.
-    glitches : tuple of int
-        Rows the law misses alone, a corrupted field's (:func:`station.analysis.glitches.isolated_misses`):
-        ``fit.max_abs_dv`` is over the other rows.
+    corrupted : Glitches or None
+        Fields the law misses alone, corrupted, and the log put right (:func:`station.analysis.
+        glitches.isolated_misses`; None: none): ``fit.max_abs_dv`` is over the other rows.
     """
 
     controller: Compensator | OpenLoop | None
@@ -189,7 +189,7 @@ class ControllerId(NamedTuple):
     alignments: tuple[int, ...] = ()
     cut: bool = False
     judged_to: int | None = None
-    glitches: tuple[int, ...] = ()
+    corrupted: Glitches | None = None
 
 
 def describe_controller(controller) -> str:
@@ -450,7 +450,7 @@ def identify_controller(log: RunLog, skipped=None) -> ControllerId:
                 "controller", said, describe_controller(used) + at, "confirmed" if pinned else "unchecked",
                 f"replays every logged v {_how_close(fit.max_abs_dv, printing)}{at}" + (
                     "" if pinned else f"; but {unpinned_words(v)}: the data cannot confirm this one") + aside),
-                exact, cut=cut, glitches=glitched(glitch))
+                exact, cut=cut, corrupted=glitch)
         header_dv = fit.max_abs_dv
         if header_dv <= NEAR_COUNTS and not cut:  # printed coefficients a count off: the design they round
             completed = completed_law(used, u, theta, a, v, fit.alignment, dt, CLAMP, prefer, restarts)
@@ -489,7 +489,7 @@ def identify_controller(log: RunLog, skipped=None) -> ControllerId:
                 f"the data's law has the header's coefficients (to {SAME_LAW_RTOL:g} relative); as printed it "
                 f"replays v to max |dv| = {_counts(header_dv)}, completed from the data "
                 f"{_how_close(hit.max_abs_dv, printing)}{at}{aside}"), hit.alignments, cut=cut,
-                glitches=glitched(glitch))
+                corrupted=glitch)
         if stated:
             notes.append(f"the header's controller ({said}) does not reproduce the logged v (max |dv| = "
                          f"{_counts(header_dv)}); the data's is used: {data_says}")
@@ -497,12 +497,12 @@ def identify_controller(log: RunLog, skipped=None) -> ControllerId:
                 "controller", said, data_says, "contradicted",
                 f"the header's controller replays v to max |dv| = {_counts(header_dv)} at best; the data's law "
                 f"reproduces every logged v {_how_close(hit.max_abs_dv, printing)}{at}{aside}"), hit.alignments,
-                cut=cut, glitches=glitched(glitch))
+                cut=cut, corrupted=glitch)
         notes.append(f"controller inferred from the data: {hit.law}, alignment {hit.alignment} "
                      f"(reproduces the logged v {_how_close(hit.max_abs_dv, printing)})")
         return ControllerId(hit.controller, "inferred", notes, fit, AuditClaim(
             "controller", said, data_says, "unchecked", f"the log names no controller; inferred from the data{aside}"),
-            hit.alignments, cut=cut, glitches=glitched(glitch))
+            hit.alignments, cut=cut, corrupted=glitch)
     tried = ("open loop, P, linear e -> v up to order 3, on the float or the stored integer command, "
              "designs on the float with the whole count sent, Gth with accelerometer feedback Ga up to order 3 "
              "each on the float command, the thesis's Ga beside a Gth on whole counts, alignments 0 and 1")

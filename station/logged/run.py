@@ -57,7 +57,10 @@ class LoggedRun:
     log : RunLog
         The log as its data say it is: ``raw_log`` itself, or a copy with t in s, θ in
         encoder counts, signed counts and its columns in their places when the audit found
-        them otherwise.
+        them otherwise, and the fields the controller's audit set aside as corrupted put
+        right (:meth:`station.analysis.glitches.Glitches.repaired`): what every number of the
+        run reads (its metrics, its model's fit, a diagnosis), so none reads a field the
+        audit said is not the run's.
     raw_log : RunLog
         The log as read.
     """
@@ -67,8 +70,17 @@ class LoggedRun:
         self._time_base: TimeBase = time_base(log)
         self._columns: Columns = check_sensor_swap(
             check_columns(self._time_base.log, _skipped(self._time_base.log)), _nominal_theta)
-        self.log = self._columns.log
+        self._checked = self._columns.log  # what the controller's audit reads
         self._simulable = False
+
+    @cached_property
+    def log(self) -> RunLog:
+        """The log as its data say it is (the class's ``log``)."""
+        g = self.identified.corrupted
+        if g is None:
+            return self._checked
+        theta, a, v = g.repaired(self._checked.data["v"])
+        return dataclasses.replace(self._checked, data={**self._checked.data, "theta": theta, "a": a, "v": v})
 
     @classmethod
     def from_path(cls, path: str | Path) -> LoggedRun:
@@ -87,10 +99,10 @@ class LoggedRun:
         return cls(read_log(path))
 
     def __repr__(self) -> str:
-        return f"LoggedRun({str(self.log.path)!r})"
+        return f"LoggedRun({str(self._checked.path)!r})"
 
     def __len__(self) -> int:
-        return len(self.log)
+        return len(self._checked)
 
     @property
     def data(self) -> dict[str, np.ndarray]:
@@ -116,7 +128,7 @@ class LoggedRun:
         """
         if self._columns.identified is not None:  # the column check identified it already
             return self._columns.identified
-        return identify_controller(self.log, self.skipped) if len(self) else ControllerId(None, None, [])
+        return identify_controller(self._checked, self.skipped) if len(self) else ControllerId(None, None, [])
 
     @cached_property
     def audit(self) -> Audit:
@@ -384,7 +396,7 @@ class LoggedRun:
     def skipped(self) -> np.ndarray | None:
         """Rows whose sample the station did not answer (our logs' :data:`station.runlog.SKIPPED`
         status bit; None for a log without a status column or without skips)."""
-        return _skipped(self.log)
+        return _skipped(self._checked)
 
     @property
     def alignment(self) -> int | None:
