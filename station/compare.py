@@ -16,12 +16,17 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from pathlib import Path
 
+import numpy as np
 
 from station.analysis.metrics import FROM_START, SETTLE_HOLD_S, THESIS_BAND_PCT, StepMetrics, settling_label
+from station.control.designs import make_controller
+from station.control.rerun import detect_alignment
 from station.errors import StationError
 from station.logged import LoggedRun
 from station.logged.audit import Audit
 from station.logged.reproduction import reproduction_lines
+from station.logged.run import REPRODUCED_TOLERANCE
+from station.runlog.timebase import restart_rows
 from station.plots import source_label
 from station.rig import THESIS_STEPS  # the thesis rows are shown for those step logs only
 
@@ -150,13 +155,42 @@ def compare_run(path, plant) -> RunComparison:
     if step is not None:
         rig = run.step_metrics()
         model = run.step_metrics(pred["theta"], pred["t"])
-        thesis_kp = name != "p" or getattr(controller, "spec", {}).get("kp") == 2.0
-        if source == "rig" and THESIS_STEPS.get(name) == step and thesis_kp:
-            (eo, es), (fo, fs) = THESIS_TABLE[name]
+        case = thesis_case(run, step) if source == "rig" else None
+        if case is not None:
+            (eo, es), (fo, fs) = THESIS_TABLE[case]
             exp, fem = StepMetrics(eo, es), StepMetrics(fo, fs)
     return RunComparison(str(path), name, step, rig, model, exp, fem, fits, data, pred, notes,
                          source=source, outcome=log.outcome, controller_source=run.source, audit=run.audit_for(plant),
                          step_time_s=step_time)
+
+
+def thesis_case(run: LoggedRun, step: float | None) -> str | None:
+    """The thesis experiment a log is (a key of :data:`THESIS_TABLE`), decided from its data:
+    a step of that experiment's height (:data:`station.rig.THESIS_STEPS`) whose logged v the
+    thesis's law (P kp = 2, the lead, the lead with Ga; ±200 clamp) reproduces at an
+    alignment, whatever the header named (the thesis's lead step under a header that says
+    open loop is still that experiment; a P step at another kp is not).
+
+    Parameters
+    ----------
+    run : LoggedRun
+        A closed-loop log.
+    step : float or None
+        Its step's height, encoder counts (:attr:`station.logged.LoggedRun.reference`).
+
+    Returns
+    -------
+    str or None
+        "p", "lead" or "lead-accel"; None for any other log.
+    """
+    kind = next((k for k, height in THESIS_STEPS.items() if height == step), None)
+    if kind is None or run.controller is None or not len(run):
+        return None
+    d = run.data
+    a = d["a"] if run.has_column("a") else np.zeros(len(run))
+    fit = detect_alignment(make_controller(kind), d["u"], d["theta"], a, d["v"], skipped=run.skipped,
+                           restarts=restart_rows(d["n"]))
+    return kind if fit.max_abs_dv <= REPRODUCED_TOLERANCE else None
 
 
 def format_comparison(c: RunComparison) -> str:

@@ -35,6 +35,31 @@ def test_step_logs(rig_data, plant, name, kind, step, model_overshoot, tol):
     assert c.prediction["v"].max() <= 200.0
 
 
+@pytest.mark.parametrize("name, header, edit, shown", [
+    (LEAD_LOG, "#SLFR RTP OL_Test", None, True),            # the thesis's lead step under a lying header
+    (P_LOG, "#SLFR RTP OL_Test", None, True),               # P kp = 2 inferred: the thesis's P step
+    (P_LOG, "#SLFR RTP P_control_Test\n#kp=2.5", None, True),  # a wrong kp in the header: the data's is 2
+    (ACCEL_LOG, None, "a negated", True),                   # the audit reads the column negated: the thesis's law
+    (LEAD_LOG, "#SLFR RTP Motor_Comp_Gth", "v halved", False),  # another law: not the thesis's experiment
+])
+def test_the_thesis_rows_are_the_datas_experiment_not_the_headers(rig_data, plant, tmp_path, name, header, edit, shown):
+    """The thesis's rows are shown where the data are the thesis's experiment: the thesis's lead
+    step under a header that said open loop got none (its law inferred, named by its design),
+    as the header's name decided them."""
+    lines = (rig_data / name).read_text().splitlines()
+    head = [x for x in lines if x.startswith("#") and not x.startswith("#t")] if header is None else [header]
+    body = [x for x in lines if not x.startswith("#") or x.startswith("#t")]
+    column, factor = {"a negated": (5, -1.0), "v halved": (3, 0.5)}.get(edit, (0, 1.0))
+    body = body[:1] + ["\t".join(f"{float(c) * factor:g}" if i == column else c for i, c in enumerate(r.split("\t")))
+                       for r in body[1:]]
+    path = tmp_path / name
+    path.write_text("\n".join(head + body) + "\n")
+    c = compare_run(path, plant)
+    assert (c.thesis_experiment is not None) is shown, c.notes
+    if shown:
+        assert c.rig == c.thesis_experiment
+
+
 def test_open_loop_log_is_driven_by_its_v(rig_data, plant):
     c = compare_run(rig_data / PULSE_LOG, plant)
     assert c.step is None and c.model is None
