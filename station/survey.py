@@ -26,6 +26,7 @@ from typing import Any
 from station.analysis.metrics import FROM_START, NOT_SETTLED, SETTLE_HOLD_S, THESIS_BAND_PCT, settling_label
 from station.errors import StationError
 from station.inputs import exists, is_folder, open_regular
+from station.logged.reproduction import reproduction_lines
 from station.outputs import WRITTEN_SUFFIXES, Transaction
 from station.pools import as_finished, lost, process_pool, submit_all
 from station.replay import NOT_TIP, replay
@@ -82,8 +83,9 @@ class SurveyRow:
         The replay's JSON (:meth:`station.replay.ReplayReport.to_json`, its ``audit``
         included); not a CSV column.
     contradictions : list of str
-        The log's claims its data contradicted, one line each (DESIGN.md "Log audit"); not a
-        CSV column.
+        The log's claims its data contradicted, one line each (DESIGN.md "Log audit"), then
+        what its replay set aside or could not confirm (a corrupted field, a law no row pins:
+        :func:`station.logged.reproduction.reproduction_lines`); not a CSV column.
     """
 
     file: str
@@ -210,6 +212,9 @@ def survey_one(path: str | Path, model: bool = True) -> SurveyRow:
     run = rep.run
     row.report = rep.to_json()
     row.contradictions = [] if rep.audit is None else rep.audit.lines()
+    if rep.max_abs_dv is not None:  # what the replay set aside or could not confirm, as replay says it
+        row.contradictions += [f"replay reproduces the logged v, {line}" for line in
+                               reproduction_lines(rep.max_abs_dv, rep.alignment, rep.audit, rep.judged_to)[1:]]
     row.accel_is_tip = None if rep.audit is None else bool(rep.audit.accel_is_tip)
     row.format = run.log.layout or run.log.format
     row.rows = len(run)

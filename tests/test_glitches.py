@@ -16,6 +16,7 @@ import pytest
 from station.analysis.glitches import glitched
 from station.logged import LoggedRun
 from station.replay import format_report, replay
+from station.survey import format_table, survey_one
 from tests.blind.audit import write_audit_case
 
 COLUMNS = {"v": 3, "theta": 4, "a": 5}  # the rig layout's columns: t n u v θ a
@@ -140,6 +141,9 @@ def test_the_rigs_logs_with_a_corrupted_field(rig_data, tmp_path, name, column, 
     words = {"v": "v of row 400", "theta": "θ of row 400", "a": "a of row 400"}[column]
     text = format_report(replay(path, model=False))
     assert (words in text) is (column != "a" or ga), text
+    # the survey says it too, before its table (it said nothing of the field set aside)
+    said = format_table([survey_one(path, model=False)])
+    assert (f"replay reproduces the logged v, but {words}" in said) is (column != "a" or ga), said
     if column != "a" or ga:  # a field set aside: the report's numbers are the clean log's
         clean = LoggedRun.from_path(rig_data / name)
         _numbers_are_the_clean_logs(run, clean)
