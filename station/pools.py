@@ -103,6 +103,7 @@ def abandon(pool: cf.ProcessPoolExecutor) -> None:
     # before 3.14 the pool offers no way to stop a running task: its worker processes are
     # killed (the pool's own thread then fails their futures and closes its queues)
     workers = list((getattr(pool, "_processes", None) or {}).values())
+    thread = getattr(pool, "_executor_manager_thread", None)  # shutdown() forgets it
     pool.shutdown(wait=False, cancel_futures=True)
     for proc in workers:
         try:
@@ -115,13 +116,16 @@ def abandon(pool: cf.ProcessPoolExecutor) -> None:
         except (OSError, ValueError, AssertionError):
             pass
     # the pool's own thread ends now, not in the interpreter's exit hook (Python < 3.14 joins it
-    # there, where a stop signal interrupted the join: "Exception ignored ... _python_exit")
-    thread = getattr(pool, "_executor_manager_thread", None)
+    # there, where a stop signal interrupted the join: "Exception ignored ... _python_exit").
+    # Its wakeup leaves the hook even when the thread outlives the wait (a busy machine): the
+    # hook's wakeup() raced the thread closing that pipe ("Exception ignored in: <module
+    # 'threading'>", CI, 1 run in many). With its workers killed the thread ends by itself,
+    # and the interpreter still joins it, a non-daemon thread. (It is taken before shutdown(),
+    # which drops the pool's reference on Python 3.11: before, neither was done.)
     if thread is not None:
         with contextlib.suppress(RuntimeError):
             thread.join(KILL_WAIT_S)
-        if not thread.is_alive():
-            getattr(cf.process, "_threads_wakeups", {}).pop(thread, None)
+        getattr(cf.process, "_threads_wakeups", {}).pop(thread, None)
 
 
 @contextlib.contextmanager

@@ -294,6 +294,29 @@ def test_a_stop_kills_a_pools_workers_and_leaves_no_thread_error(tasks, workers,
         threading.excepthook = old_hook
 
 
+@pytest.mark.parametrize("wait_s", [0.0, 0.5])
+def test_an_abandoned_pool_leaves_nothing_to_the_exit_hook(monkeypatch, wait_s):
+    """Python < 3.14 calls every pool thread's wakeup in its exit hook, racing the thread that
+    closes it ("Exception ignored in: <module 'threading'>" after "station: stopped by SIGINT",
+    once on CI's busy machine). The abandoned pool's thread leaves the hook's table whether it
+    ended within the wait or outlives it (wait 0: still alive); before, ``shutdown`` had dropped
+    the pool's reference to the thread, so it was neither joined nor removed."""
+    import concurrent.futures.process as cfp
+
+    import station.pools as pools
+
+    monkeypatch.setattr(pools, "KILL_WAIT_S", wait_s)
+    pool = cfp.ProcessPoolExecutor(2, initializer=pools.worker_signals)
+    pool.submit(int).result()
+    pool.submit(time.sleep, 30.0)
+    thread = pool._executor_manager_thread
+    assert thread in cfp._threads_wakeups
+    pools.abandon(pool)
+    assert thread not in cfp._threads_wakeups and (wait_s == 0.0 or not thread.is_alive())
+    thread.join(10.0)  # it ends by itself, its workers killed
+    assert not thread.is_alive() and _pool_children() == []
+
+
 def test_a_stop_during_a_submission_never_leaves_the_pools_queue_locked():
     # CI hung once in a stopped `tune`: the handler's raise came inside ProcessPoolExecutor.submit
     # while its work-id queue's lock was held, and the pool's own thread (then the interpreter's
