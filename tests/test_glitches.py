@@ -187,3 +187,25 @@ def test_a_v_corrupted_past_the_dac_range_is_a_field_not_a_unit(rig_data, tmp_pa
     assert not [c for c in run.audit.claims if c.claim == "columns" and c.verdict == "contradicted"]
     assert not any("another unit" in note for note in run.notes)
     assert "v of row 400 at t = 0.8 s" in format_report(replay(path, model=False))
+
+
+def test_a_v_a_count_off_under_its_headers_law_is_not_searched_with_columns_rewritten(rig_data, tmp_path,
+                                                                                       monkeypatch):
+    """The rig's P step with one v a count off: a count is within a printing's reach, so the
+    header's law is said not to reproduce the log (max |dv| = 1), and the log is taken as its
+    columns are named. Before, the audit also searched the data's law with every column swap
+    and sign (17.6 s of a 19 s replay) for a log its header's law misses by one count."""
+    import station.logged.columns as columns
+
+    name = "SFLR_P_control_step_kp_2_SLFR_RTP_P_control_kp=2.0.txt"
+    path = tmp_path / name
+    path.write_text((rig_data / name).read_text())
+    _corrupt(path, [("v", 400, 1.0)])
+
+    def searched(*args, **kwargs):
+        raise AssertionError("columns rewritten for a log its header's law misses by a count")
+
+    monkeypatch.setattr(columns, "_inferred_swap", searched)
+    run = LoggedRun.from_path(path)
+    assert run.source == "header" and not run.reproduced and run.identified.fit.max_abs_dv == 1.0
+    assert not [c for c in run.audit.claims if c.claim == "columns" and c.verdict == "contradicted"]
