@@ -16,7 +16,6 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from pathlib import Path
 
-import numpy as np
 
 from station.analysis.metrics import FROM_START, SETTLE_HOLD_S, THESIS_BAND_PCT, StepMetrics, settling_label
 from station.control.designs import make_controller
@@ -186,9 +185,8 @@ def thesis_case(run: LoggedRun, step: float | None) -> str | None:
     kind = next((k for k, height in THESIS_STEPS.items() if height == step), None)
     if kind is None or run.controller is None or not len(run):
         return None
-    d = run.data
-    a = d["a"] if run.has_column("a") else np.zeros(len(run))
-    fit = detect_alignment(make_controller(kind), d["u"], d["theta"], a, d["v"], skipped=run.skipped,
+    d = run.data  # a column of NaN where the log has none: a law that reads it reproduces nothing
+    fit = detect_alignment(make_controller(kind), d["u"], d["theta"], d["a"], d["v"], skipped=run.skipped,
                            restarts=restart_rows(d["n"]))
     return kind if fit.max_abs_dv <= REPRODUCED_TOLERANCE else None
 
