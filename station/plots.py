@@ -265,7 +265,8 @@ def plot_comparison(c, path: Path, transaction=None):
     else:
         ax[0].plot(t, c.data["u"], "k:", lw=0.8, label="u")
     for row, key, label in ((0, "theta", "θ (encoder counts)"), (1, "a", "a (counts)"), (2, "v", "v (DAC counts)")):
-        ax[row].plot(t, c.data[key], lw=0.9, label=c.source)
+        logged = np.any(np.isfinite(c.data[key]))
+        ax[row].plot(t, c.data[key], lw=0.9, label=c.source if logged else f"{c.source}: no {key} column")
         if c.prediction is not None:  # None: a hub-held beam test, which the model cannot represent
             ax[row].plot(c.prediction["t"], c.prediction[key], lw=0.9, label="model")
         ax[row].set_ylabel(label)

@@ -210,7 +210,7 @@ def replay(path: str | Path, model=True, n_elements: int | None = None) -> Repla
     report.audit = run.audit
     want_model = model is not False and model is not None
     if want_model and run.held is None and len(run):
-        run.check_columns(run.model_columns, "simulating it on a model (--no-model: the commands only)")
+        run.check_columns(run.simulated_columns, "simulating it on a model (--no-model: the commands only)")
     if want_model or run.held is not None:
         from station.plant.model import as_model  # lazy: start-up time (the FEM, loaded only when a model runs)
 
@@ -231,6 +231,8 @@ def _model(report: ReplayReport, run: LoggedRun, model) -> None:
     report.prediction = sim.prediction
     report.n_elements = model.n_elements
     report.fit_pct = fits = sim.fit_pct
+    if not run.has_column("a"):
+        report.notes.append("the log has no a column: the model's θ alone is fitted (no sensor audit of a)")
     part = sim.parting
     if part is not None and part.t_follow is not None and not part.followed:
         report.notes.append(part.line())

@@ -369,7 +369,8 @@ def format_table(rows: Sequence[SurveyRow], root: str | Path | None = None) -> s
                     f"(model {_cell(r.f1_model_hz, '.3f')} Hz, {_cell(r.zeta1_model, '.4f')})")
         elif r.fit_theta_pct is not None or r.fit_accel_pct is not None:
             why = f" ({NOT_TIP})" if r.accel_is_tip is False else ""
-            last = f"fit theta {_cell(r.fit_theta_pct, '.1f')} %, a {_cell(r.fit_accel_pct, '.1f')} %{why}"
+            pct = lambda x: "-" if x is None else f"{x:.1f} %"  # noqa: E731 - "-": not fitted (no a column)
+            last = f"fit theta {pct(r.fit_theta_pct)}, a {pct(r.fit_accel_pct)}{why}"
         else:
             last = "-"
         lines.append([name, r.format, _cell(r.rows), _cell(r.sample_time_s, "g"), ctl, _cell(r.alignment),

@@ -62,8 +62,8 @@ def fit_pct(theta, theta_hat, a, a_hat, digits: int | None = None) -> dict[str, 
     -------
     dict
         ``{"theta": F, "accel": F}``, percent (:func:`nrmse_fit`); None where the fit is
-        undefined (a constant measured signal), ``-inf`` where the simulation is not finite
-        (it diverged).
+        undefined (a constant measured signal, or one not measured: all NaN), ``-inf``
+        where the simulation is not finite (it diverged).
 
     Raises
     ------
@@ -72,6 +72,9 @@ def fit_pct(theta, theta_hat, a, a_hat, digits: int | None = None) -> dict[str, 
     """
     out: dict[str, float | None] = {}
     for key, y, yhat in (("theta", theta, theta_hat), ("accel", a, a_hat)):
+        if np.all(np.isnan(y)):  # not measured: a log without the column
+            out[key] = None
+            continue
         fit = nrmse_fit(y, yhat) if np.all(np.isfinite(yhat)) else float("-inf")
         out[key] = None if np.isnan(fit) else fit if digits is None else round(fit, digits)
     return out

@@ -243,10 +243,10 @@ class LoggedRun:
 
     @cached_property
     def mounting(self) -> Mounting:
-        """Whether the accelerometer's mass was on the beam
-        (:func:`station.logged.accelerometer.decide_mounting`), asked only when a reads no tip
-        acceleration (an accelerometer that reads is on the beam) and the hub was free."""
-        if self.accel_is_tip or not len(self) or self.held is not None:
+        """Whether the accelerometer's mass was on the beam (:func:`station.logged.accelerometer.decide_mounting`),
+        asked only when a reads no tip acceleration (one that reads is on the beam) or the log has
+        no a column, and the hub was free."""
+        if (self.accel_is_tip and self.has_column("a")) or not len(self) or self.held is not None:
             return ON_THE_TIP
         d = self.data
         applied = d["v_applied"]
@@ -341,6 +341,12 @@ class LoggedRun:
         if self.closed:
             return ("u", "theta", "a")
         return (() if self.has_column("v_applied") else ("v",)) + ("theta", "a")
+
+    @property
+    def simulated_columns(self) -> tuple[str, ...]:
+        """What simulating the run and fitting its θ need: :attr:`model_columns` but a (a
+        log without it gets no a fit, and no sensor audit)."""
+        return tuple(n for n in self.model_columns if n != "a")
 
     def check_columns(self, names, purpose: str) -> None:
         """Refuse a log that lacks a column a use needs: one line naming the log, the column
@@ -557,10 +563,10 @@ class LoggedRun:
         Raises
         ------
         StationError
-            The log lacks a column the simulation or its fit needs (:attr:`model_columns`).
+            The log lacks a column the simulation or its θ fit needs (:attr:`simulated_columns`).
         """
         if not self._simulable:  # checked once: a diagnosis simulates a run thousands of times
-            self.check_columns(self.model_columns, "simulating it on a model")
+            self.check_columns(self.simulated_columns, "simulating it on a model")
             self._simulable = True
         found = self.found_faults(model) if sensors else {}
         sim = simulate_log(self.log, self.controller, self.alignment, self.model_as_found(model, sensors),
