@@ -37,7 +37,6 @@ import numpy as np
 
 from station.analysis.glitches import most_glitches
 from station.analysis.header_law import NEAR_COUNTS
-from station.analysis.law_words import thesis_ga_sign
 from station.analysis.law_rows import TOLERANCE, no_dac_command, pins_a_law
 from station.errors import StationError
 from station.logged.audit import AuditClaim, count_step, in_counts, quantum_fits
@@ -245,7 +244,7 @@ def _inferred_swap(log: RunLog, skipped) -> Columns:
         return Columns((), log)
     # no header, an open-loop one (v = u), or a law the data contradict, and no law found in the data
     if cid.claim is None or not cid.claim.data.endswith(NO_LAW):
-        return _thesis_ga_negated(log, cid, skipped) or Columns((), log, cid)
+        return Columns((), log, cid)
     for rewrites in tuple((c,) for c in INFERRED_TRIALS) + INFERRED_PAIRS:
         trial = rewritten_all(log, rewrites)
         if not pins_a_law(trial.data["v"]):  # a step as v (u swapped in): a law of the right gain gives any
@@ -262,25 +261,6 @@ def _inferred_swap(log: RunLog, skipped) -> Columns:
     return Columns((), log, cid)
 
 
-def _thesis_ga_negated(log: RunLog, cid: ControllerId, skipped) -> Columns | None:
-    """A law inferred with the thesis's Ga negated (:func:`station.analysis.law_words.thesis_ga_sign`)
-    is the thesis's Ga on an a column written with the other sign: read so, as a header naming
-    that Ga reads it (:data:`TRIALS`), when the law found on a negated does; else None. Ga's
-    sign and a's are one product on the data alone; a named design decides which."""
-    ga = getattr(cid.controller, "ga", None)
-    if ga is None or cid.fit is None or cid.fit.max_abs_dv > TOLERANCE or thesis_ga_sign(ga, log.dt) != -1:
-        return None
-    trial = rewritten(log, ("a",))
-    try:
-        found = identify_controller(trial, skipped)
-    except StationError:
-        return None
-    if found.fit is None or found.fit.max_abs_dv > TOLERANCE or thesis_ga_sign(found.controller.ga, log.dt) != 1:
-        return None
-    return _swapped_back(log, (("a",),), trial, None, f"{found.claim.data}", found,
-                         said="a law with the thesis's Ga negated reproduces v as the columns are named")
-
-
 def _tracks_better(trial: RunLog, log: RunLog) -> bool:
     """Whether a rewrite's θ follows its u more closely than as named (RMS of u − θ): a closed
     loop's angle follows its reference. Asked of u and v swapped beside a sign, where a law
@@ -294,13 +274,11 @@ def _tracks_better(trial: RunLog, log: RunLog) -> bool:
 
 
 def _swapped_back(log: RunLog, rewrites: tuple[tuple[str, ...], ...], trial: RunLog, as_named: float | None,
-                  how: str, identified: ControllerId | None = None, also: tuple[AuditClaim, ...] = (),
-                  said: str | None = None) -> Columns:
+                  how: str, identified: ControllerId | None = None, also: tuple[AuditClaim, ...] = ()) -> Columns:
     """The rewritten log (``trial``: ``log`` with ``rewrites`` applied, :func:`rewritten_all`)
-    with one contradicted "columns" claim and note per rewrite, ``also``'s claims after them;
-    ``said``: what the columns as named gave (default: from ``as_named``)."""
-    said = said or ("no law reproduces v as the columns are named" if as_named is None else
-                    f"the header's law replays v to max |dv| = {as_named:.3g} counts as the columns are named")
+    with one contradicted "columns" claim and note per rewrite, ``also``'s claims after them."""
+    said = ("no law reproduces v as the columns are named" if as_named is None else
+            f"the header's law replays v to max |dv| = {as_named:.3g} counts as the columns are named")
     done = " and ".join(f"the columns named {SHOWN[c[0]]} and {SHOWN[c[1]]} exchanged" if len(c) == 2 else
                         f"{SHOWN[c[0]]} negated" for c in rewrites)
     claims, notes = [], []
