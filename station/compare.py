@@ -166,7 +166,7 @@ def compare_run(path, plant) -> RunComparison:
 def thesis_case(run: LoggedRun, step: float | None) -> str | None:
     """The thesis experiment a log is (a key of :data:`THESIS_TABLE`), decided from its data:
     a step of that experiment's height (:data:`station.rig.THESIS_STEPS`) whose logged v the
-    thesis's law (P kp = 2, the lead, the lead with Ga; ±200 clamp) reproduces at an
+    thesis's law (P kp = 2, the lead, the lead with Ga on a or -a; ±200 clamp) reproduces at an
     alignment, whatever the header named (the thesis's lead step under a header that says
     open loop is still that experiment; a P step at another kp is not).
 
@@ -186,9 +186,13 @@ def thesis_case(run: LoggedRun, step: float | None) -> str | None:
     if kind is None or run.controller is None or not len(run):
         return None
     d = run.data  # a column of NaN where the log has none: a law that reads it reproduces nothing
-    fit = detect_alignment(make_controller(kind), d["u"], d["theta"], d["a"], d["v"], skipped=run.skipped,
-                           restarts=restart_rows(d["n"]))
-    return kind if fit.max_abs_dv <= REPRODUCED_TOLERANCE else None
+    # the thesis's Ga on -a is that experiment too: an a column with the other sign than the loop fed back
+    for a in (d["a"], -d["a"]) if kind == "lead-accel" else (d["a"],):
+        fit = detect_alignment(make_controller(kind), d["u"], d["theta"], a, d["v"], skipped=run.skipped,
+                               restarts=restart_rows(d["n"]))
+        if fit.max_abs_dv <= REPRODUCED_TOLERANCE:
+            return kind
+    return None
 
 
 def format_comparison(c: RunComparison) -> str:

@@ -17,13 +17,18 @@ from pathlib import Path
 
 import pytest
 
+from station.analysis.law_words import thesis_ga_sign
+from station.compare import thesis_case
 from station.logged import LoggedRun
+from station.logged.sensor_evidence import sensor_evidence
+from station.logged.sensors import decide_faults
 from station.plant import load_model
 from tests.blind.audit import write_audit_case
 
 P = "SFLR_P_control_step_kp_2_SLFR_RTP_P_control_kp=2.0.txt"
 LEAD = "step_response_Gth_comp_no_accel_FB_amp_100_duration_1000_SLFR_RTP_Motor_Comp_Gth.txt"
 LEAD_ACCEL = "step_response_Gth_comp_Ga_opt_amp_200_duration_1000_opt_case43_SLFR_RTP_Motor_Comp_Gth.txt"
+PULSES = "OL_pulse_test_sys_check_SLFR_RTP_OL_Test_uend=0.txt"
 OPEN_LOOP = ["#SLFR RTP OL_Test"]
 
 
@@ -66,14 +71,34 @@ def test_theta_written_negated_is_read_back(rig_data, tmp_path, name, header):
     assert "encoder_scale" not in run.sensors.effects and "motor_polarity" not in run.sensors.effects
 
 
-def test_a_written_negated_under_the_header_that_feeds_it_back(rig_data, tmp_path):
-    # the thesis's lead + accelerometer step: its Ga reproduces v only on -a
-    clean = LoggedRun.from_path(rig_data / LEAD_ACCEL)
-    run = LoggedRun.from_path(_rewrite(rig_data / LEAD_ACCEL, tmp_path / "neg_a.txt", negate_a=True))
-    assert _said(run) == {"a written with the other sign"}
-    assert run.source == "header" and run.reproduced
+@pytest.mark.parametrize("header", [None, OPEN_LOOP])
+def test_a_session_with_a_negated_gets_one_sign(rig_data, tmp_path, header):
+    """The rig's four logs with a negated (a lab script that wrote a with the other sign than
+    its loop fed back), under their headers or open-loop ones. Before, the lead + accelerometer
+    step under its own header read its a column back ("a written with the other sign") while the
+    other three read the accelerometer reversed; the session then decided accel_gain -1.31 for all
+    four, reversing that run's a twice: its loop's feedback turned positive, and `station
+    diagnose` on the four saw a nominal θ fit of 37.8 % (75.9 % under open-loop headers, where Ga
+    took the sign). Now a's sign is Ga's everywhere: the thesis's Ga on -a, beside the
+    accelerometer read reversed, and every run of the session simulates as its clean log does."""
     model = load_model("tmm-fit")
-    assert run.simulate(model).fit_pct == pytest.approx(clean.simulate(model).fit_pct, abs=0.05)
+    runs, clean = [], []
+    for name in (PULSES, P, LEAD, LEAD_ACCEL):
+        head = header if header is not None and name != PULSES else None
+        runs.append(LoggedRun.from_path(_rewrite(rig_data / name, tmp_path / name, head, negate_a=True)))
+        clean.append(LoggedRun.from_path(rig_data / name))
+    assert not any("a written with the other sign" in _said(run) for run in runs)
+    ga = runs[-1]
+    assert ga.reproduced and ga.source == "inferred (header contradicted)"
+    assert thesis_ga_sign(ga.controller.ga, ga.log.dt) == -1
+    assert "the thesis's accelerometer feedback Ga on -a" in ga.audit.of("controller").data
+    assert thesis_case(ga, ga.reference.amplitude) == "lead-accel"
+    session = decide_faults([sensor_evidence(run, model) for run in runs]).effects
+    assert session["accel_gain"] < 0 and all(run.sensors.effects["accel_gain"] < 0 for run in runs)
+    faulty = model.with_effects(session)
+    for run, whole in zip(runs, clean):
+        fit, was = run.simulate(faulty, sensors=False).fit_pct, whole.simulate(model, sensors=False).fit_pct
+        assert fit["theta"] >= was["theta"] - 5.0, (run.log.path, fit, was)
 
 
 @pytest.mark.parametrize("name", [P, LEAD, LEAD_ACCEL])

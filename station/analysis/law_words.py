@@ -28,6 +28,29 @@ def _s_poly(c: np.ndarray) -> str:
     return text or "0"
 
 
+def thesis_ga_sign(ga: DiscreteTF, dt: float) -> int | None:
+    """Whether an accelerometer feedback is the thesis's Ga (DESIGN.md), or it negated: the
+    thesis's Ga on an a column written (or an accelerometer mounted) with the other sign.
+
+    Parameters
+    ----------
+    ga : DiscreteTF
+        Ascending powers of z⁻¹.
+    dt : float
+        Sample time, s.
+
+    Returns
+    -------
+    int or None
+        1: the thesis's Ga, -1: its negation (to 1e-6 relative), None: another law.
+    """
+    thesis = lead_controller(CLAMP, dt, accel=True).ga
+    if (ga.num.size != thesis.num.size or ga.den.size != thesis.den.size
+            or not np.allclose(ga.den, thesis.den, rtol=1e-6, atol=0.0)):
+        return None
+    return next((sign for sign in (1, -1) if np.allclose(ga.num, sign * thesis.num, rtol=1e-6, atol=0.0)), None)
+
+
 def ga_text(ga: DiscreteTF, dt: float) -> str:
     """Accelerometer feedback in a few words: the thesis's Ga when it is that law, else its
     continuous form by the Tustin inverse (4 digits; the z-law itself is in the spec).
@@ -38,11 +61,10 @@ def ga_text(ga: DiscreteTF, dt: float) -> str:
     dt : float
         Sample time, s.
     """
-    thesis = lead_controller(CLAMP, dt, accel=True).ga
-    if (ga.num.size == thesis.num.size and ga.den.size == thesis.den.size
-            and np.allclose(ga.num, thesis.num, rtol=1e-6, atol=0.0)
-            and np.allclose(ga.den, thesis.den, rtol=1e-6, atol=0.0)):
-        return "the thesis's accelerometer feedback Ga"
+    sign = thesis_ga_sign(ga, dt)
+    if sign is not None:
+        return "the thesis's accelerometer feedback Ga" + ("" if sign > 0 else " on -a (the a column has the "
+                                                            "other sign than the loop fed back)")
     order = max(ga.num.size, ga.den.size) - 1
     back = to_continuous(ga.num, ga.den, dt, "Tustin") if order else None
     if back is None:

@@ -5,7 +5,7 @@ so their names): a lab script that wrote its columns in another order than it na
 gives a log whose header names the right law and whose "v" is not that law's output. When
 the header's closed-loop law reproduces no logged v as the columns are named but every one
 with two columns swapped (u and v, θ and a), or with θ negated (a script that wrote the
-loop's angle with the other sign; a too, where the law feeds it back through Ga), the data
+loop's angle with the other sign; a's sign is Ga's, :data:`TRIALS`), the data
 say which column is which: the claim is contradicted, said first, and the log is read with
 the columns swapped or negated. The law is the
 header's own (as given, at its clamp or the log's, or completed from the data where it comes
@@ -54,21 +54,24 @@ counts, shape (N,)), None when the log cannot be simulated (``LoggedRun``'s ``_n
 SWAPS = (("u", "v"), ("theta", "a"))
 """Column pairs a swap is tried for: the reference and the command, the two sensors."""
 
-TRIALS = SWAPS + (("theta",), ("a",))
-"""What the header's closed-loop law is tried on when it reproduces no v as the columns are
-named: each swap, θ negated (a script that wrote the loop's angle with the other sign) and a
-negated (the accelerometer's, where the law feeds it back through Ga)."""
+TRIALS = SWAPS + (("theta",),)
+"""What a law is tried on when it reproduces no v as the columns are named (the header's
+closed-loop law, or the law inferred from the data): each swap, and θ negated (a script that
+wrote the loop's angle with the other sign). An a written with the other sign than the loop fed
+back is not a rewrite: it is Ga's sign (the law found on a as logged, Ga negated: the header's
+claim contradicted, :func:`station.analysis.law_words.ga_text`), beside the accelerometer the
+sensor audit reads reversed; so a session whose runs all read a reversed gets one sign, not a
+column read back in the run that feeds it back and reversed again by the session's decision."""
 
-INFERRED_TRIALS = SWAPS + (("theta",),)
-"""What a law is inferred on when none is found as the columns are named (no header, or an
-open-loop one): a negated a needs no trial, Ga is inferred with either sign."""
+INFERRED_TRIALS = TRIALS
+"""The same, for a law inferred from the data (no header, or an open-loop one)."""
 
-PAIRS = tuple((pair, (sign,)) for pair in SWAPS for sign in ("theta", "a"))
+PAIRS = tuple((pair, ("theta",)) for pair in SWAPS)
 """Two column faults at once, tried when no one of :data:`TRIALS` makes the header's law
-reproduce the log: a swap, then a sensor negated (a script that wrote its columns in another
-order and the loop's angle with the other sign, or the accelerometer's where Ga feeds it back)."""
+reproduce the log: a swap, then θ negated (a script that wrote its columns in another order and
+the loop's angle with the other sign)."""
 
-INFERRED_PAIRS = tuple((pair, ("theta",)) for pair in SWAPS)
+INFERRED_PAIRS = PAIRS
 """The same for a law inferred from the data (:data:`INFERRED_TRIALS`)."""
 
 SWAP_COSINE = 0.9
