@@ -313,12 +313,17 @@ def _without(rig: Path, name: str, column: str, out: Path) -> Path:
     return out
 
 
-def test_log_without_a_column_is_refused_by_replay_compare_diagnose(rig_data, tmp_path):
+def test_log_without_a_column_is_fitted_on_theta_and_refused_by_diagnose(rig_data, tmp_path):
+    # a lead loop never reads a: replay and compare simulate it and fit θ (tests/test_no_accel_column.py);
+    # a diagnosis, whose cost fits a, refuses it in one line
     noa = _without(rig_data, LEAD_LOG, "a", tmp_path / "no_a.txt")
     other = str(rig_data / P_LOG)
-    for argv in (["replay", str(noa)], ["compare", str(noa)], ["diagnose", str(noa), other]):
-        line = one_line_refusal(run_forked(argv))
-        assert f"{noa}: no 'a' column" in line and "NaN" not in line, line
+    line = one_line_refusal(run_forked(["diagnose", str(noa), other]))
+    assert f"{noa}: no 'a' column" in line and "NaN" not in line, line
+    for argv in (["replay", str(noa)], ["compare", "--out-dir", str(tmp_path / "runs"), str(noa)]):
+        rep = run_forked(argv)
+        assert rep.code == 0 and "NaN" not in rep.out and "nan" not in rep.out, rep
+    assert "accel n/a" in run_forked(["replay", str(noa)]).out
     rep = run_forked(["replay", "--no-model", str(noa)])  # the commands alone need no a (lead, no Ga)
     assert rep.code == 0 and "reproduces the logged v" in rep.out
 
