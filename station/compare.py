@@ -16,7 +16,6 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from pathlib import Path
 
-
 from station.analysis.metrics import FROM_START, SETTLE_HOLD_S, THESIS_BAND_PCT, StepMetrics, settling_label
 from station.control.designs import make_controller
 from station.control.rerun import detect_alignment

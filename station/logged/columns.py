@@ -63,16 +63,10 @@ claim contradicted, :func:`station.analysis.law_words.ga_text`), beside the acce
 sensor audit reads reversed; so a session whose runs all read a reversed gets one sign, not a
 column read back in the run that feeds it back and reversed again by the session's decision."""
 
-INFERRED_TRIALS = TRIALS
-"""The same, for a law inferred from the data (no header, or an open-loop one)."""
-
 PAIRS = tuple((pair, ("theta",)) for pair in SWAPS)
 """Two column faults at once, tried when no one of :data:`TRIALS` makes the header's law
 reproduce the log: a swap, then θ negated (a script that wrote its columns in another order and
 the loop's angle with the other sign)."""
-
-INFERRED_PAIRS = PAIRS
-"""The same for a law inferred from the data (:data:`INFERRED_TRIALS`)."""
 
 SWAP_COSINE = 0.9
 """An open-loop run's θ and a are read swapped when the column named a follows the nominal
@@ -162,8 +156,7 @@ def rewritten_all(log: RunLog, rewrites: tuple[tuple[str, ...], ...]) -> RunLog:
 
 def check_columns(log: RunLog, skipped=None) -> Columns:
     """Check the column line against the header's closed-loop law, or with no header (or an
-    open-loop one no law replaces) against the law the data give (:data:`TRIALS`,
-    :data:`INFERRED_TRIALS`).
+    open-loop one no law replaces) against the law the data give (:data:`TRIALS`, :data:`PAIRS`).
 
     Parameters
     ----------
@@ -248,7 +241,7 @@ def _inferred_swap(log: RunLog, skipped) -> Columns:
     # no header, an open-loop one (v = u), or a law the data contradict, and no law found in the data
     if cid.claim is None or not cid.claim.data.endswith(NO_LAW):
         return Columns((), log, cid)
-    for rewrites in tuple((c,) for c in INFERRED_TRIALS) + INFERRED_PAIRS:
+    for rewrites in tuple((c,) for c in TRIALS) + PAIRS:
         trial = rewritten_all(log, rewrites)
         if not pins_a_law(trial.data["v"]):  # a step as v (u swapped in): a law of the right gain gives any
             continue
