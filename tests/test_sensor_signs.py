@@ -264,7 +264,8 @@ def test_the_labs_third_session_in_miniature(tmp_path):
     ("encoder_reversed", 0, "encoder_scale", "the encoder the other way"),
     ("motor_reversed", 0, "motor_polarity", "the motor turns against the command"),
     ("coulomb_friction", 0, None, None),
-    ("accel_offset", 0, None, None),  # a bias is decided over a session's runs, not from one
+    ("accel_offset", 0, "accel_offset", "data: accel_offset -7."),  # -7.9 at rest: one run decides it
+    ("accel_offset", 2, None, None),  # -2.3, what the rig's own rests reach: a session's runs decide it
 ])
 def test_one_runs_signs_are_its_audit_and_replay_and_compare_use_them(tmp_path, case, seed, fault, said):
     """A single log's sensors' and motor's signs are claims its data check (DESIGN.md "Log

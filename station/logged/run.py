@@ -17,7 +17,7 @@ from station.logged.audit import (ACCEL_CLAIM, Audit, AuditClaim, accel_claims, 
                                   file_kp_claims, reference_claims)
 from station.logged.columns import Columns, check_columns, check_sensor_swap
 from station.logged.controller import ControllerId, describe_controller, identify_controller
-from station.logged.sensor_evidence import sensor_evidence
+from station.logged.sensor_evidence import REST_MIN_SAMPLES, sensor_evidence
 from station.logged.sensors import NO_FAULTS, REFINED_BY_MODEL, SensorFaults, decide_faults, fault_text
 from station.logged.reference import Reference, classify_reference
 from station.logged.simulate import ModelRun, compared_theta, simulate_log
@@ -29,10 +29,6 @@ from station.runlog import SKIPPED, RunLog, read_log
 
 REPRODUCED_TOLERANCE = 1e-6
 """max |v_replayed - v_logged| (DAC counts) under which a replay counts as reproducing the log."""
-
-REST_MIN_SAMPLES = 5
-"""Fewest samples before the first command that give the accelerometer's rest offset."""
-
 
 class LoggedRun:
     """A run log and what it was: which controller ran it, with which alignment, closed or

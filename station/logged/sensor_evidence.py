@@ -26,6 +26,9 @@ from station.control.rerun import OpenLoop
 from station.logged.audit import ACCEL_BAND_HZ
 from station.logged.device import command_quantization
 
+REST_MIN_SAMPLES = 5
+"""Fewest samples before the first command that give the accelerometer's rest offset."""
+
 SIGN_COSINE = 0.5
 """|cosine| at or above which a sign is decided (:mod:`station.logged.sensors`); the ratio of a
 is taken over the octaves whose cosine reaches it."""
@@ -82,6 +85,9 @@ class SensorEvidence:
     accel_shaped_ratio : float or None
         a's ratio over the octaves whose shape the model has (:func:`octave_compare`); None as
         ``accel_cosine``.
+    accel_rest : float or None
+        a's mean before the first command, counts (:attr:`station.logged.LoggedRun.accel_rest_offset`:
+        nothing of the model in it); None as ``accel_cosine`` or with too few samples at rest.
     """
 
     name: str
@@ -93,6 +99,7 @@ class SensorEvidence:
     accel_slope: float | None = None
     accel_band_cosine: float | None = None
     accel_shaped_ratio: float | None = None
+    accel_rest: float | None = None
 
 
 def cosine_ratio(measured: np.ndarray, model: np.ndarray) -> tuple[float | None, float | None]:
@@ -163,7 +170,7 @@ def sensor_evidence(run, model) -> SensorEvidence:
             t = np.arange(a.size) * dt  # the plant's drift runs from the run's first sample
             (bias, slope, _), *_ = np.linalg.lstsq(np.column_stack([np.ones_like(t), t, a_m]), a, rcond=None)
             return SensorEvidence(name, *th, octaves[0], band[1], float(rest + bias), float(slope), band[0],
-                                  octaves[1])
+                                  octaves[1], rest if run.accel_rest_samples >= REST_MIN_SAMPLES else None)
     return SensorEvidence(name, *th, None, None)
 
 

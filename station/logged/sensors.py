@@ -41,7 +41,9 @@ over the scale nearer 1 than θ's own). Otherwise a gain beyond the fit's search
 sensitivity: 0.2 or 6, a model may hold 0.01-100) is decided from a's ratio over θ's where θ
 itself moves within :data:`MOTION_RATIO` of the model's; past that the ratios do not decide and
 it is said. One run alone decides a bias only where it reaches :data:`RUN_OFFSET_COUNTS` (a
-channel stored without the rig's zeroing), far past what a model off in shape leaks into it.
+channel stored without the rig's zeroing), far past what a model off in shape leaks into it,
+or where a's rest before the first command reaches :data:`RUN_REST_OFFSET_COUNTS` (no model in
+that).
 
 On the rig's own logs (2009, 2013-14) every cosine is +0.74 or more where the channel
 moves (``tests/test_sensor_signs.py``), on the lab's April 2009 session (its accelerometer
@@ -71,6 +73,13 @@ first command plus the fit beside the model's a) when it is at least this large,
 channel stored without the rig's zeroing, or a loop fed from it (Ga answers an unzeroed a from
 its first sample: no rest). On the rig's 2009 and 2013-14 logs with the accelerometer on the tip
 every run's is -1.93..+1.55; a model off in shape leaks 1.25 into one run's."""
+
+RUN_REST_OFFSET_COUNTS = 4.0
+"""... or where a's rest before the first command (:attr:`SensorEvidence.accel_rest`, at least
+:data:`station.logged.sensor_evidence.REST_MIN_SAMPLES` samples: nothing of a model in it)
+reaches this, counts, and the bias beside the model's a has its sign: about twice the rig's
+largest rest (its 2009 and 2013-14 logs: -1.98..+2.20, the lead step's ten samples still
+ringing). Below it one run leaves a bias to a session's runs (:data:`OFFSET_COUNTS`)."""
 
 OFFSET_COUNTS = 1.0
 """An accelerometer bias is decided when every run's has one sign and their median is at least
@@ -334,12 +343,20 @@ def decide_faults(evidence: Sequence[SensorEvidence], accel_gain: float | None =
                         f"the ratios do not decide it")
     bias_claim = drift_claim = None
     biases = [e.accel_bias for e in ev if e.accel_bias is not None and math.isfinite(e.accel_bias)]
-    if not trends and biases and all(abs(b) >= RUN_OFFSET_COUNTS for b in biases) and \
-            (all(b > 0 for b in biases) or all(b < 0 for b in biases)):
+    rests = [e.accel_rest for e in ev if e.accel_bias is not None and math.isfinite(e.accel_bias)]
+    one_sign = bool(biases) and (all(b > 0 for b in biases) or all(b < 0 for b in biases))
+    if not trends and one_sign and all(abs(b) >= RUN_OFFSET_COUNTS for b in biases):
         effects["accel_offset"] = _counts(statistics.median(biases))
         bias_claim = AuditClaim("columns", OFFSET_HEADER, f"accel_offset {effects['accel_offset']:g} counts",
                                 "contradicted", f"bias per run beside the model's a: {_fmt(biases)} counts (the "
                                 f"rig's zeroing leaves under {RUN_OFFSET_COUNTS:g}): a channel stored without it")
+    elif not trends and one_sign and all(r is not None and abs(r) >= RUN_REST_OFFSET_COUNTS and r * b > 0
+                                         for r, b in zip(rests, biases)):
+        effects["accel_offset"] = _counts(statistics.median(biases))
+        bias_claim = AuditClaim("columns", OFFSET_HEADER, f"accel_offset {effects['accel_offset']:g} counts",
+                                "contradicted", f"a at rest before the first command: {_fmt(rests)} counts (the "
+                                f"rig's zeroing leaves under {RUN_REST_OFFSET_COUNTS:g}); bias per run beside the "
+                                f"model's a: {_fmt(biases)} counts")
     if trends:
         bias_claim = _trend_claim("accel_offset", [e.accel_bias for e in ev], OFFSET_COUNTS, effects,
                                   OFFSET_HEADER, "counts")
