@@ -220,3 +220,33 @@ def test_blind_reversed_motor_and_a_weak_accelerometer(tmp_path, nominal, seed):
     faults = decide_faults([sensor_evidence(LoggedRun.from_path(p), nominal) for p in paths])
     assert faults.effects.get("motor_polarity") == -1.0, faults.effects
     assert 0.15 <= faults.effects.get("accel_gain", 1.0) <= 0.25, faults.effects
+
+
+def test_a_runs_refined_decision_keeps_the_one_run_rule():
+    # a model holding a reversed accelerometer's gain re-decides the run's faults (its audit says
+    # the model's gain): by the rule that decided them. Before, a one-run bias claim made the
+    # re-decision a session's, and one run's slope beside the model's a (2 counts per s here)
+    # became an accelerometer drift that the run's own audit never said
+    ev = SensorEvidence("x.txt", 0.99, 1.0, -0.9, -1.3, 12.0, 2.0, -0.9, -1.3, 11.0)
+    once = decide_faults([ev], trends=False)
+    assert set(once.effects) == {"accel_gain", "accel_offset"}
+    again = once.refined({"accel_gain": -1.1})
+    assert again.effects == {"accel_gain": -1.1, "accel_offset": 12.0} and not again.trends
+    assert set(decide_faults([ev]).effects) == {"accel_gain", "accel_offset", "accel_drift"}  # a session's rule
+
+
+def test_what_the_ratios_do_not_decide_is_said_beside_the_fit(rig_data, tmp_path):
+    # the rig's open-loop pulses with θ written by a 4096-count encoder: θ's ratio (3.3) beside
+    # a's (1.1) is an encoder or the accelerometer's gain, which one run does not decide. Before,
+    # replay and compare gave a θ fit of -5.8 % without a word; the doubt was in the JSON only
+    path = tmp_path / THESIS[0]
+    lines = (rig_data / THESIS[0]).read_text().splitlines()
+    rows = [ln.split("\t") for ln in lines if ln and not ln.startswith("#")]
+    path.write_text("\n".join([ln for ln in lines if ln.startswith("#")] +
+                              ["\t".join(r[:4] + [f"{4 * float(r[4]):g}"] + r[5:]) for r in rows]) + "\n")
+    rep = replay(path, model=True)
+    (note,) = [n for n in rep.notes if "not decided by the data" in n]
+    assert "an encoder of" in note and "or the accelerometer's gain" in note, note
+    held = replay(path, model=load_model("tmm-fit").with_effects({"encoder_scale": 4.0}))
+    assert not any("not decided by the data" in n for n in held.notes)  # the model holds a scale
+    assert held.fit_pct["theta"] > rep.fit_pct["theta"] + 20.0

@@ -574,6 +574,9 @@ class LoggedRun:
             said = ", ".join(fault_text(k, v) for k, v in found.items())
             sim = dataclasses.replace(sim, how=sim.how + f"; with the sensor faults the audit decided from the "
                                       f"data ({said})")
+        held = model.effect_dict() if hasattr(model, "effect_dict") else {}
+        if sensors and self.sensors.doubt and not any(k in held for k in SENSOR_SIGNS):
+            sim = dataclasses.replace(sim, how=sim.how + f"; not decided by the data: {self.sensors.doubt}")
         return sim
 
 

@@ -103,6 +103,8 @@ THETA_HEADER = "θ: encoder counts, 1024 per revolution, turning with the comman
 ACCEL_HEADER = "a: the tip's acceleration with the model's sign"
 OFFSET_HEADER = "a: zero at rest (the rig zeroes it before a test)"
 DRIFT_HEADER = "a: no drift over a run"
+SCALE_HINT_HEADER = "θ: 1024 encoder counts per revolution"
+"""The header of the claim θ's and a's ratios point at but do not decide (:attr:`SensorFaults.doubt`)."""
 """The headers of the accelerometer's bias and drift claims (decided over a session's runs)."""
 SESSION_HEADERS = (THETA_HEADER, ACCEL_HEADER, OFFSET_HEADER, DRIFT_HEADER)
 """The headers of the sensors' "columns" claims a diagnosis decides over all its runs and says
@@ -155,6 +157,9 @@ class SensorFaults:
     first : dict of str to float
         The decision's first estimate of a fault whose value a fit refined (:meth:`refined`:
         ``effects`` holds the fitted value, the model's); empty when none was refined.
+    trends : bool
+        Whether the accelerometer's bias and drift were decided over a session's runs
+        (:func:`decide_faults`' ``trends``); :meth:`refined` decides again by the same rule.
     """
 
     effects: dict = field(default_factory=dict)
@@ -163,6 +168,7 @@ class SensorFaults:
     evidence: tuple = ()
     to_fit: tuple = ()
     first: dict = field(default_factory=dict)
+    trends: bool = True
 
     def refined(self, values, by: str = REFINED_BY_FIT) -> SensorFaults:
         """The same faults holding the values a model holds: a diagnosis's fit refines a
@@ -187,11 +193,13 @@ class SensorFaults:
         g, first = values.get("accel_gain"), self.effects.get("accel_gain")
         if g is None or first is None or (g < 0) != (first < 0) or f"{g:.3g}" == f"{first:.3g}":
             return self
-        return decide_faults(self.evidence, accel_gain=g, trends=self._trends, refined_by=by)
+        return decide_faults(self.evidence, accel_gain=g, trends=self.trends, refined_by=by)
 
     @property
-    def _trends(self) -> bool:
-        return any(c.header in (OFFSET_HEADER, DRIFT_HEADER) for c in self.claims)
+    def doubt(self) -> str:
+        """What the data point at but do not decide (:attr:`to_fit`: an encoder of another
+        resolution or the accelerometer's gain), "" when nothing."""
+        return next((c.evidence for c in self.claims if c.header == SCALE_HINT_HEADER), "")
 
     def lines(self) -> list[str]:
         """One line per contradicted claim, then the other wiring the same signs fit (never
@@ -366,9 +374,9 @@ def decide_faults(evidence: Sequence[SensorEvidence], accel_gain: float | None =
               _accel_claim(s_a, a_cos, effects, first, refined_by),
               bias_claim, drift_claim]
     if hint:
-        claims.append(AuditClaim("columns", "θ: 1024 encoder counts per revolution", "undecided", "unchecked", hint))
+        claims.append(AuditClaim("columns", SCALE_HINT_HEADER, "undecided", "unchecked", hint))
     return SensorFaults(effects, tuple(c for c in claims if c is not None), alternative, ev,
-                        ("encoder_scale",) if hint else (), first)
+                        ("encoder_scale",) if hint else (), first, trends)
 
 
 def fault_text(name: str, value: float) -> str:
