@@ -465,7 +465,9 @@ def test_a_true_header_over_missing_or_repeated_rows_is_not_contradicted(rig_dat
     run = LoggedRun.from_path(path)
     verdicts = {c.claim: c for c in run.audit.claims if c.claim in ("controller", "sample_time") and
                 c.verdict != "confirmed"}
-    assert verdicts["sample_time"].data == "n jumps at 1 rows"
+    assert verdicts["sample_time"].data == "n jumps at 1 row"
+    said = {"drop": "ticks missing at 1 row", "repeat": "a tick repeated or gone back at 1 row"}[cut]
+    assert verdicts["sample_time"].evidence.endswith(said), verdicts["sample_time"].evidence
     assert run.source == "header" and run.alignment == 1 and run.reproduced
     assert not any(c.claim == "controller" for c in run.audit.contradicted)
     if name == RIG_LOGS[3]:

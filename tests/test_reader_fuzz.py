@@ -50,6 +50,19 @@ def test_one_nan_in_a_rig_log_names_file_line_and_field(rig_data, tmp_path, caps
         assert "nan.txt: line 60: theta is nan" in err
 
 
+@pytest.mark.parametrize("line", [2, 500])
+def test_a_byte_that_is_not_utf8_names_its_line(rig_data, tmp_path, capsys, line):
+    # a Windows script's "°" (latin-1 0xb0) in a header comment or a row: before, "not a text
+    # run log (invalid start byte at byte 64 of a block)", no line to look at
+    lines = (rig_data / RIG_FILES[0]).read_bytes().split(b"\n")
+    lines[line - 1] = lines[line - 1] + (b" \xb0" if line == 2 else b"\xb0")
+    bad = tmp_path / "latin1.txt"
+    bad.write_bytes(b"\n".join(lines))
+    for argv in (["replay", str(bad)], ["compare", str(bad)]):
+        err = _one_line_error(capsys, argv)
+        assert f"latin1.txt: line {line}: not a text run log (byte 0xb0: not UTF-8" in err, err
+
+
 def test_gth_with_den0_is_a_header_error(rig_data, tmp_path, capsys):
     text = (rig_data / RIG_FILES[1]).read_text()
     bad = tmp_path / "den0.txt"

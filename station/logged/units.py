@@ -377,10 +377,12 @@ def time_base(log: RunLog) -> TimeBase:
                 new_meta = {**meta, "dt": sample_time}
         n = np.asarray(data["n"], dtype=float)
         if n.size > 1 and np.all(np.isfinite(n)) and not np.all(np.diff(n) == 1):
-            gaps = int(np.count_nonzero(np.diff(n) != 1))
-            claims.append(AuditClaim("sample_time", "one row per tick", f"n jumps at {gaps} rows", "contradicted",
-                                     f"n steps {np.min(np.diff(n)):g} .. {np.max(np.diff(n)):g}: rows are missing "
-                                     f"or repeated"))
+            dn = np.diff(n)
+            gaps, skips, back = (int(np.count_nonzero(x)) for x in (dn != 1, dn > 1, dn < 1))
+            what = ", ".join(f"{w} at {k} row{'s' * (k > 1)}" for k, w in
+                             ((skips, "ticks missing"), (back, "a tick repeated or gone back")) if k)
+            claims.append(AuditClaim("sample_time", "one row per tick", f"n jumps at {gaps} row{'s' * (gaps > 1)}",
+                                     "contradicted", f"n steps {np.min(dn):g} .. {np.max(dn):g}: {what}"))
     words, signed = word_claims(data)
     claims += words
     changes.update(signed)

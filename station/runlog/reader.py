@@ -98,7 +98,9 @@ def read_log(path: str | Path) -> RunLog:
         try:
             return _read_stream(path, Lines(fh))
         except UnicodeDecodeError as exc:
-            raise log_error(path, None, f"not a text run log ({exc.reason} at byte {exc.start} of a block)") from None
+            byte = exc.object[exc.start:exc.start + 1].hex()
+            raise log_error(path, _undecodable_line(path), f"not a text run log (byte 0x{byte}: not UTF-8 "
+                            f"text, which a run log is)") from None
         except LineTooLong as exc:
             raise log_error(path, exc.lineno, f"longer than {MAX_LINE} characters: not a run log") from None
         except OSError as exc:
@@ -251,6 +253,19 @@ def _check_finite(path: Path, data: dict[str, np.ndarray], names: list[str], fmt
             value = float(col[big[0]])
             raise log_error(path, line, f"{name} is {value:.6g}, past any measurement (at most ±2^31 = "
                             f"±{MAX_ABS_VALUE:.0f}, a 32-bit counter's range)", key=name)
+
+
+def _undecodable_line(path: Path) -> int | None:
+    """The number of the first line that is not UTF-8 text (None when none is found again)."""
+    with open_log(path, errors="replace") as fh:
+        lines = Lines(fh)
+        try:
+            while (item := lines.next()) is not None:
+                if "\ufffd" in item[1]:
+                    return item[0]
+        except LineTooLong:  # a binary file without newlines: no line to name
+            return None
+    return None
 
 
 def _line_of_row(path: Path, first_lineno: int | None, row: int) -> int:
