@@ -88,6 +88,9 @@ class ReplayReport:
         The log that was replayed.
     run : station.logged.LoggedRun (not in the JSON)
         What the log was (controller, alignment, reference, hub held, ...).
+    doubt : str (not in the JSON: its notes say it)
+        What the data point at about the sensors but do not decide, beside the model's fit
+        (:attr:`station.logged.simulate.ModelRun.doubt`); "" when nothing.
     """
 
     file: str
@@ -113,6 +116,7 @@ class ReplayReport:
     prediction: dict[str, np.ndarray] | None = field(default=None, repr=False)
     log: RunLog | None = field(default=None, repr=False)
     run: LoggedRun | None = field(default=None, repr=False)
+    doubt: str = ""
 
     @property
     def reproduced(self) -> bool:
@@ -228,7 +232,7 @@ def _model(report: ReplayReport, run: LoggedRun, model) -> None:
     sim = run.simulate(model)
     if not run.closed and run.data["theta"][0] != 0:
         report.notes.append("open loop: logged theta compared relative to its first sample")
-    report.prediction = sim.prediction
+    report.prediction, report.doubt = sim.prediction, sim.doubt
     report.n_elements = model.n_elements
     report.fit_pct = fits = sim.fit_pct
     if not run.has_column("a"):

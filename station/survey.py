@@ -85,7 +85,8 @@ class SurveyRow:
     contradictions : list of str
         The log's claims its data contradicted, one line each (DESIGN.md "Log audit"), then
         what its replay set aside or could not confirm (a corrupted field, a law no row pins:
-        :func:`station.logged.reproduction.reproduction_lines`); not a CSV column.
+        :func:`station.logged.reproduction.reproduction_lines`; what the sensors' ratios point at
+        but do not decide: :attr:`station.replay.ReplayReport.doubt`); not a CSV column.
     """
 
     file: str
@@ -215,6 +216,8 @@ def survey_one(path: str | Path, model: bool = True) -> SurveyRow:
     if rep.max_abs_dv is not None:  # what the replay set aside or could not confirm, as replay says it
         row.contradictions += [f"replay reproduces the logged v, {line}" for line in
                                reproduction_lines(rep.max_abs_dv, rep.alignment, rep.audit, rep.judged_to)[1:]]
+    if rep.doubt:  # as replay says it beside its fit
+        row.contradictions.append(f"not decided by the data: {rep.doubt}")
     row.accel_is_tip = None if rep.audit is None else bool(rep.audit.accel_is_tip)
     row.format = run.log.layout or run.log.format
     row.rows = len(run)

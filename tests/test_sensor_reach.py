@@ -247,6 +247,9 @@ def test_what_the_ratios_do_not_decide_is_said_beside_the_fit(rig_data, tmp_path
     rep = replay(path, model=True)
     (note,) = [n for n in rep.notes if "not decided by the data" in n]
     assert "an encoder of" in note and "or the accelerometer's gain" in note, note
+    from station.survey import survey_one
+
+    assert f"not decided by the data: {rep.doubt}" in survey_one(path).contradictions  # as survey lists it
     held = replay(path, model=load_model("tmm-fit").with_effects({"encoder_scale": 4.0}))
     assert not any("not decided by the data" in n for n in held.notes)  # the model holds a scale
     assert held.fit_pct["theta"] > rep.fit_pct["theta"] + 20.0

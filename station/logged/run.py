@@ -576,7 +576,8 @@ class LoggedRun:
                                       f"data ({said})")
         held = model.effect_dict() if hasattr(model, "effect_dict") else {}
         if sensors and self.sensors.doubt and not any(k in held for k in SENSOR_SIGNS):
-            sim = dataclasses.replace(sim, how=sim.how + f"; not decided by the data: {self.sensors.doubt}")
+            sim = dataclasses.replace(sim, how=sim.how + f"; not decided by the data: {self.sensors.doubt}",
+                                      doubt=self.sensors.doubt)
         return sim
 
 

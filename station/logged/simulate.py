@@ -143,6 +143,9 @@ class ModelRun:
     parting : Parting or None
         Open loop: whether the log's hub first moved with the model's and where they part
         (:func:`parting`); None in closed loop.
+    doubt : str
+        What the run's data point at about its sensors but do not decide, said beside this
+        simulation (:attr:`station.logged.sensors.SensorFaults.doubt`); "" when nothing.
     """
 
     prediction: dict
@@ -150,6 +153,7 @@ class ModelRun:
     accel_measured: np.ndarray = field(repr=False)
     how: str
     parting: Parting | None = None
+    doubt: str = ""
 
     @cached_property
     def fit_pct(self) -> dict:
