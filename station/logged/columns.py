@@ -269,6 +269,13 @@ def _tracks_better(trial: RunLog, log: RunLog) -> bool:
     return rms_error(trial) < rms_error(log)
 
 
+def _named_by(log: RunLog) -> str:
+    """What names the columns, as a swap's header says it: the file's column line, or the rig's
+    order assumed for rows saved without a header (:data:`station.runlog.rig_layouts.BARE_ORDER`)."""
+    return "in the rig's column order (no header names them)" if log.layout == "bare" else \
+        "as the column line names them"
+
+
 def _swapped_back(log: RunLog, rewrites: tuple[tuple[str, ...], ...], trial: RunLog, as_named: float | None,
                   how: str, identified: ControllerId | None = None, also: tuple[AuditClaim, ...] = ()) -> Columns:
     """The rewritten log (``trial``: ``log`` with ``rewrites`` applied, :func:`rewritten_all`)
@@ -281,7 +288,7 @@ def _swapped_back(log: RunLog, rewrites: tuple[tuple[str, ...], ...], trial: Run
     for columns in rewrites:
         if len(columns) == 2:
             a, b = SHOWN[columns[0]], SHOWN[columns[1]]
-            claims.append(AuditClaim("columns", f"{a} and {b} as the column line names them", f"{a} and {b} swapped",
+            claims.append(AuditClaim("columns", f"{a} and {b} {_named_by(log)}", f"{a} and {b} swapped",
                                      "contradicted", f"{said}, and {how} with {done}"))
             notes.append(f"the columns named {a} and {b} hold {b} and {a} (the audit): read swapped")
         else:
@@ -445,7 +452,7 @@ def check_sensor_swap(columns: Columns, model_theta: ModelTheta) -> Columns:
     if crossed < SWAP_COSINE or named >= UNLIKE_COSINE:
         return columns
     claim = AuditClaim(
-        "columns", "θ and a as the column line names them", "θ and a swapped", "contradicted",
+        "columns", f"θ and a {_named_by(log)}", "θ and a swapped", "contradicted",
         f"open loop: at rest before the first command the column named θ moves {np.ptp(theta[:rest]):g} counts and "
         f"the one named a {np.ptp(a[:rest]):g}; the nominal model's θ driven by the logged command has a cosine "
         f"of {crossed:.2f} with the column named a and {named:.2f} with the one named θ")

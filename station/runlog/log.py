@@ -38,7 +38,8 @@ class RunLog:
         How the file was laid out: "station" (ours), "rig" (``#`` header lines, the last
         naming the columns) or "columns" (no ``#`` header: a first line of column names,
         e.g. the rig's 2014 logs ``Time (sec.)	u	theta	accel	v`` and cut-down copies
-        ``t	v	theta	a``; their ``format`` is "rig").
+        ``t	v	theta	a``; their ``format`` is "rig") or "bare" (the rig's rows without any
+        header: its column order assumed, :data:`station.runlog.rig_layouts.BARE_ORDER`).
     sample_time : float or None
         The sample time found in t, s (median step, rounded to 1 ns; None with fewer
         than two rows or when t does not increase); what reports show as

@@ -169,10 +169,12 @@ def _read_stream(path: Path, lines: Lines) -> RunLog:
         found = parse_rig_header(path, header)
     else:
         fmt, layout = "rig", "columns"
-        for extra in reversed(head[1:]):
-            lines.push(extra)
         found = parse_column_line(path, texts[0])
-        header = texts[:1]
+        bare = not found.meta["columns"]  # line 1 is a row: the rig's rows without a header
+        for extra in reversed(head if bare else head[1:]):
+            lines.push(extra)
+        header = [] if bare else texts[:1]
+        layout = "bare" if bare else layout
 
     names, notes = found.names, list(found.notes)
     arr, data_lines = load_rows(path, lines, fmt, names, found.sep)

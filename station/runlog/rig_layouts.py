@@ -152,6 +152,11 @@ def parse_rig_header(path: Path, comment_lines: list[str]) -> Header:
     return Header(meta, std, sep, [])
 
 
+BARE_ORDER = ("t", "n", "u", "v", "theta", "a", "theta_d_hat")
+"""The rig's columns in its logs' order (its header's last line: ``#t n u v $\\theta$ a
+$\\hat{\\theta}_d$``), taken for rows saved without a header."""
+BARE_COLUMNS = (6, 7)
+"""How many numbers a row of the rig's own has (with or without θ̂_d)."""
 
 
 def parse_column_line(path: Path, line: str) -> Header:
@@ -168,16 +173,23 @@ def parse_column_line(path: Path, line: str) -> Header:
     -------
     Header
         meta ``{"columns": [names as printed]}``; a note lists the names taken as synonyms.
+        A line of 6 or 7 numbers is a row of the rig's saved without a header
+        (:data:`BARE_ORDER` assumed, said in a note; ``columns`` empty): the caller reads it as data.
 
     Raises
     ------
     RunLogError
-        A line of numbers (no header at all), no usable columns, or a column twice.
+        A line of other numbers (no header at all), no usable columns, or a column twice.
     """
     printed, sep = _split_names(line)
     if printed and all(is_number(c) for c in printed):
-        raise log_error(path, 1, f"expected '{MAGIC}' (station run log), the rig's '#' "
-                        f"header or a line of column names, got numbers {line[:60]!r}")
+        if len(printed) in BARE_COLUMNS:  # the rig's rows saved without their header
+            return Header({"columns": []}, list(BARE_ORDER[:len(printed)]), sep,
+                          [f"no header: the rig's column order {' '.join(BARE_ORDER[:len(printed)])} assumed "
+                           f"(the log audit checks it against the data)"])
+        raise log_error(path, 1, f"expected '{MAGIC}' (station run log), the rig's '#' header or a line "
+                        f"of column names, got {len(printed)} numbers {line[:60]!r} (the rig's rows without a "
+                        f"header hold {' or '.join(map(str, BARE_COLUMNS))})")
     names = _map_columns(path, 1, printed)
     renamed = [f"{p!r} -> {s}" for p, s in zip(printed, names) if p != s]
     notes = ["columns named by synonyms: " + ", ".join(renamed)] if renamed else []
