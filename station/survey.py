@@ -27,6 +27,7 @@ from station.analysis.metrics import FROM_START, NOT_SETTLED, SETTLE_HOLD_S, THE
 from station.errors import StationError
 from station.inputs import exists, is_folder, open_regular
 from station.logged.reproduction import reproduction_lines
+from station.logged.sensors import DOUBT_WORDS
 from station.outputs import WRITTEN_SUFFIXES, Transaction
 from station.pools import as_finished, lost, process_pool, submit_all
 from station.replay import NOT_TIP, replay
@@ -217,7 +218,7 @@ def survey_one(path: str | Path, model: bool = True) -> SurveyRow:
         row.contradictions += [f"replay reproduces the logged v, {line}" for line in
                                reproduction_lines(rep.max_abs_dv, rep.alignment, rep.audit, rep.judged_to)[1:]]
     if rep.doubt:  # as replay says it beside its fit
-        row.contradictions.append(f"not decided by the data: {rep.doubt}")
+        row.contradictions.append(DOUBT_WORDS + rep.doubt)
     row.accel_is_tip = None if rep.audit is None else bool(rep.audit.accel_is_tip)
     row.format = run.log.layout or run.log.format
     row.rows = len(run)

@@ -18,7 +18,7 @@ from station.logged.audit import (ACCEL_CLAIM, Audit, AuditClaim, accel_claims, 
 from station.logged.columns import Columns, check_columns, check_sensor_swap
 from station.logged.controller import ControllerId, describe_controller, identify_controller
 from station.logged.sensor_evidence import REST_MIN_SAMPLES, sensor_evidence
-from station.logged.sensors import NO_FAULTS, REFINED_BY_MODEL, SensorFaults, decide_faults, fault_text
+from station.logged.sensors import DOUBT_WORDS, NO_FAULTS, REFINED_BY_MODEL, SensorFaults, decide_faults, fault_text
 from station.logged.reference import Reference, classify_reference
 from station.logged.simulate import ModelRun, compared_theta, simulate_log
 from station.logged.start import Start, start_claims
@@ -576,7 +576,7 @@ class LoggedRun:
                                       f"data ({said})")
         held = model.effect_dict() if hasattr(model, "effect_dict") else {}
         if sensors and self.sensors.doubt and not any(k in held for k in SENSOR_SIGNS):
-            sim = dataclasses.replace(sim, how=sim.how + f"; not decided by the data: {self.sensors.doubt}",
+            sim = dataclasses.replace(sim, how=sim.how + f"; {DOUBT_WORDS}{self.sensors.doubt}",
                                       doubt=self.sensors.doubt)
         return sim
 

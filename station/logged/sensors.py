@@ -105,6 +105,8 @@ OFFSET_HEADER = "a: zero at rest (the rig zeroes it before a test)"
 DRIFT_HEADER = "a: no drift over a run"
 SCALE_HINT_HEADER = "θ: 1024 encoder counts per revolution"
 """The header of the claim θ's and a's ratios point at but do not decide (:attr:`SensorFaults.doubt`)."""
+DOUBT_WORDS = "not decided by the data: "
+"""How replay, compare and survey say :attr:`SensorFaults.doubt` beside a fit."""
 """The headers of the accelerometer's bias and drift claims (decided over a session's runs)."""
 SESSION_HEADERS = (THETA_HEADER, ACCEL_HEADER, OFFSET_HEADER, DRIFT_HEADER)
 """The headers of the sensors' "columns" claims a diagnosis decides over all its runs and says
@@ -353,18 +355,17 @@ def decide_faults(evidence: Sequence[SensorEvidence], accel_gain: float | None =
     biases = [e.accel_bias for e in ev if e.accel_bias is not None and math.isfinite(e.accel_bias)]
     rests = [e.accel_rest for e in ev if e.accel_bias is not None and math.isfinite(e.accel_bias)]
     one_sign = bool(biases) and (all(b > 0 for b in biases) or all(b < 0 for b in biases))
-    if not trends and one_sign and all(abs(b) >= RUN_OFFSET_COUNTS for b in biases):
+    unzeroed = one_sign and all(abs(b) >= RUN_OFFSET_COUNTS for b in biases)
+    at_rest = one_sign and all(r is not None and abs(r) >= RUN_REST_OFFSET_COUNTS and r * b > 0
+                               for r, b in zip(rests, biases))
+    if not trends and (unzeroed or at_rest):
         effects["accel_offset"] = _counts(statistics.median(biases))
+        said = (f"bias per run beside the model's a: {_fmt(biases)} counts (the rig's zeroing leaves under "
+                f"{RUN_OFFSET_COUNTS:g}): a channel stored without it" if unzeroed else
+                f"a at rest before the first command: {_fmt(rests)} counts (the rig's zeroing leaves under "
+                f"{RUN_REST_OFFSET_COUNTS:g}); bias per run beside the model's a: {_fmt(biases)} counts")
         bias_claim = AuditClaim("columns", OFFSET_HEADER, f"accel_offset {effects['accel_offset']:g} counts",
-                                "contradicted", f"bias per run beside the model's a: {_fmt(biases)} counts (the "
-                                f"rig's zeroing leaves under {RUN_OFFSET_COUNTS:g}): a channel stored without it")
-    elif not trends and one_sign and all(r is not None and abs(r) >= RUN_REST_OFFSET_COUNTS and r * b > 0
-                                         for r, b in zip(rests, biases)):
-        effects["accel_offset"] = _counts(statistics.median(biases))
-        bias_claim = AuditClaim("columns", OFFSET_HEADER, f"accel_offset {effects['accel_offset']:g} counts",
-                                "contradicted", f"a at rest before the first command: {_fmt(rests)} counts (the "
-                                f"rig's zeroing leaves under {RUN_REST_OFFSET_COUNTS:g}); bias per run beside the "
-                                f"model's a: {_fmt(biases)} counts")
+                                "contradicted", said)
     if trends:
         bias_claim = _trend_claim("accel_offset", [e.accel_bias for e in ev], OFFSET_COUNTS, effects,
                                   OFFSET_HEADER, "counts")

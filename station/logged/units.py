@@ -378,7 +378,8 @@ def time_base(log: RunLog) -> TimeBase:
         n = np.asarray(data["n"], dtype=float)
         if n.size > 1 and np.all(np.isfinite(n)) and not np.all(np.diff(n) == 1):
             dn = np.diff(n)
-            gaps, skips, back = (int(np.count_nonzero(x)) for x in (dn != 1, dn > 1, dn < 1))
+            skips, back = int(np.count_nonzero(dn > 1)), int(np.count_nonzero(dn < 1))
+            gaps = skips + back
             what = ", ".join(f"{w} at {k} row{'s' * (k > 1)}" for k, w in
                              ((skips, "ticks missing"), (back, "a tick repeated or gone back")) if k)
             claims.append(AuditClaim("sample_time", "one row per tick", f"n jumps at {gaps} row{'s' * (gaps > 1)}",
