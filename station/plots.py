@@ -388,7 +388,10 @@ def diagnosis_run_figure(run, overshoot_points: float = 3.0):
         if abs(ext - rig) > overshoot_points:
             title += f" (target ±{overshoot_points:g} points missed)"
     fig.suptitle(title, fontsize=9)
-    ax2.plot(t, run.a, color="k", lw=0.8, label="measured")
+    if run.a_logged:
+        ax2.plot(t, run.a, color="k", lw=0.8, label="measured")
+    else:
+        ax2.set_title("a: not logged (no a column); the models' only", fontsize=8)
     ax2.plot(t, run.nominal["a"], color="tab:red", lw=0.8, label="nominal")
     ax2.plot(t, run.extended["a"], color="tab:blue", lw=0.8, ls="--", label=label)
     ax2.set_ylabel("a (accelerometer counts)")
@@ -430,7 +433,8 @@ def diagnosis_resid_figure(run, max_lag_s: float = 0.5):
         if not (np.all(np.isfinite(et)) and np.all(np.isfinite(ea))):
             continue
         ax1.plot(t, et, color=color, lw=0.8, label=name)
-        ax2.plot(t, ea, color=color, lw=0.6, alpha=0.8, label=name)
+        if run.a_logged:
+            ax2.plot(t, ea, color=color, lw=0.6, alpha=0.8, label=name)
         r = resid_test(et, run.v, max_lag=lag)
         ax3.plot(r.lags[1:] * dt, r.autocorr[1:], color=color, lw=1, label=f"{name}: {r.outside_pct:.0f} % outside")
         bound = r.bound
@@ -443,6 +447,10 @@ def diagnosis_resid_figure(run, max_lag_s: float = 0.5):
     ax1.legend(fontsize=7)
     ax2.set_ylabel("a residual (counts)")
     ax2.set_xlabel("t (s)")
+    if not run.a_logged:
+        ax2.text(0.5, 0.5, "not logged (no a column)", ha="center", va="center", transform=ax2.transAxes)
+        ax2.set_xticks([])
+        ax2.set_yticks([])
     if outside:
         ax3.axhspan(-bound, bound, color="0.85", label="99 % band (white)")
     ax3.axhline(0, color="0.5", lw=0.5)

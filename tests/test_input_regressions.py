@@ -28,6 +28,7 @@ from station.plant.parameters import PARAM_RANGES, PARAMS_DIR, load_params  # no
 TMM_FIT = (PARAMS_DIR / "tmm-fit.toml").read_text()
 P_LOG = "SFLR_P_control_step_kp_2_SLFR_RTP_P_control_kp=2.0.txt"
 LEAD_LOG = "step_response_Gth_comp_no_accel_FB_amp_100_duration_1000_SLFR_RTP_Motor_Comp_Gth.txt"
+LEAD_ACCEL_LOG = "step_response_Gth_comp_Ga_opt_amp_200_duration_1000_opt_case43_SLFR_RTP_Motor_Comp_Gth.txt"
 SWEEP_LOG = "swept_sine_kp_1_amp_50.txt"
 
 
@@ -313,13 +314,14 @@ def _without(rig: Path, name: str, column: str, out: Path) -> Path:
     return out
 
 
-def test_log_without_a_column_is_fitted_on_theta_and_refused_by_diagnose(rig_data, tmp_path):
+def test_log_without_a_column_is_fitted_on_theta(rig_data, tmp_path):
     # a lead loop never reads a: replay and compare simulate it and fit θ (tests/test_no_accel_column.py);
-    # a diagnosis, whose cost fits a, refuses it in one line
+    # a diagnosis fits its θ alone (tests/test_theta_only.py), but a law that feeds a back needs a:
+    # one line
     noa = _without(rig_data, LEAD_LOG, "a", tmp_path / "no_a.txt")
-    other = str(rig_data / P_LOG)
-    line = one_line_refusal(run_forked(["diagnose", str(noa), other]))
-    assert f"{noa}: no 'a' column" in line and "NaN" not in line, line
+    no_ga_a = _without(rig_data, LEAD_ACCEL_LOG, "a", tmp_path / "no_a_ga.txt")
+    line = one_line_refusal(run_forked(["diagnose", str(noa), str(no_ga_a)]))
+    assert f"{no_ga_a}: no 'a' column" in line and "NaN" not in line, line
     for argv in (["replay", str(noa)], ["compare", "--out-dir", str(tmp_path / "runs"), str(noa)]):
         rep = run_forked(argv)
         assert rep.code == 0 and "NaN" not in rep.out and "nan" not in rep.out, rep

@@ -4,8 +4,8 @@ A lab log of a P or lead run that never recorded a (the 2014 layout's columns cu
 that logged the encoder only) was refused by `station replay`, `compare` and `survey`: "no 'a'
 column: simulating it on a model ... needs u, theta, a", although the closed loop never reads
 a and the model makes its own. The invariant: what a use needs is what it reads. Simulating a
-run needs what drives it and θ; a is needed by a law that feeds it back, by the sensor audit
-and by the diagnosis's cost. Truth: the rig's own logs with the a column cut, against the same
+run needs what drives it and θ; a is needed by a law that feeds it back and by the sensor audit
+(a diagnosis fits θ alone). Truth: the rig's own logs with the a column cut, against the same
 logs whole (the θ fit cannot depend on a column the simulation does not read; the 2014 sweep,
 run with the accelerometer off the beam, is simulated without its mass as the whole log is: the
 mounting is decided from θ/v, and was asked only when an a column read no tip acceleration).
@@ -64,10 +64,12 @@ def test_a_log_without_a_gets_the_theta_fit_of_the_whole_log(rig_data, tmp_path,
     assert f"fit theta {row.fit_theta_pct:.1f} %, a -" in format_table([row])
 
 
-def test_a_law_that_feeds_a_back_and_a_diagnosis_still_need_it(rig_data, tmp_path):
+def test_a_law_that_feeds_a_back_still_needs_it(rig_data, tmp_path):
     path = _without_a(rig_data / LEAD_ACCEL, tmp_path / LEAD_ACCEL)
     with pytest.raises(StationError, match=r"no 'a' column: replaying its controller \(lead-accel\) needs"):
         replay(path)
-    lead = _without_a(rig_data / LEAD, tmp_path / LEAD)
-    with pytest.raises(StationError, match=r"no 'a' column: a diagnosis .* needs u, theta, a"):
-        load_case(lead)
+    with pytest.raises(StationError, match=r"no 'a' column: a diagnosis .* needs u, theta, v, a"):
+        load_case(path)
+    # a lead loop never reads a: a diagnosis fits its θ alone (tests/test_theta_only.py)
+    lead = load_case(_without_a(rig_data / LEAD, tmp_path / LEAD))
+    assert not lead.fits_a and lead.kind == "lead" and "the log has no a column: its θ alone is fitted" in lead.notes

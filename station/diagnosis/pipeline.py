@@ -9,8 +9,9 @@ from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import NamedTuple
 
-from station.diagnosis.runs.cases import Simulator, load_case, keep_bias
-from station.diagnosis.runs.cost import Evaluator, calibrate_noise, feeds_back_a, pooled, relative_gain, rms_gain
+from station.diagnosis.runs.cases import NO_A_COLUMN, Simulator, load_case, keep_bias
+from station.diagnosis.runs.cost import (Evaluator, calibrate_noise, feeds_back_a, pooled, relative_gain, rms_gain,
+                                        shown_effects)
 from station.diagnosis.runs.folds import fold_records, make_folds, validation_runs
 from station.diagnosis.honesty.doubt import alternatives, effective_terms, effect_interval, interval_method
 from station.diagnosis.runs.admission import refuse_repeated_runs, set_aside_beam_tests
@@ -224,6 +225,8 @@ def _diagnose(runs, validate, model, progress, bench: Bench, simulate, likelihoo
         for c in cases:
             keep_bias(c)
     names = names + [n for n in faults.to_fit if n not in names]  # pointed at, not decided: fitted
+    notes += [f"{c.name}: {NO_A_COLUMN}" for c in cases if NO_A_COLUMN in c.notes]
+    names = shown_effects(names, cases)
     folds, how = make_folds(n_fit, len(cases) - n_fit)
     scale = accel_scale(faults, cases)
     if scale is not None:  # the gain refitted beside every set, not a candidate of its own

@@ -114,6 +114,8 @@ class RunReport:
     metrics : dict of StepMetrics or None
         "rig", "nominal", "extended" (final model), for closed-loop step runs.
     notes : list of str
+    a_logged : bool, default True
+        False where the log has no a column (``a`` is then zeros, weighing nothing).
     """
 
     file: str
@@ -135,6 +137,7 @@ class RunReport:
     residuals_after: RunResiduals | None = field(default=None, repr=False)
     metrics: dict | None = None
     notes: list = field(default_factory=list)
+    a_logged: bool = True
 
     def to_json(self) -> dict:
         """The run as DESIGN.md's ``runs`` entry (the arrays stay out).

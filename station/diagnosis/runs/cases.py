@@ -64,6 +64,12 @@ class RunCase:
         return Path(self.path).name
 
     @property
+    def fits_a(self) -> bool:
+        """Whether its a is a tip acceleration a fit uses: the log has an a column and its audit
+        finds a tip acceleration there (:attr:`station.logged.audit.Audit.accel_is_tip`)."""
+        return self.run is None or (self.run.has_column("a") and self.run.audit.accel_is_tip)
+
+    @property
     def kind(self) -> str:
         """The controller's name ("p", "lead", "lead-accel", "open-loop", ...)."""
         return getattr(self.controller, "name", None) or ("open-loop" if not self.closed else "unknown")
@@ -83,25 +89,33 @@ def load_case(path: str | Path) -> RunCase:
     -------
     RunCase
         The run: its log, controller, alignment, whether closed, θ (encoder counts) and a
-        (accelerometer counts) as above, shape (N,), N ≥ 50, and notes on what was adjusted.
+        (accelerometer counts) as above, shape (N,), N ≥ 50 (a zeros where the log has no a
+        column: :data:`NO_A_COLUMN`), and notes on what was adjusted.
 
     Raises
     ------
     StationError
         Unreadable log (:class:`station.runlog.RunLogError`), a log of fewer than 50 rows,
-        a log without a column the simulation needs (:attr:`station.logged.LoggedRun.model_columns`),
+        a log without a column the simulation needs (:attr:`station.logged.LoggedRun.simulated_columns`)
+        or its controller replays (:attr:`station.logged.LoggedRun.replay_columns`: a where it feeds a back),
         or a malformed controller in its header.
     """
     run = LoggedRun.from_path(path)
     if len(run) < 50:
         raise StationError(f"{path}: {len(run)} rows; a diagnosis needs a run of at least 50 samples")
-    run.check_columns(run.model_columns, "a diagnosis (the run simulated on a model and fitted)")
+    # a is fitted where the log has it (θ alone otherwise) and needed where the law feeds it back
+    run.check_columns(dict.fromkeys(run.simulated_columns + run.replay_columns),
+                      "a diagnosis (the run simulated on a model and fitted)")
     notes = list(run.notes)
     if run.closed:
         if run.max_abs_dv > REPRODUCED_DV:
             notes.append(f"the log's controller does not reproduce its v (max |dv| = {run.max_abs_dv:.3g} counts)")
     elif run.controller is None:
         notes.append("the log does not name its controller: the model is driven by the logged v")
+    if not run.has_column("a"):
+        notes.append(NO_A_COLUMN)
+        return RunCase(str(path), run.log, run.controller, run.alignment, run.closed, np.asarray(run.theta, float),
+                       np.zeros(len(run)), notes=notes, run=run)
     a = np.asarray(run.data["a"], float)
     offset = run.accel_rest_offset
     if abs(offset) >= 0.5:
@@ -127,6 +141,10 @@ def keep_bias(case: RunCase) -> None:
             case.a = raw
             case.notes.append("accelerometer bias kept in its a: the model holds the bias decided over the runs")
 
+
+NO_A_COLUMN = "the log has no a column: its θ alone is fitted"
+"""A run's note where its log has no accelerometer column (its a is zeros, weighing nothing:
+:func:`station.diagnosis.runs.cost.calibrate_noise`)."""
 
 REPRODUCED_DV = 1e-3
 """max |dv| (DAC counts) above which a diagnosis notes that the log's controller does not

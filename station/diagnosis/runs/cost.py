@@ -447,6 +447,25 @@ def feeds_back_a(case: RunCase) -> bool:
     return getattr(case.controller, "ga", None) is not None
 
 
+def shown_effects(names, cases) -> list[str]:
+    """The effects the runs can show: an accelerometer's (``accel_*``) only where a run's a is
+    fitted (:attr:`station.diagnosis.runs.cases.RunCase.fits_a`) or fed back (:func:`feeds_back_a`).
+
+    Parameters
+    ----------
+    names : iterable of str
+        Effect names (DESIGN.md's vocabulary).
+    cases : sequence of RunCase
+
+    Returns
+    -------
+    list of str
+        ``names`` in their order, less those no run shows.
+    """
+    seen = any(c.fits_a or feeds_back_a(c) for c in cases)
+    return [n for n in names if seen or not n.startswith("accel_")]
+
+
 def least_squares_scale(measured: np.ndarray, simulated: np.ndarray, bounds: tuple[float, float]) -> float:
     """The factor k minimising ‖measured − k·simulated‖², clipped to ``bounds`` (1 when the
     simulated signal is zero).
@@ -475,7 +494,8 @@ noise realisations stay finite numbers."""
 def calibrate_noise(ev: Evaluator) -> dict[int, tuple[np.ndarray, np.ndarray]]:
     """Simulate every run on the nominal model and set each run's noise levels from the
     high-frequency part of its residual (:func:`station.analysis.residuals.noise_std`); a run
-    whose a the log audit found to be no tip acceleration gets :data:`IGNORED_SIGMA` (a model
+    whose a the log audit found to be no tip acceleration, or whose log has none
+    (:attr:`station.diagnosis.runs.cases.RunCase.fits_a`), gets :data:`IGNORED_SIGMA` (a model
     that damps its modelled a away must not win by it).
 
     Parameters
@@ -493,8 +513,7 @@ def calibrate_noise(ev: Evaluator) -> dict[int, tuple[np.ndarray, np.ndarray]]:
         theta, a = ev.predict({}, i)
         nominal[i] = (theta, a)
         c.sigma_theta = noise_std(c.theta - theta, THETA_QUANTIZATION_STD)
-        tip = c.run is None or c.run.audit.accel_is_tip
-        c.sigma_a = noise_std(c.a - a, ACCEL_NOISE_STD) if tip else IGNORED_SIGMA
+        c.sigma_a = noise_std(c.a - a, ACCEL_NOISE_STD) if c.fits_a else IGNORED_SIGMA
     return nominal
 
 

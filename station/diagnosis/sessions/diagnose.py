@@ -14,7 +14,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from station.diagnosis.runs.cases import Simulator, keep_bias
-from station.diagnosis.runs.cost import IGNORED_SIGMA, Evaluator, calibrate_noise, pooled, rms_gain
+from station.diagnosis.runs.cost import IGNORED_SIGMA, Evaluator, calibrate_noise, pooled, rms_gain, shown_effects
 from station.diagnosis.runs.folds import LEAVE_ONE_OUT, make_folds
 from station.diagnosis.search.workbench import Bench, nominal_trial, workbench
 from station.diagnosis.sessions.drift import DriftResult, decide_drift, finite, select_structure, session_axes
@@ -277,10 +277,10 @@ def diagnose_sessions(sessions: Sequence[SessionLogs], model=None, progress: Cal
 
 def _diagnose_sessions(sessions, model, say, bench: Bench, max_samples, simulate) -> SessionsDiagnosis:
     t0 = time.perf_counter()
-    names = bench.names
     base = as_model(model)
     loaded = load_sessions(sessions, max_samples, say)
     cases = loaded.cases
+    names = shown_effects(bench.names, cases)
     for note in loaded.notes:
         say(note)
     layout = Layout(tuple(loaded.groups))

@@ -21,7 +21,7 @@ from pathlib import Path
 
 import numpy as np
 
-from station.diagnosis.runs.cases import RunCase, load_case
+from station.diagnosis.runs.cases import NO_A_COLUMN, RunCase, load_case
 from station.diagnosis.runs.admission import data_digest, set_aside_beam_tests, set_aside_copies
 from station.errors import StationError
 from station.inputs import open_regular, parse_json
@@ -297,6 +297,7 @@ def load_sessions(sessions: Sequence[SessionLogs], max_samples: int = SESSIONS_M
             seen[digest] = str(p)
             cases.append(case)
             say(f"read {s.name}: {Path(p).name} ({case.kind}, {case.n} samples)")
+            notes += [f"{s.name}: {case.name}: {NO_A_COLUMN}"] if NO_A_COLUMN in case.notes else []
         kept, held = set_aside_beam_tests(cases)
         notes += [f"{s.name}: {n}" for n in held]
         if kept:
