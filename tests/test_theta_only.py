@@ -8,10 +8,11 @@ plain text editing here, not by the station's reader."""
 from __future__ import annotations
 
 import json
+import math
 
 import pytest
 
-from station import cli
+from station import cli, diagnosis
 from station.diagnosis.sessions.diagnose import diagnose_sessions
 from station.diagnosis.sessions.logs import group_sessions
 from tests.blind.cases import TOLERANCE, value_error
@@ -75,3 +76,17 @@ def test_a_run_whose_controller_feeds_a_back_is_refused_without_a(theta_only, ca
     assert cli.main(["diagnose", runs[0], lead_accel, "--quiet"]) == 2
     err = capsys.readouterr().err
     assert "no 'a' column: a diagnosis (the run simulated on a model and fitted) needs u, theta, v, a" in err, err
+
+
+@pytest.mark.slow
+def test_a_run_without_a_beside_runs_whose_bias_is_decided(tmp_path):
+    """An accelerometer bias decided over the runs with a (held in the model, each run's a kept
+    as logged) leaves the run without a column at zeros, not at the reader's NaN."""
+    hidden = {"accel_offset": -2.33}  # blind case accel_offset seed 2: a session decides it
+    paths = write_case(tmp_path / "logs", hidden, 2)
+    paths[0].write_text(_without_a(paths[0].read_text()))
+    result = diagnosis.diagnose([str(p) for p in paths])
+    assert result.sensor_faults.effects == pytest.approx(hidden, rel=TOLERANCE), result.sensor_faults.effects
+    assert result.accepted == [] and not result.unexplained.flag, result.unexplained.evidence
+    assert all(math.isfinite(r.fit_nominal["theta"]) for r in result.runs)
+    json.dumps(result.to_json(), allow_nan=False)  # no NaN from the missing column anywhere

@@ -135,7 +135,7 @@ def keep_bias(case: RunCase) -> None:
     case : RunCase
         Changed in place (its ``a``: the logged a, as many samples as it had).
     """
-    if case.run is not None:
+    if case.run is not None and case.run.has_column("a"):  # (no a column: nothing to keep)
         raw = np.asarray(case.run.data["a"], float)[:case.a.size]
         if not np.array_equal(raw, case.a):
             case.a = raw
