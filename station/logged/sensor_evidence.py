@@ -11,7 +11,9 @@ scales and bias from (DESIGN.md's sensor and wiring faults).
   rigid motion, removed) where the model's a has :data:`OCTAVE_SHARE` of its largest octave's
   RMS, the median over those octaves; a's least-squares ratios over the whole band and over
   the octaves whose cosine reaches :data:`station.logged.sensors.SIGN_COSINE`; and a's bias and
-  drift, the least-squares fit of the measured a on [1, t, the model's a].
+  drift, the least-squares fit of the measured a on [1, t, the model's a], with its rest before
+  the first command and the drift its integral gives where the run ends at rest (no model in
+  either).
 """
 
 from __future__ import annotations
@@ -57,6 +59,22 @@ the encoder)."""
 MIN_WINDOWS = 20
 """Fewest moving windows a run's θ comparison needs."""
 
+END_REST_S = 0.25
+"""The run's last stretch, s, in which the hub must move less than :data:`END_MOVING_COUNTS` and
+a stay within :data:`END_QUIET_COUNTS` for a's integral to measure its drift
+(:func:`integral_drift`)."""
+
+END_MOVING_COUNTS = 25.0
+"""Most the hub may move over :data:`END_REST_S` at the run's end, encoder counts: 100 counts per
+s is a tip speed of 0.29 accelerometer counts·s (0.41 m and 1.15 counts per m/s², tmm-fit), which
+a's integral holds and a 2 s run's drift reads as 0.15 counts per s (a hub hunting a few counts
+is nothing; one running away is)."""
+
+END_QUIET_COUNTS = 10.0
+"""a's largest standard deviation over :data:`END_REST_S` at the run's end, counts: a beam
+still ringing there moves the tip, and a's integral holds its speed (at 2.5 Hz, a ringing of
+this RMS is a tip speed that reads about 1 count per s in a 2 s run's drift)."""
+
 @dataclass(frozen=True)
 class SensorEvidence:
     """One run's θ and a against the nominal model driven by the run's applied command.
@@ -88,6 +106,9 @@ class SensorEvidence:
     accel_rest : float or None
         a's mean before the first command, counts (:attr:`station.logged.LoggedRun.accel_rest_offset`:
         nothing of the model in it); None as ``accel_cosine`` or with too few samples at rest.
+    accel_integral_drift : float or None
+        a's drift from its integral, counts per s (:func:`integral_drift`: no model in it); None
+        as ``accel_rest`` or where the run does not end at rest.
     """
 
     name: str
@@ -100,6 +121,42 @@ class SensorEvidence:
     accel_band_cosine: float | None = None
     accel_shaped_ratio: float | None = None
     accel_rest: float | None = None
+    accel_integral_drift: float | None = None
+
+
+def integral_drift(a, theta, rest: int, dt: float) -> float | None:
+    """An accelerometer's drift from its integral: where the tip is at rest before the first
+    command and at the end, its acceleration integrates to nothing over the run, and a's
+    integral less its rest value from the first command on is the drift's alone: d times the
+    integral of the time from the rest's middle.
+
+    Parameters
+    ----------
+    a, theta : array_like, shape (N,)
+        The logged a (accelerometer counts) and θ (encoder counts).
+    rest : int
+        Samples at rest before the first command (:attr:`station.logged.LoggedRun.accel_rest_samples`).
+    dt : float
+        Sample time, s.
+
+    Returns
+    -------
+    float or None
+        d, counts per s; None with fewer than :data:`REST_MIN_SAMPLES` samples at rest, a run
+        of under 0.5 s after them, or an end not at rest (the hub moving past
+        :data:`END_MOVING_COUNTS` or a's standard deviation past :data:`END_QUIET_COUNTS` over
+        :data:`END_REST_S`).
+    """
+    a, theta = np.asarray(a, float), np.asarray(theta, float)
+    w = max(2, int(round(END_REST_S / dt)))
+    span = (a.size - rest) * dt
+    if rest < REST_MIN_SAMPLES or span < 0.5 or a.size - rest < w or not np.all(np.isfinite(a)):
+        return None
+    if abs(theta[-1] - theta[-w]) > END_MOVING_COUNTS or float(np.std(a[-w:])) > END_QUIET_COUNTS:
+        return None
+    # a less its rest mean integrates d·(t - the rest's middle) from the first command on
+    k = np.arange(rest, a.size) - 0.5 * (rest - 1)
+    return float(np.sum(a[rest:] - np.mean(a[:rest])) / (np.sum(k) * dt))
 
 
 def cosine_ratio(measured: np.ndarray, model: np.ndarray) -> tuple[float | None, float | None]:
@@ -169,8 +226,10 @@ def sensor_evidence(run, model) -> SensorEvidence:
         if band[0] is not None and octaves[0] is not None:
             t = np.arange(a.size) * dt  # the plant's drift runs from the run's first sample
             (bias, slope, _), *_ = np.linalg.lstsq(np.column_stack([np.ones_like(t), t, a_m]), a, rcond=None)
+            at_rest = run.accel_rest_samples >= REST_MIN_SAMPLES
             return SensorEvidence(name, *th, octaves[0], band[1], float(rest + bias), float(slope), band[0],
-                                  octaves[1], rest if run.accel_rest_samples >= REST_MIN_SAMPLES else None)
+                                  octaves[1], rest if at_rest else None,
+                                  integral_drift(a_raw, theta, run.accel_rest_samples, dt))
     return SensorEvidence(name, *th, None, None)
 
 

@@ -81,6 +81,14 @@ reaches this, counts, and the bias beside the model's a has its sign: about twic
 largest rest (its 2009 and 2013-14 logs: -1.98..+2.20, the lead step's ten samples still
 ringing). Below it one run leaves a bias to a session's runs (:data:`OFFSET_COUNTS`)."""
 
+RUN_DRIFT_COUNTS_PER_S = 2.0
+"""One run decides an accelerometer drift alone where the drift its integral gives
+(:attr:`SensorEvidence.accel_integral_drift`: the tip at rest before its first command and at its
+end, no model in it) is at least this large, counts per s, and the drift beside the model's a
+has its sign: the rig's logs that end at rest give -0.27..+0.22 counts per s, the blind
+generator's runs without a drift -0.82..+0.70 (every case of friction, dead-zone, drive damping,
+delay, a sensor reversed, ..., four seeds)."""
+
 OFFSET_COUNTS = 1.0
 """An accelerometer bias is decided when every run's has one sign and their median is at least
 this large, counts (the noise is 0.3; the rig's 2013-14 runs' biases take both signs)."""
@@ -366,6 +374,16 @@ def decide_faults(evidence: Sequence[SensorEvidence], accel_gain: float | None =
                 f"{RUN_REST_OFFSET_COUNTS:g}); bias per run beside the model's a: {_fmt(biases)} counts")
         bias_claim = AuditClaim("columns", OFFSET_HEADER, f"accel_offset {effects['accel_offset']:g} counts",
                                 "contradicted", said)
+    integral = [e.accel_integral_drift for e in ev if e.accel_bias is not None and math.isfinite(e.accel_bias)]
+    slopes = [e.accel_slope for e in ev if e.accel_bias is not None and math.isfinite(e.accel_bias)]
+    if not trends and integral and all(d is not None and abs(d) >= RUN_DRIFT_COUNTS_PER_S and d * m > 0
+                                       for d, m in zip(integral, slopes)):
+        effects["accel_drift"] = _counts(statistics.median(integral))
+        drift_claim = AuditClaim(
+            "columns", DRIFT_HEADER, f"accel_drift {effects['accel_drift']:g} counts per s", "contradicted",
+            f"a's integral from the first command to the run's end, the tip at rest at both: {_fmt(integral)} "
+            f"counts per s (the rig's runs under {RUN_DRIFT_COUNTS_PER_S:g}); drift per run beside the model's a: "
+            f"{_fmt(slopes)} counts per s")
     if trends:
         bias_claim = _trend_claim("accel_offset", [e.accel_bias for e in ev], OFFSET_COUNTS, effects,
                                   OFFSET_HEADER, "counts")
