@@ -162,7 +162,8 @@ def test_blind_each_run_that_ends_at_rest_decides_a_drift_or_none(tmp_path, case
 
 def test_a_run_still_ringing_at_its_end_decides_no_drift(rig_data, tmp_path):
     # the lead step ends with the beam ringing (a's std 12 counts over its last 0.25 s): the tip
-    # moves, and a's integral holds its speed; a session's runs decide the drift there
+    # moves, and a's integral holds its speed (up to 0.72 counts per s here); a session's runs
+    # decide the drift there
     name = THESIS[2]
     path = _rewrite(rig_data / name, tmp_path / name, lambda t, a: np.round(a - 4.0 * t))
     run = LoggedRun.from_path(path)

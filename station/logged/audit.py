@@ -588,7 +588,7 @@ def alignment_claim(header: int | None, found: int | None, reproduced: bool, fmt
         return AuditClaim("alignment", said, f"alignment {alts} alike", "unchecked",
                           f"the controller reproduces every logged v at alignments {alts}: the data cannot tell "
                           f"them apart (θ seldom changes between rows); {found} is used"
-                          + ("" if header is None else f", as the header states" if header == found else ""))
+                          + ("" if header is None else ", as the header states" if header == found else ""))
     if header is None:
         why = "the rig's headers do not state it" if fmt == "rig" else "the header does not state it"
         return AuditClaim("alignment", said, data, "unchecked",

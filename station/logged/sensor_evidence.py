@@ -60,20 +60,19 @@ MIN_WINDOWS = 20
 """Fewest moving windows a run's θ comparison needs."""
 
 END_REST_S = 0.25
-"""The run's last stretch, s, in which the hub must move less than :data:`END_MOVING_COUNTS` and
-a stay within :data:`END_QUIET_COUNTS` for a's integral to measure its drift
-(:func:`integral_drift`)."""
+"""The run's last stretch, s, whose motion bounds the tip's speed at the end
+(:func:`integral_drift`): half a period of the beam's slowest ringing (2 Hz; its first mode is
+2.5 Hz with the accelerometer on the tip), so that a's integral over it ranges over at least the
+ringing speed's amplitude."""
 
-END_MOVING_COUNTS = 25.0
-"""Most the hub may move over :data:`END_REST_S` at the run's end, encoder counts: 100 counts per
-s is a tip speed of 0.29 accelerometer counts·s (0.41 m and 1.15 counts per m/s², tmm-fit), which
-a's integral holds and a 2 s run's drift reads as 0.15 counts per s (a hub hunting a few counts
-is nothing; one running away is)."""
+TIP_PER_HUB = 0.41 * 1.145 / (1024 / (2 * math.pi))
+"""The tip's speed, accelerometer counts·s, per hub speed of one encoder count per s: the beam's
+0.41 m times the accelerometer's 1.145 counts per m/s² (tmm-fit) over 1024/2π counts per rad."""
 
-END_QUIET_COUNTS = 10.0
-"""a's largest standard deviation over :data:`END_REST_S` at the run's end, counts: a beam
-still ringing there moves the tip, and a's integral holds its speed (at 2.5 Hz, a ringing of
-this RMS is a tip speed that reads about 1 count per s in a 2 s run's drift)."""
+END_DRIFT_ERROR = 0.5
+"""Most the tip's speed at the run's end may move a drift read from a's integral, counts per s:
+the bound on that speed (a's ringing, the hub's motion: :func:`integral_drift`) over the integral of
+the time since the rest (a 2 s run: 1.9 s², a 1 s run 0.5 s²)."""
 
 @dataclass(frozen=True)
 class SensorEvidence:
@@ -143,20 +142,24 @@ def integral_drift(a, theta, rest: int, dt: float) -> float | None:
     -------
     float or None
         d, counts per s; None with fewer than :data:`REST_MIN_SAMPLES` samples at rest, a run
-        of under 0.5 s after them, or an end not at rest (the hub moving past
-        :data:`END_MOVING_COUNTS` or a's standard deviation past :data:`END_QUIET_COUNTS` over
-        :data:`END_REST_S`).
+        of under 0.5 s after them, or where the tip's speed at the end could move d by more than
+        :data:`END_DRIFT_ERROR`: its ringing, bounded by the range of a's integral over the last
+        :data:`END_REST_S` (a less its mean there), and the hub's motion there times
+        :data:`TIP_PER_HUB`.
     """
     a, theta = np.asarray(a, float), np.asarray(theta, float)
     w = max(2, int(round(END_REST_S / dt)))
-    span = (a.size - rest) * dt
-    if rest < REST_MIN_SAMPLES or span < 0.5 or a.size - rest < w or not np.all(np.isfinite(a)):
+    if rest < REST_MIN_SAMPLES or (a.size - rest) * dt < 0.5 or a.size - rest < w or not np.all(np.isfinite(a)):
         return None
-    if abs(theta[-1] - theta[-w]) > END_MOVING_COUNTS or float(np.std(a[-w:])) > END_QUIET_COUNTS:
-        return None
-    # a less its rest mean integrates d·(t - the rest's middle) from the first command on
+    # a less its rest mean integrates d·(t - the rest's middle) from the first command on, plus
+    # the tip's speed at the end
     k = np.arange(rest, a.size) - 0.5 * (rest - 1)
-    return float(np.sum(a[rest:] - np.mean(a[:rest])) / (np.sum(k) * dt))
+    g = float(np.sum(k)) * dt * dt
+    ringing = float(np.ptp(np.cumsum(a[-w:] - np.mean(a[-w:])))) * dt
+    speed = ringing + abs(float(theta[-1] - theta[-w])) / (w * dt) * TIP_PER_HUB
+    if not math.isfinite(speed) or speed / g > END_DRIFT_ERROR:
+        return None
+    return float(np.sum(a[rest:] - np.mean(a[:rest])) * dt / g)
 
 
 def cosine_ratio(measured: np.ndarray, model: np.ndarray) -> tuple[float | None, float | None]:
