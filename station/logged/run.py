@@ -18,13 +18,13 @@ from station.logged.audit import (ACCEL_CLAIM, Audit, AuditClaim, accel_claims, 
 from station.logged.columns import Columns, check_columns, check_sensor_swap
 from station.logged.controller import ControllerId, describe_controller, identify_controller
 from station.logged.sensor_evidence import REST_MIN_SAMPLES, sensor_evidence
-from station.logged.sensors import DOUBT_WORDS, NO_FAULTS, REFINED_BY_MODEL, SensorFaults, decide_faults, fault_text
+from station.logged.sensors import (DOUBT_WORDS, NO_FAULTS, REFINED_BY_MODEL, SensorFaults, decide_faults, fault_text,
+                                   holds_signs)
 from station.logged.reference import Reference, classify_reference
 from station.logged.simulate import ModelRun, compared_theta, simulate_log
 from station.logged.start import Start, start_claims
 from station.logged.units import TimeBase, time_base
 from station.runlog.timebase import restart_rows, row_ticks
-from station.plant.effects import SENSOR_SIGNS
 from station.runlog import SKIPPED, RunLog, read_log
 
 REPRODUCED_TOLERANCE = 1e-6
@@ -172,10 +172,9 @@ class LoggedRun:
         -------
         Audit
         """
-        held = model.effect_dict() if hasattr(model, "effect_dict") else {}
-        if not any(k in held for k in SENSOR_SIGNS):
+        if not holds_signs(model):
             return self.audit
-        faults = self.sensors.refined(held, by=REFINED_BY_MODEL)
+        faults = self.sensors.refined(model.effect_dict(), by=REFINED_BY_MODEL)
         if faults is self.sensors:
             return self.audit
         audit = self.audit  # its claims end with this run's sensors' (above)
@@ -511,15 +510,12 @@ class LoggedRun:
         Returns
         -------
         dict of str to float
-            Effect -> value; empty for a DiscretePlant (no effects) or a model that holds a
-            sign or scale (:data:`station.plant.effects.SENSOR_SIGNS`); without an
-            accelerometer bias the model holds (its own value stands).
+            Effect -> value; empty for a DiscretePlant or a model that holds a sign or scale
+            (:func:`station.logged.sensors.holds_signs`); less a bias or drift the model holds (its own stands).
         """
-        held = model.effect_dict() if hasattr(model, "effect_dict") else None
-        if held is None or any(k in held for k in SENSOR_SIGNS):
+        if not hasattr(model, "effect_dict") or holds_signs(model):
             return {}
-        # one run decides signs, scales and a large bias; a bias the model holds is its own
-        return {k: v for k, v in self.sensors.effects.items() if k not in held}
+        return {k: v for k, v in self.sensors.effects.items() if k not in model.effect_dict()}
 
     def model_as_found(self, model, sensors: bool = True):
         """The model as the audit found this run's rig: :meth:`model_for` (the accelerometer's
@@ -574,8 +570,7 @@ class LoggedRun:
             said = ", ".join(fault_text(k, v) for k, v in found.items())
             sim = dataclasses.replace(sim, how=sim.how + f"; with the sensor faults the audit decided from the "
                                       f"data ({said})")
-        held = model.effect_dict() if hasattr(model, "effect_dict") else {}
-        if sensors and self.sensors.doubt and not any(k in held for k in SENSOR_SIGNS):
+        if sensors and self.sensors.doubt and not holds_signs(model):
             sim = dataclasses.replace(sim, how=sim.how + f"; {DOUBT_WORDS}{self.sensors.doubt}",
                                       doubt=self.sensors.doubt)
         return sim

@@ -61,7 +61,7 @@ from dataclasses import dataclass, field
 
 from station.logged.audit import AuditClaim
 from station.logged.sensor_evidence import ACCEL_OCTAVES_HZ, SIGN_COSINE, THETA_HORIZON_S, SensorEvidence
-from station.plant.effects import EFFECTS
+from station.plant.effects import EFFECTS, SENSOR_SIGNS
 from station.rig import COUNTS_PER_REV
 
 SCALE_TOLERANCE = 1.2
@@ -396,6 +396,24 @@ def decide_faults(evidence: Sequence[SensorEvidence], accel_gain: float | None =
         claims.append(AuditClaim("columns", SCALE_HINT_HEADER, "undecided", "unchecked", hint))
     return SensorFaults(effects, tuple(c for c in claims if c is not None), alternative, ev,
                         ("encoder_scale",) if hint else (), first, trends)
+
+
+def holds_signs(model) -> bool:
+    """Whether a model holds sensors' signs or scales of its own (one a diagnosis saved): a run's
+    own decision is then not applied to it, its claims say the model's values and its doubt is
+    not said (:class:`station.logged.LoggedRun`).
+
+    Parameters
+    ----------
+    model : station.plant.model.Model or station.plant.DiscretePlant
+        A DiscretePlant holds no effects.
+
+    Returns
+    -------
+    bool
+        True where it holds any of :data:`station.plant.effects.SENSOR_SIGNS`.
+    """
+    return hasattr(model, "effect_dict") and any(k in model.effect_dict() for k in SENSOR_SIGNS)
 
 
 def fault_text(name: str, value: float) -> str:
