@@ -64,6 +64,22 @@ def test_a_scaled_into_another_unit_is_read_back_in_counts(rig_data, tmp_path, u
 
 
 @pytest.mark.parametrize("name", THESIS)
+def test_a_in_volts_about_a_converters_midpoint_is_read_back_in_counts(rig_data, tmp_path, name):
+    """a written as a 10-bit converter's volts about its 2.5 V midpoint (5/1024 V a count, 7
+    digits: 2.504883): the printing's error on the least change, times the 20 counts of a large
+    change, passed the step's tolerance, and the log replayed with "accel_gain 0.01" and an a fit
+    of -6912 %. Its count is found from the small changes out, its 512 counts of midpoint decided
+    as an unzeroed channel's bias, and it replays as the rig's own log."""
+    src = rig_data / name
+    path = _rewrite(src, tmp_path / name, lambda t, a: _printed(2.5 + a * 5.0 / 1024, 7))
+    clean, run = LoggedRun.from_path(src), LoggedRun.from_path(path)
+    (claim,) = [c for c in run.audit.claims if c.header == ACCEL_UNIT_CLAIM]
+    assert claim.data.startswith("a in steps of 0.00488"), claim
+    assert run.sensors.effects == {"accel_offset": pytest.approx(512 + clean.sensors.evidence[0].accel_bias, abs=0.05)}
+    assert replay(path).fit_pct == pytest.approx(replay(src).fit_pct, abs=0.5)  # its bias held, not its rest
+
+
+@pytest.mark.parametrize("name", THESIS)
 def test_a_float_with_no_count_is_judged_by_its_own_noise_and_its_scale_decided(rig_data, tmp_path, name, nominal):
     """a computed in floats (scaled into g with noise of its own, no common step) is not called
     a silent channel (its noise at rest, not half a count, is what it is judged against), and
@@ -205,6 +221,7 @@ COMMANDS = np.array([0, 1, 88, 87, 85, 86, 84, 2, -1, -3, -2, 150, 149, 60, 61, 
     (COMMANDS, 10.0 / 32768),                       # 7 digits of a 16-bit converter's volts: refined on small steps
     (COMMANDS, 5.0 / 2048),
     (np.trunc(2.5 * np.array([0, 5, 3, 1, -1, -4, 2, 0])), 5000.0 / 2048),  # trunc(2.5 e): its least change 2 counts
+    (COMMANDS + 512, 5.0 / 1024),                   # about a 10-bit converter's 2.5 V midpoint: 6 decimals
 ])
 def test_count_step_of_printed_commands(counts, size):
     printed = np.array([float(f"{c * size:.7g}") for c in counts])

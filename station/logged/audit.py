@@ -381,10 +381,9 @@ def quantum_fits(x: np.ndarray, quantum: float) -> bool:
 def count_step(x) -> float | None:
     """The size of one count in a column of counts written in another unit: the largest size
     every change between rows is a whole multiple of (to :data:`QUANTUM_TOLERANCE` of it), the
-    smallest change or a :data:`STEP_DIVISORS`-th of it at most, refined by least squares over
-    every change; None when the column never changes, its changes have no common size (a
-    filtered or computed float) or that size would span more than a sample's 16-bit field over
-    the column's range (the printing's last digit).
+    smallest change or a :data:`STEP_DIVISORS`-th of it at most, refined by least squares; None
+    when the column never changes, its changes have no common size (a filtered or computed
+    float) or that size spans more than a 16-bit field over its range (the last digit printed).
 
     A converter's reading scaled into another unit steps by its scale (an accelerometer count of
     the rig's is 1/1.145 m/s², DESIGN.md's a_gain; a DAC count 5/2048 V of a ±5 V 12-bit
@@ -411,14 +410,16 @@ def count_step(x) -> float | None:
         size = least / k
         if np.ptp(x) / size > FIELD_COUNTS:  # the printing's last digit
             return None
-        small = steps[steps <= 10.5 * size]  # refined on the small changes first: the least is printed short
-        if not quantum_fits(small, size):
-            continue
-        counts = np.round(small / size)
-        size = float(np.sum(small * counts) / np.sum(counts ** 2))
-        if quantum_fits(steps, size):
-            counts = np.round(steps / size)
-            return float(np.sum(steps * counts) / np.sum(counts ** 2))  # least squares over every step
+        # the size from the small changes, then each change's count from it and the size from them
+        # all (least squares): a change of c counts holds c times the first size's error
+        for few, tol in ((steps[steps <= (k + 1.5) * size], QUANTUM_TOLERANCE), (steps, 0.1)):
+            counts = np.round(few / size)
+            if np.any(counts == 0) or np.max(np.abs(few / size - counts)) > tol:
+                break
+            size = float(np.sum(few * counts) / np.sum(counts ** 2))
+        else:
+            if quantum_fits(steps, size):
+                return size
     return None
 
 
