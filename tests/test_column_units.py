@@ -267,3 +267,24 @@ def test_a_command_in_volts_with_no_header_is_read_by_the_law_the_data_give(tmp_
     assert float(claim.data.split()[-1]) == pytest.approx(blind.V_UNITS[unit], rel=1e-5)
     assert run.source == "inferred" and run.reproduced and run.alignment == case.alignment
     assert run.controller.spec["design"]["text"] == case.design_text
+
+
+@pytest.mark.parametrize("name, zero", [(THESIS[1], 128.0), (THESIS[1], -100.0), (LEAD_FLOAT, 128.0), (THESIS[0], 128.0)])
+def test_a_command_written_about_another_zero_is_read_about_zero(rig_data, tmp_path, name, zero):
+    """v written as an unsigned DAC code about its midpoint (128 of 8 bits): it reads that on
+    every row at rest, where no law commands anything, and the header's law reproduces every
+    row less it. Before, the P step so written was read as a law 2(s-9e-12)/(s-2e-13) that
+    "remembered the earlier rows" (its first row's 128 carried as memory), the header called a
+    lie; the lead step, past the DAC's range as written, as "v in another unit, its size not
+    found" and not reproduced (max |dv| = 128 counts)."""
+    src = rig_data / name
+    lines = src.read_text().splitlines()
+    rows = [ln.split("\t") for ln in lines if ln and not ln.startswith("#")]
+    for r in rows:
+        r[3] = f"{float(r[3]) + zero:.17g}"
+    path = tmp_path / name
+    path.write_text("\n".join([ln for ln in lines if ln.startswith("#")] + ["\t".join(r) for r in rows]) + "\n")
+    run, clean = LoggedRun.from_path(path), LoggedRun.from_path(src)
+    assert run.audit.lines()[0] == f"header: v in DAC counts about 0; data: v about {zero:g} counts"
+    assert run.source == clean.source == "header" and run.max_abs_dv == pytest.approx(clean.max_abs_dv, abs=1e-9)
+    assert replay(path).fit_pct == replay(src).fit_pct

@@ -21,6 +21,9 @@ so too (:func:`check_command_unit`). A P law's v scaled is also another kp, so o
 be no DAC command as written is read so: under one count everywhere while the hub moved (the
 device would apply nothing), or past the DAC's ±255 counts.
 
+So is its zero (:func:`check_command_offset`): a v that reads one value other than 0 at rest
+and that the header's law reproduces less that value was written about another zero.
+
 An open-loop run (v = u: no law feeds θ or a back) cannot say θ from a by a law. There the
 sensors themselves say it (:func:`check_sensor_swap`): at rest before the first command the
 encoder reads one count and the accelerometer its noise, and the hub's angle follows the
@@ -81,7 +84,8 @@ COMMAND_STEP_COUNTS = 10
 steps by kp counts: :func:`check_command_unit` tries each)."""
 
 REST_ROWS = 10
-"""Fewest rows at rest before the first command the open-loop check needs."""
+"""Fewest rows at rest before the first command the open-loop check and the command's zero
+(:func:`check_command_offset`) need."""
 
 
 UNKNOWN_UNIT = "v in another unit, its size not found"
@@ -180,6 +184,10 @@ def check_columns(log: RunLog, skipped=None) -> Columns:
     as_named = header_law_dv(log, skipped)
     if unit is None and as_named is not None and as_named <= TOLERANCE:
         return Columns((), log)
+    named = as_named > TOLERANCE if as_named is not None else header_reproduces(log, skipped) is False
+    offset = check_command_offset(log, skipped) if named else None
+    if offset is not None:  # (past the DAC's range as written: about its zero, in counts)
+        return offset
     for columns in SWAPS:  # a swap beside v in another unit (the swap's v is not in counts)
         trial = rewritten(log, columns)
         if in_counts(np.asarray(trial.data["v"], dtype=float)):
@@ -373,6 +381,45 @@ def check_command_unit(log: RunLog, skipped=None) -> Columns | None:
         return Columns((claim,), dataclasses.replace(trial, notes=list(log.notes) + [note]))
     return _unknown_unit(log, why, f"its changes are whole multiples of {least:.6g}, but no law reproduces it in "
                                    f"counts of that size or of its fractions", small)
+
+
+def check_command_offset(log: RunLog, skipped=None) -> Columns | None:
+    """The command's zero checked by its rest and the header's law: a v that reads one value c
+    other than 0 on every row before the first command (u and θ unchanged: no law commands
+    anything there) and whose every row less c the header's law reproduces (a closed loop's, or
+    an open loop's v = u) was written about another zero (an unsigned DAC code about its
+    midpoint, 128 of 8 bits).
+
+    Parameters
+    ----------
+    log : RunLog
+    skipped : array_like of bool, optional
+        As :func:`station.logged.controller.identify_controller`.
+
+    Returns
+    -------
+    Columns or None
+        The log with c taken off v and a contradicted "columns" claim; None otherwise (no law
+        named, fewer than :data:`REST_ROWS` rows at rest, v 0 there, or the law reproduces
+        neither).
+    """
+    u, theta, v = (np.asarray(log.data[c], dtype=float) for c in ("u", "theta", "v"))
+    moved = np.flatnonzero((u != u[0]) | (theta != theta[0]) | (v != v[0]))
+    rest = int(moved[0]) if moved.size else v.size
+    c = float(v[0])
+    if rest < REST_ROWS or c == 0 or u[0] != 0 or not np.isfinite(c):
+        return None
+    trial = dataclasses.replace(log, data={**log.data, "v": v - c})
+    dv = header_law_dv(trial, skipped)  # None: an open-loop header's v = u
+    if not (header_reproduces(trial, skipped) if dv is None else dv <= TOLERANCE):
+        return None
+    claim = AuditClaim(
+        "columns", "v in DAC counts about 0", f"v about {c:g} counts", "contradicted",
+        f"v reads {c:g} on the {rest} rows at rest before the first command (u and θ unchanged: no law commands "
+        f"anything there), and the header's law reproduces every logged v less {c:g} (to {dv or 0:.2g} counts): a "
+        f"command written about another zero (an unsigned DAC code about its midpoint)")
+    return Columns((claim,), dataclasses.replace(trial, notes=list(log.notes) + [f"v about {c:g} counts (the "
+                                                                                 f"audit): {c:g} taken off"]))
 
 
 def _unknown_unit(log: RunLog, why: str, detail: str, small: bool) -> Columns:
