@@ -9,9 +9,8 @@ from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import NamedTuple
 
-from station.diagnosis.runs.cases import NO_A_COLUMN, Simulator, load_case, keep_bias
-from station.diagnosis.runs.cost import (Evaluator, calibrate_noise, feeds_back_a, pooled, relative_gain, rms_gain,
-                                        shown_effects)
+from station.diagnosis.runs.cases import NO_A_COLUMN, Simulator, feeds_back_a, load_case, keep_bias, shown_effects
+from station.diagnosis.runs.cost import Evaluator, calibrate_noise, pooled, relative_gain, rms_gain
 from station.diagnosis.runs.folds import fold_records, make_folds, validation_runs
 from station.diagnosis.honesty.doubt import alternatives, effective_terms, effect_interval, interval_method
 from station.diagnosis.runs.admission import refuse_repeated_runs, set_aside_beam_tests

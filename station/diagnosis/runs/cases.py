@@ -169,3 +169,37 @@ def simulate_case(case: RunCase, model) -> tuple[np.ndarray, np.ndarray]:
     """
     pred = case.run.simulate(model, sensors=False).prediction  # the sensors: decided over the runs, in the model
     return pred["theta"], pred["a"]
+
+
+def feeds_back_a(case: RunCase) -> bool:
+    """Whether the run's controller feeds the accelerometer back (Ga): its a then shapes the
+    loop, and no scale of the simulated a stands for another gain.
+
+    Parameters
+    ----------
+    case : RunCase
+
+    Returns
+    -------
+    bool
+    """
+    return getattr(case.controller, "ga", None) is not None
+
+
+def shown_effects(names, cases) -> list[str]:
+    """The effects the runs can show: an accelerometer's (``accel_*``) only where a run's a is
+    fitted (:attr:`station.diagnosis.runs.cases.RunCase.fits_a`) or fed back (:func:`feeds_back_a`).
+
+    Parameters
+    ----------
+    names : iterable of str
+        Effect names (DESIGN.md's vocabulary).
+    cases : sequence of RunCase
+
+    Returns
+    -------
+    list of str
+        ``names`` in their order, less those no run shows.
+    """
+    seen = any(c.fits_a or feeds_back_a(c) for c in cases)
+    return [n for n in names if seen or not n.startswith("accel_")]

@@ -41,7 +41,7 @@ from typing import NamedTuple
 import numpy as np
 
 from station.analysis.residuals import ACCEL_NOISE_STD, THETA_QUANTIZATION_STD, noise_std
-from station.diagnosis.runs.cases import RunCase, Simulator, simulate_case
+from station.diagnosis.runs.cases import RunCase, Simulator, feeds_back_a, simulate_case
 from station.signals import check_stop
 from station.errors import StationError
 
@@ -430,40 +430,6 @@ class Evaluator:
                     total += c.n * (math.log(j) + 1.0 if j >= 1.0 else j)
                     terms += c.n
         return math.exp(total / terms - 1.0) if terms else math.nan
-
-
-def feeds_back_a(case: RunCase) -> bool:
-    """Whether the run's controller feeds the accelerometer back (Ga): its a then shapes the
-    loop, and no scale of the simulated a stands for another gain.
-
-    Parameters
-    ----------
-    case : RunCase
-
-    Returns
-    -------
-    bool
-    """
-    return getattr(case.controller, "ga", None) is not None
-
-
-def shown_effects(names, cases) -> list[str]:
-    """The effects the runs can show: an accelerometer's (``accel_*``) only where a run's a is
-    fitted (:attr:`station.diagnosis.runs.cases.RunCase.fits_a`) or fed back (:func:`feeds_back_a`).
-
-    Parameters
-    ----------
-    names : iterable of str
-        Effect names (DESIGN.md's vocabulary).
-    cases : sequence of RunCase
-
-    Returns
-    -------
-    list of str
-        ``names`` in their order, less those no run shows.
-    """
-    seen = any(c.fits_a or feeds_back_a(c) for c in cases)
-    return [n for n in names if seen or not n.startswith("accel_")]
 
 
 def least_squares_scale(measured: np.ndarray, simulated: np.ndarray, bounds: tuple[float, float]) -> float:

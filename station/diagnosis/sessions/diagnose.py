@@ -14,7 +14,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from station.diagnosis.runs.cases import Simulator, keep_bias
-from station.diagnosis.runs.cost import IGNORED_SIGMA, Evaluator, calibrate_noise, pooled, rms_gain, shown_effects
+from station.diagnosis.runs.cases import shown_effects
+from station.diagnosis.runs.cost import IGNORED_SIGMA, Evaluator, calibrate_noise, pooled, rms_gain
 from station.diagnosis.runs.folds import LEAVE_ONE_OUT, make_folds
 from station.diagnosis.search.workbench import Bench, nominal_trial, workbench
 from station.diagnosis.sessions.drift import DriftResult, decide_drift, finite, select_structure, session_axes
