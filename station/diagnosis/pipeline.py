@@ -224,7 +224,7 @@ def _diagnose(runs, validate, model, progress, bench: Bench, simulate, likelihoo
         for c in cases:
             keep_bias(c)
     names = names + [n for n in faults.to_fit if n not in names]  # pointed at, not decided: fitted
-    notes += [f"{c.name}: {NO_A_COLUMN}" for c in cases if NO_A_COLUMN in c.notes]
+    notes += [f"{c.name}: {NO_A_COLUMN}" for c in cases if not c.a_logged]
     names = shown_effects(names, cases)
     folds, how = make_folds(n_fit, len(cases) - n_fit)
     scale = accel_scale(faults, cases)

@@ -50,7 +50,7 @@ def _run_report(ev: Evaluator, i: int, role: str, nominal: tuple, extended: tupl
     return RunReport(c.name, role, c.kind, c.alignment, np.asarray(d["t"]), np.asarray(d["u"]),
                      np.asarray(d["v"]), c.theta, c.a, nom, ext, fin, _fit_pct(c.theta, c.a, nom),
                      _fit_pct(c.theta, c.a, ext), rms_gain(rms_e, rms_n) if changed else 0.0, rb, ra, metrics,
-                     list(c.notes), c.run is None or c.run.has_column("a"))
+                     list(c.notes), c.a_logged)
 
 
 def model_predictions(ev: Evaluator, folds: Sequence[Fold], nominal: Mapping[int, tuple],

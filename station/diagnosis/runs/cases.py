@@ -64,10 +64,15 @@ class RunCase:
         return Path(self.path).name
 
     @property
+    def a_logged(self) -> bool:
+        """Whether its log has an a column (without one, ``a`` is zeros: :data:`NO_A_COLUMN`)."""
+        return self.run is None or self.run.has_column("a")
+
+    @property
     def fits_a(self) -> bool:
         """Whether its a is a tip acceleration a fit uses: the log has an a column and its audit
         finds a tip acceleration there (:attr:`station.logged.audit.Audit.accel_is_tip`)."""
-        return self.run is None or (self.run.has_column("a") and self.run.audit.accel_is_tip)
+        return self.a_logged and (self.run is None or self.run.audit.accel_is_tip)
 
     @property
     def kind(self) -> str:

@@ -297,7 +297,7 @@ def load_sessions(sessions: Sequence[SessionLogs], max_samples: int = SESSIONS_M
             seen[digest] = str(p)
             cases.append(case)
             say(f"read {s.name}: {Path(p).name} ({case.kind}, {case.n} samples)")
-            notes += [f"{s.name}: {case.name}: {NO_A_COLUMN}"] if NO_A_COLUMN in case.notes else []
+            notes += [] if case.a_logged else [f"{s.name}: {case.name}: {NO_A_COLUMN}"]
         kept, held = set_aside_beam_tests(cases)
         notes += [f"{s.name}: {n}" for n in held]
         if kept:
