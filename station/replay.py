@@ -296,7 +296,9 @@ def format_report(report: ReplayReport) -> str:
         own = (report.controller_spec or {}).get("recursion", "")
         if own in STORED and any(r for _, _, r in alts):  # beside laws on the other integer: its own said
             source = "; ".join(filter(None, (source, on_integer(own))))
-        lines.append(f"  controller: {report.controller}" + (f" ({source})" if source else "")
+        spec = report.controller_spec or {}
+        name = f"P, kp = {spec['kp']:g}" if spec.get("kind") == "p" and "kp" in spec else report.controller
+        lines.append(f"  controller: {name}" + (f" ({source})" if source else "")
                      + alternatives_phrase(alts, design.get("method", ""), design.get("more_alternatives", 0)))
     if report.max_abs_dv is not None:
         lines += ["  " + line for line in reproduction_lines(report.max_abs_dv, report.alignment, report.audit,

@@ -269,22 +269,66 @@ def test_a_command_in_volts_with_no_header_is_read_by_the_law_the_data_give(tmp_
     assert run.controller.spec["design"]["text"] == case.design_text
 
 
-@pytest.mark.parametrize("name, zero", [(THESIS[1], 128.0), (THESIS[1], -100.0), (LEAD_FLOAT, 128.0), (THESIS[0], 128.0)])
-def test_a_command_written_about_another_zero_is_read_about_zero(rig_data, tmp_path, name, zero):
-    """v written as an unsigned DAC code about its midpoint (128 of 8 bits): it reads that on
-    every row at rest, where no law commands anything, and the header's law reproduces every
-    row less it. Before, the P step so written was read as a law 2(s-9e-12)/(s-2e-13) that
-    "remembered the earlier rows" (its first row's 128 carried as memory), the header called a
-    lie; the lead step, past the DAC's range as written, as "v in another unit, its size not
-    found" and not reproduced (max |dv| = 128 counts)."""
-    src = rig_data / name
+LEAD_ACCEL = "step_response_Gth_comp_Ga_opt_amp_200_duration_1000_opt_case43_SLFR_RTP_Motor_Comp_Gth.txt"
+"""The thesis's lead + accelerometer step: Ga moves v by a's noise before the step."""
+
+
+def _about_zero(src, dst, zero, header=True):
+    """The rig's log with v (the fourth column) written about ``zero``, every digit kept; with
+    its header lines or without (the 2014 layout's bare rows)."""
     lines = src.read_text().splitlines()
     rows = [ln.split("\t") for ln in lines if ln and not ln.startswith("#")]
     for r in rows:
         r[3] = f"{float(r[3]) + zero:.17g}"
-    path = tmp_path / name
-    path.write_text("\n".join([ln for ln in lines if ln.startswith("#")] + ["\t".join(r) for r in rows]) + "\n")
-    run, clean = LoggedRun.from_path(path), LoggedRun.from_path(src)
+    dst.write_text("\n".join([ln for ln in lines if ln.startswith("#") and header] + ["\t".join(r) for r in rows])
+                   + "\n")
+    return dst
+
+
+@pytest.mark.parametrize("header", [True, False], ids=["header", "bare"])
+@pytest.mark.parametrize("name, zero", [(THESIS[1], 128.0), (THESIS[1], -100.0), (LEAD_FLOAT, 128.0), (THESIS[0], 128.0),
+                                        (LEAD_ACCEL, 128.0), (LEAD_ACCEL, 2048.0)])
+def test_a_command_written_about_another_zero_is_read_about_zero(rig_data, tmp_path, name, zero, header):
+    """v written as an unsigned DAC code about its midpoint (128 of 8 bits): it reads that at
+    rest, where no law commands anything (a law feeding a back: its noise's few counts about
+    it), and the log's law (the header's; with no header, the data's, from rest) reproduces
+    every row less it. Before, the P step so written was read as a law 2(s-9e-12)/(s-2e-13)
+    that "remembered the earlier rows" (its first row's 128 carried as memory), with a header
+    called a lie; the lead step, past the DAC's range as written, as "v in another unit, its size
+    not found" and not reproduced (max |dv| = 128 counts); the lead + accelerometer step, with
+    or without its header, so and as an encoder of 256 counts per revolution."""
+    src = rig_data / name
+    path = _about_zero(src, tmp_path / name, zero, header)
+    clean = LoggedRun.from_path(_about_zero(src, tmp_path / f"clean_{name}", 0.0, header))
+    run = LoggedRun.from_path(path)
     assert run.audit.lines()[0] == f"header: v in DAC counts about 0; data: v about {zero:g} counts"
-    assert run.source == clean.source == "header" and run.max_abs_dv == pytest.approx(clean.max_abs_dv, abs=1e-9)
+    assert len(run.audit.lines()) == len(clean.audit.lines()) + 1
+    assert run.source == clean.source == ("header" if header else "inferred")
+    assert run.max_abs_dv == pytest.approx(clean.max_abs_dv, abs=1e-6)  # v + c - c: a float's last bits
     assert replay(path).fit_pct == replay(src).fit_pct
+
+
+@pytest.mark.parametrize("case, seed", [("v_zero", 0), ("v_zero", 1), ("v_zero", 2), ("v_zero", 3), ("v_zero", 6),
+                                        ("v_zero+coulomb_friction", 5), ("v_zero+coulomb_friction", 27)])
+def test_blind_a_command_written_about_a_dac_codes_midpoint(tmp_path, case, seed):
+    """The independent generator's P and leads under a true header, none (the 2014 layout) or
+    the lab's session's open-loop one, whose v a script wrote as an unsigned DAC code about its
+    midpoint (128, 2048, 32768). The zero said exactly and the law confirmed on v less it; with
+    no header or an open-loop one, the law the data give from rest (before: a law carrying the
+    zero as the memory of a "cut" run, or none); with a lead printed to 8 digits (seed 27), its
+    coefficients completed from the data as they are for v about 0 (before: "not this law",
+    max |dv| = 129 counts)."""
+    import tests.blind.audit as blind
+
+    path, hidden = blind.write_audit_case(tmp_path, case, seed)
+    run = LoggedRun.from_path(path)
+    zeros = [c.data for c in run.audit.claims if c.header == "v in DAC counts about 0"]
+    assert zeros == [f"v about {hidden.v_zero:g} counts"]
+    lied = [c for c in run.audit.claims if c.claim == "controller" and c.verdict == "contradicted"]
+    assert bool(lied) is hidden.lies is (hidden.header == "open-loop")
+    assert run.source == {"none": "inferred", "open-loop": "inferred (header contradicted)"}.get(hidden.header, "header")
+    assert run.reproduced
+    assert run.alignment == hidden.alignment or hidden.alignment in run.identified.alignments
+    if hidden.header in ("none", "open-loop"):
+        np.testing.assert_allclose(run.controller.spec["design"]["num_s"], hidden.num_s, rtol=1e-9)
+        np.testing.assert_allclose(run.controller.spec["design"]["den_s"], hidden.den_s, rtol=1e-9)

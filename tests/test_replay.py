@@ -16,7 +16,7 @@ from station.logged import LoggedRun
 from station.protocol import PROTOCOLS
 from station.control.rerun import detect_alignment, replay_commands
 from station.logged import rig_controller
-from station.replay import replay
+from station.replay import format_report, replay
 from station.runlog import RunLogWriter, read_log
 from station.runlog.timebase import restart_rows
 
@@ -38,6 +38,9 @@ def test_rig_closed_loop_logs_reproduce(rig_data, name, controller, kp):
     assert r.alignment == 1
     assert r.max_abs_dv < 1e-6
     assert r.reproduced
+    # the report names a P law by its gain (it printed "controller: p (named by the log)")
+    line = next(x for x in format_report(r).splitlines() if x.startswith("  controller: "))
+    assert line == ("  controller: " + (f"P, kp = {kp:g}" if kp is not None else controller) + " (named by the log)")
 
 
 def test_ol_pulse_is_v_equals_u(rig_data):

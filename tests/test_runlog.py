@@ -138,6 +138,18 @@ def test_non_number_names_the_column(tmp_path):
         read_log(path)
 
 
+def test_a_decimal_comma_is_named(rig_data, tmp_path):
+    """A lab whose locale writes decimal commas (LabVIEW, Excel in much of Europe): the first
+    such field named, and why, in one line (before: only "got '0,002'")."""
+    src = rig_data / "SFLR_P_control_step_kp_2_SLFR_RTP_P_control_kp=2.0.txt"
+    path = tmp_path / "comma.txt"
+    path.write_text("".join(ln if ln.startswith("#") else ln.replace(".", ",")
+                            for ln in src.read_text().splitlines(keepends=True)))
+    with pytest.raises(RunLogError, match=r"line 5: expected a number in column 't', got '0,002' "
+                                          r"\(a decimal comma: the log must be written with '\.' decimals\)$"):
+        read_log(path)
+
+
 def test_not_a_log(tmp_path):
     path = tmp_path / "x.txt"
     path.write_text("hello\n1 2 3\n")

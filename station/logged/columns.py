@@ -43,8 +43,8 @@ from station.analysis.header_law import NEAR_COUNTS
 from station.analysis.law_rows import TOLERANCE, no_dac_command, pins_a_law
 from station.errors import StationError
 from station.logged.audit import AuditClaim, count_step, in_counts, quantum_fits
-from station.logged.controller import (NO_LAW, ControllerId, header_law_dv, header_reproduces,
-                                       identify_controller)
+from station.logged.controller import (NO_LAW, ControllerId, describe_controller, header_law_dv,
+                                       header_reproduces, identify_controller)
 from station.logged.sensor_evidence import cosine_ratio
 from station.logged.units import whole_counts
 from station.rig import DAC_LIMIT
@@ -184,7 +184,7 @@ def check_columns(log: RunLog, skipped=None) -> Columns:
     as_named = header_law_dv(log, skipped)
     if unit is None and as_named is not None and as_named <= TOLERANCE:
         return Columns((), log)
-    named = as_named > TOLERANCE if as_named is not None else header_reproduces(log, skipped) is False
+    named = as_named > TOLERANCE if as_named is not None else header_reproduces(log, skipped) is not True
     offset = check_command_offset(log, skipped) if named else None
     if offset is not None:  # (past the DAC's range as written: about its zero, in counts)
         return offset
@@ -384,11 +384,13 @@ def check_command_unit(log: RunLog, skipped=None) -> Columns | None:
 
 
 def check_command_offset(log: RunLog, skipped=None) -> Columns | None:
-    """The command's zero checked by its rest and the header's law: a v that reads one value c
-    other than 0 on every row before the first command (u and θ unchanged: no law commands
-    anything there) and whose every row less c the header's law reproduces (a closed loop's, or
-    an open loop's v = u) was written about another zero (an unsigned DAC code about its
-    midpoint, 128 of 8 bits).
+    """The command's zero checked by its rest and the log's law: a v that reads one value c
+    other than 0 before the first command (u and θ unchanged: no law commands anything there but
+    an accelerometer feedback on a's noise; c is v's first row or its median there, whole) and
+    whose every row less c the header's law reproduces (a closed loop's, or an open loop's
+    v = u; with no law named, or an open loop the data contradict, the law the data give, from
+    rest, where v as written has none or one only with its first rows of memory as logged) was written about another zero (an
+    unsigned DAC code about its midpoint, 128 of 8 bits).
 
     Parameters
     ----------
@@ -399,27 +401,64 @@ def check_command_offset(log: RunLog, skipped=None) -> Columns | None:
     Returns
     -------
     Columns or None
-        The log with c taken off v and a contradicted "columns" claim; None otherwise (no law
-        named, fewer than :data:`REST_ROWS` rows at rest, v 0 there, or the law reproduces
-        neither).
+        The log with c taken off v and a contradicted "columns" claim; None otherwise (fewer
+        than :data:`REST_ROWS` rows at rest, v 0 there, or no law reproduces v less c).
     """
     u, theta, v = (np.asarray(log.data[c], dtype=float) for c in ("u", "theta", "v"))
-    moved = np.flatnonzero((u != u[0]) | (theta != theta[0]) | (v != v[0]))
+    moved = np.flatnonzero((u != u[0]) | (theta != theta[0]))
     rest = int(moved[0]) if moved.size else v.size
-    c = float(v[0])
-    if rest < REST_ROWS or c == 0 or u[0] != 0 or not np.isfinite(c):
+    if rest < REST_ROWS or u[0] != 0 or not np.all(np.isfinite(v[:rest])):
         return None
+    # one whole value at rest (a DAC code); a law feeding a back moves v about it by a's noise there (Ga)
+    zeros = {float(z) for z in (v[0], np.round(np.median(v[:rest]))) if z == np.round(z)} - {0.0}
+    for c in sorted(zeros, key=lambda z: abs(z - v[0])):
+        found = _offset_taken_off(log, skipped, v, c, rest)
+        if found is not None:
+            return found
+    return None
+
+
+def _offset_taken_off(log: RunLog, skipped, v: np.ndarray, c: float, rest: int) -> Columns | None:
+    """:func:`check_command_offset` for one zero c."""
     trial = dataclasses.replace(log, data={**log.data, "v": v - c})
-    dv = header_law_dv(trial, skipped)  # None: an open-loop header's v = u
-    if not (header_reproduces(trial, skipped) if dv is None else dv <= TOLERANCE):
-        return None
+    dv = header_law_dv(trial, skipped)  # None: an open-loop header's v = u, or none named
+    whose = "the header's law"
+    if dv is None and header_reproduces(trial, skipped) is not True:  # none named, or an open loop's v = u contradicted
+        whose, dv = _data_law_from_rest(log, trial, skipped)
+        if dv is None:
+            return None
+    elif dv is not None and dv > TOLERANCE:  # printed coefficients: completed from the data, as unshifted
+        if not _law_confirms(trial, skipped):
+            return None
+        whose, dv = "the header's law (its printed coefficients completed from the data)", None
+    within = "" if dv is None else f" (to {dv:.2g} counts)"
     claim = AuditClaim(
         "columns", "v in DAC counts about 0", f"v about {c:g} counts", "contradicted",
         f"v reads {c:g} on the {rest} rows at rest before the first command (u and θ unchanged: no law commands "
-        f"anything there), and the header's law reproduces every logged v less {c:g} (to {dv or 0:.2g} counts): a "
+        f"anything there but a's noise), and {whose} reproduces every logged v less {c:g}{within}: a "
         f"command written about another zero (an unsigned DAC code about its midpoint)")
     return Columns((claim,), dataclasses.replace(trial, notes=list(log.notes) + [f"v about {c:g} counts (the "
                                                                                  f"audit): {c:g} taken off"]))
+
+
+def _data_law_from_rest(log: RunLog, trial: RunLog, skipped) -> tuple[str, float | None]:
+    """With no law named (or an open loop's v = u the data contradict, less c as well): the law
+    the data give reproducing ``trial`` (v less its rest value)
+    from rest, where on ``log`` as written none does, or one does only with its first rows of
+    memory taken as logged (an integrator carrying the rest value: a copy "cut from a longer
+    run" whose hub rested under a command of many counts); (its text, max |dv|) or (, None).
+    A law from rest on u and θ of 0 gives 0 there, so v as written, c there, needs no search."""
+    try:
+        found = identify_controller(trial, skipped)
+        if found.fit is None or found.cut or found.judged_to is not None or found.fit.max_abs_dv > TOLERANCE:
+            return "", None
+        if log.data["theta"][0] != 0:  # a P law's -kp·θ at rest is one value too
+            as_written = identify_controller(log, skipped)
+            if as_written.fit is not None and not as_written.cut:
+                return "", None
+    except StationError:
+        return "", None
+    return f"the law the data give ({describe_controller(found.controller)})", float(found.fit.max_abs_dv)
 
 
 def _unknown_unit(log: RunLog, why: str, detail: str, small: bool) -> Columns:

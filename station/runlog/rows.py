@@ -67,7 +67,9 @@ def parse_row(line: str, names: list[str], sep: str | None) -> tuple[list[float]
         return [float(p) for p in parts], None
     except ValueError:
         bad = next(j for j, p in enumerate(parts) if not is_number(p))
-        return None, f"expected a number in column {names[bad]!r}, got {parts[bad]!r}"
+        comma = sep != "," and is_number(parts[bad].replace(",", ".", 1))
+        return None, (f"expected a number in column {names[bad]!r}, got {parts[bad]!r}"
+                      + (" (a decimal comma: the log must be written with '.' decimals)" if comma else ""))
 
 
 MAX_LINE = 1_000_000

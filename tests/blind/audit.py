@@ -48,7 +48,9 @@ and v swapped, or, on the float, every number printed to 5 or 6 digits); "lie:sw
 header that lies (a P header's kp over another gain, or the thesis's lead printed over another
 pole) with u and v, or θ and a, written in each other's place; "pair": two column faults at once under
 a true header (a P, or a lead on the stored integer) or none: two columns swapped and θ negated, or
-(under a true header) two columns swapped and v written in volts. A class joined with "+" to
+(under a true header) two columns swapped and v written in volts; "v_zero": a true header (a P, or a
+lead on the stored integer), none, or the lab's session's open-loop one over a log whose v a
+script wrote as an unsigned DAC code about its midpoint (128, 2048 or 32768: 8, 12 or 16 bits). A class joined with "+" to
 "coulomb_friction" hides that friction too (drawn as :func:`tests.blind.cases.draw` draws it).
 """
 
@@ -71,7 +73,8 @@ N = 2000
 
 CLASSES = ("lie:open_loop", "lie:p_kp", "lie:lead_pole", "lie:accel_fb", "int:trunc_d0", "int:trunc_d1",
            "int:round_d0", "int:round_d1", "session", "lie:sent", "lie:accel_int", "honest:p", "honest:lead_int",
-           "honest:lead_sent", "words", "swap", "rows", "a_unit", "v_unit", "printed", "sign", "double", "lie:swap", "pair")
+           "honest:lead_sent", "words", "swap", "rows", "a_unit", "v_unit", "printed", "sign", "double", "lie:swap", "pair",
+           "v_zero")
 """The audit's blind classes, in the validation table's order."""
 
 PHYSICAL = ("coulomb_friction",)
@@ -94,6 +97,9 @@ per m/s²; a 3.3 V 12-bit converter's mV)."""
 
 V_UNITS = {"V of ±5 V, 12 bits": 5.0 / 2048, "V of ±10 V, 16 bits": 10.0 / 32768}
 """One DAC count in the volts the "v_unit" class writes v in."""
+
+V_ZEROS = (128.0, 2048.0, 32768.0)
+"""The zeros the "v_zero" class writes v about: an unsigned 8-, 12- or 16-bit DAC code's midpoint."""
 
 GA_GAINS = (0.5, 0.75, 1.0, 1.5)
 GA_FREQUENCIES = (0.7, 1.0, 1.4)
@@ -145,6 +151,8 @@ class AuditCase:
         The significant digits every number is printed to ("printed"), else None (in full).
     negate : bool
         Whether θ is written with the other sign than the loop fed back ("sign").
+    v_zero : float or None
+        The zero v is written about (:data:`V_ZEROS`, "v_zero"), else None (about 0).
     """
 
     name: str
@@ -170,11 +178,12 @@ class AuditCase:
     v_unit: str | None = None
     digits: int | None = None
     negate: bool = False
+    v_zero: float | None = None
 
     @property
     def lies(self) -> bool:
         """Whether the header names another controller than the data's."""
-        if self.name.startswith(("printed", "sign", "double")):
+        if self.name.startswith(("printed", "sign", "double", "v_zero")):
             return self.header == "open-loop"
         return self.name.split("+")[0] in ("lie:open_loop", "lie:p_kp", "lie:lead_pole", "lie:accel_fb", "session", "lie:sent",
                                               "lie:accel_int", "lie:swap")
@@ -312,6 +321,12 @@ def draw_case(name: str, seed: int) -> AuditCase:
                              alignment=int(rng.integers(0, 2)), header="p", v_unit=unit, swap=pair)
         return AuditCase(**common, **lead, recursion=str(rng.choice(["trunc", "round"])),
                          alignment=int(rng.integers(0, 2)), header="lead", v_unit=unit, swap=pair)
+    if base == "v_zero":  # v written as an unsigned DAC code, about its midpoint
+        zero = float(rng.choice(V_ZEROS))
+        if rng.random() < 0.25:  # so written by the lab's session (an open-loop header on a lead on the integer)
+            return AuditCase(**common, **lead, recursion="trunc", alignment=int(rng.integers(0, 2)),
+                             header="open-loop", v_zero=zero)
+        return _true_or_no_header(rng, common, p_law, lead, kp, v_zero=zero)
     if base == "words":
         if rng.random() < 0.5:
             return AuditCase(**{**common, "header_kp": kp}, **p_law, recursion="trunc",
@@ -496,6 +511,8 @@ def write_audit_case(folder: Path, name: str, seed: int) -> tuple[Path, AuditCas
         sim = dataclasses.replace(sim, a=np.array([float(f"{x:.7g}") for x in sim.a * A_UNITS[case.a_unit]]))
     if case.v_unit is not None:
         sim = dataclasses.replace(sim, v=np.array([float(f"{x:.7g}") for x in sim.v * V_UNITS[case.v_unit]]))
+    if case.v_zero is not None:
+        sim = dataclasses.replace(sim, v=np.asarray(sim.v, dtype=float) + case.v_zero)
     if case.negate:  # a script that wrote the loop's angle with the other sign
         sim = dataclasses.replace(sim, theta=-np.asarray(sim.theta, dtype=float))
     if case.swap:
