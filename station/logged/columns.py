@@ -422,11 +422,12 @@ def _offset_taken_off(log: RunLog, skipped, v: np.ndarray, c: float, rest: int) 
     """:func:`check_command_offset` for one zero c."""
     trial = dataclasses.replace(log, data={**log.data, "v": v - c})
     dv = header_law_dv(trial, skipped)  # None: an open-loop header's v = u, or none named
-    whose = "the header's law"
+    whose, found = "the header's law", None
     if dv is None and header_reproduces(trial, skipped) is not True:  # none named, or an open loop's v = u contradicted
-        whose, dv = _data_law_from_rest(log, trial, skipped)
-        if dv is None:
+        found = _data_law_from_rest(log, trial, skipped)
+        if found is None:
             return None
+        whose, dv = f"the law the data give ({describe_controller(found.controller)})", float(found.fit.max_abs_dv)
     elif dv is not None and dv > TOLERANCE:  # printed coefficients: completed from the data, as unshifted
         if not _law_confirms(trial, skipped):
             return None
@@ -438,27 +439,28 @@ def _offset_taken_off(log: RunLog, skipped, v: np.ndarray, c: float, rest: int) 
         f"anything there but a's noise), and {whose} reproduces every logged v less {c:g}{within}: a "
         f"command written about another zero (an unsigned DAC code about its midpoint)")
     return Columns((claim,), dataclasses.replace(trial, notes=list(log.notes) + [f"v about {c:g} counts (the "
-                                                                                 f"audit): {c:g} taken off"]))
+                                                                                 f"audit): {c:g} taken off"]), found)
 
 
-def _data_law_from_rest(log: RunLog, trial: RunLog, skipped) -> tuple[str, float | None]:
+def _data_law_from_rest(log: RunLog, trial: RunLog, skipped) -> ControllerId | None:
     """With no law named (or an open loop's v = u the data contradict, less c as well): the law
     the data give reproducing ``trial`` (v less its rest value)
     from rest, where on ``log`` as written none does, or one does only with its first rows of
     memory taken as logged (an integrator carrying the rest value: a copy "cut from a longer
-    run" whose hub rested under a command of many counts); (its text, max |dv|) or (, None).
+    run" whose hub rested under a command of many counts); that law (kept: the log's controller,
+    not identified twice), or None.
     A law from rest on u and θ of 0 gives 0 there, so v as written, c there, needs no search."""
     try:
         found = identify_controller(trial, skipped)
         if found.fit is None or found.cut or found.judged_to is not None or found.fit.max_abs_dv > TOLERANCE:
-            return "", None
+            return None
         if log.data["theta"][0] != 0:  # a P law's -kp·θ at rest is one value too
             as_written = identify_controller(log, skipped)
             if as_written.fit is not None and not as_written.cut:
-                return "", None
+                return None
     except StationError:
-        return "", None
-    return f"the law the data give ({describe_controller(found.controller)})", float(found.fit.max_abs_dv)
+        return None
+    return found
 
 
 def _unknown_unit(log: RunLog, why: str, detail: str, small: bool) -> Columns:
