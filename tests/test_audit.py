@@ -481,12 +481,13 @@ def test_a_true_header_over_missing_or_repeated_rows_is_not_contradicted(rig_dat
 
 
 @pytest.mark.parametrize("name", [RIG_LOGS[0], RIG_LOGS[1], RIG_LOGS[4], RIG_LOGS[3]])
-@pytest.mark.parametrize("cut", ["drop", "repeat"])
+@pytest.mark.parametrize("cut", ["drop", "repeat", "swap"])
 def test_rows_missing_or_repeated_are_simulated_on_their_ticks(rig_data, tmp_path, name, cut):
-    # Rows lost (or written twice) while the hub moves: the model runs on every tick and is
-    # compared at the rows there are, so at each kept row it predicts what it predicts on the
-    # whole log (independent truth: the log before the cut). Before: the rows were taken as
-    # consecutive ticks, the model 15 ticks ahead of the log after the gap.
+    # Rows lost (or written twice, or two blocks written in the wrong order) while the hub
+    # moves: the model runs on every tick and is compared at the rows there are, so at each kept
+    # row it predicts what it predicts on the whole log (independent truth: the log before the
+    # cut), and the note names what n did. Before: the rows were taken as consecutive ticks, the
+    # model 15 ticks ahead of the log after the gap; rows out of order were said as "(n jumps: )".
     src = rig_data / name
     whole = LoggedRun.from_path(src)
     u, v = whole.data["u"], whole.data["v"]
@@ -497,14 +498,16 @@ def test_rows_missing_or_repeated_are_simulated_on_their_ticks(rig_data, tmp_pat
     lines = src.read_text().splitlines()
     head = [x for x in lines if x.startswith("#")]
     rows = lines[len(head):]
-    kept = np.r_[0:start, start + 15:len(rows)] if cut == "drop" else np.r_[0:start, start - 5:start, start:len(rows)]
+    kept = {"drop": np.r_[0:start, start + 15:len(rows)], "repeat": np.r_[0:start, start - 5:start, start:len(rows)],
+            "swap": np.r_[0:start, start + 5:start + 10, start:start + 5, start + 10:len(rows)]}[cut]
     path = tmp_path / src.name
     path.write_text("\n".join(head + [rows[k] for k in kept]) + "\n")
     run = LoggedRun.from_path(path)
     assert run.source == whole.source and run.alignment == whole.alignment
     model = load_model("rig")
     sim, truth = run.simulate(model), whole.simulate(model)
-    assert "on the log's ticks (n jumps: " in sim.how
+    said = {"drop": "15 tick(s) missing", "repeat": "5 row(s) repeating a tick", "swap": "5 row(s) out of order"}[cut]
+    assert f"on the log's ticks (n jumps: {said}" in sim.how, sim.how
     for key in ("theta", "a", "v", "t"):
         np.testing.assert_array_equal(sim.prediction[key], truth.prediction[key][kept], err_msg=key)
     np.testing.assert_array_equal(sim.theta_measured, truth.theta_measured[kept])

@@ -276,7 +276,8 @@ class LoggedRun:
         there (:func:`station.logged.start.start_claims`)."""
         d = self.data
         return start_claims(d["theta"], d["a"], d["u"], d["v"], self.dt, self.closed, self.accel_is_tip,
-                            self.identified.cut, self.sensors.effects.get("accel_gain", 1.0))
+                            self.identified.cut, self.sensors.effects.get("accel_gain", 1.0),
+                            self.sensors.effects.get("encoder_scale", 1.0))
 
     @property
     def audit_lines(self) -> list[str]:

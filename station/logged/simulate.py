@@ -229,13 +229,18 @@ def simulate_log(log: RunLog, controller, alignment: int | None, model, ticks=FR
         how = f"the log's controller and reference, alignment {d}, commands quantized as the device did ({command})"
         if theta0 != 0.0:
             pred = pred._replace(u=np.asarray(u, float), theta=pred.theta + theta0, theta_d_hat=pred.theta_d_hat + theta0)
-            how += f", from rest at θ = {theta0:g} (the log's first θ: the encoder was not zeroed)"
+            how += (f", from rest at θ = {theta0:g} (the log's first θ: an encoder not zeroed, or where a copy cut "
+                    f"from a longer run starts; the audit says which)")
     if ticks is not None:
         missing = int(ticks.max()) + 1 - np.unique(ticks).size
         repeated = int(ticks.size - np.unique(ticks).size)
         pred = type(pred)(*(np.asarray(x)[ticks] for x in pred))
         said = [f"{missing} tick(s) missing (the row before's u and v held there)"] if missing else []
         said += [f"{repeated} row(s) repeating a tick"] if repeated else []
+        first = np.zeros(ticks.size, bool)
+        first[np.unique(ticks, return_index=True)[1]] = True
+        late = int(np.count_nonzero(first[1:] & (ticks[1:] < np.maximum.accumulate(ticks)[:-1])))
+        said += [f"{late} row(s) out of order (each compared at its own tick)"] if late else []
         how += f"; on the log's ticks (n jumps: {', '.join(said)})"
     theta = compared_theta(data["theta"], closed)
     part = None if closed or not theta.size else parting(data["t"], theta, pred["theta"])

@@ -21,6 +21,21 @@ START_WINDOW_S = 0.05
 START_MIN_ROWS = 3
 """Fewest rows of the start window (a command from row 0 cannot move the hub sooner)."""
 
+EARLY_COMMAND = 100.0
+"""A command, DAC counts, after which the rig's hub at rest moves its first encoder count
+:data:`FIRST_COUNT_ROWS` rows later (the thesis's P step: its command of 100 logged at row 50,
+θ's first count at row 53; the lead step's 200 at row 10, its count at row 12). From rest the
+angle grows as the command times t²: under v, sqrt(100/|v|) times as many rows, and on an
+encoder of s times the counts 1/sqrt(s) as many."""
+
+FIRST_COUNT_ROWS = 3.0
+"""Rows from a command of :data:`EARLY_COMMAND` to the hub's first count, from rest."""
+
+EARLY_SHARE = 0.7
+"""θ's first count before this share of the rows a hub at rest needs (:func:`earliest_count_row`)
+is an earlier motion: half the acceleration's margin (0.7² ≈ 0.5) for a rig stronger or
+lighter than the rig's."""
+
 ACCEL_QUIET_COUNTS = 8.0
 """Largest peak-to-peak of a over the start window of a run at rest, counts (noise 0.3 std;
 a beam ringing from an earlier motion swings tens of counts)."""
@@ -51,6 +66,31 @@ class Start:
     theta0: float
 
 
+def earliest_count_row(v, encoder_scale: float = 1.0) -> float:
+    """The soonest row a hub at rest at row 0 can move its first encoder count under the commands
+    ``v`` (those logged before that row): :data:`EARLY_SHARE` of :data:`FIRST_COUNT_ROWS`
+    under :data:`EARLY_COMMAND`, sqrt(EARLY_COMMAND / max |v|) times as many under another
+    (the angle from rest grows as the command times t²), 1/sqrt(|encoder_scale|) as many on
+    a finer encoder: 2.1 rows under 100, 1.5 under 200, 3.8 under 30.
+
+    Parameters
+    ----------
+    v : array_like, shape (K,)
+        Commands, DAC counts (NaN where not logged: taken as :data:`EARLY_COMMAND`).
+    encoder_scale : float, default 1.0
+
+    Returns
+    -------
+    float
+        Rows; ``inf`` under commands of 0 (no command moves the hub).
+    """
+    v = np.asarray(v, float)
+    top = float(np.max(np.abs(v))) if v.size and np.all(np.isfinite(v)) else EARLY_COMMAND
+    if top == 0.0:
+        return np.inf
+    return EARLY_SHARE * FIRST_COUNT_ROWS * np.sqrt(EARLY_COMMAND / top / max(abs(encoder_scale), 1e-9))
+
+
 def start_window(u, v) -> int:
     """Rows at the start under the run's first command: before u or v first changes from
     row 0's value, at most :data:`START_WINDOW_S` (0.05 s at the rig's rate: 25 rows).
@@ -74,14 +114,15 @@ def start_window(u, v) -> int:
 
 
 def start_claims(theta, a, u, v, dt: float, closed: bool, accel_is_tip: bool, remembered: bool = False,
-                 accel_gain: float = 1.0) -> Start:
+                 accel_gain: float = 1.0, encoder_scale: float = 1.0) -> Start:
     """Check that the run starts at rest at t = 0, and where θ's zero is.
 
     Under the first command (:func:`start_window`, :data:`START_WINDOW_S` at most) a hub at rest
     stays on one count and the accelerometer reads noise (peak-to-peak at most
-    :data:`ACCEL_QUIET_COUNTS`): θ changing there while the command is 0, or within the first
-    :data:`START_MIN_ROWS` rows (no command moves the hub a count that soon: on the rig's logs
-    4 rows after a command of 100), or a swinging, is an earlier motion still going on (a copy cut from a longer run, t re-zeroed): "reference"
+    :data:`ACCEL_QUIET_COUNTS`): θ changing there while the command is 0, or sooner than the
+    commands before it could move a hub at rest a count (:func:`earliest_count_row`: a copy
+    cut 50 rows after the thesis's P step moves a count at row 3 under a command of 30, which
+    needs 5.5), or a swinging before the first command of a count, is an earlier motion still going on (a copy cut from a longer run, t re-zeroed): "reference"
     contradicted (the model starts at rest: the start of its fit is that motion's). A start at
     rest off θ = 0 (the encoder not zeroed) contradicts a closed loop's zero ("columns": the
     loop's error was u - θ from that θ, and the model starts there); in open loop θ is compared
@@ -106,6 +147,9 @@ def start_claims(theta, a, u, v, dt: float, closed: bool, accel_is_tip: bool, re
         its noise at rest is that many times the rig's, and so is the quiet peak-to-peak (an
         accelerometer at 6x the model's a swung 18 counts at rest over the thesis's lead step's
         first 10 rows).
+    encoder_scale : float, default 1.0
+        Measured / modelled encoder counts decided from the data (a 4096-count encoder: 4):
+        its first count comes sooner (:func:`earliest_count_row`).
 
     Returns
     -------
@@ -121,10 +165,20 @@ def start_claims(theta, a, u, v, dt: float, closed: bool, accel_is_tip: bool, re
     th0 = float(theta[0])
     still = bool(np.all(theta[:w] == th0))
     quiet = ACCEL_QUIET_COUNTS * max(1.0, abs(accel_gain))
-    swing = (float(np.ptp(a[1:w])) if accel_is_tip and w > 2 and np.all(np.isfinite(a[1:w])) else 0.0)
+    # a's swing counts before the first command of a count or more: a command swings the beam at once
+    commanded = (np.flatnonzero(np.abs(v[:w]) >= 1.0) if v.size >= w and np.all(np.isfinite(v[:w]))
+                 else np.array([], int))
+    z = int(commanded[0]) if commanded.size else w
+    swing = (float(np.ptp(a[1:z])) if accel_is_tip and z > 2 and np.all(np.isfinite(a[1:z])) else 0.0)
     idle = v.size >= w and np.all(np.isfinite(v[:w])) and np.all(v[:w] == 0)
     span = f"the first {w} rows ({w * dt:g} s, before the command first changes)"
-    early = not np.all(theta[:START_MIN_ROWS] == th0)  # sooner than any command of row 0 moves the hub
+    moved = np.flatnonzero(theta[:max(w, cap)] != th0)
+    first = int(moved[0]) if moved.size else None
+    soonest = None if first is None else earliest_count_row(v[:first], encoder_scale)
+    early = first is not None and first < soonest  # sooner than the commands before it move a hub at rest
+    if early and first >= w:  # the window ends at the command's first change: θ's first count after it
+        w, still = first + 1, False
+        span = f"the first {w} rows ({w * dt:g} s)"
     claims = []
     if remembered and still and swing <= quiet:
         claims.append(AuditClaim(
@@ -135,8 +189,9 @@ def start_claims(theta, a, u, v, dt: float, closed: bool, accel_is_tip: bool, re
     elif (not still and (idle or early)) or swing > quiet:
         what = []
         if not still:
-            what.append(f"θ moves {np.ptp(theta[:w]):g} counts" + (f" (within its first {START_MIN_ROWS} rows: sooner "
-                                                                    f"than a command moves the hub)" if early else ""))
+            what.append(f"θ moves {np.ptp(theta[:w]):g} counts" + (
+                f" (its first count at row {first}: a hub at rest under commands up to "
+                f"{np.max(np.abs(v[:first]), initial=0.0):g} moves one no sooner than row {soonest:.2g})" if early else ""))
         if swing > quiet:
             what.append(f"a swings {swing:g} counts")
         claims.append(AuditClaim(
