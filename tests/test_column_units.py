@@ -332,3 +332,75 @@ def test_blind_a_command_written_about_a_dac_codes_midpoint(tmp_path, case, seed
     if hidden.header in ("none", "open-loop"):
         np.testing.assert_allclose(run.controller.spec["design"]["num_s"], hidden.num_s, rtol=1e-9)
         np.testing.assert_allclose(run.controller.spec["design"]["den_s"], hidden.den_s, rtol=1e-9)
+
+
+COUNT_IN = {"degrees": 360.0 / 1024, "radians": 2.0 * np.pi / 1024}
+"""One encoder count of 1024/rev in each unit a script may write the reference in."""
+
+SWEEP_2014 = "swept_sine_kp_1_amp_50.txt"
+BARE_2014 = "without_accel_01_28_14_test_2.txt"
+SWEEP_2009 = "2009/swept_sine_no_sat_amp=25_stopn=20000_test_1_SLFR_RTP_P_control_kp=1.0.txt"
+
+
+def _u_in(src, dst, unit, digits=17):
+    """The rig's log with u written in ``unit`` to ``digits`` significant digits (u is the third
+    column of the ``#`` layout, the second of the 2014 one)."""
+    lines = src.read_text().splitlines()
+    col = 1 if not lines[0].startswith("#") else 2
+    out = []
+    for ln in lines:
+        if ln.startswith("#") or not ln[:1].isdigit():
+            out.append(ln)
+            continue
+        r = ln.split("\t")
+        r[col] = f"{float(r[col]) * COUNT_IN[unit]:.{digits}g}"
+        out.append("\t".join(r))
+    dst.write_text("\n".join(out) + "\n")
+    return dst
+
+
+@pytest.mark.parametrize("unit", COUNT_IN)
+@pytest.mark.parametrize("name, digits", [(THESIS[1], 17), (THESIS[1], 6), (LEAD_FLOAT, 17), (LEAD_ACCEL, 17),
+                                          (SWEEP_2014, 17), (BARE_2014, 17), (SWEEP_2009, 17)])
+def test_a_reference_written_in_degrees_or_radians_is_read_back_in_counts(rig_data, tmp_path, unit, name, digits):
+    """The loop's law acts on u − θ: with u in degrees (or radians) and θ in counts it weighs one
+    unit of u as 2.84 (163) counts, and reproduces every logged v with u read back in counts
+    (a step's counts printed to 6 digits, 17.5781, rounded back to 50). Before: the P step so
+    written gave "not this law (max |dv| = 64.8 counts); no law found", an overshoot of 252.71 %
+    of a 17.6-count step and a θ fit of −125 %; the sweeps "not this law" or no law at all."""
+    src = rig_data / name
+    path = _u_in(src, tmp_path / name.replace("/", "_"), unit, digits)
+    clean, run = LoggedRun.from_path(src), LoggedRun.from_path(path)
+    assert not any(c.header == "u in encoder counts" for c in clean.audit.claims)  # the rig's own: counts
+    assert run.audit.lines()[0] == f"header: u in encoder counts; data: u in {unit}"
+    assert len(run.audit.lines()) == len(clean.audit.lines()) + 1
+    assert run.source == clean.source and run.reproduced and run.alignment == clean.alignment
+    assert run.controller.spec == clean.controller.spec
+    np.testing.assert_allclose(run.data["u"], clean.data["u"], rtol=0, atol=1e-9)
+    if name in (THESIS[1], LEAD_ACCEL):
+        assert replay(path).fit_pct == replay(src).fit_pct
+
+
+@pytest.mark.parametrize("case, seed", [("session", 0), ("session", 3), ("lie:p_kp", 1), ("int:trunc_d1", 2),
+                                        ("lie:accel_fb", 0)])
+def test_blind_a_reference_written_in_degrees(tmp_path, case, seed):
+    """The independent generator's laws (the lab's session under its open-loop header, a P
+    header of another gain, a lead on the stored integer with no header, a lead with Ga under
+    an open-loop one), their u written in degrees: the unit said, and the law the log's own
+    audit finds with u in counts found again, the header's lie too (a P header of kp = 2 over
+    0.5 and u in degrees, before: "not this law (max |dv| = 42.2 counts); no law found")."""
+    import dataclasses
+
+    import tests.blind.audit as blind
+
+    drawn = blind.draw_case(case, seed)
+    sim = blind.simulate_audit_case(drawn, seed)
+    counts = tmp_path / "counts.txt"
+    counts.write_text(blind.format_audit_run(drawn, sim))
+    path = tmp_path / "degrees.txt"
+    path.write_text(blind.format_audit_run(drawn, dataclasses.replace(sim, u=sim.u * COUNT_IN["degrees"])))
+    clean, run = LoggedRun.from_path(counts), LoggedRun.from_path(path)
+    assert sorted(run.audit.lines()) == sorted(clean.audit.lines() + ["header: u in encoder counts; data: u in degrees"])
+    assert run.source == clean.source and run.reproduced == clean.reproduced
+    if clean.controller is not None and clean.controller.spec.get("design"):
+        assert run.controller.spec["design"]["text"] == clean.controller.spec["design"]["text"]

@@ -45,6 +45,7 @@ from station.errors import StationError
 from station.logged.audit import AuditClaim, count_step, in_counts, quantum_fits
 from station.logged.controller import (NO_LAW, ControllerId, describe_controller, header_law_dv,
                                        header_reproduces, identify_controller)
+from station.logged.reference_unit import check_reference_unit
 from station.logged.sensor_evidence import cosine_ratio
 from station.logged.units import whole_counts
 from station.rig import DAC_LIMIT
@@ -188,6 +189,9 @@ def check_columns(log: RunLog, skipped=None) -> Columns:
     offset = check_command_offset(log, skipped) if named else None
     if offset is not None:  # (past the DAC's range as written: about its zero, in counts)
         return offset
+    ref = check_reference_unit(log, skipped, as_named) if named and unit is None else None
+    if ref is not None:
+        return Columns((ref.claim,), ref.log, ref.identified)
     for columns in SWAPS:  # a swap beside v in another unit (the swap's v is not in counts)
         trial = rewritten(log, columns)
         if in_counts(np.asarray(trial.data["v"], dtype=float)):

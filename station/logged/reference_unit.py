@@ -1,0 +1,142 @@
+"""The reference's unit: a closed loop's u in encoder counts, checked against its law.
+
+A log claims u in encoder counts, the unit the loop's error u - θ is taken in (DESIGN.md "Log
+audit": the columns' units). A lab script that wrote the reference in degrees or radians
+while θ stayed in counts leaves a log whose law reproduces no logged v as written (a P step of
+50 counts written 17.578125: the header's kp = 2 misses by 65 counts) and every v with u read
+back in counts. θ in degrees too is :mod:`station.logged.units`' (u goes with it); this is a
+reference alone in another unit, decided by the law: a step is a multiple of the unit's
+share of a count, but a sine is not, and only the law tells.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from typing import NamedTuple
+
+import numpy as np
+
+from station.analysis.law_rows import TOLERANCE
+from station.errors import StationError
+from station.logged.audit import AuditClaim
+from station.logged.controller import ControllerId, describe_controller, header_law_dv, identify_controller
+from station.logged.units import THETA_UNITS
+from station.rig import COUNTS_PER_REV
+from station.runlog import RunLog
+
+
+PRINTED_COUNTS = 0.01
+"""A u within this of whole counts in every row is a reference of whole counts printed in
+another unit (17.5781 degrees: 49.99994 counts), read back as those counts."""
+
+
+class ReferenceUnit(NamedTuple):
+    """A reference found in another unit (:func:`check_reference_unit`).
+
+    Attributes
+    ----------
+    claim : AuditClaim
+        The contradicted "columns" claim.
+    log : RunLog
+        The log with u in encoder counts and a note.
+    identified : ControllerId or None
+        The law the data give on it, when no header named one.
+    """
+
+    claim: AuditClaim
+    log: RunLog
+    identified: ControllerId | None
+
+
+LAGS = 3
+"""Lags of the regression that finds u's share of the loop's error (:func:`reference_ratio`):
+the rig's laws are of order 3 at most."""
+
+RATIO_TOLERANCE = 0.2
+"""Relative tolerance of u's share against a unit's 1/q (1 in counts, 2.84 in degrees, 163 in
+radians: far apart)."""
+
+
+def reference_ratio(log: RunLog) -> float | None:
+    """How many counts of θ one unit of u is worth to the loop's law: -Σb_u / Σb_θ of the
+    least-squares fit v[k] = Σ b_u,i u[k-i] + Σ b_θ,i θ[k-i] + Σ b_a,i a[k-i] + Σ c_i v[k-i]
+    (i ≤ :data:`LAGS`). A law on the error u - θ (any order, beside an accelerometer feedback)
+    weighs u and θ alike at DC: 1 with u in counts, 1/q with u in a unit of q counts' share.
+
+    Parameters
+    ----------
+    log : RunLog
+
+    Returns
+    -------
+    float or None
+        None when the fit is singular or θ carries no weight.
+    """
+    u, theta, v, a = (np.asarray(log.data[c], dtype=float) for c in ("u", "theta", "v", "a"))
+    n = u.size
+    if n <= 4 * LAGS or not np.all(np.isfinite(v)):
+        return None
+    rows = slice(LAGS, n)
+    cols = [x[LAGS - i:n - i] for x in (u, theta) for i in range(LAGS + 1)]
+    if np.all(np.isfinite(a)) and np.any(a != a[0]):
+        cols += [a[LAGS - i:n - i] for i in range(LAGS + 1)]
+    cols += [v[LAGS - i:n - i] for i in range(1, LAGS + 1)]
+    coef, *_ = np.linalg.lstsq(np.column_stack(cols), v[rows], rcond=None)
+    b_u, b_theta = float(np.sum(coef[:LAGS + 1])), float(np.sum(coef[LAGS + 1:2 * LAGS + 2]))
+    if not np.isfinite(b_u) or abs(b_theta) < 1e-9:
+        return None
+    return -b_u / b_theta
+
+
+def check_reference_unit(log: RunLog, skipped=None, as_named: float | None = None) -> ReferenceUnit | None:
+    """Whether a closed loop's u is in degrees or radians of the hub (θ in counts): the
+    loop's law weighs u as that many counts (:func:`reference_ratio`), and the header's law
+    (else the law the data give) reproduces every logged v with u divided by one encoder count
+    in that unit (:data:`station.logged.units.THETA_UNITS`).
+
+    Parameters
+    ----------
+    log : RunLog
+        A log whose law, as its columns are written, does not reproduce it.
+    skipped : array_like of bool, optional
+        As :func:`station.logged.controller.identify_controller`.
+    as_named : float or None
+        The header's law's max |dv| as written (:func:`header_law_dv`), None when no header
+        names a closed-loop law.
+
+    Returns
+    -------
+    ReferenceUnit or None
+        None when u is not finite or 0 throughout, θ not finite, or no unit makes a law
+        reproduce v.
+    """
+    u, theta = (np.asarray(log.data[c], dtype=float) for c in ("u", "theta"))
+    if not (np.all(np.isfinite(u)) and np.all(np.isfinite(theta)) and np.any(u)):
+        return None
+    ratio = reference_ratio(log)
+    for unit, q in THETA_UNITS.items():
+        if ratio is None or abs(ratio * q - 1.0) > RATIO_TOLERANCE:  # the law weighs u as 1/q counts
+            continue
+        counts = u / q
+        if np.max(np.abs(counts - np.round(counts))) <= PRINTED_COUNTS:  # a step's counts, printed in the unit
+            counts = np.round(counts)
+        trial = dataclasses.replace(log, data={**log.data, "u": counts})
+        found, dv = None, None if as_named is None else header_law_dv(trial, skipped)
+        if dv is not None and dv <= TOLERANCE:
+            whose = "the header's law"
+        else:  # none named, an open loop's v = u, or a header that lies about the law as well
+            try:
+                found = identify_controller(trial, skipped)
+            except StationError:
+                continue
+            if found.fit is None or found.cut or found.judged_to is not None or found.fit.max_abs_dv > TOLERANCE:
+                continue
+            whose, dv = f"the law the data give ({describe_controller(found.controller)})", float(found.fit.max_abs_dv)
+        before = "" if as_named is None else f" (as written: max |dv| = {as_named:.3g} counts)"
+        claim = AuditClaim("columns", "u in encoder counts", f"u in {unit}", "contradicted",
+                           f"{whose} reproduces every logged v to {dv:.2g} counts with u read in encoder counts "
+                           f"(u / {q:.6g}, {unit} per count of {COUNTS_PER_REV}/rev){before}; the law weighs one "
+                           f"unit of u as {ratio:.3g} counts of θ: a reference written in {unit}")
+        note = f"u is in {unit} (the audit): converted to encoder counts"
+        return ReferenceUnit(claim, dataclasses.replace(trial, notes=list(log.notes) + [note]), found)
+    return None
