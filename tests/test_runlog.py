@@ -482,3 +482,46 @@ def test_an_unstable_header_law_is_said_to_diverge_not_nan(rig_data, tmp_path):
     claim = next(c for c in run.audit.claims if c.claim == "controller")
     assert "nan" not in claim.evidence and "its replay diverges: an unstable law" in claim.evidence
     assert claim.verdict == "contradicted" and run.reproduced
+
+
+P_LOG = "SFLR_P_control_step_kp_2_SLFR_RTP_P_control_kp=2.0.txt"
+LEAD_LOG = "step_response_Gth_comp_no_accel_FB_amp_100_duration_1000_SLFR_RTP_Motor_Comp_Gth.txt"
+
+
+def _with_line(rig_data, tmp_path, name, line, text):
+    lines = (rig_data / name).read_text().splitlines()
+    lines[line - 1] = text
+    path = tmp_path / "h.txt"
+    path.write_text("\n".join(lines) + "\n")
+    return path
+
+
+@pytest.mark.parametrize("text", ["#kp=2.0 ki=0 kd=0", "#kp=2.0, ki=0.0, kd=0.0", "#Kp = 2.0; ki = 0; kd = 0"])
+def test_several_gains_on_one_header_line_are_each_read(rig_data, tmp_path, text):
+    """A PID script's one line of gains (before: "kp: expected a number, got '2.0 ki=0 kd=0'")."""
+    log = read_log(_with_line(rig_data, tmp_path, P_LOG, 2, text))
+    assert (log.meta["kp"], log.meta["ki"], log.meta["kd"]) == (2.0, 0.0, 0.0)
+
+
+@pytest.mark.parametrize("num, den", [("[18.32547182, -17.20911971]", "[1.0, -0.77672958]"),
+                                      ("[ 18.32547182,-17.20911971 ]", "[1.,-0.77672958]")])
+def test_a_filter_printed_as_a_python_list_is_read(rig_data, tmp_path, num, den):
+    """numpy prints [ 18.3 -17.2]; a Python list (or numpy with separator=', ') prints
+    [18.3, -17.2]: the same coefficients (before: "expected numbers in Gth num=[...]")."""
+    path = _with_line(rig_data, tmp_path, LEAD_LOG, 2, f"#Gth num={num}")
+    lines = path.read_text().splitlines()
+    lines[2] = f"#Gth den={den}"
+    path.write_text("\n".join(lines) + "\n")
+    assert read_log(path).meta["Gth"] == read_log(rig_data / LEAD_LOG).meta["Gth"]
+
+
+@pytest.mark.parametrize("name, line, text, said", [
+    (P_LOG, 2, "#kp=2,0", "line 2: kp: expected a number, got '2,0' (a decimal comma"),
+    (LEAD_LOG, 2, "#Gth num=[18,32547182 -17,20911971]", "line 2: expected numbers in Gth num=[...]"),
+    (LEAD_LOG, 2, "#Gth num=[18,17]", "(a comma between digits"),
+], ids=["kp", "Gth decimal comma", "Gth unspaced"])
+def test_a_decimal_comma_in_the_header_is_named_not_misread(rig_data, tmp_path, name, line, text, said):
+    """"[18,3 -17,2]" read with commas as separators would be a four-coefficient Gth: refused,
+    naming the comma, as a row's decimal comma is."""
+    with pytest.raises(RunLogError, match=re.escape(said)):
+        read_log(_with_line(rig_data, tmp_path, name, line, text))

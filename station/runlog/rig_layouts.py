@@ -40,6 +40,12 @@ _KV = re.compile(r"^\s*([A-Za-z_]\w*)\s*=\s*(.*?)\s*$")
 _COEF = re.compile(r"^\s*(\w+)\s+(num|den)\s*=\s*\[(.*)\]\s*$")
 _COEF_START = re.compile(r"^\s*(gth|ga)\b\s*(num|den)?", re.IGNORECASE)
 """The start of a filter's coefficient line, however it goes on (:data:`_COEF` is its whole form)."""
+_KV_ALL = re.compile(r"^\s*(?:[A-Za-z_]\w*\s*=\s*[^\s,;=]+\s*[,;]?\s*){2,}$")
+_KV_EACH = re.compile(r"([A-Za-z_]\w*)\s*=\s*([^\s,;=]+)")
+"""Several ``key=value`` fields on one line (``#kp=2.0 ki=0 kd=0``, ``#kp=2.0, ki=0.0, kd=0.0``)."""
+_DECIMAL_COMMA = re.compile(r"\d,\d")
+"""A comma between two digits in a coefficient list: a decimal comma or a list with no spaces
+(``[18,3 -17,2]`` or ``[1,2]``), which cannot be told apart and is refused."""
 _KEYS = {name.lower(): name for name in ("kp", "ki", "kd", "b0", "b1", "a1", "Gth", "Ga")}
 """The controller's fields by their lower case: a header's ``#Kp=2`` or ``#GTH num=`` is the
 rig software's ``#kp=2`` and ``#Gth num=``."""
@@ -116,11 +122,17 @@ def parse_rig_header(path: Path, comment_lines: list[str]) -> Header:
             parts = body.split()
             meta["test"] = parts[-1] if parts else ""
         elif coef:
+            text = coef.group(3)
             try:
-                values = [float(x) for x in coef.group(3).split()]
+                if _DECIMAL_COMMA.search(text):
+                    raise ValueError
+                # numpy's print (spaces) or a Python list's (commas): [ 18.3 -17.2] or [18.3, -17.2]
+                values = [float(x) for x in re.split(r"[\s,]+", text.strip()) if x]
             except ValueError:
+                why = (" (a comma between digits: a decimal comma, or numbers not spaced; expected "
+                       "[c0 c1 ...] or [c0, c1, ...] with '.' decimals)" if _DECIMAL_COMMA.search(text) else "")
                 raise log_error(path, i + 1, f"expected numbers in {coef.group(1)} "
-                                f"{coef.group(2)}=[...], got {line!r}", key=coef.group(1)) from None
+                                f"{coef.group(2)}=[...], got {line!r}{why}", key=coef.group(1)) from None
             if not all(math.isfinite(x) for x in values) or (coef.group(2) == "den" and values and values[0] == 0):
                 raise log_error(path, i + 1, f"{coef.group(1)} {coef.group(2)}={values}: expected finite "
                                 f"coefficients" + (", den[0] not 0 (the filter would be non-causal)"
@@ -131,16 +143,20 @@ def parse_rig_header(path: Path, comment_lines: list[str]) -> Header:
             meta.setdefault(name, {})[coef.group(2)] = values
             coef_lines[name] = i + 1
         elif kv:
-            key, val = kv.groups()
-            key = _KEYS.get(key.lower(), key)
-            if key in kv_lines:
-                raise log_error(path, i + 1, f"{key} given twice (lines {kv_lines[key]} and {i + 1}): expected one",
-                                key=key)
-            kv_lines[key] = i + 1
-            try:
-                meta[key] = float(val)
-            except ValueError:
-                meta[key] = val
+            pairs = _KV_EACH.findall(body) if _KV_ALL.match(body) else [kv.groups()]
+            for key, val in pairs:
+                key = _KEYS.get(key.lower(), key)
+                if key in kv_lines:
+                    raise log_error(path, i + 1, f"{key} given twice (lines {kv_lines[key]} and {i + 1}): "
+                                    f"expected one", key=key)
+                kv_lines[key] = i + 1
+                try:
+                    meta[key] = float(val)
+                except ValueError:
+                    if key in _KEYS.values() and is_number(val.replace(",", ".", 1)):
+                        raise log_error(path, i + 1, f"{key}: expected a number, got {val!r} (a decimal comma: "
+                                        f"the header must be written with '.' decimals)", key=key) from None
+                    meta[key] = val
         else:
             other.append(body)
     for key, lineno in coef_lines.items():  # a filter printed with a numerator needs its denominator
