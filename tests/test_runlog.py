@@ -138,14 +138,46 @@ def test_non_number_names_the_column(tmp_path):
         read_log(path)
 
 
-def test_a_decimal_comma_is_named(rig_data, tmp_path):
-    """A lab whose locale writes decimal commas (LabVIEW, Excel in much of Europe): the first
-    such field named, and why, in one line (before: only "got '0,002'")."""
-    src = rig_data / "SFLR_P_control_step_kp_2_SLFR_RTP_P_control_kp=2.0.txt"
+@pytest.mark.parametrize("name, sep", [("SFLR_P_control_step_kp_2_SLFR_RTP_P_control_kp=2.0.txt", "\t"),
+                                       ("without_accel_01_28_14_test_2.txt", "\t"),
+                                       ("without_accel_01_28_14_test_2.txt", ";"),
+                                       ("without_accel_01_28_14_test_2.txt", " ")])
+def test_a_log_written_with_decimal_commas_is_read_and_said(rig_data, tmp_path, name, sep):
+    """A lab whose locale writes decimal commas (LabVIEW, Excel in much of Europe) parts its
+    fields by tabs, ';' or spaces, where a comma can be nothing but the decimal mark: read,
+    the same numbers as the rig's own log, and said in a note; a gain so written too (before:
+    refused, "got '0,002' (a decimal comma ...)")."""
+    src = rig_data / name
     path = tmp_path / "comma.txt"
-    path.write_text("".join(ln if ln.startswith("#") else ln.replace(".", ",")
-                            for ln in src.read_text().splitlines(keepends=True)))
-    with pytest.raises(RunLogError, match=r"line 5: expected a number in column 't', got '0,002' "
+    lines = src.read_text().splitlines()
+    first = 0 if lines[0].startswith("#") else 1  # the 2014 layout's line of names keeps its "Time (sec.)"
+    out = [ln.replace("kp=2.0", "kp=2,0") if ln.startswith("#") or k < first else ln.replace(".", ",")
+           for k, ln in enumerate(lines)]
+    out = [ln.replace("\t", sep) if not ln.startswith("#") and sep != "\t" and k >= first else ln
+           for k, ln in enumerate(out)]
+    if first and sep != "\t":
+        out[0] = out[0].replace("\t", sep) if sep != " " else "t u theta a v"
+    path.write_text("\n".join(out) + "\n")
+    clean, log = read_log(src), read_log(path)
+    for column in ("t", "n", "u", "v", "theta", "a"):
+        np.testing.assert_array_equal(log.data[column], clean.data[column])
+    assert any("decimal commas" in n for n in log.notes)
+    if first == 0:
+        assert log.meta["kp"] == 2.0 and any("kp=2,0 read as 2" in n for n in log.notes)
+
+
+def test_a_decimal_comma_beside_decimal_points_is_named(rig_data, tmp_path):
+    """One row with a comma where the others have points (a hand edit): not a locale's
+    export; the field named, and why, in one line."""
+    src = rig_data / "SFLR_P_control_step_kp_2_SLFR_RTP_P_control_kp=2.0.txt"
+    lines = src.read_text().splitlines()
+    lines[104] = lines[104].replace("0.2", "0,2", 1)
+    fields = lines[104].split("\t")
+    fields[5] = "1.5"
+    lines[104] = "\t".join(fields)
+    path = tmp_path / "comma.txt"
+    path.write_text("\n".join(lines) + "\n")
+    with pytest.raises(RunLogError, match=r"line 105: expected a number in column 't', got '0,202' "
                                           r"\(a decimal comma: the log must be written with '\.' decimals\)$"):
         read_log(path)
 
@@ -516,12 +548,11 @@ def test_a_filter_printed_as_a_python_list_is_read(rig_data, tmp_path, num, den)
 
 
 @pytest.mark.parametrize("name, line, text, said", [
-    (P_LOG, 2, "#kp=2,0", "line 2: kp: expected a number, got '2,0' (a decimal comma"),
     (LEAD_LOG, 2, "#Gth num=[18,32547182 -17,20911971]", "line 2: expected numbers in Gth num=[...]"),
     (LEAD_LOG, 2, "#Gth num=[18,17]", "(a comma between digits"),
-], ids=["kp", "Gth decimal comma", "Gth unspaced"])
+], ids=["Gth decimal comma", "Gth unspaced"])
 def test_a_decimal_comma_in_the_header_is_named_not_misread(rig_data, tmp_path, name, line, text, said):
     """"[18,3 -17,2]" read with commas as separators would be a four-coefficient Gth: refused,
-    naming the comma, as a row's decimal comma is."""
+    naming the comma (a gain's one number, #kp=2,0, is read: its comma can be nothing else)."""
     with pytest.raises(RunLogError, match=re.escape(said)):
         read_log(_with_line(rig_data, tmp_path, name, line, text))

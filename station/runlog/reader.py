@@ -178,6 +178,8 @@ def _read_stream(path: Path, lines: Lines) -> RunLog:
 
     names, notes = found.names, list(found.notes)
     arr, data_lines = load_rows(path, lines, fmt, names, found.sep)
+    if data_lines.decimal_comma:
+        notes.append("numbers written with decimal commas (a spreadsheet's export): read with their commas as points")
     n = arr.shape[0]
     data = {name: np.full(n, np.nan) for name in COLUMNS}
     for j, name in enumerate(names):

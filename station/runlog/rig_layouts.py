@@ -110,6 +110,7 @@ def parse_rig_header(path: Path, comment_lines: list[str]) -> Header:
     other = []
     coef_lines: dict[str, int] = {}
     kv_lines: dict[str, int] = {}
+    notes: list[str] = []
     for i, line in enumerate(info):
         body = line[1:].strip()
         coef = _COEF.match(body)
@@ -153,10 +154,11 @@ def parse_rig_header(path: Path, comment_lines: list[str]) -> Header:
                 try:
                     meta[key] = float(val)
                 except ValueError:
-                    if key in _KEYS.values() and is_number(val.replace(",", ".", 1)):
-                        raise log_error(path, i + 1, f"{key}: expected a number, got {val!r} (a decimal comma: "
-                                        f"the header must be written with '.' decimals)", key=key) from None
-                    meta[key] = val
+                    if key in _KEYS.values() and "." not in val and is_number(val.replace(",", ".", 1)):
+                        meta[key] = float(val.replace(",", "."))  # one number: its comma can be nothing else
+                        notes.append(f"{key}={val} read as {meta[key]:g} (a decimal comma)")
+                    else:
+                        meta[key] = val
         else:
             other.append(body)
     for key, lineno in coef_lines.items():  # a filter printed with a numerator needs its denominator
@@ -165,7 +167,7 @@ def parse_rig_header(path: Path, comment_lines: list[str]) -> Header:
                             f"(expected both, as the rig's software prints them)", key=key)
     if other:
         meta["notes"] = other
-    return Header(meta, std, sep, [])
+    return Header(meta, std, sep, notes)
 
 
 BARE_ORDER = ("t", "n", "u", "v", "theta", "a", "theta_d_hat")

@@ -72,6 +72,26 @@ def parse_row(line: str, names: list[str], sep: str | None) -> tuple[list[float]
                       + (" (a decimal comma: the log must be written with '.' decimals)" if comma else ""))
 
 
+def decimal_comma_row(line: str, names: list[str], sep: str | None) -> bool:
+    """Whether a data line is written with decimal commas (a spreadsheet's export where the
+    fields are parted by ';', tabs or spaces: ``0,002;1;50``): it has a comma, no point, fields
+    that are not all numbers as written, and every field a number with its comma a point.
+    With commas between fields a decimal comma cannot be told from them: never.
+
+    Parameters
+    ----------
+    line : str
+        The line without its newline.
+    names : list of str
+        The columns' standard names.
+    sep : str or None
+        The delimiter; None: any whitespace.
+    """
+    if sep == "," or "," not in line or "." in line:
+        return False
+    return parse_row(line, names, sep)[1] is not None and parse_row(line.replace(",", "."), names, sep)[1] is None
+
+
 MAX_LINE = 1_000_000
 """Longest line of a run log, characters: a row is under 200, our JSON header a few
 thousand; a longer line (a binary file, a file without newlines) is no log, and reading
@@ -190,6 +210,12 @@ class DataLines:
         self._comment: int | None = None
         self._rows = 0
         self.non_ascii = False
+        self._comma: bool | None = None
+
+    @property
+    def decimal_comma(self) -> bool:
+        """Whether the rows are written with decimal commas (:func:`decimal_comma_row`), read as points."""
+        return bool(self._comma)
 
     def __iter__(self):
         while (item := self.lines.next()) is not None:
@@ -206,6 +232,10 @@ class DataLines:
                 self._comment = None
             if self.first_lineno is None:
                 self.first_lineno = lineno
+            if self._comma is None and "," in line:  # decided on the first row with a comma
+                self._comma = self.fmt != "station" and decimal_comma_row(line, self.names, self.sep)
+            if self._comma:
+                line = line.replace(",", ".")
             if self.sep and self.fmt != "station" and line.endswith(self.sep):
                 line = line[:-len(self.sep)]  # a lab script's `"%g\t" % x` for every field, the last too
             if not terminated and (self.fmt == "station" or parse_row(line, self.names, self.sep)[1] is not None):
