@@ -227,6 +227,15 @@ def replay(path: str | Path, model=True, n_elements: int | None = None) -> Repla
     return report
 
 
+def _tick_of_row(log: RunLog | None, row: int) -> str:
+    """"tick K" of a log's row: its n there, and the row beside it where rows skip ticks (a log
+    of every other tick steps at row 25, the device's tick 50)."""
+    n = None if log is None or row >= len(log.data["n"]) else log.data["n"][row]
+    if n is None or not np.isfinite(n) or n == row or n != round(n):
+        return f"tick {row}"
+    return f"tick {int(n)} (row {row})"
+
+
 def _model(report: ReplayReport, run: LoggedRun, model) -> None:
     """The model run as the rig ran the log, and its fit."""
     sim = run.simulate(model)
@@ -305,7 +314,7 @@ def format_report(report: ReplayReport) -> str:
                                                              report.judged_to)]
     ref = report.reference
     if ref.is_step:
-        lines.append(f"  reference: step of {ref.amplitude:g} at tick {ref.step_tick}")
+        lines.append(f"  reference: step of {ref.amplitude:g} at {_tick_of_row(report.log, ref.step_tick)}")
     if report.metrics is not None:
         lines.append(f"  {report.metrics.summary()}")
     if report.fit_pct is not None:

@@ -286,3 +286,16 @@ def test_a_law_replayed_again_from_each_jump_of_n_reproduces_the_rows_left(order
     fit = detect_alignment(law, u[kept], theta[kept], np.zeros(kept.size), v_whole[kept], (d,),
                            restarts=restarts)
     assert fit.max_abs_dv <= 1e-9 * max(1.0, float(np.max(np.abs(v_whole))))
+
+
+@pytest.mark.parametrize("every, start, said", [(1, 0, "at tick 50"), (2, 0, "at tick 50 (row 25)"),
+                                               (3, 1, "at tick 52 (row 17)")])
+def test_the_steps_tick_is_the_devices_where_rows_skip_ticks(rig_data, tmp_path, every, start, said):
+    """The P step (its u steps at tick 50) kept every k-th row, n as logged: the report's tick
+    is n's, the row beside it (before: "at tick 25", the row, on the copy of every other row)."""
+    lines = (rig_data / P_LOG).read_text().splitlines()
+    head = [ln for ln in lines if ln.startswith("#")]
+    path = tmp_path / "every.txt"
+    path.write_text("\n".join(head + lines[len(head):][start::every]) + "\n")
+    text = format_report(replay(path, model=False))
+    assert f"  reference: step of 50 {said}\n" in text + "\n", text
