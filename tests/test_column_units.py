@@ -404,3 +404,20 @@ def test_blind_a_reference_written_in_degrees(tmp_path, case, seed):
     assert run.source == clean.source and run.reproduced == clean.reproduced
     if clean.controller is not None and clean.controller.spec.get("design"):
         assert run.controller.spec["design"]["text"] == clean.controller.spec["design"]["text"]
+
+
+@pytest.mark.parametrize("case, seed", [("u_unit", 1), ("u_unit", 5), ("u_unit", 9), ("u_unit+coulomb_friction", 0)])
+def test_blind_u_unit_class(tmp_path, case, seed):
+    """The independent generator's "u_unit" class (tests/blind/audit.py): a P or a lead on the
+    stored integer under its true header, none, or the session's open-loop one, u written in
+    degrees or radians. A 5 Hz sine under a lead on the integer leaves the least-squares weight
+    of u anywhere (6.2 on seed 5): the law decides (before that: "not this law", max |dv| = 44
+    counts, on seeds 5 and 9; an open-loop header's step, seed 0 with friction, unread)."""
+    import tests.blind.audit as blind
+
+    path, hidden = blind.write_audit_case(tmp_path, case, seed)
+    run = LoggedRun.from_path(path)
+    units = [c.data for c in run.audit.claims if c.header == "u in encoder counts"]
+    assert units == [f"u in {hidden.u_unit}"]
+    assert run.reproduced and (run.source == "inferred (header contradicted)") is hidden.lies
+    assert run.alignment == hidden.alignment or hidden.alignment in run.identified.alignments

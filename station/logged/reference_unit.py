@@ -53,8 +53,9 @@ LAGS = 3
 the rig's laws are of order 3 at most."""
 
 RATIO_TOLERANCE = 0.2
-"""Relative tolerance of u's share against a unit's 1/q (1 in counts, 2.84 in degrees, 163 in
-radians: far apart)."""
+"""How near 1 u's share (:func:`reference_ratio`) says u is in counts and no other unit is
+tried (in degrees it is 2.84, in radians 163, where a step pins it; a 5 Hz sine, or a
+recursion on the stored integer, may leave it anywhere, and then the law decides)."""
 
 
 def reference_ratio(log: RunLog) -> float | None:
@@ -90,9 +91,10 @@ def reference_ratio(log: RunLog) -> float | None:
 
 def check_reference_unit(log: RunLog, skipped=None, as_named: float | None = None) -> ReferenceUnit | None:
     """Whether a closed loop's u is in degrees or radians of the hub (θ in counts): the
-    loop's law weighs u as that many counts (:func:`reference_ratio`), and the header's law
-    (else the law the data give) reproduces every logged v with u divided by one encoder count
-    in that unit (:data:`station.logged.units.THETA_UNITS`).
+    header's law (else the law the data give) reproduces every logged v with u divided by one
+    encoder count in that unit (:data:`station.logged.units.THETA_UNITS`). Not asked where a
+    least-squares fit already weighs u as counts (:func:`reference_ratio` within
+    :data:`RATIO_TOLERANCE` of 1); the unit it points at is tried first.
 
     Parameters
     ----------
@@ -114,9 +116,11 @@ def check_reference_unit(log: RunLog, skipped=None, as_named: float | None = Non
     if not (np.all(np.isfinite(u)) and np.all(np.isfinite(theta)) and np.any(u)):
         return None
     ratio = reference_ratio(log)
-    for unit, q in THETA_UNITS.items():
-        if ratio is None or abs(ratio * q - 1.0) > RATIO_TOLERANCE:  # the law weighs u as 1/q counts
-            continue
+    if ratio is not None and abs(ratio - 1.0) <= RATIO_TOLERANCE:  # the law weighs u as counts
+        return None
+    # a step pins the ratio; a sine, or a recursion on the stored integer, may not: then the law decides
+    units = sorted(THETA_UNITS.items(), key=lambda item: 0.0 if ratio is None else abs(np.log(abs(ratio * item[1]) + 1e-12)))
+    for unit, q in units:
         counts = u / q
         if np.max(np.abs(counts - np.round(counts))) <= PRINTED_COUNTS:  # a step's counts, printed in the unit
             counts = np.round(counts)
@@ -135,8 +139,8 @@ def check_reference_unit(log: RunLog, skipped=None, as_named: float | None = Non
         before = "" if as_named is None else f" (as written: max |dv| = {as_named:.3g} counts)"
         claim = AuditClaim("columns", "u in encoder counts", f"u in {unit}", "contradicted",
                            f"{whose} reproduces every logged v to {dv:.2g} counts with u read in encoder counts "
-                           f"(u / {q:.6g}, {unit} per count of {COUNTS_PER_REV}/rev){before}; the law weighs one "
-                           f"unit of u as {ratio:.3g} counts of θ: a reference written in {unit}")
+                           f"(u / {q:.6g}, {unit} per count of {COUNTS_PER_REV}/rev){before}: a reference "
+                           f"written in {unit}")
         note = f"u is in {unit} (the audit): converted to encoder counts"
         return ReferenceUnit(claim, dataclasses.replace(trial, notes=list(log.notes) + [note]), found)
     return None

@@ -50,7 +50,9 @@ pole) with u and v, or θ and a, written in each other's place; "pair": two colu
 a true header (a P, or a lead on the stored integer) or none: two columns swapped and θ negated, or
 (under a true header) two columns swapped and v written in volts; "v_zero": a true header (a P, or a
 lead on the stored integer), none, or the lab's session's open-loop one over a log whose v a
-script wrote as an unsigned DAC code about its midpoint (128, 2048 or 32768: 8, 12 or 16 bits). A class joined with "+" to
+script wrote as an unsigned DAC code about its midpoint (128, 2048 or 32768: 8, 12 or 16 bits); "u_unit":
+the same headers over a log whose u (the reference) a script wrote in degrees or radians of the
+hub, θ left in encoder counts. A class joined with "+" to
 "coulomb_friction" hides that friction too (drawn as :func:`tests.blind.cases.draw` draws it).
 """
 
@@ -74,7 +76,7 @@ N = 2000
 CLASSES = ("lie:open_loop", "lie:p_kp", "lie:lead_pole", "lie:accel_fb", "int:trunc_d0", "int:trunc_d1",
            "int:round_d0", "int:round_d1", "session", "lie:sent", "lie:accel_int", "honest:p", "honest:lead_int",
            "honest:lead_sent", "words", "swap", "rows", "a_unit", "v_unit", "printed", "sign", "double", "lie:swap", "pair",
-           "v_zero")
+           "v_zero", "u_unit")
 """The audit's blind classes, in the validation table's order."""
 
 PHYSICAL = ("coulomb_friction",)
@@ -100,6 +102,9 @@ V_UNITS = {"V of ±5 V, 12 bits": 5.0 / 2048, "V of ±10 V, 16 bits": 10.0 / 327
 
 V_ZEROS = (128.0, 2048.0, 32768.0)
 """The zeros the "v_zero" class writes v about: an unsigned 8-, 12- or 16-bit DAC code's midpoint."""
+
+U_UNITS = {"degrees": 360.0 / 1024, "radians": 2.0 * math.pi / 1024}
+"""One encoder count (1024/rev) in the units the "u_unit" class writes u in."""
 
 GA_GAINS = (0.5, 0.75, 1.0, 1.5)
 GA_FREQUENCIES = (0.7, 1.0, 1.4)
@@ -153,6 +158,8 @@ class AuditCase:
         Whether θ is written with the other sign than the loop fed back ("sign").
     v_zero : float or None
         The zero v is written about (:data:`V_ZEROS`, "v_zero"), else None (about 0).
+    u_unit : str or None
+        The unit u is written in (:data:`U_UNITS`, "u_unit"), else None (encoder counts).
     """
 
     name: str
@@ -179,11 +186,12 @@ class AuditCase:
     digits: int | None = None
     negate: bool = False
     v_zero: float | None = None
+    u_unit: str | None = None
 
     @property
     def lies(self) -> bool:
         """Whether the header names another controller than the data's."""
-        if self.name.startswith(("printed", "sign", "double", "v_zero")):
+        if self.name.startswith(("printed", "sign", "double", "v_zero", "u_unit")):
             return self.header == "open-loop"
         return self.name.split("+")[0] in ("lie:open_loop", "lie:p_kp", "lie:lead_pole", "lie:accel_fb", "session", "lie:sent",
                                               "lie:accel_int", "lie:swap")
@@ -327,6 +335,12 @@ def draw_case(name: str, seed: int) -> AuditCase:
             return AuditCase(**common, **lead, recursion="trunc", alignment=int(rng.integers(0, 2)),
                              header="open-loop", v_zero=zero)
         return _true_or_no_header(rng, common, p_law, lead, kp, v_zero=zero)
+    if base == "u_unit":  # the reference written in degrees or radians of the hub
+        unit = str(rng.choice(sorted(U_UNITS)))
+        if rng.random() < 0.25:  # by the lab's session (an open-loop header on a lead on the integer)
+            return AuditCase(**common, **lead, recursion="trunc", alignment=int(rng.integers(0, 2)),
+                             header="open-loop", u_unit=unit)
+        return _true_or_no_header(rng, common, p_law, lead, kp, u_unit=unit)
     if base == "words":
         if rng.random() < 0.5:
             return AuditCase(**{**common, "header_kp": kp}, **p_law, recursion="trunc",
@@ -513,6 +527,8 @@ def write_audit_case(folder: Path, name: str, seed: int) -> tuple[Path, AuditCas
         sim = dataclasses.replace(sim, v=np.array([float(f"{x:.7g}") for x in sim.v * V_UNITS[case.v_unit]]))
     if case.v_zero is not None:
         sim = dataclasses.replace(sim, v=np.asarray(sim.v, dtype=float) + case.v_zero)
+    if case.u_unit is not None:
+        sim = dataclasses.replace(sim, u=np.asarray(sim.u, dtype=float) * U_UNITS[case.u_unit])
     if case.negate:  # a script that wrote the loop's angle with the other sign
         sim = dataclasses.replace(sim, theta=-np.asarray(sim.theta, dtype=float))
     if case.swap:
