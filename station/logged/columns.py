@@ -189,7 +189,7 @@ def check_columns(log: RunLog, skipped=None) -> Columns:
     offset = check_command_offset(log, skipped) if named else None
     if offset is not None:  # (past the DAC's range as written: about its zero, in counts)
         return offset
-    ref = check_reference_unit(log, skipped, as_named) if named and unit is None else None
+    ref = check_reference_unit(log, skipped, as_named) if as_named is not None and unit is None else None
     if ref is not None:
         return Columns((ref.claim,), ref.log, ref.identified)
     for columns in SWAPS:  # a swap beside v in another unit (the swap's v is not in counts)
@@ -266,6 +266,9 @@ def _inferred_swap(log: RunLog, skipped) -> Columns:
         if found.controller is not None and found.source in ("inferred", "inferred (header contradicted)") \
                 and found.fit is not None:
             return _swapped_back(log, rewrites, trial, None, f"{found.claim.data}", found)
+    ref = check_reference_unit(log, skipped)  # no rewrite gives a law: u written in degrees or radians
+    if ref is not None:
+        return Columns((ref.claim,), ref.log, ref.identified)
     return Columns((), log, cid)
 
 

@@ -89,12 +89,29 @@ def reference_ratio(log: RunLog) -> float | None:
     return -b_u / b_theta
 
 
+def _stable(controller) -> bool:
+    """Whether a law's filters have no pole outside the unit circle: a compensator's recursion
+    does not grow (an order-3 fit with a pole at z = 1062 reproduced the P step with θ negated
+    and u read 163 times larger, on the truncated integer at a clamp of ±100: no lab's law)."""
+    for name in ("gth", "ga"):
+        tf = getattr(controller, name, None)
+        den = None if tf is None else np.asarray(tf.den, dtype=float)
+        if den is not None and den.size > 1 and np.max(np.abs(np.roots(den))) > 1.0 + 1e-6:
+            return False
+    return True
+
+
 def check_reference_unit(log: RunLog, skipped=None, as_named: float | None = None) -> ReferenceUnit | None:
     """Whether a closed loop's u is in degrees or radians of the hub (θ in counts): the
     header's law (else the law the data give) reproduces every logged v with u divided by one
     encoder count in that unit (:data:`station.logged.units.THETA_UNITS`). Not asked where a
     least-squares fit already weighs u as counts (:func:`reference_ratio` within
     :data:`RATIO_TOLERANCE` of 1); the unit it points at is tried first.
+
+    A header's law is replayed on u in counts (cheap); a law is searched for (costly: every
+    recursion, order and alignment) with none named or an open-loop one, where the caller found
+    none as written, or where the fit's weight points at the unit (a header lying about the law
+    as well).
 
     Parameters
     ----------
@@ -128,12 +145,15 @@ def check_reference_unit(log: RunLog, skipped=None, as_named: float | None = Non
         found, dv = None, None if as_named is None else header_law_dv(trial, skipped)
         if dv is not None and dv <= TOLERANCE:
             whose = "the header's law"
-        else:  # none named, an open loop's v = u, or a header that lies about the law as well
+        elif as_named is not None and (ratio is None or abs(ratio * q - 1.0) > RATIO_TOLERANCE):
+            continue  # a header that lies about the law as well: searched only where the fit points at the unit
+        else:  # none named, an open loop's v = u, or a lying header the fit's weight of u points past
             try:
                 found = identify_controller(trial, skipped)
             except StationError:
                 continue
-            if found.fit is None or found.cut or found.judged_to is not None or found.fit.max_abs_dv > TOLERANCE:
+            if (found.fit is None or found.cut or found.judged_to is not None or found.fit.max_abs_dv > TOLERANCE
+                    or not _stable(found.controller)):
                 continue
             whose, dv = f"the law the data give ({describe_controller(found.controller)})", float(found.fit.max_abs_dv)
         before = "" if as_named is None else f" (as written: max |dv| = {as_named:.3g} counts)"
