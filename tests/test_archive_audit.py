@@ -79,9 +79,11 @@ def test_an_unplugged_accelerometer_is_no_tip_acceleration(tmp_path, seed, creep
     assert "no tip acceleration" in format_report(replay(path, model=False)).splitlines()[0]
 
 
-@pytest.mark.parametrize("name, row", [("SFLR_P_control_step_kp_2_SLFR_RTP_P_control_kp=2.0.txt", 50),
-                                       ("step_response_Gth_comp_no_accel_FB_amp_100_duration_1000_SLFR_RTP_Motor_Comp_Gth.txt",
-                                        10)])
+RIG_P = "SFLR_P_control_step_kp_2_SLFR_RTP_P_control_kp=2.0.txt"
+RIG_LEAD = "step_response_Gth_comp_no_accel_FB_amp_100_duration_1000_SLFR_RTP_Motor_Comp_Gth.txt"
+
+
+@pytest.mark.parametrize("name, row", [(RIG_P, 50), (RIG_LEAD, 10)])
 def test_the_rigs_hub_at_rest_moves_its_first_count_no_sooner_than_the_audit_allows(rig_data, name, row):
     # Independent truth, the rig's own steps from rest: the P's command of 100 logged at row 50,
     # θ's first count at row 53; the lead's 200 at row 10, its count at row 12. A count sooner

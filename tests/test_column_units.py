@@ -400,7 +400,8 @@ def test_blind_a_reference_written_in_degrees(tmp_path, case, seed):
     path = tmp_path / "degrees.txt"
     path.write_text(blind.format_audit_run(drawn, dataclasses.replace(sim, u=sim.u * COUNT_IN["degrees"])))
     clean, run = LoggedRun.from_path(counts), LoggedRun.from_path(path)
-    assert sorted(run.audit.lines()) == sorted(clean.audit.lines() + ["header: u in encoder counts; data: u in degrees"])
+    said = "header: u in encoder counts; data: u in degrees"
+    assert sorted(run.audit.lines()) == sorted(clean.audit.lines() + [said])
     assert run.source == clean.source and run.reproduced == clean.reproduced
     if clean.controller is not None and clean.controller.spec.get("design"):
         assert run.controller.spec["design"]["text"] == clean.controller.spec["design"]["text"]

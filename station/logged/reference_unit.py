@@ -136,7 +136,10 @@ def check_reference_unit(log: RunLog, skipped=None, as_named: float | None = Non
     if ratio is not None and abs(ratio - 1.0) <= RATIO_TOLERANCE:  # the law weighs u as counts
         return None
     # a step pins the ratio; a sine, or a recursion on the stored integer, may not: then the law decides
-    units = sorted(THETA_UNITS.items(), key=lambda item: 0.0 if ratio is None else abs(np.log(abs(ratio * item[1]) + 1e-12)))
+    def off(item):  # how far the fit's weight is from the unit's (its log ratio)
+        return 0.0 if ratio is None else abs(np.log(abs(ratio * item[1]) + 1e-12))
+
+    units = sorted(THETA_UNITS.items(), key=off)
     for unit, q in units:
         counts = u / q
         if np.max(np.abs(counts - np.round(counts))) <= PRINTED_COUNTS:  # a step's counts, printed in the unit

@@ -121,8 +121,10 @@ def start_claims(theta, a, u, v, dt: float, closed: bool, accel_is_tip: bool, re
     stays on one count and the accelerometer reads noise (peak-to-peak at most
     :data:`ACCEL_QUIET_COUNTS`): θ changing there while the command is 0, or sooner than the
     commands before it could move a hub at rest a count (:func:`earliest_count_row`: a copy
-    cut 50 rows after the thesis's P step moves a count at row 3 under a command of 30, which
-    needs 5.5), or a swinging before the first command of a count, is an earlier motion still going on (a copy cut from a longer run, t re-zeroed): "reference"
+    cut 50 rows after the thesis's P step moves a count at row 3 under a command of 30, where
+    a hub at rest needs 5.5 rows, 3.8 with the margin), or a swinging before the first command
+    of a count, is an earlier motion still going on (a copy cut from a longer run, t
+    re-zeroed): "reference"
     contradicted (the model starts at rest: the start of its fit is that motion's). A start at
     rest off θ = 0 (the encoder not zeroed) contradicts a closed loop's zero ("columns": the
     loop's error was u - θ from that θ, and the model starts there); in open loop θ is compared
@@ -189,9 +191,10 @@ def start_claims(theta, a, u, v, dt: float, closed: bool, accel_is_tip: bool, re
     elif (not still and (idle or early)) or swing > quiet:
         what = []
         if not still:
+            top = np.max(np.abs(v[:first]), initial=0.0) if early else 0.0
             what.append(f"θ moves {np.ptp(theta[:w]):g} counts" + (
-                f" (its first count at row {first}: a hub at rest under commands up to "
-                f"{np.max(np.abs(v[:first]), initial=0.0):g} moves one no sooner than row {soonest:.2g})" if early else ""))
+                f" (its first count at row {first}: a hub at rest under commands up to {top:g} moves one no "
+                f"sooner than row {soonest:.2g})" if early else ""))
         if swing > quiet:
             what.append(f"a swings {swing:g} counts")
         claims.append(AuditClaim(
