@@ -20,7 +20,7 @@ from station.analysis.header_law import NEAR_COUNTS
 from station.analysis.law_rows import TOLERANCE, LawRows, pins_a_law
 from station.control import Compensator, OpenLoop
 from station.control.rerun import (ALIGNMENTS, AlignmentFit, command_error, is_closed_loop, judged_rows, memory,
-                                   replay_commands)
+                                   pole_radius, replay_commands)
 from station.rig import CLAMP, DAC_LIMIT, DT
 
 GLITCH_WORDS = "what no law gives, as a corrupted field has it; set aside, the law reproduces every other row"
@@ -217,9 +217,7 @@ def _isolated(controller, u, theta, a, v, alignments, skipped, restarts, slack) 
 def _fading_rows(controller) -> int:
     """Rows over which a law's recursion carries a corrupted input, until its slowest pole has
     faded it a thousandfold (1 for a law without memory)."""
-    poles = [np.roots(tf.den) for tf in (getattr(controller, "gth", None), getattr(controller, "ga", None))
-             if tf is not None and len(tf.den) > 1]
-    radius = max((float(np.max(np.abs(p))) for p in poles if p.size), default=0.0)
+    radius = pole_radius(controller)
     if radius <= 0.0:
         return 1
     if radius >= 1.0:

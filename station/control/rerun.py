@@ -359,3 +359,20 @@ def detect_alignment(controller, u, theta, a, v, alignments=ALIGNMENTS, skipped=
         if best is None or err < best.max_abs_dv:
             best = AlignmentFit(d, err, v_hat)
     return best
+
+
+def pole_radius(controller) -> float:
+    """The largest |pole| of a controller's filters (its Gth and Ga), 0 for one without memory
+    (a P law, an open loop): at 1 or more its recursion does not fade.
+
+    Parameters
+    ----------
+    controller : Compensator, OpenLoop or an object with ``gth`` / ``ga`` DiscreteTFs
+
+    Returns
+    -------
+    float
+    """
+    dens = [np.asarray(tf.den, dtype=float) for tf in (getattr(controller, "gth", None), getattr(controller, "ga", None))
+            if tf is not None and len(tf.den) > 1]
+    return max((float(np.max(np.abs(np.roots(den)))) for den in dens), default=0.0)

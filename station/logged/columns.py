@@ -45,7 +45,7 @@ from station.errors import StationError
 from station.logged.audit import AuditClaim, count_step, in_counts, quantum_fits
 from station.logged.controller import (NO_LAW, ControllerId, describe_controller, header_law_dv,
                                        header_reproduces, identify_controller)
-from station.logged.reference_unit import check_reference_unit
+from station.logged.reference_unit import check_reference_unit, exact_from_rest
 from station.logged.sensor_evidence import cosine_ratio
 from station.logged.units import whole_counts
 from station.rig import DAC_LIMIT
@@ -459,7 +459,7 @@ def _data_law_from_rest(log: RunLog, trial: RunLog, skipped) -> ControllerId | N
     A law from rest on u and θ of 0 gives 0 there, so v as written, c there, needs no search."""
     try:
         found = identify_controller(trial, skipped)
-        if found.fit is None or found.cut or found.judged_to is not None or found.fit.max_abs_dv > TOLERANCE:
+        if not exact_from_rest(found):
             return None
         if log.data["theta"][0] != 0:  # a P law's -kp·θ at rest is one value too
             as_written = identify_controller(log, skipped)

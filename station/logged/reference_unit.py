@@ -17,6 +17,7 @@ from typing import NamedTuple
 import numpy as np
 
 from station.analysis.law_rows import TOLERANCE
+from station.control.rerun import pole_radius
 from station.errors import StationError
 from station.logged.audit import AuditClaim
 from station.logged.controller import ControllerId, describe_controller, header_law_dv, identify_controller
@@ -89,16 +90,17 @@ def reference_ratio(log: RunLog) -> float | None:
     return -b_u / b_theta
 
 
-def _stable(controller) -> bool:
-    """Whether a law's filters have no pole outside the unit circle: a compensator's recursion
-    does not grow (an order-3 fit with a pole at z = 1062 reproduced the P step with θ negated
-    and u read 163 times larger, on the truncated integer at a clamp of ±100: no lab's law)."""
-    for name in ("gth", "ga"):
-        tf = getattr(controller, name, None)
-        den = None if tf is None else np.asarray(tf.den, dtype=float)
-        if den is not None and den.size > 1 and np.max(np.abs(np.roots(den))) > 1.0 + 1e-6:
-            return False
-    return True
+def exact_from_rest(found: ControllerId) -> bool:
+    """Whether an identified law reproduces every logged v (to :data:`TOLERANCE`) from rest: not
+    with its first rows of memory taken as logged (a "cut" copy), not only up to a jump of n.
+
+    Parameters
+    ----------
+    found : ControllerId
+        As :func:`station.logged.controller.identify_controller` gives it.
+    """
+    return (found.fit is not None and not found.cut and found.judged_to is None
+            and found.fit.max_abs_dv <= TOLERANCE)
 
 
 def check_reference_unit(log: RunLog, skipped=None, as_named: float | None = None) -> ReferenceUnit | None:
@@ -155,8 +157,9 @@ def check_reference_unit(log: RunLog, skipped=None, as_named: float | None = Non
                 found = identify_controller(trial, skipped)
             except StationError:
                 continue
-            if (found.fit is None or found.cut or found.judged_to is not None or found.fit.max_abs_dv > TOLERANCE
-                    or not _stable(found.controller)):
+            # a recursion that grows is no lab's law (an order-3 fit with a pole at z = 1062 on the
+            # truncated integer at a ±100 clamp "reproduced" the P step with θ negated, u 163x)
+            if not exact_from_rest(found) or pole_radius(found.controller) > 1.0 + 1e-6:
                 continue
             whose, dv = f"the law the data give ({describe_controller(found.controller)})", float(found.fit.max_abs_dv)
         before = "" if as_named is None else f" (as written: max |dv| = {as_named:.3g} counts)"
