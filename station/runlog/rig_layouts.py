@@ -11,7 +11,7 @@ import re
 from pathlib import Path
 from typing import Any, NamedTuple
 
-from station.runlog.rows import is_number
+from station.runlog.rows import decimal_comma, is_number
 from station.runlog.schema import MAGIC, SIGNAL_COLUMNS, log_error, standard_column
 
 
@@ -154,7 +154,7 @@ def parse_rig_header(path: Path, comment_lines: list[str]) -> Header:
                 try:
                     meta[key] = float(val)
                 except ValueError:
-                    if key in _KEYS.values() and "." not in val and is_number(val.replace(",", ".", 1)):
+                    if key in _KEYS.values() and decimal_comma(val):
                         meta[key] = float(val.replace(",", "."))  # one number: its comma can be nothing else
                         notes.append(f"{key}={val} read as {meta[key]:g} (a decimal comma)")
                     else:

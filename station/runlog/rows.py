@@ -38,6 +38,17 @@ def is_number(text: str) -> bool:
     return True
 
 
+def decimal_comma(text: str) -> bool:
+    """Whether one field is a number written with a decimal comma (``0,002``; not ``1.000,5``).
+
+    Parameters
+    ----------
+    text : str
+        One field.
+    """
+    return "," in text and "." not in text and is_number(text.replace(",", ".", 1))
+
+
 def parse_row(line: str, names: list[str], sep: str | None) -> tuple[list[float] | None, str | None]:
     """One data line as numbers, or what is wrong with it.
 
@@ -67,7 +78,7 @@ def parse_row(line: str, names: list[str], sep: str | None) -> tuple[list[float]
         return [float(p) for p in parts], None
     except ValueError:
         bad = next(j for j, p in enumerate(parts) if not is_number(p))
-        comma = sep != "," and is_number(parts[bad].replace(",", ".", 1))
+        comma = sep != "," and decimal_comma(parts[bad])
         return None, (f"expected a number in column {names[bad]!r}, got {parts[bad]!r}"
                       + (" (a decimal comma: the log must be written with '.' decimals)" if comma else ""))
 
