@@ -119,9 +119,13 @@ class ReplayReport:
     doubt: str = ""
 
     @property
-    def reproduced(self) -> bool:
-        """True when the replay reproduces the logged v within ``REPRODUCED_TOLERANCE``."""
-        return self.max_abs_dv is not None and self.max_abs_dv <= REPRODUCED_TOLERANCE
+    def reproduced(self) -> bool | None:
+        """True when the replay reproduces the logged v within ``REPRODUCED_TOLERANCE``; None
+        when nothing was judged (no replay, or a law with memory on rows that skip ticks:
+        :attr:`judged_to` 0)."""
+        if self.max_abs_dv is None or self.judged_to == 0:
+            return None
+        return self.max_abs_dv <= REPRODUCED_TOLERANCE
 
     def to_json(self) -> dict[str, Any]:
         """The report as JSON-able dict (``station replay --json``).
@@ -148,7 +152,7 @@ class ReplayReport:
             "samples": self.samples,
             "max_abs_dv": self.max_abs_dv,
             "judged_to_row": self.judged_to,
-            "reproduced": self.reproduced if self.max_abs_dv is not None else None,
+            "reproduced": self.reproduced,
             "reference": self.reference.to_json(),
             "metrics": {"overshoot_pct": None, "settling_thesis_s": None} if m is None else m.to_json(),
             "model": None if self.fit_pct is None else {"fit_pct": dict(self.fit_pct),
@@ -205,7 +209,7 @@ def replay(path: str | Path, model=True, n_elements: int | None = None) -> Repla
         else:
             if run.header_alignment is not None and run.header_alignment != run.alignment:
                 report.notes.append(f"header says alignment {run.header_alignment}, the data say {run.alignment}")
-            if not run.reproduced:
+            if not run.reproduced and report.judged_to != 0:  # 0: not judged (reproduction_lines says)
                 report.notes.append(f"the replay does NOT reproduce the logged v (max |dv| = "
                                     f"{report.max_abs_dv:.3g} counts)")
             report.metrics = run.step_metrics()

@@ -65,7 +65,8 @@ class SurveyRow:
     alignment : int or None
         Computational delay detected by the replay, samples.
     max_abs_dv : float or None
-        Largest |replayed v − logged v|, DAC counts.
+        Largest |replayed v − logged v|, DAC counts (None: not replayed, or judged on no row,
+        a law with memory on a copy that skips ticks).
     overshoot_pct, settling_thesis_s : float or None
         Step metrics of the logged θ (:class:`station.analysis.metrics.StepMetrics`).
     fit_theta_pct, fit_accel_pct : float or None
@@ -226,6 +227,9 @@ def survey_one(path: str | Path, model: bool = True) -> SurveyRow:
     if run.replayed is not None:  # a controller was replayed
         row.controller, row.controller_source = run.controller.name, run.source or ""
         row.alignment, row.max_abs_dv = run.alignment, run.max_abs_dv
+        if rep.judged_to == 0:  # a law with memory on rows that skip ticks: judged on none
+            row.max_abs_dv = None
+            row.contradictions += reproduction_lines(rep.max_abs_dv, rep.alignment, rep.audit, 0)
     if rep.metrics is not None:
         row.overshoot_pct, row.settling_thesis_s = rep.metrics.overshoot_pct, rep.metrics.settling_time_s
     if rep.fit_pct is not None:

@@ -53,13 +53,17 @@ def test_a_loop_run_at_another_rate_is_replayed_there(tmp_path, dt, kind):
     assert rep.fit_pct["theta"] > 70.0, rep.fit_pct
 
 
-def test_rows_kept_from_a_500_hz_loop_are_still_refused(rig_data, tmp_path):
-    """Every other row of the rig's lead step (n jumping by 2): the law ran on rows the log
-    lacks, so no controller is replayed, as before."""
+def test_rows_kept_from_a_500_hz_loop_without_n_are_still_refused(rig_data, tmp_path):
+    """Every other row of the rig's lead step with its n column dropped (t by 0.004 s): nothing
+    tells a loop at 250 Hz from rows kept from one at 500 Hz, whose law ran on rows the log
+    lacks, so no controller is replayed. (With n as counted, jumping by 2, the header's law is
+    kept and run at every tick: tests/test_missing_ticks.py.)"""
     name = "step_response_Gth_comp_no_accel_FB_amp_100_duration_1000_SLFR_RTP_Motor_Comp_Gth.txt"
     lines = (rig_data / name).read_text().splitlines()
-    head = [ln for ln in lines if ln.startswith("#")]
-    rows = [ln for ln in lines if ln and not ln.startswith("#")][::2]
+    head = [ln.replace("#t\tn\t", "#t\t") for ln in lines if ln.startswith("#")]
+    rows = [ln.split("\t", 2)[0] + "\t" + ln.split("\t", 2)[2]
+            for ln in lines if ln and not ln.startswith("#")][::2]
+    assert head[-1].startswith("#t\tu\t")
     path = tmp_path / name
     path.write_text("\n".join(head + rows) + "\n")
     run = LoggedRun.from_path(path)

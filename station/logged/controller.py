@@ -37,14 +37,14 @@ from station.analysis.pid_law import match_pid
 from station.control import Compensator, DiscreteTF, OpenLoop, controller_from_spec, lead_controller, p_controller
 from station.control.compensator import recursion_words
 from station.control.designs import MAX_ORDER, z_problem
-from station.control.rerun import (ALIGNMENTS, AlignmentFit, command_error, detect_alignment, is_closed_loop,
-                                   printed_commands)
+from station.control.rerun import ALIGNMENTS, AlignmentFit, is_closed_loop, printed_commands
 from station.errors import StationError
 from station.logged.audit import AuditClaim
+from station.logged.missing_ticks import law_on_kept_rows, miss_at_gap
 from station.logged.start import start_claims
 from station.logged.units import replayable_rate
 from station.runlog.printing import Printing
-from station.runlog.timebase import restart_rows
+from station.runlog.timebase import restart_rows, row_ticks, tick_time
 from station.rig import CLAMP, DT  # the rig's clamp and sample time: its compensators ran at them
 from station.runlog import RunLog
 
@@ -381,9 +381,11 @@ def identify_controller(log: RunLog, skipped=None) -> ControllerId:
                 f"replayed; the model is driven by the logged v")
         return ControllerId(None, None, [note], None, AuditClaim(
             "controller", f"custom Python controller {custom}", "not replayable", "unchecked", note))
-    controller, notes = _named_controller(log)
-    dt = log.dt
     data = log.data
+    ticks = None if replayable_rate(log) else row_ticks(data["n"])
+    # a copy that lacks ticks between its rows: its law ran at the tick's rate, not the rows'
+    dt = log.dt if ticks is None else tick_time(data["t"], data["n"], log.dt)
+    controller, notes = _named_controller(log, dt)
     u, theta, v, a = data["u"], data["theta"], data["v"], data["a"]
     a = np.where(np.isfinite(a), a, 0.0)
     printing = printed_commands(v)
@@ -397,8 +399,12 @@ def identify_controller(log: RunLog, skipped=None) -> ControllerId:
     prefer = stated_d if isinstance(stated_d, int) and not isinstance(stated_d, bool) else PREFERRED_ALIGNMENT
     said = (describe_controller(controller) if controller is not None else
             f"PID kp = {pid[0]:g}, ki = {pid[1]:g}, kd = {pid[2]:g}" if pid is not None else NOT_STATED)
+    if ticks is not None and is_closed_loop(controller) and all(np.all(np.isfinite(x)) for x in (u, theta, v)):
+        k = law_on_kept_rows(controller, u, theta, a, v, ticks, said, dt)
+        return ControllerId(k.law, "header", notes + [k.note], k.fit, k.claim, k.alignments,
+                            judged_to=None if k.judged else 0)
     if not replayable_rate(log) and not isinstance(controller, OpenLoop):
-        notes.append(f"sampled at {dt:g} s, not the rig's {DT:g} s, and its rows are not every tick of a loop "
+        notes.append(f"sampled at {log.dt:g} s, not the rig's {DT:g} s, and its rows are not every tick of a loop "
                      f"at that rate (n jumps, or no n column): closed-loop commands cannot be replayed or "
                      f"inferred (the rig's controllers ran at {DT:g} s, on rows this log may lack); {_driven(v)}")
         return ControllerId(None, None, notes, None, AuditClaim("controller", said, "not replayable", "unchecked",
@@ -515,7 +521,7 @@ def identify_controller(log: RunLog, skipped=None) -> ControllerId:
     evidence = (f"the header's controller replays v to max |dv| = {_counts(header_dv)} at best, and no law "
                 f"tried ({tried}) reproduces it")
     data_says = f"not this law (max |dv| = {_counts(header_dv)}); no law found"
-    gap = None if controller is None else _miss_at_gap(used, u, theta, a, v, data["n"], skipped)
+    gap = None if controller is None else miss_at_gap(used, u, theta, a, v, data["n"], skipped)
     if gap is not None:  # the law is judged on rows it never saw together: not a contradiction
         gap, fit = gap
         before = np.abs(np.asarray(fit.v_replayed[:gap], float) - np.asarray(v[:gap], float))[fit.alignment:]
@@ -529,24 +535,6 @@ def identify_controller(log: RunLog, skipped=None) -> ControllerId:
     return ControllerId(controller, "header" if controller is not None else None, notes,
                         None if controller is None else fit, AuditClaim(
                             "controller", said, data_says, verdict, evidence), judged_to=gap)
-
-
-def _miss_at_gap(controller, u, theta, a, v, n, skipped) -> tuple[int, AlignmentFit] | None:
-    """The row where n jumps (a tick missing or repeated) at which, or within its alignment
-    after which, the controller replayed straight through at some alignment first misses the
-    logged v, and that alignment's fit (over every row); None when at every alignment it
-    first misses elsewhere, or n does not jump."""
-    n = np.asarray(n, dtype=float)
-    if n.size < 2 or not np.all(np.isfinite(n)):
-        return None
-    gaps = np.flatnonzero(np.diff(n) != 1) + 1
-    for d in ALIGNMENTS if gaps.size else ():
-        fit = detect_alignment(controller, u, theta, a, v, (d,), skipped)
-        miss = np.flatnonzero(command_error(fit.v_replayed, v) > TOLERANCE)
-        near = gaps[(miss[0] >= gaps) & (miss[0] <= gaps + d)] if miss.size else gaps[:0]
-        if near.size:
-            return int(near[0]), fit
-    return None
 
 
 def _counts(dv: float) -> str:
@@ -579,8 +567,8 @@ def _custom_controller(log: RunLog) -> str | None:
     return str(spec.get("name") or spec.get("kind") or "unnamed")
 
 
-def _named_controller(log: RunLog) -> tuple[Compensator | OpenLoop | None, list[str]]:
-    """The controller the log's header names (None when it names none)."""
+def _named_controller(log: RunLog, dt: float | None = None) -> tuple[Compensator | OpenLoop | None, list[str]]:
+    """The controller the log's header names (None when it names none), at ``dt`` (default the log's)."""
     if log.format == "station":
         spec = log.meta.get("controller")
         if not isinstance(spec, dict):
@@ -589,9 +577,8 @@ def _named_controller(log: RunLog) -> tuple[Compensator | OpenLoop | None, list[
             return controller_from_spec(spec), []
         except StationError as exc:  # name the log
             raise StationError(f"{log.path}: {exc}", file=log.path, key="controller") from None
-    dt = log.dt
     try:
-        return rig_controller(log.meta, dt)
+        return rig_controller(log.meta, log.dt if dt is None else dt)
     except StationError as exc:  # a header field: name the file and its line
         key = exc.key
         line = None if key is None else next((i for i, text in enumerate(log.header, 1)

@@ -25,7 +25,8 @@ def reproduction_lines(max_abs_dv: float, alignment: int | None, audit: Audit | 
         The log's audit (:attr:`station.logged.LoggedRun.audit`): its controller and
         alignment rows say what the data left undecided.
     judged_to : int or None, optional
-        The row where n jumps past which the law was not judged.
+        The row where n jumps past which the law was not judged (0: on no row, a law with
+        memory on a copy that lacks ticks between its rows).
 
     Returns
     -------
@@ -39,6 +40,9 @@ def reproduction_lines(max_abs_dv: float, alignment: int | None, audit: Audit | 
         align += f" ({tie.data.removeprefix('alignment ')}: the data cannot tell them apart)"
     upto = "" if judged_to is None else (f" up to row {judged_to}, where n jumps (its memory is not in the "
                                          f"log's rows: not judged across it)")
+    if judged_to == 0:  # a law with memory on a copy that lacks ticks between its rows
+        return [f"replay not judged: the law's memory ran on ticks the log lacks (replayed on θ interpolated "
+                f"there: max |dv| = {max_abs_dv:.3g} counts{align})"]
     verdict = "reproduces" if reproduced else "does NOT reproduce"
     lines = [f"replay {verdict} the logged v{upto}: max |dv| = {max_abs_dv:.3g} counts{align}"]
     if reproduced and law is not None and "; but " in law.evidence:

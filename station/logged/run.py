@@ -143,7 +143,7 @@ class LoggedRun:
             spec = getattr(self.controller, "spec", None) or {}
             kp = spec.get("kp") if spec.get("kind") == "p" else None
             claims += file_kp_claims(self.log.path, describe_controller(self.controller), kp)
-        if self.closed and self.replayed is not None:
+        if self.closed and self.replayed is not None and cid.judged_to != 0:  # 0: judged on no row
             row = alignment_claim(self.header_alignment, self.alignment, self.reproduced, self.log.format,
                                   cid.alignments)
             if row is not None:

@@ -235,7 +235,8 @@ def simulate_log(log: RunLog, controller, alignment: int | None, model, ticks=FR
         missing = int(ticks.max()) + 1 - np.unique(ticks).size
         repeated = int(ticks.size - np.unique(ticks).size)
         pred = type(pred)(*(np.asarray(x)[ticks] for x in pred))
-        said = [f"{missing} tick(s) missing (the row before's u and v held there)"] if missing else []
+        held = "u" if closed else "u and v"  # a closed loop computes its own v at every tick
+        said = [f"{missing} tick(s) missing (the row before's {held} held there)"] if missing else []
         said += [f"{repeated} row(s) repeating a tick"] if repeated else []
         first = np.zeros(ticks.size, bool)
         first[np.unique(ticks, return_index=True)[1]] = True

@@ -39,7 +39,7 @@ class Hidden:
     Attributes
     ----------
     kind : str
-        "held", "cut", "copy", "unzeroed", "unplugged" or "unpowered".
+        "held", "cut", "copy", "unzeroed", "unplugged", "unpowered" or "kept_ticks".
     moving_at_start : bool
         The run was moving at its first row (cut after the motion began).
     theta0 : float
@@ -279,3 +279,31 @@ def first_mode() -> tuple[float, float]:
 
 __all__ = ["Hidden", "cut_log", "first_mode", "held_beam", "write_beam_test", "write_copy", "write_cut", "write_unplugged",
            "write_unpowered", "write_unzeroed"]
+
+
+def write_kept_ticks(folder: Path, seed: int, kind: str = "p_step", every: int = 2, start: int = 0,
+                     kp: float = 2.0, header_kp: float | None = None, alignment: int = 1,
+                     effects: dict | None = None) -> tuple[Path, Hidden, Run]:
+    """A closed-loop step of the blind rig (its law at every 0.002 s tick) logged every
+    ``every``-th tick from tick ``start``, t and n as the loop counted them (a logger at 250 Hz
+    beside a 500 Hz loop), the header's kp ``header_kp`` (a lying header) or the true one.
+
+    Returns
+    -------
+    (Path, Hidden, Run)
+        The log, the truth (``extra``: kp, alignment, every) and the whole run (every tick).
+    """
+    u = reference(kind, 1000)
+    sim = simulate(KINDS[kind], u, dict(effects or {}), np.random.default_rng([seed, 2611]), kp=kp,
+                   alignment=alignment)
+    lines = format_run(kind, sim).splitlines()
+    head = [x for x in lines if x.startswith("#")]
+    if kind == "p_step":
+        head = [f"#kp={kp if header_kp is None else header_kp!r}" if x.startswith("#kp=") else x for x in head]
+    rows = [x for x in lines if not x.startswith("#")][start::every]
+    folder = Path(folder)
+    folder.mkdir(parents=True, exist_ok=True)
+    path = folder / f"{kind}_{seed}_every_{every}_from_{start}.txt"
+    path.write_text("\n".join(head + rows) + "\n")
+    return path, Hidden("kept_ticks", False, float(sim.theta[start]), DT,
+                        extra={"kp": kp, "alignment": alignment, "every": every}), sim

@@ -1,0 +1,192 @@
+"""A named law on a copy that lacks ticks between its rows (a rig log kept every other tick:
+n jumps by 2, t by 0.004 s): what its rows can say of the law, and how the model runs it.
+
+The rig's laws ran at every 0.002 s tick; the rows in between are not in the log, so a law
+with memory cannot be replayed on its rows (:func:`station.control.rerun.replay_commands`
+starts again at each jump of n, and a copy where every row follows a jump leaves nothing to
+judge). A law without memory (P: v[k] = kp·(u[k] − θ[k−d])) needs only θ at tick k − d: where
+the log lacks that tick, θ there lay between the rows around it (the hub moves a few counts a
+tick; a count either side for a turn between rows), so the logged v must lie in the law's range
+over that bracket. A law with memory is run on θ interpolated at the missing ticks, a number
+said beside it, never a verdict. Either way the model then runs the law at every tick, the
+reference held between rows (:func:`station.logged.simulate.simulate_log`).
+"""
+
+from __future__ import annotations
+
+from typing import NamedTuple
+
+import numpy as np
+
+from station.analysis.controller_id import PREFERRED_ALIGNMENT, TOLERANCE, law_variants
+from station.control.rerun import ALIGNMENTS, AlignmentFit, command_error, detect_alignment, memory, replay_commands
+from station.logged.audit import AuditClaim
+
+TURN_COUNTS = 1.0
+"""How far θ at a missing tick may lie outside the rows around it, encoder counts (one count:
+the hub turning between two rows)."""
+
+
+class KeptRowsLaw(NamedTuple):
+    """A header's law judged on a copy that lacks ticks between its rows (:func:`law_on_kept_rows`).
+
+    Attributes
+    ----------
+    law : Compensator
+        The law as it reproduces the rows best (its recursion on the stored integer when that
+        fits better).
+    fit : AlignmentFit
+        Its fit over the judged rows (a law with memory: replayed on interpolated θ).
+    claim : AuditClaim
+        The controller's audit row.
+    alignments : tuple of int
+        The alignments at which it holds.
+    note : str
+        One line on how the rows judged it and how the model runs it.
+    judged : bool
+        Whether the rows judged it (False: a law with memory, its fit a number only).
+    """
+
+    law: object
+    fit: AlignmentFit
+    claim: AuditClaim
+    alignments: tuple
+    note: str
+    judged: bool
+
+
+def _bracket(ticks: np.ndarray, theta: np.ndarray, d: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """θ at each row's tick − d: (lowest, highest, judged). Exact where the log has that tick;
+    between the rows around it (± :data:`TURN_COUNTS`) where it does not; not judged before the
+    log's first tick."""
+    want = ticks - d
+    order = np.argsort(ticks, kind="stable")
+    placed = ticks[order]
+    at = np.searchsorted(placed, want, side="left")
+    exact = (at < placed.size) & (placed[np.minimum(at, placed.size - 1)] == want)
+    before = order[np.clip(at - 1, 0, placed.size - 1)]
+    after = order[np.clip(at, 0, placed.size - 1)]
+    lo = np.minimum(theta[before], theta[after]) - TURN_COUNTS
+    hi = np.maximum(theta[before], theta[after]) + TURN_COUNTS
+    own = order[np.clip(at, 0, placed.size - 1)]
+    lo, hi = np.where(exact, theta[own], lo), np.where(exact, theta[own], hi)
+    return lo, hi, want >= placed[0]
+
+
+def _miss(law, u, lo, hi, a, v, judged) -> tuple[float, np.ndarray]:
+    """How far each logged v lies outside a law's range over θ in [lo, hi] (a law without
+    memory is monotone in θ): the largest miss over judged rows, and the range's nearest v."""
+    v_lo, _ = replay_commands(law, u, hi, a, 0)  # θ at its highest: the least v (kp > 0)
+    v_hi, _ = replay_commands(law, u, lo, a, 0)
+    low, high = np.minimum(v_lo, v_hi), np.maximum(v_lo, v_hi)
+    nearest = np.clip(v, low, high)
+    miss = np.abs(v - nearest)[judged]
+    return float(np.max(miss, initial=0.0)), nearest
+
+
+def _interpolated(law, u, theta, a, v, ticks, d: int) -> AlignmentFit:
+    """A law with memory run on every tick, θ and a interpolated at the missing ones and u held;
+    its commands at the log's rows against the logged v."""
+    grid = np.arange(int(ticks.max()) + 1)
+    order = np.argsort(ticks, kind="stable")
+    placed = ticks[order]
+    held = order[np.searchsorted(placed, grid, side="right") - 1]
+    at = [np.interp(grid, placed, np.asarray(x, float)[order]) for x in (theta, a)]
+    out, _ = replay_commands(law, np.asarray(u, float)[held], at[0], at[1], d)
+    replayed = out[ticks]
+    return AlignmentFit(d, float(np.max(np.abs(replayed - v), initial=0.0)), replayed)
+
+
+def law_on_kept_rows(controller, u, theta, a, v, ticks: np.ndarray, said: str, tick_s: float) -> KeptRowsLaw:
+    """Judge a closed-loop law a log's header names on a copy that lacks ticks between its
+    rows, and keep it to run the model at every tick.
+
+    Parameters
+    ----------
+    controller : Compensator
+        The header's law (closed loop).
+    u, theta, a, v : numpy.ndarray, shape (N,)
+        The log's columns (a with 0 where not finite).
+    ticks : numpy.ndarray of int, shape (N,)
+        Each row's tick from the first row's (:func:`station.runlog.timebase.row_ticks`).
+    said : str
+        The header's claim in words (:func:`station.logged.controller.describe_controller`).
+    tick_s : float
+        Seconds per tick (:func:`station.runlog.timebase.tick_time`), for the words.
+
+    Returns
+    -------
+    KeptRowsLaw
+    """
+    u, theta, a, v = (np.asarray(x, dtype=float) for x in (u, theta, a, v))
+    missing = int(ticks.max()) + 1 - np.unique(ticks).size
+    gap = f"the log keeps {ticks.size} rows of {int(ticks.max()) + 1} ticks ({missing} missing, {tick_s:g} s a tick)"
+    if memory(controller) == 0:  # P: θ at the tick it used, bracketed by the rows around it
+        best, holds = None, []
+        for d in ALIGNMENTS:
+            lo, hi, judged = _bracket(ticks, theta, d)
+            for law in law_variants(controller, v):
+                dv, nearest = _miss(law, u, lo, hi, a, v, judged)
+                if dv <= TOLERANCE and d not in holds:
+                    holds.append(d)
+                if best is None or dv < best[1].max_abs_dv - TOLERANCE or (
+                        dv <= TOLERANCE and d == PREFERRED_ALIGNMENT):
+                    best = (law, AlignmentFit(d, dv, nearest))
+        law, fit = best
+        ok = fit.max_abs_dv <= TOLERANCE
+        words = (f"every logged v within the law's range over θ at the tick it used (the rows around a missing "
+                 f"tick, ±{TURN_COUNTS:g} count): {gap}")
+        claim = AuditClaim("controller", said, f"{said} at alignment {fit.alignment}" if ok else
+                           f"not this law (max |dv| = {fit.max_abs_dv:.3g} counts)",
+                           "confirmed" if ok else "contradicted" if fit.max_abs_dv >= 1.0 else "unchecked",
+                           words if ok else f"a logged v lies {fit.max_abs_dv:.3g} counts outside the law's range "
+                                            f"over θ at the tick it used: {gap}")
+        note = (f"{gap}: the header's law is judged on θ bracketed at the missing ticks "
+                f"(max |dv| = {fit.max_abs_dv:.3g} counts) and the model runs it at every tick, u held between rows")
+        return KeptRowsLaw(law, fit, claim, tuple(sorted(holds)), note, True)
+    best = None
+    for law in law_variants(controller, v):
+        for d in ALIGNMENTS:
+            fit = _interpolated(law, u, theta, a, v, ticks, d)
+            rms = float(np.sqrt(np.mean((fit.v_replayed - v) ** 2)))
+            if best is None or rms < best[2]:
+                best = (law, fit, rms)
+    law, fit, rms = best
+    words = (f"a law with memory ran on the ticks between the rows, which the log lacks: not judged ({gap}); "
+             f"replayed on θ interpolated there it comes within {rms:.3g} counts RMS of the logged v "
+             f"(max {fit.max_abs_dv:.3g})")
+    claim = AuditClaim("controller", said, "not judged (ticks missing between rows)", "unchecked", words)
+    note = f"{words}; the model runs the header's law at every tick, u held between rows"
+    return KeptRowsLaw(law, fit, claim, (fit.alignment,), note, False)
+
+
+def miss_at_gap(controller, u, theta, a, v, n, skipped) -> tuple[int, AlignmentFit] | None:
+    """The row where n jumps (a tick missing or repeated) at which, or within its alignment
+    after which, the controller replayed straight through at some alignment first misses the
+    logged v, and that alignment's fit (over every row): a law judged on rows it never saw
+    together, not contradicted.
+
+    Parameters
+    ----------
+    controller : Compensator or OpenLoop
+    u, theta, a, v, n : array_like, shape (N,)
+        The log's columns.
+    skipped : array_like of bool or None
+        As :func:`station.control.rerun.replay_commands`.
+
+    Returns
+    -------
+    (int, AlignmentFit) or None
+        None when at every alignment it first misses elsewhere, or n does not jump.
+    """
+    n = np.asarray(n, dtype=float)
+    if n.size < 2 or not np.all(np.isfinite(n)):
+        return None
+    gaps = np.flatnonzero(np.diff(n) != 1) + 1
+    for d in ALIGNMENTS if gaps.size else ():
+        fit = detect_alignment(controller, u, theta, a, v, (d,), skipped)
+        miss = np.flatnonzero(command_error(fit.v_replayed, v) > TOLERANCE)
+        near = gaps[(miss[0] >= gaps) & (miss[0] <= gaps + d)] if miss.size else gaps[:0]
+        if near.size:
+            return int(near[0]), fit
+    return None
