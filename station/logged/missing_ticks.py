@@ -1,5 +1,6 @@
-"""A named law on a copy that lacks ticks between its rows (a rig log kept every other tick:
-n jumps by 2, t by 0.004 s): what its rows can say of the law, and how the model runs it.
+"""A named law on a copy that lacks ticks between its rows (a rig log kept every other tick,
+n jumping by 2 and t by 0.004 s, or every k-th up to :data:`station.runlog.timebase.MISSING_SHARE`
++ 1): what its rows can say of the law, and how the model runs it.
 
 The rig's laws ran at every 0.002 s tick; the rows in between are not in the log, so a law
 with memory cannot be replayed on its rows (:func:`station.control.rerun.replay_commands`
