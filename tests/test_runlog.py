@@ -535,6 +535,15 @@ def test_several_gains_on_one_header_line_are_each_read(rig_data, tmp_path, text
     assert (log.meta["kp"], log.meta["ki"], log.meta["kd"]) == (2.0, 0.0, 0.0)
 
 
+@pytest.mark.parametrize("text, title", [("#kp=2.0; title=foo bar", "foo bar"),
+                                         ("#title = P step, 50 counts; kp = 2.0", "P step, 50 counts")])
+def test_fields_parted_by_semicolons_may_hold_spaces(rig_data, tmp_path, text, title):
+    """';' parts a header's fields whatever their values hold (before: "kp: expected a number,
+    got '2.0; title=foo bar'")."""
+    log = read_log(_with_line(rig_data, tmp_path, P_LOG, 2, text))
+    assert log.meta["kp"] == 2.0 and log.meta["title"] == title
+
+
 @pytest.mark.parametrize("num, den", [("[18.32547182, -17.20911971]", "[1.0, -0.77672958]"),
                                       ("[ 18.32547182,-17.20911971 ]", "[1.,-0.77672958]")])
 def test_a_filter_printed_as_a_python_list_is_read(rig_data, tmp_path, num, den):

@@ -144,7 +144,11 @@ def parse_rig_header(path: Path, comment_lines: list[str]) -> Header:
             meta.setdefault(name, {})[coef.group(2)] = values
             coef_lines[name] = i + 1
         elif kv:
-            pairs = _KV_EACH.findall(body) if _KV_ALL.match(body) else [kv.groups()]
+            parts = [part for part in body.split(";") if part.strip()]
+            fields = [_KV.match(part) for part in parts]
+            # ';' parts fields whose values may hold spaces (#kp=2.0; title=foo bar)
+            pairs = (_KV_EACH.findall(body) if _KV_ALL.match(body) else [f.groups() for f in fields]
+                     if len(parts) > 1 and all(fields) else [kv.groups()])
             for key, val in pairs:
                 key = _KEYS.get(key.lower(), key)
                 if key in kv_lines:
