@@ -24,7 +24,7 @@ from station.logged import LoggedRun
 from station.logged.audit import Audit
 from station.logged.reproduction import reproduction_lines
 from station.logged.run import REPRODUCED_TOLERANCE
-from station.runlog.timebase import restart_rows
+from station.runlog.timebase import restart_rows, run_start
 from station.plots import source_label
 from station.rig import THESIS_STEPS  # the thesis rows are shown for those step logs only
 
@@ -138,7 +138,8 @@ def compare_run(path, plant) -> RunComparison:
         notes.extend(said[1:])
     step = run.reference.amplitude if run.closed else None  # station.logged.reference: the one definition of a step
     tick = run.reference.step_tick
-    step_time = None if step is None or tick is None else float(data["t"][tick])
+    step_time = (None if step is None or tick is None else
+                 float(data["t"][tick] - data["t"][0]) + run_start(data["t"], data["n"], log.dt))
     if run.held is not None:
         notes.append(f"{run.held_note}; `station replay` analyzes the beam's free vibration after the release")
         return RunComparison(str(path), name, step, run.step_metrics(), None, None, None,

@@ -231,13 +231,13 @@ def replay(path: str | Path, model=True, n_elements: int | None = None) -> Repla
     return report
 
 
-def _tick_of_row(log: RunLog | None, row: int) -> str:
+def _tick_of_row(log: RunLog | None, row: int, row_said: bool = True) -> str:
     """"tick K" of a log's row: its n there, and the row beside it where rows skip ticks (a log
-    of every other tick steps at row 25, the device's tick 50)."""
+    of every other tick steps at row 25, the device's tick 50) unless not ``row_said``."""
     n = None if log is None or row >= len(log.data["n"]) else log.data["n"][row]
     if n is None or not np.isfinite(n) or n == row or n != round(n):
         return f"tick {row}"
-    return f"tick {int(n)} (row {row})"
+    return f"tick {int(n)} (row {row})" if row_said else f"tick {int(n)}"
 
 
 def _model(report: ReplayReport, run: LoggedRun, model) -> None:
@@ -318,7 +318,9 @@ def format_report(report: ReplayReport) -> str:
                                                              report.judged_to)]
     ref = report.reference
     if ref.is_step:
-        lines.append(f"  reference: step of {ref.amplitude:g} at {_tick_of_row(report.log, ref.step_tick)}")
+        lines.append(f"  reference: step of {ref.amplitude:g} at {_tick_of_row(report.log, ref.step_tick)}"
+                     if ref.step_tick else f"  reference: u = {ref.amplitude:g} from the first row "
+                                           f"({_tick_of_row(report.log, 0, row_said=False)}): the step is at or before it")
     if report.metrics is not None:
         lines.append(f"  {report.metrics.summary()}")
     if report.fit_pct is not None:

@@ -18,7 +18,7 @@ from station.control.rerun import detect_alignment, replay_commands
 from station.logged import rig_controller
 from station.replay import format_report, replay
 from station.runlog import RunLogWriter, read_log
-from station.runlog.timebase import restart_rows
+from station.runlog.timebase import restart_rows, run_start
 
 P_LOG = "SFLR_P_control_step_kp_2_SLFR_RTP_P_control_kp=2.0.txt"
 LEAD_LOG = "step_response_Gth_comp_no_accel_FB_amp_100_duration_1000_SLFR_RTP_Motor_Comp_Gth.txt"
@@ -299,3 +299,51 @@ def test_the_steps_tick_is_the_devices_where_rows_skip_ticks(rig_data, tmp_path,
     path.write_text("\n".join(head + lines[len(head):][start::every]) + "\n")
     text = format_report(replay(path, model=False))
     assert f"  reference: step of 50 {said}\n" in text + "\n", text
+
+
+def _rows_of(rig_data, name, first, rezero=False):
+    """The rig's log from row ``first`` on: t and n as the loop counted them, or (``rezero``)
+    t from 0 and n from 0, as the lab's ``_trunc`` copies renumbered them."""
+    lines = (rig_data / name).read_text().splitlines()
+    head = [ln for ln in lines if ln.startswith("#")]
+    rows = [ln.split("\t") for ln in lines[len(head):]][first:]
+    if rezero:
+        t0 = float(rows[0][0])
+        rows = [[f"{float(r[0]) - t0:.6g}", str(k)] + r[2:] for k, r in enumerate(rows)]
+    return "\n".join(head + ["\t".join(r) for r in rows]) + "\n"
+
+
+@pytest.mark.parametrize("first", [10, 30, 49])
+def test_a_copy_cut_at_rest_with_its_clock_kept_settles_when_the_whole_run_does(rig_data, tmp_path, first):
+    """The P step from row 30, t and n as logged (t = 0.06 s at n = 30): the settling time is
+    from the run's t = 0, 1.250 s as on the whole log, and compare's step at 0.100 s (before:
+    "settling (1 %) 1.190 s" beside "this log's step at 0.100 s", from a first row it called
+    t = 0). A copy whose t and n were renumbered from 0 starts its own clock there."""
+    whole = LoggedRun.from_path(rig_data / P_LOG).step_metrics()
+    path = tmp_path / "kept.txt"
+    path.write_text(_rows_of(rig_data, P_LOG, first))
+    kept = LoggedRun.from_path(path)
+    assert kept.step_metrics() == whole
+    assert "settling (1 %) 1.250 s from t = 0" in format_report(replay(path, model=False))
+    path.write_text(_rows_of(rig_data, P_LOG, first, rezero=True))
+    renumbered = LoggedRun.from_path(path).step_metrics()
+    assert renumbered.overshoot_pct == whole.overshoot_pct
+    assert renumbered.settling_time_s == pytest.approx(whole.settling_time_s - first * 0.002)
+
+
+def test_the_runs_start_is_said_by_t_and_n_together():
+    n = np.arange(30, 40)
+    assert run_start(n * 0.002, n, 0.002) == pytest.approx(0.06)         # a copy with its clock kept
+    assert run_start((n - 30) * 0.002, n, 0.002) == 0.0                 # t re-zeroed: t's word
+    assert run_start(1764072000.0 + n * 0.002, n, 0.002) == 0.0         # a host's wall clock
+    assert run_start(np.arange(10) * 0.002, np.arange(10), 0.002) == 0.0
+    assert run_start(n[::2] * 0.002, n[::2], 0.004) == pytest.approx(0.06)  # every other tick
+    assert run_start([], [], 0.002) == 0.0
+
+
+def test_a_copy_cut_after_its_step_says_u_from_the_first_row_not_a_step_there(rig_data, tmp_path):
+    path = tmp_path / "moving.txt"
+    path.write_text(_rows_of(rig_data, P_LOG, 80))
+    text = format_report(replay(path, model=False))
+    assert "  reference: u = 50 from the first row (tick 80): the step is at or before it" in text
+    assert "step of 50 at tick 80" not in text

@@ -24,7 +24,7 @@ from station.logged.reference import Reference, classify_reference
 from station.logged.simulate import ModelRun, compared_theta, simulate_log
 from station.logged.start import Start, start_claims
 from station.logged.units import TimeBase, time_base
-from station.runlog.timebase import restart_rows, row_ticks
+from station.runlog.timebase import restart_rows, row_ticks, run_start
 from station.runlog import SKIPPED, RunLog, read_log
 
 REPRODUCED_TOLERANCE = 1e-6
@@ -483,8 +483,10 @@ class LoggedRun:
         theta : array_like, shape (N,), optional
             The response, encoder counts (default: the logged θ; e.g. a simulation's).
         t : array_like, shape (N,), optional
-            Its sample times, s (default: the logged t). Times are taken from the first row's:
-            the run starts there, whatever its clock read (a host's time stamps, 1-based ticks).
+            Its sample times, s (default: the logged t). Times are taken from the run's start:
+            the first row's, whatever its clock read (a host's time stamps, 1-based ticks), or
+            n[0] ticks before it where t and n agree on that (a copy cut from a longer run,
+            :func:`station.runlog.timebase.run_start`).
 
         Returns
         -------
@@ -494,8 +496,9 @@ class LoggedRun:
         """
         if not (self.closed and self.reference.is_step and len(self)) or self.start.at_rest is False:
             return None  # a copy cut after the step: its overshoot is not the run's
+        before = run_start(self.data["t"], self.data["n"], self.dt)
         t = np.asarray(self.data["t"] if t is None else t, dtype=float)
-        return step_metrics(t - t[0], self.data["theta"] if theta is None else theta, self.reference.amplitude)
+        return step_metrics(t - t[0] + before, self.data["theta"] if theta is None else theta, self.reference.amplitude)
 
     def found_faults(self, model) -> dict[str, float]:
         """The sensor and wiring faults this run's data decided (:attr:`sensors`), for a model

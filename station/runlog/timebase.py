@@ -156,3 +156,29 @@ def restart_rows(n) -> tuple[int, ...]:
     ticks = row_ticks(n)
     return () if ticks is None else tuple(int(r) for r in np.flatnonzero(np.diff(ticks) != 1) + 1)
 
+
+def run_start(t, n, dt: float) -> float:
+    """How long before a log's first row its run started, s: n[0] ticks where the log's t and
+    its own n agree that the first row is tick n[0] of a clock started at 0 (a copy cut from a
+    longer run, t and n as the loop counted them: the P step from row 30 has t = 0.06 s at
+    n = 30); else 0 (the run starts at the first row, whatever its clock read: a host's time
+    stamps, a clock since boot, an n derived from t).
+
+    Parameters
+    ----------
+    t, n : array_like, shape (N,)
+        The log's t (s) and n columns.
+    dt : float
+        The log's sample time (:attr:`station.runlog.RunLog.dt`).
+
+    Returns
+    -------
+    float
+        >= 0.
+    """
+    t, n = np.asarray(t, float), np.asarray(n, float)
+    if not t.size or not (np.isfinite(n[0]) and np.isfinite(t[0]) and n[0] > 0 and n[0] == round(n[0])):
+        return 0.0
+    tick = tick_time(t, n, dt) if t.size > 1 else dt
+    start = float(n[0]) * tick
+    return start if abs(float(t[0]) - start) <= 0.5 * tick else 0.0
