@@ -69,17 +69,16 @@ def _bracket(ticks: np.ndarray, theta: np.ndarray, d: int) -> tuple[np.ndarray, 
     after = order[np.clip(at, 0, placed.size - 1)]
     lo = np.minimum(theta[before], theta[after]) - TURN_COUNTS
     hi = np.maximum(theta[before], theta[after]) + TURN_COUNTS
-    own = order[np.clip(at, 0, placed.size - 1)]
-    lo, hi = np.where(exact, theta[own], lo), np.where(exact, theta[own], hi)
+    lo, hi = np.where(exact, theta[after], lo), np.where(exact, theta[after], hi)  # exact: `after` is that tick
     return lo, hi, want >= placed[0]
 
 
 def _miss(law, u, lo, hi, a, v, judged) -> tuple[float, np.ndarray]:
     """How far each logged v lies outside a law's range over θ in [lo, hi] (a law without
     memory is monotone in θ): the largest miss over judged rows, and the range's nearest v."""
-    v_lo, _ = replay_commands(law, u, hi, a, 0)  # θ at its highest: the least v (kp > 0)
-    v_hi, _ = replay_commands(law, u, lo, a, 0)
-    low, high = np.minimum(v_lo, v_hi), np.maximum(v_lo, v_hi)
+    at_hi, _ = replay_commands(law, u, hi, a, 0)  # the law at each end of the bracket, whatever kp's sign
+    at_lo, _ = replay_commands(law, u, lo, a, 0)
+    low, high = np.minimum(at_lo, at_hi), np.maximum(at_lo, at_hi)
     nearest = np.clip(v, low, high)
     miss = np.abs(v - nearest)[judged]
     return float(np.max(miss, initial=0.0)), nearest
