@@ -318,9 +318,10 @@ def format_report(report: ReplayReport) -> str:
                                                              report.judged_to)]
     ref = report.reference
     if ref.is_step:
+        first = _tick_of_row(report.log, 0, row_said=False)  # u at its level from the first row: a cut copy
         lines.append(f"  reference: step of {ref.amplitude:g} at {_tick_of_row(report.log, ref.step_tick)}"
-                     if ref.step_tick else f"  reference: u = {ref.amplitude:g} from the first row "
-                                           f"({_tick_of_row(report.log, 0, row_said=False)}): the step is at or before it")
+                     if ref.step_tick else
+                     f"  reference: u = {ref.amplitude:g} from the first row ({first}): the step is at or before it")
     if report.metrics is not None:
         lines.append(f"  {report.metrics.summary()}")
     if report.fit_pct is not None:

@@ -142,3 +142,16 @@ def test_the_bracket_is_exact_where_the_tick_is_logged_and_spans_the_rows_around
     assert hi[1:].tolist() == [4 + TURN_COUNTS, 4.0, 9 + TURN_COUNTS]
     lo0, hi0, judged0 = _bracket(ticks, theta, 0)
     assert judged0.all() and np.array_equal(lo0, theta) and np.array_equal(hi0, theta)
+
+
+@pytest.mark.parametrize("start, every", [(0, 2), (1, 2), (0, 5), (4, 5), (3, 10)])
+def test_a_copy_of_every_kth_tick_keeps_the_file_names_run_length(rig_data, tmp_path, start, every):
+    # duration_1000: the copy's first and last rows may be up to k - 1 ticks inside the run
+    # (before: "header: file name: 1000 samples; data: 999 samples" on every other tick)
+    src = rig_data / LEAD
+    run = LoggedRun.from_path(_keep(src, tmp_path / LEAD, range(start, 1000, every)))
+    rows = [c for c in run.audit.claims if c.header == "file name: 1000 samples"]
+    assert [c.verdict for c in rows] == ["confirmed"], rows
+    (tmp_path / "short").mkdir()
+    short = LoggedRun.from_path(_keep(src, tmp_path / "short" / LEAD, range(start, 1000 - 3 * every, every)))
+    assert [c.verdict for c in short.audit.claims if c.header == "file name: 1000 samples"] == ["contradicted"]

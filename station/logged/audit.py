@@ -10,10 +10,9 @@ evidence in numbers; an :class:`Audit` holds them and where the controller came 
 A contradicted claim is said in one line before anything else (:meth:`Audit.lines`), and
 the data's answer is what :class:`station.logged.LoggedRun` uses.
 
-This module checks the claims that need no controller (:func:`reference_claims`,
-:func:`time_base`, :func:`alignment_claim`); the controller's claim is
-:func:`station.logged.controller.identify_controller`'s, since only replaying a law over
-the log decides it.
+This module checks the claims that need no controller (:func:`reference_claims`, :func:`time_base`,
+:func:`alignment_claim`); the controller's claim is :func:`station.logged.controller.identify_controller`'s,
+since only replaying a law over the log decides it.
 """
 
 from __future__ import annotations
@@ -270,10 +269,11 @@ def reference_claims(log: RunLog, reference) -> list[AuditClaim]:
         out.append(AuditClaim("reference", f"file name: last u = {uend:g}", f"last u = {u[-1]:g}",
                               "confirmed" if ok else "contradicted", f"u[{u.size - 1}] = {u[-1]:g}"))
     ticks = row_ticks(log.data["n"])  # rows missing or repeated: the run's samples are its ticks
-    span = u.size if ticks is None else int(ticks.max()) + 1
+    span, every = (u.size, 1) if ticks is None else (int(ticks.max()) + 1, max(int(np.median(np.diff(ticks))), 1))
     for stopn in stated.get("stopn", []) + stated.get("duration", []):
-        ok = span == stopn
-        held = f"{u.size} rows" if ticks is None else f"{u.size} rows over {span} ticks (n jumps)"
+        ok = 0 <= stopn - span <= 2 * (every - 1)  # every k-th tick kept: up to k - 1 not, before and after
+        kept = f", every {every}th tick kept" if every > 1 else ""
+        held = f"{u.size} rows" if ticks is None else f"{u.size} rows over {span} ticks (n jumps{kept})"
         out.append(AuditClaim("reference", f"file name: {stopn:g} samples", f"{span} samples",
                               "confirmed" if ok else "contradicted", f"the log holds {held}"))
     return out
