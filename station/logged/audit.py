@@ -272,7 +272,7 @@ def reference_claims(log: RunLog, reference) -> list[AuditClaim]:
     span, every = (u.size, 1) if ticks is None else (int(ticks.max()) + 1, max(int(np.median(np.diff(ticks))), 1))
     for stopn in stated.get("stopn", []) + stated.get("duration", []):
         ok = 0 <= stopn - span <= 2 * (every - 1)  # every k-th tick kept: up to k - 1 not, before and after
-        kept = f", every {every}th tick kept" if every > 1 else ""
+        kept = f", one tick in {every} kept" if every > 1 else ""
         held = f"{u.size} rows" if ticks is None else f"{u.size} rows over {span} ticks (n jumps{kept})"
         out.append(AuditClaim("reference", f"file name: {stopn:g} samples", f"{span} samples",
                               "confirmed" if ok else "contradicted", f"the log holds {held}"))
