@@ -155,3 +155,32 @@ def test_a_copy_of_every_kth_tick_keeps_the_file_names_run_length(rig_data, tmp_
     (tmp_path / "short").mkdir()
     short = LoggedRun.from_path(_keep(src, tmp_path / "short" / LEAD, range(start, 1000 - 3 * every, every)))
     assert [c.verdict for c in short.audit.claims if c.header == "file name: 1000 samples"] == ["contradicted"]
+
+
+def test_an_open_loop_header_on_kept_rows_of_a_closed_loop_is_contradicted(rig_data, tmp_path):
+    # The P step every other tick under `#SLFR RTP OL_Test`: v = 2(u - θ), not u. Before,
+    # every row followed a jump of n, the replay took each row's v as logged at d = 1 and
+    # "reproduced" the open loop to 0 counts; then "not judged across" a jump its d reached.
+    path = _keep(rig_data / P_STEP, tmp_path / "ol.txt", range(0, 1000, 2),
+                 lambda x: "#SLFR RTP OL_Test" if x.startswith("#SLFR") else x)
+    path.write_text("\n".join(x for x in path.read_text().splitlines() if not x.startswith("#kp")) + "\n")
+    run = LoggedRun.from_path(path)
+    assert _claim(run).verdict == "contradicted" and not run.reproduced
+
+
+@pytest.mark.parametrize("law", ["open-loop", "p", "lead"])
+def test_a_replay_that_judges_no_row_never_reproduces(rig_data, law):
+    # Every row after a jump within d: at d = 1 the replay's every v is the logged one. Such an
+    # alignment cannot be told (max |dv| inf), and an open loop at d = 0 is judged on every row.
+    from station.control import make_controller
+    from station.control.rerun import detect_alignment, judged_rows
+
+    run = LoggedRun.from_path(rig_data / P_STEP)
+    d = run.data
+    rows = np.arange(0, 1000, 2)
+    restarts = tuple(range(1, rows.size))
+    fit = detect_alignment(make_controller(law), d["u"][rows], d["theta"][rows], d["a"][rows], d["v"][rows],
+                           (1,), restarts=restarts)
+    assert fit.max_abs_dv == np.inf
+    assert not judged_rows(rows.size, 1, 0, restarts, 0).any()
+    assert judged_rows(1, 1).tolist() == [True]  # a one-row log: its last row, as before

@@ -9,6 +9,7 @@ identification (:mod:`station.analysis.controller_id`) and the logged-run reader
 
 from __future__ import annotations
 
+import math
 from typing import Any, NamedTuple
 
 import numpy as np
@@ -170,7 +171,8 @@ def judged_rows(n: int, alignment: int, primed: int = 0, restarts=(), memory_row
     Rows k < d were computed from samples before the log (0 on a run logged from its start,
     the earlier run's on a copy cut from one), and the ``primed`` rows after them were taken
     as logged; after each restart (:func:`replay_commands`) the same d + ``memory_rows`` rows.
-    At least the last row is judged.
+    At least the last row is judged, unless the restarts leave none (every row follows a jump
+    of n within d + ``memory_rows``: nothing the log holds can judge the law there).
 
     Parameters
     ----------
@@ -195,7 +197,7 @@ def judged_rows(n: int, alignment: int, primed: int = 0, restarts=(), memory_row
     for r in restarts:
         if 0 < r < n:
             mask[r:r + d + memory_rows] = False
-    if n and not mask.any():
+    if n and not mask.any() and not any(0 < r < n for r in restarts):  # a short log: its last row
         mask[-1] = True
     return mask
 
@@ -355,7 +357,8 @@ def detect_alignment(controller, u, theta, a, v, alignments=ALIGNMENTS, skipped=
         rows_back = memory(controller)
         judged = judged_rows(v.size, d, primed, () if rows_back is None else restarts, rows_back or 0)
         seeded = (d + primed,) * bool(primed) + tuple(restarts)
-        err = float(np.max(command_error(v_hat, v, printing, seeded)[judged]))
+        # no row judged (every row follows a jump of n within d): this alignment cannot be told
+        err = float(np.max(command_error(v_hat, v, printing, seeded)[judged])) if judged.any() else math.inf
         if best is None or err < best.max_abs_dv:
             best = AlignmentFit(d, err, v_hat)
     return best

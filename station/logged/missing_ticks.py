@@ -20,7 +20,8 @@ from typing import NamedTuple
 import numpy as np
 
 from station.analysis.controller_id import PREFERRED_ALIGNMENT, TOLERANCE, law_variants
-from station.control.rerun import ALIGNMENTS, AlignmentFit, command_error, detect_alignment, memory, replay_commands
+from station.control.rerun import (ALIGNMENTS, AlignmentFit, command_error, detect_alignment, is_closed_loop, memory,
+                                   replay_commands)
 from station.logged.audit import AuditClaim
 
 TURN_COUNTS = 1.0
@@ -183,10 +184,14 @@ def miss_at_gap(controller, u, theta, a, v, n, skipped) -> tuple[int, AlignmentF
     if n.size < 2 or not np.all(np.isfinite(n)):
         return None
     gaps = np.flatnonzero(np.diff(n) != 1) + 1
+    rows_back = memory(controller)
     for d in ALIGNMENTS if gaps.size else ():
         fit = detect_alignment(controller, u, theta, a, v, (d,), skipped)
         miss = np.flatnonzero(command_error(fit.v_replayed, v) > TOLERANCE)
-        near = gaps[(miss[0] >= gaps) & (miss[0] <= gaps + d)] if miss.size else gaps[:0]
+        # the rows a jump reaches: d + the law's memory after it (Ga's, not in the rows: d + 1);
+        # none for an open loop (v = u of its own row, whatever d)
+        reach = 0 if not is_closed_loop(controller) else d + (1 if rows_back is None else rows_back)
+        near = gaps[(miss[0] >= gaps) & (miss[0] < gaps + reach)] if miss.size else gaps[:0]
         if near.size:
             return int(near[0]), fit
     return None
