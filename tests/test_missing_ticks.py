@@ -161,11 +161,14 @@ def test_an_open_loop_header_on_kept_rows_of_a_closed_loop_is_contradicted(rig_d
     # The P step every other tick under `#SLFR RTP OL_Test`: v = 2(u - θ), not u. Before,
     # every row followed a jump of n, the replay took each row's v as logged at d = 1 and
     # "reproduced" the open loop to 0 counts; then "not judged across" a jump its d reached.
+    # Now the data's P law is found on the kept rows.
     path = _keep(rig_data / P_STEP, tmp_path / "ol.txt", range(0, 1000, 2),
                  lambda x: "#SLFR RTP OL_Test" if x.startswith("#SLFR") else x)
     path.write_text("\n".join(x for x in path.read_text().splitlines() if not x.startswith("#kp")) + "\n")
     run = LoggedRun.from_path(path)
-    assert _claim(run).verdict == "contradicted" and not run.reproduced
+    claim = _claim(run)
+    assert claim.verdict == "contradicted" and claim.header == "open loop" and claim.data == "P, kp = 2 at alignment 1"
+    assert run.source == "inferred (header contradicted)" and run.alignment == 1
 
 
 @pytest.mark.parametrize("law", ["open-loop", "p", "lead"])
@@ -184,3 +187,26 @@ def test_a_replay_that_judges_no_row_never_reproduces(rig_data, law):
     assert fit.max_abs_dv == np.inf
     assert not judged_rows(rows.size, 1, 0, restarts, 0).any()
     assert judged_rows(1, 1).tolist() == [True]  # a one-row log: its last row, as before
+
+
+@pytest.mark.parametrize("header", ["none", "open_loop"])
+@pytest.mark.parametrize("kp, alignment, every", [(2.0, 1, 2), (1.5, 0, 2), (2.5, 1, 5), (0.8, 1, 10), (3.0, 0, 5)])
+def test_blind_p_law_found_on_kept_rows_where_the_header_names_none_or_an_open_loop(tmp_path, header, kp, alignment,
+                                                                                   every):
+    path, _, _ = write_kept_ticks(tmp_path, 11, "p_step", every, 1, kp=kp, alignment=alignment, header=header)
+    run = LoggedRun.from_path(path)
+    claim = _claim(run)
+    assert run.controller.spec["kind"] == "p" and run.controller.spec["kp"] == kp
+    assert alignment in run.identified.alignments
+    assert run.source == ("inferred" if header == "none" else "inferred (header contradicted)")
+    assert claim.verdict == ("unchecked" if header == "none" else "contradicted")
+
+
+@pytest.mark.parametrize("every", [2, 5, 10])
+def test_no_p_law_is_found_on_kept_rows_of_a_lead(tmp_path, every):
+    # the blind lead's v has the lead's high-frequency gain: no P reproduces it, however wide
+    # the brackets at the missing ticks (10 ticks of a step's rise)
+    path, _, _ = write_kept_ticks(tmp_path, 5, "lead_step", every, 0, header="open_loop")
+    run = LoggedRun.from_path(path)
+    assert run.controller is None or run.controller.spec.get("kind") != "p"
+    assert _claim(run).verdict == "contradicted"

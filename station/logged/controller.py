@@ -40,7 +40,7 @@ from station.control.designs import MAX_ORDER, z_problem
 from station.control.rerun import ALIGNMENTS, AlignmentFit, is_closed_loop, printed_commands
 from station.errors import StationError
 from station.logged.audit import AuditClaim
-from station.logged.missing_ticks import law_on_kept_rows, miss_at_gap
+from station.logged.missing_ticks import law_on_kept_rows, miss_at_gap, p_on_kept_rows
 from station.logged.start import start_claims
 from station.logged.units import replayable_rate
 from station.runlog.printing import Printing
@@ -403,6 +403,13 @@ def identify_controller(log: RunLog, skipped=None) -> ControllerId:
         k = law_on_kept_rows(controller, u, theta, a, v, ticks, said, dt)
         return ControllerId(k.law, "header", notes + [k.note], k.fit, k.claim, k.alignments,
                             judged_to=None if k.judged else 0)
+    if ticks is not None and not is_closed_loop(controller) and all(np.all(np.isfinite(x)) for x in (u, theta, v)):
+        stated = controller is not None  # an open loop: contradicted where v is not u
+        k = None if stated and np.max(np.abs(v - u)) <= TOLERANCE else p_on_kept_rows(u, theta, a, v, ticks, said, dt,
+                                                                                       stated)
+        if k is not None:
+            return ControllerId(k.law, "inferred (header contradicted)" if stated else "inferred", notes + [k.note],
+                                k.fit, k.claim, k.alignments)
     if not replayable_rate(log) and not isinstance(controller, OpenLoop):
         notes.append(f"sampled at {log.dt:g} s, not the rig's {DT:g} s, and its rows are not every tick of a loop "
                      f"at that rate (n jumps, or no n column): closed-loop commands cannot be replayed or "

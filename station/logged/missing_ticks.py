@@ -8,9 +8,12 @@ starts again at each jump of n, and a copy where every row follows a jump leaves
 judge). A law without memory (P: v[k] = kp·(u[k] − θ[k−d])) needs only θ at tick k − d: where
 the log lacks that tick, θ there lay between the rows around it (the hub moves a few counts a
 tick; a count either side for a turn between rows), so the logged v must lie in the law's range
-over that bracket. A law with memory is run on θ interpolated at the missing ticks, a number
-said beside it, never a verdict. Either way the model then runs the law at every tick, the
-reference held between rows (:func:`station.logged.simulate.simulate_log`).
+over that bracket. At d = 0 that test is exact (θ of the row's own tick), so where a law holds at
+both alignments d = 0 is used. A log that names no closed-loop law (none, or an open loop its v
+contradicts) gets a P law found so (:func:`p_on_kept_rows`). A law with memory is run on θ
+interpolated at the missing ticks, a number said beside it, never a verdict. Either way the
+model then runs the law at every tick, the reference held between rows
+(:func:`station.logged.simulate.simulate_log`).
 """
 
 from __future__ import annotations
@@ -19,10 +22,13 @@ from typing import NamedTuple
 
 import numpy as np
 
-from station.analysis.controller_id import PREFERRED_ALIGNMENT, TOLERANCE, law_variants
+from station.analysis.controller_id import TOLERANCE, clamps_to_try, law_variants
+from station.analysis.law_rows import pins_a_law
+from station.control import p_controller
 from station.control.rerun import (ALIGNMENTS, AlignmentFit, command_error, detect_alignment, is_closed_loop, memory,
                                    replay_commands)
 from station.logged.audit import AuditClaim
+from station.rig import CLAMP  # the rig's clamp: its laws ran at it
 
 TURN_COUNTS = 1.0
 """How far θ at a missing tick may lie outside the rows around it, encoder counts (one count:
@@ -124,14 +130,13 @@ def law_on_kept_rows(controller, u, theta, a, v, ticks: np.ndarray, said: str, t
     gap = f"the log keeps {ticks.size} rows of {int(ticks.max()) + 1} ticks ({missing} missing, {tick_s:g} s a tick)"
     if memory(controller) == 0:  # P: θ at the tick it used, bracketed by the rows around it
         best, holds = None, []
-        for d in ALIGNMENTS:
+        for d in sorted(ALIGNMENTS):
             lo, hi, judged = _bracket(ticks, theta, d)
             for law in law_variants(controller, v):
                 dv, nearest = _miss(law, u, lo, hi, a, v, judged)
                 if dv <= TOLERANCE and d not in holds:
                     holds.append(d)
-                if best is None or dv < best[1].max_abs_dv - TOLERANCE or (
-                        dv <= TOLERANCE and d == PREFERRED_ALIGNMENT):
+                if best is None or dv < best[1].max_abs_dv - TOLERANCE:  # d = 0 first: its test is exact
                     best = (law, AlignmentFit(d, dv, nearest))
         law, fit = best
         ok = fit.max_abs_dv <= TOLERANCE
@@ -159,6 +164,67 @@ def law_on_kept_rows(controller, u, theta, a, v, ticks: np.ndarray, said: str, t
     claim = AuditClaim("controller", said, "not judged (ticks missing between rows)", "unchecked", words)
     note = f"{words}; the model runs the header's law at every tick, u held between rows"
     return KeptRowsLaw(law, fit, claim, (fit.alignment,), note, False)
+
+
+def p_on_kept_rows(u, theta, a, v, ticks: np.ndarray, said: str, tick_s: float, stated: bool) -> KeptRowsLaw | None:
+    """A P law v = kp·(u[k] − θ[k−d]) found on a copy that lacks ticks between its rows, where
+    the log names no closed-loop law (none, or an open loop its v contradicts): kp by least
+    squares on θ at the middle of each row's bracket, then the fewest digits of it (1 to 4, or
+    as found) whose law every logged v lies within (:func:`law_on_kept_rows`'s test), at the
+    rig's clamp or the log's own.
+
+    Parameters
+    ----------
+    u, theta, a, v : numpy.ndarray, shape (N,)
+        The log's columns.
+    ticks : numpy.ndarray of int, shape (N,)
+        Each row's tick from the first row's.
+    said : str
+        The header's claim in words ("not stated", "open loop").
+    tick_s : float
+        Seconds per tick.
+    stated : bool
+        Whether the header named a law (an open loop): its claim is then contradicted.
+
+    Returns
+    -------
+    KeptRowsLaw or None
+        None when v pins no law (:func:`station.analysis.law_rows.pins_a_law`) or no kp
+        holds at either alignment.
+    """
+    u, theta, a, v = (np.asarray(x, dtype=float) for x in (u, theta, a, v))
+    if not pins_a_law(v):
+        return None
+    brackets = {d: _bracket(ticks, theta, d) for d in sorted(ALIGNMENTS)}  # d = 0 first: its test is exact
+    for d, (lo, hi, judged) in brackets.items():
+        e = u - 0.5 * (lo + hi)
+        for limit in clamps_to_try(v, CLAMP):
+            rows = judged & (np.abs(v) < limit)
+            if not np.any(e[rows] != 0):
+                continue
+            kp = float(np.dot(e[rows], v[rows]) / np.dot(e[rows], e[rows]))
+            for gain in dict.fromkeys([float(f"{kp:.{k}g}") for k in (1, 2, 3, 4)] + [kp]):
+                for law in law_variants(p_controller(gain, limit, tick_s), v):
+                    dv, nearest = _miss(law, u, lo, hi, a, v, judged)
+                    if dv <= TOLERANCE:  # and every other alignment at which it holds alike
+                        holds = tuple(x for x, b in brackets.items() if x == d or _miss(law, u, b[0], b[1], a, v,
+                                                                                      b[2])[0] <= TOLERANCE)
+                        return _inferred(law, AlignmentFit(d, dv, nearest), holds, said, tick_s, ticks, stated)
+    return None
+
+
+def _inferred(law, fit: AlignmentFit, holds: tuple, said: str, tick_s: float, ticks: np.ndarray,
+              stated: bool) -> KeptRowsLaw:
+    """:func:`p_on_kept_rows`'s answer, in the audit's words."""
+    missing = int(ticks.max()) + 1 - np.unique(ticks).size
+    gap = f"the log keeps {ticks.size} rows of {int(ticks.max()) + 1} ticks ({missing} missing, {tick_s:g} s a tick)"
+    data = f"P, kp = {law.spec['kp']:g} at alignment {fit.alignment}"
+    header = "the header's open loop (v = u) does not give the logged v; " if stated else ""
+    evidence = (f"{header}every logged v within the P law's range over θ at the tick it used (the rows around a "
+                f"missing tick, ±{TURN_COUNTS:g} count): {gap}")
+    claim = AuditClaim("controller", said, data, "contradicted" if stated else "unchecked", evidence)
+    note = f"controller inferred from the data: {data} ({gap}); the model runs it at every tick, u held between rows"
+    return KeptRowsLaw(law, fit, claim, holds, note, True)
 
 
 def miss_at_gap(controller, u, theta, a, v, n, skipped) -> tuple[int, AlignmentFit] | None:

@@ -277,16 +277,15 @@ def first_mode() -> tuple[float, float]:
     return held_first_mode(p, 4, beta_for_damping(p, 0.005, 4))
 
 
-__all__ = ["Hidden", "cut_log", "first_mode", "held_beam", "write_beam_test", "write_copy", "write_cut", "write_unplugged",
-           "write_unpowered", "write_unzeroed"]
 
 
 def write_kept_ticks(folder: Path, seed: int, kind: str = "p_step", every: int = 2, start: int = 0,
                      kp: float = 2.0, header_kp: float | None = None, alignment: int = 1,
-                     effects: dict | None = None) -> tuple[Path, Hidden, Run]:
+                     effects: dict | None = None, header: str = "true") -> tuple[Path, Hidden, Run]:
     """A closed-loop step of the blind rig (its law at every 0.002 s tick) logged every
     ``every``-th tick from tick ``start``, t and n as the loop counted them (a logger at 250 Hz
-    beside a 500 Hz loop), the header's kp ``header_kp`` (a lying header) or the true one.
+    beside a 500 Hz loop), the header's kp ``header_kp`` (a lying header) or the true one;
+    ``header`` "none" (the column line only) or "open_loop" (the lab's ``#SLFR RTP OL_Test``).
 
     Returns
     -------
@@ -300,6 +299,8 @@ def write_kept_ticks(folder: Path, seed: int, kind: str = "p_step", every: int =
     head = [x for x in lines if x.startswith("#")]
     if kind == "p_step":
         head = [f"#kp={kp if header_kp is None else header_kp!r}" if x.startswith("#kp=") else x for x in head]
+    if header != "true":
+        head = (["#SLFR RTP OL_Test"] if header == "open_loop" else []) + head[-1:]
     rows = [x for x in lines if not x.startswith("#")][start::every]
     folder = Path(folder)
     folder.mkdir(parents=True, exist_ok=True)
@@ -307,3 +308,7 @@ def write_kept_ticks(folder: Path, seed: int, kind: str = "p_step", every: int =
     path.write_text("\n".join(head + rows) + "\n")
     return path, Hidden("kept_ticks", False, float(sim.theta[start]), DT,
                         extra={"kp": kp, "alignment": alignment, "every": every}), sim
+
+
+__all__ = ["Hidden", "cut_log", "first_mode", "held_beam", "write_beam_test", "write_copy", "write_cut",
+           "write_kept_ticks", "write_unplugged", "write_unpowered", "write_unzeroed"]
