@@ -10,11 +10,7 @@ import pytest
 from station.compare import compare_run
 from station.commands import compare
 from station.plant import DiscretePlant
-
-P_LOG = "SFLR_P_control_step_kp_2_SLFR_RTP_P_control_kp=2.0.txt"
-LEAD_LOG = "step_response_Gth_comp_no_accel_FB_amp_100_duration_1000_SLFR_RTP_Motor_Comp_Gth.txt"
-ACCEL_LOG = "step_response_Gth_comp_Ga_opt_amp_200_duration_1000_opt_case43_SLFR_RTP_Motor_Comp_Gth.txt"
-PULSE_LOG = "OL_pulse_test_sys_check_SLFR_RTP_OL_Test_uend=0.txt"
+from tests.rig_logs import ACCEL_LOG, LEAD_LOG, PULSE_LOG, P_LOG
 
 
 @pytest.fixture(scope="module")

@@ -21,11 +21,8 @@ from station.logged.missing_ticks import TURN_COUNTS, _bracket
 from station.plant.model import load_model
 from station.replay import format_report, replay
 from tests.blind.archive import write_kept_ticks
+from tests.rig_logs import ACCEL_LOG, LEAD_LOG, P_LOG, SWEEP_LOG
 
-P_STEP = "SFLR_P_control_step_kp_2_SLFR_RTP_P_control_kp=2.0.txt"
-LEAD = "step_response_Gth_comp_no_accel_FB_amp_100_duration_1000_SLFR_RTP_Motor_Comp_Gth.txt"
-ACCEL = "step_response_Gth_comp_Ga_opt_amp_200_duration_1000_opt_case43_SLFR_RTP_Motor_Comp_Gth.txt"
-SWEEP = "swept_sine_kp_1_amp_50.txt"
 
 
 @pytest.fixture(scope="module")
@@ -52,8 +49,8 @@ def _theta_fit(run, model):
     return run.simulate(model).fit_pct["theta"]
 
 
-@pytest.mark.parametrize("name, law, judged", [(P_STEP, "P, kp = 2", True), (SWEEP, "P, kp = 1", True),
-                                                (LEAD, "lead", False), (ACCEL, "lead", False)])
+@pytest.mark.parametrize("name, law, judged", [(P_LOG, "P, kp = 2", True), (SWEEP_LOG, "P, kp = 1", True),
+                                                (LEAD_LOG, "lead", False), (ACCEL_LOG, "lead", False)])
 @pytest.mark.parametrize("start, every", [(0, 2), (1, 2), (0, 5), (3, 10)])
 def test_a_copy_of_every_kth_tick_keeps_the_headers_law_and_fits_as_the_whole_log(
         rig_data, tmp_path, nominal, name, law, judged, start, every):
@@ -76,7 +73,7 @@ def test_a_copy_of_every_kth_tick_keeps_the_headers_law_and_fits_as_the_whole_lo
 
 
 def test_replay_of_a_law_with_memory_on_kept_rows_says_not_judged_not_a_miss(rig_data, tmp_path):
-    src = rig_data / LEAD
+    src = rig_data / LEAD_LOG
     path = _keep(src, tmp_path / "lead.txt", range(0, 1000, 2))
     report = replay(path, model=False)
     text = format_report(report)
@@ -88,7 +85,7 @@ def test_replay_of_a_law_with_memory_on_kept_rows_says_not_judged_not_a_miss(rig
 
 @pytest.mark.parametrize("kp", ["3.0", "1.5", "2.1"])
 def test_a_p_header_with_the_wrong_kp_is_contradicted_on_kept_rows(rig_data, tmp_path, kp):
-    src = rig_data / P_STEP
+    src = rig_data / P_LOG
     path = _keep(src, tmp_path / "p.txt", range(0, 1000, 2), lambda x: re.sub(r"kp=2\.0", f"kp={kp}", x))
     claim = _claim(LoggedRun.from_path(path))
     assert claim.verdict == "contradicted" and claim.data.startswith("not this law")
@@ -102,7 +99,7 @@ def test_rows_missing_at_random_still_confirm_the_rigs_p_law_and_refute_another_
     while k < 1000:
         keep.append(k)
         k += 1 + int(rng.random() < 0.6)
-    src = rig_data / P_STEP
+    src = rig_data / P_LOG
     run = LoggedRun.from_path(_keep(src, tmp_path / "p.txt", keep))
     assert _claim(run).verdict == "confirmed" and run.alignment == 1
     lie = LoggedRun.from_path(_keep(src, tmp_path / "lie.txt", keep, lambda x: x.replace("kp=2.0", "kp=2.5")))
@@ -148,12 +145,12 @@ def test_the_bracket_is_exact_where_the_tick_is_logged_and_spans_the_rows_around
 def test_a_copy_of_every_kth_tick_keeps_the_file_names_run_length(rig_data, tmp_path, start, every):
     # duration_1000: the copy's first and last rows may be up to k - 1 ticks inside the run
     # (before: "header: file name: 1000 samples; data: 999 samples" on every other tick)
-    src = rig_data / LEAD
-    run = LoggedRun.from_path(_keep(src, tmp_path / LEAD, range(start, 1000, every)))
+    src = rig_data / LEAD_LOG
+    run = LoggedRun.from_path(_keep(src, tmp_path / LEAD_LOG, range(start, 1000, every)))
     rows = [c for c in run.audit.claims if c.header == "file name: 1000 samples"]
     assert [c.verdict for c in rows] == ["confirmed"], rows
     (tmp_path / "short").mkdir()
-    short = LoggedRun.from_path(_keep(src, tmp_path / "short" / LEAD, range(start, 1000 - 3 * every, every)))
+    short = LoggedRun.from_path(_keep(src, tmp_path / "short" / LEAD_LOG, range(start, 1000 - 3 * every, every)))
     assert [c.verdict for c in short.audit.claims if c.header == "file name: 1000 samples"] == ["contradicted"]
 
 
@@ -162,7 +159,7 @@ def test_an_open_loop_header_on_kept_rows_of_a_closed_loop_is_contradicted(rig_d
     # every row followed a jump of n, the replay took each row's v as logged at d = 1 and
     # "reproduced" the open loop to 0 counts; then "not judged across" a jump its d reached.
     # Now the data's P law is found on the kept rows.
-    path = _keep(rig_data / P_STEP, tmp_path / "ol.txt", range(0, 1000, 2),
+    path = _keep(rig_data / P_LOG, tmp_path / "ol.txt", range(0, 1000, 2),
                  lambda x: "#SLFR RTP OL_Test" if x.startswith("#SLFR") else x)
     path.write_text("\n".join(x for x in path.read_text().splitlines() if not x.startswith("#kp")) + "\n")
     run = LoggedRun.from_path(path)
@@ -178,7 +175,7 @@ def test_a_replay_that_judges_no_row_never_reproduces(rig_data, law):
     from station.control import make_controller
     from station.control.rerun import detect_alignment, judged_rows
 
-    run = LoggedRun.from_path(rig_data / P_STEP)
+    run = LoggedRun.from_path(rig_data / P_LOG)
     d = run.data
     rows = np.arange(0, 1000, 2)
     restarts = tuple(range(1, rows.size))

@@ -19,16 +19,11 @@ from station.logged import rig_controller
 from station.replay import format_report, replay
 from station.runlog import RunLogWriter, read_log
 from station.runlog.timebase import restart_rows, run_start
-
-P_LOG = "SFLR_P_control_step_kp_2_SLFR_RTP_P_control_kp=2.0.txt"
-LEAD_LOG = "step_response_Gth_comp_no_accel_FB_amp_100_duration_1000_SLFR_RTP_Motor_Comp_Gth.txt"
-ACCEL_LOG = "step_response_Gth_comp_Ga_opt_amp_200_duration_1000_opt_case43_SLFR_RTP_Motor_Comp_Gth.txt"
-SWEEP = "swept_sine_kp_1_amp_50.txt"
-OL_PULSE = "OL_pulse_test_sys_check_SLFR_RTP_OL_Test_uend=0.txt"
+from tests.rig_logs import ACCEL_LOG, LEAD_LOG, PULSE_LOG, P_LOG, SWEEP_LOG
 
 
 @pytest.mark.parametrize("name, controller, kp", [
-    (P_LOG, "p", 2.0), (LEAD_LOG, "lead", None), (ACCEL_LOG, "lead-accel", None), (SWEEP, "p", 1.0)])
+    (P_LOG, "p", 2.0), (LEAD_LOG, "lead", None), (ACCEL_LOG, "lead-accel", None), (SWEEP_LOG, "p", 1.0)])
 def test_rig_closed_loop_logs_reproduce(rig_data, name, controller, kp):
     r = replay(rig_data / name, model=False)
     assert r.format == "rig"
@@ -44,7 +39,7 @@ def test_rig_closed_loop_logs_reproduce(rig_data, name, controller, kp):
 
 
 def test_ol_pulse_is_v_equals_u(rig_data):
-    r = replay(rig_data / OL_PULSE, model=False)
+    r = replay(rig_data / PULSE_LOG, model=False)
     assert r.controller == "open-loop" and r.alignment is None
     assert r.max_abs_dv == 0.0
     assert r.metrics is None
@@ -60,7 +55,7 @@ def test_step_metrics_in_report(rig_data, name, overshoot, settling):
 
 
 def test_sweep_has_no_step_metrics(rig_data):
-    r = replay(rig_data / SWEEP, model=False)
+    r = replay(rig_data / SWEEP_LOG, model=False)
     assert r.reference == {"kind": "other"} and r.metrics is None
 
 

@@ -1,0 +1,12 @@
+"""The rig's shared logs the tests read by name (``../shared/data/rig``, the ``rig_data`` fixture)."""
+
+P_LOG = "SFLR_P_control_step_kp_2_SLFR_RTP_P_control_kp=2.0.txt"
+"""The thesis's P step (kp = 2, a step of 50 at tick 50)."""
+LEAD_LOG = "step_response_Gth_comp_no_accel_FB_amp_100_duration_1000_SLFR_RTP_Motor_Comp_Gth.txt"
+"""The thesis's lead step (a step of 100 at tick 10)."""
+ACCEL_LOG = "step_response_Gth_comp_Ga_opt_amp_200_duration_1000_opt_case43_SLFR_RTP_Motor_Comp_Gth.txt"
+"""The thesis's lead + accelerometer step (a step of 200 at tick 10)."""
+PULSE_LOG = "OL_pulse_test_sys_check_SLFR_RTP_OL_Test_uend=0.txt"
+"""The thesis's open-loop pulses."""
+SWEEP_LOG = "swept_sine_kp_1_amp_50.txt"
+"""The 2014 P sweep (kp = 1, amplitude 50)."""
