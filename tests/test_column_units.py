@@ -334,26 +334,30 @@ def test_blind_a_command_written_about_a_dac_codes_midpoint(tmp_path, case, seed
         np.testing.assert_allclose(run.controller.spec["design"]["den_s"], hidden.den_s, rtol=1e-9)
 
 
-COUNT_IN = {"degrees": 360.0 / 1024, "radians": 2.0 * np.pi / 1024}
-"""One encoder count of 1024/rev in each unit a script may write the reference in."""
+COUNT_IN = {"degrees": 360.0 / 1024, "radians": 2.0 * np.pi / 1024, "milliradians": 2000.0 * np.pi / 1024}
+"""One encoder count of 1024/rev in each unit a script may write the reference in (an
+independent table: not :data:`station.logged.units.THETA_UNITS`)."""
 
 SWEEP_2014 = "swept_sine_kp_1_amp_50.txt"
 BARE_2014 = "without_accel_01_28_14_test_2.txt"
 SWEEP_2009 = "2009/swept_sine_no_sat_amp=25_stopn=20000_test_1_SLFR_RTP_P_control_kp=1.0.txt"
 
 
-def _u_in(src, dst, unit, digits=17):
-    """The rig's log with u written in ``unit`` to ``digits`` significant digits (u is the third
-    column of the ``#`` layout, the second of the 2014 one)."""
+def _u_in(src, dst, unit, digits=17, columns=("u",)):
+    """The rig's log with u (or each of ``columns``, "u" or "theta") written in ``unit`` to
+    ``digits`` significant digits (u and θ are the third and fifth columns of the ``#`` layout,
+    the second and third of the 2014 one)."""
     lines = src.read_text().splitlines()
-    col = 1 if not lines[0].startswith("#") else 2
+    rig = lines[0].startswith("#")
+    cols = [{"u": 2, "theta": 4}[c] if rig else {"u": 1, "theta": 2}[c] for c in columns]
     out = []
     for ln in lines:
         if ln.startswith("#") or not ln[:1].isdigit():
             out.append(ln)
             continue
         r = ln.split("\t")
-        r[col] = f"{float(r[col]) * COUNT_IN[unit]:.{digits}g}"
+        for col in cols:
+            r[col] = f"{float(r[col]) * COUNT_IN[unit]:.{digits}g}"
         out.append("\t".join(r))
     dst.write_text("\n".join(out) + "\n")
     return dst
@@ -379,6 +383,24 @@ def test_a_reference_written_in_degrees_or_radians_is_read_back_in_counts(rig_da
     np.testing.assert_allclose(run.data["u"], clean.data["u"], rtol=0, atol=1e-9)
     if name in (THESIS[1], LEAD_ACCEL):
         assert replay(path).fit_pct == replay(src).fit_pct
+
+
+@pytest.mark.parametrize("unit", COUNT_IN)
+@pytest.mark.parametrize("columns", [("theta",), ("u", "theta")])
+@pytest.mark.parametrize("name", [THESIS[1], LEAD_FLOAT, SWEEP_2014])
+def test_a_hub_angle_written_in_another_unit_is_read_back_in_counts(rig_data, tmp_path, unit, columns, name):
+    """θ (and u with it) in degrees, radians or milliradians, 7 digits: θ read back in counts
+    and the log's numbers its own. Before, θ in milliradians (6.14 a count) was taken for an
+    encoder of 4096 counts a revolution: "not this law (max |dv| = 250 counts)", an overshoot
+    of 660.85 %; and u written with it was left a count's millionth off its step (not settled)."""
+    src = rig_data / name
+    path = _u_in(src, tmp_path / name, unit, 7, columns)
+    clean, run = LoggedRun.from_path(src), LoggedRun.from_path(path)
+    assert run.audit.lines()[0] == f"header: θ in encoder counts; data: θ in {unit}"
+    np.testing.assert_array_equal(run.data["theta"], clean.data["theta"])
+    np.testing.assert_array_equal(run.data["u"], clean.data["u"])
+    assert run.reproduced and run.controller.spec == clean.controller.spec
+    assert run.step_metrics() == clean.step_metrics()
 
 
 @pytest.mark.parametrize("case, seed", [("session", 0), ("session", 3), ("lie:p_kp", 1), ("int:trunc_d1", 2),

@@ -253,7 +253,12 @@ def _inferred_swap(log: RunLog, skipped) -> Columns:
     # no header, an open-loop one (v = u), or a law the data contradict, and no law found in the data
     if cid.claim is None or not cid.claim.data.endswith(NO_LAW):
         return Columns((), log, cid)
-    for rewrites in tuple((c,) for c in TRIALS) + PAIRS:
+    for rewrites in tuple((c,) for c in TRIALS) + (None,) + PAIRS:  # one fault before two
+        if rewrites is None:  # u written in another unit (degrees, radians, milliradians): one fault
+            ref = check_reference_unit(log, skipped)
+            if ref is not None:
+                return Columns((ref.claim,), ref.log, ref.identified)
+            continue
         trial = rewritten_all(log, rewrites)
         if not pins_a_law(trial.data["v"]):  # a step as v (u swapped in): a law of the right gain gives any
             continue
@@ -266,9 +271,6 @@ def _inferred_swap(log: RunLog, skipped) -> Columns:
         if found.controller is not None and found.source in ("inferred", "inferred (header contradicted)") \
                 and found.fit is not None:
             return _swapped_back(log, rewrites, trial, None, f"{found.claim.data}", found)
-    ref = check_reference_unit(log, skipped)  # no rewrite gives a law: u written in degrees or radians
-    if ref is not None:
-        return Columns((ref.claim,), ref.log, ref.identified)
     return Columns((), log, cid)
 
 

@@ -1,7 +1,7 @@
 """The reference's unit: a closed loop's u in encoder counts, checked against its law.
 
 A log claims u in encoder counts, the unit the loop's error u - θ is taken in (DESIGN.md "Log
-audit": the columns' units). A lab script that wrote the reference in degrees or radians
+audit": the columns' units). A lab script that wrote the reference in degrees, radians or milliradians
 while θ stayed in counts leaves a log whose law reproduces no logged v as written (a P step of
 50 counts written 17.578125: the header's kp = 2 misses by 65 counts) and every v with u read
 back in counts. θ in degrees too is :mod:`station.logged.units`' (u goes with it); this is a
@@ -21,14 +21,9 @@ from station.control.rerun import pole_radius
 from station.errors import StationError
 from station.logged.audit import AuditClaim
 from station.logged.controller import ControllerId, describe_controller, header_law_dv, identify_controller
-from station.logged.units import THETA_UNITS
+from station.logged.units import THETA_UNITS, counts_of
 from station.rig import COUNTS_PER_REV
 from station.runlog import RunLog
-
-
-PRINTED_COUNTS = 0.01
-"""A u within this of whole counts in every row is a reference of whole counts printed in
-another unit (17.5781 degrees: 49.99994 counts), read back as those counts."""
 
 
 class ReferenceUnit(NamedTuple):
@@ -104,7 +99,7 @@ def exact_from_rest(found: ControllerId) -> bool:
 
 
 def check_reference_unit(log: RunLog, skipped=None, as_named: float | None = None) -> ReferenceUnit | None:
-    """Whether a closed loop's u is in degrees or radians of the hub (θ in counts): the
+    """Whether a closed loop's u is in degrees, radians or milliradians of the hub (θ in counts): the
     header's law (else the law the data give) reproduces every logged v with u divided by one
     encoder count in that unit (:data:`station.logged.units.THETA_UNITS`). Not asked where a
     least-squares fit already weighs u as counts (:func:`reference_ratio` within
@@ -143,9 +138,7 @@ def check_reference_unit(log: RunLog, skipped=None, as_named: float | None = Non
 
     units = sorted(THETA_UNITS.items(), key=off)
     for unit, q in units:
-        counts = u / q
-        if np.max(np.abs(counts - np.round(counts))) <= PRINTED_COUNTS:  # a step's counts, printed in the unit
-            counts = np.round(counts)
+        counts = counts_of(u, q)  # a step's counts, printed in the unit: whole again
         trial = dataclasses.replace(log, data={**log.data, "u": counts})
         found, dv = None, None if as_named is None else header_law_dv(trial, skipped)
         if dv is not None and dv <= TOLERANCE:

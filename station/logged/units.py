@@ -25,8 +25,34 @@ from station.logged.audit import QUANTUM_TOLERANCE, AuditClaim, count_step, in_c
 from station.rig import COUNTS_PER_REV, DT
 from station.runlog import RunLog
 
-THETA_UNITS = {"radians": 2.0 * math.pi / COUNTS_PER_REV, "degrees": 360.0 / COUNTS_PER_REV}
-"""θ columns in another unit than counts, by one encoder count in that unit."""
+THETA_UNITS = {"milliradians": 2000.0 * math.pi / COUNTS_PER_REV, "degrees": 360.0 / COUNTS_PER_REV,
+               "radians": 2.0 * math.pi / COUNTS_PER_REV}
+"""θ columns in another unit than counts, by one encoder count in that unit, the coarsest first
+(a θ in milliradians is whole multiples of a radian's count too)."""
+
+PRINTED_COUNTS = 0.01
+"""A column within this of whole counts in every row, once in counts, is whole counts printed in
+another unit (17.5781 degrees: 49.99994 counts), read back as those counts."""
+
+
+def counts_of(x, quantum: float) -> np.ndarray:
+    """A column written in another unit, in counts: ``x / quantum``, rounded where every row is
+    within :data:`PRINTED_COUNTS` of whole counts (a step's 50 counts printed in milliradians).
+
+    Parameters
+    ----------
+    x : array_like, shape (N,)
+        The column as written.
+    quantum : float
+        One count in its unit (:data:`THETA_UNITS`).
+
+    Returns
+    -------
+    numpy.ndarray, shape (N,)
+    """
+    counts = np.asarray(x, dtype=float) / quantum
+    whole = np.round(counts)
+    return whole if counts.size and np.max(np.abs(counts - whole)) <= PRINTED_COUNTS else counts
 
 
 @dataclass(frozen=True)
@@ -311,7 +337,7 @@ def time_base(log: RunLog) -> TimeBase:
     -------
     TimeBase
         A t column in ms (steps 1000 times the claimed sample time) and a θ column in
-        radians or degrees (multiples of one encoder count in that unit, not whole) and a
+        milliradians, degrees or radians (multiples of one encoder count in that unit, not whole) and a
         column of unsigned 16-bit words (:func:`unsigned_words`) are contradicted and
         converted; a header dt the t column contradicts is replaced by t's.
     """
@@ -399,14 +425,14 @@ def time_base(log: RunLog) -> TimeBase:
             if unit is None:
                 claims.append(AuditClaim("columns", "θ in encoder counts", "θ not quantized", "unchecked",
                                          f"θ is not whole counts (e.g. {theta[np.flatnonzero(theta != np.round(theta))[0]]:.6g})"
-                                         f" nor whole counts of radians or degrees: its unit is not decided"))
+                                         f" nor whole counts of {', '.join(THETA_UNITS)}: its unit is not decided"))
             else:
                 q = THETA_UNITS[unit]
                 changes["theta"] = np.round(theta / q)
                 u = np.asarray(changes.get("u", data["u"]), dtype=float)
                 also = ""
                 if u.size and np.all(np.isfinite(u)) and not _whole(u) and _in_unit(u, changes["theta"], q):
-                    changes["u"] = u / q
+                    changes["u"] = counts_of(u, q)
                     also = "; u, not whole counts, taken in the same unit"
                 claims.append(AuditClaim("columns", "θ in encoder counts", f"θ in {unit}", "contradicted",
                                          f"every θ is a multiple of {q:.6g} ({unit} per encoder count of "
