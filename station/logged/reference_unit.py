@@ -16,7 +16,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from station.analysis.law_rows import TOLERANCE
+from station.analysis.law_rows import TOLERANCE, pins_a_law
 from station.control.rerun import pole_radius
 from station.errors import StationError
 from station.logged.audit import AuditClaim
@@ -123,12 +123,12 @@ def check_reference_unit(log: RunLog, skipped=None, as_named: float | None = Non
     Returns
     -------
     ReferenceUnit or None
-        None when u is not finite or 0 throughout, θ not finite, or no unit makes a law
-        reproduce v.
+        None when u is not finite or 0 throughout, θ not finite, v pins no law
+        (:func:`station.analysis.law_rows.pins_a_law`), or no unit makes a law reproduce v.
     """
     u, theta = (np.asarray(log.data[c], dtype=float) for c in ("u", "theta"))
-    if not (np.all(np.isfinite(u)) and np.all(np.isfinite(theta)) and np.any(u)):
-        return None
+    if not (np.all(np.isfinite(u)) and np.all(np.isfinite(theta)) and np.any(u)) or not pins_a_law(log.data["v"]):
+        return None  # a v that pins no law (a step at a clamp, u swapped in: any law of high gain gives it)
     ratio = reference_ratio(log)
     if ratio is not None and abs(ratio - 1.0) <= RATIO_TOLERANCE:  # the law weighs u as counts
         return None
