@@ -63,6 +63,13 @@ class KeptRowsLaw(NamedTuple):
     judged: bool
 
 
+def _kept(ticks: np.ndarray, tick_s: float) -> str:
+    """The copy's rows against its ticks, in words."""
+    span = int(ticks.max()) + 1
+    missing = span - np.unique(ticks).size
+    return f"the log keeps {ticks.size} rows of {span} ticks ({missing} missing, {tick_s:g} s a tick)"
+
+
 def _bracket(ticks: np.ndarray, theta: np.ndarray, d: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """θ at each row's tick − d: (lowest, highest, judged). Exact where the log has that tick;
     between the rows around it (± :data:`TURN_COUNTS`) where it does not; not judged before the
@@ -126,8 +133,7 @@ def law_on_kept_rows(controller, u, theta, a, v, ticks: np.ndarray, said: str, t
     KeptRowsLaw
     """
     u, theta, a, v = (np.asarray(x, dtype=float) for x in (u, theta, a, v))
-    missing = int(ticks.max()) + 1 - np.unique(ticks).size
-    gap = f"the log keeps {ticks.size} rows of {int(ticks.max()) + 1} ticks ({missing} missing, {tick_s:g} s a tick)"
+    gap = _kept(ticks, tick_s)
     if memory(controller) == 0:  # P: θ at the tick it used, bracketed by the rows around it
         best, holds = None, []
         for d in sorted(ALIGNMENTS):
@@ -216,8 +222,7 @@ def p_on_kept_rows(u, theta, a, v, ticks: np.ndarray, said: str, tick_s: float, 
 def _inferred(law, fit: AlignmentFit, holds: tuple, said: str, tick_s: float, ticks: np.ndarray,
               stated: bool) -> KeptRowsLaw:
     """:func:`p_on_kept_rows`'s answer, in the audit's words."""
-    missing = int(ticks.max()) + 1 - np.unique(ticks).size
-    gap = f"the log keeps {ticks.size} rows of {int(ticks.max()) + 1} ticks ({missing} missing, {tick_s:g} s a tick)"
+    gap = _kept(ticks, tick_s)
     data = f"P, kp = {law.spec['kp']:g} at alignment {fit.alignment}"
     header = "the header's open loop (v = u) does not give the logged v; " if stated else ""
     evidence = (f"{header}every logged v within the P law's range over θ at the tick it used (the rows around a "
