@@ -207,3 +207,13 @@ def test_no_p_law_is_found_on_kept_rows_of_a_lead(tmp_path, every):
     run = LoggedRun.from_path(path)
     assert run.controller is None or run.controller.spec.get("kind") != "p"
     assert _claim(run).verdict == "contradicted"
+
+
+def test_a_pid_header_on_kept_rows_of_a_p_run_is_contradicted_by_the_p_found(rig_data, tmp_path):
+    path = _keep(rig_data / P_LOG, tmp_path / "pid.txt", range(0, 1000, 2),
+                 lambda x: "#kp=2.0 ki=0.1 kd=0" if x.startswith("#kp") else x)
+    run = LoggedRun.from_path(path)
+    claim = _claim(run)
+    assert claim.header == "PID kp = 2, ki = 0.1, kd = 0" and claim.verdict == "contradicted"
+    assert claim.evidence.startswith("the header's PID kp = 2, ki = 0.1, kd = 0 does not give the logged v")
+    assert run.source == "inferred (header contradicted)" and run.controller.spec["kp"] == 2.0

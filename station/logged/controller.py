@@ -404,9 +404,9 @@ def identify_controller(log: RunLog, skipped=None) -> ControllerId:
         return ControllerId(k.law, "header", notes + [k.note], k.fit, k.claim, k.alignments,
                             judged_to=None if k.judged else 0)
     if ticks is not None and not is_closed_loop(controller) and all(np.all(np.isfinite(x)) for x in (u, theta, v)):
-        stated = controller is not None  # an open loop: contradicted where v is not u
-        k = None if stated and np.max(np.abs(v - u)) <= TOLERANCE else p_on_kept_rows(u, theta, a, v, ticks, said, dt,
-                                                                                       stated)
+        stated = controller is not None or pid is not None  # an open loop (v = u) or a PID: contradicted
+        k = None if controller is not None and np.max(np.abs(v - u)) <= TOLERANCE else p_on_kept_rows(
+            u, theta, a, v, ticks, said, dt, stated)
         if k is not None:
             return ControllerId(k.law, "inferred (header contradicted)" if stated else "inferred", notes + [k.note],
                                 k.fit, k.claim, k.alignments)

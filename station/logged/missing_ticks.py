@@ -186,11 +186,12 @@ def p_on_kept_rows(u, theta, a, v, ticks: np.ndarray, said: str, tick_s: float, 
     ticks : numpy.ndarray of int, shape (N,)
         Each row's tick from the first row's.
     said : str
-        The header's claim in words ("not stated", "open loop").
+        The header's claim in words ("not stated", "open loop", a PID's gains).
     tick_s : float
         Seconds per tick.
     stated : bool
-        Whether the header named a law (an open loop): its claim is then contradicted.
+        Whether the header named a law (an open loop, or a PID no standard discretization
+        matched): its claim is then contradicted.
 
     Returns
     -------
@@ -224,7 +225,7 @@ def _inferred(law, fit: AlignmentFit, holds: tuple, said: str, tick_s: float, ti
     """:func:`p_on_kept_rows`'s answer, in the audit's words."""
     gap = _kept(ticks, tick_s)
     data = f"P, kp = {law.spec['kp']:g} at alignment {fit.alignment}"
-    header = "the header's open loop (v = u) does not give the logged v; " if stated else ""
+    header = f"the header's {said} does not give the logged v; " if stated else ""
     evidence = (f"{header}every logged v within the P law's range over θ at the tick it used (the rows around a "
                 f"missing tick, ±{TURN_COUNTS:g} count): {gap}")
     claim = AuditClaim("controller", said, data, "contradicted" if stated else "unchecked", evidence)
