@@ -399,11 +399,12 @@ def identify_controller(log: RunLog, skipped=None) -> ControllerId:
     prefer = stated_d if isinstance(stated_d, int) and not isinstance(stated_d, bool) else PREFERRED_ALIGNMENT
     said = (describe_controller(controller) if controller is not None else
             f"PID kp = {pid[0]:g}, ki = {pid[1]:g}, kd = {pid[2]:g}" if pid is not None else NOT_STATED)
-    if ticks is not None and is_closed_loop(controller) and all(np.all(np.isfinite(x)) for x in (u, theta, v)):
+    kept = ticks is not None and all(np.all(np.isfinite(x)) for x in (u, theta, v))  # rows that skip ticks
+    if kept and is_closed_loop(controller):
         k = law_on_kept_rows(controller, u, theta, a, v, ticks, said, dt)
         return ControllerId(k.law, "header", notes + [k.note], k.fit, k.claim, k.alignments,
                             judged_to=None if k.judged else 0)
-    if ticks is not None and not is_closed_loop(controller) and all(np.all(np.isfinite(x)) for x in (u, theta, v)):
+    if kept:  # none named, an open loop or an unmatched PID: a P law the kept rows give
         stated = controller is not None or pid is not None  # an open loop (v = u) or a PID: contradicted
         k = None if controller is not None and np.max(np.abs(v - u)) <= TOLERANCE else p_on_kept_rows(
             u, theta, a, v, ticks, said, dt, stated)

@@ -29,6 +29,7 @@ from station.control.rerun import (ALIGNMENTS, AlignmentFit, command_error, dete
                                    replay_commands)
 from station.logged.audit import AuditClaim
 from station.rig import CLAMP  # the rig's clamp: its laws ran at it
+from station.runlog.timebase import on_ticks
 
 TURN_COUNTS = 1.0
 """How far θ at a missing tick may lie outside the rows around it, encoder counts (one count:
@@ -103,10 +104,8 @@ def _interpolated(law, u, theta, a, v, ticks, d: int) -> AlignmentFit:
     its commands at the log's rows against the logged v."""
     grid = np.arange(int(ticks.max()) + 1)
     order = np.argsort(ticks, kind="stable")
-    placed = ticks[order]
-    held = order[np.searchsorted(placed, grid, side="right") - 1]
-    at = [np.interp(grid, placed, np.asarray(x, float)[order]) for x in (theta, a)]
-    out, _ = replay_commands(law, np.asarray(u, float)[held], at[0], at[1], d)
+    at = [np.interp(grid, ticks[order], np.asarray(x, float)[order]) for x in (theta, a)]
+    out, _ = replay_commands(law, on_ticks(ticks, u)[0], at[0], at[1], d)
     replayed = out[ticks]
     return AlignmentFit(d, float(np.max(np.abs(replayed - v), initial=0.0)), replayed)
 

@@ -17,7 +17,7 @@ from station.analysis.fit import fit_pct
 from station.control import OpenLoop
 from station.control.rerun import is_closed_loop
 from station.logged.device import command_quantization
-from station.runlog.timebase import row_ticks, tick_time
+from station.runlog.timebase import on_ticks, row_ticks, tick_time
 from station.runlog import RunLog
 
 
@@ -114,18 +114,6 @@ def parting(t, theta_measured, theta_model) -> Parting:
     return Parting(followed, float(t[k]), t_part, float(y[-1]), float(m[-1]))
 
 
-def _on_ticks(ticks: np.ndarray, *columns):
-    """The columns on every tick from the first row's to the last: a tick's value is its
-    first row's; a missing tick holds the tick before's (the device holds its command, a
-    reference is held)."""
-    order = np.argsort(ticks, kind="stable")
-    ordered = ticks[order]
-    first = order[np.r_[True, ordered[1:] != ordered[:-1]]]  # each tick's first row, by tick
-    grid = np.arange(int(ticks.max()) + 1)
-    src = first[np.searchsorted(ticks[first], grid, side="right") - 1]
-    return tuple(np.asarray(c, float)[src] for c in columns)
-
-
 @dataclass
 class ModelRun:
     """A logged run simulated on the plant (:func:`simulate_log`).
@@ -205,7 +193,7 @@ def simulate_log(log: RunLog, controller, alignment: int | None, model, ticks=FR
         ticks = row_ticks(data["n"])
     u, v, applied = data["u"], data["v"], data["v_applied"]
     if ticks is not None:  # rows missing or repeated: the model runs on every tick
-        u, v, applied = _on_ticks(ticks, u, v, applied)
+        u, v, applied = on_ticks(ticks, u, v, applied)
     kw = {}
     if isinstance(model, DiscretePlant):
         model.reset()

@@ -114,6 +114,29 @@ def row_ticks(n) -> np.ndarray | None:
     return ticks
 
 
+def on_ticks(ticks: np.ndarray, *columns) -> tuple[np.ndarray, ...]:
+    """Columns on every tick from the first row's to the last: a tick's value is its first
+    row's; a missing tick holds the tick before's (the device holds its command, a reference is
+    held).
+
+    Parameters
+    ----------
+    ticks : numpy.ndarray of int, shape (N,)
+        Each row's tick from the first row's (:func:`row_ticks`).
+    *columns : array_like, shape (N,)
+
+    Returns
+    -------
+    tuple of numpy.ndarray, shape (ticks.max() + 1,) each
+    """
+    order = np.argsort(ticks, kind="stable")
+    ordered = ticks[order]
+    first = order[np.r_[True, ordered[1:] != ordered[:-1]]]  # each tick's first row, by tick
+    grid = np.arange(int(ticks.max()) + 1)
+    src = first[np.searchsorted(ticks[first], grid, side="right") - 1]
+    return tuple(np.asarray(c, float)[src] for c in columns)
+
+
 def tick_time(t, n, dt: float) -> float:
     """Seconds per tick of a log whose rows skip ticks: the median of t's steps over n's, to 1 ns.
 
