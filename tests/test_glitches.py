@@ -19,8 +19,9 @@ from station.replay import format_report, replay
 from station.survey import format_table, survey_one
 from tests.blind.audit import write_audit_case
 
-COLUMNS = {"v": 3, "theta": 4, "a": 5}  # the rig layout's columns: t n u v θ a
-NAMES = {"v": ("v",), "theta": ("theta",), "a": ("accel", "a")}  # the 2014 layout's column line
+COLUMNS = {"u": 2, "v": 3, "theta": 4, "a": 5}  # the rig layout's columns: t n u v θ a
+NAMES = {"u": ("u",), "v": ("v",), "theta": ("theta",), "a": ("accel", "a")}  # the 2014 layout's column line
+SYMBOL = {"u": "u", "v": "v", "theta": "θ", "a": "a"}  # as the audit names a column
 
 
 def _corrupt(path, fields):
@@ -57,7 +58,7 @@ CASES = [(c, s) for c in ("honest:p", "honest:lead_int", "honest:lead_sent") for
 
 
 @pytest.mark.parametrize("case, seed", CASES)
-@pytest.mark.parametrize("column", ["v", "theta", "two v"])
+@pytest.mark.parametrize("column", ["v", "theta", "u", "two v"])
 def test_a_corrupted_field_keeps_the_header_law_and_its_alignment(tmp_path, case, seed, column):
     path, hidden = write_audit_case(tmp_path, case, seed)
     clean = LoggedRun.from_path(path)
@@ -76,14 +77,19 @@ def test_a_corrupted_field_keeps_the_header_law_and_its_alignment(tmp_path, case
         assert named == tuple(sorted(rows))
     text = format_report(replay(path, model=False))
     for k in rows:
-        assert f"{'θ' if col == 'theta' else 'v'} of row {k} at t = " in text, text
+        assert f"{SYMBOL[col]} of row {k} at t = " in text, text
     _numbers_are_the_clean_logs(run, clean)
 
 
 def _numbers_are_the_clean_logs(run, clean):
     """No number of the run reads a field its audit set aside: the step metrics, the θ and a a
     model is compared with (and a diagnosis fits) are the uncorrupted log's. Before, the audit
-    said "θ of row 400 ... set aside" and the overshoot read it: 288.5 % where the run's was 21.5 %."""
+    said "θ of row 400 ... set aside" and the overshoot read it: 288.5 % where the run's was 21.5 %;
+    and a corrupted u made the step "other" (no metrics at all) and, under a law with memory, the
+    header "contradicted", no law found."""
+    assert run.reference == clean.reference
+    # u put right within a count of the logged (a law may give the logged v for a count or two of u)
+    np.testing.assert_allclose(run.data["u"], clean.data["u"], atol=1.0)
     assert run.step_metrics() == clean.step_metrics()
     np.testing.assert_allclose(run.theta, clean.theta, atol=1.0)  # θ put right within a count of the logged
     assert np.count_nonzero(run.theta != clean.theta) <= 3
@@ -110,7 +116,7 @@ def test_a_corrupted_field_does_not_hide_a_lying_header(tmp_path, case, seed):
 
 @pytest.mark.parametrize("case, seed", [("int:trunc_d0", 0), ("int:round_d1", 1), ("int:trunc_d1", 2),
                                         ("int:round_d0", 3)])
-@pytest.mark.parametrize("column", ["v", "theta"])
+@pytest.mark.parametrize("column", ["v", "theta", "u"])
 def test_a_log_that_names_no_law_is_inferred_past_a_corrupted_field(tmp_path, case, seed, column):
     # the 2014 layout (no header) on the stored integer: before, one corrupted field and no law was found
     path, hidden = write_audit_case(tmp_path, case, seed)
@@ -122,11 +128,12 @@ def test_a_log_that_names_no_law_is_inferred_past_a_corrupted_field(tmp_path, ca
     run = LoggedRun.from_path(path)
     assert run.source == "inferred" and run.reproduced and run.alignment == hidden.alignment
     assert glitched(run.identified.corrupted) == ((row,) if column == "v" else ())
-    assert f"{'θ' if column == 'theta' else 'v'} of row {row} at t = " in run.audit.of("controller").evidence
+    assert f"{SYMBOL[column]} of row {row} at t = " in run.audit.of("controller").evidence
     np.testing.assert_array_equal(run.identified.fit.v_replayed, clean.identified.fit.v_replayed)
+    assert run.reference == clean.reference
 
 
-@pytest.mark.parametrize("column, delta", [("v", 45.0), ("theta", 30.0), ("a", 250.0)])
+@pytest.mark.parametrize("column, delta", [("v", 45.0), ("theta", 30.0), ("a", 250.0), ("u", 64.0)])
 @pytest.mark.parametrize("name", ["SFLR_P_control_step_kp_2_SLFR_RTP_P_control_kp=2.0.txt",
                                   "step_response_Gth_comp_no_accel_FB_amp_100_duration_1000_SLFR_RTP_Motor_Comp_Gth.txt",
                                   "step_response_Gth_comp_Ga_opt_amp_200_duration_1000_opt_case43_SLFR_RTP_Motor_Comp_Gth.txt"])
@@ -138,7 +145,7 @@ def test_the_rigs_logs_with_a_corrupted_field(rig_data, tmp_path, name, column, 
     run = LoggedRun.from_path(path)
     assert run.source == "header" and run.reproduced and run.alignment == 1
     ga = getattr(run.controller, "ga", None) is not None
-    words = {"v": "v of row 400", "theta": "θ of row 400", "a": "a of row 400"}[column]
+    words = f"{SYMBOL[column]} of row 400"
     text = format_report(replay(path, model=False))
     assert (words in text) is (column != "a" or ga), text
     # the survey says it too, before its table (it said nothing of the field set aside)
@@ -209,3 +216,36 @@ def test_a_v_a_count_off_under_its_headers_law_is_not_searched_with_columns_rewr
     run = LoggedRun.from_path(path)
     assert run.source == "header" and not run.reproduced and run.identified.fit.max_abs_dv == 1.0
     assert not [c for c in run.audit.claims if c.claim == "columns" and c.verdict == "contradicted"]
+
+
+@pytest.mark.parametrize("row", [30, 999])
+def test_a_corrupted_reference_of_the_rigs_open_loop_pulses(rig_data, tmp_path, row):
+    """Open loop, v = u: a u that differs from both its neighbours and from the v sent is the
+    corrupted field (the last row has one neighbour); v is the logged one. (Row 0 is not
+    judged: no replay reads it.)"""
+    name = "OL_pulse_test_sys_check_SLFR_RTP_OL_Test_uend=0.txt"
+    path = tmp_path / name
+    path.write_text((rig_data / name).read_text())
+    _corrupt(path, [("u", row, 37.0)])
+    run, clean = LoggedRun.from_path(path), LoggedRun.from_path(rig_data / name)
+    assert run.source == "header" and run.reproduced
+    found = run.identified.corrupted
+    assert found.u_rows == (row,) and glitched(found) == ()
+    np.testing.assert_array_equal(run.data["u"], clean.data["u"])
+    np.testing.assert_array_equal(run.data["v"], clean.data["v"])
+    logged = clean.data["u"][row] + 37
+    assert f"u of row {row} at t = {row * 0.002:g} s (logged {logged:g}, its neighbour" in \
+        run.audit.of("controller").evidence
+
+
+def test_the_rigs_headerless_sweep_with_a_corrupted_reference(rig_data, tmp_path):
+    # the 2014 layout, no header: P kp = 1 found past a u field, and the sine's u put right
+    name = "without_accel_01_28_14_test_2.txt"
+    path = tmp_path / name
+    path.write_text((rig_data / name).read_text())
+    _corrupt(path, [("u", 6000, -40.0)])
+    run, clean = LoggedRun.from_path(path), LoggedRun.from_path(rig_data / name)
+    assert run.source == "inferred" and run.reproduced and run.alignment == 1
+    assert run.controller.spec.get("kp") == 1.0 and run.identified.corrupted.u_rows == (6000,)
+    np.testing.assert_array_equal(run.data["u"], clean.data["u"])
+    assert "u of row 6000 at t = 12 s" in format_report(replay(path, model=False))

@@ -70,8 +70,11 @@ class Glitches(NamedTuple):
     a_rows : tuple of int
         The rows whose a was corrupted: the law reproduces every row after them with a there
         solved from the law.
-    theta, a : numpy.ndarray, shape (N,)
-        The log's θ and a with those rows put right.
+    u_rows : tuple of int
+        The rows whose u was corrupted: the law reproduces every row from them with u there
+        taken from a neighbouring row (the reference the loop ran on).
+    u, theta, a : numpy.ndarray, shape (N,)
+        The log's u, θ and a with those rows put right.
     """
 
     law: Compensator | OpenLoop
@@ -79,11 +82,13 @@ class Glitches(NamedTuple):
     rows: tuple[int, ...]
     theta_rows: tuple[int, ...]
     a_rows: tuple[int, ...]
+    u_rows: tuple[int, ...]
+    u: np.ndarray
     theta: np.ndarray
     a: np.ndarray
 
-    def repaired(self, v) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """The log's θ, a and v with the corrupted fields put right (v: the law's there).
+    def repaired(self, v) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """The log's u, θ, a and v with the corrupted fields put right (v: the law's there).
 
         Parameters
         ----------
@@ -92,29 +97,37 @@ class Glitches(NamedTuple):
 
         Returns
         -------
-        (theta, a, v) : numpy.ndarray, shape (N,) each
+        (u, theta, a, v) : numpy.ndarray, shape (N,) each
         """
         v = np.array(v, dtype=float)
         v[list(self.rows)] = self.fit.v_replayed[list(self.rows)]
-        return self.theta, self.a, v
+        return self.u, self.theta, self.a, v
 
-    def words(self, v, t, theta, a) -> str:
+    def words(self, v, t, u, theta, a) -> str:
         """``v of row 499 at t = 0.998 s (logged 33, the law's 71)``, ``θ of row 300 at t = 0.6 s
-        (logged 72, its neighbours 52 and 52)``: each row by its index among the log's data
-        rows, from 0, and its time.
+        (logged 72, its neighbours 52 and 52)``, ``u of row 500 at t = 1 s (logged 114, its
+        neighbours 50 and 50)``: each row by its index among the log's data rows, from 0, and
+        its time.
 
         Parameters
         ----------
-        v, t, theta, a : array_like, shape (N,)
-            The logged commands (DAC counts), times (s), hub angle (encoder counts) and
-            accelerometer (counts).
+        v, t, u, theta, a : array_like, shape (N,)
+            The logged commands (DAC counts), times (s), reference and hub angle (encoder
+            counts) and accelerometer (counts), as logged.
         """
         v_hat = self.fit.v_replayed
         each = [f"v of row {k} at t = {t[k]:g} s (logged {v[k]:g}, the law's {v_hat[k]:.6g})" for k in self.rows]
-        each += [f"θ of row {k} at t = {t[k]:g} s (logged {theta[k]:g}, its neighbours {theta[k - 1]:g} and "
-                 f"{theta[k + 1]:g})" for k in self.theta_rows]
+        each += [f"θ of row {k} at t = {t[k]:g} s (logged {theta[k]:g}, its {_neighbours(theta, k)})"
+                 for k in self.theta_rows]
         each += [f"a of row {k} at t = {t[k]:g} s (logged {a[k]:g})" for k in self.a_rows]
+        each += [f"u of row {k} at t = {t[k]:g} s (logged {u[k]:g}, its {_neighbours(u, k)})" for k in self.u_rows]
         return ", ".join(each)
+
+
+def _neighbours(x, k: int) -> str:
+    """``neighbours 52 and 52`` (or ``neighbour 50`` at the log's first or last row)."""
+    near = [f"{x[j]:g}" for j in (k - 1, k + 1) if 0 <= j < len(x)]
+    return f"neighbours {near[0]} and {near[1]}" if len(near) == 2 else f"neighbour {near[0]}"
 
 
 def _misses(controller, u, theta, a, v, d, skipped, restarts, rows_back,
@@ -134,7 +147,7 @@ def isolated_misses(controller, u, theta, a, v, alignments=ALIGNMENTS, skipped=N
     beside it within ``slack``) by more than :data:`station.analysis.header_law.NEAR_COUNTS` (a
     law a count off is a printing's, :func:`station.analysis.header_law.completed_law`), or a θ
     whose row's neighbour, put in its place, makes the law reproduce the rows it fed (a law
-    with memory carries a corrupted θ into many rows), or an a solved so. Every other row
+    with memory carries a corrupted θ into many rows), or an a solved so, or a u so put right. Every other row
     must be within ``slack``, at the alignment where the law misses fewest, and pin the law
     (:func:`station.analysis.law_rows.pins_a_law`; not asked of an open-loop law). Of the law's
     forms (:func:`station.analysis.controller_id.law_variants`), the one nearest the other rows.
@@ -187,31 +200,29 @@ def _isolated(controller, u, theta, a, v, alignments, skipped, restarts, slack) 
     most = most_glitches(v.size)
     if _episodes(miss, _fading_rows(controller)) > most:
         return None  # misses spread past what a few fields' fading echoes reach: a law's, not a field's
-    theta, a = np.array(theta, dtype=float), np.array(a, dtype=float)
+    cols = {"u": np.array(u, dtype=float), "theta": np.array(theta, dtype=float), "a": np.array(a, dtype=float)}
     bad_v: list[int] = []
-    bad_theta: list[int] = []
-    bad_a: list[int] = []
-    while miss.size and len(bad_v) + len(bad_theta) + len(bad_a) < most:
+    bad: dict[str, list[int]] = {name: [] for name in cols}
+    while miss.size and len(bad_v) + sum(map(len, bad.values())) < most:
         first = int(miss[0])
-        j = first - d  # the θ row the law read there
-        fixed = _repaired(controller, u, theta, a, v, d, j, first, bad_v, skipped, restarts, rows_back, slack)
+        fixed = _repaired(controller, cols, v, d, first, bad_v, skipped, restarts, rows_back, slack)
         if fixed is not None:
-            (theta, a), miss, column = fixed
-            (bad_theta if column == "theta" else bad_a).append(j)
+            cols, miss, column, row = fixed
+            bad[column].append(row)
             continue
         if miss.size > 1 and miss[1] == first + 1:
             return None  # rows missed together: a law's miss, not a field's
         bad_v.append(first)
         miss = miss[1:]
-    if miss.size or not (bad_v or bad_theta or bad_a):
+    if miss.size or not (bad_v or any(bad.values())):
         return None
-    _, err, v_hat = _misses(controller, u, theta, a, v, d, skipped, restarts, rows_back)
+    _, err, v_hat = _misses(controller, cols["u"], cols["theta"], cols["a"], v, d, skipped, restarts, rows_back)
     kept = np.ones(v.size, bool)
     kept[bad_v] = False
     if np.any(err[bad_v] <= NEAR_COUNTS) or (is_closed_loop(controller) and not pins_a_law(v[kept])):
         return None
     return Glitches(controller, AlignmentFit(d, float(np.max(err[kept], initial=0.0)), v_hat), tuple(bad_v),
-                    tuple(bad_theta), tuple(bad_a), theta, a)
+                    tuple(bad["theta"]), tuple(bad["a"]), tuple(bad["u"]), cols["u"], cols["theta"], cols["a"])
 
 
 def _fading_rows(controller) -> int:
@@ -234,35 +245,72 @@ def _episodes(rows, reach: int) -> int:
     return count
 
 
-def _repaired(controller, u, theta, a, v, d, j, first, bad_v, skipped, restarts, rows_back, slack):
-    """θ[j] or a[j] put right so that the law reproduces row ``first`` and the next, missing
-    fewest rows: θ from its neighbouring rows or a count between them, a (noisy between rows) solved from the law's slope in it there (rounded
-    to a whole count when a is logged in whole counts). ((θ, a), the misses left, "theta" or "a"), or None."""
-    if not 0 < j < theta.size - 1:
-        return None
-    low, high = sorted((theta[j - 1], theta[j + 1]))
-    between = np.arange(np.ceil(low), np.floor(high) + 1) if high - low <= 8 else np.array([low, high])
-    trials = [("theta", float(guess)) for guess in dict.fromkeys((low, high, *between)) if guess != theta[j]]
-    v_hat = _misses(controller, u, theta, a, v, d, skipped, restarts, rows_back)[2]
-    nudged = a.copy()
-    nudged[j] += 1.0
-    slope = _misses(controller, u, theta, nudged, v, d, skipped, restarts, rows_back)[2][first] - v_hat[first]
-    if slope:
-        guess = a[j] + (v[first] - v_hat[first]) / slope
-        whole = np.all(a[np.isfinite(a)] == np.round(a[np.isfinite(a)]))
-        guess = float(np.round(guess)) if whole else float(guess)
-        trials += [("a", guess)] if guess != a[j] else []
+def _repaired(controller, cols, v, d, first, bad_v, skipped, restarts, rows_back, slack):
+    """One field put right so that the law reproduces row ``first`` and the next, missing
+    fewest rows: θ of the row the law read there (``first - d``) from its neighbouring rows or
+    a count between them; a there (noisy between rows) solved from the law's slope in it
+    (rounded to a whole count when a is logged in whole counts); u of row ``first`` from a
+    neighbouring row (a reference holds its value between its changes). (columns, the misses
+    left, the column, its row), or None."""
+    u, theta, a = cols["u"], cols["theta"], cols["a"]
+    j = first - d  # the θ and a row the law read there
+    trials = []
+    if 0 < j < theta.size - 1:
+        low, high = sorted((theta[j - 1], theta[j + 1]))
+        between = np.arange(np.ceil(low), np.floor(high) + 1) if high - low <= 8 else np.array([low, high])
+        trials += [("theta", j, float(guess)) for guess in dict.fromkeys((low, high, *between)) if guess != theta[j]]
+        v_hat = _misses(controller, u, theta, a, v, d, skipped, restarts, rows_back)[2]
+        nudged = a.copy()
+        nudged[j] += 1.0
+        slope = _misses(controller, u, theta, nudged, v, d, skipped, restarts, rows_back)[2][first] - v_hat[first]
+        if slope:
+            guess = a[j] + (v[first] - v_hat[first]) / slope
+            whole = np.all(a[np.isfinite(a)] == np.round(a[np.isfinite(a)]))
+            guess = float(np.round(guess)) if whole else float(guess)
+            trials += [("a", j, guess)] if guess != a[j] else []
+    trials += [("u", first, guess) for guess in _u_guesses(controller, cols, v, d, first, skipped, restarts, rows_back)]
     best = None
-    for column, guess in trials:
-        trial_theta, trial_a = theta.copy(), a.copy()
-        (trial_theta if column == "theta" else trial_a)[j] = guess
-        _, err, _ = _misses(controller, u, trial_theta, trial_a, v, d, skipped, restarts, rows_back)
+    for column, row, guess in trials:
+        trial = {**cols, column: cols[column].copy()}
+        trial[column][row] = guess
+        _, err, _ = _misses(controller, trial["u"], trial["theta"], trial["a"], v, d, skipped, restarts, rows_back)
         err[bad_v] = 0.0
         left = np.flatnonzero(err > slack)
         score = int(np.count_nonzero(err > TOLERANCE))
         if (not left.size or left[0] > first + 1) and (best is None or score < best[0]):
-            best = (score, ((trial_theta, trial_a), left, column))
+            best = (score, (trial, left, column, row))
     return None if best is None else best[1]
+
+
+def _u_guesses(controller, cols, v, d, first, skipped, restarts, rows_back) -> list[float]:
+    """What u of row ``first`` may have been, when the logged one lies outside its neighbours
+    (a reference steps or sweeps through its rows; a value past both neighbours is a corrupted
+    field's, a v corrupted under a law without memory is not read as one): the neighbours, their
+    mean, every whole count between them (u in whole counts), and the u that makes the law give
+    the logged v there, solved from its slope, when no further past them than the reference's
+    rows lie past theirs elsewhere (its largest second difference, at least a count)."""
+    u = cols["u"]
+    near = [float(u[k]) for k in (first - 1, first + 1) if 0 <= k < u.size and np.isfinite(u[k])]
+    if not near or min(near) <= u[first] <= max(near):
+        return []
+    low, high = min(near), max(near)
+    # how far a row of this reference lies past its neighbours elsewhere (a sine's peak, a step)
+    bend = np.abs(np.diff(u, 2))
+    bend[max(first - 2, 0):first + 1] = 0.0
+    reach = max(1.0, float(np.max(bend[np.isfinite(bend)], initial=0.0)))
+    whole = bool(np.all(u[np.isfinite(u)] == np.round(u[np.isfinite(u)])))
+    mean = float(np.mean(near))
+    guesses = [float(np.round(mean)) if whole else mean, low, high]
+    guesses += list(np.arange(np.ceil(low), np.floor(high) + 1)) if whole and high - low <= 8 else []
+    v_hat = _misses(controller, u, cols["theta"], cols["a"], v, d, skipped, restarts, rows_back)[2]
+    nudged = u.copy()
+    nudged[first] += 1.0
+    slope = _misses(controller, nudged, cols["theta"], cols["a"], v, d, skipped, restarts, rows_back)[2][first] - \
+        v_hat[first]
+    if slope:
+        solved = u[first] + (v[first] - v_hat[first]) / slope
+        guesses += [float(np.round(solved)) if whole else float(solved)] if low - reach <= solved <= high + reach else []
+    return [float(g) for g in dict.fromkeys(guesses) if g != u[first]]
 
 
 def law_past_glitches(u, theta, a, v, dt: float = DT, rig_limit: float = CLAMP, alignments=ALIGNMENTS,

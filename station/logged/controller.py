@@ -335,9 +335,9 @@ def _driven(v) -> str:
     return "the model is driven by the logged v" if np.all(np.isfinite(v)) else "no model can run on it (no usable v)"
 
 
-def _set_aside(glitch: Glitches, t, theta, a, v) -> tuple[str, np.ndarray, np.ndarray, np.ndarray]:
-    """The words that set a log's corrupted fields aside, and its θ, a and v put right."""
-    return (f"; but {glitch.words(v, t, theta, a)}: {GLITCH_WORDS}", *glitch.repaired(v))
+def _set_aside(glitch: Glitches, t, u, theta, a, v) -> tuple[str, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """The words that set a log's corrupted fields aside, and its u, θ, a and v put right."""
+    return (f"; but {glitch.words(v, t, u, theta, a)}: {GLITCH_WORDS}", *glitch.repaired(v))
 
 
 def identify_controller(log: RunLog, skipped=None) -> ControllerId:
@@ -451,7 +451,7 @@ def identify_controller(log: RunLog, skipped=None) -> ControllerId:
         if fit.max_abs_dv > TOLERANCE and not cut:
             glitch = isolated_misses(controller, u, theta, a, v, ALIGNMENTS, skipped, restarts, slack=NEAR_COUNTS)
         if glitch is not None:  # a corrupted field or two, not another law: set aside, said, and put right
-            aside, theta, a, v = _set_aside(glitch, data['t'], theta, a, v)
+            aside, u, theta, a, v = _set_aside(glitch, data['t'], u, theta, a, v)
             used, fit, exact = glitch.law, glitch.fit, (glitch.fit.alignment,)
         if fit.max_abs_dv <= TOLERANCE:
             at = f" at alignment {fit.alignment}" if is_closed_loop(used) else ""
@@ -484,7 +484,7 @@ def identify_controller(log: RunLog, skipped=None) -> ControllerId:
         past = law_past_glitches(u, theta, a, v, dt, CLAMP, ALIGNMENTS, prefer)
         if past is not None:
             glitch = past[1]
-            aside, theta, a, v = _set_aside(glitch, data['t'], theta, a, v)
+            aside, u, theta, a, v = _set_aside(glitch, data['t'], u, theta, a, v)
             law = past[0].law if glitch.law is past[0].controller else describe_controller(glitch.law)
             hit = IdentifiedController(glitch.law, glitch.fit.alignment, glitch.fit.max_abs_dv, glitch.fit.v_replayed,
                                        law, past[0].design, (glitch.fit.alignment,))

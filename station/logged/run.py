@@ -75,8 +75,8 @@ class LoggedRun:
         g = self.identified.corrupted
         if g is None:
             return self._checked
-        theta, a, v = g.repaired(self._checked.data["v"])
-        return dataclasses.replace(self._checked, data={**self._checked.data, "theta": theta, "a": a, "v": v})
+        u, theta, a, v = g.repaired(self._checked.data["v"])
+        return dataclasses.replace(self._checked, data={**self._checked.data, "u": u, "theta": theta, "a": a, "v": v})
 
     @classmethod
     def from_path(cls, path: str | Path) -> LoggedRun:
