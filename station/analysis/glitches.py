@@ -309,7 +309,8 @@ def _u_guesses(controller, cols, v, d, first, skipped, restarts, rows_back) -> l
         v_hat[first]
     if slope:
         solved = u[first] + (v[first] - v_hat[first]) / slope
-        guesses += [float(np.round(solved)) if whole else float(solved)] if low - reach <= solved <= high + reach else []
+        if low - reach <= solved <= high + reach:
+            guesses.append(float(np.round(solved)) if whole else float(solved))
     return [float(g) for g in dict.fromkeys(guesses) if g != u[first]]
 
 
