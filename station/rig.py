@@ -47,6 +47,12 @@ CLAMP = 200.0
 """The rig software's clamp of the motor command, ±DAC counts ("slightly nonlinear above
 ±200"): the station's default ``--limit`` and the clamp assumed for the rig's logs."""
 
+MAX_ENCODER_STEP = 40.0
+"""Largest plausible encoder change per tick, counts: the rig's top motor speed (act_K·|2πj +
+act_p|/act_p ≈ 0.067 rad/s per DAC count, at 255 counts ≈ 5.6 counts per tick) with a margin of
+7 for the beam's swing of the hub. A live sample past it ends a run (``--max-step``); a logged
+θ past it from both neighbouring rows is a corrupted field (:mod:`station.logged.spikes`)."""
+
 # The station's defaults for a step test (DESIGN.md "Station defaults").
 
 DEFAULT_AMPLITUDE = 100.0

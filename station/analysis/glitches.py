@@ -100,7 +100,8 @@ class Glitches(NamedTuple):
         (u, theta, a, v) : numpy.ndarray, shape (N,) each
         """
         v = np.array(v, dtype=float)
-        v[list(self.rows)] = self.fit.v_replayed[list(self.rows)]
+        if self.rows:
+            v[list(self.rows)] = self.fit.v_replayed[list(self.rows)]
         return self.u, self.theta, self.a, v
 
     def words(self, v, t, u, theta, a) -> str:

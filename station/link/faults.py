@@ -9,7 +9,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from station.errors import StationError
-from station.rig import DEFAULT_TIMEOUT
+from station.rig import DEFAULT_TIMEOUT, MAX_ENCODER_STEP
 
 MISS_WINDOW = 100
 """Ticks over which --max-miss is counted."""
@@ -49,9 +49,8 @@ class LinkLimits:
         station cannot keep up.
     max_step : float
         Largest plausible encoder change per tick, counts; above it (a byte slip, a
-        corrupted sample), reason "sequence". Default: the rig's top motor speed
-        (act_K·|2πj + act_p|/act_p ≈ 0.067 rad/s per DAC count, at 255 counts ≈ 5.6
-        counts per tick) with a margin of 7 for the beam's swing of the hub.
+        corrupted sample), reason "sequence". Default: :data:`station.rig.MAX_ENCODER_STEP`
+        (the rig's top motor speed with a margin for the beam's swing of the hub).
     check_rate : bool
         Check the device's tick rate (reason "rate"): samples more than 1.5× the
         nominal period apart on average over 0.5 s (time the station spent on a sample
@@ -64,7 +63,7 @@ class LinkLimits:
     timeout: float = DEFAULT_TIMEOUT
     max_lag: float = 0.020
     max_miss: int = 10
-    max_step: float = 40.0
+    max_step: float = MAX_ENCODER_STEP
     check_rate: bool = True
 
 

@@ -22,6 +22,7 @@ from station.logged.sensors import (DOUBT_WORDS, NO_FAULTS, REFINED_BY_MODEL, Se
                                    holds_signs)
 from station.logged.reference import Reference, classify_reference
 from station.logged.simulate import ModelRun, compared_theta, simulate_log
+from station.logged.spikes import with_spikes
 from station.logged.start import Start, start_claims
 from station.logged.units import TimeBase, time_base
 from station.runlog.timebase import restart_rows, row_ticks, run_start
@@ -111,20 +112,20 @@ class LoggedRun:
         return self.log.dt
 
     # --- which controller ran, and how ------------------------------------------------
-
     @cached_property
     def identified(self) -> ControllerId:
-        """Which controller ran the log, where that came from and its audit row
-        (:func:`station.logged.controller.identify_controller`; none for a log without rows).
+        """Which controller ran the log, where that came from and its audit row (:func:`~station.logged.controller.
+        identify_controller`; none for a log without rows), and the corrupted fields of columns its law does not read
+        (:func:`station.logged.spikes.with_spikes`).
 
         Raises
         ------
         StationError
             Our header's controller spec is malformed, or a rig header's gain is not a number.
         """
-        if self._columns.identified is not None:  # the column check identified it already
-            return self._columns.identified
-        return identify_controller(self._checked, self.skipped) if len(self) else ControllerId(None, None, [])
+        cid = self._columns.identified  # the column check identified it already, or None
+        cid = cid or (identify_controller(self._checked, self.skipped) if len(self) else ControllerId(None, None, []))
+        return with_spikes(self._checked, cid)
 
     @cached_property
     def audit(self) -> Audit:
