@@ -118,15 +118,28 @@ class Glitches(NamedTuple):
         """
         v_hat = self.fit.v_replayed
         each = [f"v of row {k} at t = {t[k]:g} s (logged {v[k]:g}, the law's {v_hat[k]:.6g})" for k in self.rows]
-        each += [f"θ of row {k} at t = {t[k]:g} s (logged {theta[k]:g}, its {_neighbours(theta, k)})"
+        each += [f"θ of row {k} at t = {t[k]:g} s (logged {theta[k]:g}, its {neighbours_words(theta, k)})"
                  for k in self.theta_rows]
         each += [f"a of row {k} at t = {t[k]:g} s (logged {a[k]:g})" for k in self.a_rows]
-        each += [f"u of row {k} at t = {t[k]:g} s (logged {u[k]:g}, its {_neighbours(u, k)})" for k in self.u_rows]
+        each += [f"u of row {k} at t = {t[k]:g} s (logged {u[k]:g}, its {neighbours_words(u, k)})" for k in self.u_rows]
         return ", ".join(each)
 
 
-def _neighbours(x, k: int) -> str:
-    """``neighbours 52 and 52`` (or ``neighbour 50`` at the log's first or last row)."""
+def neighbours_words(x, k: int) -> str:
+    """``neighbours 52 and 52`` (or ``neighbour 50`` at the log's first or last row): a field's
+    neighbouring rows, as a corrupted field is said beside them.
+
+    Parameters
+    ----------
+    x : array_like, shape (N,)
+        The column.
+    k : int
+        The field's row.
+
+    Returns
+    -------
+    str
+    """
     near = [f"{x[j]:g}" for j in (k - 1, k + 1) if 0 <= j < len(x)]
     return f"neighbours {near[0]} and {near[1]}" if len(near) == 2 else f"neighbour {near[0]}"
 

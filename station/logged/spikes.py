@@ -19,7 +19,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from station.analysis.glitches import Glitches, most_glitches
+from station.analysis.glitches import Glitches, most_glitches, neighbours_words
 from station.analysis.law_rows import TOLERANCE
 from station.control.rerun import is_closed_loop
 from station.logged.controller import ControllerId
@@ -153,7 +153,7 @@ def _put_right(x: np.ndarray, k: int) -> float:
 
 
 def _words(name: str, t, x, k: int, why: str) -> str:
-    return f"{name} of row {k} at t = {t[k]:g} s (logged {x[k]:g}, its neighbours {x[k - 1]:g} and {x[k + 1]:g}): {why}"
+    return f"{name} of row {k} at t = {t[k]:g} s (logged {x[k]:g}, its {neighbours_words(x, k)}): {why}"
 
 
 def _off(x: np.ndarray) -> np.ndarray:
