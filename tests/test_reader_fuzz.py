@@ -9,6 +9,7 @@ import os
 import random
 import warnings
 
+import numpy as np
 import pytest
 
 from station.cli import main
@@ -50,17 +51,39 @@ def test_one_nan_in_a_rig_log_names_file_line_and_field(rig_data, tmp_path, caps
         assert "nan.txt: line 60: theta is nan" in err
 
 
-@pytest.mark.parametrize("line", [2, 500])
-def test_a_byte_that_is_not_utf8_names_its_line(rig_data, tmp_path, capsys, line):
-    # a Windows script's "°" (latin-1 0xb0) in a header comment or a row: before, "not a text
-    # run log (invalid start byte at byte 64 of a block)", no line to look at
+@pytest.mark.parametrize("line, said", [(500, "not a text run log (byte 0xb0: not UTF-8"),
+                                        (2, "kp: expected a number, got '2.0 \ufffd' (a byte that is not UTF-8")])
+def test_a_byte_that_is_not_utf8_names_its_line(rig_data, tmp_path, capsys, line, said):
+    # a Windows script's "°" (latin-1 0xb0) in a row, or in a header line that holds a field:
+    # before, "not a text run log (invalid start byte at byte 64 of a block)", no line to look at
     lines = (rig_data / RIG_FILES[0]).read_bytes().split(b"\n")
     lines[line - 1] = lines[line - 1] + (b" \xb0" if line == 2 else b"\xb0")
     bad = tmp_path / "latin1.txt"
     bad.write_bytes(b"\n".join(lines))
     for argv in (["replay", str(bad)], ["compare", str(bad)]):
         err = _one_line_error(capsys, argv)
-        assert f"latin1.txt: line {line}: not a text run log (byte 0xb0: not UTF-8" in err, err
+        assert f"latin1.txt: line {line}: {said}" in err, err
+
+
+@pytest.mark.parametrize("name", RIG_FILES[:4])
+def test_a_header_comment_in_another_code_page_is_read(rig_data, tmp_path, capsys, name):
+    """A title or comment line written on a Windows machine ("20°C" in cp1252): no number is in
+    it, so the log is read, with one warning naming the line. Before, the whole log was refused
+    ("not a text run log")."""
+    lines = (rig_data / name).read_bytes().split(b"\n")
+    lines[0] += b" 20\xb0C"  # the title line
+    lines.insert(1, b"#operator: J\xfcrgen")
+    path = tmp_path / name
+    path.write_bytes(b"\n".join(lines))
+    with pytest.warns(RuntimeWarning, match=r"line 1: 2 '#' line\(s\) not UTF-8 text"):
+        log = read_log(path)
+    clean = read_log(rig_data / name)
+    assert log.meta["title"].endswith("20\ufffdC") and log.meta.get("kp") == clean.meta.get("kp")
+    for key in clean.data:
+        np.testing.assert_array_equal(log.data[key], clean.data[key])
+    assert main(["replay", "--no-model", str(path)]) == 0
+    err = capsys.readouterr().err
+    assert "warning:" in err and "not UTF-8" in err and "error" not in err, err
 
 
 def test_gth_with_den0_is_a_header_error(rig_data, tmp_path, capsys):

@@ -93,14 +93,27 @@ def read_log(path: str | Path) -> RunLog:
     /.../missing.tsv: run log not found
     """
     path = Path(path)
-    fh = open_log(path)
-    with fh:
+    try:
+        return _read_path(path, "strict")
+    except UnicodeDecodeError as exc:
+        byte = exc.object[exc.start:exc.start + 1].hex()
+        bad = _undecodable_lines(path)
+        if not bad or not all(text.startswith("#") for _, text in bad):
+            raise log_error(path, bad[0][0] if bad else None, f"not a text run log (byte 0x{byte}: not UTF-8 "
+                            f"text, which a run log is)") from None
+    # only '#' lines are not UTF-8 (a comment written in a Windows code page: "20°C"); a field's
+    # line among them is refused by the header's parser (a number with "\ufffd" is none)
+    log = _read_path(path, "replace")
+    warnings.warn(f"{path}: line {bad[0][0]}: {len(bad)} '#' line(s) not UTF-8 text (a comment written in "
+                  f"another code page): read with those characters replaced", RuntimeWarning, stacklevel=2)
+    return log
+
+
+def _read_path(path: Path, errors: str) -> RunLog:
+    """:func:`read_log` with the text decoder's error handling ``errors``."""
+    with open_log(path, errors) as fh:
         try:
             return _read_stream(path, Lines(fh))
-        except UnicodeDecodeError as exc:
-            byte = exc.object[exc.start:exc.start + 1].hex()
-            raise log_error(path, _undecodable_line(path), f"not a text run log (byte 0x{byte}: not UTF-8 "
-                            f"text, which a run log is)") from None
         except LineTooLong as exc:
             raise log_error(path, exc.lineno, f"longer than {MAX_LINE} characters: not a run log") from None
         except OSError as exc:
@@ -259,17 +272,19 @@ def _check_finite(path: Path, data: dict[str, np.ndarray], names: list[str], fmt
                             f"±{MAX_ABS_VALUE:.0f}, a 32-bit counter's range)", key=name)
 
 
-def _undecodable_line(path: Path) -> int | None:
-    """The number of the first line that is not UTF-8 text (None when none is found again)."""
+def _undecodable_lines(path: Path) -> list[tuple[int, str]]:
+    """The lines that are not UTF-8 text, (number, text with U+FFFD for each bad byte); [] for
+    none found again, or a binary file without newlines."""
+    bad = []
     with open_log(path, errors="replace") as fh:
         lines = Lines(fh)
         try:
             while (item := lines.next()) is not None:
                 if "\ufffd" in item[1]:
-                    return item[0]
+                    bad.append(item[:2])
         except LineTooLong:  # a binary file without newlines: no line to name
-            return None
-    return None
+            return []
+    return bad
 
 
 def _line_of_row(path: Path, first_lineno: int | None, row: int) -> int:

@@ -158,6 +158,9 @@ def parse_rig_header(path: Path, comment_lines: list[str]) -> Header:
                 try:
                     meta[key] = float(val)
                 except ValueError:
+                    if key in _KEYS.values() and "\ufffd" in val:  # read past a byte of another code page
+                        raise log_error(path, i + 1, f"{key}: expected a number, got {val!r} (a byte that is not "
+                                        f"UTF-8 text)", key=key) from None
                     if key in _KEYS.values() and decimal_comma(val):
                         meta[key] = float(val.replace(",", "."))  # one number: its comma can be nothing else
                         notes.append(f"{key}={val} read as {meta[key]:g} (a decimal comma)")
