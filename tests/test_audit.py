@@ -375,12 +375,17 @@ def _swap_columns(src, dst, first, second, header=True):
 @pytest.mark.parametrize("name, first, second, header", [
     (RIG_LOGS[1], "u", "v", True), (RIG_LOGS[1], "$\\theta$", "a", True), (RIG_LOGS[4], "u", "v", True),
     (RIG_LOGS[4], "$\\theta$", "a", True), (RIG_LOGS[7], "$\\theta$", "a", True),
-    (RIG_LOGS[1], "u", "v", False), (RIG_LOGS[1], "$\\theta$", "a", False)])
+    (RIG_LOGS[1], "u", "v", False), (RIG_LOGS[1], "$\\theta$", "a", False),
+    # the command and the angle, the reference and the angle (a layout mapped onto another by place)
+    (RIG_LOGS[1], "v", "$\\theta$", True), (RIG_LOGS[1], "u", "$\\theta$", True), (RIG_LOGS[4], "v", "$\\theta$", True),
+    (RIG_LOGS[4], "u", "$\\theta$", True), (RIG_LOGS[3], "v", "$\\theta$", True),
+    (RIG_LOGS[1], "v", "$\\theta$", False)])
 def test_two_columns_swapped_are_found(rig_data, tmp_path, name, first, second, header):
     # The header's law (or, with no header, the law the data give) reproduces every logged v
     # only with the two columns exchanged: the column line is contradicted, said first, and the
     # log read swapped (before, the P step with u and v swapped was "inferred" a
-    # 300(s-2)/(s-3000) with Ga at a ±50 clamp, θ fit -3690 %)
+    # 300(s-2)/(s-3000) with Ga at a ±50 clamp, θ fit -3690 %; with v and θ swapped it was "not
+    # this law, no law found", overshoot 100 %, θ fit -196 %)
     src = rig_data / name
     truth = LoggedRun.from_path(src)
     run = LoggedRun.from_path(_swap_columns(src, tmp_path / src.name, first, second, header))

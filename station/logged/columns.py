@@ -55,8 +55,10 @@ ModelTheta = Callable[[RunLog], "np.ndarray | None"]
 """``model_theta(log) -> θ``: the nominal model's θ for a log driven open loop by its v (encoder
 counts, shape (N,)), None when the log cannot be simulated (``LoggedRun``'s ``_nominal_theta``)."""
 
-SWAPS = (("u", "v"), ("theta", "a"))
-"""Column pairs a swap is tried for: the reference and the command, the two sensors."""
+SWAPS = (("u", "v"), ("theta", "a"), ("v", "theta"), ("u", "theta"))
+"""Column pairs a swap is tried for: the reference and the command, the two sensors; the
+command and the angle, the reference and the angle (a script that mapped one layout's columns
+onto another's by place: the 2014 logs write v last)."""
 
 TRIALS = SWAPS + (("theta",),)
 """What a law is tried on when it reproduces no v as the columns are named (the header's
@@ -67,7 +69,7 @@ claim contradicted, :func:`station.analysis.law_words.ga_text`), beside the acce
 sensor audit reads reversed; so a session whose runs all read a reversed gets one sign, not a
 column read back in the run that feeds it back and reversed again by the session's decision."""
 
-PAIRS = tuple((pair, ("theta",)) for pair in SWAPS)
+PAIRS = tuple((pair, ("theta",)) for pair in SWAPS[:2])
 """Two column faults at once, tried when no one of :data:`TRIALS` makes the header's law
 reproduce the log: a swap, then θ negated (a script that wrote its columns in another order and
 the loop's angle with the other sign)."""
