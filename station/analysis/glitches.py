@@ -263,9 +263,8 @@ def _repaired(controller, cols, v, d, first, bad_v, skipped, restarts, rows_back
     """One field put right so that the law reproduces row ``first`` and the next, missing
     fewest rows: θ of the row the law read there (``first - d``) from its neighbouring rows or
     a count between them; a there (noisy between rows) solved from the law's slope in it
-    (rounded to a whole count when a is logged in whole counts); u of row ``first`` from a
-    neighbouring row (a reference holds its value between its changes). (columns, the misses
-    left, the column, its row), or None."""
+    (rounded to a whole count when a is logged in whole counts); u of row ``first`` between its
+    neighbouring rows (:func:`_u_guesses`). (columns, the misses left, the column, its row), or None."""
     u, theta, a = cols["u"], cols["theta"], cols["a"]
     j = first - d  # the θ and a row the law read there
     trials = []

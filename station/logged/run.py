@@ -114,9 +114,9 @@ class LoggedRun:
     # --- which controller ran, and how ------------------------------------------------
     @cached_property
     def identified(self) -> ControllerId:
-        """Which controller ran the log, where that came from and its audit row (:func:`~station.logged.controller.
-        identify_controller`; none for a log without rows), and the corrupted fields of columns its law does not read
-        (:func:`station.logged.spikes.with_spikes`).
+        """Which controller ran the log, where that came from and its audit row; none for a log
+        without rows (:func:`station.logged.controller.identify_controller`), with the corrupted
+        fields of the columns its law does not read (:func:`station.logged.spikes.with_spikes`).
 
         Raises
         ------

@@ -66,8 +66,8 @@ def unread_spikes(t, theta, a, controller, found: Glitches | None = None) -> Spi
         Hub angle (encoder counts, the rig's) and accelerometer (counts), as the audit read
         them (a corrupted field the law found already put right: ``found``).
     controller : Compensator, OpenLoop or None
-        The log's law: a closed loop reads θ, accelerometer feedback (``ga``) reads a; no law
-        reads neither.
+        The log's law: a closed loop reads θ, accelerometer feedback (``ga``) reads a; with no law,
+        neither is read.
     found : Glitches, optional
         The fields the law set aside (:func:`station.analysis.glitches.isolated_misses`): at
         most :func:`station.analysis.glitches.most_glitches` in all.
