@@ -277,19 +277,20 @@ def test_a_corrupted_theta_of_the_rigs_open_loop_pulses(rig_data, tmp_path, rows
 
 def test_a_field_within_what_the_column_holds_is_the_runs(rig_data, tmp_path):
     """Not every large sample is corrupted: θ of the open-loop pulses 30 counts off (within a
-    tick's motion) and a of the lead + accelerometer step twice its own largest jolt are kept
-    as logged (no law reads the first; the second is read by Ga, which reproduces it as it is
-    nowhere: its law says)."""
+    tick's motion), a of the P step at twice its own largest jolt, and the 2014 sweep's unused
+    accelerometer channel reading -66 on two rows (two rows alike are no lone field) are kept
+    as logged."""
     name = "OL_pulse_test_sys_check_SLFR_RTP_OL_Test_uend=0.txt"
     path = tmp_path / name
     path.write_text((rig_data / name).read_text())
     _corrupt(path, [("theta", 400, 30.0)])
     assert LoggedRun.from_path(path).identified.corrupted is None
-    name = "SFLR_P_control_step_kp_2_SLFR_RTP_P_control_kp=2.0.txt"  # its a's largest jolt: 17 counts
+    name = "SFLR_P_control_step_kp_2_SLFR_RTP_P_control_kp=2.0.txt"  # its a's largest jolt: 14 counts past both
     path = tmp_path / name
     path.write_text((rig_data / name).read_text())
-    _corrupt(path, [("a", 135, 30.0)])
+    _corrupt(path, [("a", 135, 15.0)])
     assert LoggedRun.from_path(path).identified.corrupted is None
+    assert LoggedRun.from_path(rig_data / "without_accel_01_28_14_test_2.txt").identified.corrupted is None
 
 
 @pytest.mark.parametrize("seed", range(3))

@@ -6,9 +6,9 @@ serial glitch in a column no law reads (a under P or the lead alone, θ in open 
 law reproducing every row and was read as the run's: the rig's P step with a of row 500 off by
 512 counts compared with its model at an accelerometer fit of 4.3 % (the log's own 38.5 %),
 without a word. Such a field is told by the column: θ past both neighbouring rows by more
-than the hub can move in a tick (:data:`station.rig.MAX_ENCODER_STEP`), a past the mean of its
+than the hub can move in a tick (:data:`station.rig.MAX_ENCODER_STEP`), a past both its
 neighbours :data:`SPIKE_FACTOR` times as far as any other row of the run lies past its own
-(the rig's eleven logs: at most 2.3 times, the lead + accelerometer step's jolt at its start).
+(the rig's eleven logs: at most 1.7 times, the 2009 P step's jolt; two rows alike are no lone field).
 Each is set aside, said, and put right from its neighbours.
 """
 
@@ -27,8 +27,8 @@ from station.rig import MAX_ENCODER_STEP
 from station.runlog import RunLog
 
 SPIKE_FACTOR = 4.0
-"""How many times further past its neighbours' mean than any other row of the run an a field
-must lie to be a corrupted one (the rig's logs: at most 2.3)."""
+"""How many times further past both its neighbours than any other row of the run an a field
+must lie to be a corrupted one (the rig's logs: at most 1.7)."""
 
 SPIKE_WORDS = "no law reads it; as a corrupted field has it, set aside"
 """Why such a field is set aside, said after it."""
@@ -92,8 +92,9 @@ def unread_spikes(t, theta, a, controller, found: Glitches | None = None) -> Spi
             theta_rows.append(k)
     if getattr(controller, "ga", None) is None:
         for k, rest in _a_spikes(a, budget - len(theta_rows)):
-            words.append(_words("a", t, a, k, f"{abs(a[k] - _mean(a, k)) / rest:.0f}× as far past its neighbours as "
-                                f"any other row of the run ({rest:g} counts)"))
+            past = min(abs(a[k] - a[k - 1]), abs(a[k] - a[k + 1]))
+            words.append(_words("a", t, a, k, f"past both its neighbours {past / rest:.0f}× as far as any other row "
+                                f"of the run ({rest:g} counts)"))
             a[k] = _put_right(a, k)
             a_rows.append(k)
     if not words:
@@ -164,6 +165,16 @@ def _off(x: np.ndarray) -> np.ndarray:
     return np.where(np.isfinite(off), off, 0.0)
 
 
+def _past_both(x: np.ndarray) -> np.ndarray:
+    """How far x[k] lies past both its neighbours, on one side of them (0 where it lies between
+    them or level with one: two rows alike are no lone field), for each interior row k."""
+    past = np.zeros(x.size)
+    if x.size >= 3:
+        before, after = x[1:-1] - x[:-2], x[1:-1] - x[2:]
+        past[1:-1] = np.where(np.sign(before) * np.sign(after) > 0, np.minimum(np.abs(before), np.abs(after)), 0.0)
+    return np.where(np.isfinite(past), past, 0.0)
+
+
 def _theta_spikes(theta: np.ndarray, budget: int) -> list[int]:
     """Rows whose θ lies past both neighbours by more than a tick's motion, the neighbours
     within a tick's motion of each other (a hub cannot jump there and back)."""
@@ -175,18 +186,18 @@ def _theta_spikes(theta: np.ndarray, budget: int) -> list[int]:
 
 
 def _a_spikes(a: np.ndarray, budget: int) -> list[tuple[int, float]]:
-    """Rows whose a lies :data:`SPIKE_FACTOR` times further past its neighbours' mean than any
-    other row (the rows beside it left out), largest first, with that other row's distance."""
-    off = _off(a)
+    """Rows whose a lies past both its neighbours :data:`SPIKE_FACTOR` times as far as any other
+    row lies past its own (the rows beside it left out), largest first, with that other row's."""
+    past = _past_both(a)
     found: list[tuple[int, float]] = []
     while len(found) < budget:
-        k = int(np.argmax(off))
-        rest = off.copy()
+        k = int(np.argmax(past))
+        rest = past.copy()
         for j, _ in found + [(k, 0.0)]:
             rest[max(j - 2, 0):j + 3] = 0.0
         other = max(float(np.max(rest, initial=0.0)), 1.0)  # at least a count: a quiet channel's noise
-        if off[k] <= SPIKE_FACTOR * other:
+        if past[k] <= SPIKE_FACTOR * other:
             break
         found.append((k, other))
-        off[max(k - 2, 0):k + 3] = 0.0
+        past[max(k - 2, 0):k + 3] = 0.0
     return found
