@@ -72,6 +72,9 @@ class RunComparison:
     step_time_s : float or None
         When the step starts, s from the log's t = 0 (the thesis's settling (1 %) counts from
         t = 0); None when not a step.
+    step_from : float
+        The level the step starts from, encoder counts (0 but for a step from a held position,
+        :attr:`station.logged.reference.Reference.initial`).
     """
 
     file: str
@@ -90,6 +93,7 @@ class RunComparison:
     controller_source: str | None = None
     audit: Audit | None = field(default=None, repr=False)
     step_time_s: float | None = None
+    step_from: float = 0.0
 
     def to_json(self) -> dict:
         """JSON-able summary (metrics as {overshoot_pct, settling_thesis_s} or null). ``rig``
@@ -98,6 +102,7 @@ class RunComparison:
         return {"file": self.file, "source": self.source, "outcome": self.outcome,
                 "controller": self.controller, "controller_source": self.controller_source,
                 "audit": [] if self.audit is None else self.audit.to_json(), "step": self.step,
+                **({"step_from": self.step_from} if self.step_from else {}),
                 "step_time_s": self.step_time_s, "rig": j(self.rig),
                 "model": j(self.model), "thesis_experiment": j(self.thesis_experiment),
                 "thesis_fem": j(self.thesis_fem), "fit_pct": dict(self.fit_pct), "notes": list(self.notes)}
@@ -144,7 +149,8 @@ def compare_run(path, plant) -> RunComparison:
         notes.append(f"{run.held_note}; `station replay` analyzes the beam's free vibration after the release")
         return RunComparison(str(path), name, step, run.step_metrics(), None, None, None,
                              {"theta": None, "accel": None}, data, None, notes, source=source, outcome=log.outcome,
-                             controller_source=run.source, audit=run.audit, step_time_s=step_time)
+                             controller_source=run.source, audit=run.audit, step_time_s=step_time,
+                             step_from=run.reference.initial)
     sim = run.simulate(plant)
     pred, fits = sim.prediction, sim.fit_pct
     notes.append(f"model: driven by {sim.how}")
@@ -154,13 +160,13 @@ def compare_run(path, plant) -> RunComparison:
     if step is not None:
         rig = run.step_metrics()
         model = run.step_metrics(pred["theta"], pred["t"])
-        case = thesis_case(run, step) if source == "rig" else None
+        case = thesis_case(run, step) if source == "rig" and not run.reference.initial else None
         if case is not None:
             (eo, es), (fo, fs) = THESIS_TABLE[case]
             exp, fem = StepMetrics(eo, es), StepMetrics(fo, fs)
     return RunComparison(str(path), name, step, rig, model, exp, fem, fits, data, pred, notes,
                          source=source, outcome=log.outcome, controller_source=run.source, audit=run.audit_for(plant),
-                         step_time_s=step_time)
+                         step_time_s=step_time, step_from=run.reference.initial)
 
 
 def thesis_case(run: LoggedRun, step: float | None) -> str | None:
@@ -221,7 +227,8 @@ def format_comparison(c: RunComparison) -> str:
     outcome = "" if c.outcome is None else f", outcome {c.outcome.get('reason')}"
     lines = [] if c.audit is None else [f"{Path(c.file).name}: {line}" for line in c.audit.lines()]
     lines += [f"{Path(c.file).name} ({c.source} log): controller {c.controller}"
-             + ("" if c.step is None else f", step {c.step:g} counts") + outcome,
+             + ("" if c.step is None else f", step {c.step - c.step_from:g} counts"
+                + (f" from u = {c.step_from:g}" if c.step_from else "")) + outcome,
              f"  {'':<20} {'overshoot %':>12} {settling_label(THESIS_BAND_PCT) + ' s':>14} {'fit θ %':>8} "
              f"{'fit a %':>8}",
              f"  {c.source + ' (this log)':<20} {fmt(c.rig)}"]

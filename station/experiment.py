@@ -334,14 +334,14 @@ def _metrics_of(log: RunLog, plan: StepPlan) -> tuple[StepMetrics | None, StepIn
     t, theta = log.data["t"], log.data["theta"]
     if t.size == 0:
         return None, None
-    amplitude, step_time = plan.amplitude, plan.step_time
+    amplitude, step_time, initial = plan.amplitude, plan.step_time, 0.0
     if not plan.closed_step:
-        ref = classify_reference(log.data["u"])
+        ref = classify_reference(log.data["u"], float(theta[0]))
         if not ref.is_step or ref.step_tick >= t.size:
             return None, None
-        amplitude, step_time = ref.amplitude, float(t[ref.step_tick])
-    return (step_metrics(t, theta, amplitude),
-            step_info(t, theta, amplitude, step_time, v=log.data["v"], limit=plan.limit))
+        amplitude, step_time, initial = ref.amplitude, float(t[ref.step_tick]), ref.initial
+    return (step_metrics(t, theta, amplitude, initial),
+            step_info(t, theta, amplitude, step_time, v=log.data["v"], limit=plan.limit, u_initial=initial))
 
 
 def format_report(report: StepReport) -> str:

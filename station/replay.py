@@ -319,7 +319,7 @@ def format_report(report: ReplayReport) -> str:
     ref = report.reference
     if ref.is_step:
         first = _tick_of_row(report.log, 0, row_said=False)  # u at its level from the first row: a cut copy
-        lines.append(f"  reference: step of {ref.amplitude:g} at {_tick_of_row(report.log, ref.step_tick)}"
+        lines.append(f"  reference: step of {ref.height:g}{ref.held_words} at {_tick_of_row(report.log, ref.step_tick)}"
                      if ref.step_tick else
                      f"  reference: u = {ref.amplitude:g} from the first row ({first}): the step is at or before it")
     if report.metrics is not None:

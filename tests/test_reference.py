@@ -53,3 +53,36 @@ def test_replay_and_compare_agree_on_what_a_step_is(tmp_path, u, step):
     assert c.step == step
     assert (r.reference["kind"] == "step") == (step is not None)
     assert (c.rig is not None) == (step is not None)
+
+
+@pytest.mark.parametrize("u, theta0, expected", [
+    ([20, 20, 70, 70], 20.0, {"kind": "step", "amplitude": 70.0, "tick": 2, "from": 20.0}),  # from a held position
+    ([20, 20, 70, 70], 18.0, {"kind": "step", "amplitude": 70.0, "tick": 2, "from": 20.0}),  # held short by friction
+    ([100, 100, 0, 0], 100.0, {"kind": "step", "amplitude": 0.0, "tick": 2, "from": 100.0}),  # back to 0
+    ([100, 100, 0, 0], 0.0, {"kind": "other"}),  # a pulse from rest
+    ([100, 100, 0, 0], None, {"kind": "other"}),  # u alone cannot say which
+    ([20, 20, 70, 70, 20], 20.0, {"kind": "other"}),  # three levels
+    ([0, 0, 70, 70], 5.0, {"kind": "step", "amplitude": 70.0, "tick": 2}),  # from 0, whatever θ
+])
+def test_a_step_from_a_held_position(u, theta0, expected):
+    ref = classify_reference(u, theta0)
+    assert ref == expected
+    if ref.is_step:
+        assert ref.height == ref.amplitude - ref.initial
+
+
+def test_step_metrics_of_a_step_from_a_held_position_are_the_steps():
+    # the docstring's 100-count step answered by a 2 Hz ring, shifted to start at 20, and
+    # mirrored (a step down from 120 to 20): the same overshoot and settling, the same figures
+    from station.analysis.metrics import step_info, step_metrics
+
+    t = np.arange(1000) * 0.002
+    theta = np.round(100 * (1 - np.exp(-8 * t) * np.cos(2 * np.pi * 2 * t)))
+    base, info = step_metrics(t, theta, 100), step_info(t, theta, 100, 0.0)
+    assert base.overshoot_pct == 16.0
+    assert step_metrics(t, theta + 20, 120, 20) == base
+    assert step_metrics(t, 120 - theta, 20, 120) == base
+    assert step_info(t, theta + 20, 120, 0.0, u_initial=20) == info
+    assert step_info(t, 120 - theta, 20, 0.0, u_initial=120) == info
+    with pytest.raises(ValueError, match="u_final - u_initial must be a non-zero step size"):
+        step_metrics(t, theta, 20, 20)

@@ -342,3 +342,37 @@ def test_a_copy_cut_after_its_step_says_u_from_the_first_row_not_a_step_there(ri
     text = format_report(replay(path, model=False))
     assert "  reference: u = 50 from the first row (tick 80): the step is at or before it" in text
     assert "step of 50 at tick 80" not in text
+
+
+@pytest.mark.parametrize("level, mirror", [(20.0, False), (70.0, True), (50.0, True)])
+def test_a_step_from_a_held_position_has_the_runs_metrics(rig_data, tmp_path, level, mirror):
+    """The thesis's P step moved to start from a held position: u and θ shifted by 20 (a step
+    of 50 from u = 20), or mirrored about 70 or 50 (u, θ to level − u, level − θ; v and a
+    negated: a step down of 50, the last one back to 0). The P law holds on each as on the
+    log, so the run is the same run: its overshoot and settling are the log's own (24.00 %,
+    1.250 s), the model's fit too, and nothing is contradicted (θ starts where u holds it).
+    Before, the reference was "other": no overshoot, no settling time, and "the encoder not
+    zeroed" was said against it."""
+    from station.compare import compare_run
+    from station.plant import load_model
+
+    src = rig_data / P_LOG
+    lines = src.read_text().splitlines()
+    head = [x for x in lines if x.startswith("#")]
+    rows = []
+    for line in lines[len(head):]:
+        t, n, u, v, theta, a = (float(x) for x in line.split("\t"))
+        u, v, theta, a = (level - u, -v, level - theta, -a) if mirror else (u + level, v, theta + level, a)
+        rows.append("\t".join(f"{x:g}" for x in (t, n, u, v, theta, a)))
+    path = tmp_path / "held.txt"
+    path.write_text("\n".join(head + rows) + "\n")
+    run, clean = LoggedRun.from_path(path), LoggedRun.from_path(src)
+    assert run.reference.is_step and run.reference.initial == level
+    assert run.reference.height == (-50.0 if mirror else 50.0)
+    assert run.step_metrics() == clean.step_metrics()
+    assert run.audit.lines() == []
+    text = format_report(replay(path))
+    assert f"reference: step of {run.reference.height:g} from u = {level:g} at tick 50" in text, text
+    assert "overshoot 24.00 %, settling (1 %) 1.250 s" in text and "theta 69.4 %" in text, text
+    c = compare_run(path, load_model("tmm-fit"))
+    assert c.rig == clean.step_metrics() and c.step_from == level and c.thesis_experiment is None

@@ -202,21 +202,24 @@ class StepInfo:
                 f"steady-state error {self.steady_state_error:.1f} counts{sat}")
 
 
-def _step_response(t, theta, u_final) -> tuple[np.ndarray, np.ndarray, float]:
-    """t and θ as float arrays and the step as a float; ValueError when they cannot be a step response."""
+def _step_response(t, theta, u_final, u_initial=0.0) -> tuple[np.ndarray, np.ndarray, float]:
+    """t and θ as float arrays and the step's height as a float; ValueError when they cannot be
+    a step response."""
     t = np.asarray(t, dtype=float)
     theta = np.asarray(theta, dtype=float)
     if t.ndim != 1 or t.shape != theta.shape or t.size == 0:
         raise ValueError(f"t and theta must be 1-D arrays of the same non-zero length, got {t.shape} and {theta.shape}")
     if np.any(np.isnan(theta)):
         raise ValueError("theta holds NaN samples")
-    u_final = float(u_final)
-    if u_final == 0.0 or not np.isfinite(u_final):
-        raise ValueError(f"u_final must be a non-zero step size, got {u_final}")
-    return t, theta, u_final
+    height = float(u_final) - float(u_initial)
+    if height == 0.0 or not np.isfinite(height):
+        raise ValueError(f"u_final must be a non-zero step size, got {float(u_final)}" if not u_initial else
+                         f"u_final - u_initial must be a non-zero step size, got {u_final} - {u_initial}")
+    return t, theta, height
 
 
-def step_info(t, theta, u_final: float, step_time: float = 0.0, v=None, limit: float | None = None) -> StepInfo:
+def step_info(t, theta, u_final: float, step_time: float = 0.0, v=None, limit: float | None = None,
+              u_initial: float = 0.0) -> StepInfo:
     """Rise time, peak time, 2 % settling time, steady-state error and time in saturation.
 
     Parameters
@@ -231,6 +234,9 @@ def step_info(t, theta, u_final: float, step_time: float = 0.0, v=None, limit: f
         Commands, DAC counts (for the time in saturation).
     limit : float, optional
         The controller's clamp, DAC counts.
+    u_initial : float
+        The level the step starts from, encoder counts (0 but for a step from a held
+        position): the figures are of θ − u_initial against the height ``u_final - u_initial``.
 
     Returns
     -------
@@ -239,7 +245,7 @@ def step_info(t, theta, u_final: float, step_time: float = 0.0, v=None, limit: f
     Raises
     ------
     ValueError
-        Mismatched or empty arrays, NaN in theta, ``u_final`` zero or not finite.
+        Mismatched or empty arrays, NaN in theta, a height zero or not finite.
 
     Notes
     -----
@@ -251,13 +257,13 @@ def step_info(t, theta, u_final: float, step_time: float = 0.0, v=None, limit: f
     """
     import control  # lazy: start-up time (python-control)
 
-    t, theta, u_final = _step_response(t, theta, u_final)
+    t, theta, height = _step_response(t, theta, u_final, u_initial)
     after = t >= step_time - 1e-12
-    ts, ys = t[after] - step_time, theta[after]
+    ts, ys = t[after] - step_time, theta[after] - u_initial  # the response from the level it steps from
     if ts.size < 2:
         raise ValueError("fewer than two samples after the step")
-    reached = np.sign(u_final) * (ys - 0.9 * u_final) >= 0
-    info = control.step_info(ys, timepts=ts, final_output=float(u_final)) if reached.any() else None
+    reached = np.sign(height) * (ys - 0.9 * height) >= 0
+    info = control.step_info(ys, timepts=ts, final_output=height) if reached.any() else None
     tail = ys[ts >= ts[-1] - 0.1]
 
     def value(key):
@@ -266,14 +272,14 @@ def step_info(t, theta, u_final: float, step_time: float = 0.0, v=None, limit: f
         x = info[key]
         return None if not np.isfinite(x) else float(x)
 
-    settled = settled_index(ts, ys, u_final, step_info_band(u_final))
+    settled = settled_index(ts, ys, height, step_info_band(height))
     sat = None
     if v is not None and limit is not None and np.isfinite(limit):
         sat = time_at_clamp(v, limit, float(np.median(np.diff(t))) if t.size > 1 else 0.0)
     peak = float(ts[np.argmax(np.abs(ys))])
     return StepInfo(rise_time_s=value("RiseTime"), peak_time_s=peak,
                     settling_time_2pct_s=None if settled is None else float(ts[settled]),
-                    steady_state_error=float(u_final - tail.mean()), saturation_time_s=sat)
+                    steady_state_error=float(height - tail.mean()), saturation_time_s=sat)
 
 
 def settling_band(u_final: float) -> float:
@@ -328,7 +334,7 @@ def time_at_clamp(v, limit: float, dt: float) -> float:
     return float(np.count_nonzero(np.abs(np.asarray(v, dtype=float)) >= limit) * dt)
 
 
-def step_metrics(t, theta, u_final: float) -> StepMetrics:
+def step_metrics(t, theta, u_final: float, u_initial: float = 0.0) -> StepMetrics:
     """Overshoot and settling time of a step response.
 
     Parameters
@@ -338,22 +344,25 @@ def step_metrics(t, theta, u_final: float) -> StepMetrics:
     theta : array_like, shape (N,)
         Hub angle, encoder counts.
     u_final : float
-        Final value of the reference, encoder counts (the logs' last u). Non-zero; for a
-        negative step the peak is the minimum of theta.
+        Final value of the reference, encoder counts (the logs' last u); for a step down the
+        peak is the minimum of theta.
+    u_initial : float
+        The level the step starts from, encoder counts (0 but for a step from a held
+        position); the step's height ``u_final - u_initial`` is non-zero.
 
     Returns
     -------
     StepMetrics
-        ``overshoot_pct = 100 (peak - u_final)/u_final`` (peak = max theta for a positive
-        step); ``settling_time_s`` = t of the first sample after the last sample with
-        ``|theta - u_final| > settling_band(u_final)`` (t[0] if none is outside), None when
-        not settled within the run (:func:`settled_index`: the last sample outside the
-        band, or inside for less than :data:`SETTLE_HOLD_S`).
+        ``overshoot_pct = 100 (peak - u_final)/(u_final - u_initial)`` (peak = max theta for
+        a step up); ``settling_time_s`` = t of the first sample after the last sample with
+        ``|theta - u_final| > settling_band(u_final - u_initial)`` (t[0] if none is
+        outside), None when not settled within the run (:func:`settled_index`: the last
+        sample outside the band, or inside for less than :data:`SETTLE_HOLD_S`).
 
     Raises
     ------
     ValueError
-        Empty or mismatched arrays, NaN in theta, or ``u_final == 0``.
+        Empty or mismatched arrays, NaN in theta, or a step of height 0.
 
     Notes
     -----
@@ -374,8 +383,8 @@ def step_metrics(t, theta, u_final: float) -> StepMetrics:
     ...
     ValueError: u_final must be a non-zero step size, got 0.0
     """
-    t, theta, u_final = _step_response(t, theta, u_final)
-    peak = theta.max() if u_final > 0 else theta.min()
-    overshoot = 100.0 * float((peak - u_final) / u_final)
-    settled = settled_index(t, theta, u_final, settling_band(u_final))
+    t, theta, height = _step_response(t, theta, u_final, u_initial)
+    peak = theta.max() if height > 0 else theta.min()
+    overshoot = 100.0 * float((peak - u_final) / height)
+    settled = settled_index(t, theta, u_final, settling_band(height))
     return StepMetrics(overshoot_pct=overshoot, settling_time_s=None if settled is None else float(t[settled]))

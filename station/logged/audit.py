@@ -249,8 +249,8 @@ def reference_claims(log: RunLog, reference) -> list[AuditClaim]:
     peak = float(np.max(np.abs(u)))
     for where, amp in amps:
         if reference.is_step:
-            ok = reference.amplitude == amp
-            data = f"a step of {reference.amplitude:g} at tick {reference.step_tick}"
+            ok = amp in (reference.amplitude, reference.height)  # from a held position: its end or its height
+            data = f"a step of {reference.height:g}{reference.held_words} at tick {reference.step_tick}"
         else:  # a sine or pulse: its peak (a truncated sine's is up to one count lower)
             ok = abs(amp) - 1.0 - 0.03 * abs(amp) <= peak <= abs(amp) * (1 + 1e-9)
             data = f"{reference.kind} reference, max |u| = {peak:g}"

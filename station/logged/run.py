@@ -427,8 +427,8 @@ class LoggedRun:
 
     @cached_property
     def reference(self) -> Reference:
-        """What the logged u is (:func:`station.logged.reference.classify_reference`)."""
-        return classify_reference(self.data["u"])
+        """What the logged u is, and θ at its first row (:func:`station.logged.reference.classify_reference`)."""
+        return classify_reference(self.data["u"], float(self.data["theta"][0]) if len(self) else None)
 
     @cached_property
     def held(self) -> HubHeld | None:
@@ -497,9 +497,9 @@ class LoggedRun:
         """
         if not (self.closed and self.reference.is_step and len(self)) or self.start.at_rest is False:
             return None  # a copy cut after the step: its overshoot is not the run's
-        before = run_start(self.data["t"], self.data["n"], self.dt)
+        r, before = self.reference, run_start(self.data["t"], self.data["n"], self.dt)
         t = np.asarray(self.data["t"] if t is None else t, dtype=float)
-        return step_metrics(t - t[0] + before, self.data["theta"] if theta is None else theta, self.reference.amplitude)
+        return step_metrics(t - t[0] + before, self.data["theta"] if theta is None else theta, r.amplitude, r.initial)
 
     def found_faults(self, model) -> dict[str, float]:
         """The sensor and wiring faults this run's data decided (:attr:`sensors`), for a model

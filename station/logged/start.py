@@ -14,6 +14,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from station.logged.audit import AuditClaim
+from station.logged.reference import held_at
 
 START_WINDOW_S = 0.05
 """The start window, s: the rows before the first change of command, at most this long."""
@@ -217,8 +218,12 @@ def start_claims(theta, a, u, v, dt: float, closed: bool, accel_is_tip: bool, re
         claims.append(AuditClaim("reference", START_CLAIM, "at rest at t = 0", "confirmed",
                                  f"θ keeps one count and a's noise stays within {quiet:g} counts over "
                                  f"{span}{off}"))
+    u = np.asarray(u, float)
+    held = closed and u.size > 0 and held_at(float(u[0]), th0)  # a step from a held position
     if closed and th0 != 0 and at_rest:
-        claims.append(AuditClaim("columns", ZERO_CLAIM, f"θ starts at {counts} (the encoder not zeroed)",
-                                 "contradicted", f"θ[0] = {th0:g}: the controller's error was u - θ from there; the "
-                                 f"model starts at rest at θ = {th0:g}"))
+        claims.append(AuditClaim("columns", ZERO_CLAIM, f"θ starts at {counts}" + (
+            f", held at u = {float(u[0]):g}" if held else " (the encoder not zeroed)"),
+            "unchecked" if held else "contradicted", f"θ[0] = {th0:g}: the controller's error was u - θ from there; "
+            f"the model starts at rest at θ = {th0:g}" + ("; a run from a held position says nothing of where the "
+                                                           "encoder was zeroed" if held else "")))
     return Start(tuple(claims), at_rest, th0)
