@@ -427,8 +427,8 @@ class LoggedRun:
 
     @cached_property
     def reference(self) -> Reference:
-        """What the logged u is, and θ at its first row (:func:`station.logged.reference.classify_reference`)."""
-        return classify_reference(self.data["u"], float(self.data["theta"][0]) if len(self) else None)
+        """What the logged u is, told a closed loop's first θ (:func:`station.logged.reference.classify_reference`)."""
+        return classify_reference(self.data["u"], float(self.data["theta"][0]) if len(self) and self.closed else None)
 
     @cached_property
     def held(self) -> HubHeld | None:
