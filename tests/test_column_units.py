@@ -20,7 +20,8 @@ import numpy as np
 import pytest
 
 from station.logged import LoggedRun
-from station.logged.audit import ACCEL_CLAIM, count_step, in_counts
+from station.logged.audit import ACCEL_CLAIM
+from station.logged.quantum import count_step, in_counts
 from station.logged.sensor_evidence import sensor_evidence
 from station.plant.model import load_model
 from station.logged.units import ACCEL_UNIT_CLAIM, accel_unit

@@ -24,6 +24,7 @@ from pathlib import Path
 
 import numpy as np
 
+from station.logged.quantum import in_counts
 from station.runlog import RunLog
 from station.runlog.timebase import row_ticks
 
@@ -353,93 +354,9 @@ ACCEL_BASELINE_CLAIM = "a: the tip's acceleration about a steady zero"
 """What a log's a column claims about its baseline (a contradicted baseline keeps a in use)."""
 
 
-STEP_DIVISORS = 10
-"""Most counts a column's smallest change between rows may span for :func:`count_step` (a P
-law's command trunc(kp·e) changes by 2 or 3 counts at kp = 2.5)."""
-
-FIELD_COUNTS = 65536
-"""Counts a sample of the rig's can span (a signed 16-bit field)."""
-
-QUANTUM_TOLERANCE = 1e-3
-"""How far a value may sit from a whole multiple of a quantum (in quanta) and still be one
-(values printed to a few decimals)."""
-
-
-def quantum_fits(x: np.ndarray, quantum: float) -> bool:
-    """Whether every value of ``x`` is a whole multiple of ``quantum`` (to
-    :data:`QUANTUM_TOLERANCE` of it).
-
-    Parameters
-    ----------
-    x : ndarray, shape (N,)
-    quantum : float
-    """
-    q = x / quantum
-    return bool(np.all(np.abs(q - np.round(q)) <= QUANTUM_TOLERANCE))
-
-
-def count_step(x) -> float | None:
-    """The size of one count in a column of counts written in another unit: the largest size
-    every change between rows is a whole multiple of (to :data:`QUANTUM_TOLERANCE` of it), the
-    smallest change or a :data:`STEP_DIVISORS`-th of it at most, refined by least squares; None
-    when the column never changes, its changes have no common size (a filtered or computed
-    float) or that size spans more than a 16-bit field over its range (the last digit printed).
-
-    A converter's reading scaled into another unit steps by its scale (an accelerometer count of
-    the rig's is 1/1.145 m/s², DESIGN.md's a_gain; a DAC count 5/2048 V of a ±5 V 12-bit
-    converter); an offset (the thesis's lead + accelerometer log stores a as counts + 0.04)
-    moves no step.
-
-    Parameters
-    ----------
-    x : array_like, shape (N,)
-
-    Returns
-    -------
-    float or None
-    """
-    x = np.asarray(x, dtype=float)
-    if x.size < 2 or not np.all(np.isfinite(x)):
-        return None
-    steps = np.abs(np.diff(x))
-    steps = steps[steps > 1e-9 * max(1.0, float(np.max(np.abs(x))))]
-    if not steps.size:
-        return None
-    least = float(np.min(steps))
-    for k in range(1, STEP_DIVISORS + 1):  # a column whose least change spans k counts (2 or 3 of trunc(2.5 e))
-        size = least / k
-        if np.ptp(x) / size > FIELD_COUNTS:  # the printing's last digit
-            return None
-        # the size from the small changes, then each change's count from it and the size from them
-        # all (least squares): a change of c counts holds c times the first size's error
-        for few, tol in ((steps[steps <= (k + 1.5) * size], QUANTUM_TOLERANCE), (steps, 0.1)):
-            counts = np.round(few / size)
-            if np.any(counts == 0) or np.max(np.abs(few / size - counts)) > tol:
-                break
-            size = float(np.sum(few * counts) / np.sum(counts ** 2))
-        else:
-            if quantum_fits(steps, size):
-                return size
-    return None
-
-
-def in_counts(x) -> bool:
-    """Whether a column is in whole counts: it changes by whole counts (or never changes),
-    whatever its offset. A column that steps by whole multiples of 2 or more is counts too (an
-    accelerometer of another gain read in whole counts: the gain says it, not the unit); False
-    for a column that changes by fractions of a count.
-
-    Parameters
-    ----------
-    x : array_like, shape (N,)
-    """
-    x = np.asarray(x, dtype=float)
-    return x.size < 2 or not np.all(np.isfinite(x)) or quantum_fits(np.diff(x), 1.0)
-
-
 def accel_band(a, dt: float, rest_samples: int) -> tuple[float, float] | None:
     """a's RMS in :data:`ACCEL_BAND_HZ` after the rest, and at rest (floored at
-    :data:`ACCEL_NOISE_FLOOR` where a is in counts, :func:`in_counts`; a column in another unit
+    :data:`ACCEL_NOISE_FLOOR` where a is in counts, :func:`station.logged.quantum.in_counts`; a column in another unit
     is judged by its own noise), counts. With fewer than :data:`ACCEL_REST_MIN` samples at rest
     (a loop that answers a's first sample: Ga fed an unzeroed or dead channel), the band over the
     whole run and :data:`ACCEL_NOISE_FLOOR` as its noise: a still channel reads less (the 2014

@@ -21,7 +21,9 @@ from typing import NamedTuple
 
 import numpy as np
 
-from station.logged.audit import QUANTUM_TOLERANCE, AuditClaim, count_step, in_counts, quantum_fits
+from station.analysis.glitches import most_glitches
+from station.logged.audit import AuditClaim
+from station.logged.quantum import QUANTUM_TOLERANCE, count_step, in_counts, quantum_fits, quantum_fits_each
 from station.rig import COUNTS_PER_REV, DT
 from station.runlog import RunLog
 
@@ -421,7 +423,8 @@ def time_base(log: RunLog) -> TimeBase:
             claims.append(AuditClaim("columns", "θ in encoder counts", "θ in encoder counts", "confirmed",
                                      "every θ is a whole count"))
         else:
-            unit = next((name for name, q in THETA_UNITS.items() if quantum_fits(theta, q)), None)
+            unit = next((name for name, q in THETA_UNITS.items()
+                         if quantum_fits(theta, q, most_glitches(theta.size))), None)  # a corrupted field too
             if unit is None:
                 claims.append(AuditClaim("columns", "θ in encoder counts", "θ not quantized", "unchecked",
                                          f"θ is not whole counts (e.g. {theta[np.flatnonzero(theta != np.round(theta))[0]]:.6g})"
@@ -434,8 +437,10 @@ def time_base(log: RunLog) -> TimeBase:
                 if u.size and np.all(np.isfinite(u)) and not _whole(u) and _in_unit(u, changes["theta"], q):
                     changes["u"] = counts_of(u, q)
                     also = "; u, not whole counts, taken in the same unit"
+                off = np.flatnonzero(~quantum_fits_each(theta, q))
+                but = f" but row{'s' * (off.size > 1)} {', '.join(map(str, off))} (corrupted)" if off.size else ""
                 claims.append(AuditClaim("columns", "θ in encoder counts", f"θ in {unit}", "contradicted",
-                                         f"every θ is a multiple of {q:.6g} ({unit} per encoder count of "
+                                         f"every θ{but} is a multiple of {q:.6g} ({unit} per encoder count of "
                                          f"{COUNTS_PER_REV}/rev), none of 1{also}"))
                 notes.append(f"θ is in {unit} (the audit): converted to encoder counts{also}")
     accel = accel_unit(np.asarray(changes.get("a", data["a"]), dtype=float))
