@@ -29,12 +29,16 @@ P = "SFLR_P_control_step_kp_2_SLFR_RTP_P_control_kp=2.0.txt"
 LEAD = "step_response_Gth_comp_no_accel_FB_amp_100_duration_1000_SLFR_RTP_Motor_Comp_Gth.txt"
 LEAD_ACCEL = "step_response_Gth_comp_Ga_opt_amp_200_duration_1000_opt_case43_SLFR_RTP_Motor_Comp_Gth.txt"
 PULSES = "OL_pulse_test_sys_check_SLFR_RTP_OL_Test_uend=0.txt"
+P_2009 = "2009/step_response_amp=100_SLFR_RTP_P_control_kp=1.0.txt"
 OPEN_LOOP = ["#SLFR RTP OL_Test"]
 
 
-def _rewrite(src: Path, dst: Path, header=None, negate=False, swap=False, volts=None, negate_a=False) -> Path:
-    """The log with its header replaced (the column line kept), θ (or a) negated, u and v
-    swapped, or v written in volts of ``volts`` per count (7 digits), every other field as it was."""
+def _rewrite(src: Path, dst: Path, header=None, negate=False, swap=False, volts=None, negate_a=False,
+             degrees=False, corrupt=None) -> Path:
+    """The log with its header replaced (the column line kept), θ (or a) negated or written in
+    degrees (6 decimals), u and v swapped, or v written in volts of ``volts`` per count (7
+    digits); ``corrupt`` (row, counts): that row's θ field, as written, that many higher (a
+    digit or bit a serial line or a writer got wrong); every other field as it was."""
     lines = src.read_text().splitlines()
     head = [ln for ln in lines if ln.startswith("#")]
     out = []
@@ -44,6 +48,10 @@ def _rewrite(src: Path, dst: Path, header=None, negate=False, swap=False, volts=
         f = ln.split()
         if negate:
             f[4] = f"{-float(f[4]):g}"
+        if degrees:
+            f[4] = f"{float(f[4]) * 360 / 1024:.6f}"
+        if corrupt is not None and len(out) == corrupt[0]:
+            f[4] = f"{float(f[4]) + corrupt[1]:g}"
         if negate_a:
             f[5] = f"{-float(f[5]):.10g}"
         if volts is not None:
@@ -117,6 +125,43 @@ def test_a_p_step_with_theta_negated_is_not_a_swap(rig_data, tmp_path):
     # with u and v swapped back, v is the 0/50 step: any law of high gain at a ±50 clamp gives it
     run = LoggedRun.from_path(_rewrite(rig_data / P, tmp_path / "neg.txt", negate=True))
     assert "u and v swapped" not in _said(run)
+
+
+@pytest.mark.parametrize("header", [OPEN_LOOP, ["#SLFR RTP P_control_Test", "#kp=1.5"], None])
+def test_the_2009_p_step_negated_is_negated_not_swapped(rig_data, tmp_path, header):
+    """The 2009 P step (kp = 1 at alignment 0: v = u − θ, one row) with θ negated reads the same
+    law as v and θ exchanged and kp = −1 (θ' = −θ: v = u + θ', and θ' = −(u − v)): no law tells
+    them apart, the tracking does (a closed loop's θ follows u). Before, under an open-loop
+    header or one that lies about kp: "v and θ swapped", P kp = −1, overshoot 0 %, θ fit −10 867 %
+    (under its own header the header's law decided: θ negated)."""
+    clean = LoggedRun.from_path(rig_data / P_2009)
+    run = LoggedRun.from_path(_rewrite(rig_data / P_2009, tmp_path / "neg.txt", header, negate=True))
+    assert _said(run) == {"θ written with the other sign"}
+    assert run.reproduced and run.alignment == 0 and run.controller.spec["kp"] == 1.0
+    assert run.step_metrics() == clean.step_metrics()
+    model = load_model("tmm-fit")
+    assert run.simulate(model).fit_pct["theta"] == pytest.approx(clean.simulate(model).fit_pct["theta"], abs=0.05)
+
+
+@pytest.mark.parametrize("name", [P, LEAD, P_2009])
+@pytest.mark.parametrize("fault", ["negate", "degrees", "swap"])
+def test_a_column_fault_beside_a_corrupted_field(rig_data, tmp_path, name, fault):
+    """A column fault (θ negated, θ in degrees, u and v swapped) beside one corrupted θ field
+    (row 500 written 64 higher). Each alone was found; together the rewrite was judged on every
+    row, the corrupted one too, and refused: "no law found" (θ fit −197 to −15 469 %), or on the
+    2009 step "v and θ swapped" with kp = −1. Now a rewrite is judged as the law is, its
+    corrupted fields set aside (:func:`station.logged.columns.check_columns`), and θ's unit
+    spares them (:func:`station.logged.quantum.quantum_fits`): the fault said, the field set
+    aside, the clean log's numbers."""
+    clean = LoggedRun.from_path(rig_data / name)
+    run = LoggedRun.from_path(_rewrite(rig_data / name, tmp_path / f"{fault}.txt", negate=fault == "negate",
+                                       degrees=fault == "degrees", swap=fault == "swap", corrupt=(500, 64)))
+    said = {"negate": "θ written with the other sign", "degrees": "θ in degrees", "swap": "u and v swapped"}[fault]
+    assert _said(run) == {said}
+    assert run.reproduced and run.identified.corrupted.theta_rows == (500,)
+    assert run.step_metrics() == clean.step_metrics()
+    model = load_model("tmm-fit")
+    assert run.simulate(model).fit_pct["theta"] == pytest.approx(clean.simulate(model).fit_pct["theta"], abs=0.5)
 
 
 @pytest.mark.parametrize("volts", [5 / 2048, 10 / 32768])

@@ -41,8 +41,10 @@ import numpy as np
 from station.analysis.glitches import most_glitches
 from station.analysis.header_law import NEAR_COUNTS
 from station.analysis.law_rows import TOLERANCE, no_dac_command, pins_a_law
+from station.control.rerun import is_closed_loop
 from station.errors import StationError
-from station.logged.audit import AuditClaim, count_step, in_counts, quantum_fits
+from station.logged.audit import AuditClaim
+from station.logged.quantum import count_step, in_counts, quantum_fits
 from station.logged.controller import (NO_LAW, ControllerId, describe_controller, header_law_dv,
                                        header_reproduces, identify_controller)
 from station.logged.reference_unit import check_reference_unit, exact_from_rest
@@ -247,7 +249,10 @@ def _inferred_swap(log: RunLog, skipped) -> Columns:
     """A log that names no controller, open loop, or a law that reproduces it on no rewrite (a
     header that lies about the law as well as the columns): when no law reproduces it as its
     columns are named and one does with two of them exchanged or θ negated, that rewrite (the
-    law inferred on it)."""
+    law inferred on it). Where more than one rewrite of as many faults gives a law (a P law of
+    gain 1 at alignment 0, v = u − θ, reads the same with θ negated as with v and θ exchanged
+    and the gain −1), the one whose θ follows its u most closely (:func:`tracking_error`: a
+    closed loop's angle follows its reference), the first on a tie."""
     try:
         cid = identify_controller(log, skipped)
     except StationError:  # said where the controller is asked for (LoggedRun.identified)
@@ -255,7 +260,10 @@ def _inferred_swap(log: RunLog, skipped) -> Columns:
     # no header, an open-loop one (v = u), or a law the data contradict, and no law found in the data
     if cid.claim is None or not cid.claim.data.endswith(NO_LAW):
         return Columns((), log, cid)
+    laws: list[tuple[tuple[tuple[str, ...], ...], RunLog, ControllerId]] = []
     for rewrites in tuple((c,) for c in TRIALS) + (None,) + PAIRS:  # one fault before two
+        if laws and (rewrites is None or len(rewrites) > 1):
+            break  # one fault gives a law: no two are tried
         if rewrites is None:  # u written in another unit (degrees, radians, milliradians): one fault
             ref = check_reference_unit(log, skipped)
             if ref is not None:
@@ -270,22 +278,39 @@ def _inferred_swap(log: RunLog, skipped) -> Columns:
             found = identify_controller(trial, skipped)
         except StationError:
             continue
-        if found.controller is not None and found.source in ("inferred", "inferred (header contradicted)") \
-                and found.fit is not None:
-            return _swapped_back(log, rewrites, trial, None, f"{found.claim.data}", found)
-    return Columns((), log, cid)
+        if found.controller is not None and found.fit is not None and (
+                found.source in ("inferred", "inferred (header contradicted)")
+                or (found.source == "header" and is_closed_loop(found.controller))):  # its corrupted fields set aside
+            laws.append((rewrites, trial, found))
+    if not laws:
+        return Columns((), log, cid)
+    rewrites, trial, found = min(laws, key=lambda x: tracking_error(x[1]))
+    return _swapped_back(log, rewrites, trial, None, f"{found.claim.data}", found)
+
+
+def tracking_error(log: RunLog) -> float:
+    """RMS of u − θ over a log's finite rows, encoder counts (inf without any): how closely its
+    hub follows its reference, as a closed loop's does.
+
+    Parameters
+    ----------
+    log : RunLog
+
+    Returns
+    -------
+    float
+    """
+    e = np.asarray(log.data["u"], dtype=float) - np.asarray(log.data["theta"], dtype=float)
+    e = e[np.isfinite(e)]
+    return float(np.sqrt(np.mean(e * e))) if e.size else np.inf
 
 
 def _tracks_better(trial: RunLog, log: RunLog) -> bool:
-    """Whether a rewrite's θ follows its u more closely than as named (RMS of u − θ): a closed
-    loop's angle follows its reference. Asked of u and v swapped beside a sign, where a law
-    cannot decide: a P law of gain 1 (v = u − θ) is the same law with u and v swapped and θ
-    negated (u = v + θ), and only the tracking tells which column is the reference."""
-    def rms_error(x: RunLog) -> float:
-        e = np.asarray(x.data["u"], dtype=float) - np.asarray(x.data["theta"], dtype=float)
-        e = e[np.isfinite(e)]
-        return float(np.sqrt(np.mean(e * e))) if e.size else np.inf
-    return rms_error(trial) < rms_error(log)
+    """Whether a rewrite's θ follows its u more closely than as named (:func:`tracking_error`).
+    Asked of u and v swapped beside a sign, where a law cannot decide: a P law of gain 1
+    (v = u − θ) is the same law with u and v swapped and θ negated (u = v + θ), and only the
+    tracking tells which column is the reference."""
+    return tracking_error(trial) < tracking_error(log)
 
 
 def _named_by(log: RunLog) -> str:
