@@ -249,10 +249,11 @@ def _inferred_swap(log: RunLog, skipped) -> Columns:
     """A log that names no controller, open loop, or a law that reproduces it on no rewrite (a
     header that lies about the law as well as the columns): when no law reproduces it as its
     columns are named and one does with two of them exchanged or θ negated, that rewrite (the
-    law inferred on it). Where more than one rewrite of as many faults gives a law (a P law of
-    gain 1 at alignment 0, v = u − θ, reads the same with θ negated as with v and θ exchanged
-    and the gain −1), the one whose θ follows its u most closely (:func:`tracking_error`: a
-    closed loop's angle follows its reference), the first on a tie."""
+    law inferred on it). Where more than one rewrite of as many faults gives a law, the one of
+    lowest order, and of those (a P law of gain 1 at alignment 0, v = u − θ, reads the same with
+    θ negated as with v and θ exchanged and the gain −1) the one whose θ follows its u most
+    closely (:func:`tracking_error`: a closed loop's angle follows its reference), the first on
+    a tie."""
     try:
         cid = identify_controller(log, skipped)
     except StationError:  # said where the controller is asked for (LoggedRun.identified)
@@ -280,12 +281,19 @@ def _inferred_swap(log: RunLog, skipped) -> Columns:
             continue
         if found.controller is not None and found.fit is not None and (
                 found.source in ("inferred", "inferred (header contradicted)")
-                or (found.source == "header" and is_closed_loop(found.controller))):  # its corrupted fields set aside
+                or (found.source == "header" and is_closed_loop(found.controller)  # its corrupted fields set aside
+                    and found.claim is not None and found.claim.verdict == "confirmed")):
             laws.append((rewrites, trial, found))
     if not laws:
         return Columns((), log, cid)
-    rewrites, trial, found = min(laws, key=lambda x: tracking_error(x[1]))
+    rewrites, trial, found = min(laws, key=lambda x: (_order(x[2].controller), tracking_error(x[1])))
     return _swapped_back(log, rewrites, trial, None, f"{found.claim.data}", found)
+
+
+def _order(controller) -> int:
+    """A law's order: its Gth's poles and, with accelerometer feedback, Ga's (0 for P)."""
+    return sum(len(tf.den) - 1 for tf in (getattr(controller, "gth", None), getattr(controller, "ga", None))
+               if tf is not None)
 
 
 def tracking_error(log: RunLog) -> float:
