@@ -177,6 +177,54 @@ def test_the_rigs_headerless_sweep_with_two_corrupted_fields(rig_data, tmp_path)
 
 
 
+@pytest.mark.parametrize("delta", [3.0, 8.0, 20.0, 56.0, -40.0])
+def test_an_accelerometer_field_a_few_counts_off_under_its_feedback(rig_data, tmp_path, delta):
+    """The lead + accelerometer step with a of row 500 a few counts off. Ga's slow poles carry such
+    a field into the commands as an echo that grows over rows (56 counts: 0.46, 1.7, then 3.2
+    counts off): the repair started at the first row off by more than the law's slack, two rows
+    late, and failed; and under that slack (3 and 8 counts: 0.4 and 1.1 off) none was tried.
+    Before: "not this law; no law found" (with a false "u and θ swapped", θ fit −153 %), or
+    "replay does NOT reproduce the logged v"; only a field 250 counts off was found. Now each is
+    set aside, and every number is the clean log's."""
+    name = "step_response_Gth_comp_Ga_opt_amp_200_duration_1000_opt_case43_SLFR_RTP_Motor_Comp_Gth.txt"
+    path = tmp_path / name
+    path.write_text((rig_data / name).read_text())
+    _corrupt(path, [("a", 500, delta)])
+    run = LoggedRun.from_path(path)
+    assert run.source == "header" and run.reproduced and run.alignment == 1
+    assert run.identified.corrupted.a_rows == (500,) and not run.audit.contradicted
+    _numbers_are_the_clean_logs(run, LoggedRun.from_path(rig_data / name))
+
+
+@pytest.mark.parametrize("name", ["SFLR_P_control_step_kp_2_SLFR_RTP_P_control_kp=2.0.txt",
+                                  "step_response_Gth_comp_no_accel_FB_amp_100_duration_1000_SLFR_RTP_Motor_Comp_Gth.txt"])
+def test_an_accelerometer_in_g_with_a_corrupted_field(rig_data, tmp_path, name):
+    """a written in g (a script's scaling, 7 digits) with one field 25 g off (281 counts). Its unit
+    is read from the size every change is a whole multiple of; the corrupted field's two changes
+    are not, and the size found was a third of a count's (0.0297 g), then 'no law found'. Now
+    :func:`station.logged.quantum.count_step` spares a field's two changes: a in steps of one
+    count's g, and the field set aside from its neighbours (no law reads a here)."""
+    g = 1.1452654922936827 * 9.81  # DESIGN.md's a_gain: counts per g
+    lines = (rig_data / name).read_text().splitlines()
+    head = sum(1 for x in lines if x.startswith("#"))
+    for k in range(head, len(lines)):
+        cells = lines[k].split("\t")
+        cells[COLUMNS["a"]] = f"{float(cells[COLUMNS['a']]) / g:.7g}"
+        lines[k] = "\t".join(cells)
+    path = tmp_path / name
+    path.write_text("\n".join(lines) + "\n")
+    _corrupt(path, [("a", 500, 25.0)])
+    run = LoggedRun.from_path(path)
+    clean = LoggedRun.from_path(rig_data / name)
+    (unit,) = [c for c in run.audit.contradicted if c.claim == "columns"]
+    assert unit.data.startswith("a in steps of") and float(unit.data.split()[-1]) == pytest.approx(1 / g, rel=1e-4)
+    assert run.reproduced and run.identified.corrupted.a_rows == (500,)
+    # row 500 put right from its neighbours, within a few counts of the uncorrupted a; the others as logged
+    assert abs(run.data["a"][500] - clean.data["a"][500]) <= 8
+    assert np.count_nonzero(run.data["a"] != clean.data["a"]) <= 1
+    assert run.step_metrics() == clean.step_metrics()
+
+
 @pytest.mark.parametrize("header", [True, False])
 @pytest.mark.parametrize("name", ["SFLR_P_control_step_kp_2_SLFR_RTP_P_control_kp=2.0.txt",
                                   "step_response_Gth_comp_no_accel_FB_amp_100_duration_1000_SLFR_RTP_Motor_Comp_Gth.txt"])

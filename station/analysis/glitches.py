@@ -220,6 +220,9 @@ def _isolated(controller, u, theta, a, v, alignments, skipped, restarts, slack) 
     while miss.size and len(bad_v) + sum(map(len, bad.values())) < most:
         first = int(miss[0])
         fixed = _repaired(controller, cols, v, d, first, bad_v, skipped, restarts, rows_back, slack)
+        onset = _onset(controller, cols, v, d, first, skipped, restarts, rows_back) if fixed is None else first
+        if onset < first:  # a law with memory grows a field's echo past the slack rows after its first miss
+            fixed = _repaired(controller, cols, v, d, onset, bad_v, skipped, restarts, rows_back, slack)
         if fixed is not None:
             cols, miss, column, row = fixed
             bad[column].append(row)
@@ -237,6 +240,23 @@ def _isolated(controller, u, theta, a, v, alignments, skipped, restarts, slack) 
         return None
     return Glitches(controller, AlignmentFit(d, float(np.max(err[kept], initial=0.0)), v_hat), tuple(bad_v),
                     tuple(bad["theta"]), tuple(bad["a"]), tuple(bad["u"]), cols["u"], cols["theta"], cols["a"])
+
+
+ONSET_ROWS = 50
+"""Most rows before the first row a law misses by more than its slack that a field's echo may
+have grown over from its first miss (:func:`_onset`)."""
+
+
+def _onset(controller, cols, v, d, first, skipped, restarts, rows_back) -> int:
+    """The first of the rows up to ``first`` that the law misses by more than
+    :data:`~station.analysis.law_rows.TOLERANCE` without a break (at most :data:`ONSET_ROWS`
+    back): where a corrupted field's echo began (an a under Ga's slow poles: 0.46, 1.7, then
+    3.2 counts), the row to put right from."""
+    err = _misses(controller, cols["u"], cols["theta"], cols["a"], v, d, skipped, restarts, rows_back)[1]
+    onset = first
+    while onset > max(0, first - ONSET_ROWS) and err[onset - 1] > TOLERANCE:
+        onset -= 1
+    return onset
 
 
 def _fading_rows(controller) -> int:

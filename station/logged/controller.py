@@ -450,6 +450,8 @@ def identify_controller(log: RunLog, skipped=None) -> ControllerId:
         glitch = None
         if fit.max_abs_dv > TOLERANCE and not cut:
             glitch = isolated_misses(controller, u, theta, a, v, ALIGNMENTS, skipped, restarts, slack=NEAR_COUNTS)
+            if glitch is None and fit.max_abs_dv <= NEAR_COUNTS:  # a field's echo within a printing's slack
+                glitch = isolated_misses(controller, u, theta, a, v, ALIGNMENTS, skipped, restarts)
         if glitch is not None:  # a corrupted field or two, not another law: set aside, said, and put right
             aside, u, theta, a, v = _set_aside(glitch, data['t'], u, theta, a, v)
             used, fit, exact = glitch.law, glitch.fit, (glitch.fit.alignment,)

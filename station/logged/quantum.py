@@ -52,7 +52,7 @@ def quantum_fits_each(x: np.ndarray, quantum: float) -> np.ndarray:
     return np.abs(q - np.round(q)) <= QUANTUM_TOLERANCE
 
 
-def count_step(x) -> float | None:
+def count_step(x, spare: int = 0) -> float | None:
     """The size of one count in a column of counts written in another unit: the largest size
     every change between rows is a whole multiple of (to :data:`QUANTUM_TOLERANCE` of it), the
     smallest change or a :data:`STEP_DIVISORS`-th of it at most, refined by least squares; None
@@ -67,6 +67,9 @@ def count_step(x) -> float | None:
     Parameters
     ----------
     x : array_like, shape (N,)
+    spare : int, default 0
+        Changes that may be off the size: two for each corrupted field (into it and out of
+        it), which the law then finds; the smallest ``spare`` changes do not set the size.
 
     Returns
     -------
@@ -77,9 +80,9 @@ def count_step(x) -> float | None:
         return None
     steps = np.abs(np.diff(x))
     steps = steps[steps > 1e-9 * max(1.0, float(np.max(np.abs(x))))]
-    if not steps.size:
+    if steps.size <= spare:
         return None
-    least = float(np.min(steps))
+    least = float(np.sort(steps)[spare])
     for k in range(1, STEP_DIVISORS + 1):  # a column whose least change spans k counts (2 or 3 of trunc(2.5 e))
         size = least / k
         if np.ptp(x) / size > FIELD_COUNTS:  # the printing's last digit
@@ -88,11 +91,12 @@ def count_step(x) -> float | None:
         # all (least squares): a change of c counts holds c times the first size's error
         for few, tol in ((steps[steps <= (k + 1.5) * size], QUANTUM_TOLERANCE), (steps, 0.1)):
             counts = np.round(few / size)
-            if np.any(counts == 0) or np.max(np.abs(few / size - counts)) > tol:
+            fits = (counts != 0) & (np.abs(few / size - counts) <= tol)
+            if np.count_nonzero(~fits) > spare or not np.any(fits):
                 break
-            size = float(np.sum(few * counts) / np.sum(counts ** 2))
+            size = float(np.sum(few[fits] * counts[fits]) / np.sum(counts[fits] ** 2))
         else:
-            if quantum_fits(steps, size):
+            if quantum_fits(steps, size, spare):
                 return size
     return None
 
