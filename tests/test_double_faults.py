@@ -34,11 +34,12 @@ OPEN_LOOP = ["#SLFR RTP OL_Test"]
 
 
 def _rewrite(src: Path, dst: Path, header=None, negate=False, swap=False, volts=None, negate_a=False,
-             degrees=False, corrupt=None) -> Path:
+             degrees=False, corrupt=None, zero=None) -> Path:
     """The log with its header replaced (the column line kept), θ (or a) negated or written in
-    degrees (6 decimals), u and v swapped, or v written in volts of ``volts`` per count (7
-    digits); ``corrupt`` (row, counts): that row's θ field, as written, that many higher (a
-    digit or bit a serial line or a writer got wrong); every other field as it was."""
+    degrees (6 decimals), u and v swapped, v written in volts of ``volts`` per count (7 digits)
+    or about ``zero`` (an unsigned DAC code); ``corrupt`` (row, counts): that row's θ field, as
+    written, that many higher (a digit or bit a serial line or a writer got wrong); every other
+    field as it was."""
     lines = src.read_text().splitlines()
     head = [ln for ln in lines if ln.startswith("#")]
     out = []
@@ -56,6 +57,8 @@ def _rewrite(src: Path, dst: Path, header=None, negate=False, swap=False, volts=
             f[5] = f"{-float(f[5]):.10g}"
         if volts is not None:
             f[3] = f"{float(f[3]) * volts:.7g}"
+        if zero is not None:
+            f[3] = f"{float(f[3]) + zero:.10g}"
         if swap:  # after volts: the command's column, in volts, moves
             f[2], f[3] = f[3], f[2]
         out.append("\t".join(f))
@@ -164,6 +167,25 @@ def test_a_column_fault_beside_a_corrupted_field(rig_data, tmp_path, name, fault
     assert run.simulate(model).fit_pct["theta"] == pytest.approx(clean.simulate(model).fit_pct["theta"], abs=0.5)
 
 
+@pytest.mark.parametrize("name, fault", [(P, "volts"), (P_2009, "volts"), (P, "zero"), (LEAD, "zero")])
+def test_the_commands_unit_or_zero_beside_a_corrupted_field(rig_data, tmp_path, name, fault):
+    """v in volts (5/2048 V a count) or about an unsigned DAC code's 2048, beside θ of row 500
+    written 64 higher. The unit and the zero are read where the header's law then reproduces v;
+    judged on every row, the corrupted one too, neither was: "v in another unit, its size not
+    found" (the P step: overshoot 132 %, the 2009 step 65 %), or "not this law (max |dv| = 2.2e+03
+    counts)". Now the header's law past its corrupted fields decides them."""
+    clean = LoggedRun.from_path(rig_data / name)
+    run = LoggedRun.from_path(_rewrite(rig_data / name, tmp_path / f"{fault}.txt", corrupt=(500, 64),
+                                       volts=5 / 2048 if fault == "volts" else None,
+                                       zero=2048.0 if fault == "zero" else None))
+    said = {"volts": "v in steps of 0.00244141", "zero": "v about 2048 counts"}[fault]
+    assert _said(run) == {said}
+    assert run.source == "header" and run.reproduced and run.identified.corrupted.theta_rows == (500,)
+    assert run.step_metrics() == clean.step_metrics()
+    model = load_model("tmm-fit")
+    assert run.simulate(model).fit_pct["theta"] == pytest.approx(clean.simulate(model).fit_pct["theta"], abs=0.5)
+
+
 @pytest.mark.parametrize("volts", [5 / 2048, 10 / 32768])
 def test_the_thesis_p_step_in_volts_under_an_open_loop_header(rig_data, tmp_path, volts):
     clean = LoggedRun.from_path(rig_data / P)
@@ -177,6 +199,7 @@ def test_the_thesis_p_step_in_volts_under_an_open_loop_header(rig_data, tmp_path
     # (kp 2 on steps of one count, or kp 1 on steps of two: the largest step is taken)
     assert step == pytest.approx(2 * volts, rel=1e-3) and run.controller.spec["kp"] == 1.0
     assert run.controller.spec["kp"] * step == pytest.approx(2.0 * volts, rel=1e-3)
+    assert run.step_metrics() == clean.step_metrics()  # θ and u as logged: the run's own step
 
 
 # seeds that draw each header (sign: none, open loop, P, lead) and each fault beside the

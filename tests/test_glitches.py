@@ -18,6 +18,7 @@ from station.logged import LoggedRun
 from station.replay import format_report, replay
 from station.survey import format_table, survey_one
 from tests.blind.audit import write_audit_case
+from tests.rig_logs import LEAD_LOG
 
 COLUMNS = {"u": 2, "v": 3, "theta": 4, "a": 5}  # the rig layout's columns: t n u v θ a
 NAMES = {"u": ("u",), "v": ("v",), "theta": ("theta",), "a": ("accel", "a")}  # the 2014 layout's column line
@@ -196,8 +197,7 @@ def test_an_accelerometer_field_a_few_counts_off_under_its_feedback(rig_data, tm
     _numbers_are_the_clean_logs(run, LoggedRun.from_path(rig_data / name))
 
 
-@pytest.mark.parametrize("name", ["SFLR_P_control_step_kp_2_SLFR_RTP_P_control_kp=2.0.txt",
-                                  "step_response_Gth_comp_no_accel_FB_amp_100_duration_1000_SLFR_RTP_Motor_Comp_Gth.txt"])
+@pytest.mark.parametrize("name", ["SFLR_P_control_step_kp_2_SLFR_RTP_P_control_kp=2.0.txt", LEAD_LOG])
 def test_an_accelerometer_in_g_with_a_corrupted_field(rig_data, tmp_path, name):
     """a written in g (a script's scaling, 7 digits) with one field 25 g off (281 counts). Its unit
     is read from the size every change is a whole multiple of; the corrupted field's two changes

@@ -520,10 +520,11 @@ def _unknown_unit(log: RunLog, why: str, detail: str, small: bool) -> Columns:
 
 
 def _law_confirms(log: RunLog, skipped) -> bool:
-    """Whether the header's law reproduces the log: as given (v = u in open loop), or, where it
-    comes within :data:`NEAR_COUNTS` (printed coefficients, a recursion the printing moves by a
-    count), is an open-loop header's v = u that does not, or none is named, a law the data give
-    reproduces every logged v (whether that is the header's own the controller's audit says after)."""
+    """Whether the header's law reproduces the log: as given (v = u in open loop), or past a
+    few corrupted fields, or, where it comes within :data:`NEAR_COUNTS` (printed coefficients,
+    a recursion the printing moves by a count), is an open-loop header's v = u that does not,
+    or none is named, a law the data give reproduces every logged v (whether that is the
+    header's own the controller's audit says after)."""
     dv = header_law_dv(log, skipped)  # replayed once; None for an open-loop header (v = u) or none
     if dv is None:
         if header_reproduces(log, skipped) is True:
@@ -531,12 +532,12 @@ def _law_confirms(log: RunLog, skipped) -> bool:
         # an open-loop header's v = u does not, or none is named: the law the data give
     elif dv <= TOLERANCE:
         return True
-    elif dv > NEAR_COUNTS:
-        return False
     try:
         found = identify_controller(log, skipped)
     except StationError:
         return False
+    if dv is not None and dv > NEAR_COUNTS:  # the header's own law only, its corrupted fields set aside
+        return found.source == "header" and found.corrupted is not None and found.fit.max_abs_dv <= TOLERANCE
     return found.fit is not None and found.judged_to is None and found.fit.max_abs_dv <= TOLERANCE
 
 
