@@ -15,6 +15,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from station.analysis.law_words import thesis_ga_sign
@@ -221,6 +222,34 @@ def test_blind_sign_and_double_faults(tmp_path, case, seed):
         assert len(said) == 1 and next(iter(said)).startswith("v in steps of")
     else:  # printed to few digits: judged to its printing, no column contradicted
         assert not said
+
+
+# sign: the headers none, open loop (at alignments 1 and 0), P and lead; seed 2 (an open-loop
+# header over a lead on the truncated integer at alignment 0 whose law needs rows on a
+# quantization boundary) is left out: with its θ field corrupted no law is found even with θ
+# as the loop fed it back (a corrupted field beside boundary rows, not the sign)
+@pytest.mark.parametrize("case, seed", [("sign", s) for s in (0, 3, 4, 7, 9)] + [("double", s) for s in (0, 7)])
+def test_blind_column_faults_beside_a_corrupted_field(tmp_path, case, seed):
+    """The generator's θ negated (under each header) and the session's lie beside a column
+    fault, with one θ field 40 counts higher where the hub moves: the fault and the lie said as
+    without it, the field set aside at its row, the law at the hidden alignment."""
+    path, hidden = write_audit_case(tmp_path, case, seed)
+    clean = LoggedRun.from_path(path)
+    moves = np.flatnonzero(np.abs(np.diff(clean.data["theta"])) > 0)
+    row = int(moves[moves.size // 2])  # the hub moves there
+    lines = path.read_text().splitlines()
+    head = next(k for k, x in enumerate(lines) if x[:1].isdigit())  # '#' lines, or the 2014 layout's names
+    names = lines[head - 1].lstrip("#").split("\t")
+    j = names.index("theta") if "theta" in names else 4  # the 2014 layout's, or the rig's t n u v θ a
+    cells = lines[head + row].split("\t")
+    cells[j] = f"{float(cells[j]) + 40:g}"  # as written: the column θ is named by (negated or not)
+    lines[head + row] = "\t".join(cells)
+    path.write_text("\n".join(lines) + "\n")
+    run = LoggedRun.from_path(path)
+    assert _said(run) == _said(clean)
+    assert run.source == clean.source and run.reproduced and run.alignment == hidden.alignment
+    assert run.identified.corrupted is not None and run.identified.corrupted.theta_rows == (row,)
+    assert run.step_metrics() == clean.step_metrics()
 
 
 def test_a_p_header_with_the_wrong_kp_over_swapped_columns(rig_data, tmp_path):
