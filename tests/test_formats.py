@@ -44,6 +44,25 @@ def test_names_in_quotes_or_with_their_units(tmp_path):
     assert log.sample_time == 0.002 and list(log.data["v"]) == [0, 100, 98] and list(log.data["a"]) == [0, 0, 2]
 
 
+@pytest.mark.parametrize("style", ["r", "all"])
+def test_quoted_fields_are_numbers(rig_data, tmp_path, style):
+    """R's write.csv quotes its row names ("1",0,0.002,...); a spreadsheet may quote every field.
+    Before: 'line 2: expected a number in column '', got '"1"''. Now the quotes go, and the rig's
+    P step so written gives the log's own numbers."""
+    src = rig_data / "SFLR_P_control_step_kp_2_SLFR_RTP_P_control_kp=2.0.txt"
+    rows = [x.split("\t") for x in src.read_text().splitlines() if not x.startswith("#")]
+    path = tmp_path / "exported.csv"
+    if style == "r":
+        path.write_text('"","t","n","u","v","theta","a"\n'
+                        + "".join(f'"{k + 1}",' + ",".join(r) + "\n" for k, r in enumerate(rows)))
+    else:
+        path.write_text('"t","n","u","v","theta","a"\n' + "".join(",".join(f'"{x}"' for x in r) + "\n" for r in rows))
+    clean, quoted = read_log(src), read_log(path)
+    for name in ("t", "n", "u", "v", "theta", "a"):
+        np.testing.assert_array_equal(quoted.data[name], clean.data[name])
+    assert replay(path).metrics == replay(src).metrics
+
+
 @pytest.mark.parametrize("names_end, row_end", [("", "\t"), ("\t", "\t")])
 def test_a_delimiter_after_the_last_field(tmp_path, names_end, row_end):
     # A lab script that writes "%g\t" for every field, the last too: before, "expected 6

@@ -245,6 +245,8 @@ class DataLines:
                 self.first_lineno = lineno
             if self._comma is None and "," in line:  # decided on the first row with a comma
                 self._comma = self.fmt != "station" and decimal_comma_row(line, self.names, self.sep)
+            if self.fmt != "station" and '"' in line:
+                line = line.replace('"', "")  # a spreadsheet's or R's write.csv's quoted fields ("1",0.002,...)
             if self._comma:
                 line = line.replace(",", ".")
             if self.sep and self.fmt != "station" and line.endswith(self.sep):
