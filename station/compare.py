@@ -22,6 +22,7 @@ from station.control.rerun import detect_alignment
 from station.errors import StationError
 from station.logged import LoggedRun
 from station.logged.audit import Audit
+from station.logged.reference import held_words
 from station.logged.reproduction import reproduction_lines
 from station.logged.run import REPRODUCED_TOLERANCE
 from station.runlog.timebase import restart_rows, run_start
@@ -228,7 +229,7 @@ def format_comparison(c: RunComparison) -> str:
     lines = [] if c.audit is None else [f"{Path(c.file).name}: {line}" for line in c.audit.lines()]
     lines += [f"{Path(c.file).name} ({c.source} log): controller {c.controller}"
              + ("" if c.step is None else f", step {c.step - c.step_from:g} counts"
-                + (f" from u = {c.step_from:g}" if c.step_from else "")) + outcome,
+                + held_words(c.step_from)) + outcome,
              f"  {'':<20} {'overshoot %':>12} {settling_label(THESIS_BAND_PCT) + ' s':>14} {'fit θ %':>8} "
              f"{'fit a %':>8}",
              f"  {c.source + ' (this log)':<20} {fmt(c.rig)}"]

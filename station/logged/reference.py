@@ -17,6 +17,22 @@ from typing import Any
 import numpy as np
 
 
+def held_words(initial: float) -> str:
+    """How a step from a held position is said after its height.
+
+    Parameters
+    ----------
+    initial : float
+        The level u held before the step, encoder counts.
+
+    Returns
+    -------
+    str
+        `` from u = 20``, or "" for a step from 0.
+    """
+    return f" from u = {initial:g}" if initial else ""
+
+
 @dataclass(frozen=True, eq=False)
 class Reference(Mapping):
     """What a logged reference is (:func:`classify_reference`).
@@ -51,8 +67,8 @@ class Reference(Mapping):
 
     @property
     def held_words(self) -> str:
-        """`` from u = 20`` for a step from a held position, else "" (said after its height)."""
-        return f" from u = {self.initial:g}" if self.initial else ""
+        """:func:`held_words` of its ``initial``."""
+        return held_words(self.initial)
 
     @property
     def is_step(self) -> bool:
