@@ -23,17 +23,17 @@ device would apply nothing), or past the DAC's ±255 counts.
 
 So is its zero (:func:`check_command_offset`): a v that reads one value other than 0 at rest
 and that the header's law reproduces less that value was written about another zero.
+So is θ's (:func:`check_theta_zero`): a θ that rests on one count θ0 other than 0 before the
+first command, whose law reproduces v from θ − θ0 and not from θ as written, was logged as the
+encoder read it by a loop that took θ0 off (the lab's client reads θ0 at START).
 
-An open-loop run (v = u: no law feeds θ or a back) cannot say θ from a by a law. There the
-sensors themselves say it (:func:`check_sensor_swap`): at rest before the first command the
-encoder reads one count and the accelerometer its noise, and the hub's angle follows the
-nominal model's driven by the logged command where the tip's acceleration does not.
+An open-loop run (v = u: no law feeds θ or a back) cannot say θ from a by a law: there the
+sensors themselves say it (:mod:`station.logged.sensor_swap`).
 """
 
 from __future__ import annotations
 
 import dataclasses
-from collections.abc import Callable
 from typing import NamedTuple
 
 import numpy as np
@@ -48,14 +48,9 @@ from station.logged.quantum import count_step, in_counts, quantum_fits
 from station.logged.controller import (NO_LAW, ControllerId, describe_controller, header_law_dv,
                                        header_reproduces, identify_controller)
 from station.logged.reference_unit import check_reference_unit, exact_from_rest
-from station.logged.sensor_evidence import cosine_ratio
 from station.logged.units import whole_counts
 from station.rig import DAC_LIMIT
 from station.runlog import RunLog
-
-ModelTheta = Callable[[RunLog], "np.ndarray | None"]
-"""``model_theta(log) -> θ``: the nominal model's θ for a log driven open loop by its v (encoder
-counts, shape (N,)), None when the log cannot be simulated (``LoggedRun``'s ``_nominal_theta``)."""
 
 SWAPS = (("u", "v"), ("theta", "a"), ("v", "theta"), ("u", "theta"))
 """Column pairs a swap is tried for: the reference and the command, the two sensors; the
@@ -75,14 +70,6 @@ PAIRS = tuple((pair, ("theta",)) for pair in SWAPS[:2])
 """Two column faults at once, tried when no one of :data:`TRIALS` makes the header's law
 reproduce the log: a swap, then θ negated (a script that wrote its columns in another order and
 the loop's angle with the other sign)."""
-
-SWAP_COSINE = 0.9
-"""An open-loop run's θ and a are read swapped when the column named a follows the nominal
-model's θ this closely (the cosine of their changes from row 0; the rig's own open-loop pulses
-as named: 0.98) and the column named θ does not (under :data:`UNLIKE_COSINE`)."""
-
-UNLIKE_COSINE = 0.5
-"""A column no closer than this to the model's θ is not the hub's angle."""
 
 COMMAND_STEP_COUNTS = 10
 """Most DAC counts v's least change may span when it is written in another unit (a P law's v
@@ -190,7 +177,7 @@ def check_columns(log: RunLog, skipped=None) -> Columns:
     if unit is None and as_named is not None and as_named <= TOLERANCE:
         return Columns((), log)
     named = as_named > TOLERANCE if as_named is not None else header_reproduces(log, skipped) is not True
-    offset = check_command_offset(log, skipped) if named else None
+    offset = (check_command_offset(log, skipped) or check_theta_zero(log, skipped)) if named else None
     if offset is not None:  # (past the DAC's range as written: about its zero, in counts)
         return offset
     ref = check_reference_unit(log, skipped, as_named) if as_named is not None and unit is None else None
@@ -321,9 +308,19 @@ def _tracks_better(trial: RunLog, log: RunLog) -> bool:
     return tracking_error(trial) < tracking_error(log)
 
 
-def _named_by(log: RunLog) -> str:
-    """What names the columns, as a swap's header says it: the file's column line, or the rig's
-    order assumed for rows saved without a header (:data:`station.runlog.rig_layouts.BARE_ORDER`)."""
+def named_by(log: RunLog) -> str:
+    """What names the columns, as a swap's header says it.
+
+    Parameters
+    ----------
+    log : RunLog
+
+    Returns
+    -------
+    str
+        The file's column line, or the rig's order assumed for rows saved without a header
+        (:data:`station.runlog.rig_layouts.BARE_ORDER`).
+    """
     return "in the rig's column order (no header names them)" if log.layout == "bare" else \
         "as the column line names them"
 
@@ -340,7 +337,7 @@ def _swapped_back(log: RunLog, rewrites: tuple[tuple[str, ...], ...], trial: Run
     for columns in rewrites:
         if len(columns) == 2:
             a, b = SHOWN[columns[0]], SHOWN[columns[1]]
-            claims.append(AuditClaim("columns", f"{a} and {b} {_named_by(log)}", f"{a} and {b} swapped",
+            claims.append(AuditClaim("columns", f"{a} and {b} {named_by(log)}", f"{a} and {b} swapped",
                                      "contradicted", f"{said}, and {how} with {done}"))
             notes.append(f"the columns named {a} and {b} hold {b} and {a} (the audit): read swapped")
         else:
@@ -486,6 +483,50 @@ def _offset_taken_off(log: RunLog, skipped, v: np.ndarray, c: float, rest: int) 
                                                                                  f"audit): {c:g} taken off"]), found)
 
 
+def check_theta_zero(log: RunLog, skipped=None) -> Columns | None:
+    """θ's zero checked by its rest and the log's law: a θ that rests on one count θ0 other
+    than 0 before the first command, where the law (the header's closed-loop law, else the data's
+    from rest, as :func:`check_command_offset` asks it, a header that lies about the law too)
+    reproduces every logged v from θ − θ0 and not from θ as written, was logged before the
+    script took its zero off (the lab's client reads θ0 at START, ``q``, and the loop's error is
+    u − (θ − θ0)); read from θ0. A law that reproduces θ as written is the encoder not zeroed
+    (:func:`station.logged.start.start_claims`).
+
+    Parameters
+    ----------
+    log : RunLog
+    skipped : array_like of bool, optional
+        As :func:`station.logged.controller.identify_controller`.
+
+    Returns
+    -------
+    Columns or None
+        The log with θ0 taken off θ and a contradicted "columns" claim; None otherwise.
+    """
+    u, theta, v = (np.asarray(log.data[c], dtype=float) for c in ("u", "theta", "v"))
+    moved = np.flatnonzero((u != u[0]) | (theta != theta[0]) | (v != v[0]))
+    rest = int(moved[0]) if moved.size else v.size
+    th0 = float(theta[0])
+    if rest < REST_ROWS or th0 == 0 or not np.isfinite(th0) or u[0] != 0:
+        return None
+    trial = dataclasses.replace(log, data={**log.data, "theta": theta - th0})
+    dv = header_law_dv(trial, skipped)  # None: an open-loop header's v = u, or none named
+    whose, found = "the header's law", None
+    if dv is None or dv > TOLERANCE:  # none named, an open loop's v = u, or a header lying about the law too
+        found = _data_law_from_rest(log, trial, skipped)
+        if found is None:
+            return None
+        whose, dv = f"the law the data give ({describe_controller(found.controller)})", float(found.fit.max_abs_dv)
+    claim = AuditClaim(
+        "columns", "θ as the loop's error used it", f"θ logged before its zero was taken off (θ0 = {th0:g} counts)",
+        "contradicted",
+        f"θ rests at {th0:g} counts on the {rest} rows before the first command, and {whose} reproduces every logged "
+        f"v from θ − θ0 (to {dv:.2g} counts) where it does not from θ as written: the loop's error was "
+        f"u − (θ − θ0), its zero taken at the start; read from θ0")
+    return Columns((claim,), dataclasses.replace(trial, notes=list(log.notes) + [
+        f"θ logged before its zero was taken off (the audit): {th0:g} taken off"]), found)
+
+
 def _data_law_from_rest(log: RunLog, trial: RunLog, skipped) -> ControllerId | None:
     """With no law named (or an open loop's v = u the data contradict, less c as well): the law
     the data give reproducing ``trial`` (v less its rest value)
@@ -500,7 +541,7 @@ def _data_law_from_rest(log: RunLog, trial: RunLog, skipped) -> ControllerId | N
             return None
         if log.data["theta"][0] != 0:  # a P law's -kp·θ at rest is one value too
             as_written = identify_controller(log, skipped)
-            if as_written.fit is not None and not as_written.cut:
+            if as_written.fit is not None and as_written.fit.max_abs_dv <= TOLERANCE and not as_written.cut:
                 return None
     except StationError:
         return None
@@ -539,56 +580,3 @@ def _law_confirms(log: RunLog, skipped) -> bool:
     if dv is not None and dv > NEAR_COUNTS:  # the header's own law only, its corrupted fields set aside
         return found.source == "header" and found.corrupted is not None and found.fit.max_abs_dv <= TOLERANCE
     return found.fit is not None and found.judged_to is None and found.fit.max_abs_dv <= TOLERANCE
-
-
-def _cosine(x: np.ndarray, y: np.ndarray) -> float:
-    """|cosine| of two signals' changes from their row 0 (0 where either never changes)."""
-    cos, _ = cosine_ratio(x - x[0], y - y[0])
-    return 0.0 if cos is None else abs(cos)
-
-
-def check_sensor_swap(columns: Columns, model_theta: ModelTheta) -> Columns:
-    """θ and a of an open-loop run (v = u) checked by the sensors themselves (module docstring).
-
-    Asked only where the rest before the first command says it may be (the column named θ moves
-    there more than the column named a: an encoder at rest reads one count); decided by the
-    nominal model's θ driven by the logged command (:data:`SWAP_COSINE`, :data:`UNLIKE_COSINE`).
-
-    Parameters
-    ----------
-    columns : Columns
-        What :func:`check_columns` found; returned as it is when it found a swap, the run is
-        closed loop, or its rest is shorter than :data:`REST_ROWS`.
-    model_theta : callable
-        ``model_theta(log) -> θ`` (encoder counts, shape (N,)): the nominal model's θ for the
-        log driven open loop by its command; None when the log cannot be simulated.
-
-    Returns
-    -------
-    Columns
-    """
-    log = columns.log
-    if columns.claims or len(log) < 2 * REST_ROWS:
-        return columns
-    d = log.data
-    u, v, theta, a = (np.asarray(d[k], dtype=float) for k in ("u", "v", "theta", "a"))
-    if not all(np.all(np.isfinite(x)) for x in (u, v, theta, a)) or not np.array_equal(u, v):
-        return columns
-    moved = np.flatnonzero(v != v[0])
-    rest = int(moved[0]) if moved.size else 0
-    if rest < REST_ROWS or np.ptp(theta[:rest]) <= np.ptp(a[:rest]):
-        return columns
-    expected = model_theta(log)
-    if expected is None:
-        return columns
-    named, crossed = _cosine(theta, expected), _cosine(a, expected)
-    if crossed < SWAP_COSINE or named >= UNLIKE_COSINE:
-        return columns
-    claim = AuditClaim(
-        "columns", f"θ and a {_named_by(log)}", "θ and a swapped", "contradicted",
-        f"open loop: at rest before the first command the column named θ moves {np.ptp(theta[:rest]):g} counts and "
-        f"the one named a {np.ptp(a[:rest]):g}; the nominal model's θ driven by the logged command has a cosine "
-        f"of {crossed:.2f} with the column named a and {named:.2f} with the one named θ")
-    note = "the columns named θ and a hold a and θ (the audit): read swapped"
-    trial = swapped(log, "theta", "a")
-    return Columns((claim,), dataclasses.replace(trial, notes=list(log.notes) + [note]))  # its controller asked again

@@ -15,7 +15,8 @@ from station.errors import StationError
 from station.logged.accelerometer import ON_THE_TIP, Mounting, decide_mounting, motion_ratio, silent_claims
 from station.logged.audit import (ACCEL_CLAIM, Audit, AuditClaim, accel_claims, alignment_claim,
                                   file_kp_claims, reference_claims)
-from station.logged.columns import Columns, check_columns, check_sensor_swap
+from station.logged.columns import Columns, check_columns
+from station.logged.sensor_swap import check_sensor_swap
 from station.logged.controller import ControllerId, describe_controller, identify_controller
 from station.logged.sensor_evidence import REST_MIN_SAMPLES, sensor_evidence
 from station.logged.sensors import (DOUBT_WORDS, NO_FAULTS, REFINED_BY_MODEL, SensorFaults, decide_faults, fault_text,
@@ -65,8 +66,7 @@ class LoggedRun:
     def __init__(self, log: RunLog):
         self.raw_log = log
         self._time_base: TimeBase = time_base(log)
-        self._columns: Columns = check_sensor_swap(
-            check_columns(self._time_base.log, _skipped(self._time_base.log)), _nominal_theta)
+        self._columns: Columns = check_sensor_swap(check_columns(self._time_base.log, _skipped(self._time_base.log)))
         self._checked = self._columns.log  # what the controller's audit reads
         self._simulable = False
 
@@ -579,17 +579,6 @@ class LoggedRun:
             sim = dataclasses.replace(sim, how=sim.how + f"; {DOUBT_WORDS}{self.sensors.doubt}",
                                       doubt=self.sensors.doubt)
         return sim
-
-
-def _nominal_theta(log: RunLog) -> np.ndarray | None:
-    """The nominal model's θ for an open-loop log driven by its command (None when it cannot be
-    simulated): :func:`station.logged.columns.check_sensor_swap`'s evidence."""
-    from station.plant.model import load_model  # lazy: start-up time (asked only of a suspect open-loop log)
-
-    try:
-        return simulate_log(log, None, None, load_model("tmm-fit")).prediction["theta"]
-    except (StationError, ArithmeticError, ValueError, KeyError):  # a run the model cannot replay decides nothing
-        return None
 
 
 def _skipped(log: RunLog) -> np.ndarray | None:

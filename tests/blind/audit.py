@@ -52,7 +52,9 @@ a true header (a P, or a lead on the stored integer) or none: two columns swappe
 lead on the stored integer), none, or the lab's session's open-loop one over a log whose v a
 script wrote as an unsigned DAC code about its midpoint (128, 2048 or 32768: 8, 12 or 16 bits); "u_unit":
 the same headers over a log whose u (the reference) a script wrote in degrees or radians of the
-hub, θ left in encoder counts. A class joined with "+" to
+hub, θ left in encoder counts; "theta_zero": the same headers over a log whose θ a script wrote
+as the encoder read it, from a count θ0 left by an earlier run, where its loop took θ0 off (the
+lab's client reads θ0 at START: the error u − (θ − θ0)). A class joined with "+" to
 "coulomb_friction" hides that friction too (drawn as :func:`tests.blind.cases.draw` draws it).
 """
 
@@ -76,7 +78,7 @@ N = 2000
 CLASSES = ("lie:open_loop", "lie:p_kp", "lie:lead_pole", "lie:accel_fb", "int:trunc_d0", "int:trunc_d1",
            "int:round_d0", "int:round_d1", "session", "lie:sent", "lie:accel_int", "honest:p", "honest:lead_int",
            "honest:lead_sent", "words", "swap", "rows", "a_unit", "v_unit", "printed", "sign", "double", "lie:swap", "pair",
-           "v_zero", "u_unit")
+           "v_zero", "u_unit", "theta_zero")
 """The audit's blind classes, in the validation table's order."""
 
 PHYSICAL = ("coulomb_friction",)
@@ -160,6 +162,9 @@ class AuditCase:
         The zero v is written about (:data:`V_ZEROS`, "v_zero"), else None (about 0).
     u_unit : str or None
         The unit u is written in (:data:`U_UNITS`, "u_unit"), else None (encoder counts).
+    theta_zero : float or None
+        The encoder's count at the start, written in θ but taken off by the loop ("theta_zero"),
+        else None.
     """
 
     name: str
@@ -187,11 +192,12 @@ class AuditCase:
     negate: bool = False
     v_zero: float | None = None
     u_unit: str | None = None
+    theta_zero: float | None = None
 
     @property
     def lies(self) -> bool:
         """Whether the header names another controller than the data's."""
-        if self.name.startswith(("printed", "sign", "double", "v_zero", "u_unit")):
+        if self.name.startswith(("printed", "sign", "double", "v_zero", "u_unit", "theta_zero")):
             return self.header == "open-loop"
         return self.name.split("+")[0] in ("lie:open_loop", "lie:p_kp", "lie:lead_pole", "lie:accel_fb", "session", "lie:sent",
                                               "lie:accel_int", "lie:swap")
@@ -341,6 +347,12 @@ def draw_case(name: str, seed: int) -> AuditCase:
             return AuditCase(**common, **lead, recursion="trunc", alignment=int(rng.integers(0, 2)),
                              header="open-loop", u_unit=unit)
         return _true_or_no_header(rng, common, p_law, lead, kp, u_unit=unit)
+    if base == "theta_zero":  # θ written as the encoder read it, from an earlier run's count
+        zero = float(rng.integers(5, 400)) * float(rng.choice([-1.0, 1.0]))
+        if rng.random() < 0.25:  # by the lab's session (an open-loop header on a lead on the integer)
+            return AuditCase(**common, **lead, recursion="trunc", alignment=int(rng.integers(0, 2)),
+                             header="open-loop", theta_zero=zero)
+        return _true_or_no_header(rng, common, p_law, lead, kp, theta_zero=zero)
     if base == "words":
         if rng.random() < 0.5:
             return AuditCase(**{**common, "header_kp": kp}, **p_law, recursion="trunc",
@@ -529,6 +541,8 @@ def write_audit_case(folder: Path, name: str, seed: int) -> tuple[Path, AuditCas
         sim = dataclasses.replace(sim, v=np.asarray(sim.v, dtype=float) + case.v_zero)
     if case.u_unit is not None:
         sim = dataclasses.replace(sim, u=np.asarray(sim.u, dtype=float) * U_UNITS[case.u_unit])
+    if case.theta_zero is not None:  # the loop took θ0 off; the script wrote the encoder's count
+        sim = dataclasses.replace(sim, theta=np.asarray(sim.theta, dtype=float) + case.theta_zero)
     if case.negate:  # a script that wrote the loop's angle with the other sign
         sim = dataclasses.replace(sim, theta=-np.asarray(sim.theta, dtype=float))
     if case.swap:
