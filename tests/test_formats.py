@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 
 from station.cli import main
+from station.logged import LoggedRun
 from station.replay import replay
 from station.runlog import RunLogError, read_log, standard_column
 
@@ -61,6 +62,24 @@ def test_quoted_fields_are_numbers(rig_data, tmp_path, style):
     for name in ("t", "n", "u", "v", "theta", "a"):
         np.testing.assert_array_equal(quoted.data[name], clean.data[name])
     assert replay(path).metrics == replay(src).metrics
+
+
+@pytest.mark.parametrize("comments", [["#SLFR RTP OL_Test"], ["# lab notebook p. 12", "#kp=1.0"]])
+def test_comment_lines_above_a_line_of_column_names(rig_data, tmp_path, comments):
+    """A 2014 log (a first line of column names, no '#' header) with comment lines put above it.
+    Before: 'line 1: no usable columns: found 'SLFR', 'RTP', 'OL_Test'' (the last '#' line taken
+    as the column line). Now the names line is the columns and the comments the header: the
+    rows as the log's own, and the header's claim judged (an open-loop header contradicted by
+    the P law the rows hold; the notebook's kp = 1 confirmed)."""
+    src = rig_data / "without_accel_01_28_14_test_2.txt"
+    path = tmp_path / "annotated.txt"
+    path.write_text("\n".join(comments) + "\n" + src.read_text())
+    clean, annotated = read_log(src), read_log(path)
+    for name in ("t", "u", "v", "theta", "a"):
+        np.testing.assert_array_equal(annotated.data[name], clean.data[name])
+    run = LoggedRun.from_path(path)
+    assert run.reproduced and run.controller.spec["kp"] == 1.0
+    assert run.source == ("inferred (header contradicted)" if "OL_Test" in comments[0] else "header")
 
 
 @pytest.mark.parametrize("names_end, row_end", [("", "\t"), ("\t", "\t")])

@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import json
 import math
+import re
 import warnings
 from pathlib import Path
 from typing import Any
@@ -149,6 +150,19 @@ def open_log(path: Path, errors: str = "strict"):
         raise RunLogError(str(exc), file=path) from None
 
 
+def _names(text: str) -> bool:
+    """Whether a line under the ``#`` lines names columns (a 2014 log's first line with a comment
+    put above it) rather than holding the first row: its first field is no number."""
+    first = re.split(r"[\t,;]|\s+", text.strip(), maxsplit=1)[0].strip().strip('"')
+    if not first:
+        return False
+    try:
+        float(first.replace(",", "."))
+    except ValueError:
+        return True
+    return False
+
+
 def _read_stream(path: Path, lines: Lines) -> RunLog:
     """:func:`read_log` on an open text file: header line by line, rows by numpy's parser."""
     head: list[tuple[int, str, bool]] = []
@@ -179,6 +193,10 @@ def _read_stream(path: Path, lines: Lines) -> RunLog:
             if len(header) > MAX_HEADER_LINES:
                 raise log_error(path, item[0], f"more than {MAX_HEADER_LINES} '#' header lines before the first "
                                 f"row: not a run log (the rig's header has about ten)")
+        if (item := lines.next()) is not None and _names(item[1]):  # a line of names under the comments: the columns
+            header.append("#" + item[1])
+        elif item is not None:
+            lines.push(item)
         found = parse_rig_header(path, header)
     else:
         fmt, layout = "rig", "columns"
