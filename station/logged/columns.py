@@ -501,7 +501,8 @@ def check_theta_zero(log: RunLog, skipped=None) -> Columns | None:
     Returns
     -------
     Columns or None
-        The log with θ0 taken off θ and a contradicted "columns" claim; None otherwise.
+        The log with θ0 taken off θ and a contradicted "columns" claim; None otherwise (θ not
+        in whole counts, fewer than :data:`REST_ROWS` rows at rest, or no law from θ − θ0).
     """
     u, theta, v = (np.asarray(log.data[c], dtype=float) for c in ("u", "theta", "v"))
     moved = np.flatnonzero((u != u[0]) | (theta != theta[0]) | (v != v[0]))
@@ -509,6 +510,8 @@ def check_theta_zero(log: RunLog, skipped=None) -> Columns | None:
     th0 = float(theta[0])
     if rest < REST_ROWS or th0 == 0 or not np.isfinite(th0) or u[0] != 0:
         return None
+    if not np.all(theta == np.round(theta)):  # the encoder's counts (a unit read back first): else a law on the
+        return None  # truncated integer may fit θ's fractions from any zero
     trial = dataclasses.replace(log, data={**log.data, "theta": theta - th0})
     dv = header_law_dv(trial, skipped)  # None: an open-loop header's v = u, or none named
     whose, found = "the header's law", None
@@ -529,7 +532,7 @@ def check_theta_zero(log: RunLog, skipped=None) -> Columns | None:
 
 def _data_law_from_rest(log: RunLog, trial: RunLog, skipped) -> ControllerId | None:
     """With no law named (or an open loop's v = u the data contradict, less c as well): the law
-    the data give reproducing ``trial`` (v less its rest value)
+    the data give reproducing ``trial`` (v less its rest value, or θ less its first count)
     from rest, where on ``log`` as written none does, or one does only with its first rows of
     memory taken as logged (an integrator carrying the rest value: a copy "cut from a longer
     run" whose hub rested under a command of many counts); that law (kept: the log's controller,
