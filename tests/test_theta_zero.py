@@ -23,6 +23,7 @@ from station.plant import load_model
 P = "SFLR_P_control_step_kp_2_SLFR_RTP_P_control_kp=2.0.txt"
 LEAD = "step_response_Gth_comp_no_accel_FB_amp_100_duration_1000_SLFR_RTP_Motor_Comp_Gth.txt"
 P_2009 = "2009/step_response_amp=100_SLFR_RTP_P_control_kp=1.0.txt"
+LEAD_ACCEL = "step_response_Gth_comp_Ga_opt_amp_200_duration_1000_opt_case43_SLFR_RTP_Motor_Comp_Gth.txt"
 CLAIM = "θ as the loop's error used it"
 
 
@@ -46,11 +47,13 @@ def _zeros(run: LoggedRun) -> list[str]:
     return [c.data for c in run.audit.claims if c.claim == "columns" and c.header == CLAIM]
 
 
-@pytest.mark.parametrize("name, zero", [(P, -59.0), (LEAD, -59.0), (P_2009, 137.0), (P, 3.0)])
-@pytest.mark.parametrize("header", ["true", "open-loop", "none"])
+@pytest.mark.parametrize("name, zero, header", [
+    (name, zero, header) for name, zero in [(P, -59.0), (LEAD, -59.0), (P_2009, 137.0), (P, 3.0)]
+    for header in ("true", "open-loop", "none")] + [(LEAD_ACCEL, -59.0, "true")])
 def test_theta_from_the_encoders_starting_count_is_read_from_it(rig_data, tmp_path, name, zero, header):
     """θ0 said exactly, the law the clean log's (the header's, or the data's under an open-loop
-    header or none), and the step's numbers and the model's θ fit those of the clean log."""
+    header or none), and the step's numbers and the model's θ fit those of the clean log. The
+    lead + accelerometer step's v moves at rest (Ga on a's noise): θ and u say the rest."""
     clean = LoggedRun.from_path(_from(rig_data / name, tmp_path / "clean.txt", 0.0, header))
     run = LoggedRun.from_path(_from(rig_data / name, tmp_path / "from.txt", zero, header))
     assert _zeros(run) == [f"θ logged before its zero was taken off (θ0 = {zero:g} counts)"]

@@ -504,9 +504,9 @@ def check_theta_zero(log: RunLog, skipped=None) -> Columns | None:
         The log with θ0 taken off θ and a contradicted "columns" claim; None otherwise (θ not
         in whole counts, fewer than :data:`REST_ROWS` rows at rest, or no law from θ − θ0).
     """
-    u, theta, v = (np.asarray(log.data[c], dtype=float) for c in ("u", "theta", "v"))
-    moved = np.flatnonzero((u != u[0]) | (theta != theta[0]) | (v != v[0]))
-    rest = int(moved[0]) if moved.size else v.size
+    u, theta = (np.asarray(log.data[c], dtype=float) for c in ("u", "theta"))
+    moved = np.flatnonzero((u != u[0]) | (theta != theta[0]))  # (v may move there: Ga on a's noise)
+    rest = int(moved[0]) if moved.size else theta.size
     th0 = float(theta[0])
     if rest < REST_ROWS or th0 == 0 or not np.isfinite(th0) or u[0] != 0:
         return None
