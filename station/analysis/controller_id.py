@@ -119,6 +119,27 @@ def clamps_to_try(v: np.ndarray, rig_limit: float) -> list[float]:
     return [first, vmax] if 0 < vmax < first else [first]
 
 
+def at_clamps(controller, v) -> list:
+    """A law a header names, at its own clamp, then at the log's largest |v| where that is
+    under it (a header does not state its clamp; the lab's ran at 150 as well as 200).
+
+    Parameters
+    ----------
+    controller : Compensator
+    v : array_like, shape (N,)
+        The logged commands, DAC counts.
+
+    Returns
+    -------
+    list of Compensator
+    """
+    peak = float(np.max(np.abs(v))) if np.size(v) else 0.0
+    laws = [controller]
+    if 0 < peak < (controller.limit or np.inf):
+        laws.append(with_recursion(controller, controller.recursion, peak))
+    return laws
+
+
 def law_compensator(num, den, limit: float | None, dt: float, kind: str, extra: dict | None = None,
                     recursion: str = "none", name: str | None = None, ga=None) -> Compensator:
     """A compensator for a law found in a log: its z-law (and Ga's), clamp and recursion, its

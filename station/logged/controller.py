@@ -20,14 +20,8 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
-from station.analysis.controller_id import (
-    PREFERRED_ALIGNMENT,
-    TOLERANCE,
-    IdentifiedController,
-    infer_controller,
-    variant_of,
-    with_recursion,
-)
+from station.analysis.controller_id import (PREFERRED_ALIGNMENT, TOLERANCE, IdentifiedController, at_clamps,
+                                           infer_controller, variant_of)
 from station.analysis.header_law import (NEAR_COUNTS, PRINTED_TOLERANCE, SAME_LAW_RTOL, completed_law, named_design,
                                         same_law)
 from station.analysis.law_words import ga_text
@@ -265,9 +259,14 @@ def log_controller(log: RunLog) -> tuple[Compensator | OpenLoop | None, list[str
     return cid.controller, cid.notes
 
 
-def _header_law(log: RunLog):
+def named_law(log: RunLog):
     """The law a log's header names, as given (None: no rows, a custom controller, none named,
-    or a malformed header, which :func:`identify_controller` says)."""
+    or a malformed header, which :func:`identify_controller` says).
+
+    Parameters
+    ----------
+    log : RunLog
+    """
     if not len(log) or _custom_controller(log) is not None:
         return None
     try:
@@ -287,7 +286,7 @@ def header_reproduces(log: RunLog, skipped=None) -> bool | None:
     skipped : array_like of bool, optional
         As :func:`identify_controller`.
     """
-    controller = _header_law(log)
+    controller = named_law(log)
     if controller is None:
         return None
     if not is_closed_loop(controller):
@@ -311,19 +310,15 @@ def header_law_dv(log: RunLog, skipped=None) -> float | None:
     skipped : array_like of bool, optional
         As :func:`identify_controller`.
     """
-    controller = _header_law(log)
+    controller = named_law(log)
     data = log.data
     if (controller is None or not is_closed_loop(controller) or not replayable_rate(log)
             or not all(np.all(np.isfinite(data[c])) for c in ("u", "theta", "v"))):
         return None
     a = np.where(np.isfinite(data["a"]), data["a"], 0.0)
     best = None
-    peak = float(np.max(np.abs(data["v"])))
-    laws = [controller]  # at the rig's clamp, then the log's own (a header does not state its clamp)
-    if 0 < peak < (controller.limit or np.inf):
-        laws.append(with_recursion(controller, controller.recursion, peak))
     restarts = restart_rows(data["n"])
-    for law in laws:
+    for law in at_clamps(controller, data["v"]):
         _, fit, _ = variant_of(law, data["u"], data["theta"], a, data["v"], ALIGNMENTS, skipped, restarts=restarts)
         if fit is not None and (best is None or fit.max_abs_dv < best):
             best = float(fit.max_abs_dv)

@@ -14,10 +14,11 @@ from collections.abc import Callable
 import numpy as np
 
 from station.logged.audit import AuditClaim
-from station.logged.columns import REST_ROWS, Columns, named_by, swapped
+from station.logged.columns import Columns, named_by, swapped
 from station.errors import StationError
 from station.logged.sensor_evidence import cosine_ratio
 from station.logged.simulate import simulate_log
+from station.logged.start import REST_ROWS
 from station.runlog import RunLog
 
 ModelTheta = Callable[[RunLog], "np.ndarray | None"]

@@ -41,6 +41,31 @@ ACCEL_QUIET_COUNTS = 8.0
 """Largest peak-to-peak of a over the start window of a run at rest, counts (noise 0.3 std;
 a beam ringing from an earlier motion swings tens of counts)."""
 
+REST_ROWS = 10
+"""Fewest rows at rest before the first command (:func:`rest_rows`) a zero read from the rest
+needs: the open-loop sensor check, v's zero, θ's and a's
+(:mod:`station.logged.columns`, :mod:`station.logged.sensor_zeros`)."""
+
+
+def rest_rows(u, theta) -> int:
+    """The rows at rest before the first command: u and θ unchanged from row 0 (v may move
+    there: an accelerometer feedback on a's noise; no law commands anything else).
+
+    Parameters
+    ----------
+    u, theta : array_like, shape (N,)
+        Reference and hub angle, encoder counts.
+
+    Returns
+    -------
+    int
+        The first row where u or θ differs from its row 0 (N when neither ever does).
+    """
+    u, theta = np.asarray(u, dtype=float), np.asarray(theta, dtype=float)
+    moved = np.flatnonzero((u != u[0]) | (theta != theta[0]))
+    return int(moved[0]) if moved.size else int(theta.size)
+
+
 START_CLAIM = "the run starts at rest at t = 0"
 """What every log claims about its start (the lab zeroes the encoder and starts a test at rest)."""
 
