@@ -25,7 +25,8 @@ So is its zero (:func:`check_command_offset`): a v that reads one value other th
 and that the header's law reproduces less that value was written about another zero.
 So is θ's (:func:`check_theta_zero`): a θ that rests on one count θ0 other than 0 before the
 first command, whose law reproduces v from θ − θ0 and not from θ as written, was logged as the
-encoder read it by a loop that took θ0 off (the lab's client reads θ0 at START).
+encoder read it by a loop that took θ0 off (the lab's client reads θ0 at START); so is a's, under
+a law feeding a back, and of both at once (:func:`station.logged.sensor_zeros.check_accel_zero`).
 
 An open-loop run (v = u: no law feeds θ or a back) cannot say θ from a by a law: there the
 sensors themselves say it (:mod:`station.logged.sensor_swap`).
@@ -48,6 +49,8 @@ from station.logged.quantum import count_step, in_counts, quantum_fits
 from station.logged.controller import (NO_LAW, ControllerId, describe_controller, header_law_dv,
                                        header_reproduces, identify_controller)
 from station.logged.reference_unit import check_reference_unit, exact_from_rest
+from station.logged.sensor_zeros import check_accel_zero, theta_zero_claim
+from station.logged.start import REST_ROWS, rest_rows
 from station.logged.units import whole_counts
 from station.rig import DAC_LIMIT
 from station.runlog import RunLog
@@ -74,11 +77,6 @@ the loop's angle with the other sign)."""
 COMMAND_STEP_COUNTS = 10
 """Most DAC counts v's least change may span when it is written in another unit (a P law's v
 steps by kp counts: :func:`check_command_unit` tries each)."""
-
-REST_ROWS = 10
-"""Fewest rows at rest before the first command the open-loop check and the command's zero
-(:func:`check_command_offset`) need."""
-
 
 UNKNOWN_UNIT = "v in another unit, its size not found"
 """The "columns" claim's data for a v that is no DAC command as written, in a size the data do
@@ -177,6 +175,9 @@ def check_columns(log: RunLog, skipped=None) -> Columns:
     if unit is None and as_named is not None and as_named <= TOLERANCE:
         return Columns((), log)
     named = as_named > TOLERANCE if as_named is not None else header_reproduces(log, skipped) is not True
+    zeros = check_accel_zero(log, skipped) if named and unit is None else None  # (the header's law only: quick)
+    if zeros is not None:
+        return Columns(zeros.claims, zeros.log)
     offset = (check_command_offset(log, skipped) or check_theta_zero(log, skipped)) if named else None
     if offset is not None:  # (past the DAC's range as written: about its zero, in counts)
         return offset
@@ -446,8 +447,7 @@ def check_command_offset(log: RunLog, skipped=None) -> Columns | None:
         than :data:`REST_ROWS` rows at rest, v 0 there, or no law reproduces v less c).
     """
     u, theta, v = (np.asarray(log.data[c], dtype=float) for c in ("u", "theta", "v"))
-    moved = np.flatnonzero((u != u[0]) | (theta != theta[0]))
-    rest = int(moved[0]) if moved.size else v.size
+    rest = rest_rows(u, theta)
     if rest < REST_ROWS or u[0] != 0 or not np.all(np.isfinite(v[:rest])):
         return None
     # one whole value at rest (a DAC code); a law feeding a back moves v about it by a's noise there (Ga)
@@ -505,8 +505,7 @@ def check_theta_zero(log: RunLog, skipped=None) -> Columns | None:
         in whole counts, fewer than :data:`REST_ROWS` rows at rest, or no law from θ − θ0).
     """
     u, theta = (np.asarray(log.data[c], dtype=float) for c in ("u", "theta"))
-    moved = np.flatnonzero((u != u[0]) | (theta != theta[0]))  # (v may move there: Ga on a's noise)
-    rest = int(moved[0]) if moved.size else theta.size
+    rest = rest_rows(u, theta)
     th0 = float(theta[0])
     if rest < REST_ROWS or th0 == 0 or not np.isfinite(th0) or u[0] != 0:
         return None
@@ -520,14 +519,8 @@ def check_theta_zero(log: RunLog, skipped=None) -> Columns | None:
         if found is None:
             return None
         whose, dv = f"the law the data give ({describe_controller(found.controller)})", float(found.fit.max_abs_dv)
-    claim = AuditClaim(
-        "columns", "θ as the loop's error used it", f"θ logged before its zero was taken off (θ0 = {th0:g} counts)",
-        "contradicted",
-        f"θ rests at {th0:g} counts on the {rest} rows before the first command, and {whose} reproduces every logged "
-        f"v from θ − θ0 (to {dv:.2g} counts) where it does not from θ as written: the loop's error was "
-        f"u − (θ − θ0), its zero taken at the start; read from θ0")
-    return Columns((claim,), dataclasses.replace(trial, notes=list(log.notes) + [
-        f"θ logged before its zero was taken off (the audit): {th0:g} taken off"]), found)
+    claim, note = theta_zero_claim(th0, rest, whose, dv)
+    return Columns((claim,), dataclasses.replace(trial, notes=list(log.notes) + [note]), found)
 
 
 def _data_law_from_rest(log: RunLog, trial: RunLog, skipped) -> ControllerId | None:

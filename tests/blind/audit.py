@@ -54,7 +54,10 @@ script wrote as an unsigned DAC code about its midpoint (128, 2048 or 32768: 8, 
 the same headers over a log whose u (the reference) a script wrote in degrees or radians of the
 hub, θ left in encoder counts; "theta_zero": the same headers over a log whose θ a script wrote
 as the encoder read it, from a count θ0 left by an earlier run, where its loop took θ0 off (the
-lab's client reads θ0 at START: the error u − (θ − θ0)). A class joined with "+" to
+lab's client reads θ0 at START: the error u − (θ − θ0)); "a_zero": the thesis's lead + accelerometer
+feedback under its true header, on the float command, over a log whose a a script wrote as the
+accelerometer read it where the loop fed Ga the reading less a calibrated zero a0 (the rig's logs
+read a about 0.04 at rest). A class joined with "+" to
 "coulomb_friction" hides that friction too (drawn as :func:`tests.blind.cases.draw` draws it).
 """
 
@@ -78,7 +81,7 @@ N = 2000
 CLASSES = ("lie:open_loop", "lie:p_kp", "lie:lead_pole", "lie:accel_fb", "int:trunc_d0", "int:trunc_d1",
            "int:round_d0", "int:round_d1", "session", "lie:sent", "lie:accel_int", "honest:p", "honest:lead_int",
            "honest:lead_sent", "words", "swap", "rows", "a_unit", "v_unit", "printed", "sign", "double", "lie:swap", "pair",
-           "v_zero", "u_unit", "theta_zero")
+           "v_zero", "u_unit", "theta_zero", "a_zero")
 """The audit's blind classes, in the validation table's order."""
 
 PHYSICAL = ("coulomb_friction",)
@@ -165,6 +168,8 @@ class AuditCase:
     theta_zero : float or None
         The encoder's count at the start, written in θ but taken off by the loop ("theta_zero"),
         else None.
+    a_zero : float or None
+        The accelerometer's zero, written in a but taken off by the loop's Ga ("a_zero"), else None.
     """
 
     name: str
@@ -193,11 +198,12 @@ class AuditCase:
     v_zero: float | None = None
     u_unit: str | None = None
     theta_zero: float | None = None
+    a_zero: float | None = None
 
     @property
     def lies(self) -> bool:
         """Whether the header names another controller than the data's."""
-        if self.name.startswith(("printed", "sign", "double", "v_zero", "u_unit", "theta_zero")):
+        if self.name.startswith(("printed", "sign", "double", "v_zero", "u_unit", "theta_zero", "a_zero")):
             return self.header == "open-loop"
         return self.name.split("+")[0] in ("lie:open_loop", "lie:p_kp", "lie:lead_pole", "lie:accel_fb", "session", "lie:sent",
                                               "lie:accel_int", "lie:swap")
@@ -353,6 +359,13 @@ def draw_case(name: str, seed: int) -> AuditCase:
             return AuditCase(**common, **lead, recursion="trunc", alignment=int(rng.integers(0, 2)),
                              header="open-loop", theta_zero=zero)
         return _true_or_no_header(rng, common, p_law, lead, kp, theta_zero=zero)
+    if base == "a_zero":  # a written as read, the loop feeding Ga the reading less its zero
+        p, z = 2 * math.pi * 20, 2 * math.pi * 5
+        thesis = dict(law="lead", kp=None, num_s=(5 * p / z, 5 * p), den_s=(1.0, p),
+                      design_text=_lead_text(5 * p / z, z, p, hz=True))
+        zero = round(float(rng.uniform(0.5, 80.0)) * float(rng.choice([-1.0, 1.0])), 2)
+        return AuditCase(**common, **thesis, recursion="none", alignment=int(rng.integers(0, 2)), header="lead",
+                         ga_s=GA_S, a_zero=zero)
     if base == "words":
         if rng.random() < 0.5:
             return AuditCase(**{**common, "header_kp": kp}, **p_law, recursion="trunc",
@@ -429,8 +442,10 @@ def reference(case: AuditCase, n: int = N) -> np.ndarray:
     return u
 
 
-def simulate_audit_case(case: AuditCase, seed: int, substeps: int = 100, accel_noise: float = 0.3) -> Run:
-    """One run of the case on the blind rig, as the lab's software ran it (its alignment)."""
+def simulate_audit_case(case: AuditCase, seed: int, substeps: int = 100, accel_noise: float = 0.3,
+                        accel_bias: float = 0.0) -> Run:
+    """One run of the case on the blind rig, as the lab's software ran it (its alignment);
+    ``accel_bias``: counts the accelerometer reads over the tip's acceleration, fed back too."""
     eff = Effects.parse(case.effects)
     plant, a_gain = make_plant(eff, 4, substeps)
     amp = Amplifier(eff.saturation, eff.deadzone, eff.delay, eff.amp_offset)
@@ -447,7 +462,7 @@ def simulate_audit_case(case: AuditCase, seed: int, substeps: int = 100, accel_n
     for k in range(N):
         th, acc = plant.outputs()
         theta = encoder(th)
-        a = math.floor(a_gain * acc + noise[k] + 0.5)
+        a = math.floor(a_gain * acc + accel_bias + noise[k] + 0.5)
         out[2, k], out[3, k] = theta, a
         hat = u[k] if k < d or ga is None else float(u[k]) - ga.step(out[3, k - d])
         v = 0.0 if k < d else ctrl.step(hat - out[2, k - d])
@@ -468,8 +483,11 @@ def header(case: AuditCase) -> list[str]:
             num, den = gth_design()  # the thesis's lead; the data's has another pole
         else:
             num, den = tustin(list(case.num_s), list(case.den_s), DT)
+        ga = ("[]", "[]")  # no accelerometer feedback named (a lie where the data hold one: "lie:accel_fb")
+        if case.a_zero is not None:  # the thesis's, named
+            ga = tuple(_coeffs(x) for x in tustin(*case.ga_s, DT))
         return ["#SLFR RTP Motor_Comp_w_accel_fb", f"#Gth num={_coeffs(num)}", f"#Gth den={_coeffs(den)}",
-                "#Ga num=[]", "#Ga den=[]", COLUMNS_ACCEL]
+                f"#Ga num={ga[0]}", f"#Ga den={ga[1]}", COLUMNS_ACCEL]
     return []
 
 
@@ -543,6 +561,8 @@ def write_audit_case(folder: Path, name: str, seed: int) -> tuple[Path, AuditCas
         sim = dataclasses.replace(sim, u=np.asarray(sim.u, dtype=float) * U_UNITS[case.u_unit])
     if case.theta_zero is not None:  # the loop took θ0 off; the script wrote the encoder's count
         sim = dataclasses.replace(sim, theta=np.asarray(sim.theta, dtype=float) + case.theta_zero)
+    if case.a_zero is not None:  # the loop took a0 off; the script wrote the accelerometer's reading
+        sim = dataclasses.replace(sim, a=np.asarray(sim.a, dtype=float) + case.a_zero)
     if case.negate:  # a script that wrote the loop's angle with the other sign
         sim = dataclasses.replace(sim, theta=-np.asarray(sim.theta, dtype=float))
     if case.swap:

@@ -1,0 +1,210 @@
+"""A sensor's zero the loop took off before the log was written: θ's and a's.
+
+The lab's client reads the encoder's count θ0 at START (``q``) and runs its loop on θ − θ0, and
+it zeroes the accelerometer before a test (the rig's logs read a about 0.04 at rest: a reading
+less a calibrated zero a0) and feeds the accelerometer feedback Ga the reading less a0. A script
+that logs the readings as read writes θ from θ0 and a from a0, and the header's law then
+reproduces no logged v. θ0 is the count θ rests on (:func:`station.logged.columns.check_theta_zero`
+reads it alone; :func:`theta_zero_claim` says it). The law is linear in a between its clamps, so
+the a0 that makes it reproduce the log is a least-squares fit (Gauss–Newton on the replayed
+commands, :func:`fitted_zeros`); where the header's law reproduces every logged v from a − a0
+(and θ − θ0, when θ rests on θ0 too), the column claims are contradicted and a (and θ) read
+from their zeros (:func:`check_accel_zero`).
+
+A law that reproduces a as written, a bias and all, is an accelerometer offset the loop fed
+back: a sensor fault (``accel_offset``, :mod:`station.logged.sensors`), not this; so is θ's
+encoder not zeroed (:func:`station.logged.start.start_claims`).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from typing import NamedTuple
+
+import numpy as np
+
+from station.analysis.controller_id import ALIGNMENTS, at_clamps, law_variants
+from station.analysis.law_rows import TOLERANCE
+from station.control.rerun import is_closed_loop, replay_commands
+from station.logged.audit import AuditClaim
+from station.logged.controller import header_law_dv, named_law
+from station.logged.start import REST_ROWS, rest_rows
+from station.runlog import RunLog
+from station.runlog.timebase import restart_rows
+
+ITERATIONS = 4
+"""Gauss–Newton steps per law variant and alignment (the rig's lead + accelerometer step, a
+written 37 counts over the loop's: 37.2 after the first, 37.000000 after the second)."""
+
+
+THETA_ZERO_CLAIM = "θ as the loop's error used it"
+ACCEL_ZERO_CLAIM = "a as the loop's accelerometer feedback used it"
+"""The "columns" claims' headers: θ's zero and a's, as the loop took them off."""
+
+
+class SensorZeros(NamedTuple):
+    """Sensor zeros the loop took off before the log was written (:func:`check_accel_zero`).
+
+    Attributes
+    ----------
+    claims : tuple of AuditClaim
+        The contradicted "columns" claims: θ's zero (when θ rests on θ0 ≠ 0), then a's.
+    log : RunLog
+        The log with the zeros taken off θ and a, and a note each.
+    a0 : float
+        The accelerometer's zero the loop took off, counts.
+    theta0 : float
+        The encoder's count the loop took off, counts (0: none).
+    """
+
+    claims: tuple[AuditClaim, ...]
+    log: RunLog
+    a0: float
+    theta0: float = 0.0
+
+
+def theta_zero_claim(th0: float, rest: int, whose: str, dv: float) -> tuple[AuditClaim, str]:
+    """θ logged before its zero θ0 was taken off, said: the contradicted "columns" claim and
+    the log's note.
+
+    Parameters
+    ----------
+    th0 : float
+        The count θ rests on before the first command, encoder counts.
+    rest : int
+        Rows at rest (:func:`station.logged.start.rest_rows`).
+    whose : str
+        The law that reproduces v from θ − θ0, in words ("the header's law").
+    dv : float
+        Its max |dv|, DAC counts.
+
+    Returns
+    -------
+    (AuditClaim, str)
+    """
+    claim = AuditClaim(
+        "columns", THETA_ZERO_CLAIM, f"θ logged before its zero was taken off (θ0 = {th0:g} counts)",
+        "contradicted",
+        f"θ rests at {th0:g} counts on the {rest} rows before the first command, and {whose} reproduces every logged "
+        f"v from θ − θ0 (to {dv:.2g} counts) where it does not from θ as written: the loop's error was "
+        f"u − (θ − θ0), its zero taken at the start; read from θ0")
+    return claim, f"θ logged before its zero was taken off (the audit): {th0:g} taken off"
+
+
+def fitted_zeros(controller, log: RunLog, skipped=None) -> list[float]:
+    """The zeros a0 of a that best make ``controller`` reproduce the logged v from a − a0,
+    one per law variant (:func:`station.analysis.controller_id.law_variants`) and alignment,
+    by Gauss–Newton least squares over the rows no clamp holds (the replay is linear in a
+    there: its sensitivity to a is the replay's change under a − 1).
+
+    Parameters
+    ----------
+    controller : Compensator
+        A closed-loop law.
+    log : RunLog
+        u, θ, a and v finite.
+    skipped : array_like of bool, optional
+        As :func:`station.control.rerun.replay_commands`.
+
+    Returns
+    -------
+    list of float
+        Candidate zeros, accelerometer counts, by least residual first; empty when the law
+        does not feed a back (the replay does not change with a).
+    """
+    d = log.data
+    u, theta, a, v = (np.asarray(d[c], dtype=float) for c in ("u", "theta", "a", "v"))
+    restarts = restart_rows(d["n"])
+    found = []
+    for clamped in at_clamps(controller, v):
+        for law in law_variants(clamped, v):
+            for alignment in ALIGNMENTS:
+                fit = _gauss_newton(law, u, theta, a, v, alignment, skipped, restarts)
+                if fit is None:
+                    return []
+                found.append(fit)
+    return [a0 for _, a0 in sorted(found)]
+
+
+def _gauss_newton(law, u, theta, a, v, alignment: int, skipped, restarts) -> tuple[float, float] | None:
+    """(max |dv|, a0) of one law variant at one alignment (:func:`fitted_zeros`); None when the
+    replay does not change with a."""
+    limit = law.limit or np.inf
+    a0 = 0.0
+    for _ in range(ITERATIONS):
+        r0, _ = replay_commands(law, u, theta, a - a0, alignment, skipped, v, restarts=restarts)
+        r1, _ = replay_commands(law, u, theta, a - a0 - 1.0, alignment, skipped, v, restarts=restarts)
+        h = r0 - r1
+        if not np.any(h):
+            return None
+        free = (np.abs(r0) < limit) & (np.abs(r1) < limit) & (np.abs(v) < limit) & (h != 0)
+        free[:alignment] = False  # the rows before the law's first sample
+        if not free.any():
+            break
+        step = float(np.dot(h[free], (r0 - v)[free]) / np.dot(h[free], h[free]))
+        a0 += step
+        if abs(step) <= 1e-9 * max(1.0, abs(a0)):
+            break
+    r0, _ = replay_commands(law, u, theta, a - a0, alignment, skipped, v, restarts=restarts)
+    return float(np.max(np.abs(r0 - v)[alignment:], initial=0.0)), a0
+
+
+def check_accel_zero(log: RunLog, skipped=None) -> SensorZeros | None:
+    """a's zero checked by the header's law: where the header names a closed-loop law that
+    feeds a back, the run rests (u and θ unchanged) for :data:`REST_ROWS` rows before the first
+    command, and the law reproduces every logged v from a − a0 (to the device's quantization)
+    where it does not from a as written, a was logged before the loop took its zero a0 off;
+    read from a0. Where θ rests on a whole count θ0 ≠ 0 there too, the law is asked of θ − θ0
+    as well (both zeros taken off by the lab's client).
+
+    Parameters
+    ----------
+    log : RunLog
+    skipped : array_like of bool, optional
+        As :func:`station.logged.controller.identify_controller`.
+
+    Returns
+    -------
+    SensorZeros or None
+        None otherwise: no such law named, the law reproduces a as written (from θ or θ − θ0),
+        a column not finite, too short a rest, or no a0 makes the law reproduce the log.
+    """
+    controller = named_law(log)
+    if controller is None or not is_closed_loop(controller) or getattr(controller, "ga", None) is None:
+        return None
+    if not all(np.all(np.isfinite(log.data[c])) for c in ("u", "theta", "a", "v")):
+        return None
+    u, theta, a = (np.asarray(log.data[c], dtype=float) for c in ("u", "theta", "a"))
+    rest = rest_rows(u, theta)
+    if rest < REST_ROWS or u[0] != 0:
+        return None
+    th0 = float(theta[0])
+    for zero in [0.0] + ([th0] if th0 != 0 and np.all(theta == np.round(theta)) else []):
+        from_zero = dataclasses.replace(log, data={**log.data, "theta": theta - zero})
+        as_written = header_law_dv(from_zero, skipped)
+        if as_written is None or as_written <= TOLERANCE:  # a as written (θ0 alone is columns.check_theta_zero's)
+            return None
+        for a0 in fitted_zeros(controller, from_zero, skipped)[:2]:
+            trial = dataclasses.replace(from_zero, data={**from_zero.data, "a": a - a0})
+            dv = header_law_dv(trial, skipped)
+            if dv is not None and dv <= TOLERANCE:
+                return _said(log, trial, rest, a0, zero, dv, as_written)
+    return None
+
+
+def _said(log: RunLog, trial: RunLog, rest: int, a0: float, th0: float, dv: float, as_written: float) -> SensorZeros:
+    """:func:`check_accel_zero`'s claims and the log read from the zeros."""
+    a = np.asarray(log.data["a"], dtype=float)
+    also = " and θ − θ0" if th0 else ""
+    claim = AuditClaim(
+        "columns", ACCEL_ZERO_CLAIM, f"a logged before its zero was taken off (a0 = {a0:.4g} counts)", "contradicted",
+        f"a reads {np.mean(a[:rest]):.4g} counts on average on the {rest} rows at rest before the first command, "
+        f"and the header's law, which feeds a back, reproduces every logged v from a − a0{also} (to {dv:.2g} "
+        f"counts) where it does not from a as written (max |dv| = {as_written:.3g} counts): the loop fed back the "
+        f"reading less its zero a0; read from a0")
+    claims, notes = [claim], [f"a logged before its zero was taken off (the audit): {a0:.6g} taken off"]
+    if th0:
+        theta_claim, note = theta_zero_claim(th0, rest, "the header's law (from a − a0)", dv)
+        claims.insert(0, theta_claim)
+        notes.insert(0, note)
+    return SensorZeros(tuple(claims), dataclasses.replace(trial, notes=list(log.notes) + notes), a0, th0)
