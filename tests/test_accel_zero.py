@@ -99,12 +99,14 @@ def test_an_offset_the_loop_fed_back_is_no_such_fault(tmp_path):
     assert run.source == "header" and run.reproduced
 
 
-@pytest.mark.parametrize("case, seed", [("a_zero", 0), ("a_zero", 9), ("a_zero", 1),
-                                        ("a_zero+coulomb_friction", 2), ("a_zero+coulomb_friction", 6)])
+@pytest.mark.parametrize("case, seed", [("a_zero", 0), ("a_zero", 2), ("a_zero", 3), ("a_zero", 8), ("a_zero", 9),
+                                        ("a_zero+coulomb_friction", 5), ("a_zero+coulomb_friction", 7)])
 def test_blind_a_from_the_accelerometers_zero(tmp_path, case, seed):
     """The independent generator's thesis lead + accelerometer feedback under its true header, at
-    either alignment and clamp, its loop on a − a0 and a written as read: a0 said to 0.01 counts
-    and the header's law reproducing every v at the hidden alignment."""
+    either alignment and clamp, on the float command (seeds 0, 2) or the whole count stored
+    (truncated 3 and 5, rounded 9) or sent (8, 7: a0 bisected on the first row missed), its loop
+    on a − a0 and a written as read: a0 said to 0.01 counts and the header's law reproducing
+    every v at the hidden alignment."""
     import tests.blind.audit as blind
 
     path, hidden = blind.write_audit_case(tmp_path, case, seed)

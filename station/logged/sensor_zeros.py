@@ -7,7 +7,8 @@ that logs the readings as read writes θ from θ0 and a from a0, and the header'
 reproduces no logged v. θ0 is the count θ rests on (:func:`station.logged.columns.check_theta_zero`
 reads it alone; :func:`theta_zero_claim` says it). The law is linear in a between its clamps, so
 the a0 that makes it reproduce the log is a least-squares fit (Gauss–Newton on the replayed
-commands, :func:`fitted_zeros`); where the header's law reproduces every logged v from a − a0
+commands, :func:`fitted_zeros`; on a whole-count command, bisected on the first row the replay
+misses); where the header's law reproduces every logged v from a − a0
 (and θ − θ0, when θ rests on θ0 too), the column claims are contradicted and a (and θ) read
 from their zeros (:func:`check_accel_zero`).
 
@@ -35,6 +36,15 @@ from station.runlog.timebase import restart_rows
 ITERATIONS = 4
 """Gauss–Newton steps per law variant and alignment (the rig's lead + accelerometer step, a
 written 37 counts over the loop's: 37.2 after the first, 37.000000 after the second)."""
+
+REFINED = 4
+"""Fits bisected and judged, by least residual (the law's variant, clamp and alignment)."""
+
+BRACKET = 1.0
+BISECTIONS = 48
+"""A law on a whole-count command pins a0 to about 1e-4 counts (its rows' distance from a count
+over a's effect on them), finer than Gauss–Newton on the quantized replay gets: bisected within
+±:data:`BRACKET` counts of the fit, to 2e-14 counts at most."""
 
 
 THETA_ZERO_CLAIM = "θ as the loop's error used it"
@@ -122,8 +132,14 @@ def fitted_zeros(controller, log: RunLog, skipped=None) -> list[float]:
                 fit = _gauss_newton(law, u, theta, a, v, alignment, skipped, restarts)
                 if fit is None:
                     return []
-                found.append(fit)
-    return [a0 for _, a0 in sorted(found)]
+                found.append((*fit, law, alignment))
+    found.sort(key=lambda f: f[0])
+    zeros = []
+    for dv, a0, law, alignment in found[:REFINED]:
+        if dv > TOLERANCE and law.recursion != "none":  # a whole count stored or sent: a0 pinned finer
+            a0 = _bisected(law, u, theta, a, v, alignment, skipped, restarts, a0)
+        zeros.append(a0)
+    return zeros
 
 
 def _gauss_newton(law, u, theta, a, v, alignment: int, skipped, restarts) -> tuple[float, float] | None:
@@ -131,12 +147,12 @@ def _gauss_newton(law, u, theta, a, v, alignment: int, skipped, restarts) -> tup
     replay does not change with a."""
     limit = law.limit or np.inf
     a0 = 0.0
-    for _ in range(ITERATIONS):
+    for step_number in range(ITERATIONS):
         r0, _ = replay_commands(law, u, theta, a - a0, alignment, skipped, v, restarts=restarts)
         r1, _ = replay_commands(law, u, theta, a - a0 - 1.0, alignment, skipped, v, restarts=restarts)
         h = r0 - r1
-        if not np.any(h):
-            return None
+        if not np.any(h):  # from a as written: the law does not feed a back; later, every row clamped
+            return None if step_number == 0 else (np.inf, a0)
         free = (np.abs(r0) < limit) & (np.abs(r1) < limit) & (np.abs(v) < limit) & (h != 0)
         free[:alignment] = False  # the rows before the law's first sample
         if not free.any():
@@ -147,6 +163,31 @@ def _gauss_newton(law, u, theta, a, v, alignment: int, skipped, restarts) -> tup
             break
     r0, _ = replay_commands(law, u, theta, a - a0, alignment, skipped, v, restarts=restarts)
     return float(np.max(np.abs(r0 - v)[alignment:], initial=0.0)), a0
+
+
+def _bisected(law, u, theta, a, v, alignment: int, skipped, restarts, a0: float) -> float:
+    """a0 within :data:`BRACKET` counts of a fit, bisected on the first row the replay misses:
+    every row before it reproduced, the law's memory there is the log's, and that row's
+    command moves with a0 only through the error's a-part (θ̂_d = u − Ga(a − a0), linear:
+    Gth's numerator over its change). The fit itself where no bisection reproduces every row."""
+    _, hat0 = replay_commands(law, u, theta, a - a0, alignment, skipped, v, restarts=restarts)
+    _, hat1 = replay_commands(law, u, theta, a - a0 - 1.0, alignment, skipped, v, restarts=restarts)
+    falls = np.convolve(hat0 - hat1, law.gth.num)[:v.size]  # −∂(the row's command before its count)/∂a0
+    lo, hi = a0 - BRACKET, a0 + BRACKET
+    for _ in range(BISECTIONS):
+        mid = 0.5 * (lo + hi)
+        r0, _ = replay_commands(law, u, theta, a - mid, alignment, skipped, v, restarts=restarts)
+        missed = np.flatnonzero(np.abs(r0 - v)[alignment:] > TOLERANCE)
+        if not missed.size:
+            return mid
+        k = int(missed[0]) + alignment
+        if falls[k] == 0:  # a row a0 does not move: no side to take
+            return a0
+        if (r0[k] - v[k]) * falls[k] > 0:  # too high, falling as a0 grows: a0 is above mid
+            lo = mid
+        else:
+            hi = mid
+    return a0
 
 
 def check_accel_zero(log: RunLog, skipped=None) -> SensorZeros | None:
@@ -184,7 +225,7 @@ def check_accel_zero(log: RunLog, skipped=None) -> SensorZeros | None:
         as_written = header_law_dv(from_zero, skipped)
         if as_written is None or as_written <= TOLERANCE:  # a as written (θ0 alone is columns.check_theta_zero's)
             return None
-        for a0 in fitted_zeros(controller, from_zero, skipped)[:2]:
+        for a0 in fitted_zeros(controller, from_zero, skipped):
             trial = dataclasses.replace(from_zero, data={**from_zero.data, "a": a - a0})
             dv = header_law_dv(trial, skipped)
             if dv is not None and dv <= TOLERANCE:

@@ -55,9 +55,9 @@ the same headers over a log whose u (the reference) a script wrote in degrees or
 hub, θ left in encoder counts; "theta_zero": the same headers over a log whose θ a script wrote
 as the encoder read it, from a count θ0 left by an earlier run, where its loop took θ0 off (the
 lab's client reads θ0 at START: the error u − (θ − θ0)); "a_zero": the thesis's lead + accelerometer
-feedback under its true header, on the float command, over a log whose a a script wrote as the
-accelerometer read it where the loop fed Ga the reading less a calibrated zero a0 (the rig's logs
-read a about 0.04 at rest). A class joined with "+" to
+feedback under its true header, on the float command or the whole count stored or sent, over a
+log whose a a script wrote as the accelerometer read it where the loop fed Ga the reading less a
+calibrated zero a0 (the rig's logs read a about 0.04 at rest). A class joined with "+" to
 "coulomb_friction" hides that friction too (drawn as :func:`tests.blind.cases.draw` draws it).
 """
 
@@ -364,7 +364,8 @@ def draw_case(name: str, seed: int) -> AuditCase:
         thesis = dict(law="lead", kp=None, num_s=(5 * p / z, 5 * p), den_s=(1.0, p),
                       design_text=_lead_text(5 * p / z, z, p, hz=True))
         zero = round(float(rng.uniform(0.5, 80.0)) * float(rng.choice([-1.0, 1.0])), 2)
-        return AuditCase(**common, **thesis, recursion="none", alignment=int(rng.integers(0, 2)), header="lead",
+        recursion = str(rng.choice(["none", "none", "trunc", "round", "float-trunc", "float-round"]))
+        return AuditCase(**common, **thesis, recursion=recursion, alignment=int(rng.integers(0, 2)), header="lead",
                          ga_s=GA_S, a_zero=zero)
     if base == "words":
         if rng.random() < 0.5:
