@@ -93,12 +93,13 @@ def test_an_encoder_not_zeroed_under_a_loop_on_its_count_is_no_such_fault(tmp_pa
     assert run.source == "header" and run.reproduced
 
 
-@pytest.mark.parametrize("case, seed", [("theta_zero", 3), ("theta_zero", 5), ("theta_zero", 2),
+@pytest.mark.parametrize("case, seed", [("theta_zero", 3), ("theta_zero", 5), ("theta_zero", 2), ("theta_zero", 8),
                                         ("theta_zero+coulomb_friction", 1), ("theta_zero+coulomb_friction", 6)])
 def test_blind_theta_from_the_encoders_starting_count(tmp_path, case, seed):
     """The independent generator's P and leads under a true header, none (the 2014 layout) or the
     lab's session's open-loop one, the loop on θ − θ0 and θ written as read: θ0 said exactly,
-    the law confirmed or inferred, and the design named where inferred."""
+    the law confirmed or inferred, and the design named where inferred (seed 8: 2(s+22)/(s+32),
+    once named with a cancelled pair (s+1000)/(s+1000), Tustin's z = 0, beside it)."""
     import tests.blind.audit as blind
 
     path, hidden = blind.write_audit_case(tmp_path, case, seed)

@@ -80,15 +80,21 @@ class ContinuousDesign:
     more: int = 0
     recursion: str = ""
 
-    def discretize(self, dt: float) -> tuple[np.ndarray, np.ndarray]:
+    def discretize(self, dt: float, order: int | None = None) -> tuple[np.ndarray, np.ndarray]:
         """Its z-law at ``dt`` by its method (:func:`discretize`).
 
         Parameters
         ----------
         dt : float
             Sample time, s.
+        order : int, optional
+            The order to write it in: its top taps 0 past its own (a law found at that order
+            with a pair cancelled, :func:`recognize`).
         """
-        return discretize(self.num_s, self.den_s, dt, self.method)
+        law = discretize(self.num_s, self.den_s, dt, self.method)
+        if order is None:
+            return law
+        return tuple(np.pad(x, (0, max(order + 1 - x.size, 0))) for x in law)
 
     def describe(self) -> str:
         """One line: the factored form, num/den in s and the method."""
@@ -552,13 +558,31 @@ def recognize(num_z, den_z, dt: float, gain_interval: GainInterval, methods=METH
             for i in np.flatnonzero(lo <= hi):
                 gain = nicest_between(float(lo[i]), float(hi[i]), level)
                 if gain is not None:
-                    found.append(_design(gain[0], combos[i], n_zeros, method, max(gain[1], *(f[4] for f in combos[i]))))
+                    combo, kept = _cancelled(combos[i], n_zeros, laws[i], dt, method)
+                    found.append(_design(gain[0], combo, kept, method, max(gain[1], *(f[4] for f in combos[i]))))
         if found:
             best = found[0]
             others = {(d.text, d.method): d for d in found[1:] if d.digits <= best.digits}
             return replace(best, alternatives=tuple(others.values())[:MAX_ALTERNATIVES],
                            more=max(len(others) - MAX_ALTERNATIVES, 0))
     return None
+
+
+def _cancelled(combo, n_zeros: int, law, dt: float, method: str) -> tuple[tuple, int]:
+    """A zero and a pole at one root, said without the pair where the law is then the same
+    z-law with its top taps 0 (Tustin's (s + 2/dt)/(s + 2/dt): a law of one order less written
+    in the rows' order); elsewhere a pair cancels in s but not in the recursion, and is kept."""
+    zs, ps = list(combo[:n_zeros]), list(combo[n_zeros:])
+    for z in list(zs):
+        p = next((q for q in ps if q[0] == z[0]), None)
+        if p is None:
+            continue
+        rz, rp = [f for f in zs if f is not z], [f for f in ps if f is not p]
+        reduced = unit_gain_law([f[0] for f in rz], [f[0] for f in rp], dt, method)
+        if reduced is not None and all(np.allclose(np.pad(r, (0, x.size - r.size)), x, rtol=1e-12, atol=1e-15)
+                                       for r, x in zip(reduced, law)):
+            zs, ps = rz, rp
+    return tuple(zs + ps), len(zs)
 
 
 def _design(k: float, combo, n_zeros: int, method: str, digits: int) -> ContinuousDesign:

@@ -528,7 +528,7 @@ def _sent_design(rows: LawRows, e: np.ndarray, d: int, log, dt: float, rig_limit
     accepted only when, run as the rig ran it, it gives every logged v exactly."""
     order = rows.order
     for design, recursion in sent_designs(rows, e, log[3], d, dt):
-        num_z, den_z = design.discretize(dt)
+        num_z, den_z = design.discretize(dt, order)
         try:
             kind = f"linear-{order}" + ("" if ga is None else f"+accel-{ga.den.size - 1}")
             ctl = law_compensator(num_z, den_z, rows.limit, dt, kind, {"design": design.to_json()}, recursion,

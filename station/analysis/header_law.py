@@ -199,7 +199,7 @@ def _completed_at(controller, num, den, order: int, u, theta, a, v, d: int, dt: 
     design = recognize(num, den, dt, within_print)
     if design is None:
         return None
-    num_z, den_z = design.discretize(dt)
+    num_z, den_z = design.discretize(dt, order)
     deep = rows.least_squares("none") if controller.recursion == "none" else rows.deepest_fit(controller.recursion)
     c = None if deep is None else nudged_inside(rows, np.concatenate([num_z, den_z[1:]]), deep, controller.recursion)
     if c is None:

@@ -394,7 +394,7 @@ def _nearest_first(rows: LawRows, design: ContinuousDesign, dt: float) -> Contin
     keep = ~rows.clamped
 
     def miss(d: ContinuousDesign) -> float:
-        num_z, den_z = d.discretize(dt)
+        num_z, den_z = d.discretize(dt, rows.order)
         return float(np.sum((rows.X[keep] @ np.concatenate([num_z, den_z[1:]]) - rows.v[keep]) ** 2))
 
     ranked = sorted((miss(d), i, d) for i, d in enumerate(pool))
@@ -440,7 +440,7 @@ def pinned_law(rows: LawRows, recursion: str, dt: float) -> tuple[np.ndarray, Co
         return c, None
     if rows.printed and recursion == "none":
         design = _nearest_first(rows, design, dt)
-    num_z, den_z = design.discretize(dt)
+    num_z, den_z = design.discretize(dt, order)
     inside = nudged_inside(rows, np.concatenate([num_z, den_z[1:]]), c, recursion)
     return (c, None) if inside is None else (inside, design)
 
