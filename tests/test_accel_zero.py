@@ -24,10 +24,14 @@ LEAD_ACCEL = "step_response_Gth_comp_Ga_opt_amp_200_duration_1000_opt_case43_SLF
 CLAIM = "a as the loop's accelerometer feedback used it"
 
 
-def _from(src: Path, dst: Path, zero: float, theta0: float = 0.0) -> Path:
+def _from(src: Path, dst: Path, zero: float, theta0: float = 0.0, header: list[str] | None = None) -> Path:
     """The rig's log with a (the sixth column: t n u v θ a ...) written ``zero`` counts over,
-    and θ (the fifth) from ``theta0``."""
+    and θ (the fifth) from ``theta0``; its header lines (all but the column line) replaced by
+    ``header`` when given."""
     lines = src.read_text().splitlines()
+    if header is not None:
+        heads = [ln for ln in lines if ln.startswith("#")]
+        lines = header + heads[-1:] + [ln for ln in lines if not ln.startswith("#")]
     out = []
     for ln in lines:
         if ln.strip() and not ln.startswith("#"):
@@ -76,6 +80,34 @@ def test_both_zeros_taken_off_by_the_loop(rig_data, tmp_path):
     assert run.step_metrics() == clean.step_metrics()
 
 
+@pytest.mark.parametrize("header, zero", [("#SLFR RTP OL_Test", 37.0), ("#SLFR RTP OL_Test", -0.75), (None, 12.5)])
+def test_a_zero_under_a_header_that_names_no_law(rig_data, tmp_path, header, zero):
+    """The thesis's lead + accelerometer step under an open-loop header, or no header, a written
+    from a0: the law and Ga inferred with a0 beside them (before: "no law found" after a search
+    of 186 s, and the model run open loop on the logged v, θ fit 63.5 % against the clean log's
+    88.2 %), and the clean log's numbers."""
+    clean = LoggedRun.from_path(_from(rig_data / LEAD_ACCEL, tmp_path / "clean.txt", 0.0))
+    heads = [] if header is None else [header]
+    run = LoggedRun.from_path(_from(rig_data / LEAD_ACCEL, tmp_path / "from.txt", zero, header=heads))
+    assert _zeros(run) == [f"a logged before its zero was taken off (a0 = {zero:.4g} counts)"]
+    assert run.reproduced and run.source == ("inferred (header contradicted)" if header else "inferred")
+    assert run.controller.name == "20(s+2π·5)/(s+2π·20) with Ga"
+    np.testing.assert_allclose(run.log.data["a"], clean.log.data["a"], atol=1e-6)
+    assert run.step_metrics() == clean.step_metrics()
+    model = load_model("tmm-fit")
+    assert run.simulate(model).fit_pct["theta"] == pytest.approx(clean.simulate(model).fit_pct["theta"], abs=1e-3)
+
+
+def test_a_law_with_no_accelerometer_feedback_under_an_open_loop_header(rig_data, tmp_path):
+    """The thesis's lead without Ga under an open-loop header, a written 37 counts over: the
+    lead inferred from θ alone, and no zero read from a."""
+    lead = "step_response_Gth_comp_no_accel_FB_amp_100_duration_1000_SLFR_RTP_Motor_Comp_Gth.txt"
+    run = LoggedRun.from_path(_from(rig_data / lead, tmp_path / "lead.txt", 37.0, header=["#SLFR RTP OL_Test"]))
+    assert _zeros(run) == []
+    assert run.reproduced and run.source == "inferred (header contradicted)"
+    assert getattr(run.controller, "ga", None) is None
+
+
 def test_a_law_that_does_not_feed_a_back_leaves_a_as_written(rig_data, tmp_path):
     """The P step written 37 counts over in a: its law reproduces v from θ alone, so a is not
     the loop's and no zero is read from it (an offset the sensor audit may say)."""
@@ -115,3 +147,20 @@ def test_blind_a_from_the_accelerometers_zero(tmp_path, case, seed):
     assert float(said.split("a0 = ")[1].split()[0]) == pytest.approx(hidden.a_zero, abs=0.01)
     assert run.source == "header" and run.reproduced
     assert run.alignment == hidden.alignment or hidden.alignment in run.identified.alignments
+
+
+@pytest.mark.parametrize("case, seed", [("lie:a_zero", 1), ("lie:a_zero", 4)])
+def test_blind_a_zero_under_a_header_that_names_no_law(tmp_path, case, seed):
+    """The independent generator's lead and scaled Ga of their own on the float command, under an
+    open-loop header (seed 1) or none (4), the loop on a − a0 and a written as read: a0 said to
+    0.01 counts, the law and Ga inferred on a − a0 at the hidden alignment, and the lead named."""
+    import tests.blind.audit as blind
+
+    path, hidden = blind.write_audit_case(tmp_path, case, seed)
+    run = LoggedRun.from_path(path)
+    (said,) = _zeros(run)
+    assert float(said.split("a0 = ")[1].split()[0]) == pytest.approx(hidden.a_zero, abs=0.01)
+    assert run.source == ("inferred (header contradicted)" if hidden.header == "open-loop" else "inferred")
+    assert run.reproduced and getattr(run.controller, "ga", None) is not None
+    assert run.alignment == hidden.alignment or hidden.alignment in run.identified.alignments
+    assert run.controller.spec["design"]["text"] == hidden.design_text

@@ -54,12 +54,16 @@ class AccelFeedback(NamedTuple):
         Ga's z-law, ascending powers of z⁻¹, ``den[0] = 1`` (accelerometer counts to encoder
         counts).
     x : numpy.ndarray, shape (N,)
-        Ga(a) on every row (0 before the alignment), encoder counts: e = u − θ − x.
+        Ga(a − a0) on every row (0 before the alignment), encoder counts: e = u − θ − x.
+    a0 : float
+        The zero the loop took off a before Ga, accelerometer counts (0 unless fitted:
+        :func:`accel_feedback`'s ``zero``).
     """
 
     num: np.ndarray
     den: np.ndarray
     x: np.ndarray
+    a0: float = 0.0
 
 
 def lagged(x: np.ndarray, d: int) -> np.ndarray:
@@ -89,24 +93,33 @@ def _columns(x: np.ndarray, rows: np.ndarray, lags: range) -> list[np.ndarray]:
     return [x[rows - j] for j in lags]
 
 
-def _arx(w, alpha, v, d: int, n: int, free: np.ndarray):
-    """The products (AD, DB, BC) of order n by least squares, or None when they do not fit."""
+def _arx(w, alpha, v, d: int, n: int, free: np.ndarray, zero: bool = False):
+    """The products (AD, DB, BC) of order n by least squares, and the zero a0 the law took
+    off a (with ``zero``: a constant column, (BC)(1)·a0; else 0), or None when they do not fit."""
     k = np.arange(d + n, v.size)
     k = k[np.all([free[k - j] for j in range(n + 1)], axis=0)] if k.size else k
-    width = 3 * n + 2
+    width = 3 * n + 2 + zero
     if k.size < 4 * width:
         return None
     x = np.column_stack(_columns(-v, k, range(1, n + 1)) + _columns(w, k, range(n + 1))
-                        + _columns(-alpha, k, range(n + 1)))
-    if not np.any(x[:, n + n + 1:]):
+                        + _columns(-alpha, k, range(n + 1)) + ([np.ones(k.size)] if zero else []))
+    if not np.any(x[:, n + n + 1:3 * n + 2]):
         return None
     target = v[k]
     c, *_ = np.linalg.lstsq(x, target, rcond=None)
     if not np.all(np.isfinite(c)):
         return None
-    if float(np.max(np.abs(x @ c - target))) > ARX_SLACK * max(1.0, float(np.max(np.abs(v)))):
+    slack = ARX_SLACK * max(1.0, float(np.max(np.abs(v))))
+    if float(np.max(np.abs(x @ c - target))) > slack:
         return None
-    return np.concatenate(([1.0], c[:n])), c[n:2 * n + 1], c[2 * n + 1:]
+    bc = c[2 * n + 1:3 * n + 2]
+    if zero and not np.sum(bc):
+        return None
+    if zero:  # a law that holds without a feeds no a back: no zero of a to find
+        lone, *_ = np.linalg.lstsq(x[:, :2 * n + 1], target, rcond=None)
+        if float(np.max(np.abs(x[:, :2 * n + 1] @ lone - target))) <= slack:
+            return None
+    return np.concatenate(([1.0], c[:n])), c[n:2 * n + 1], bc, float(c[-1] / np.sum(bc)) if zero else 0.0
 
 
 def _factor(ad, db, bc, m: int, p: int):
@@ -165,7 +178,8 @@ def _pole_params(den_s: np.ndarray):
     return np.array(q), den
 
 
-def accel_feedback(u, theta, a, v, d: int, m: int, p: int, limit: float, dt: float = DT) -> AccelFeedback | None:
+def accel_feedback(u, theta, a, v, d: int, m: int, p: int, limit: float, dt: float = DT,
+                   zero: bool = False) -> AccelFeedback | None:
     """Ga of order ``p`` beside a Gth of order ``m`` that together give the logged v, if any.
 
     Given Ga's denominator D, the law A·v = B·w − (BC)·(a/D) is linear in A, B and the
@@ -186,6 +200,10 @@ def accel_feedback(u, theta, a, v, d: int, m: int, p: int, limit: float, dt: flo
         float command (module docstring: not beside the stored integer).
     dt : float
         Sample time, s (Tustin's inverse of D, for the polish).
+    zero : bool
+        Fit the zero a0 the loop took off a before Ga as well (a logged as the accelerometer
+        read it): the law is A·v = B·w − (BC)·(a − a0)/D, a constant (BC)(1)·a0 in the
+        products' least squares, then one more parameter of the polish.
 
     Returns
     -------
@@ -199,15 +217,19 @@ def accel_feedback(u, theta, a, v, d: int, m: int, p: int, limit: float, dt: flo
     alpha = lagged(a, d)
     if not np.any(alpha):
         return None
+    a0 = 0.0
     w = np.zeros(v.size)
     w[d:] = u[d:] - theta[:v.size - d]
     free = np.abs(v) < limit
     with np.errstate(all="ignore"):  # wrong orders overflow on the way to being refused
-        products = _arx(w, alpha, v, d, m + p, free)
-        factors = None if products is None else _factor(*products, m, p)
+        products = _arx(w, alpha, v, d, m + p, free, zero)
+        factors = None if products is None else _factor(*products[:3], m, p)
         if factors is None or not all(np.all(np.isfinite(f)) for f in factors):
             return None
         d_ga = factors[3]
+        if zero:  # a − a0 from here; the polish refines a0
+            a0 = products[3]
+            alpha = lagged(a - a0, d)
         k = np.arange(d + m + p, v.size)
         k = k[free[k]]
         target = v[k]
@@ -253,21 +275,25 @@ def accel_feedback(u, theta, a, v, d: int, m: int, p: int, limit: float, dt: flo
             v_lags = np.column_stack(known[:m]) if m else np.zeros((k.size, 0))
 
             def split(z):
-                return den_of(z[:n_q]), z[n_q:n_q + p + 1], z[n_q + p + 1:n_q + p + m + 2], z[n_q + p + m + 2:]
+                return (den_of(z[:n_q]), z[n_q:n_q + p + 1], z[n_q + p + 1:n_q + p + m + 2],
+                        z[n_q + p + m + 2:n_q + p + 2 * m + 2], z[n_q + p + 2 * m + 2:])
 
             def law(z):
-                dz, cz, bz, az = split(z)
+                dz, cz, bz, az, shift = split(z)
                 xa = np.zeros(v.size)
-                xa[d:] = lfilter(cz, dz, alpha[d:])
+                xa[d:] = lfilter(cz, dz, alpha[d:] - np.sum(shift))
                 if not np.all(np.isfinite(xa)):
                     return np.full(k.size, 1e30)
                 return w_lags @ bz - np.column_stack([xa[k - i] for i in range(m + 1)]) @ bz + v_lags @ az - target
 
-            z0 = np.concatenate((q, num, b, a_th))
+            z0 = np.concatenate((q, num, b, a_th, [0.0] if zero else []))
             fit = least_squares(law, z0, method="trf", jac="3-point", x_scale="jac", xtol=1e-15, ftol=1e-15, gtol=1e-15)
             if np.all(np.isfinite(fit.x)) and np.max(np.abs(fit.fun)) < np.max(np.abs(law(z0))):
-                dz, num, _, _ = split(fit.x)
+                dz, num, _, _, shift = split(fit.x)
                 den = np.asarray(dz, float) / dz[0]
+                if zero:
+                    a0 += float(np.sum(shift))
+                    alpha = lagged(a - a0, d)
         if p and np.any(np.abs(np.roots(den)) >= 1.0 + 1e-9):
             return None  # an unstable Ga: not a compensator a lab ran
-        return AccelFeedback(num, den, _filter(num, den, alpha, d))
+        return AccelFeedback(num, den, _filter(num, den, alpha, d), a0)

@@ -177,7 +177,7 @@ def check_columns(log: RunLog, skipped=None) -> Columns:
     named = as_named > TOLERANCE if as_named is not None else header_reproduces(log, skipped) is not True
     zeros = check_accel_zero(log, skipped) if named and unit is None else None  # (the header's law only: quick)
     if zeros is not None:
-        return Columns(zeros.claims, zeros.log)
+        return Columns(zeros.claims, zeros.log, zeros.identified)
     offset = (check_command_offset(log, skipped) or check_theta_zero(log, skipped)) if named else None
     if offset is not None:  # (past the DAC's range as written: about its zero, in counts)
         return offset

@@ -10,7 +10,9 @@ the a0 that makes it reproduce the log is a least-squares fit (Gauss–Newton on
 commands, :func:`fitted_zeros`; on a whole-count command, bisected on the first row the replay
 misses); where the header's law reproduces every logged v from a − a0
 (and θ − θ0, when θ rests on θ0 too), the column claims are contradicted and a (and θ) read
-from their zeros (:func:`check_accel_zero`).
+from their zeros (:func:`check_accel_zero`). With no header, or an open-loop one, the law the
+data give is asked instead: Gth and Ga fitted from the data with a0 beside them
+(:func:`data_accel_zero`).
 
 A law that reproduces a as written, a bias and all, is an accelerometer offset the loop fed
 back: a sensor fault (``accel_offset``, :mod:`station.logged.sensors`), not this; so is θ's
@@ -24,13 +26,17 @@ from typing import NamedTuple
 
 import numpy as np
 
-from station.analysis.controller_id import ALIGNMENTS, at_clamps, law_variants
-from station.analysis.law_rows import TOLERANCE
+from station.analysis.accel_law import accel_feedback
+from station.analysis.controller_id import (ALIGNMENTS, MAX_ORDER, aligned_error, at_clamps, clamps_to_try,
+                                            law_variants, whole_counts)
+from station.analysis.law_rows import TOLERANCE, LawRows
 from station.control.rerun import is_closed_loop, replay_commands
 from station.logged.audit import AuditClaim
-from station.logged.controller import header_law_dv, named_law
+from station.errors import StationError
+from station.logged.controller import ControllerId, header_law_dv, identify_controller, named_law
 from station.logged.start import REST_ROWS, rest_rows
 from station.runlog import RunLog
+from station.rig import CLAMP
 from station.runlog.timebase import restart_rows
 
 ITERATIONS = 4
@@ -45,6 +51,11 @@ BISECTIONS = 48
 """A law on a whole-count command pins a0 to about 1e-4 counts (its rows' distance from a count
 over a's effect on them), finer than Gauss–Newton on the quantized replay gets: bisected within
 ±:data:`BRACKET` counts of the fit, to 2e-14 counts at most."""
+
+
+ZERO_FLOOR = 0.25
+"""Least |a| at rest, counts, that :func:`data_accel_zero` reads as a zero not taken off (the
+rig's zeroed logs rest at about 0.04)."""
 
 
 THETA_ZERO_CLAIM = "θ as the loop's error used it"
@@ -65,12 +76,16 @@ class SensorZeros(NamedTuple):
         The accelerometer's zero the loop took off, counts.
     theta0 : float
         The encoder's count the loop took off, counts (0: none).
+    identified : ControllerId or None
+        The law the data give on the log read from its zeros, where the header names none
+        (:func:`data_accel_zero`); None where the header's law is the one.
     """
 
     claims: tuple[AuditClaim, ...]
     log: RunLog
     a0: float
     theta0: float = 0.0
+    identified: ControllerId | None = None
 
 
 def theta_zero_claim(th0: float, rest: int, whose: str, dv: float) -> tuple[AuditClaim, str]:
@@ -196,7 +211,8 @@ def check_accel_zero(log: RunLog, skipped=None) -> SensorZeros | None:
     command, and the law reproduces every logged v from a − a0 (to the device's quantization)
     where it does not from a as written, a was logged before the loop took its zero a0 off;
     read from a0. Where θ rests on a whole count θ0 ≠ 0 there too, the law is asked of θ − θ0
-    as well (both zeros taken off by the lab's client).
+    as well (both zeros taken off by the lab's client). Where the header names no closed-loop
+    law (none, or open loop), :func:`data_accel_zero` asks the law the data give.
 
     Parameters
     ----------
@@ -207,11 +223,14 @@ def check_accel_zero(log: RunLog, skipped=None) -> SensorZeros | None:
     Returns
     -------
     SensorZeros or None
-        None otherwise: no such law named, the law reproduces a as written (from θ or θ − θ0),
-        a column not finite, too short a rest, or no a0 makes the law reproduce the log.
+        None otherwise: a closed-loop law named that feeds no a back, the law reproduces a as
+        written (from θ or θ − θ0), a column not finite, too short a rest, or no a0 makes the
+        law reproduce the log.
     """
     controller = named_law(log)
-    if controller is None or not is_closed_loop(controller) or getattr(controller, "ga", None) is None:
+    if controller is None or not is_closed_loop(controller):
+        return data_accel_zero(log, skipped)
+    if getattr(controller, "ga", None) is None:
         return None
     if not all(np.all(np.isfinite(log.data[c])) for c in ("u", "theta", "a", "v")):
         return None
@@ -233,19 +252,85 @@ def check_accel_zero(log: RunLog, skipped=None) -> SensorZeros | None:
     return None
 
 
-def _said(log: RunLog, trial: RunLog, rest: int, a0: float, th0: float, dv: float, as_written: float) -> SensorZeros:
+def data_accel_zero(log: RunLog, skipped=None) -> SensorZeros | None:
+    """a's zero checked by the law the data give, where the header names no closed-loop law
+    (none, or open loop): where a rests off 0 (by :data:`ZERO_FLOOR` counts or more) on the
+    :data:`REST_ROWS` or more rows before the first command, and a law with accelerometer
+    feedback reproduces every logged v from a − a0 (Gth and Ga fitted with a0 beside them,
+    :func:`station.analysis.accel_law.accel_feedback`'s ``zero``; a0 within the rest's spread)
+    where it does not from a as written, a was logged before the loop took its zero a0 off.
+
+    Parameters
+    ----------
+    log : RunLog
+    skipped : array_like of bool, optional
+        As :func:`station.logged.controller.identify_controller`.
+
+    Returns
+    -------
+    SensorZeros or None
+        With the law identified on a − a0; None otherwise, and on a whole-count command (its
+        recursion beside Ga is not fitted: :mod:`station.analysis.accel_law`).
+    """
+    if not all(np.all(np.isfinite(log.data[c])) for c in ("u", "theta", "a", "v")):
+        return None
+    u, theta, a, v = (np.asarray(log.data[c], dtype=float) for c in ("u", "theta", "a", "v"))
+    rest = rest_rows(u, theta)
+    if rest < REST_ROWS or u[0] != 0 or whole_counts(v) or abs(np.mean(a[:rest])) < ZERO_FLOOR:
+        return None
+    spread = 1.0 + 4.0 * float(np.std(a[:rest]))
+    th0 = float(theta[0])
+    for zero in [0.0] + ([th0] if th0 != 0 and np.all(theta == np.round(theta)) else []):
+        for total in range(1, 2 * MAX_ORDER + 1):  # the simplest law first, as identify_controller
+            for m in range(max(0, total - MAX_ORDER), min(total - 1, MAX_ORDER) + 1):
+                for d in ALIGNMENTS:
+                    for limit in clamps_to_try(v, CLAMP):
+                        ga = accel_feedback(u, theta - zero, a, v, d, m, total - m, limit, log.dt, zero=True)
+                        if ga is None or abs(ga.a0 - np.mean(a[:rest])) > spread:
+                            continue
+                        rows = LawRows(aligned_error(u, theta - zero, d) - ga.x, v, d, m, limit)
+                        c = rows.least_squares("none")  # Gth beside it, quick, to the float's last digits
+                        if c is None or np.max(np.abs(rows.predict(c, "none") - rows.v)) > TOLERANCE:
+                            continue
+                        found = _data_law(log, theta - zero, a - ga.a0, skipped)
+                        if found is not None:
+                            trial, cid, as_written = found
+                            return _said(log, trial, rest, ga.a0, zero, cid.fit.max_abs_dv, as_written, cid)
+    return None
+
+
+def _data_law(log: RunLog, theta, a, skipped) -> tuple[RunLog, ControllerId, float] | None:
+    """(the log read from its zeros, its law, max |dv| from a as written) where the data's law
+    on θ and a feeds a back and reproduces every logged v, and not from a as written."""
+    trial = dataclasses.replace(log, data={**log.data, "theta": theta, "a": a})
+    try:
+        cid = identify_controller(trial, skipped)
+    except StationError:
+        return None
+    if cid.fit is None or cid.fit.max_abs_dv > TOLERANCE or getattr(cid.controller, "ga", None) is None:
+        return None
+    written = np.asarray(log.data["a"], dtype=float)
+    replayed, _ = replay_commands(cid.controller, trial.data["u"], theta, written, cid.fit.alignment, skipped,
+                                  trial.data["v"], restarts=restart_rows(log.data["n"]))
+    as_written = float(np.max(np.abs(replayed - trial.data["v"])[cid.fit.alignment:], initial=0.0))
+    return (trial, cid, as_written) if as_written > TOLERANCE else None
+
+
+def _said(log: RunLog, trial: RunLog, rest: int, a0: float, th0: float, dv: float, as_written: float,
+          identified: ControllerId | None = None) -> SensorZeros:
     """:func:`check_accel_zero`'s claims and the log read from the zeros."""
     a = np.asarray(log.data["a"], dtype=float)
     also = " and θ − θ0" if th0 else ""
+    whose = "the header's law" if identified is None else "the law the data give"
     claim = AuditClaim(
         "columns", ACCEL_ZERO_CLAIM, f"a logged before its zero was taken off (a0 = {a0:.4g} counts)", "contradicted",
         f"a reads {np.mean(a[:rest]):.4g} counts on average on the {rest} rows at rest before the first command, "
-        f"and the header's law, which feeds a back, reproduces every logged v from a − a0{also} (to {dv:.2g} "
+        f"and {whose}, which feeds a back, reproduces every logged v from a − a0{also} (to {dv:.2g} "
         f"counts) where it does not from a as written (max |dv| = {as_written:.3g} counts): the loop fed back the "
         f"reading less its zero a0; read from a0")
     claims, notes = [claim], [f"a logged before its zero was taken off (the audit): {a0:.6g} taken off"]
     if th0:
-        theta_claim, note = theta_zero_claim(th0, rest, "the header's law (from a − a0)", dv)
+        theta_claim, note = theta_zero_claim(th0, rest, f"{whose} (from a − a0)", dv)
         claims.insert(0, theta_claim)
         notes.insert(0, note)
-    return SensorZeros(tuple(claims), dataclasses.replace(trial, notes=list(log.notes) + notes), a0, th0)
+    return SensorZeros(tuple(claims), dataclasses.replace(trial, notes=list(log.notes) + notes), a0, th0, identified)

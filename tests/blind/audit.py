@@ -57,7 +57,8 @@ as the encoder read it, from a count θ0 left by an earlier run, where its loop 
 lab's client reads θ0 at START: the error u − (θ − θ0)); "a_zero": the thesis's lead + accelerometer
 feedback under its true header, on the float command or the whole count stored or sent, over a
 log whose a a script wrote as the accelerometer read it where the loop fed Ga the reading less a
-calibrated zero a0 (the rig's logs read a about 0.04 at rest). A class joined with "+" to
+calibrated zero a0 (the rig's logs read a about 0.04 at rest); "lie:a_zero": the same under an
+open-loop header or none, a lead and a scaled Ga of their own on the float command. A class joined with "+" to
 "coulomb_friction" hides that friction too (drawn as :func:`tests.blind.cases.draw` draws it).
 """
 
@@ -81,7 +82,7 @@ N = 2000
 CLASSES = ("lie:open_loop", "lie:p_kp", "lie:lead_pole", "lie:accel_fb", "int:trunc_d0", "int:trunc_d1",
            "int:round_d0", "int:round_d1", "session", "lie:sent", "lie:accel_int", "honest:p", "honest:lead_int",
            "honest:lead_sent", "words", "swap", "rows", "a_unit", "v_unit", "printed", "sign", "double", "lie:swap", "pair",
-           "v_zero", "u_unit", "theta_zero", "a_zero")
+           "v_zero", "u_unit", "theta_zero", "a_zero", "lie:a_zero")
 """The audit's blind classes, in the validation table's order."""
 
 PHYSICAL = ("coulomb_friction",)
@@ -203,7 +204,8 @@ class AuditCase:
     @property
     def lies(self) -> bool:
         """Whether the header names another controller than the data's."""
-        if self.name.startswith(("printed", "sign", "double", "v_zero", "u_unit", "theta_zero", "a_zero")):
+        if self.name.startswith(("printed", "sign", "double", "v_zero", "u_unit", "theta_zero", "a_zero",
+                                 "lie:a_zero")):
             return self.header == "open-loop"
         return self.name.split("+")[0] in ("lie:open_loop", "lie:p_kp", "lie:lead_pole", "lie:accel_fb", "session", "lie:sent",
                                               "lie:accel_int", "lie:swap")
@@ -367,6 +369,13 @@ def draw_case(name: str, seed: int) -> AuditCase:
         recursion = str(rng.choice(["none", "none", "trunc", "round", "float-trunc", "float-round"]))
         return AuditCase(**common, **thesis, recursion=recursion, alignment=int(rng.integers(0, 2)), header="lead",
                          ga_s=GA_S, a_zero=zero)
+    if base == "lie:a_zero":  # the same, under an open-loop header or none, a lead and Ga of its own
+        g, f = float(rng.choice(GA_GAINS)), float(rng.choice(GA_FREQUENCIES))
+        (b1, b0), (_, a2, a1, a0) = GA_S
+        ga = ((g * b1 * f, g * b0 * f * f), (1.0, a2 * f, a1 * f * f, a0 * f ** 3))  # g·Ga(s/f)
+        zero = round(float(rng.uniform(0.5, 80.0)) * float(rng.choice([-1.0, 1.0])), 2)
+        return AuditCase(**common, **lead, recursion="none", alignment=int(rng.integers(0, 2)),
+                         header=str(rng.choice(["open-loop", "none"])), ga_s=ga, a_zero=zero)
     if base == "words":
         if rng.random() < 0.5:
             return AuditCase(**{**common, "header_kp": kp}, **p_law, recursion="trunc",
