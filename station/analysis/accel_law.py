@@ -113,11 +113,9 @@ def _arx(w, alpha, v, d: int, n: int, free: np.ndarray, zero: bool = False):
     if float(np.max(np.abs(x @ c - target))) > slack:
         return None
     bc = c[2 * n + 1:3 * n + 2]
-    if zero and not np.sum(bc):
-        return None
     if zero:  # a law that holds without a feeds no a back: no zero of a to find
         lone, *_ = np.linalg.lstsq(x[:, :2 * n + 1], target, rcond=None)
-        if float(np.max(np.abs(x[:, :2 * n + 1] @ lone - target))) <= slack:
+        if not np.sum(bc) or float(np.max(np.abs(x[:, :2 * n + 1] @ lone - target))) <= slack:
             return None
     return np.concatenate(([1.0], c[:n])), c[n:2 * n + 1], bc, float(c[-1] / np.sum(bc)) if zero else 0.0
 

@@ -22,6 +22,7 @@ encoder not zeroed (:func:`station.logged.start.start_claims`).
 from __future__ import annotations
 
 import dataclasses
+import itertools
 from typing import NamedTuple
 
 import numpy as np
@@ -238,8 +239,7 @@ def check_accel_zero(log: RunLog, skipped=None) -> SensorZeros | None:
     rest = rest_rows(u, theta)
     if rest < REST_ROWS or u[0] != 0:
         return None
-    th0 = float(theta[0])
-    for zero in [0.0] + ([th0] if th0 != 0 and np.all(theta == np.round(theta)) else []):
+    for zero in _theta_zeros(theta):
         from_zero = dataclasses.replace(log, data={**log.data, "theta": theta - zero})
         as_written = header_law_dv(from_zero, skipped)
         if as_written is None or as_written <= TOLERANCE:  # a as written (θ0 alone is columns.check_theta_zero's)
@@ -278,25 +278,28 @@ def data_accel_zero(log: RunLog, skipped=None) -> SensorZeros | None:
     rest = rest_rows(u, theta)
     if rest < REST_ROWS or u[0] != 0 or whole_counts(v) or abs(np.mean(a[:rest])) < ZERO_FLOOR:
         return None
-    spread = 1.0 + 4.0 * float(np.std(a[:rest]))
-    th0 = float(theta[0])
-    for zero in [0.0] + ([th0] if th0 != 0 and np.all(theta == np.round(theta)) else []):
-        for total in range(1, 2 * MAX_ORDER + 1):  # the simplest law first, as identify_controller
-            for m in range(max(0, total - MAX_ORDER), min(total - 1, MAX_ORDER) + 1):
-                for d in ALIGNMENTS:
-                    for limit in clamps_to_try(v, CLAMP):
-                        ga = accel_feedback(u, theta - zero, a, v, d, m, total - m, limit, log.dt, zero=True)
-                        if ga is None or abs(ga.a0 - np.mean(a[:rest])) > spread:
-                            continue
-                        rows = LawRows(aligned_error(u, theta - zero, d) - ga.x, v, d, m, limit)
-                        c = rows.least_squares("none")  # Gth beside it, quick, to the float's last digits
-                        if c is None or np.max(np.abs(rows.predict(c, "none") - rows.v)) > TOLERANCE:
-                            continue
-                        found = _data_law(log, theta - zero, a - ga.a0, skipped)
-                        if found is not None:
-                            trial, cid, as_written = found
-                            return _said(log, trial, rest, ga.a0, zero, cid.fit.max_abs_dv, as_written, cid)
+    resting, spread = float(np.mean(a[:rest])), 1.0 + 4.0 * float(np.std(a[:rest]))
+    orders = [(m, total - m) for total in range(1, 2 * MAX_ORDER + 1)  # the simplest law first
+              for m in range(max(0, total - MAX_ORDER), min(total - 1, MAX_ORDER) + 1)]
+    for zero, (m, p), d, limit in itertools.product(_theta_zeros(theta), orders, ALIGNMENTS, clamps_to_try(v, CLAMP)):
+        ga = accel_feedback(u, theta - zero, a, v, d, m, p, limit, log.dt, zero=True)
+        if ga is None or abs(ga.a0 - resting) > spread:
+            continue
+        rows = LawRows(aligned_error(u, theta - zero, d) - ga.x, v, d, m, limit)
+        c = rows.least_squares("none")  # Gth beside it, quick, to the float's last digits
+        if c is None or np.max(np.abs(rows.predict(c, "none") - rows.v)) > TOLERANCE:
+            continue
+        found = _data_law(log, theta - zero, a - ga.a0, skipped)
+        if found is not None:
+            trial, cid, as_written = found
+            return _said(log, trial, rest, ga.a0, zero, cid.fit.max_abs_dv, as_written, cid)
     return None
+
+
+def _theta_zeros(theta: np.ndarray) -> list[float]:
+    """The zeros of θ a law is asked from: none, and the whole count θ0 ≠ 0 it rests on."""
+    th0 = float(theta[0])
+    return [0.0] + ([th0] if th0 != 0 and np.all(theta == np.round(theta)) else [])
 
 
 def _data_law(log: RunLog, theta, a, skipped) -> tuple[RunLog, ControllerId, float] | None:
