@@ -132,6 +132,35 @@ def test_the_logs_own_clamp():
     assert hit.design.text == "2.5(s+17)/(s+63)" and "clamp ±150" in hit.law
 
 
+@pytest.mark.parametrize("recursion", ["none", "trunc"])
+@pytest.mark.parametrize("design", [((2.5, 75.0), (1.0, 90.0), "2.5(s+30)/(s+90)"),
+                                    ((1.25, 12.5), (1.0, 40.0), "1.25(s+10)/(s+40)"),
+                                    ((7.5, 150.0), (1.0, 50.0), "7.5(s+20)/(s+50)")])
+def test_a_gain_of_more_digits_than_its_roots_is_recognised(design, recursion):
+    """The roots round at fewer digits than the gain: the roots found at their level must
+    still be given the gain's digits at the next (lie:a_zero seeds 7 and 8 named none)."""
+    num, den = _scipy_law(design[0], design[1], 0.002, "Tustin")
+    u, theta, v = _closed_loop(LabController(num, den, 200.0, recursion).step, 1)
+    hit = infer_controller(u, theta, v)
+    assert hit is not None and hit.design is not None and hit.design.text == design[2]
+    np.testing.assert_allclose(hit.design.num_s, design[0], rtol=1e-12)
+
+
+@pytest.mark.parametrize("seed", range(8))
+def test_any_round_lead_is_recognised_whatever_its_digits(seed):
+    """A lead K(s+z)/(s+p) of 1-3 digit gain and 1-2 digit roots, float recursion: named as typed."""
+    rng = np.random.default_rng(seed)
+    k = float(f"{rng.uniform(1, 9):.{int(rng.integers(0, 3))}f}")
+    z = float(f"{rng.uniform(2, 40):.{int(rng.integers(1, 3))}g}")
+    p = float(f"{rng.uniform(1.5, 5) * z:.{int(rng.integers(1, 3))}g}")
+    num, den = _scipy_law([k, k * z], [1.0, p], 0.002, "Tustin")
+    u, theta, v = _closed_loop(LabController(num, den, 200.0, "none").step, 1, seed=seed)
+    hit = infer_controller(u, theta, v)
+    assert hit is not None and hit.design is not None
+    np.testing.assert_allclose(hit.design.num_s, [k, k * z], rtol=1e-9)
+    np.testing.assert_allclose(hit.design.den_s, [1.0, p], rtol=1e-9)
+
+
 def test_thesis_lead_recognised_in_hz():
     lead = make_controller("lead")
     u, theta, v = _closed_loop(lambda e: lead.step(e, 0.0, 0.0)[0], 1)

@@ -538,10 +538,10 @@ def recognize(num_z, den_z, dt: float, gain_interval: GainInterval, methods=METH
             continue
         _, zeros, poles = _roots(back[0], back[1], dt)
         options = [_candidates(r, max_digits) for r in zeros + poles]
-        plans.append((method, len(zeros), options, set()))
+        plans.append((method, len(zeros), options, set(), []))
     for level in range(1, max_digits + 1):
         found = []  # every design of this level that reproduces the log, the preferred first
-        for method, n_zeros, options, tried in plans:
+        for method, n_zeros, options, tried, open_ in plans:
             combos, laws = [], []
             for combo in _combos(options, level):
                 key = tuple(f[0] for f in combo)
@@ -552,14 +552,15 @@ def recognize(num_z, den_z, dt: float, gain_interval: GainInterval, methods=METH
                 if law is not None and law[0].size == law[1].size:
                     combos.append(combo)
                     laws.append(law)
-            if not laws:
-                continue
-            lo, hi = gain_interval(np.array([x[0] for x in laws]), np.array([x[1] for x in laws]))
-            for i in np.flatnonzero(lo <= hi):
-                gain = nicest_between(float(lo[i]), float(hi[i]), level)
+            if laws:
+                lo, hi = gain_interval(np.array([x[0] for x in laws]), np.array([x[1] for x in laws]))
+                # roots tried at a lower level whose gain needs more digits (2.5(s+30)/(s+90)) come first
+                open_.extend((combos[i], laws[i], float(lo[i]), float(hi[i])) for i in np.flatnonzero(lo <= hi))
+            for combo, law, lo_i, hi_i in open_:
+                gain = nicest_between(lo_i, hi_i, level)
                 if gain is not None:
-                    combo, kept = _cancelled(combos[i], n_zeros, laws[i], dt, method)
-                    found.append(_design(gain[0], combo, kept, method, max(gain[1], *(f[4] for f in combos[i]))))
+                    combo_kept, kept = _cancelled(combo, n_zeros, law, dt, method)
+                    found.append(_design(gain[0], combo_kept, kept, method, max(gain[1], *(f[4] for f in combo))))
         if found:
             best = found[0]
             others = {(d.text, d.method): d for d in found[1:] if d.digits <= best.digits}
