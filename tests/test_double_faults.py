@@ -281,6 +281,56 @@ def test_blind_p_header_lies_and_columns_swapped(tmp_path, seed, pair):
     assert run.controller.spec["kp"] == case.kp and run.alignment == case.alignment
 
 
+LYING_LEAD = ["#SLFR RTP Motor_Comp_w_accel_fb", "#Gth num=[ 2.97 -2.89]", "#Gth den=[ 1. -0.957]"]
+
+
+@pytest.mark.parametrize("fault", ["volts", "zero"])
+@pytest.mark.parametrize("header", [["#SLFR RTP P_control_Test", "#kp=1.5"], LYING_LEAD])
+def test_a_lying_closed_loop_header_over_the_commands_unit_or_zero(rig_data, tmp_path, header, fault):
+    """The thesis's P step (kp = 2) under a header naming another law, its v in volts or about
+    an unsigned DAC code's 2048: the data's law reads v back as under an open-loop header.
+    Before: 'not this law; v in another unit, its size not found', or (about 2048, under the
+    lead) 2(s-5e-12)/(s-3e-13) with "cut from a longer run"."""
+    clean = LoggedRun.from_path(rig_data / P)
+    run = LoggedRun.from_path(_rewrite(rig_data / P, tmp_path / f"{fault}.txt", header,
+                                       volts=5 / 2048 if fault == "volts" else None,
+                                       zero=2048.0 if fault == "zero" else None))
+    (said,) = _said(run)
+    assert run.source == "inferred (header contradicted)" and run.reproduced and run.controller.spec["kind"] == "p"
+    if fault == "zero":
+        assert said == "v about 2048 counts" and run.controller.spec["kp"] == 2.0
+    else:  # with the header's law refused, kp and v's unit are one: the largest step is taken
+        claim = next(c for c in run.audit.claims if c.data == said)
+        assert "the header's law reproduces neither" in claim.evidence
+        step = float(said.split()[-1])
+        assert run.controller.spec["kp"] * step == pytest.approx(2.0 * 5 / 2048, rel=1e-3)
+    assert run.step_metrics() == clean.step_metrics()
+
+
+@pytest.mark.parametrize("seed", [0, 1, 3, 6, 7, 8])
+def test_blind_a_lying_closed_loop_header_over_one_column_fault(tmp_path, seed):
+    """lie:column (v in volts under a lead's other pole; v about a DAC code, θ0 or u in degrees
+    or radians under a P's or a lead's lie): all ten in scripts/validate_audit.py. Before, the
+    command's faults (seeds 0, 1, 7, 8) kept the header's law or named an integrator
+    1.5(s+1e-09)/s; θ0 and u's unit (seeds 3, 6) were read already."""
+    path, hidden = write_audit_case(tmp_path, "lie:column", seed)
+    run = LoggedRun.from_path(path)
+    assert run.source == "inferred (header contradicted)" and run.reproduced and run.alignment == hidden.alignment
+    (said,) = _said(run)
+    if hidden.v_unit is not None:
+        assert said.startswith("v in steps of")
+    elif hidden.v_zero is not None:
+        assert said == f"v about {hidden.v_zero:g} counts"
+    elif hidden.theta_zero is not None:
+        assert said == f"θ logged before its zero was taken off (θ0 = {hidden.theta_zero:g} counts)"
+    else:
+        assert said == f"u in {hidden.u_unit}"
+    if hidden.law == "p":
+        assert run.controller.spec["kp"] == hidden.kp
+    else:
+        np.testing.assert_allclose(run.controller.spec["design"]["num_s"], hidden.num_s, rtol=1e-9)
+
+
 # --- two column faults at once under a true header ----------------------------------------
 
 @pytest.mark.parametrize("name", [LEAD, LEAD_ACCEL])

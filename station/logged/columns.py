@@ -16,13 +16,14 @@ its data, tried on the swaps only when none is found as the columns are named.
 
 The command's unit is checked the same way: a v the header's law does not reproduce, whose
 changes are all whole multiples of one size other than a DAC count (a script that wrote the
-command in volts), is read in counts when its law then reproduces it and the DAC's range says
-so too (:func:`check_command_unit`). A P law's v scaled is also another kp, so only a v that can
+command in volts), is read in counts when its law (the data's, where the header lies about the
+law as well) then reproduces it and the DAC's range says so too (:func:`check_command_unit`). A P law's v scaled is also another kp, so only a v that can
 be no DAC command as written is read so: under one count everywhere while the hub moved (the
 device would apply nothing), or past the DAC's ±255 counts.
 
 So is its zero (:func:`check_command_offset`): a v that reads one value other than 0 at rest
-and that the header's law reproduces less that value was written about another zero.
+and that the header's law (or the data's, as for the unit) reproduces less that value was
+written about another zero.
 So is θ's (:func:`check_theta_zero`): a θ that rests on one count θ0 other than 0 before the
 first command, whose law reproduces v from θ − θ0 and not from θ as written, was logged as the
 encoder read it by a loop that took θ0 off (the lab's client reads θ0 at START); so is a's, under
@@ -397,21 +398,26 @@ def check_command_unit(log: RunLog, skipped=None) -> Columns | None:
     commanded = np.isfinite(u) & (u != 0)
     if u_least is None and np.any(commanded):  # an open-loop command in counts as u, in another unit as v
         steps.append(float(np.median(v[commanded] / u[commanded])))
-    for step in steps:
-        if not step > 0:
-            continue
+    found = None  # the header's closed-loop law at any step, else the data's at the largest
+    for step in filter(lambda x: x > 0, steps):
         data = dict(log.data)
         data["v"] = whole_counts(v / step)
         also = u_least is not None and quantum_fits(np.array([u_least / step]), 1.0)
         if also:
             data["u"] = whole_counts(u / step)
         trial = dataclasses.replace(log, data=data)
-        if not _law_confirms(trial, skipped):
-            continue
+        whose = _law_confirms(trial, skipped)
+        if whose is not None and (found is None or whose == "header"):
+            found = step, trial, also, whose
+        if found is not None and (dv is None or found[3] == "header"):
+            break
+    if found is not None:
+        step, trial, also, whose = found
         both = "v and u" if also else "v"
-        header = "the header's open loop (v = u) reproduces neither" if stated is False else "the log names no law"
+        header = ("the log names no law" if stated is None else
+                  "the header's open loop (v = u) reproduces neither" if dv is None else "the header's law reproduces neither")
         law = (f"the header's law does not reproduce v as written and reproduces it in counts (÷ {step:.6g})"
-               if dv is not None else
+               if dv is not None and whose == "header" else
                f"{header}, and the law the data give reproduces v in counts (÷ {step:.6g}; with no law named, its "
                f"gain and v's unit are one: gain k·g on steps of {step:.6g}/k gives the same v, and the largest step "
                f"is taken)")
@@ -464,15 +470,14 @@ def _offset_taken_off(log: RunLog, skipped, v: np.ndarray, c: float, rest: int) 
     trial = dataclasses.replace(log, data={**log.data, "v": v - c})
     dv = header_law_dv(trial, skipped)  # None: an open-loop header's v = u, or none named
     whose, found = "the header's law", None
-    if dv is None and header_reproduces(trial, skipped) is not True:  # none named, or an open loop's v = u contradicted
+    named = dv <= TOLERANCE if dv is not None else header_reproduces(trial, skipped) is True
+    if not named and dv is not None and _law_confirms(trial, skipped) == "header":  # printed coefficients completed
+        whose, dv = "the header's law (its printed coefficients completed from the data)", None
+    elif not named:  # none named, an open loop's v = u contradicted, or a header lying about the law too
         found = _data_law_from_rest(log, trial, skipped)
         if found is None:
             return None
         whose, dv = f"the law the data give ({describe_controller(found.controller)})", float(found.fit.max_abs_dv)
-    elif dv is not None and dv > TOLERANCE:  # printed coefficients: completed from the data, as unshifted
-        if not _law_confirms(trial, skipped):
-            return None
-        whose, dv = "the header's law (its printed coefficients completed from the data)", None
     within = "" if dv is None else f" (to {dv:.2g} counts)"
     claim = AuditClaim(
         "columns", "v in DAC counts about 0", f"v about {c:g} counts", "contradicted",
@@ -556,23 +561,19 @@ def _unknown_unit(log: RunLog, why: str, detail: str, small: bool) -> Columns:
     return Columns((claim,), dataclasses.replace(log, notes=list(log.notes) + [note]))
 
 
-def _law_confirms(log: RunLog, skipped) -> bool:
-    """Whether the header's law reproduces the log: as given (v = u in open loop), or past a
-    few corrupted fields, or, where it comes within :data:`NEAR_COUNTS` (printed coefficients,
-    a recursion the printing moves by a count), is an open-loop header's v = u that does not,
-    or none is named, a law the data give reproduces every logged v (whether that is the
-    header's own the controller's audit says after)."""
+def _law_confirms(log: RunLog, skipped) -> str | None:
+    """Whose law reproduces every logged v: "header" where the header's does (as given, v = u
+    in open loop, past a few corrupted fields, or within :data:`NEAR_COUNTS` with its printed
+    coefficients completed from the data), "data" where a law the data give does (none named,
+    an open-loop header's v = u contradicted, or a closed-loop header lying about the law
+    too), else None."""
     dv = header_law_dv(log, skipped)  # replayed once; None for an open-loop header (v = u) or none
-    if dv is None:
-        if header_reproduces(log, skipped) is True:
-            return True
-        # an open-loop header's v = u does not, or none is named: the law the data give
-    elif dv <= TOLERANCE:
-        return True
+    if (dv <= TOLERANCE) if dv is not None else header_reproduces(log, skipped) is True:
+        return "header"
     try:
         found = identify_controller(log, skipped)
     except StationError:
-        return False
-    if dv is not None and dv > NEAR_COUNTS:  # the header's own law only, its corrupted fields set aside
-        return found.source == "header" and found.corrupted is not None and found.fit.max_abs_dv <= TOLERANCE
-    return found.fit is not None and found.judged_to is None and found.fit.max_abs_dv <= TOLERANCE
+        return None
+    if found.fit is None or found.judged_to is not None or found.fit.max_abs_dv > TOLERANCE:
+        return None
+    return "header" if found.source == "header" and dv is not None else "data"

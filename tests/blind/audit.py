@@ -58,7 +58,9 @@ lab's client reads θ0 at START: the error u − (θ − θ0)); "a_zero": the th
 feedback under its true header, on the float command or the whole count stored or sent, over a
 log whose a a script wrote as the accelerometer read it where the loop fed Ga the reading less a
 calibrated zero a0 (the rig's logs read a about 0.04 at rest); "lie:a_zero": the same under an
-open-loop header or none, a lead and a scaled Ga of their own on the float command. A class joined with "+" to
+open-loop header or none, a lead and a scaled Ga of their own on the float command; "lie:column": a
+closed-loop header that lies (as "lie:swap"'s) over one column fault ("v_unit", on a lead's stored
+integer; "v_zero"; "theta_zero"; "u_unit"). A class joined with "+" to
 "coulomb_friction" hides that friction too (drawn as :func:`tests.blind.cases.draw` draws it).
 """
 
@@ -82,7 +84,7 @@ N = 2000
 CLASSES = ("lie:open_loop", "lie:p_kp", "lie:lead_pole", "lie:accel_fb", "int:trunc_d0", "int:trunc_d1",
            "int:round_d0", "int:round_d1", "session", "lie:sent", "lie:accel_int", "honest:p", "honest:lead_int",
            "honest:lead_sent", "words", "swap", "rows", "a_unit", "v_unit", "printed", "sign", "double", "lie:swap", "pair",
-           "v_zero", "u_unit", "theta_zero", "a_zero", "lie:a_zero")
+           "v_zero", "u_unit", "theta_zero", "a_zero", "lie:a_zero", "lie:column")
 """The audit's blind classes, in the validation table's order."""
 
 PHYSICAL = ("coulomb_friction",)
@@ -208,7 +210,7 @@ class AuditCase:
                                  "lie:a_zero")):
             return self.header == "open-loop"
         return self.name.split("+")[0] in ("lie:open_loop", "lie:p_kp", "lie:lead_pole", "lie:accel_fb", "session", "lie:sent",
-                                              "lie:accel_int", "lie:swap")
+                                              "lie:accel_int", "lie:swap", "lie:column")
 
 
 def _rng(name: str, seed: int) -> np.random.Generator:
@@ -333,6 +335,22 @@ def draw_case(name: str, seed: int) -> AuditCase:
         return AuditCase(**common, law="lead", kp=None, num_s=(kk, kk * zz), den_s=(1.0, pp),
                          design_text=_lead_text(kk, zz, pp, hz=True), recursion="none", alignment=1, header="lead",
                          swap=pair)
+    if base == "lie:column":  # a closed-loop header that lies (a P's kp, a lead's pole) over one column fault
+        fault = str(rng.choice(["v_unit", "v_zero", "theta_zero", "u_unit"]))
+        hidden = {"v_unit": {"v_unit": str(rng.choice(sorted(V_UNITS)))}, "v_zero": {"v_zero": float(rng.choice(V_ZEROS))},
+                  "theta_zero": {"theta_zero": float(rng.integers(5, 400)) * float(rng.choice([-1.0, 1.0]))},
+                  "u_unit": {"u_unit": str(rng.choice(sorted(U_UNITS)))}}[fault]
+        recursion = str(rng.choice(["trunc", "round"] if fault == "v_unit" else ["none", "trunc", "round"]))
+        if fault != "v_unit" and rng.random() < 0.5:  # a P's v in another unit is another kp as much: a lead's
+            kp = float(rng.choice([g for g in P_GAINS if g != HEADER_KP]))
+            p_law.update(kp=kp, design_text=f"P, kp = {kp:g}")
+            return AuditCase(**{**common, "header_kp": HEADER_KP}, **p_law, recursion=recursion, alignment=1,
+                             header="p", **hidden)
+        zz, pp = 2 * math.pi * 5, 2 * math.pi * float(rng.choice(OTHER_POLES_HZ))
+        kk = 5.0 * pp / zz
+        return AuditCase(**common, law="lead", kp=None, num_s=(kk, kk * zz), den_s=(1.0, pp),
+                         design_text=_lead_text(kk, zz, pp, hz=True), recursion=recursion, alignment=1, header="lead",
+                         **hidden)
     if base == "pair":  # two column faults at once: a swap beside θ negated, or beside v in volts
         pair = ("u", "v") if rng.random() < 0.5 else ("theta", "a")
         if rng.random() < 0.5:
@@ -489,7 +507,7 @@ def header(case: AuditCase) -> list[str]:
     if case.header == "p":
         return ["#SLFR RTP P_control_Test", f"#kp={case.header_kp!r}", COLUMNS]
     if case.header == "lead":
-        if case.name.startswith(("lie:lead_pole", "lie:swap")):
+        if case.name.startswith(("lie:lead_pole", "lie:swap", "lie:column")):
             num, den = gth_design()  # the thesis's lead; the data's has another pole
         else:
             num, den = tustin(list(case.num_s), list(case.den_s), DT)
