@@ -331,6 +331,55 @@ def test_blind_a_lying_closed_loop_header_over_one_column_fault(tmp_path, seed):
         np.testing.assert_allclose(run.controller.spec["design"]["num_s"], hidden.num_s, rtol=1e-9)
 
 
+def _corrupt_theta(path: Path, row: int, by: float) -> None:
+    """The log's θ field of data row ``row`` written ``by`` counts higher (any layout)."""
+    lines = path.read_text().splitlines()
+    head = next(k for k, x in enumerate(lines) if x[:1].isdigit())  # '#' lines, or the 2014 layout's names
+    names = lines[head - 1].lstrip("#").split("\t")
+    j = names.index("theta") if "theta" in names else 4  # the 2014 layout's, or the rig's t n u v θ a
+    cells = lines[head + row].split("\t")
+    cells[j] = f"{float(cells[j]) + by:g}"
+    lines[head + row] = "\t".join(cells)
+    path.write_text("\n".join(lines) + "\n")
+
+
+@pytest.mark.parametrize("header", [OPEN_LOOP, ["#SLFR RTP P_control_Test", "#kp=2.0"], None])
+def test_accelerometer_feedback_beside_a_corrupted_field_under_any_header(rig_data, tmp_path, header):
+    """The thesis's lead + accelerometer step with θ of row 500 written 64 higher: under its
+    true header the law is judged past the field; under a lying one (or none)
+    Ga's state is in no column, so no stretch after the field and no one-input least squares
+    gives the law: it is inferred on the first half. Before: 'not this law; no law found'."""
+    clean = LoggedRun.from_path(rig_data / LEAD_ACCEL)
+    path = _rewrite(rig_data / LEAD_ACCEL, tmp_path / "corrupt.txt", header, corrupt=(500, 64))
+    if header is None:  # no header: the column line alone, without its '#'
+        lines = path.read_text().splitlines()
+        path.write_text("\n".join([lines[5][1:]] + lines[6:]) + "\n")
+    run = LoggedRun.from_path(path)
+    assert run.reproduced and run.identified.corrupted.theta_rows == (500,)
+    assert run.source == ("inferred" if header is None else "inferred (header contradicted)")
+    np.testing.assert_allclose(run.controller.gth.num, clean.controller.gth.num, rtol=1e-6)
+    np.testing.assert_allclose(run.controller.ga.num, clean.controller.ga.num, rtol=1e-6)
+    assert run.step_metrics() == clean.step_metrics()
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_blind_accelerometer_feedback_under_a_lying_header_beside_a_corrupted_field(tmp_path, seed):
+    """lie:accel_fb (a lead and a scaled Ga of its own on the float command, under an open-loop
+    header or the lead alone) with one θ field 40 counts higher where the hub moves in its
+    second half: the lie said, the field set aside, the law and Ga as without it (found before
+    the first-half search too: a one-input least squares there misses few enough rows)."""
+    path, hidden = write_audit_case(tmp_path, "lie:accel_fb", seed)
+    clean = LoggedRun.from_path(path)
+    moves = np.flatnonzero(np.abs(np.diff(clean.data["theta"])) > 0)
+    row = int(moves[np.searchsorted(moves, clean.data["theta"].size // 2)])
+    _corrupt_theta(path, row, 40)
+    run = LoggedRun.from_path(path)
+    assert run.source == "inferred (header contradicted)" and run.reproduced
+    assert run.identified.corrupted.theta_rows == (row,) and run.alignment == hidden.alignment
+    np.testing.assert_allclose(run.controller.ga.num, clean.controller.ga.num, rtol=1e-6)
+    np.testing.assert_allclose(run.controller.gth.num, clean.controller.gth.num, rtol=1e-6)
+
+
 # --- two column faults at once under a true header ----------------------------------------
 
 @pytest.mark.parametrize("name", [LEAD, LEAD_ACCEL])

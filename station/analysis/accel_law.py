@@ -93,6 +93,42 @@ def _columns(x: np.ndarray, rows: np.ndarray, lags: range) -> list[np.ndarray]:
     return [x[rows - j] for j in lags]
 
 
+def arx_rows_off(u, theta, a, v, d: int, n: int, limit: float, fitted: int) -> np.ndarray | None:
+    """The rows of a whole log that the two-input ARX law of total order ``n`` (the products
+    AD, DB, BC of the module docstring), fitted on its first ``fitted`` rows, misses past its
+    slack: with the logged v as its history a corrupted field's miss spans n + 1 rows.
+
+    Parameters
+    ----------
+    u, theta, a, v : numpy.ndarray, shape (N,)
+        The log's reference, θ, a and v (counts).
+    d : int
+        The alignment, samples.
+    n : int
+        The law's total order m + p.
+    limit : float
+        The clamp, DAC counts (rows at it are not judged).
+    fitted : int
+        The first rows the law is fitted on.
+
+    Returns
+    -------
+    numpy.ndarray of int or None
+        The rows missed; None when no such law holds on the first rows.
+    """
+    alpha, w, free = lagged(a, d), np.zeros(v.size), np.abs(v) < limit
+    w[d:] = u[d:] - theta[:v.size - d]
+    with np.errstate(all="ignore"):
+        products = _arx(w[:fitted], alpha[:fitted], v[:fitted], d, n, free[:fitted])
+        if products is None:
+            return None
+        ad, db, bc = products[:3]
+        miss = np.convolve(v, ad)[:v.size] - np.convolve(w, db)[:v.size] + np.convolve(alpha, bc)[:v.size]
+    judged = np.zeros(v.size, dtype=bool)
+    judged[d + n:] = np.all([free[d + n - j:v.size - j] for j in range(n + 1)], axis=0)
+    return np.flatnonzero(judged & ~(np.abs(miss) <= ARX_SLACK * max(1.0, float(np.max(np.abs(v[:fitted]))))))
+
+
 def _arx(w, alpha, v, d: int, n: int, free: np.ndarray, zero: bool = False):
     """The products (AD, DB, BC) of order n by least squares, and the zero a0 the law took
     off a (with ``zero``: a constant column, (BC)(1)·a0; else 0), or None when they do not fit."""

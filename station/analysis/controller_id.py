@@ -369,7 +369,7 @@ def aligned_error(u: np.ndarray, theta: np.ndarray, d: int) -> np.ndarray:
 
 def infer_controller(u, theta, v, a=None, dt: float = DT, rig_limit: float = CLAMP,
                      alignments=(0, 1), prefer: int | None = PREFERRED_ALIGNMENT,
-                     cut: bool = False, restarts=()) -> IdentifiedController | None:
+                     cut: bool = False, restarts=(), accel_only: bool = False) -> IdentifiedController | None:
     """Identify the controller that produced a log's commands from u, θ and v.
 
     Parameters
@@ -396,6 +396,9 @@ def infer_controller(u, theta, v, a=None, dt: float = DT, rig_limit: float = CLA
         whose lags do not reach across a jump and replayed again from each
         (:func:`station.control.rerun.replay_commands`); the laws with accelerometer
         feedback or a sent whole count are not tried across a jump.
+    accel_only : bool
+        Only the laws with accelerometer feedback (on a log's first rows, before a corrupted
+        field: :func:`station.analysis.glitches.law_past_glitches`).
 
     Returns
     -------
@@ -421,7 +424,7 @@ def infer_controller(u, theta, v, a=None, dt: float = DT, rig_limit: float = CLA
     if not pins_a_law(v) or no_dac_command(v, theta):
         return None  # nothing but 0 and a clamp's level, or no DAC command: no law is pinned
 
-    recursions = ("none", *STORED) if whole_counts(v) else ("none",)
+    recursions = () if accel_only else ("none", *STORED) if whole_counts(v) else ("none",)  # (): no one-input law
     for order in range(MAX_ORDER + 1):
         for d in alignments:
             if d < 0:

@@ -10,10 +10,12 @@ are set aside instead and said: they are not a law's.
 
 from __future__ import annotations
 
+import itertools
 from typing import NamedTuple
 
 import numpy as np
 
+from station.analysis.accel_law import arx_rows_off
 from station.analysis.controller_id import (MAX_ORDER, PREFERRED_ALIGNMENT, IdentifiedController, aligned_error,
                                            clamps_to_try, infer_controller, law_variants)
 from station.analysis.header_law import NEAR_COUNTS
@@ -50,6 +52,10 @@ def most_glitches(rows: int) -> int:
 
 MIN_STRETCH = 100
 """Fewest rows between corrupted fields that :func:`law_past_glitches` infers a law on."""
+
+MIN_ACCEL_ROWS = 250
+"""Fewest first rows :func:`law_past_glitches` infers a law with accelerometer feedback on (0.5 s at
+the rig's rate)."""
 
 
 class Glitches(NamedTuple):
@@ -354,7 +360,10 @@ def law_past_glitches(u, theta, a, v, dt: float = DT, rig_limit: float = CLAMP, 
     (:func:`station.analysis.controller_id.infer_controller`, the stretch's first rows of
     history taken as logged), then accepted on the whole log only as :func:`isolated_misses`
     accepts a law (at most :data:`MAX_GLITCH_ROWS` isolated fields, every other row reproduced).
-    A header-less log, or one whose header lies, with a serial glitch in it.
+    A header-less log, or one whose header lies, with a serial glitch in it. A law with
+    accelerometer feedback, whose Ga state no log holds (no stretch after a glitch, no least
+    squares of one input finds it), is inferred on the log's first half or quarter and judged
+    on the whole log the same way.
 
     Parameters
     ----------
@@ -392,6 +401,13 @@ def law_past_glitches(u, theta, a, v, dt: float = DT, rig_limit: float = CLAMP, 
             found = isolated_misses(hit.controller, u, theta, a, v, alignments, slack=TOLERANCE)
             if found is not None:
                 return hit, found
+    for end in (v.size // 2, v.size // 4) if np.any(a != a[0]) else ():
+        gated = end >= MIN_ACCEL_ROWS and _arx_glitches(u, theta, a, v, end, alignments, rig_limit)
+        hit = infer_controller(u[:end], theta[:end], v[:end], a[:end], dt, rig_limit, alignments, prefer,
+                               accel_only=True) if gated else None
+        found = None if hit is None else isolated_misses(hit.controller, u, theta, a, v, alignments, slack=TOLERANCE)
+        if found is not None:
+            return hit, found
     return None
 
 
@@ -422,6 +438,17 @@ def _rows_off(u, theta, v, alignments, rig_limit: float, most: int) -> list[np.n
                 if off.size and _episodes(off, order + 1) <= most:
                     found.add(tuple(off.tolist()))
     return [np.array(off) for off in sorted(found, key=len)]
+
+
+def _arx_glitches(u, theta, a, v, end: int, alignments, rig_limit: float) -> bool:
+    """Whether a two-input law (Gth beside Ga) fitted on the first ``end`` rows misses the whole
+    log in a few windows of its order + 1 rows alone (a corrupted field's), at some order,
+    alignment and clamp: the cheap gate before Ga's search on those rows."""
+    for n, d, limit in itertools.product(range(1, 2 * MAX_ORDER + 1), alignments, clamps_to_try(v, rig_limit)):
+        off = arx_rows_off(u, theta, a, v, d, n, limit, end) if d >= 0 else None
+        if off is not None and off.size and _episodes(off, n + 1) <= most_glitches(v.size):
+            return True
+    return False
 
 
 def _refit(rows: LawRows, keep: np.ndarray) -> tuple[np.ndarray, np.ndarray] | None:
