@@ -17,9 +17,10 @@ its data, tried on the swaps only when none is found as the columns are named.
 The command's unit is checked the same way: a v the header's law does not reproduce, whose
 changes are all whole multiples of one size other than a DAC count (a script that wrote the
 command in volts), is read in counts when its law (the data's, where the header lies about the
-law as well) then reproduces it and the DAC's range says so too (:func:`check_command_unit`). A P law's v scaled is also another kp, so only a v that can
-be no DAC command as written is read so: under one count everywhere while the hub moved (the
-device would apply nothing), or past the DAC's ±255 counts.
+law as well) then reproduces it and the DAC's range says so too (:func:`check_command_unit`). A
+P law's v scaled is also another kp, so only a v that can be no DAC command as written is read
+so: under one count everywhere while the hub moved (the device would apply nothing), or past
+the DAC's ±255 counts.
 
 So is its zero (:func:`check_command_offset`): a v that reads one value other than 0 at rest
 and that the header's law (or the data's, as for the unit) reproduces less that value was
