@@ -445,3 +445,18 @@ def test_blind_u_unit_class(tmp_path, case, seed):
     assert units == [f"u in {hidden.u_unit}"]
     assert run.reproduced and (run.source == "inferred (header contradicted)") is hidden.lies
     assert run.alignment == hidden.alignment or hidden.alignment in run.identified.alignments
+
+
+def test_a_law_that_leaves_u_unit_open_names_no_unit(rig_data, tmp_path):
+    """The thesis's P step (kp = 2, a 50-count step from row 0) with θ written 4 times over (the
+    loop's θ not): read with u in radians (163 counts a unit) an integrator whose first row the
+    ±100 clamp took, v[k] = v[k-1] + 0.5 (e[k] - e[k-1]), "reproduced" every v, and so did any u
+    of 4 counts or more. A unit the law does not decide is not said (was "u in radians")."""
+    lines = (rig_data / THESIS[1]).read_text().splitlines()
+    out = [ln if ln.startswith("#") else "\t".join(f"{4 * float(x):g}" if j == 4 else x
+                                                  for j, x in enumerate(ln.split("\t"))) for ln in lines if ln]
+    path = tmp_path / "theta_x4_SLFR_RTP_P_control_kp=2.0.txt"
+    path.write_text("\n".join(out) + "\n")
+    run = LoggedRun.from_path(path)
+    assert not [c for c in run.audit.claims if c.header == "u in encoder counts"]
+    assert run.controller.spec.get("kind") == "p"  # the header's law kept, said contradicted

@@ -16,6 +16,7 @@ from typing import NamedTuple
 
 import numpy as np
 
+from station.analysis.controller_id import check_law
 from station.analysis.law_rows import TOLERANCE, pins_a_law
 from station.control.rerun import pole_radius
 from station.errors import StationError
@@ -153,6 +154,12 @@ def check_reference_unit(log: RunLog, skipped=None, as_named: float | None = Non
             # a recursion that grows is no lab's law (an order-3 fit with a pole at z = 1062 on the
             # truncated integer at a ±100 clamp "reproduced" the P step with θ negated, u 163x)
             if not exact_from_rest(found) or pole_radius(found.controller) > 1.0 + 1e-6:
+                continue
+            # nor is a law that gives v from u of twice the size too (an integrator whose first row
+            # the clamp took: the P step with θ written 4x read as "u in radians"): u's unit undecided
+            twice = check_law(found.controller, 2.0 * counts, theta, np.nan_to_num(np.asarray(log.data["a"], float)),
+                              np.asarray(log.data["v"], float), "", (found.fit.alignment,))
+            if twice is not None and twice.max_abs_dv <= TOLERANCE:
                 continue
             whose, dv = f"the law the data give ({describe_controller(found.controller)})", float(found.fit.max_abs_dv)
         before = "" if as_named is None else f" (as written: max |dv| = {as_named:.3g} counts)"
