@@ -237,14 +237,7 @@ def test_blind_column_faults_beside_a_corrupted_field(tmp_path, case, seed):
     clean = LoggedRun.from_path(path)
     moves = np.flatnonzero(np.abs(np.diff(clean.data["theta"])) > 0)
     row = int(moves[moves.size // 2])  # the hub moves there
-    lines = path.read_text().splitlines()
-    head = next(k for k, x in enumerate(lines) if x[:1].isdigit())  # '#' lines, or the 2014 layout's names
-    names = lines[head - 1].lstrip("#").split("\t")
-    j = names.index("theta") if "theta" in names else 4  # the 2014 layout's, or the rig's t n u v θ a
-    cells = lines[head + row].split("\t")
-    cells[j] = f"{float(cells[j]) + 40:g}"  # as written: the column θ is named by (negated or not)
-    lines[head + row] = "\t".join(cells)
-    path.write_text("\n".join(lines) + "\n")
+    _corrupt_theta(path, row, 40)  # as written: the column θ is named by (negated or not)
     run = LoggedRun.from_path(path)
     assert _said(run) == _said(clean)
     assert run.source == clean.source and run.reproduced and run.alignment == hidden.alignment

@@ -471,7 +471,7 @@ def _offset_taken_off(log: RunLog, skipped, v: np.ndarray, c: float, rest: int) 
     trial = dataclasses.replace(log, data={**log.data, "v": v - c})
     dv = header_law_dv(trial, skipped)  # None: an open-loop header's v = u, or none named
     whose, found = "the header's law", None
-    named = dv <= TOLERANCE if dv is not None else header_reproduces(trial, skipped) is True
+    named = _header_holds(trial, dv, skipped)
     if not named and dv is not None and _law_confirms(trial, skipped) == "header":  # printed coefficients completed
         whose, dv = "the header's law (its printed coefficients completed from the data)", None
     elif not named:  # none named, an open loop's v = u contradicted, or a header lying about the law too
@@ -562,6 +562,11 @@ def _unknown_unit(log: RunLog, why: str, detail: str, small: bool) -> Columns:
     return Columns((claim,), dataclasses.replace(log, notes=list(log.notes) + [note]))
 
 
+def _header_holds(log: RunLog, dv: float | None, skipped) -> bool:
+    """Whether the header's law, replayed once to ``dv`` (None: open loop or none named), holds as given."""
+    return dv <= TOLERANCE if dv is not None else header_reproduces(log, skipped) is True
+
+
 def _law_confirms(log: RunLog, skipped) -> str | None:
     """Whose law reproduces every logged v: "header" where the header's does (as given, v = u
     in open loop, past a few corrupted fields, or within :data:`NEAR_COUNTS` with its printed
@@ -569,7 +574,7 @@ def _law_confirms(log: RunLog, skipped) -> str | None:
     an open-loop header's v = u contradicted, or a closed-loop header lying about the law
     too), else None."""
     dv = header_law_dv(log, skipped)  # replayed once; None for an open-loop header (v = u) or none
-    if (dv <= TOLERANCE) if dv is not None else header_reproduces(log, skipped) is True:
+    if _header_holds(log, dv, skipped):
         return "header"
     try:
         found = identify_controller(log, skipped)
