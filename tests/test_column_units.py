@@ -234,19 +234,40 @@ LEAD_FLOAT = "step_response_Gth_comp_no_accel_FB_amp_100_duration_1000_SLFR_RTP_
 
 
 @pytest.mark.parametrize("unit", VOLTS)
-def test_a_float_command_in_volts_is_said_and_no_law_is_fitted_to_it(rig_data, tmp_path, unit):
+def test_a_float_command_in_volts_is_read_in_counts_by_the_headers_law(rig_data, tmp_path, unit):
     """The thesis's lead logged its float v; written in volts it has no whole-count steps to read
-    its unit by. Before: a law of order 3 in volts with a cancelled pole pair, 0.0009155(s^2+2000s
-    +1e+06)(s+2π·2.069)/..., 'inferred (header contradicted)' and a θ fit of -573 %: laws fitted
-    to a v of 0.3 'counts' pass tolerances of 1e-6 counts a thousand times too wide. Now the unit
-    is said to be unknown, and no law is inferred on a v that is no DAC command
+    its unit by, but the header's lead replayed on its own commands gives v in counts whatever
+    unit the log wrote: the ratio is the unit (before: "v in another unit, its size not found",
+    "not this law", a false "moving at t = 0" and no overshoot)."""
+    src = rig_data / LEAD_FLOAT
+    path = _rewrite_v(src, tmp_path / LEAD_FLOAT, VOLTS[unit])
+    run, clean = LoggedRun.from_path(path), LoggedRun.from_path(src)
+    (claim,) = [c for c in run.audit.claims if c.header == "v in DAC counts"]
+    assert claim.verdict == "contradicted" and float(claim.data.split()[-1]) == pytest.approx(VOLTS[unit], rel=1e-5)
+    assert [c.header for c in run.audit.claims if c.verdict == "contradicted"] == ["v in DAC counts"]
+    np.testing.assert_allclose(run.data["v"], clean.data["v"], rtol=0, atol=1e-4 * np.max(np.abs(clean.data["v"])))
+    assert run.source == "header" and run.reproduced
+    assert run.step_metrics() == clean.step_metrics()
+    assert replay(path).fit_pct == pytest.approx(replay(src).fit_pct, abs=0.05)
+
+
+@pytest.mark.parametrize("unit", VOLTS)
+def test_a_float_command_in_volts_with_no_law_named_is_said_and_no_law_is_fitted_to_it(rig_data, tmp_path, unit):
+    """The same log with its header lines dropped: no law to read the unit by, and a law's gain
+    and v's unit are one. Before the no-DAC-command rule: a law of order 3 in volts with a
+    cancelled pole pair, 0.0009155(s^2+2000s+1e+06)(s+2π·2.069)/..., and a θ fit of -573 %: laws
+    fitted to a v of 0.3 'counts' pass tolerances of 1e-6 counts a thousand times too wide. The
+    unit is said to be unknown, and no law is inferred on a v that is no DAC command
     (``analysis.law_rows.no_dac_command``)."""
     path = _rewrite_v(rig_data / LEAD_FLOAT, tmp_path / LEAD_FLOAT, VOLTS[unit])
+    lines = path.read_text().splitlines()
+    path.write_text("\n".join([ln for ln in lines if ln.startswith("#")][-1:]
+                              + [ln for ln in lines if not ln.startswith("#")]) + "\n")  # the column line only
     run = LoggedRun.from_path(path)
     (claim,) = [c for c in run.audit.claims if c.header == "v in DAC counts"]
     assert claim.verdict == "contradicted" and claim.data == "v in another unit, its size not found"
     assert "under one DAC count" in claim.evidence and "no law is inferred" in claim.evidence
-    assert run.source == "header" and not run.reproduced  # the header's lead, as named: no law of volts
+    assert not run.reproduced
 
 
 @pytest.mark.parametrize("seed", range(2))

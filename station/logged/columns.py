@@ -47,6 +47,7 @@ from station.analysis.law_rows import TOLERANCE, no_dac_command, pins_a_law
 from station.control.rerun import is_closed_loop
 from station.errors import StationError
 from station.logged.audit import AuditClaim
+from station.logged.command_scale import law_scale
 from station.logged.quantum import count_step, in_counts, quantum_fits
 from station.logged.controller import (NO_LAW, ControllerId, describe_controller, header_law_dv,
                                        header_reproduces, identify_controller)
@@ -390,19 +391,20 @@ def check_command_unit(log: RunLog, skipped=None) -> Columns | None:
     else:  # as written v could be a command too: another gain of the law as much as another unit
         return None
     least = count_step(v)
-    if least is None:  # no size to read it in
+    scaled = law_scale(log, skipped) if least is None else None  # a float: its size by the law replayed
+    if least is None and scaled is None:  # no size to read it in
         return _unknown_unit(log, why, "its changes are no whole multiples of one size (a float, or printed to few "
                                        "digits)", small)
     u = np.asarray(log.data["u"], dtype=float)
     u_least = None if in_counts(u) else count_step(u)
-    steps = [least / k for k in range(1, COMMAND_STEP_COUNTS + 1)]  # v's least change may be k counts (kp·e)
+    steps = [scaled.ratio] if least is None else [least / k for k in range(1, COMMAND_STEP_COUNTS + 1)]  # k counts: kp·e
     commanded = np.isfinite(u) & (u != 0)
-    if u_least is None and np.any(commanded):  # an open-loop command in counts as u, in another unit as v
+    if least is not None and u_least is None and np.any(commanded):  # open loop: u in counts, v in another unit
         steps.append(float(np.median(v[commanded] / u[commanded])))
     found = None  # the header's closed-loop law at any step, else the data's at the largest
     for step in filter(lambda x: x > 0, steps):
         data = dict(log.data)
-        data["v"] = whole_counts(v / step)
+        data["v"] = scaled.v if least is None else whole_counts(v / step)
         also = u_least is not None and quantum_fits(np.array([u_least / step]), 1.0)
         if also:
             data["u"] = whole_counts(u / step)
@@ -422,10 +424,11 @@ def check_command_unit(log: RunLog, skipped=None) -> Columns | None:
                f"{header}, and the law the data give reproduces v in counts (÷ {step:.6g}; with no law named, its "
                f"gain and v's unit are one: gain k·g on steps of {step:.6g}/k gives the same v, and the largest step "
                f"is taken)")
-        claim = AuditClaim(
-            "columns", "v in DAC counts", f"{both} in steps of {step:.6g}", "contradicted",
-            f"every change of v is a whole multiple of {step:.6g}, not of one count; {law}, and {why}: a command "
-            f"written in another unit")
+        sized = (f"every change of v is a whole multiple of {step:.6g}, not of one count" if least is not None else
+                 f"v is a float, {step:.6g} times the header's law replayed on its own commands to its printing")
+        claim = AuditClaim("columns", "v in DAC counts", f"{both} in {'units' if least is None else 'steps'} of {step:.6g}",
+                           "contradicted",
+                           f"{sized}; {law}, and {why}: a command written in another unit")
         note = f"{both} in steps of {step:.6g} a DAC count (the audit): divided by it"
         return Columns((claim,), dataclasses.replace(trial, notes=list(log.notes) + [note]))
     return _unknown_unit(log, why, f"its changes are whole multiples of {least:.6g}, but no law reproduces it in "

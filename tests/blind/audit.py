@@ -37,8 +37,8 @@ t jumping), over a log that lost rows (one to
 three spans of 1-30 ticks while the hub moves, n and t jumping over them) or holds a span of
 rows written again (a logger that re-sent a block); "a_unit": a true header (a P, or a lead on the
 stored integer) or none over a log whose a column a script scaled into m/s², g or mV (a count
-1/1.145 m/s², 1/11.23 g or 3300/4096 mV) and printed to 7 digits; "v_unit": a true header (a P
-or a lead on the stored integer) over a log whose v a script wrote in volts of a ±5 V 12-bit or a
+1/1.145 m/s², 1/11.23 g or 3300/4096 mV) and printed to 7 digits; "v_unit": a true header (a P,
+or a lead on the stored integer or the float) over a log whose v a script wrote in volts of a ±5 V 12-bit or a
 ±10 V 16-bit converter (a count 5/2048 or 10/32768 V), 7 digits; "printed": a lead on the float
 command under its true header or an open-loop one, every number printed to 5 significant digits
 (MATLAB's csvwrite) or 6 (C's %g); "sign": θ written with the other sign than the loop fed back,
@@ -307,7 +307,7 @@ def draw_case(name: str, seed: int) -> AuditCase:
         if rng.random() < 0.5:
             return AuditCase(**{**common, "header_kp": kp}, **p_law, recursion="trunc",
                              alignment=int(rng.integers(0, 2)), header="p", v_unit=unit)
-        return AuditCase(**common, **lead, recursion=str(rng.choice(["trunc", "round"])),
+        return AuditCase(**common, **lead, recursion=str(rng.choice(["trunc", "round", "none"])),
                          alignment=int(rng.integers(0, 2)), header="lead", v_unit=unit)
     if base == "printed":  # MATLAB's csvwrite (5 significant digits) or C's %g (6)
         return AuditCase(**common, **lead, recursion="none", alignment=int(rng.integers(0, 2)),

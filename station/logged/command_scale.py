@@ -1,0 +1,73 @@
+"""The size of a float command's unit, read by the header's law replayed on its own commands.
+
+A command written as a float in another unit (the thesis's lead logs store the float command; a
+script that wrote it in volts: 5/2048 V a count of a ±5 V 12-bit DAC) has no step to read its
+unit from (:func:`station.logged.quantum.count_step`). A closed-loop law replayed on its own
+past commands (:func:`station.control.rerun.replay_commands`) gives v in DAC counts whatever
+unit the log wrote, so the least-squares ratio of the logged v to that replay is the unit's
+size, and the replay is v in counts where it gives every logged v to its printing
+(:func:`station.logged.columns.check_command_unit` reads v so).
+"""
+
+from __future__ import annotations
+
+from typing import NamedTuple
+
+import numpy as np
+
+from station.analysis.law_rows import TOLERANCE
+from station.control.rerun import ALIGNMENTS, command_error, is_closed_loop, replay_commands
+from station.logged.controller import named_law
+from station.logged.units import replayable_rate
+from station.runlog import RunLog
+
+
+class Scaled(NamedTuple):
+    """A float command read in DAC counts by the law (:func:`law_scale`).
+
+    Attributes
+    ----------
+    ratio : float
+        The log's v units in one DAC count.
+    v : numpy.ndarray, shape (N,)
+        The law's commands, DAC counts: the logged v divided by ``ratio``, to its printing.
+    """
+
+    ratio: float
+    v: np.ndarray
+
+
+def law_scale(log: RunLog, skipped=None) -> Scaled | None:
+    """The log's v read in DAC counts by its header's law: the least-squares ratio of the
+    logged v to the law replayed on its own commands, at the alignment it fits best, when that
+    ratio times the replay gives every logged v to its printing (half its last digit:
+    :func:`station.control.rerun.command_error`, in the unit v was written in, whose printing
+    the division would lose).
+
+    Parameters
+    ----------
+    log : RunLog
+    skipped : array_like of bool, optional
+        As :func:`station.logged.controller.identify_controller`.
+
+    Returns
+    -------
+    Scaled or None
+        None when the header names no closed-loop law, the rows are no loop's every tick, u, θ
+        or v are not finite, the law commands nothing, the ratio is not positive (a reversed
+        command is the motor's polarity, not a unit) or the law so scaled misses a logged v.
+    """
+    law = named_law(log)
+    data = log.data
+    if (law is None or not is_closed_loop(law) or not replayable_rate(log)
+            or not all(np.all(np.isfinite(data[c])) for c in ("u", "theta", "v"))):
+        return None
+    v = np.asarray(data["v"], dtype=float)
+    a = np.where(np.isfinite(data["a"]), data["a"], 0.0)
+    for d in ALIGNMENTS:
+        replayed, _ = replay_commands(law, data["u"], data["theta"], a, d, skipped)
+        power = float(replayed @ replayed)
+        ratio = float(v @ replayed) / power if power > 0 else 0.0
+        if ratio > 0 and np.all(command_error(ratio * replayed, v)[d:] <= TOLERANCE):
+            return Scaled(ratio, replayed)
+    return None
