@@ -397,7 +397,7 @@ def check_command_unit(log: RunLog, skipped=None) -> Columns | None:
                                        "digits)", small)
     u = np.asarray(log.data["u"], dtype=float)
     u_least = None if in_counts(u) else count_step(u)
-    steps = [scaled.ratio] if least is None else [least / k for k in range(1, COMMAND_STEP_COUNTS + 1)]  # k counts: kp·e
+    steps = [scaled.ratio] if least is None else [least / k for k in range(1, COMMAND_STEP_COUNTS + 1)]  # kp·e
     commanded = np.isfinite(u) & (u != 0)
     if least is not None and u_least is None and np.any(commanded):  # open loop: u in counts, v in another unit
         steps.append(float(np.median(v[commanded] / u[commanded])))
@@ -426,8 +426,8 @@ def check_command_unit(log: RunLog, skipped=None) -> Columns | None:
                f"is taken)")
         sized = (f"every change of v is a whole multiple of {step:.6g}, not of one count" if least is not None else
                  f"v is a float, {step:.6g} times the header's law replayed on its own commands to its printing")
-        claim = AuditClaim("columns", "v in DAC counts", f"{both} in {'units' if least is None else 'steps'} of {step:.6g}",
-                           "contradicted",
+        sizes = "units" if least is None else "steps"
+        claim = AuditClaim("columns", "v in DAC counts", f"{both} in {sizes} of {step:.6g}", "contradicted",
                            f"{sized}; {law}, and {why}: a command written in another unit")
         note = f"{both} in steps of {step:.6g} a DAC count (the audit): divided by it"
         return Columns((claim,), dataclasses.replace(trial, notes=list(log.notes) + [note]))
