@@ -99,6 +99,43 @@ def test_a_delimiter_after_the_last_field(tmp_path, names_end, row_end):
     assert list(read_log(csv).data["theta"]) == [0, 1, 3]
 
 
+P_STEP = "SFLR_P_control_step_kp_2_SLFR_RTP_P_control_kp=2.0.txt"
+
+
+@pytest.mark.parametrize("rows_sep", [" ", "  ", ",", ";", ", "])
+def test_rows_parted_otherwise_than_the_column_line(rig_data, tmp_path, rows_sep):
+    # A script that printed its column line with tabs and its rows with "%g %g" or "%g,%g":
+    # before, "line 4: expected 6 tab-separated numbers, got 1"
+    src = rig_data / P_STEP
+    lines = src.read_text().splitlines()
+    path = tmp_path / P_STEP
+    path.write_text("\n".join(ln if ln.startswith("#") else ln.replace("\t", rows_sep) for ln in lines) + "\n")
+    clean, other = read_log(src), read_log(path)
+    for name in clean.data:
+        np.testing.assert_array_equal(other.data[name], clean.data[name])
+    assert LoggedRun.from_path(path).reproduced
+
+
+def test_a_blank_line_among_the_header_lines(rig_data, tmp_path):
+    # before: the header ended at the blank line, and its first line was read as the column
+    # names ("line 1: no usable columns: found 'SLFR', 'RTP', 'P_control_Test'")
+    src = rig_data / P_STEP
+    path = tmp_path / P_STEP
+    path.write_text(src.read_text().replace("\n", "\n\n", 1))
+    clean, other = read_log(src), read_log(path)
+    assert other.meta == clean.meta
+    for name in clean.data:
+        np.testing.assert_array_equal(other.data[name], clean.data[name])
+
+
+def test_a_row_of_too_few_fields_is_still_named(tmp_path):
+    # the rows' own delimiter is chosen only where it gives one field per column
+    path = tmp_path / "short_SLFR_RTP_P_control_Test.txt"
+    path.write_text("#SLFR RTP P_control_Test\n#kp=2.0\n#t\tn\tu\tv\t$\\theta$\ta\n0 0 0 0 0\n")
+    with pytest.raises(RunLogError, match="line 4: expected 6 tab-separated numbers, got 1"):
+        read_log(path)
+
+
 def test_a_file_holding_two_runs_is_one_line_error(rig_data, tmp_path):
     # Two runs appended to one file (the second with its own header): before, read as one run
     # of 2000 rows whose t jumps back, replayed to max |dv| = 98 counts. A '#' line among rows

@@ -23,7 +23,7 @@ from station.errors import StationError
 from station.inputs import MAX_JSON_DEPTH, json_depth, open_regular
 from station.runlog.log import RunLog
 from station.runlog.rig_layouts import Header, parse_column_line, parse_rig_header
-from station.runlog.rows import MAX_LINE, LineTooLong, Lines, load_rows
+from station.runlog.rows import MAX_LINE, LineTooLong, Lines, load_rows, rows_separator
 from station.runlog.schema import (COLUMN_LINE, COLUMNS, END_PREFIX, FINITE_COLUMNS, MAGIC, MAX_ABS_VALUE, RunLogError,
                                    log_error)
 
@@ -186,6 +186,8 @@ def _read_stream(path: Path, lines: Lines) -> RunLog:
             lines.push(extra)
         header = []
         while (item := lines.next()) is not None:
+            if not item[1].strip():  # a blank line among the header's: it ends nothing
+                continue
             if not item[1].startswith("#"):
                 lines.push(item)
                 break
@@ -208,7 +210,10 @@ def _read_stream(path: Path, lines: Lines) -> RunLog:
         layout = "bare" if bare else layout
 
     names, notes = found.names, list(found.notes)
-    arr, data_lines = load_rows(path, lines, fmt, names, found.sep)
+    sep = found.sep
+    if fmt == "rig" and (item := _first_row(lines)) is not None:
+        sep = rows_separator(item[1], names, found.sep)
+    arr, data_lines = load_rows(path, lines, fmt, names, sep)
     if data_lines.decimal_comma:
         notes.append("numbers written with decimal commas (a spreadsheet's export): read with their commas as points")
     n = arr.shape[0]
@@ -251,6 +256,18 @@ def _station_header(path: Path, texts: list[str]) -> Header:
     if tuple(names[:len(COLUMNS)]) != COLUMNS:
         raise log_error(path, col_no, f"expected the column names {COLUMN_LINE!r}, got {col_line!r}")
     return Header(meta, names, "\t", [])
+
+
+def _first_row(lines: Lines) -> tuple[int, str, bool] | None:
+    """The first non-blank line after the header (as :meth:`Lines.next` gives it), left in ``lines``."""
+    seen = []
+    while (item := lines.next()) is not None:
+        seen.append(item)
+        if item[1].strip():
+            break
+    for back in reversed(seen):
+        lines.push(back)
+    return seen[-1] if seen and seen[-1][1].strip() else None
 
 
 def _one_run(path: Path, data: dict[str, np.ndarray], resumed: list[tuple[int, int]]) -> None:

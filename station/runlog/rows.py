@@ -38,6 +38,31 @@ def is_number(text: str) -> bool:
     return True
 
 
+def rows_separator(line: str, names: list[str], sep: str | None) -> str | None:
+    """The delimiter of a log's rows: the column line's, unless it does not part the first data
+    row into one field per column and another delimiter does (a script that printed its column
+    line with tabs and its rows with spaces or commas).
+
+    Parameters
+    ----------
+    line : str
+        The first data row, without its newline.
+    names : list of str
+        The columns' standard names.
+    sep : str or None
+        The column line's delimiter; None: any whitespace.
+
+    Returns
+    -------
+    str or None
+        The delimiter to read every row with (None: any whitespace).
+    """
+    if len(line.split(sep)) == len(names):
+        return sep
+    others = [d for d in ("\t", ",", ";") if d != sep and d in line] + ([None] if sep is not None else [])
+    return next((d for d in others if len(line.split(d)) == len(names)), sep)
+
+
 def decimal_comma(text: str) -> bool:
     """Whether one field is a number written with a decimal comma (``0,002``; not ``1.000,5``).
 
