@@ -53,6 +53,7 @@ from station.logged.controller import (NO_LAW, ControllerId, describe_controller
                                        header_reproduces, identify_controller)
 from station.logged.reference_unit import check_reference_unit, exact_from_rest
 from station.logged.sensor_zeros import check_accel_zero, theta_zero_claim
+from station.logged.rewrite_evidence import model_miss, tracking_error, tracks_better
 from station.logged.start import REST_ROWS, rest_rows
 from station.logged.units import whole_counts
 from station.rig import DAC_LIMIT
@@ -201,17 +202,21 @@ def check_columns(log: RunLog, skipped=None) -> Columns:
         return _inferred_swap(log, skipped)
     trials = []
     for tried in (tuple((c,) for c in TRIALS), PAIRS):  # one fault, else two at once
+        exact = []
         for rewrites in tried:  # the header's law as given
             trial = rewritten_all(log, rewrites)
             if not pins_a_law(trial.data["v"]):  # a step column for v: any law of high gain at its clamp gives it
                 continue
-            if len(rewrites) > 1 and rewrites[0] == ("u", "v") and not _tracks_better(trial, log):
+            if len(rewrites) > 1 and rewrites[0] == ("u", "v") and not tracks_better(trial, log):
                 continue
             dv = header_law_dv(trial, skipped)
             if dv is not None and dv <= TOLERANCE:
-                return _swapped_back(log, rewrites, trial, as_named, f"to {dv:.2g}")
-            if dv is not None and dv <= NEAR_COUNTS < as_named:
+                exact.append((rewrites, trial, dv))
+            elif dv is not None and dv <= NEAR_COUNTS < as_named:
                 trials.append((rewrites, trial))
+        if exact:  # a P law of gain 1 gives two: the nominal model's θ tells them apart
+            rewrites, trial, dv = min(exact, key=lambda x: model_miss(x[1]) if len(exact) > 1 else 0.0)
+            return _swapped_back(log, rewrites, trial, as_named, f"to {dv:.2g}")
         if trials:
             break
     if not trials and as_named <= NEAR_COUNTS:  # the header's law within a count as named: no lie about the law
@@ -242,9 +247,9 @@ def _inferred_swap(log: RunLog, skipped) -> Columns:
     columns are named and one does with two of them exchanged or θ negated, that rewrite (the
     law inferred on it). Where more than one rewrite of as many faults gives a law, the one of
     lowest order, and of those (a P law of gain 1 at alignment 0, v = u − θ, reads the same with
-    θ negated as with v and θ exchanged and the gain −1) the one whose θ follows its u most
-    closely (:func:`tracking_error`: a closed loop's angle follows its reference), the first on
-    a tie."""
+    θ negated as with v and θ exchanged and the gain −1) the one whose θ the nominal model driven
+    by its v gives most closely (:func:`station.logged.rewrite_evidence.model_miss`), then whose
+    θ follows its u most closely (:func:`tracking_error`), the first on a tie."""
     try:
         cid = identify_controller(log, skipped)
     except StationError:  # said where the controller is asked for (LoggedRun.identified)
@@ -264,7 +269,7 @@ def _inferred_swap(log: RunLog, skipped) -> Columns:
         trial = rewritten_all(log, rewrites)
         if not pins_a_law(trial.data["v"]):  # a step as v (u swapped in): a law of the right gain gives any
             continue
-        if len(rewrites) > 1 and rewrites[0] == ("u", "v") and not _tracks_better(trial, log):
+        if len(rewrites) > 1 and rewrites[0] == ("u", "v") and not tracks_better(trial, log):
             continue
         try:
             found = identify_controller(trial, skipped)
@@ -277,7 +282,9 @@ def _inferred_swap(log: RunLog, skipped) -> Columns:
             laws.append((rewrites, trial, found))
     if not laws:
         return Columns((), log, cid)
-    rewrites, trial, found = min(laws, key=lambda x: (_order(x[2].controller), tracking_error(x[1])))
+    low = min(_order(x[2].controller) for x in laws)
+    laws = [x for x in laws if _order(x[2].controller) == low]
+    rewrites, trial, found = min(laws, key=lambda x: (model_miss(x[1]) if len(laws) > 1 else 0.0, tracking_error(x[1])))
     return _swapped_back(log, rewrites, trial, None, f"{found.claim.data}", found)
 
 
@@ -285,31 +292,6 @@ def _order(controller) -> int:
     """A law's order: its Gth's poles and, with accelerometer feedback, Ga's (0 for P)."""
     return sum(len(tf.den) - 1 for tf in (getattr(controller, "gth", None), getattr(controller, "ga", None))
                if tf is not None)
-
-
-def tracking_error(log: RunLog) -> float:
-    """RMS of u − θ over a log's finite rows, encoder counts (inf without any): how closely its
-    hub follows its reference, as a closed loop's does.
-
-    Parameters
-    ----------
-    log : RunLog
-
-    Returns
-    -------
-    float
-    """
-    e = np.asarray(log.data["u"], dtype=float) - np.asarray(log.data["theta"], dtype=float)
-    e = e[np.isfinite(e)]
-    return float(np.sqrt(np.mean(e * e))) if e.size else np.inf
-
-
-def _tracks_better(trial: RunLog, log: RunLog) -> bool:
-    """Whether a rewrite's θ follows its u more closely than as named (:func:`tracking_error`).
-    Asked of u and v swapped beside a sign, where a law cannot decide: a P law of gain 1
-    (v = u − θ) is the same law with u and v swapped and θ negated (u = v + θ), and only the
-    tracking tells which column is the reference."""
-    return tracking_error(trial) < tracking_error(log)
 
 
 def named_by(log: RunLog) -> str:

@@ -15,9 +15,8 @@ import numpy as np
 
 from station.logged.audit import AuditClaim
 from station.logged.columns import Columns, named_by, swapped
-from station.errors import StationError
 from station.logged.sensor_evidence import cosine_ratio
-from station.logged.simulate import simulate_log
+from station.logged.simulate import nominal_theta
 from station.logged.start import REST_ROWS
 from station.runlog import RunLog
 
@@ -88,22 +87,3 @@ def check_sensor_swap(columns: Columns, model_theta: ModelTheta | None = None) -
     return Columns((claim,), dataclasses.replace(trial, notes=list(log.notes) + [note]))  # its controller asked again
 
 
-def nominal_theta(log: RunLog) -> np.ndarray | None:
-    """The nominal model's θ for an open-loop log driven by its command: :func:`check_sensor_swap`'s
-    evidence.
-
-    Parameters
-    ----------
-    log : RunLog
-
-    Returns
-    -------
-    ndarray, shape (N,), or None
-        Encoder counts; None when the log cannot be simulated.
-    """
-    from station.plant.model import load_model  # lazy: start-up time (asked only of a suspect open-loop log)
-
-    try:
-        return simulate_log(log, None, None, load_model("tmm-fit")).prediction["theta"]
-    except (StationError, ArithmeticError, ValueError, KeyError):  # a run the model cannot replay decides nothing
-        return None

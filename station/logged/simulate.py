@@ -16,6 +16,7 @@ import numpy as np
 from station.analysis.fit import fit_pct
 from station.control import OpenLoop
 from station.control.rerun import is_closed_loop
+from station.errors import StationError
 from station.logged.device import command_quantization
 from station.runlog.timebase import on_ticks, row_ticks, tick_time
 from station.runlog import RunLog
@@ -234,3 +235,25 @@ def simulate_log(log: RunLog, controller, alignment: int | None, model, ticks=FR
     theta = compared_theta(data["theta"], closed)
     part = None if closed or not theta.size else parting(data["t"], theta, pred["theta"])
     return ModelRun(pred, theta, data["a"], how, part)
+
+
+def nominal_theta(log: RunLog) -> np.ndarray | None:
+    """The nominal model's θ for a log driven by its logged command: the evidence of
+    :func:`station.logged.sensor_swap.check_sensor_swap` and of a column rewrite a law cannot decide
+    (:func:`station.logged.rewrite_evidence.model_miss`).
+
+    Parameters
+    ----------
+    log : RunLog
+
+    Returns
+    -------
+    ndarray, shape (N,), or None
+        Encoder counts; None when the log cannot be simulated.
+    """
+    from station.plant.model import load_model  # lazy: start-up time (asked only of a suspect log)
+
+    try:
+        return simulate_log(log, None, None, load_model("tmm-fit")).prediction["theta"]
+    except (StationError, ArithmeticError, ValueError, KeyError):  # a run the model cannot replay decides nothing
+        return None
