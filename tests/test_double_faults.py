@@ -131,6 +131,18 @@ def test_the_thesis_lead_under_an_open_loop_header_with_u_and_v_swapped(rig_data
     assert run.controller.spec["design"]["text"] == "20(s+2π·5)/(s+2π·20)"
 
 
+@pytest.mark.parametrize("header", [None, OPEN_LOOP])
+def test_the_kp_1_sweep_with_u_and_v_swapped_is_not_read_theta_negated(rig_data, tmp_path, header):
+    """The mirror of :func:`test_theta_written_negated_is_read_back`'s sweep: before, u and v
+    swapped on the 2014 sweep (P, kp = 1) under an open-loop header were read "θ written with the
+    other sign", θ fit -367558 %."""
+    clean = LoggedRun.from_path(rig_data / SWEEP)
+    run = LoggedRun.from_path(_rewrite(rig_data / SWEEP, tmp_path / SWEEP, header, swap=True))
+    assert _said(run) == {"u and v swapped"} and run.reproduced
+    model = load_model("tmm-fit")
+    assert run.simulate(model).fit_pct["theta"] == pytest.approx(clean.simulate(model).fit_pct["theta"], abs=0.05)
+
+
 def test_a_p_step_with_theta_negated_is_not_a_swap(rig_data, tmp_path):
     # with u and v swapped back, v is the 0/50 step: any law of high gain at a ±50 clamp gives it
     run = LoggedRun.from_path(_rewrite(rig_data / P, tmp_path / "neg.txt", negate=True))
