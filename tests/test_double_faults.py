@@ -78,7 +78,7 @@ def test_theta_written_negated_is_read_back(rig_data, tmp_path, name, header):
     """Also the mirror a law cannot decide: a P law of gain 1 (the 2014 sweep, kp = 1) reads the
     same with θ negated as with u and v swapped. On the sweep the hub lags its reference, so how
     closely θ follows u could not tell them apart: before, "u and v swapped" and a θ fit of
-    -367558 %; the nominal model driven by v decides (``logged.rewrite_evidence.model_miss``)."""
+    -367558 %; the nominal model run in closed loop by the law decides (``logged.rewrite_evidence.model_miss``)."""
     clean = LoggedRun.from_path(rig_data / name)
     run = LoggedRun.from_path(_rewrite(rig_data / name, tmp_path / "neg.txt", header, negate=True))
     assert _said(run) == {"θ written with the other sign"}
@@ -139,6 +139,25 @@ def test_the_kp_1_sweep_with_u_and_v_swapped_is_not_read_theta_negated(rig_data,
     clean = LoggedRun.from_path(rig_data / SWEEP)
     run = LoggedRun.from_path(_rewrite(rig_data / SWEEP, tmp_path / SWEEP, header, swap=True))
     assert _said(run) == {"u and v swapped"} and run.reproduced
+    model = load_model("tmm-fit")
+    assert run.simulate(model).fit_pct["theta"] == pytest.approx(clean.simulate(model).fit_pct["theta"], abs=0.05)
+
+
+def test_the_2014_sweep_without_accelerometer_with_theta_negated_under_an_open_loop_header(rig_data, tmp_path):
+    """21 s of a kp = 1 sweep in the 2014 layout (θ third): the nominal model driven open loop by
+    v drifts far over such a run (θ RMS 231 counts against 131 for the wrong rewrite, u and v
+    swapped), so the rewrites are judged in closed loop, each by its law. Before: "u and v
+    swapped", θ fit -357256 %."""
+    name = "without_accel_01_28_14_test_2.txt"
+    lines = (rig_data / name).read_text().splitlines()
+    rows = [ln.split("\t") for ln in lines[1:] if ln.strip()]
+    for f in rows:
+        f[2] = f"{-float(f[2]):g}"
+    path = tmp_path / name
+    path.write_text("\n".join(OPEN_LOOP + lines[:1] + ["\t".join(f) for f in rows]) + "\n")
+    clean, run = LoggedRun.from_path(rig_data / name), LoggedRun.from_path(path)
+    assert lines[0].split("\t")[2] == "theta" and _said(run) - _said(clean) == {"θ written with the other sign"}
+    assert "u and v swapped" not in _said(run)
     model = load_model("tmm-fit")
     assert run.simulate(model).fit_pct["theta"] == pytest.approx(clean.simulate(model).fit_pct["theta"], abs=0.05)
 

@@ -215,7 +215,7 @@ def check_columns(log: RunLog, skipped=None) -> Columns:
             elif dv is not None and dv <= NEAR_COUNTS < as_named:
                 trials.append((rewrites, trial))
         if exact:  # a P law of gain 1 gives two: the nominal model's θ tells them apart
-            rewrites, trial, dv = min(exact, key=lambda x: model_miss(x[1]) if len(exact) > 1 else 0.0)
+            rewrites, trial, dv = min(exact, key=lambda x: _law_miss(x[1], skipped) if len(exact) > 1 else 0.0)
             return _swapped_back(log, rewrites, trial, as_named, f"to {dv:.2g}")
         if trials:
             break
@@ -284,8 +284,20 @@ def _inferred_swap(log: RunLog, skipped) -> Columns:
         return Columns((), log, cid)
     low = min(_order(x[2].controller) for x in laws)
     laws = [x for x in laws if _order(x[2].controller) == low]
-    rewrites, trial, found = min(laws, key=lambda x: (model_miss(x[1]) if len(laws) > 1 else 0.0, tracking_error(x[1])))
+    rewrites, trial, found = min(laws, key=lambda x: (_law_miss(x[1], skipped, x[2]) if len(laws) > 1 else 0.0,
+                                                      tracking_error(x[1])))
     return _swapped_back(log, rewrites, trial, None, f"{found.claim.data}", found)
+
+
+def _law_miss(trial: RunLog, skipped, found: ControllerId | None = None) -> float:
+    """:func:`station.logged.rewrite_evidence.model_miss` of a rewrite, closed by its law."""
+    if found is None:
+        try:
+            found = identify_controller(trial, skipped)
+        except StationError:
+            return np.inf
+    alignment = found.fit.alignment if found.fit is not None else None
+    return model_miss(trial, found.controller, alignment)
 
 
 def _order(controller) -> int:

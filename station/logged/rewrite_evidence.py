@@ -32,17 +32,23 @@ def tracking_error(log: RunLog) -> float:
     return float(np.sqrt(np.mean(e * e))) if e.size else np.inf
 
 
-def model_miss(log: RunLog) -> float:
-    """RMS of θ less the nominal model's θ driven by the log's v, encoder counts (inf where the
-    model cannot run it): which of two rewrites a law cannot decide puts the command in v and
-    the hub's angle in θ (a P law of gain 1 reads the same with θ negated as with u and v
-    swapped; on a sweep the hub lags, and how closely θ follows u says nothing).
+def model_miss(log: RunLog, law=None, alignment: int | None = None) -> float:
+    """RMS of θ less the nominal model's θ, run in closed loop by the log's law, encoder counts
+    (inf where the model cannot run it): which of two rewrites a law cannot decide puts the
+    reference in u, the command in v and the hub's angle in θ (a P law of gain 1 reads the same
+    with θ negated as with u and v swapped; on a sweep the hub lags, and how closely θ follows u
+    says little). In closed loop, as the rig ran it: the model driven open loop by v drifts
+    over a long run.
 
     Parameters
     ----------
     log : RunLog
+    law : Compensator, OpenLoop or None
+        The law the rewrite reproduces (None: the model driven by the logged v).
+    alignment : int or None
+        The law's alignment.
     """
-    predicted = nominal_theta(log)
+    predicted = nominal_theta(log, law, alignment)
     if predicted is None:
         return np.inf
     miss = np.asarray(log.data["theta"], dtype=float) - predicted

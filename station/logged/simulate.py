@@ -237,14 +237,18 @@ def simulate_log(log: RunLog, controller, alignment: int | None, model, ticks=FR
     return ModelRun(pred, theta, data["a"], how, part)
 
 
-def nominal_theta(log: RunLog) -> np.ndarray | None:
-    """The nominal model's θ for a log driven by its logged command: the evidence of
-    :func:`station.logged.sensor_swap.check_sensor_swap` and of a column rewrite a law cannot decide
-    (:func:`station.logged.rewrite_evidence.model_miss`).
+def nominal_theta(log: RunLog, controller=None, alignment: int | None = None) -> np.ndarray | None:
+    """The nominal model's θ for a log driven by its logged command, or run in closed loop by
+    its law: the evidence of :func:`station.logged.sensor_swap.check_sensor_swap` and of a column
+    rewrite a law cannot decide (:func:`station.logged.rewrite_evidence.model_miss`).
 
     Parameters
     ----------
     log : RunLog
+    controller : Compensator, OpenLoop or None
+        The log's law (None: the model driven by the logged v, open loop).
+    alignment : int or None
+        As :func:`simulate_log`.
 
     Returns
     -------
@@ -254,6 +258,6 @@ def nominal_theta(log: RunLog) -> np.ndarray | None:
     from station.plant.model import load_model  # lazy: start-up time (asked only of a suspect log)
 
     try:
-        return simulate_log(log, None, None, load_model("tmm-fit")).prediction["theta"]
+        return simulate_log(log, controller, alignment, load_model("tmm-fit")).prediction["theta"]
     except (StationError, ArithmeticError, ValueError, KeyError):  # a run the model cannot replay decides nothing
         return None
