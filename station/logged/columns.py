@@ -247,9 +247,9 @@ def _inferred_swap(log: RunLog, skipped) -> Columns:
     columns are named and one does with two of them exchanged or θ negated, that rewrite (the
     law inferred on it). Where more than one rewrite of as many faults gives a law, the one of
     lowest order, and of those (a P law of gain 1 at alignment 0, v = u − θ, reads the same with
-    θ negated as with v and θ exchanged and the gain −1) the one whose θ the nominal model driven
-    by its v gives most closely (:func:`station.logged.rewrite_evidence.model_miss`), then whose
-    θ follows its u most closely (:func:`tracking_error`), the first on a tie."""
+    θ negated as with v and θ exchanged and the gain −1) the one whose θ the nominal model run in
+    closed loop by its law gives most closely (:func:`station.logged.rewrite_evidence.model_miss`),
+    then whose θ follows its u most closely (:func:`tracking_error`), the first on a tie."""
     try:
         cid = identify_controller(log, skipped)
     except StationError:  # said where the controller is asked for (LoggedRun.identified)
@@ -423,7 +423,7 @@ def check_command_unit(log: RunLog, skipped=None) -> Columns | None:
         sizes = "units" if least is None else "steps"
         claim = AuditClaim("columns", "v in DAC counts", f"{both} in {sizes} of {step:.6g}", "contradicted",
                            f"{sized}; {law}, and {why}: a command written in another unit")
-        note = f"{both} in steps of {step:.6g} a DAC count (the audit): divided by it"
+        note = f"{both} in {sizes} of {step:.6g} a DAC count (the audit): divided by it"
         return Columns((claim,), dataclasses.replace(trial, notes=list(log.notes) + [note]))
     return _unknown_unit(log, why, f"its changes are whole multiples of {least:.6g}, but no law reproduces it in "
                                    f"counts of that size or of its fractions", small)

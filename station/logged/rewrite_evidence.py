@@ -3,8 +3,9 @@
 A P law of gain 1 at alignment 0, v = u − θ, reads the same with θ negated as with u and v
 swapped and its gain −1 (u = v + θ); only the physics tells which column is the reference and
 which the command: a closed loop's angle follows its reference (:func:`tracking_error`), and the
-hub's angle is what the plant makes of the command (:func:`model_miss`, the nominal model
-driven by v; on a sweep the hub lags, and how closely θ follows u says little).
+hub's angle is what the plant makes of the command (:func:`model_miss`, the nominal model run
+in closed loop by the rewrite's law; on a sweep the hub lags, and how closely θ follows u says
+little).
 """
 
 from __future__ import annotations
