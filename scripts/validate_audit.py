@@ -18,7 +18,9 @@ samples; ``station.logged.LoggedRun`` sees only the file. Judged per case:
   those column faults beside it (``double``) is contradicted and the fault said; so is a
   closed-loop header's lie over two columns swapped (``lie:swap``) or over one column in
   another unit or about another zero (``lie:column``); and two column faults at once under a
-  true header or none (``pair``);
+  true header or none (``pair``); a lead with Ga over rows lost (``lie:accel_rows``) is
+  contradicted under its lying header, its law judged on the rows before the first jump; a
+  column fault beside rows lost (``rows:column``) is said;
 - reproduced: the controller used reproduces every logged v to the device's quantization
   (1e-6 counts, the logged integer exactly for an integer recursion, half the last printed
   digit for a v printed to fewer digits) at the hidden alignment;
@@ -212,7 +214,12 @@ def table(outcomes: list[Outcome], seeds: str, elapsed: float) -> str:
         "`lie:open_loop`: an open-loop header on closed-loop data; `lie:p_kp`: `#kp=2.0` over another gain; "
         "`lie:lead_pole`: the thesis's lead printed, another pole run; `lie:accel_fb`: a lead with "
         "accelerometer feedback θ̂_d = u − Ga(a) (DESIGN.md's Ga, its gain ×0.5–1.5 and frequencies ×0.7–1.4; "
-        "the float recursion) under a header without Ga (open loop, or the lead alone); `int:*`: integer "
+        "the float recursion) under a header without Ga (open loop, or the lead alone); `lie:accel_rows`: the "
+        "same, or no header, over a log that lost one to three spans of 1–30 rows, the first from row 150 on "
+        "(Ga's state is in no column: the law is judged on the rows before the first jump); `rows:column`: a "
+        "true header (P, a lead on the stored integer, or the thesis's lead + Ga on the float, both named) over "
+        "a log that lost rows (as `rows`) with one column fault beside it — θ negated, u and v or θ and a "
+        "swapped, or v in volts — the fault said as in its own class; `int:*`: integer "
         "recursions with no "
         "header (the 2014 layout); `session`: the lab's third session (open-loop header, a lead on the "
         "truncated integer at alignment 0); `lie:sent`: an open-loop header on a lead whose recursion runs on the "
@@ -224,7 +231,8 @@ def table(outcomes: list[Outcome], seeds: str, elapsed: float) -> str:
         "the controller reproducing every logged v to the device's quantization (1e-6 counts; the logged "
         "integer exactly) at the hidden alignment, and the hidden law named: the continuous design (num/den in s "
         "to 1e-9, Tustin) or the P gain (— where the header's law is confirmed and used as printed), and "
-        "for `lie:accel_fb` Ga too (its Tustin inverse's coefficients to 1e-3: DESIGN.md's are not round "
+        "for `lie:accel_fb` and `lie:accel_rows` Ga too (its Tustin inverse's coefficients to 1e-3: DESIGN.md's "
+        "are not round "
         "numbers, and a run pins Ga's slowest pole only so far).",
         "",
         "| class | seeds | contradiction right | reproduced | design / gain named | all | median s |",

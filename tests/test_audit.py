@@ -28,7 +28,7 @@ from station.logged.units import unsigned_words, word_claims
 from station.plant import DiscretePlant, load_model
 from station.replay import format_report, replay
 from station.survey import format_table, survey
-from tests.blind.audit import LabController, draw_case, reference, write_audit_case
+from tests.blind.audit import GA_S, LabController, draw_case, reference, write_audit_case
 from tests.blind.rig import tustin
 
 RIG_LOGS = [
@@ -102,7 +102,11 @@ BLIND = [("lie:open_loop", 0), ("lie:open_loop", 1), ("lie:p_kp", 0), ("lie:lead
          ("honest:lead_int+coulomb_friction", 8),
          # a lead with accelerometer feedback under a header without Ga (open loop at d 0 and 1, the
          # lead alone on a 5 Hz sine, which hardly pins Ga's slowest pole, and on a sweep at a ±150 clamp)
-         ("lie:accel_fb", 0), ("lie:accel_fb", 5), ("lie:accel_fb", 8), ("lie:accel_fb+coulomb_friction", 9)]
+         ("lie:accel_fb", 0), ("lie:accel_fb", 5), ("lie:accel_fb", 8), ("lie:accel_fb+coulomb_friction", 9),
+         # the same over rows lost (Ga's state in no column: judged on the rows before the first jump), under
+         # an open-loop header, the lead alone over two gaps, and none on a sweep whose first 437 rows gave
+         # the products' slowest pole a hair right of 0 (were "no law found")
+         ("lie:accel_rows", 2), ("lie:accel_rows+coulomb_friction", 4), ("lie:accel_rows", 8)]
 
 
 @pytest.mark.parametrize("case, seed", BLIND)
@@ -483,6 +487,33 @@ def test_a_true_header_over_missing_or_repeated_rows_is_not_contradicted(rig_dat
     else:
         assert "controller" not in verdicts and run.identified.judged_to is None
         assert run.max_abs_dv <= 1e-6
+
+
+@pytest.mark.parametrize("header", ["#SLFR RTP OL_Test", "#SLFR RTP P_control_Test\n#kp=2.0", None])
+@pytest.mark.parametrize("cut", ["drop", "repeat"])
+def test_a_lying_header_over_rows_lost_from_the_accelerometer_run(rig_data, tmp_path, header, cut):
+    # The lead + Ga step with 11 rows deleted, or 10 written again, at row 200, under an open-loop
+    # header, a P header or none: Ga's state is a's whole past, in no column, so its law is inferred on
+    # the 200 rows before the jump and judged there (as its true header's is), the thesis's lead and Ga
+    # named, the header contradicted. Before: "no law found", the model driven open loop by v
+    src = rig_data / RIG_LOGS[3]
+    lines = src.read_text().splitlines()
+    head = [x for x in lines if x.startswith("#")]
+    rows = lines[len(head):]
+    rows = rows[:200] + rows[211:] if cut == "drop" else rows[:200] + rows[190:200] + rows[200:]
+    path = tmp_path / src.name
+    path.write_text("\n".join(([header] if header else []) + head[-1:] + rows) + "\n")
+    run = LoggedRun.from_path(path)
+    claim = next(c for c in run.audit.claims if c.claim == "controller")
+    assert run.source == ("inferred (header contradicted)" if header else "inferred")
+    assert claim.verdict == ("contradicted" if header else "unchecked")
+    assert claim.data.endswith("before row 200, where n jumps (not judged across it)"), claim.data
+    assert run.identified.judged_to == 200 and run.reproduced and run.alignment == 1
+    assert run.controller.spec["design"]["text"] == "20(s+2π·5)/(s+2π·20)"
+    found = to_continuous(run.controller.ga.num, run.controller.ga.den, 0.002, "Tustin")
+    np.testing.assert_allclose(found[1], GA_S[1], rtol=1e-6)  # DESIGN.md's Ga, the lab's software's
+    report = format_report(replay(path, model=False))
+    assert "reproduces the logged v up to row 200, where n jumps" in report
 
 
 @pytest.mark.parametrize("name", [RIG_LOGS[0], RIG_LOGS[1], RIG_LOGS[4], RIG_LOGS[3]])

@@ -36,12 +36,12 @@ OPEN_LOOP = ["#SLFR RTP OL_Test"]
 
 
 def _rewrite(src: Path, dst: Path, header=None, negate=False, swap=False, volts=None, negate_a=False,
-             degrees=False, corrupt=None, zero=None) -> Path:
+             degrees=False, corrupt=None, zero=None, drop=None) -> Path:
     """The log with its header replaced (the column line kept), θ (or a) negated or written in
     degrees (6 decimals), u and v swapped, v written in volts of ``volts`` per count (7 digits)
     or about ``zero`` (an unsigned DAC code); ``corrupt`` (row, counts): that row's θ field, as
-    written, that many higher (a digit or bit a serial line or a writer got wrong); every other
-    field as it was."""
+    written, that many higher (a digit or bit a serial line or a writer got wrong); ``drop``
+    (row, rows): that many rows lost from that one on; every other field as it was."""
     lines = src.read_text().splitlines()
     head = [ln for ln in lines if ln.startswith("#")]
     out = []
@@ -64,6 +64,8 @@ def _rewrite(src: Path, dst: Path, header=None, negate=False, swap=False, volts=
         if swap:  # after volts: the command's column, in volts, moves
             f[2], f[3] = f[3], f[2]
         out.append("\t".join(f))
+    if drop is not None:
+        out = out[:drop[0]] + out[drop[0] + drop[1]:]
     dst.write_text("\n".join((head if header is None else header + head[-1:]) + out) + "\n")
     return dst
 
@@ -222,6 +224,49 @@ def test_the_commands_unit_or_zero_beside_a_corrupted_field(rig_data, tmp_path, 
     assert run.step_metrics() == clean.step_metrics()
     model = load_model("tmm-fit")
     assert run.simulate(model).fit_pct["theta"] == pytest.approx(clean.simulate(model).fit_pct["theta"], abs=0.5)
+
+
+@pytest.mark.parametrize("name, fault", [(LEAD_ACCEL, "negate"), (LEAD_ACCEL, "swap"), (LEAD_ACCEL, "volts"),
+                                         (LEAD, "volts")])
+def test_a_column_fault_beside_rows_lost(rig_data, tmp_path, name, fault):
+    """A column fault beside 11 rows lost at row 300, under the true header. The lead + Ga
+    step's law is judged on the rows before the jump (Ga's state is in no column); the header's
+    law was judged across it, and every rewrite refused: θ negated read "the encoder the other
+    way" with "no law found", u and v swapped "undecided" beside a false accelerometer offset,
+    and a float v in volts (on the lead too: its unit's ratio judged by a replay that did not
+    start again at the jump) "size not found" or a crash. Now each fault is said and the log
+    reads as the same log without it."""
+    plain = LoggedRun.from_path(_rewrite(rig_data / name, tmp_path / "plain.txt", drop=(300, 11)))
+    run = LoggedRun.from_path(_rewrite(rig_data / name, tmp_path / f"{fault}.txt", drop=(300, 11),
+                                       negate=fault == "negate", swap=fault == "swap",
+                                       volts=5 / 2048 if fault == "volts" else None))
+    said = {"negate": "θ written with the other sign", "swap": "u and v swapped",
+            "volts": "v in units of 0.00244141"}[fault]
+    assert _said(run) - {"n jumps at 1 row"} == {said}
+    assert run.source == "header" and run.reproduced
+    assert run.identified.judged_to == plain.identified.judged_to == (300 if name == LEAD_ACCEL else None)
+    assert run.step_metrics() == plain.step_metrics()
+    model = load_model("tmm-fit")
+    assert run.simulate(model).fit_pct["theta"] == pytest.approx(plain.simulate(model).fit_pct["theta"], abs=0.5)
+
+
+# rows:column: the thesis's lead + Ga (named) with θ and a swapped, v in volts (a sine) and θ negated,
+# a lead on the stored integer with u and v swapped over three gaps, and a P with θ and a swapped (the
+# last two were read already: their laws' memory is in the rows)
+@pytest.mark.parametrize("case, seed", [("rows:column", s) for s in (6, 4, 8, 1, 0)])
+def test_blind_column_faults_beside_rows_lost(tmp_path, case, seed):
+    path, hidden = write_audit_case(tmp_path, case, seed)
+    run = LoggedRun.from_path(path)
+    assert run.source == "header" and run.reproduced and run.alignment == hidden.alignment
+    assert (run.identified.judged_to is not None) is (hidden.ga_s is not None)
+    said = _said(run) - {"n jumps at 1 row", "n jumps at 2 rows", "n jumps at 3 rows"}
+    shown = {"u": "u", "v": "v", "theta": "θ", "a": "a"}
+    if hidden.negate:
+        assert said == {"θ written with the other sign"}
+    elif hidden.swap:
+        assert said == {f"{shown[hidden.swap[0]]} and {shown[hidden.swap[1]]} swapped"}
+    else:
+        assert len(said) == 1 and next(iter(said)).startswith(("v in steps of", "v in units of"))
 
 
 @pytest.mark.parametrize("volts", [5 / 2048, 10 / 32768])

@@ -186,6 +186,24 @@ def _exp(x: float) -> float:
     return math.exp(min(max(float(x), -LOG_POLE), LOG_POLE))
 
 
+def _sign_starts(den_s: np.ndarray) -> list[np.ndarray]:
+    """Ga's s-denominator as the products give it, and, where its slowest real pole lies right
+    of 0, with that pole's sign turned. :func:`_pole_params` keeps each real pole's sign; on a
+    short or printed log the products can put the slowest pole (the thesis's at −0.064 rad/s,
+    under a run's 1/T) a hair right of 0, and the polish from there only slides toward an
+    integrator (a Ga that stays unstable is refused anyway)."""
+    roots = np.roots(den_s)
+    real = [i for i, r in enumerate(roots) if abs(r.imag) <= 1e-9 * max(1.0, abs(r))]
+    if not real:
+        return [den_s]
+    slowest = min(real, key=lambda i: abs(roots[i]))
+    if roots[slowest].real <= 0.0:
+        return [den_s]
+    turned = roots.copy()
+    turned[slowest] = -turned[slowest].real
+    return [den_s, np.real(np.poly(turned)) * den_s[0]]
+
+
 def _pole_params(den_s: np.ndarray):
     """Ga's s-poles as parameters, and the map back to its monic s-denominator: a real pole
     as log |p| (its sign kept), a complex pair as (log ωn, ζ). Ga's poles span decades (the
@@ -281,15 +299,22 @@ def accel_feedback(u, theta, a, v, d: int, m: int, p: int, limit: float, dt: flo
         den_z, den_of, q = d_ga, None, np.zeros(0)
         back = to_continuous(np.ones(1), d_ga, dt, "Tustin") if p else None
         if back is not None and np.all(np.isfinite(back[1])):
-            q, den_s = _pole_params(back[1])
+            best = None
+            for start in _sign_starts(back[1]):  # each parametrization keeps its real poles' signs
+                q0, den_s = _pole_params(start)
 
-            def den_of(q):
-                return discretize(np.ones(1), den_s(q), dt, "Tustin")[1]
+                def of(q, den_s=den_s):
+                    return discretize(np.ones(1), den_s(q), dt, "Tustin")[1]
 
-            fit = least_squares(lambda q: inner(den_of(q))[0], q, method="trf", jac="3-point", x_scale="jac",
-                                xtol=1e-15, ftol=1e-15, gtol=1e-15)
-            if np.all(np.isfinite(fit.x)):
-                q, den_z = fit.x, den_of(fit.x)
+                fit = least_squares(lambda q, of=of: inner(of(q))[0], q0, method="trf", jac="3-point",
+                                    x_scale="jac", xtol=1e-15, ftol=1e-15, gtol=1e-15)
+                if np.all(np.isfinite(fit.x)) and (best is None or fit.cost < best[0]):
+                    best = fit.cost, fit.x, of
+                if den_of is None:  # the products' own poles, should no polish be finite
+                    q, den_of = q0, of
+            if best is not None:
+                q, den_of = best[1], best[2]
+                den_z = den_of(q)
         _, sol = inner(den_z)
         if not (np.all(np.isfinite(sol)) and np.all(np.isfinite(den_z))):
             return None

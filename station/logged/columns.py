@@ -48,6 +48,7 @@ from station.control.rerun import is_closed_loop
 from station.errors import StationError
 from station.logged.audit import AuditClaim
 from station.logged.command_scale import law_scale
+from station.logged.missing_ticks import GAP_LAW_ROWS
 from station.logged.quantum import count_step, in_counts, quantum_fits
 from station.logged.controller import (NO_LAW, ControllerId, describe_controller, header_law_dv,
                                        header_reproduces, identify_controller)
@@ -425,8 +426,10 @@ def check_command_unit(log: RunLog, skipped=None) -> Columns | None:
                            f"{sized}; {law}, and {why}: a command written in another unit")
         note = f"{both} in {sizes} of {step:.6g} a DAC count (the audit): divided by it"
         return Columns((claim,), dataclasses.replace(trial, notes=list(log.notes) + [note]))
-    return _unknown_unit(log, why, f"its changes are whole multiples of {least:.6g}, but no law reproduces it in "
-                                   f"counts of that size or of its fractions", small)
+    said = (f"its changes are whole multiples of {least:.6g}, but no law reproduces it in counts of that size or "
+            f"of its fractions" if least is not None else f"it is {scaled.ratio:.6g} times the header's law replayed "
+            f"on its own commands, but no law reproduces it so read in counts")
+    return _unknown_unit(log, why, said, small)
 
 
 def check_command_offset(log: RunLog, skipped=None) -> Columns | None:
@@ -577,6 +580,7 @@ def _law_confirms(log: RunLog, skipped) -> str | None:
         found = identify_controller(log, skipped)
     except StationError:
         return None
-    if found.fit is None or found.judged_to is not None or found.fit.max_abs_dv > TOLERANCE:
-        return None
+    if found.fit is None or found.fit.max_abs_dv > TOLERANCE or found.judged_to is not None and (
+            found.judged_to == 0 or found.source != "header" and found.judged_to < GAP_LAW_ROWS):
+        return None  # judged on the rows before n jumps: a law the data give, on enough of them
     return "header" if found.source == "header" and dv is not None else "data"

@@ -16,10 +16,12 @@ from typing import NamedTuple
 import numpy as np
 
 from station.analysis.law_rows import TOLERANCE
-from station.control.rerun import ALIGNMENTS, command_error, is_closed_loop, replay_commands
+from station.control.rerun import (ALIGNMENTS, command_error, is_closed_loop, judged_rows, memory,
+                                   replay_commands)
 from station.logged.controller import named_law
 from station.logged.units import replayable_rate
 from station.runlog import RunLog
+from station.runlog.timebase import restart_rows
 
 
 class Scaled(NamedTuple):
@@ -56,6 +58,11 @@ def law_scale(log: RunLog, skipped=None) -> Scaled | None:
         None when the header names no closed-loop law, the rows are no loop's every tick, u, θ
         or v are not finite, the law commands nothing, the ratio is not positive (a reversed
         command is the motor's polarity, not a unit) or the law so scaled misses a logged v.
+        Where n jumps (rows missing or repeated) the ratio is taken on the rows before the first
+        jump, and the law replayed again from each jump with its memory the logged v in counts
+        (:func:`station.control.rerun.judged_rows` are judged); a law whose memory is in no
+        column (Ga's) is judged on the rows before the first jump, and past it v is the logged
+        one in counts.
     """
     law = named_law(log)
     data = log.data
@@ -64,10 +71,21 @@ def law_scale(log: RunLog, skipped=None) -> Scaled | None:
         return None
     v = np.asarray(data["v"], dtype=float)
     a = np.where(np.isfinite(data["a"]), data["a"], 0.0)
+    restarts = restart_rows(data["n"])
+    first = restarts[0] if restarts else v.size  # the ratio from the rows before n jumps, if it does
+    rows_back = memory(law)
     for d in ALIGNMENTS:
         replayed, _ = replay_commands(law, data["u"], data["theta"], a, d, skipped)
-        power = float(replayed @ replayed)
-        ratio = float(v @ replayed) / power if power > 0 else 0.0
-        if ratio > 0 and np.all(command_error(ratio * replayed, v)[d:] <= TOLERANCE):
+        power = float(replayed[:first] @ replayed[:first])
+        ratio = float(v[:first] @ replayed[:first]) / power if power > 0 else 0.0
+        if ratio <= 0:
+            continue
+        if restarts and rows_back is not None:  # again from each jump, its memory the logged v in counts
+            replayed, _ = replay_commands(law, data["u"], data["theta"], a, d, skipped, v / ratio, 0, restarts)
+        elif restarts:  # Ga's memory is in no column: judged before the jump, v in counts past it as logged
+            replayed = np.concatenate((replayed[:first], v[first:] / ratio))
+        judged = judged_rows(v.size, d, 0, restarts, rows_back or 0)
+        judged[first if rows_back is None else v.size:] = False
+        if np.all(command_error(ratio * replayed, v, seeded=restarts)[judged] <= TOLERANCE):
             return Scaled(ratio, replayed)
     return None

@@ -31,10 +31,10 @@ from station.analysis.pid_law import match_pid
 from station.control import Compensator, DiscreteTF, OpenLoop, controller_from_spec, lead_controller, p_controller
 from station.control.compensator import recursion_words
 from station.control.designs import MAX_ORDER, z_problem
-from station.control.rerun import ALIGNMENTS, AlignmentFit, is_closed_loop, printed_commands
+from station.control.rerun import ALIGNMENTS, AlignmentFit, is_closed_loop, memory, printed_commands
 from station.errors import StationError
 from station.logged.audit import AuditClaim
-from station.logged.missing_ticks import law_on_kept_rows, miss_at_gap, p_on_kept_rows
+from station.logged.missing_ticks import law_before_gap, law_on_kept_rows, miss_at_gap, p_on_kept_rows
 from station.logged.start import start_claims
 from station.logged.units import replayable_rate
 from station.runlog.printing import Printing
@@ -301,8 +301,9 @@ def header_law_dv(log: RunLog, skipped=None) -> float | None:
     |v_replayed − v_logged| at its best alignment and recursion (:func:`variant_of`) and clamp
     (its own, or the log's largest |v|), DAC counts; None when the header names no closed-loop
     law, the log's rows are no loop's every tick (:func:`station.logged.units.replayable_rate`),
-    or u, θ or v are not finite. The
-    header's coefficients as given: no law is inferred (:func:`identify_controller` does that).
+    or u, θ or v are not finite. The header's coefficients as given: no law is inferred
+    (:func:`identify_controller` does that). A law whose memory is in no column (Ga's) is judged
+    on the rows before n first jumps, if it does and they pin a law (v more than 0 and one level).
 
     Parameters
     ----------
@@ -315,11 +316,13 @@ def header_law_dv(log: RunLog, skipped=None) -> float | None:
     if (controller is None or not is_closed_loop(controller) or not replayable_rate(log)
             or not all(np.all(np.isfinite(data[c])) for c in ("u", "theta", "v"))):
         return None
-    a = np.where(np.isfinite(data["a"]), data["a"], 0.0)
-    best = None
+    cols, best = (data["u"], data["theta"], np.where(np.isfinite(data["a"]), data["a"], 0.0), data["v"]), None
     restarts = restart_rows(data["n"])
+    if restarts and memory(controller) is None and pins_a_law(cols[3][:restarts[0]]):  # Ga's state: no column
+        cols = tuple(np.asarray(c, dtype=float)[:restarts[0]] for c in cols)
+        skipped, restarts = None if skipped is None else np.asarray(skipped)[:restarts[0]], ()
     for law in at_clamps(controller, data["v"]):
-        _, fit, _ = variant_of(law, data["u"], data["theta"], a, data["v"], ALIGNMENTS, skipped, restarts=restarts)
+        _, fit, _ = variant_of(law, *cols, ALIGNMENTS, skipped, restarts=restarts)
         if fit is not None and (best is None or fit.max_abs_dv < best):
             best = float(fit.max_abs_dv)
     return best
@@ -486,10 +489,16 @@ def identify_controller(log: RunLog, skipped=None) -> ControllerId:
             hit = IdentifiedController(glitch.law, glitch.fit.alignment, glitch.fit.max_abs_dv, glitch.fit.v_replayed,
                                        law, past[0].design, (glitch.fit.alignment,))
     stated = controller is not None or pid is not None
+    gap = None if controller is None or hit is not None else miss_at_gap(used, u, theta, a, v, data["n"], skipped)
+    judged_to = None  # a law with memory in no column (Ga's) is judged before n jumps, as the header's is
+    if hit is None and gap is None and not cut and (found := law_before_gap(u, theta, a, v, data["n"], skipped, dt,
+                                                                            prefer)) is not None:
+        hit, judged_to = found
     if hit is not None:
         fit = AlignmentFit(hit.alignment, hit.max_abs_dv, hit.v_replayed)
         at = f" at alignment {hit.alignment}" if is_closed_loop(hit.controller) else ""
-        data_says = f"{hit.law}{at}, reproduces every logged v {_how_close(hit.max_abs_dv, printing)}"
+        upto = "" if judged_to is None else f" before row {judged_to}, where n jumps (not judged across it)"
+        data_says = f"{hit.law}{at}, reproduces every logged v {_how_close(hit.max_abs_dv, printing)}{upto}"
         if controller is not None and (hit is completed or same_law(controller, hit.controller)):
             # what the header states holds; the data complete what it does not (the clamp,
             # the recursion on the stored integer, coefficients past their printed digits)
@@ -499,21 +508,21 @@ def identify_controller(log: RunLog, skipped=None) -> ControllerId:
                 "controller", said, data_says, "confirmed",
                 f"the data's law has the header's coefficients (to {SAME_LAW_RTOL:g} relative); as printed it "
                 f"replays v to max |dv| = {_counts(header_dv)}, completed from the data "
-                f"{_how_close(hit.max_abs_dv, printing)}{at}{aside}"), hit.alignments, cut=cut,
-                corrupted=glitch)
+                f"{_how_close(hit.max_abs_dv, printing)}{at}{upto}{aside}"), hit.alignments, cut=cut,
+                judged_to=judged_to, corrupted=glitch)
         if stated:
             notes.append(f"the header's controller ({said}) does not reproduce the logged v (max |dv| = "
                          f"{_counts(header_dv)}); the data's is used: {data_says}")
             return ControllerId(hit.controller, "inferred (header contradicted)", notes, fit, AuditClaim(
                 "controller", said, data_says, "contradicted",
                 f"the header's controller replays v to max |dv| = {_counts(header_dv)} at best; the data's law "
-                f"reproduces every logged v {_how_close(hit.max_abs_dv, printing)}{at}{aside}"), hit.alignments,
-                cut=cut, corrupted=glitch)
+                f"reproduces every logged v {_how_close(hit.max_abs_dv, printing)}{at}{upto}{aside}"), hit.alignments,
+                cut=cut, judged_to=judged_to, corrupted=glitch)
         notes.append(f"controller inferred from the data: {hit.law}, alignment {hit.alignment} "
-                     f"(reproduces the logged v {_how_close(hit.max_abs_dv, printing)})")
+                     f"(reproduces the logged v {_how_close(hit.max_abs_dv, printing)}{upto})")
         return ControllerId(hit.controller, "inferred", notes, fit, AuditClaim(
             "controller", said, data_says, "unchecked", f"the log names no controller; inferred from the data{aside}"),
-            hit.alignments, cut=cut, corrupted=glitch)
+            hit.alignments, cut=cut, judged_to=judged_to, corrupted=glitch)
     tried = ("open loop, P, linear e -> v up to order 3, on the float or the stored integer command, "
              "designs on the float with the whole count sent, Gth with accelerometer feedback Ga up to order 3 "
              "each on the float command, the thesis's Ga beside a Gth on whole counts, alignments 0 and 1")
@@ -526,11 +535,8 @@ def identify_controller(log: RunLog, skipped=None) -> ControllerId:
     evidence = (f"the header's controller replays v to max |dv| = {_counts(header_dv)} at best, and no law "
                 f"tried ({tried}) reproduces it")
     data_says = f"not this law (max |dv| = {_counts(header_dv)}); no law found"
-    gap = None if controller is None else miss_at_gap(used, u, theta, a, v, data["n"], skipped)
     if gap is not None:  # the law is judged on rows it never saw together: not a contradiction
         gap, fit = gap
-        before = np.abs(np.asarray(fit.v_replayed[:gap], float) - np.asarray(v[:gap], float))[fit.alignment:]
-        fit = fit._replace(max_abs_dv=float(np.max(before, initial=0.0)))
         verdict = "unchecked"
         data_says = f"this law up to row {gap}, where n jumps; not judged across it"
         evidence += (f"; but it reproduces every row before row {gap}, where n jumps (rows missing or repeated): "

@@ -18,11 +18,13 @@ model then runs the law at every tick, the reference held between rows
 
 from __future__ import annotations
 
+from dataclasses import replace
 from typing import NamedTuple
 
 import numpy as np
 
-from station.analysis.controller_id import TOLERANCE, clamps_to_try, law_variants
+from station.analysis.controller_id import (TOLERANCE, IdentifiedController, clamps_to_try, infer_controller,
+                                           law_variants)
 from station.analysis.law_rows import pins_a_law
 from station.control import p_controller
 from station.control.rerun import (ALIGNMENTS, AlignmentFit, command_error, detect_alignment, is_closed_loop, memory,
@@ -30,6 +32,10 @@ from station.control.rerun import (ALIGNMENTS, AlignmentFit, command_error, dete
 from station.logged.audit import AuditClaim
 from station.rig import CLAMP  # the rig's clamp: its laws ran at it
 from station.runlog.timebase import on_ticks
+
+GAP_LAW_ROWS = 100
+"""Rows before a log's first jump of n that a law is inferred on, at least (0.2 s at the rig's
+rate): many times the 14 coefficients of the largest law tried, Gth and Ga of order 3 each."""
 
 TURN_COUNTS = 1.0
 """How far θ at a missing tick may lie outside the rows around it, encoder counts (one count:
@@ -235,8 +241,8 @@ def _inferred(law, fit: AlignmentFit, holds: tuple, said: str, tick_s: float, ti
 def miss_at_gap(controller, u, theta, a, v, n, skipped) -> tuple[int, AlignmentFit] | None:
     """The row where n jumps (a tick missing or repeated) at which, or within its alignment
     after which, the controller replayed straight through at some alignment first misses the
-    logged v, and that alignment's fit (over every row): a law judged on rows it never saw
-    together, not contradicted.
+    logged v, and that alignment's fit: a law judged on rows it never saw together, not
+    contradicted.
 
     Parameters
     ----------
@@ -249,7 +255,9 @@ def miss_at_gap(controller, u, theta, a, v, n, skipped) -> tuple[int, AlignmentF
     Returns
     -------
     (int, AlignmentFit) or None
-        None when at every alignment it first misses elsewhere, or n does not jump.
+        The fit's ``max_abs_dv`` is over the rows before that one (from the alignment's, to v's
+        printing: :func:`station.control.rerun.command_error`), its ``v_replayed`` over every
+        row. None when at every alignment it first misses elsewhere, or n does not jump.
     """
     n = np.asarray(n, dtype=float)
     if n.size < 2 or not np.all(np.isfinite(n)):
@@ -259,10 +267,58 @@ def miss_at_gap(controller, u, theta, a, v, n, skipped) -> tuple[int, AlignmentF
     for d in ALIGNMENTS if gaps.size else ():
         fit = detect_alignment(controller, u, theta, a, v, (d,), skipped)
         miss = np.flatnonzero(command_error(fit.v_replayed, v) > TOLERANCE)
-        # the rows a jump reaches: d + the law's memory after it (Ga's, not in the rows: d + 1);
-        # none for an open loop (v = u of its own row, whatever d)
-        reach = 0 if not is_closed_loop(controller) else d + (1 if rows_back is None else rows_back)
+        # the rows a jump reaches: d + the law's memory after it; every later row for Ga's, whose
+        # state is in no column (the clamp can hide it for a while); none for an open loop (v = u
+        # of its own row, whatever d)
+        reach = 0 if not is_closed_loop(controller) else n.size if rows_back is None else d + rows_back
         near = gaps[(miss[0] >= gaps) & (miss[0] < gaps + reach)] if miss.size else gaps[:0]
         if near.size:
-            return int(near[0]), fit
+            gap = int(near[0])
+            before = command_error(fit.v_replayed, v)[fit.alignment:gap]
+            return gap, fit._replace(max_abs_dv=float(np.max(before, initial=0.0)))
     return None
+
+
+def law_before_gap(u, theta, a, v, n, skipped, dt: float,
+                   prefer: int | None) -> tuple[IdentifiedController, int] | None:
+    """A law whose memory is in no column (Ga's state, a's whole past) inferred on the rows
+    before a log's first jump of n, where the replay cannot start again: the law it finds, and
+    the row where n jumps, past which it is not judged (as a header's law is, :func:`miss_at_gap`).
+
+    Parameters
+    ----------
+    u, theta, a, v, n : array_like, shape (N,)
+        The log's columns (u, θ in encoder counts, a in accelerometer counts, v in DAC counts).
+    skipped : array_like of bool or None
+        As :func:`station.control.rerun.replay_commands`.
+    dt : float
+        Sample time, s.
+    prefer : int or None
+        The alignment chosen where the law holds at several.
+
+    Returns
+    -------
+    (IdentifiedController, int) or None
+        The law replayed over every row (``max_abs_dv`` over the rows before the jump) and that
+        row. None when n does not jump, fewer than :data:`GAP_LAW_ROWS` rows come before it, no
+        law reproduces them (:func:`station.analysis.controller_id.infer_controller`), or the
+        law replayed straight through first misses elsewhere than at a jump (a law whose memory
+        the rows hold is judged across the jumps already).
+    """
+    n = np.asarray(n, dtype=float)
+    if n.size < 2 or not np.all(np.isfinite(n)):
+        return None
+    jumps = np.flatnonzero(np.diff(n) != 1) + 1
+    if not jumps.size or jumps[0] < GAP_LAW_ROWS:
+        return None
+    first = int(jumps[0])
+    cols = [np.asarray(x, dtype=float) for x in (u, theta, v, a)]
+    hit = infer_controller(*(x[:first] for x in cols), dt, CLAMP, prefer=prefer)
+    if hit is None or memory(hit.controller) is not None:
+        return None
+    found = miss_at_gap(hit.controller, cols[0], cols[1], cols[3], cols[2], n, skipped)
+    if found is None or found[0] != first or found[1].alignment not in (hit.alignments or (hit.alignment,)):
+        return None
+    fit = found[1]
+    return replace(hit, alignment=fit.alignment, max_abs_dv=fit.max_abs_dv, v_replayed=fit.v_replayed,
+                   alignments=(fit.alignment,)), first

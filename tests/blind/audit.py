@@ -60,7 +60,13 @@ log whose a a script wrote as the accelerometer read it where the loop fed Ga th
 calibrated zero a0 (the rig's logs read a about 0.04 at rest); "lie:a_zero": the same under an
 open-loop header or none, a lead and a scaled Ga of their own on the float command; "lie:column": a
 closed-loop header that lies (as "lie:swap"'s) over one column fault ("v_unit", on a lead's stored
-integer; "v_zero"; "theta_zero"; "u_unit"). A class joined with "+" to
+integer; "v_zero"; "theta_zero"; "u_unit"); "lie:accel_rows": "lie:accel_fb"'s law and headers, or
+none, over a log that lost rows (one to three spans of 1-30 ticks, the first from tick 150 on:
+Ga's state is in no column, so only the rows before the first jump can show its law, and a
+law of up to 14 coefficients needs more than a few); "rows:column": a true header (a P, a lead on
+the stored integer, or the thesis's lead + Ga on the float command, both named) over a log that
+lost rows (as "rows") and holds one column fault beside it (θ negated, u and v or θ and a
+swapped, or v in volts). A class joined with "+" to
 "coulomb_friction" hides that friction too (drawn as :func:`tests.blind.cases.draw` draws it).
 """
 
@@ -84,7 +90,7 @@ N = 2000
 CLASSES = ("lie:open_loop", "lie:p_kp", "lie:lead_pole", "lie:accel_fb", "int:trunc_d0", "int:trunc_d1",
            "int:round_d0", "int:round_d1", "session", "lie:sent", "lie:accel_int", "honest:p", "honest:lead_int",
            "honest:lead_sent", "words", "swap", "rows", "a_unit", "v_unit", "printed", "sign", "double", "lie:swap", "pair",
-           "v_zero", "u_unit", "theta_zero", "a_zero", "lie:a_zero", "lie:column")
+           "v_zero", "u_unit", "theta_zero", "a_zero", "lie:a_zero", "lie:column", "lie:accel_rows", "rows:column")
 """The audit's blind classes, in the validation table's order."""
 
 PHYSICAL = ("coulomb_friction",)
@@ -209,6 +215,8 @@ class AuditCase:
         if self.name.startswith(("printed", "sign", "double", "v_zero", "u_unit", "theta_zero", "a_zero",
                                  "lie:a_zero")):
             return self.header == "open-loop"
+        if self.name.startswith("lie:accel_rows"):
+            return self.header != "none"
         return self.name.split("+")[0] in ("lie:open_loop", "lie:p_kp", "lie:lead_pole", "lie:accel_fb", "session", "lie:sent",
                                               "lie:accel_int", "lie:swap", "lie:column")
 
@@ -264,12 +272,20 @@ def draw_case(name: str, seed: int) -> AuditCase:
         kk = 5.0 * pp / zz
         return AuditCase(**common, law="lead", kp=None, num_s=(kk, kk * zz), den_s=(1.0, pp),
                          design_text=_lead_text(kk, zz, pp, hz=True), recursion="none", alignment=1, header="lead")
-    if base == "lie:accel_fb":
+    if base in ("lie:accel_fb", "lie:accel_rows"):
         g, f = float(rng.choice(GA_GAINS)), float(rng.choice(GA_FREQUENCIES))
         (b1, b0), (_, a2, a1, a0) = GA_S
         ga = ((g * b1 * f, g * b0 * f * f), (1.0, a2 * f, a1 * f * f, a0 * f ** 3))  # g·Ga(s/f)
+        if base == "lie:accel_fb":
+            return AuditCase(**common, **lead, recursion="none", alignment=int(rng.integers(0, 2)),
+                             header=str(rng.choice(["open-loop", "lead"])), ga_s=ga)
+        lost = np.zeros(N, dtype=bool)
+        for k in range(int(rng.integers(1, 4))):
+            start = int(rng.integers(150, 500)) if k == 0 else int(rng.integers(150, N - 40))
+            lost[start:start + int(rng.integers(1, 31))] = True
         return AuditCase(**common, **lead, recursion="none", alignment=int(rng.integers(0, 2)),
-                         header=str(rng.choice(["open-loop", "lead"])), ga_s=ga)
+                         header=str(rng.choice(["open-loop", "lead", "none"])), ga_s=ga,
+                         rows=tuple(int(k) for k in np.flatnonzero(~lost)))
     if base.startswith("int:"):
         recursion, d = base[4:].split("_d")
         return AuditCase(**common, **lead, recursion=recursion, alignment=int(d), header="none")
@@ -351,6 +367,27 @@ def draw_case(name: str, seed: int) -> AuditCase:
         return AuditCase(**common, law="lead", kp=None, num_s=(kk, kk * zz), den_s=(1.0, pp),
                          design_text=_lead_text(kk, zz, pp, hz=True), recursion=recursion, alignment=1, header="lead",
                          **hidden)
+    if base == "rows:column":  # rows lost beside one column fault, under a true header
+        lost = np.zeros(N, dtype=bool)
+        for _ in range(int(rng.integers(1, 4))):
+            start = int(rng.integers(20, 500))
+            lost[start:start + int(rng.integers(1, 31))] = True
+        fault = str(rng.choice(["negate", "swap", "v_unit"]))
+        hidden = dict(rows=tuple(int(k) for k in np.flatnonzero(~lost)))
+        hidden.update({"negate": {"negate": True}, "v_unit": {"v_unit": str(rng.choice(sorted(V_UNITS)))},
+                       "swap": {"swap": ("u", "v") if rng.random() < 0.5 else ("theta", "a")}}[fault])
+        which = rng.random()
+        if which < 1 / 3:
+            return AuditCase(**{**common, "header_kp": kp}, **p_law, recursion="trunc",
+                             alignment=int(rng.integers(0, 2)), header="p", **hidden)
+        if which < 2 / 3:
+            return AuditCase(**common, **lead, recursion=str(rng.choice(["trunc", "round"])),
+                             alignment=int(rng.integers(0, 2)), header="lead", **hidden)
+        p, z = 2 * math.pi * 20, 2 * math.pi * 5
+        thesis = dict(law="lead", kp=None, num_s=(5 * p / z, 5 * p), den_s=(1.0, p),
+                      design_text=_lead_text(5 * p / z, z, p, hz=True))
+        return AuditCase(**common, **thesis, recursion="none", alignment=int(rng.integers(0, 2)), header="lead",
+                         ga_s=GA_S, **hidden)
     if base == "pair":  # two column faults at once: a swap beside θ negated, or beside v in volts
         pair = ("u", "v") if rng.random() < 0.5 else ("theta", "a")
         if rng.random() < 0.5:
@@ -512,7 +549,7 @@ def header(case: AuditCase) -> list[str]:
         else:
             num, den = tustin(list(case.num_s), list(case.den_s), DT)
         ga = ("[]", "[]")  # no accelerometer feedback named (a lie where the data hold one: "lie:accel_fb")
-        if case.a_zero is not None:  # the thesis's, named
+        if case.a_zero is not None or case.name.startswith("rows:column") and case.ga_s is not None:  # named
             ga = tuple(_coeffs(x) for x in tustin(*case.ga_s, DT))
         return ["#SLFR RTP Motor_Comp_w_accel_fb", f"#Gth num={_coeffs(num)}", f"#Gth den={_coeffs(den)}",
                 f"#Ga num={ga[0]}", f"#Ga den={ga[1]}", COLUMNS_ACCEL]
