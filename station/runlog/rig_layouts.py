@@ -183,6 +183,13 @@ $\\hat{\\theta}_d$``), taken for rows saved without a header."""
 BARE_COLUMNS = (6, 7)
 """How many numbers a row of the rig's own has (with or without θ̂_d)."""
 
+BARE_ORDER_2014 = ("t", "u", "theta", "a", "v")
+"""The 2014 logs' columns in their order (their line ``Time (sec.) u theta accel v``), taken for
+rows of 5 numbers saved without it (a script that dropped the column line)."""
+
+BARE_ORDERS = {len(BARE_ORDER_2014): BARE_ORDER_2014, **{k: BARE_ORDER[:k] for k in BARE_COLUMNS}}
+"""The column order assumed for a bare row, by how many numbers it holds."""
+
 
 def parse_column_line(path: Path, line: str) -> Header:
     """A first line of column names, without a ``#`` header, understood.
@@ -198,8 +205,9 @@ def parse_column_line(path: Path, line: str) -> Header:
     -------
     Header
         meta ``{"columns": [names as printed]}``; a note lists the names taken as synonyms.
-        A line of 6 or 7 numbers is a row of the rig's saved without a header
-        (:data:`BARE_ORDER` assumed, said in a note; ``columns`` empty): the caller reads it as data.
+        A line of 6 or 7 numbers is a row of the rig's saved without a header (:data:`BARE_ORDER`
+        assumed), one of 5 a row of its 2014 logs saved without their column line
+        (:data:`BARE_ORDER_2014`); said in a note, ``columns`` empty: the caller reads it as data.
 
     Raises
     ------
@@ -208,13 +216,15 @@ def parse_column_line(path: Path, line: str) -> Header:
     """
     printed, sep = _split_names(line)
     if printed and all(is_number(c) for c in printed):
-        if len(printed) in BARE_COLUMNS:  # the rig's rows saved without their header
-            return Header({"columns": []}, list(BARE_ORDER[:len(printed)]), sep,
-                          [f"no header: the rig's column order {' '.join(BARE_ORDER[:len(printed)])} assumed "
+        order = BARE_ORDERS.get(len(printed))
+        if order is not None:  # the rig's rows saved without their header
+            era = "2014 logs'" if order == BARE_ORDER_2014 else "rig's"
+            return Header({"columns": []}, list(order), sep,
+                          [f"no header: the {era} column order {' '.join(order)} assumed "
                            f"(the log audit checks it against the data)"])
         raise log_error(path, 1, f"expected '{MAGIC}' (station run log), the rig's '#' header or a line "
                         f"of column names, got {len(printed)} numbers {line[:60]!r} (the rig's rows without a "
-                        f"header hold {' or '.join(map(str, BARE_COLUMNS))})")
+                        f"header hold {' or '.join(map(str, sorted(BARE_ORDERS)))})")
     names = _map_columns(path, 1, printed)
     renamed = [f"{p!r} -> {s}" for p, s in zip(printed, names) if p != s]
     notes = ["columns named by synonyms: " + ", ".join(renamed)] if renamed else []
