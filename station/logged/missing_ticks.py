@@ -31,7 +31,7 @@ from station.control.rerun import (ALIGNMENTS, AlignmentFit, command_error, dete
                                    replay_commands)
 from station.logged.audit import AuditClaim
 from station.rig import CLAMP  # the rig's clamp: its laws ran at it
-from station.runlog.timebase import on_ticks
+from station.runlog.timebase import on_ticks, restart_rows
 
 GAP_LAW_ROWS = 100
 """Rows before a log's first jump of n that a law is inferred on, at least (0.2 s at the rig's
@@ -305,13 +305,10 @@ def law_before_gap(u, theta, a, v, n, skipped, dt: float,
         law replayed straight through first misses elsewhere than at a jump (a law whose memory
         the rows hold is judged across the jumps already).
     """
-    n = np.asarray(n, dtype=float)
-    if n.size < 2 or not np.all(np.isfinite(n)):
+    jumps = restart_rows(n)  # the replay's own rows where n jumps
+    if not jumps or jumps[0] < GAP_LAW_ROWS:
         return None
-    jumps = np.flatnonzero(np.diff(n) != 1) + 1
-    if not jumps.size or jumps[0] < GAP_LAW_ROWS:
-        return None
-    first = int(jumps[0])
+    first = jumps[0]
     cols = [np.asarray(x, dtype=float) for x in (u, theta, v, a)]
     hit = infer_controller(*(x[:first] for x in cols), dt, CLAMP, prefer=prefer)
     if hit is None or memory(hit.controller) is not None:
