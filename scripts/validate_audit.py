@@ -20,7 +20,8 @@ samples; ``station.logged.LoggedRun`` sees only the file. Judged per case:
   another unit or about another zero (``lie:column``); and two column faults at once under a
   true header or none (``pair``); a lead with Ga over rows lost (``lie:accel_rows``) is
   contradicted under its lying header, its law judged on the rows before the first jump; a
-  column fault beside rows lost (``rows:column``) is said;
+  column fault beside rows lost (``rows:column``) is said, and θ from an earlier run's count
+  beside θ negated or u and v swapped (``zero:column``) both;
 - reproduced: the controller used reproduces every logged v to the device's quantization
   (1e-6 counts, the logged integer exactly for an integer recursion, half the last printed
   digit for a v printed to fewer digits) at the hidden alignment;
@@ -219,7 +220,9 @@ def table(outcomes: list[Outcome], seeds: str, elapsed: float) -> str:
         "(Ga's state is in no column: the law is judged on the rows before the first jump); `rows:column`: a "
         "true header (P, a lead on the stored integer, or the thesis's lead + Ga on the float, both named) over "
         "a log that lost rows (as `rows`) with one column fault beside it — θ negated, u and v or θ and a "
-        "swapped, or v in volts — the fault said as in its own class; `int:*`: integer "
+        "swapped, or v in volts — the fault said as in its own class; `zero:column`: `theta_zero`'s headers and "
+        "θ from an earlier run's count, beside θ negated or u and v swapped — both said as in their own classes, "
+        "and the law confirmed or inferred on the columns read back; `int:*`: integer "
         "recursions with no "
         "header (the 2014 layout); `session`: the lab's third session (open-loop header, a lead on the "
         "truncated integer at alignment 0); `lie:sent`: an open-loop header on a lead whose recursion runs on the "

@@ -36,12 +36,13 @@ OPEN_LOOP = ["#SLFR RTP OL_Test"]
 
 
 def _rewrite(src: Path, dst: Path, header=None, negate=False, swap=False, volts=None, negate_a=False,
-             degrees=False, corrupt=None, zero=None, drop=None) -> Path:
+             degrees=False, corrupt=None, zero=None, drop=None, theta0=None) -> Path:
     """The log with its header replaced (the column line kept), θ (or a) negated or written in
     degrees (6 decimals), u and v swapped, v written in volts of ``volts`` per count (7 digits)
     or about ``zero`` (an unsigned DAC code); ``corrupt`` (row, counts): that row's θ field, as
     written, that many higher (a digit or bit a serial line or a writer got wrong); ``drop``
-    (row, rows): that many rows lost from that one on; every other field as it was."""
+    (row, rows): that many rows lost from that one on; ``theta0``: θ written from that count
+    (the encoder's, where the loop took it off), before any negation; every other field as it was."""
     lines = src.read_text().splitlines()
     head = [ln for ln in lines if ln.startswith("#")]
     out = []
@@ -49,6 +50,8 @@ def _rewrite(src: Path, dst: Path, header=None, negate=False, swap=False, volts=
         if not ln.strip() or ln.startswith("#"):
             continue
         f = ln.split()
+        if theta0 is not None:
+            f[4] = f"{float(f[4]) + theta0:g}"
         if negate:
             f[4] = f"{-float(f[4]):g}"
         if degrees:
@@ -89,6 +92,31 @@ def test_theta_written_negated_is_read_back(rig_data, tmp_path, name, header):
     assert run.simulate(model).fit_pct["theta"] == pytest.approx(clean.simulate(model).fit_pct["theta"], abs=0.05)
     # the sensors then see the encoder as the model's: no encoder reversal claimed on top
     assert "encoder_scale" not in run.sensors.effects and "motor_polarity" not in run.sensors.effects
+
+
+@pytest.mark.parametrize("name, header", [(P, None), (P, OPEN_LOOP), (LEAD, None), (LEAD_ACCEL, OPEN_LOOP),
+                                          (P_2009, []), (SWEEP, None), (SWEEP, OPEN_LOOP)])
+@pytest.mark.parametrize("fault", ["negate", "swap"])
+def test_theta_from_its_zero_beside_a_sign_or_a_swap(rig_data, tmp_path, name, header, fault):
+    """θ written from the encoder's count 59 where the loop took it off, beside θ negated or u
+    and v swapped: two column faults, under the true header, an open-loop one or none. Each
+    was found alone; together, the θ zero was tried only on the columns as named and the
+    rewrites only from θ's written zero. The P step read as "2(s+5e-12)/(s+2e-12) ... with its
+    first row of memory taken as logged" (θ fit -342 %), the lead as "no law found". Now a
+    rewrite whose θ rests off 0 has its zero taken off as well; the kp = 1 sweep, whose
+    law reads the same from θ0 with u and v exchanged as from −θ0 with θ negated, is told by
+    the nominal model as the one-fault mirror is."""
+    clean = LoggedRun.from_path(rig_data / name)
+    run = LoggedRun.from_path(_rewrite(rig_data / name, tmp_path / "zero.txt", header, theta0=59.0,
+                                       negate=fault == "negate", swap=fault == "swap"))
+    said = {"negate": "θ written with the other sign", "swap": "u and v swapped"}[fault]
+    assert _said(run) == {said, "θ logged before its zero was taken off (θ0 = 59 counts)"}
+    assert run.reproduced and run.source == ("header" if header is None else
+                                             "inferred (header contradicted)" if header else "inferred")
+    assert run.step_metrics() == clean.step_metrics()
+    model = load_model("tmm-fit")
+    assert run.simulate(model).fit_pct["theta"] == pytest.approx(clean.simulate(model).fit_pct["theta"], abs=0.05)
+    assert "encoder_scale" not in run.sensors.effects
 
 
 @pytest.mark.parametrize("header", [None, OPEN_LOOP])
@@ -267,6 +295,19 @@ def test_blind_column_faults_beside_rows_lost(tmp_path, case, seed):
         assert said == {f"{shown[hidden.swap[0]]} and {shown[hidden.swap[1]]} swapped"}
     else:
         assert len(said) == 1 and next(iter(said)).startswith(("v in steps of", "v in units of"))
+
+
+# zero:column: a P of gain 1 (the mirror), a P at alignment 0, a lead on the sweep, one under no
+# header and one under the session's open-loop header; each read no law, or a near-integrator, before
+@pytest.mark.parametrize("seed", [1, 3, 4, 5, 9])
+def test_blind_theta_from_its_zero_beside_a_sign_or_a_swap(tmp_path, seed):
+    path, hidden = write_audit_case(tmp_path, "zero:column", seed)
+    run = LoggedRun.from_path(path)
+    assert run.reproduced and run.alignment == hidden.alignment
+    sources = {"none": "inferred", "open-loop": "inferred (header contradicted)"}
+    assert run.source == sources.get(hidden.header, "header")
+    fault = "θ written with the other sign" if hidden.negate else "u and v swapped"
+    assert _said(run) == {fault, f"θ logged before its zero was taken off (θ0 = {hidden.theta_zero:g} counts)"}
 
 
 @pytest.mark.parametrize("volts", [5 / 2048, 10 / 32768])

@@ -87,6 +87,9 @@ UNKNOWN_UNIT = "v in another unit, its size not found"
 """The "columns" claim's data for a v that is no DAC command as written, in a size the data do
 not give (:func:`check_command_unit`)."""
 
+ZEROED_TOO = "with θ's zero taken off as well (the next claim)"
+"""How a rewrite's claim says that θ was also logged before its zero was taken off (:func:`check_theta_zero`)."""
+
 SHOWN = {"u": "u", "v": "v", "theta": "θ", "a": "a"}
 """How a column's name is printed."""
 
@@ -203,7 +206,7 @@ def check_columns(log: RunLog, skipped=None) -> Columns:
         return _inferred_swap(log, skipped)
     trials = []
     for tried in (tuple((c,) for c in TRIALS), PAIRS):  # one fault, else two at once
-        exact = []
+        exact, zeroed = [], []
         for rewrites in tried:  # the header's law as given
             trial = rewritten_all(log, rewrites)
             if not pins_a_law(trial.data["v"]):  # a step column for v: any law of high gain at its clamp gives it
@@ -215,11 +218,17 @@ def check_columns(log: RunLog, skipped=None) -> Columns:
                 exact.append((rewrites, trial, dv))
             elif dv is not None and dv <= NEAR_COUNTS < as_named:
                 trials.append((rewrites, trial))
+            elif len(rewrites) == 1 and (zero := check_theta_zero(trial, skipped)) is not None:
+                zeroed.append((rewrites, zero))  # θ's zero in the log as well: two faults, after one
         if exact:  # a P law of gain 1 gives two: the nominal model's θ tells them apart
             rewrites, trial, dv = min(exact, key=lambda x: _law_miss(x[1], skipped) if len(exact) > 1 else 0.0)
             return _swapped_back(log, rewrites, trial, as_named, f"to {dv:.2g}")
         if trials:
             break
+        if zeroed:  # as exact's: a P law of gain 1 from θ0 reads as v = u − θ from −θ0 with u and v exchanged
+            rewrites, zero = min(zeroed, key=lambda x: _law_miss(x[1].log, skipped, x[1].identified)
+                                 if len(zeroed) > 1 else 0.0)
+            return _swapped_back(log, rewrites, zero.log, as_named, ZEROED_TOO, zero.identified, also=zero.claims)
     if not trials and as_named <= NEAR_COUNTS:  # the header's law within a count as named: no lie about the law
         return Columns((), log)
     if not trials:  # a header that lies about the law too: the data's law, on the rewrites
@@ -272,6 +281,9 @@ def _inferred_swap(log: RunLog, skipped) -> Columns:
             continue
         if len(rewrites) > 1 and rewrites[0] == ("u", "v") and not tracks_better(trial, log):
             continue
+        if len(rewrites) == 1 and (zero := check_theta_zero(trial, skipped)) is not None and zero.identified:
+            laws.append((rewrites, zero.log, zero.identified, zero.claims))  # θ from its zero too: that law, from rest
+            continue
         try:
             found = identify_controller(trial, skipped)
         except StationError:
@@ -280,14 +292,14 @@ def _inferred_swap(log: RunLog, skipped) -> Columns:
                 found.source in ("inferred", "inferred (header contradicted)")
                 or (found.source == "header" and is_closed_loop(found.controller)  # its corrupted fields set aside
                     and found.claim is not None and found.claim.verdict == "confirmed")):
-            laws.append((rewrites, trial, found))
+            laws.append((rewrites, trial, found, ()))
     if not laws:
         return Columns((), log, cid)
     low = min(_order(x[2].controller) for x in laws)
     laws = [x for x in laws if _order(x[2].controller) == low]
-    rewrites, trial, found = min(laws, key=lambda x: (_law_miss(x[1], skipped, x[2]) if len(laws) > 1 else 0.0,
-                                                      tracking_error(x[1])))
-    return _swapped_back(log, rewrites, trial, None, f"{found.claim.data}", found)
+    rewrites, trial, found, also = min(laws, key=lambda x: (_law_miss(x[1], skipped, x[2]) if len(laws) > 1 else 0.0,
+                                                            tracking_error(x[1])))
+    return _swapped_back(log, rewrites, trial, None, ZEROED_TOO if also else f"{found.claim.data}", found, also=also)
 
 
 def _law_miss(trial: RunLog, skipped, found: ControllerId | None = None) -> float:

@@ -66,7 +66,9 @@ Ga's state is in no column, so only the rows before the first jump can show its 
 law of up to 14 coefficients needs more than a few); "rows:column": a true header (a P, a lead on
 the stored integer, or the thesis's lead + Ga on the float command, both named) over a log that
 lost rows (as "rows") and holds one column fault beside it (θ negated, u and v or θ and a
-swapped, or v in volts). A class joined with "+" to
+swapped, or v in volts); "zero:column": "theta_zero"'s headers and θ from an earlier run's count,
+beside θ negated or u and v swapped (the script that kept the encoder's count also wrote the
+angle with the other sign, or its columns in another order). A class joined with "+" to
 "coulomb_friction" hides that friction too (drawn as :func:`tests.blind.cases.draw` draws it).
 """
 
@@ -90,7 +92,8 @@ N = 2000
 CLASSES = ("lie:open_loop", "lie:p_kp", "lie:lead_pole", "lie:accel_fb", "int:trunc_d0", "int:trunc_d1",
            "int:round_d0", "int:round_d1", "session", "lie:sent", "lie:accel_int", "honest:p", "honest:lead_int",
            "honest:lead_sent", "words", "swap", "rows", "a_unit", "v_unit", "printed", "sign", "double", "lie:swap", "pair",
-           "v_zero", "u_unit", "theta_zero", "a_zero", "lie:a_zero", "lie:column", "lie:accel_rows", "rows:column")
+           "v_zero", "u_unit", "theta_zero", "a_zero", "lie:a_zero", "lie:column", "lie:accel_rows", "rows:column",
+           "zero:column")
 """The audit's blind classes, in the validation table's order."""
 
 PHYSICAL = ("coulomb_friction",)
@@ -213,7 +216,7 @@ class AuditCase:
     def lies(self) -> bool:
         """Whether the header names another controller than the data's."""
         if self.name.startswith(("printed", "sign", "double", "v_zero", "u_unit", "theta_zero", "a_zero",
-                                 "lie:a_zero")):
+                                 "lie:a_zero", "zero:column")):
             return self.header == "open-loop"
         if self.name.startswith("lie:accel_rows"):
             return self.header != "none"
@@ -416,6 +419,13 @@ def draw_case(name: str, seed: int) -> AuditCase:
             return AuditCase(**common, **lead, recursion="trunc", alignment=int(rng.integers(0, 2)),
                              header="open-loop", theta_zero=zero)
         return _true_or_no_header(rng, common, p_law, lead, kp, theta_zero=zero)
+    if base == "zero:column":  # θ from an earlier run's count, beside θ negated or u and v swapped
+        zero = float(rng.integers(5, 400)) * float(rng.choice([-1.0, 1.0]))
+        hidden = {"negate": True} if rng.random() < 0.5 else {"swap": ("u", "v")}
+        if rng.random() < 0.25:  # by the lab's session (an open-loop header on a lead on the integer)
+            return AuditCase(**common, **lead, recursion="trunc", alignment=int(rng.integers(0, 2)),
+                             header="open-loop", theta_zero=zero, **hidden)
+        return _true_or_no_header(rng, common, p_law, lead, kp, theta_zero=zero, **hidden)
     if base == "a_zero":  # a written as read, the loop feeding Ga the reading less its zero
         p, z = 2 * math.pi * 20, 2 * math.pi * 5
         thesis = dict(law="lead", kp=None, num_s=(5 * p / z, 5 * p), den_s=(1.0, p),
