@@ -158,7 +158,8 @@ def rewritten_all(log: RunLog, rewrites: tuple[tuple[str, ...], ...]) -> RunLog:
 
 def check_columns(log: RunLog, skipped=None) -> Columns:
     """Check the column line against the header's closed-loop law, or with no header (or an
-    open-loop one no law replaces) against the law the data give (:data:`TRIALS`, :data:`PAIRS`).
+    open-loop one no law replaces) against the law the data give (:data:`TRIALS`, :data:`PAIRS`;
+    a single rewrite whose θ rests off 0 also from that zero, :func:`check_theta_zero`).
 
     Parameters
     ----------
@@ -255,7 +256,8 @@ def _inferred_swap(log: RunLog, skipped) -> Columns:
     """A log that names no controller, open loop, or a law that reproduces it on no rewrite (a
     header that lies about the law as well as the columns): when no law reproduces it as its
     columns are named and one does with two of them exchanged or θ negated, that rewrite (the
-    law inferred on it). Where more than one rewrite of as many faults gives a law, the one of
+    law inferred on it; θ read from its rest count too where that law then runs from rest,
+    :func:`check_theta_zero`). Where more than one rewrite of as many faults gives a law, the one of
     lowest order, and of those (a P law of gain 1 at alignment 0, v = u − θ, reads the same with
     θ negated as with v and θ exchanged and the gain −1) the one whose θ the nominal model run in
     closed loop by its law gives most closely (:func:`station.logged.rewrite_evidence.model_miss`),
