@@ -207,7 +207,7 @@ def check_columns(log: RunLog, skipped=None) -> Columns:
         return _inferred_swap(log, skipped)
     trials = []
     for tried in (tuple((c,) for c in TRIALS), PAIRS):  # one fault, else two at once
-        exact, zeroed = [], []
+        exact, missed = [], []  # missed: single rewrites, asked from θ's zero after every one (tied as exact)
         for rewrites in tried:  # the header's law as given
             trial = rewritten_all(log, rewrites)
             if not pins_a_law(trial.data["v"]):  # a step column for v: any law of high gain at its clamp gives it
@@ -219,14 +219,14 @@ def check_columns(log: RunLog, skipped=None) -> Columns:
                 exact.append((rewrites, trial, dv))
             elif dv is not None and dv <= NEAR_COUNTS < as_named:
                 trials.append((rewrites, trial))
-            elif len(rewrites) == 1 and (zero := check_theta_zero(trial, skipped)) is not None:
-                zeroed.append((rewrites, zero))  # θ's zero in the log as well: two faults, after one
+            elif len(rewrites) == 1:
+                missed.append((rewrites, trial))
         if exact:  # a P law of gain 1 gives two: the nominal model's θ tells them apart
             rewrites, trial, dv = min(exact, key=lambda x: _law_miss(x[1], skipped) if len(exact) > 1 else 0.0)
             return _swapped_back(log, rewrites, trial, as_named, f"to {dv:.2g}")
         if trials:
             break
-        if zeroed:  # as exact's: a P law of gain 1 from θ0 reads as v = u − θ from −θ0 with u and v exchanged
+        if zeroed := [(r, z) for r, trial in missed if (z := check_theta_zero(trial, skipped)) is not None]:
             rewrites, zero = min(zeroed, key=lambda x: _law_miss(x[1].log, skipped, x[1].identified)
                                  if len(zeroed) > 1 else 0.0)
             return _swapped_back(log, rewrites, zero.log, as_named, ZEROED_TOO, zero.identified, also=zero.claims)
@@ -256,12 +256,12 @@ def _inferred_swap(log: RunLog, skipped) -> Columns:
     """A log that names no controller, open loop, or a law that reproduces it on no rewrite (a
     header that lies about the law as well as the columns): when no law reproduces it as its
     columns are named and one does with two of them exchanged or θ negated, that rewrite (the
-    law inferred on it; θ read from its rest count too where that law then runs from rest,
-    :func:`check_theta_zero`). Where more than one rewrite of as many faults gives a law, the one of
-    lowest order, and of those (a P law of gain 1 at alignment 0, v = u − θ, reads the same with
-    θ negated as with v and θ exchanged and the gain −1) the one whose θ the nominal model run in
-    closed loop by its law gives most closely (:func:`station.logged.rewrite_evidence.model_miss`),
-    then whose θ follows its u most closely (:func:`tracking_error`), the first on a tie."""
+    law inferred on it; θ also read from its rest count where that law then runs from rest:
+    :func:`check_theta_zero`). Of several rewrites of as many faults giving a law, the lowest order;
+    of those (a P law of gain 1 at alignment 0, v = u − θ, reads the same with θ negated as with v
+    and θ exchanged and the gain −1) the one whose θ the nominal model run in closed loop by its law
+    gives most closely (:func:`station.logged.rewrite_evidence.model_miss`), then whose θ follows its
+    u most closely (:func:`tracking_error`), the first on a tie."""
     try:
         cid = identify_controller(log, skipped)
     except StationError:  # said where the controller is asked for (LoggedRun.identified)
