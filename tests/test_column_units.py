@@ -139,6 +139,9 @@ def test_count_step(a, step):
     (np.array([2.0, 2.0, 2.0]), True),
     (np.array([0.0, 0.25, 0.5, -0.75]), False),
     (np.array([0.1, 0.35, 0.2, 0.9]), False),
+    # volts of a ±10 V 16-bit DAC moving by 1-3 counts a row: every change within 1e-3 of none, none a count
+    (np.array([0.0, 3.0, 6.0, 5.0, 5.0]) * 10 / 32768, False),
+    (np.array([0.1 + 0.2, 0.3, 1.3]), True),   # a float's rounding between equal printed values is no change
 ])
 def test_in_counts(a, counts):
     assert in_counts(a) is counts

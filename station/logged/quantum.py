@@ -21,6 +21,10 @@ QUANTUM_TOLERANCE = 1e-3
 (values printed to a few decimals)."""
 
 
+FLOAT_NOISE = 1e-9
+"""A change between two printed values smaller than this is the float's rounding, not a change."""
+
+
 def quantum_fits(x: np.ndarray, quantum: float, spare: int = 0) -> bool:
     """Whether every value of ``x`` is a whole multiple of ``quantum`` (to
     :data:`QUANTUM_TOLERANCE` of it), but at most ``spare`` of them.
@@ -105,11 +109,15 @@ def in_counts(x) -> bool:
     """Whether a column is in whole counts: it changes by whole counts (or never changes),
     whatever its offset. A column that steps by whole multiples of 2 or more is counts too (an
     accelerometer of another gain read in whole counts: the gain says it, not the unit); False
-    for a column that changes by fractions of a count.
+    for a column that changes by fractions of a count, however small (a change within
+    :data:`QUANTUM_TOLERANCE` of none, but more than :data:`FLOAT_NOISE`, is one).
 
     Parameters
     ----------
     x : array_like, shape (N,)
     """
     x = np.asarray(x, dtype=float)
-    return x.size < 2 or not np.all(np.isfinite(x)) or quantum_fits(np.diff(x), 1.0)
+    if x.size < 2 or not np.all(np.isfinite(x)):
+        return True
+    d = np.diff(x)  # a change within the tolerance of none is a fraction, not a count (volts of a 16-bit DAC)
+    return quantum_fits(d, 1.0) and not np.any((np.abs(d) > FLOAT_NOISE) & (np.round(d) == 0))
