@@ -21,7 +21,8 @@ samples; ``station.logged.LoggedRun`` sees only the file. Judged per case:
   true header or none (``pair``); a lead with Ga over rows lost (``lie:accel_rows``) is
   contradicted under its lying header, its law judged on the rows before the first jump; a
   column fault beside rows lost (``rows:column``) is said, and θ from an earlier run's count
-  beside θ negated or u and v swapped (``zero:column``) both;
+  beside θ negated or u and v swapped (``zero:column``) both, and beside v in volts or about a
+  DAC code's midpoint (``zero:command``);
 - reproduced: the controller used reproduces every logged v to the device's quantization
   (1e-6 counts, the logged integer exactly for an integer recursion, half the last printed
   digit for a v printed to fewer digits) at the hidden alignment;
@@ -222,7 +223,9 @@ def table(outcomes: list[Outcome], seeds: str, elapsed: float) -> str:
         "a log that lost rows (as `rows`) with one column fault beside it — θ negated, u and v or θ and a "
         "swapped, or v in volts — the fault said as in its own class; `zero:column`: `theta_zero`'s headers and "
         "θ from an earlier run's count, beside θ negated or u and v swapped — both said as in their own classes, "
-        "and the law confirmed or inferred on the columns read back; `int:*`: integer "
+        "and the law confirmed or inferred on the columns read back; `zero:command`: the same headers and θ0 "
+        "beside v in volts (as `v_unit`'s; a P law's under its own header) or about a DAC code's midpoint (as "
+        "`v_zero`'s): a script that wrote the device's raw words — both said as in their own classes; `int:*`: integer "
         "recursions with no "
         "header (the 2014 layout); `session`: the lab's third session (open-loop header, a lead on the "
         "truncated integer at alignment 0); `lie:sent`: an open-loop header on a lead whose recursion runs on the "

@@ -24,7 +24,7 @@ from station.logged import LoggedRun
 from station.logged.sensor_evidence import sensor_evidence
 from station.logged.sensors import decide_faults
 from station.plant import load_model
-from tests.blind.audit import write_audit_case
+from tests.blind.audit import V_UNITS, write_audit_case
 
 P = "SFLR_P_control_step_kp_2_SLFR_RTP_P_control_kp=2.0.txt"
 LEAD = "step_response_Gth_comp_no_accel_FB_amp_100_duration_1000_SLFR_RTP_Motor_Comp_Gth.txt"
@@ -276,6 +276,73 @@ def test_a_column_fault_beside_rows_lost(rig_data, tmp_path, name, fault):
     assert run.step_metrics() == plain.step_metrics()
     model = load_model("tmm-fit")
     assert run.simulate(model).fit_pct["theta"] == pytest.approx(plain.simulate(model).fit_pct["theta"], abs=0.5)
+
+
+@pytest.mark.parametrize("name, header, fault", [
+    (P, None, "volts"), (LEAD, None, "volts"), (LEAD_ACCEL, None, "volts"), (P_2009, [], "volts"),
+    (P_2009, OPEN_LOOP, "volts"), (SWEEP, OPEN_LOOP, "volts"),
+    (P, None, "zero"), (P, OPEN_LOOP, "zero"), (P, [], "zero"), (P_2009, OPEN_LOOP, "zero"), (SWEEP, [], "zero")])
+def test_theta_from_its_zero_beside_the_commands_unit_or_zero(rig_data, tmp_path, name, header, fault):
+    """θ written from the encoder's count −59 where the loop took it off, beside v in volts of a
+    ±5 V 12-bit converter or about 128 (an unsigned 8-bit DAC code): a script that wrote the
+    device's raw words. Each fault alone was read; together the unit and v's zero were asked
+    only from θ as written. The P step read 1(s+5e-12)/(s+2e-12) (volts) or 2(s-1e-12)/(s-8e-12)
+    (about 128) "with its first row of memory taken as logged", the thesis's leads "no law found".
+    A P law's v in volts is read under its own header, or where kp = 1 decides the unit (with
+    no law named, gain and unit are one)."""
+    clean = LoggedRun.from_path(rig_data / name)
+    run = LoggedRun.from_path(_rewrite(rig_data / name, tmp_path / "zero.txt", header, theta0=-59.0,
+                                       volts=5 / 2048 if fault == "volts" else None,
+                                       zero=128.0 if fault == "zero" else None))
+    said = _said(run) - {"θ logged before its zero was taken off (θ0 = -59 counts)"}
+    assert len(said) == 1 and len(_said(run)) == 2
+    if fault == "volts":
+        assert next(iter(said)) in {"v in steps of 0.00244141", "v in units of 0.00244141"}
+    else:
+        assert said == {"v about 128 counts"}
+    assert run.reproduced and run.source == ("header" if header is None else
+                                             "inferred (header contradicted)" if header else "inferred")
+    assert run.step_metrics() == clean.step_metrics()
+    model = load_model("tmm-fit")
+    assert run.simulate(model).fit_pct["theta"] == pytest.approx(clean.simulate(model).fit_pct["theta"], abs=0.05)
+
+
+@pytest.mark.parametrize("header", [[], OPEN_LOOP])
+def test_an_encoder_not_zeroed_is_not_read_as_two_zeros(rig_data, tmp_path, header):
+    """The loop ran on θ as written (the encoder not zeroed): its P law reproduces v from θ's
+    rest count, v reading −kp·θ0 there. That is one claim on the start, not v about −kp·θ0
+    beside θ from its zero, which gives the same v
+    (:func:`station.logged.column_zeros.check_command_offset` asks θ's zero only where no law
+    reproduces the log as written)."""
+    src = _rewrite(rig_data / P_2009, tmp_path / "raw.txt", header, theta0=-59.0)
+    lines = src.read_text().splitlines()
+    out = [ln if ln.startswith("#") else "\t".join(
+        f[:3] + [f"{float(f[3]) + 59.0:g}"] + f[4:]) for ln in lines for f in [ln.split()]]
+    src.write_text("\n".join(out) + "\n")
+    run = LoggedRun.from_path(src)
+    said = _said(run)  # (v rewritten without the hub's answer to it: the sensors' check is not asked here)
+    assert run.reproduced and "θ starts at -59 counts (the encoder not zeroed)" in said
+    assert not {c for c in said if c.startswith(("v about", "θ logged before"))}
+    assert run.controller.spec.get("kind") == "p" and run.controller.spec.get("kp") == 1.0
+
+
+# zero:command: the session's open-loop header over volts of a 16-bit DAC and over 32768, a lead about
+# 128 under no header, a P in volts under its header, a float P about 128, a lead in volts under none
+@pytest.mark.parametrize("seed", [0, 1, 4, 6, 8, 5])
+def test_blind_theta_from_its_zero_beside_the_commands_unit_or_zero(tmp_path, seed):
+    path, hidden = write_audit_case(tmp_path, "zero:command", seed)
+    run = LoggedRun.from_path(path)
+    assert run.reproduced and run.alignment == hidden.alignment
+    sources = {"none": "inferred", "open-loop": "inferred (header contradicted)"}
+    assert run.source == sources.get(hidden.header, "header")
+    said = _said(run) - {f"θ logged before its zero was taken off (θ0 = {hidden.theta_zero:g} counts)"}
+    assert len(_said(run)) == 2 and len(said) == 1
+    if hidden.v_zero is not None:
+        assert said == {f"v about {hidden.v_zero:g} counts"}
+    else:
+        (unit,) = said
+        assert unit.startswith(("v in steps of", "v in units of"))
+        assert float(unit.split()[-1]) == pytest.approx(V_UNITS[hidden.v_unit], rel=1e-3)
 
 
 # rows:column: the thesis's lead + Ga (named) with θ and a swapped, v in volts (a sine) and θ negated,

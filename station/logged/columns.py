@@ -37,7 +37,6 @@ sensors themselves say it (:mod:`station.logged.sensor_swap`).
 from __future__ import annotations
 
 import dataclasses
-from typing import NamedTuple
 
 import numpy as np
 
@@ -47,15 +46,15 @@ from station.analysis.law_rows import TOLERANCE, no_dac_command, pins_a_law
 from station.control.rerun import is_closed_loop
 from station.errors import StationError
 from station.logged.audit import AuditClaim
-from station.logged.command_scale import law_scale
-from station.logged.missing_ticks import GAP_LAW_ROWS
+from station.logged.column_zeros import (ZEROED_TOO, Columns, check_command_offset, check_theta_zero, law_confirms,
+                                         theta_from_zero)
+from station.logged.command_scale import Scaled, law_scale
 from station.logged.quantum import count_step, in_counts, quantum_fits
-from station.logged.controller import (NO_LAW, ControllerId, describe_controller, header_law_dv,
+from station.logged.controller import (NO_LAW, ControllerId, header_law_dv,
                                        header_reproduces, identify_controller)
-from station.logged.reference_unit import check_reference_unit, exact_from_rest
-from station.logged.sensor_zeros import check_accel_zero, theta_zero_claim
+from station.logged.reference_unit import check_reference_unit
+from station.logged.sensor_zeros import check_accel_zero
 from station.logged.rewrite_evidence import model_miss, tracking_error, tracks_better
-from station.logged.start import REST_ROWS, rest_rows
 from station.logged.units import whole_counts
 from station.rig import DAC_LIMIT
 from station.runlog import RunLog
@@ -87,30 +86,8 @@ UNKNOWN_UNIT = "v in another unit, its size not found"
 """The "columns" claim's data for a v that is no DAC command as written, in a size the data do
 not give (:func:`check_command_unit`)."""
 
-ZEROED_TOO = "with θ's zero taken off as well (the next claim)"
-"""How a rewrite's claim says that θ was also logged before its zero was taken off (:func:`check_theta_zero`)."""
-
 SHOWN = {"u": "u", "v": "v", "theta": "θ", "a": "a"}
 """How a column's name is printed."""
-
-
-class Columns(NamedTuple):
-    """The column claim of a log and the log its data say it is (:func:`check_columns`).
-
-    Attributes
-    ----------
-    claims : tuple of AuditClaim
-        One contradicted "columns" claim when two columns were found swapped, else empty.
-    log : RunLog
-        The log itself, or a copy with the two columns swapped back and a note.
-    identified : ControllerId or None
-        The log's controller (:func:`station.logged.controller.identify_controller`) when
-        deciding needed it, else None.
-    """
-
-    claims: tuple[AuditClaim, ...]
-    log: RunLog
-    identified: ControllerId | None = None
 
 
 def swapped(log: RunLog, first: str, second: str) -> RunLog:
@@ -400,7 +377,7 @@ def check_command_unit(log: RunLog, skipped=None) -> Columns | None:
     else:  # as written v could be a command too: another gain of the law as much as another unit
         return None
     least = count_step(v)
-    scaled = law_scale(log, skipped) if least is None else None  # a float: its size by the law replayed
+    scaled = _float_scale(log, skipped) if least is None else None
     if least is None and scaled is None:  # no size to read it in
         return _unknown_unit(log, why, "its changes are no whole multiples of one size (a float, or printed to few "
                                        "digits)", small)
@@ -417,14 +394,16 @@ def check_command_unit(log: RunLog, skipped=None) -> Columns | None:
         also = u_least is not None and quantum_fits(np.array([u_least / step]), 1.0)
         if also:
             data["u"] = whole_counts(u / step)
-        trial = dataclasses.replace(log, data=data)
-        whose = _law_confirms(trial, skipped)
+        trial, zero = dataclasses.replace(log, data=data), None
+        whose = law_confirms(trial, skipped)
+        if whose != "header" and (zero := check_theta_zero(trial, skipped)) is not None:  # θ from its zero too
+            whose, trial = "data" if zero.identified is not None else "header", zero.log
         if whose is not None and (found is None or whose == "header"):
-            found = step, trial, also, whose
+            found = step, trial, also, whose, zero
         if found is not None and (dv is None or found[3] == "header"):
             break
     if found is not None:
-        step, trial, also, whose = found
+        step, trial, also, whose, zero = found
         both = "v and u" if also else "v"
         header = ("the log names no law" if stated is None else
                   "the header's open loop (v = u) reproduces neither" if dv is None else "the header's law reproduces neither")
@@ -432,136 +411,28 @@ def check_command_unit(log: RunLog, skipped=None) -> Columns | None:
                if dv is not None and whose == "header" else
                f"{header}, and the law the data give reproduces v in counts (÷ {step:.6g}; with no law named, its "
                f"gain and v's unit are one: gain k·g on steps of {step:.6g}/k gives the same v, and the largest step "
-               f"is taken)")
+               f"is taken)") + (f", {ZEROED_TOO}" if zero is not None else "")
         sized = (f"every change of v is a whole multiple of {step:.6g}, not of one count" if least is not None else
                  f"v is a float, {step:.6g} times the header's law replayed on its own commands to its printing")
         sizes = "units" if least is None else "steps"
         claim = AuditClaim("columns", "v in DAC counts", f"{both} in {sizes} of {step:.6g}", "contradicted",
                            f"{sized}; {law}, and {why}: a command written in another unit")
         note = f"{both} in {sizes} of {step:.6g} a DAC count (the audit): divided by it"
-        return Columns((claim,), dataclasses.replace(trial, notes=list(log.notes) + [note]))
+        zeroed = zero.claims if zero is not None else ()
+        return Columns((claim, *zeroed), dataclasses.replace(trial, notes=list(trial.notes) + [note]),
+                       zero.identified if zero is not None else None)
     said = (f"its changes are whole multiples of {least:.6g}, but no law reproduces it in counts of that size or "
             f"of its fractions" if least is not None else f"it is {scaled.ratio:.6g} times the header's law replayed "
             f"on its own commands, but no law reproduces it so read in counts")
     return _unknown_unit(log, why, said, small)
 
 
-def check_command_offset(log: RunLog, skipped=None) -> Columns | None:
-    """The command's zero checked by its rest and the log's law: a v that reads one value c
-    other than 0 before the first command (u and θ unchanged: no law commands anything there but
-    an accelerometer feedback on a's noise; c is v's first row or its median there, whole) and
-    whose every row less c the header's law reproduces (a closed loop's, or an open loop's
-    v = u; with no law named, or an open loop the data contradict, the law the data give, from
-    rest, where v as written has none or one only with its first rows of memory as logged) was written about another zero (an
-    unsigned DAC code about its midpoint, 128 of 8 bits).
-
-    Parameters
-    ----------
-    log : RunLog
-    skipped : array_like of bool, optional
-        As :func:`station.logged.controller.identify_controller`.
-
-    Returns
-    -------
-    Columns or None
-        The log with c taken off v and a contradicted "columns" claim; None otherwise (fewer
-        than :data:`REST_ROWS` rows at rest, v 0 there, or no law reproduces v less c).
-    """
-    u, theta, v = (np.asarray(log.data[c], dtype=float) for c in ("u", "theta", "v"))
-    rest = rest_rows(u, theta)
-    if rest < REST_ROWS or u[0] != 0 or not np.all(np.isfinite(v[:rest])):
-        return None
-    # one whole value at rest (a DAC code); a law feeding a back moves v about it by a's noise there (Ga)
-    zeros = {float(z) for z in (v[0], np.round(np.median(v[:rest]))) if z == np.round(z)} - {0.0}
-    for c in sorted(zeros, key=lambda z: abs(z - v[0])):
-        found = _offset_taken_off(log, skipped, v, c, rest)
-        if found is not None:
-            return found
-    return None
-
-
-def _offset_taken_off(log: RunLog, skipped, v: np.ndarray, c: float, rest: int) -> Columns | None:
-    """:func:`check_command_offset` for one zero c."""
-    trial = dataclasses.replace(log, data={**log.data, "v": v - c})
-    dv = header_law_dv(trial, skipped)  # None: an open-loop header's v = u, or none named
-    whose, found = "the header's law", None
-    named = _header_holds(trial, dv, skipped)
-    if not named and dv is not None and _law_confirms(trial, skipped) == "header":  # printed coefficients completed
-        whose, dv = "the header's law (its printed coefficients completed from the data)", None
-    elif not named:  # none named, an open loop's v = u contradicted, or a header lying about the law too
-        found = _data_law_from_rest(log, trial, skipped)
-        if found is None:
-            return None
-        whose, dv = f"the law the data give ({describe_controller(found.controller)})", float(found.fit.max_abs_dv)
-    within = "" if dv is None else f" (to {dv:.2g} counts)"
-    claim = AuditClaim(
-        "columns", "v in DAC counts about 0", f"v about {c:g} counts", "contradicted",
-        f"v reads {c:g} on the {rest} rows at rest before the first command (u and θ unchanged: no law commands "
-        f"anything there but a's noise), and {whose} reproduces every logged v less {c:g}{within}: a "
-        f"command written about another zero (an unsigned DAC code about its midpoint)")
-    return Columns((claim,), dataclasses.replace(trial, notes=list(log.notes) + [f"v about {c:g} counts (the "
-                                                                                 f"audit): {c:g} taken off"]), found)
-
-
-def check_theta_zero(log: RunLog, skipped=None) -> Columns | None:
-    """θ's zero checked by its rest and the log's law: a θ that rests on one count θ0 other
-    than 0 before the first command, where the law (the header's closed-loop law, else the data's
-    from rest, as :func:`check_command_offset` asks it, a header that lies about the law too)
-    reproduces every logged v from θ − θ0 and not from θ as written, was logged before the
-    script took its zero off (the lab's client reads θ0 at START, ``q``, and the loop's error is
-    u − (θ − θ0)); read from θ0. A law that reproduces θ as written is the encoder not zeroed
-    (:func:`station.logged.start.start_claims`).
-
-    Parameters
-    ----------
-    log : RunLog
-    skipped : array_like of bool, optional
-        As :func:`station.logged.controller.identify_controller`.
-
-    Returns
-    -------
-    Columns or None
-        The log with θ0 taken off θ and a contradicted "columns" claim; None otherwise (θ not
-        in whole counts, fewer than :data:`REST_ROWS` rows at rest, or no law from θ − θ0).
-    """
-    u, theta = (np.asarray(log.data[c], dtype=float) for c in ("u", "theta"))
-    rest = rest_rows(u, theta)
-    th0 = float(theta[0])
-    if rest < REST_ROWS or th0 == 0 or not np.isfinite(th0) or u[0] != 0:
-        return None
-    if not np.all(theta == np.round(theta)):  # the encoder's counts (a unit read back first): else a law on the
-        return None  # truncated integer may fit θ's fractions from any zero
-    trial = dataclasses.replace(log, data={**log.data, "theta": theta - th0})
-    dv = header_law_dv(trial, skipped)  # None: an open-loop header's v = u, or none named
-    whose, found = "the header's law", None
-    if dv is None or dv > TOLERANCE:  # none named, an open loop's v = u, or a header lying about the law too
-        found = _data_law_from_rest(log, trial, skipped)
-        if found is None:
-            return None
-        whose, dv = f"the law the data give ({describe_controller(found.controller)})", float(found.fit.max_abs_dv)
-    claim, note = theta_zero_claim(th0, rest, whose, dv)
-    return Columns((claim,), dataclasses.replace(trial, notes=list(log.notes) + [note]), found)
-
-
-def _data_law_from_rest(log: RunLog, trial: RunLog, skipped) -> ControllerId | None:
-    """With no law named (or an open loop's v = u the data contradict, less c as well): the law
-    the data give reproducing ``trial`` (v less its rest value, or θ less its first count)
-    from rest, where on ``log`` as written none does, or one does only with its first rows of
-    memory taken as logged (an integrator carrying the rest value: a copy "cut from a longer
-    run" whose hub rested under a command of many counts); that law (kept: the log's controller,
-    not identified twice), or None.
-    A law from rest on u and θ of 0 gives 0 there, so v as written, c there, needs no search."""
-    try:
-        found = identify_controller(trial, skipped)
-        if not exact_from_rest(found):
-            return None
-        if log.data["theta"][0] != 0:  # a P law's -kp·θ at rest is one value too
-            as_written = identify_controller(log, skipped)
-            if as_written.fit is not None and as_written.fit.max_abs_dv <= TOLERANCE and not as_written.cut:
-                return None
-    except StationError:
-        return None
-    return found
+def _float_scale(log: RunLog, skipped) -> Scaled | None:
+    """A float command's size by the header's law replayed (:func:`law_scale`), from θ's zero
+    too (:func:`theta_from_zero`): θ's zero is asked of the command in counts after."""
+    found = law_scale(log, skipped)
+    zeroed = theta_from_zero(log) if found is None else None
+    return law_scale(zeroed, skipped) if zeroed is not None else found
 
 
 def _unknown_unit(log: RunLog, why: str, detail: str, small: bool) -> Columns:
@@ -576,25 +447,3 @@ def _unknown_unit(log: RunLog, why: str, detail: str, small: bool) -> Columns:
     return Columns((claim,), dataclasses.replace(log, notes=list(log.notes) + [note]))
 
 
-def _header_holds(log: RunLog, dv: float | None, skipped) -> bool:
-    """Whether the header's law, replayed once to ``dv`` (None: open loop or none named), holds as given."""
-    return dv <= TOLERANCE if dv is not None else header_reproduces(log, skipped) is True
-
-
-def _law_confirms(log: RunLog, skipped) -> str | None:
-    """Whose law reproduces every logged v: "header" where the header's does (as given, v = u
-    in open loop, past a few corrupted fields, or within :data:`NEAR_COUNTS` with its printed
-    coefficients completed from the data), "data" where a law the data give does (none named,
-    an open-loop header's v = u contradicted, or a closed-loop header lying about the law
-    too), else None."""
-    dv = header_law_dv(log, skipped)  # replayed once; None for an open-loop header (v = u) or none
-    if _header_holds(log, dv, skipped):
-        return "header"
-    try:
-        found = identify_controller(log, skipped)
-    except StationError:
-        return None
-    if found.fit is None or found.fit.max_abs_dv > TOLERANCE or found.judged_to is not None and (
-            found.judged_to == 0 or found.source != "header" and found.judged_to < GAP_LAW_ROWS):
-        return None  # judged on the rows before n jumps: a law the data give, on enough of them
-    return "header" if found.source == "header" and dv is not None else "data"
