@@ -439,9 +439,11 @@ def draw_case(name: str, seed: int) -> AuditCase:
         if "v_unit" in hidden and which < 0.5:  # as "v_unit"'s: a float P's v in volts is another kp as much
             return AuditCase(**{**common, "header_kp": kp}, **p_law, recursion="trunc",
                              alignment=int(rng.integers(0, 2)), header="p", theta_zero=zero, **hidden)
-        return _true_or_no_header(rng, common, p_law, lead, kp, theta_zero=zero, **hidden) if "v_zero" in hidden else \
-            AuditCase(**common, **lead, recursion=str(rng.choice(["trunc", "round"])), alignment=int(rng.integers(0, 2)),
-                      header="lead" if which < 0.75 else "none", theta_zero=zero, **hidden)
+        if "v_zero" in hidden:
+            return _true_or_no_header(rng, common, p_law, lead, kp, theta_zero=zero, **hidden)
+        return AuditCase(**common, **lead, recursion=str(rng.choice(["trunc", "round"])),
+                         alignment=int(rng.integers(0, 2)), header="lead" if which < 0.75 else "none",
+                         theta_zero=zero, **hidden)
     if base == "a_zero":  # a written as read, the loop feeding Ga the reading less its zero
         p, z = 2 * math.pi * 20, 2 * math.pi * 5
         thesis = dict(law="lead", kp=None, num_s=(5 * p / z, 5 * p), den_s=(1.0, p),
