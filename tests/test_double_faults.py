@@ -24,7 +24,7 @@ from station.logged import LoggedRun
 from station.logged.sensor_evidence import sensor_evidence
 from station.logged.sensors import decide_faults
 from station.plant import load_model
-from tests.blind.audit import V_UNITS, write_audit_case
+from tests.blind.audit import V_UNITS, AuditCase, write_audit_case, write_case
 
 P = "SFLR_P_control_step_kp_2_SLFR_RTP_P_control_kp=2.0.txt"
 LEAD = "step_response_Gth_comp_no_accel_FB_amp_100_duration_1000_SLFR_RTP_Motor_Comp_Gth.txt"
@@ -343,6 +343,30 @@ def test_blind_theta_from_its_zero_beside_the_commands_unit_or_zero(tmp_path, se
         (unit,) = said
         assert unit.startswith(("v in steps of", "v in units of"))
         assert float(unit.split()[-1]) == pytest.approx(V_UNITS[hidden.v_unit], rel=1e-3)
+
+
+# a hub Coulomb friction holds still the whole run (a lead on a 29-count sine, friction 40 DAC
+# counts), v written in volts: before, u and θ read swapped under every header (the swap moved
+# the hub that "v under one count while the hub moved" asks for), with a gain −2 law and a
+# reference "moving at t = 0"; with θ0 beside it too, u and v swapped and a law 1700(s+50)/(s+2π·2)
+@pytest.mark.parametrize("header", ["lead", "none", "open-loop"])
+@pytest.mark.parametrize("unit", sorted(V_UNITS))
+@pytest.mark.parametrize("zero", [None, -59.0])
+def test_blind_a_hub_held_still_with_v_in_volts_is_no_swap(tmp_path, header, unit, zero):
+    case = AuditCase(name="v_unit+coulomb_friction", law="lead", kp=None, num_s=(2.0, 26.0), den_s=(1.0, 40.0),
+                     design_text="2(s+13)/(s+40)", recursion="trunc", alignment=0, limit=200.0, header=header,
+                     header_kp=None, reference="sine", amplitude=29.0, effects={"coulomb_friction": 40.0},
+                     v_unit=unit, theta_zero=zero)
+    path, _ = write_case(tmp_path, case, 0)
+    run = LoggedRun.from_path(path)
+    assert np.ptp(np.asarray(run.log.data["theta"], dtype=float)) == 0  # the hub never moved: the case holds
+    assert run.reproduced
+    sources = {"none": "inferred", "open-loop": "inferred (header contradicted)"}
+    assert run.source == sources.get(header, "header")
+    said = _said(run) - ({f"θ logged before its zero was taken off (θ0 = {zero:g} counts)"} if zero else set())
+    assert len(_said(run)) == 1 + (zero is not None) and len(said) == 1
+    (step,) = said
+    assert step.startswith("v in steps of") and float(step.split()[-1]) == pytest.approx(V_UNITS[unit], rel=1e-3)
 
 
 # rows:column: the thesis's lead + Ga (named) with θ and a swapped, v in volts (a sine) and θ negated,

@@ -161,6 +161,9 @@ def check_columns(log: RunLog, skipped=None) -> Columns:
     if unit is None and as_named is not None and as_named <= TOLERANCE:
         return Columns((), log)
     named = as_named > TOLERANCE if as_named is not None else header_reproduces(log, skipped) is not True
+    held = check_command_unit(log, skipped, held=True) if named and unit is None else None
+    if held is not None and held.claims[0].data != UNKNOWN_UNIT:
+        return held  # a hub held still reads v in a unit as named, before a rewrite that would move it
     zeros = check_accel_zero(log, skipped) if named and unit is None else None  # (the header's law only: quick)
     if zeros is not None:
         return Columns(zeros.claims, zeros.log, zeros.identified)
@@ -338,7 +341,7 @@ def _swapped_back(log: RunLog, rewrites: tuple[tuple[str, ...], ...], trial: Run
     return Columns(tuple(claims) + tuple(also), dataclasses.replace(trial, notes=list(trial.notes) + notes), identified)
 
 
-def check_command_unit(log: RunLog, skipped=None) -> Columns | None:
+def check_command_unit(log: RunLog, skipped=None, held: bool = False) -> Columns | None:
     """The command's unit (DAC counts) checked by the header's law and the DAC's range
     (module docstring).
 
@@ -347,6 +350,10 @@ def check_command_unit(log: RunLog, skipped=None) -> Columns | None:
     log : RunLog
     skipped : array_like of bool, optional
         As :func:`station.logged.controller.identify_controller`.
+    held : bool, optional
+        Also read a v under one count everywhere where the hub held still (the device applying 0
+        would leave it so; asked where the law does not reproduce v as written, before a rewrite
+        of the columns that would move it: :func:`check_columns`).
 
     Returns
     -------
@@ -372,6 +379,8 @@ def check_command_unit(log: RunLog, skipped=None) -> Columns | None:
     small = no_dac_command(v, log.data["theta"])
     if small:
         why = f"as written v stays under one DAC count (|v| ≤ {peak:.3g}: the device would apply 0) while the hub moved"
+    elif held and peak < 1.0 and np.any(v != 0):
+        small, why = True, f"as written v stays under one DAC count (|v| ≤ {peak:.3g}) where the hub held still"
     elif peak > DAC_LIMIT:
         why = f"as written v reaches {peak:.4g}, past the DAC's ±{DAC_LIMIT:g} counts"
     else:  # as written v could be a command too: another gain of the law as much as another unit

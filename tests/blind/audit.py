@@ -634,11 +634,16 @@ def write_audit_case(folder: Path, name: str, seed: int) -> tuple[Path, AuditCas
         kp, amplitude or other claim in the name), and what it hides (with ``wrapped``, the
         columns written as words).
     """
-    case = draw_case(name, seed)
+    return write_case(folder, draw_case(name, seed), seed)
+
+
+def write_case(folder: Path, case: AuditCase, seed: int) -> tuple[Path, AuditCase]:
+    """Write one audit case's log as :func:`write_audit_case` does, for a case given (one no
+    class draws; its noise from ``seed``)."""
     folder = Path(folder)
     folder.mkdir(parents=True, exist_ok=True)
     test = {"open-loop": "OL_Test", "p": "P_control_Test", "lead": "Motor_Comp_Gth", "none": "run"}[case.header]
-    tag = name.replace(":", "-").replace("+", "-").replace("_", "-")  # no "kp_", "amp_" claims in the name
+    tag = case.name.replace(":", "-").replace("+", "-").replace("_", "-")  # no "kp_", "amp_" claims in the name
     path = folder / f"audit_{tag}_{seed}_SLFR_RTP_{test}.txt"
     sim = simulate_audit_case(case, seed)
     if case.words:
