@@ -369,6 +369,59 @@ def test_blind_a_hub_held_still_with_v_in_volts_is_no_swap(tmp_path, header, uni
     assert step.startswith("v in steps of") and float(step.split()[-1]) == pytest.approx(V_UNITS[unit], rel=1e-3)
 
 
+# the same under a P header on a step: v is only 0 and kp·u, which any law gives at a clamp of its
+# peak, in any unit. Before, with θ0 = -116: v "in steps of 0.00915527" (30 counts: kp·u, the law at
+# a clamp of 1) and not reproduced by 29 counts; with θ0 = 0, "P, kp = 1.2: not this law, no law
+# found". A converter's count (±2.5, 5 or 10 V, 8 to 16 bits) read by the header's law at its own
+# clamp is the size now; a header that lies about kp reads no size.
+@pytest.mark.parametrize("unit", sorted(V_UNITS))
+@pytest.mark.parametrize("zero", [None, -116.0])
+@pytest.mark.parametrize("header_kp", [1.2, 1.5])
+def test_blind_a_p_step_held_still_with_v_in_volts(tmp_path, unit, zero, header_kp):
+    case = AuditCase(name="zero:command+coulomb_friction", law="p", kp=1.2, num_s=None, den_s=None,
+                     design_text="P, kp = 1.2", recursion="trunc", alignment=1, limit=200.0, header="p",
+                     header_kp=header_kp, reference="step", amplitude=25.0, effects={"coulomb_friction": 60.0},
+                     v_unit=unit, theta_zero=zero)
+    path, _ = write_case(tmp_path, case, 4)
+    run = LoggedRun.from_path(path)
+    assert np.ptp(np.asarray(run.log.data["theta"], dtype=float)) == 0  # the hub never moved: the case holds
+    said = _said(run) - ({f"θ logged before its zero was taken off (θ0 = {zero:g} counts)"} if zero else set())
+    if header_kp == 1.2:
+        assert run.source == "header" and run.reproduced
+        assert len(_said(run)) == 1 + (zero is not None) and said == {f"v in steps of {V_UNITS[unit]:.6g}"}
+    else:  # the lie's kp·u in counts of no converter: no size read, the header contradicted
+        assert not run.reproduced and not any(x.startswith("v in steps") for x in said)
+        assert next(c for c in run.audit.claims if c.claim == "controller").verdict == "contradicted"
+
+
+# a guard: u in radians on that step. v = kp·u as written in any unit, and u and v swapped give a
+# "P law" in steps of v/u; a draft read it so (a ratio of v to u is no converter's count)
+def test_blind_a_p_step_held_still_with_u_in_radians_is_no_swap(tmp_path):
+    case = AuditCase(name="u_unit+coulomb_friction", law="p", kp=1.0, num_s=None, den_s=None, design_text="P, kp = 1",
+                     recursion="none", alignment=1, limit=200.0, header="p", header_kp=1.0, reference="step",
+                     amplitude=25.0, effects={"coulomb_friction": 60.0}, u_unit="radians")
+    path, _ = write_case(tmp_path, case, 2)
+    run = LoggedRun.from_path(path)
+    assert np.ptp(np.asarray(run.log.data["theta"], dtype=float)) == 0  # the hub never moved: the case holds
+    assert not any("swapped" in x or x.startswith("v in steps") for x in _said(run))
+
+
+# θ and a swapped beside v in volts, the hub held still: the column named θ (a's noise) moves, the
+# one named a does not. Before: "moving at t = 0" and v "in another unit, its size not found"
+# (the swap's v was read only where its hub moved)
+@pytest.mark.parametrize("unit", sorted(V_UNITS))
+def test_blind_theta_and_a_swapped_beside_v_in_volts_the_hub_held_still(tmp_path, unit):
+    case = AuditCase(name="pair+coulomb_friction", law="lead", kp=None, num_s=(1.5, 36.0), den_s=(1.0, 66.0),
+                     design_text="1.5(s+24)/(s+66)", recursion="trunc", alignment=0, limit=200.0, header="lead",
+                     header_kp=None, reference="step", amplitude=25.0, effects={"coulomb_friction": 60.0},
+                     v_unit=unit, swap=("theta", "a"))
+    path, _ = write_case(tmp_path, case, 1)
+    run = LoggedRun.from_path(path)
+    assert np.ptp(np.asarray(run.log.data["theta"], dtype=float)) == 0  # the hub never moved: the case holds
+    assert run.source == "header" and run.reproduced
+    assert _said(run) == {"θ and a swapped", f"v in steps of {V_UNITS[unit]:.6g}"}
+
+
 # rows:column: the thesis's lead + Ga (named) with θ and a swapped, v in volts (a sine) and θ negated,
 # a lead on the stored integer with u and v swapped over three gaps, and a P with θ and a swapped (the
 # last two were read already: their laws' memory is in the rows)

@@ -49,7 +49,7 @@ from station.logged.audit import AuditClaim
 from station.logged.column_zeros import (ZEROED_TOO, Columns, check_command_offset, check_theta_zero, law_confirms,
                                          theta_from_zero)
 from station.logged.command_scale import Scaled, law_scale
-from station.logged.quantum import count_step, in_counts, quantum_fits
+from station.logged.quantum import CONVERTER_VOLTS, count_step, in_counts, quantum_fits
 from station.logged.controller import (NO_LAW, ControllerId, header_law_dv,
                                        header_reproduces, identify_controller)
 from station.logged.reference_unit import check_reference_unit
@@ -157,7 +157,8 @@ def check_columns(log: RunLog, skipped=None) -> Columns:
     unit = check_command_unit(log, skipped)
     if unit is not None and unit.claims[0].data != UNKNOWN_UNIT:
         return unit
-    as_named = header_law_dv(log, skipped)
+    v = np.asarray(log.data["v"], dtype=float)
+    as_named = header_law_dv(log, skipped, own_clamp=not in_counts(v) and not pins_a_law(v))  # (its unit unread)
     if unit is None and as_named is not None and as_named <= TOLERANCE:
         return Columns((), log)
     named = as_named > TOLERANCE if as_named is not None else header_reproduces(log, skipped) is not True
@@ -177,7 +178,7 @@ def check_columns(log: RunLog, skipped=None) -> Columns:
         trial = rewritten(log, columns)
         if in_counts(np.asarray(trial.data["v"], dtype=float)):
             continue
-        sized = check_command_unit(trial, skipped)
+        sized = check_command_unit(trial, skipped, held=True)  # (a swap may leave the hub still)
         if sized is not None and sized.claims[0].data != UNKNOWN_UNIT:
             return _swapped_back(log, (columns,), sized.log, as_named, "the law reproduces v in counts",
                                  also=sized.claims)
@@ -369,7 +370,7 @@ def check_command_unit(log: RunLog, skipped=None, held: bool = False) -> Columns
     v = np.asarray(log.data["v"], dtype=float)
     if in_counts(v) or not np.all(np.isfinite(v)):
         return None
-    dv = header_law_dv(log, skipped)  # the header's law replayed once; None: open loop or none named
+    dv = header_law_dv(log, skipped, own_clamp=not pins_a_law(v))  # replayed once; None: open loop or none named
     stated = dv <= TOLERANCE if dv is not None else header_reproduces(log, skipped)
     if stated is True:
         return None
@@ -393,9 +394,12 @@ def check_command_unit(log: RunLog, skipped=None, held: bool = False) -> Columns
     u = np.asarray(log.data["u"], dtype=float)
     u_least = None if in_counts(u) else count_step(u)
     steps = [scaled.ratio] if least is None else [least / k for k in range(1, COMMAND_STEP_COUNTS + 1)]  # kp·e
+    pinned = pins_a_law(v)  # else only 0 and ±peak: any law at a clamp of its peak gives it, in any unit
     commanded = np.isfinite(u) & (u != 0)
     if least is not None and u_least is None and np.any(commanded):  # open loop: u in counts, v in another unit
         steps.append(float(np.median(v[commanded] / u[commanded])))
+    if not pinned and dv is not None:  # a named law's gain and v's unit are one: a converter's count only
+        steps = [q for q in CONVERTER_VOLTS if quantum_fits(v, q)]
     found = None  # the header's closed-loop law at any step, else the data's at the largest
     for step in filter(lambda x: x > 0, steps):
         data = dict(log.data)
@@ -407,6 +411,8 @@ def check_command_unit(log: RunLog, skipped=None, held: bool = False) -> Columns
         whose = law_confirms(trial, skipped)
         if whose != "header" and (zero := check_theta_zero(trial, skipped)) is not None:  # θ from its zero too
             whose, trial = "data" if zero.identified is not None else "header", zero.log
+        if not pinned and dv is not None and not (whose == "header" and _at_own_clamp(trial, skipped)):
+            continue  # an unpinned v is read only by a named law at its own clamp
         if whose is not None and (found is None or whose == "header"):
             found = step, trial, also, whose, zero
         if found is not None and (dv is None or found[3] == "header"):
@@ -434,6 +440,12 @@ def check_command_unit(log: RunLog, skipped=None, held: bool = False) -> Columns
             f"of its fractions" if least is not None else f"it is {scaled.ratio:.6g} times the header's law replayed "
             f"on its own commands, but no law reproduces it so read in counts")
     return _unknown_unit(log, why, said, small)
+
+
+def _at_own_clamp(trial: RunLog, skipped) -> bool:
+    """Whether the header's law reproduces a rewrite at its own clamp (not at v's peak)."""
+    dv = header_law_dv(trial, skipped, own_clamp=True)
+    return dv is not None and dv <= TOLERANCE
 
 
 def _float_scale(log: RunLog, skipped) -> Scaled | None:

@@ -296,7 +296,7 @@ def header_reproduces(log: RunLog, skipped=None) -> bool | None:
     return None if dv is None else dv <= TOLERANCE
 
 
-def header_law_dv(log: RunLog, skipped=None) -> float | None:
+def header_law_dv(log: RunLog, skipped=None, own_clamp: bool = False) -> float | None:
     """How near the closed-loop law a log's header names comes to its logged commands: max
     |v_replayed − v_logged| at its best alignment and recursion (:func:`variant_of`) and clamp
     (its own, or the log's largest |v|), DAC counts; None when the header names no closed-loop
@@ -310,6 +310,8 @@ def header_law_dv(log: RunLog, skipped=None) -> float | None:
     log : RunLog
     skipped : array_like of bool, optional
         As :func:`identify_controller`.
+    own_clamp : bool, optional
+        At the law's own clamp only (a v of 0 and ±peak is any law's at its peak: ``pins_a_law``).
     """
     controller = named_law(log)
     data = log.data
@@ -321,7 +323,7 @@ def header_law_dv(log: RunLog, skipped=None) -> float | None:
     if restarts and memory(controller) is None and pins_a_law(cols[3][:restarts[0]]):  # Ga's state: no column
         cols = tuple(np.asarray(c, dtype=float)[:restarts[0]] for c in cols)
         skipped, restarts = None if skipped is None else np.asarray(skipped)[:restarts[0]], ()
-    for law in at_clamps(controller, data["v"]):
+    for law in [controller] if own_clamp else at_clamps(controller, data["v"]):
         _, fit, _ = variant_of(law, *cols, ALIGNMENTS, skipped, restarts=restarts)
         if fit is not None and (best is None or fit.max_abs_dv < best):
             best = float(fit.max_abs_dv)

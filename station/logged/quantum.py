@@ -21,6 +21,11 @@ QUANTUM_TOLERANCE = 1e-3
 (values printed to a few decimals)."""
 
 
+CONVERTER_VOLTS = tuple(span / 2 ** (bits - 1) for span in (2.5, 5.0, 10.0) for bits in (8, 10, 12, 14, 16))
+"""One count of a bipolar converter, volts (±2.5, ±5 or ±10 V full scale, 8 to 16 bits; the
+rig's DAC count is 5/2048 V of a ±5 V 12-bit converter, DESIGN.md): sizes a command written in
+volts steps by, tried where its changes cannot give one (a v only 0 and one value)."""
+
 FLOAT_NOISE = 1e-9
 """A change between two printed values smaller than this is the float's rounding, not a change."""
 
