@@ -24,7 +24,7 @@ from station.logged import LoggedRun
 from station.logged.sensor_evidence import sensor_evidence
 from station.logged.sensors import decide_faults
 from station.plant import load_model
-from tests.blind.audit import V_UNITS, AuditCase, write_audit_case, write_case
+from tests.blind.audit import U_UNITS, V_UNITS, AuditCase, write_audit_case, write_case
 
 P = "SFLR_P_control_step_kp_2_SLFR_RTP_P_control_kp=2.0.txt"
 LEAD = "step_response_Gth_comp_no_accel_FB_amp_100_duration_1000_SLFR_RTP_Motor_Comp_Gth.txt"
@@ -394,16 +394,66 @@ def test_blind_a_p_step_held_still_with_v_in_volts(tmp_path, unit, zero, header_
         assert next(c for c in run.audit.claims if c.claim == "controller").verdict == "contradicted"
 
 
-# a guard: u in radians on that step. v = kp·u as written in any unit, and u and v swapped give a
-# "P law" in steps of v/u; a draft read it so (a ratio of v to u is no converter's count)
-def test_blind_a_p_step_held_still_with_u_in_radians_is_no_swap(tmp_path):
-    case = AuditCase(name="u_unit+coulomb_friction", law="p", kp=1.0, num_s=None, den_s=None, design_text="P, kp = 1",
-                     recursion="none", alignment=1, limit=200.0, header="p", header_kp=1.0, reference="step",
-                     amplitude=25.0, effects={"coulomb_friction": 60.0}, u_unit="radians")
+# u in degrees or radians on that step. Before, under its true header: "P, kp = 1: not this law, no
+# law found" (a true header contradicted: u's unit was read only on a v that pins a law). The
+# header's law at its own clamp reads it now. Guards: u and v swapped give a "P law" in steps of
+# v/u (a draft read it so: a ratio of v to u is no converter's count); a header that lies about kp
+# reads no unit and is contradicted.
+@pytest.mark.parametrize("unit", sorted(U_UNITS))
+@pytest.mark.parametrize("kp, header_kp", [(1.0, 1.0), (1.5, 1.5), (1.5, 1.2)])
+def test_blind_a_p_step_held_still_with_u_in_degrees_or_radians(tmp_path, unit, kp, header_kp):
+    case = AuditCase(name="u_unit+coulomb_friction", law="p", kp=kp, num_s=None, den_s=None,
+                     design_text=f"P, kp = {kp:g}", recursion="none", alignment=1, limit=200.0, header="p",
+                     header_kp=header_kp, reference="step", amplitude=25.0, effects={"coulomb_friction": 60.0},
+                     u_unit=unit)
     path, _ = write_case(tmp_path, case, 2)
     run = LoggedRun.from_path(path)
     assert np.ptp(np.asarray(run.log.data["theta"], dtype=float)) == 0  # the hub never moved: the case holds
-    assert not any("swapped" in x or x.startswith("v in steps") for x in _said(run))
+    said = _said(run)
+    assert not any("swapped" in x or x.startswith("v in steps") for x in said)
+    if header_kp == kp:
+        assert said == {f"u in {unit}"} and run.source == "header" and run.reproduced
+        assert run.controller.spec.get("kp") == kp
+    else:
+        assert not said and not run.reproduced
+        assert next(c for c in run.audit.claims if c.claim == "controller").verdict == "contradicted"
+
+
+# u and v swapped on a P step the hub never follows: v is then the step and u is kp·u, which the
+# header's law gives at a clamp of v's peak (as any law of high gain does). Before, "P, kp = 1.5:
+# not this law, no law found" (a true header contradicted), and with θ0 beside it θ0 was said on
+# that peak clamp and the log not reproduced. Now the swap is read at the law's own clamp, θ0 with
+# it; a header that lies about kp reads no swap. A saturated step (kp·u past the ±200 clamp) too.
+@pytest.mark.parametrize("kp, header_kp, amplitude", [(1.5, 1.5, 25.0), (1.2, 1.2, 25.0), (2.5, 2.5, 120.0),
+                                                      (1.5, 1.2, 25.0)])
+@pytest.mark.parametrize("zero", [None, -58.0])
+def test_blind_a_p_step_held_still_with_u_and_v_swapped(tmp_path, kp, header_kp, amplitude, zero):
+    case = AuditCase(name="swap+coulomb_friction", law="p", kp=kp, num_s=None, den_s=None,
+                     design_text=f"P, kp = {kp:g}", recursion="trunc", alignment=1, limit=200.0, header="p",
+                     header_kp=header_kp, reference="step",
+                     amplitude=amplitude, effects={"coulomb_friction": 60.0 if amplitude < 100 else 450.0},
+                     swap=("u", "v"), theta_zero=zero)
+    path, _ = write_case(tmp_path, case, 0)
+    run = LoggedRun.from_path(path)
+    assert np.ptp(np.asarray(run.log.data["theta"], dtype=float)) == 0  # the hub never moved: the case holds
+    zeroed = {f"θ logged before its zero was taken off (θ0 = {zero:g} counts)"} if zero else set()
+    if header_kp == kp:
+        assert run.source == "header" and run.reproduced and _said(run) == {"u and v swapped"} | zeroed
+    else:
+        assert "u and v swapped" not in _said(run) and not run.reproduced
+        assert next(c for c in run.audit.claims if c.claim == "controller").verdict == "contradicted"
+
+
+# a guard: v and θ swapped on a P sweep of kp = 1 the hub never follows (v = u) leave v at 0 and
+# the error at 0, which every law gives; a draft read the swap so, under a header lying about kp
+def test_blind_a_rewrite_to_a_v_of_zero_is_no_swap(tmp_path):
+    case = AuditCase(name="lie:p_kp+coulomb_friction", law="p", kp=1.0, num_s=None, den_s=None,
+                     design_text="P, kp = 1", recursion="none", alignment=1, limit=150.0, header="p", header_kp=2.0,
+                     reference="sweep", amplitude=25.0, effects={"coulomb_friction": 60.0})
+    path, _ = write_case(tmp_path, case, 2)
+    run = LoggedRun.from_path(path)
+    assert np.ptp(np.asarray(run.log.data["theta"], dtype=float)) == 0  # the hub never moved: the case holds
+    assert not any("swapped" in x for x in _said(run)) and run.source == "inferred (header contradicted)"
 
 
 # θ and a swapped beside v in volts, the hub held still: the column named θ (a's noise) moves, the

@@ -16,7 +16,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from station.analysis.law_rows import TOLERANCE
+from station.analysis.law_rows import TOLERANCE, pins_a_law
 from station.errors import StationError
 from station.logged.audit import AuditClaim
 from station.logged.controller import (ControllerId, describe_controller, header_law_dv, header_reproduces,
@@ -91,7 +91,8 @@ def check_command_offset(log: RunLog, skipped=None) -> Columns | None:
 def _offset_taken_off(log: RunLog, skipped, v: np.ndarray, c: float, rest: int) -> Columns | None:
     """:func:`check_command_offset` for one zero c."""
     trial = dataclasses.replace(log, data={**log.data, "v": v - c})
-    dv = header_law_dv(trial, skipped)  # None: an open-loop header's v = u, or none named
+    # None: an open-loop header's v = u, or none named; a v of 0 and one level only at the law's own clamp
+    dv = header_law_dv(trial, skipped, own_clamp=not pins_a_law(trial.data["v"]))
     whose, found, zero = "the header's law", None, None
     named = header_holds(trial, dv, skipped)
     if not named and dv is not None and law_confirms(trial, skipped) == "header":  # printed coefficients completed
@@ -144,7 +145,8 @@ def check_theta_zero(log: RunLog, skipped=None) -> Columns | None:
     if trial is None:
         return None
     th0, rest = float(log.data["theta"][0]), rest_rows(log.data["u"], log.data["theta"])
-    dv = header_law_dv(trial, skipped)  # None: an open-loop header's v = u, or none named
+    # None: an open-loop header's v = u, or none named; a v of 0 and one level only at the law's own clamp
+    dv = header_law_dv(trial, skipped, own_clamp=not pins_a_law(trial.data["v"]))
     whose, found = "the header's law", None
     if dv is None or dv > TOLERANCE:  # none named, an open loop's v = u, or a header lying about the law too
         found = _data_law_from_rest(log, trial, skipped)

@@ -160,7 +160,7 @@ def check_columns(log: RunLog, skipped=None) -> Columns:
     v = np.asarray(log.data["v"], dtype=float)
     as_named = header_law_dv(log, skipped, own_clamp=not in_counts(v) and not pins_a_law(v))  # (its unit unread)
     if unit is None and as_named is not None and as_named <= TOLERANCE:
-        return Columns((), log)
+        return _rewritten_at_own_clamp(log, skipped) or Columns((), log)
     named = as_named > TOLERANCE if as_named is not None else header_reproduces(log, skipped) is not True
     held = check_command_unit(log, skipped, held=True) if named and unit is None else None
     if held is not None and held.claims[0].data != UNKNOWN_UNIT:
@@ -191,14 +191,15 @@ def check_columns(log: RunLog, skipped=None) -> Columns:
         exact, missed = [], []  # missed: single rewrites, asked from θ's zero after every one (tied as exact)
         for rewrites in tried:  # the header's law as given
             trial = rewritten_all(log, rewrites)
-            if not pins_a_law(trial.data["v"]):  # a step column for v: any law of high gain at its clamp gives it
+            pinned = pins_a_law(trial.data["v"])  # a step column for v: any law of high gain at its clamp gives it
+            if not pinned and not np.any(trial.data["v"]):  # (every law gives a v of 0 where e is 0)
                 continue
             if len(rewrites) > 1 and rewrites[0] == ("u", "v") and not tracks_better(trial, log):
                 continue
-            dv = header_law_dv(trial, skipped)
+            dv = header_law_dv(trial, skipped, own_clamp=not pinned)  # (unpinned: the header's law, its clamp)
             if dv is not None and dv <= TOLERANCE:
                 exact.append((rewrites, trial, dv))
-            elif dv is not None and dv <= NEAR_COUNTS < as_named:
+            elif dv is not None and dv <= NEAR_COUNTS < as_named and pinned:
                 trials.append((rewrites, trial))
             elif len(rewrites) == 1:
                 missed.append((rewrites, trial))
@@ -446,6 +447,21 @@ def _at_own_clamp(trial: RunLog, skipped) -> bool:
     """Whether the header's law reproduces a rewrite at its own clamp (not at v's peak)."""
     dv = header_law_dv(trial, skipped, own_clamp=True)
     return dv is not None and dv <= TOLERANCE
+
+
+def _rewritten_at_own_clamp(log: RunLog, skipped) -> Columns | None:
+    """A v of 0 and one level that the header's law gives as named only at a clamp of its peak
+    (as any law of high gain does) and at its own clamp on one rewrite (:data:`TRIALS`): that
+    rewrite (u and v swapped on a P step the hub never followed: v is then the step, u is kp·u).
+    None where v pins a law or the law reproduces it at its own clamp as named."""
+    if pins_a_law(log.data["v"]) or _at_own_clamp(log, skipped):
+        return None
+    for columns in TRIALS:
+        trial = rewritten(log, columns)
+        if np.any(trial.data["v"]) and _at_own_clamp(trial, skipped):  # (a v of 0: any law where e is 0)
+            own = header_law_dv(log, skipped, own_clamp=True)
+            return _swapped_back(log, (columns,), trial, own, "to 0 counts at its own clamp (not only at v's peak)")
+    return None
 
 
 def _float_scale(log: RunLog, skipped) -> Scaled | None:

@@ -125,12 +125,16 @@ def check_reference_unit(log: RunLog, skipped=None, as_named: float | None = Non
     -------
     ReferenceUnit or None
         None when u is not finite or 0 throughout, θ not finite, v pins no law
-        (:func:`station.analysis.law_rows.pins_a_law`), or no unit makes a law reproduce v.
+        (:func:`station.analysis.law_rows.pins_a_law`) and no header names one, or no unit makes
+        a law reproduce v. A v that pins no law (0 and one level: a hub held still) is read only
+        by the header's law at its own clamp.
     """
     u, theta = (np.asarray(log.data[c], dtype=float) for c in ("u", "theta"))
-    if not (np.all(np.isfinite(u)) and np.all(np.isfinite(theta)) and np.any(u)) or not pins_a_law(log.data["v"]):
+    pinned = pins_a_law(log.data["v"])
+    usable = np.all(np.isfinite(u)) and np.all(np.isfinite(theta)) and np.any(u)
+    if not usable or not (pinned or as_named is not None):
         return None  # a v that pins no law (a step at a clamp, u swapped in: any law of high gain gives it)
-    ratio = reference_ratio(log)
+    ratio = reference_ratio(log) if pinned else None  # (0 and one level weigh nothing)
     if ratio is not None and abs(ratio - 1.0) <= RATIO_TOLERANCE:  # the law weighs u as counts
         return None
     # a step pins the ratio; a sine, or a recursion on the stored integer, may not: then the law decides
@@ -141,9 +145,11 @@ def check_reference_unit(log: RunLog, skipped=None, as_named: float | None = Non
     for unit, q in units:
         counts = counts_of(u, q)  # a step's counts, printed in the unit: whole again
         trial = dataclasses.replace(log, data={**log.data, "u": counts})
-        found, dv = None, None if as_named is None else header_law_dv(trial, skipped)
+        found, dv = None, None if as_named is None else header_law_dv(trial, skipped, own_clamp=not pinned)
         if dv is not None and dv <= TOLERANCE:
-            whose = "the header's law"
+            whose = "the header's law" if pinned else "the header's law at its own clamp"
+        elif not pinned:
+            continue  # a v of 0 and one level (a hub held still): only the header's law at its own clamp reads it
         elif as_named is not None and (ratio is None or abs(ratio * q - 1.0) > RATIO_TOLERANCE):
             continue  # a header that lies about the law as well: searched only where the fit points at the unit
         else:  # none named, an open loop's v = u, or a lying header the fit's weight of u points past
