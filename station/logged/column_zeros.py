@@ -88,11 +88,16 @@ def check_command_offset(log: RunLog, skipped=None) -> Columns | None:
     return None
 
 
+def _law_dv(trial: RunLog, skipped) -> float | None:
+    """The header's law's max |dv| on a zero's trial (None: an open-loop header's v = u, or none
+    named); a v of 0 and one level only at the law's own clamp (any law gives it at its peak)."""
+    return header_law_dv(trial, skipped, own_clamp=not pins_a_law(trial.data["v"]))
+
+
 def _offset_taken_off(log: RunLog, skipped, v: np.ndarray, c: float, rest: int) -> Columns | None:
     """:func:`check_command_offset` for one zero c."""
     trial = dataclasses.replace(log, data={**log.data, "v": v - c})
-    # None: an open-loop header's v = u, or none named; a v of 0 and one level only at the law's own clamp
-    dv = header_law_dv(trial, skipped, own_clamp=not pins_a_law(trial.data["v"]))
+    dv = _law_dv(trial, skipped)
     whose, found, zero = "the header's law", None, None
     named = header_holds(trial, dv, skipped)
     if not named and dv is not None and law_confirms(trial, skipped) == "header":  # printed coefficients completed
@@ -145,8 +150,7 @@ def check_theta_zero(log: RunLog, skipped=None) -> Columns | None:
     if trial is None:
         return None
     th0, rest = float(log.data["theta"][0]), rest_rows(log.data["u"], log.data["theta"])
-    # None: an open-loop header's v = u, or none named; a v of 0 and one level only at the law's own clamp
-    dv = header_law_dv(trial, skipped, own_clamp=not pins_a_law(trial.data["v"]))
+    dv = _law_dv(trial, skipped)
     whose, found = "the header's law", None
     if dv is None or dv > TOLERANCE:  # none named, an open loop's v = u, or a header lying about the law too
         found = _data_law_from_rest(log, trial, skipped)

@@ -371,7 +371,8 @@ def check_command_unit(log: RunLog, skipped=None, held: bool = False) -> Columns
     v = np.asarray(log.data["v"], dtype=float)
     if in_counts(v) or not np.all(np.isfinite(v)):
         return None
-    dv = header_law_dv(log, skipped, own_clamp=not pins_a_law(v))  # replayed once; None: open loop or none named
+    pinned = pins_a_law(v)  # else only 0 and ±peak: any law at a clamp of its peak gives it, in any unit
+    dv = header_law_dv(log, skipped, own_clamp=not pinned)  # replayed once; None: open loop or none named
     stated = dv <= TOLERANCE if dv is not None else header_reproduces(log, skipped)
     if stated is True:
         return None
@@ -395,12 +396,11 @@ def check_command_unit(log: RunLog, skipped=None, held: bool = False) -> Columns
     u = np.asarray(log.data["u"], dtype=float)
     u_least = None if in_counts(u) else count_step(u)
     steps = [scaled.ratio] if least is None else [least / k for k in range(1, COMMAND_STEP_COUNTS + 1)]  # kp·e
-    pinned = pins_a_law(v)  # else only 0 and ±peak: any law at a clamp of its peak gives it, in any unit
     commanded = np.isfinite(u) & (u != 0)
-    if least is not None and u_least is None and np.any(commanded):  # open loop: u in counts, v in another unit
-        steps.append(float(np.median(v[commanded] / u[commanded])))
     if not pinned and dv is not None:  # a named law's gain and v's unit are one: a converter's count only
         steps = [q for q in CONVERTER_VOLTS if quantum_fits(v, q)]
+    elif least is not None and u_least is None and np.any(commanded):  # open loop: u in counts, v in another unit
+        steps.append(float(np.median(v[commanded] / u[commanded])))
     found = None  # the header's closed-loop law at any step, else the data's at the largest
     for step in filter(lambda x: x > 0, steps):
         data = dict(log.data)
@@ -454,12 +454,12 @@ def _rewritten_at_own_clamp(log: RunLog, skipped) -> Columns | None:
     (as any law of high gain does) and at its own clamp on one rewrite (:data:`TRIALS`): that
     rewrite (u and v swapped on a P step the hub never followed: v is then the step, u is kp·u).
     None where v pins a law or the law reproduces it at its own clamp as named."""
-    if pins_a_law(log.data["v"]) or _at_own_clamp(log, skipped):
+    own = None if pins_a_law(log.data["v"]) else header_law_dv(log, skipped, own_clamp=True)
+    if own is None or own <= TOLERANCE:
         return None
     for columns in TRIALS:
         trial = rewritten(log, columns)
         if np.any(trial.data["v"]) and _at_own_clamp(trial, skipped):  # (a v of 0: any law where e is 0)
-            own = header_law_dv(log, skipped, own_clamp=True)
             return _swapped_back(log, (columns,), trial, own, "to 0 counts at its own clamp (not only at v's peak)")
     return None
 
