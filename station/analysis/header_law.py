@@ -18,7 +18,7 @@ from station.analysis.controller_id import (MAX_ORDER, IdentifiedController, ali
 from station.analysis.law_words import law_text
 from station.analysis.law_rows import BOUNDARY, LawRows, nudged_inside, pinned_law
 from station.control import Compensator, DiscreteTF
-from station.control.compensator import STORED
+from station.control.compensator import RECURSIONS, STORED
 from station.control.rerun import ALIGNMENTS, is_closed_loop
 from station.rig import DT
 
@@ -64,10 +64,55 @@ def same_law(stated, found) -> bool:
     if not (is_closed_loop(stated) and is_closed_loop(found)):
         return False
     a, b = _coefficients(stated), _coefficients(found)
-    if a is None or b is None or len(a) != len(b):
-        return False
+    return a is not None and b is not None and len(a) == len(b) and _same(a, b)
+
+
+def _same(a: list[np.ndarray], b: list[np.ndarray]) -> bool:
     return all(x.shape == y.shape and np.allclose(x, y, rtol=SAME_LAW_RTOL, atol=PRINTED_TOLERANCE)
                for x, y in zip(a, b))
+
+
+def idle_ga(stated, found, a, d: int) -> str | None:
+    """Why a header's Ga is not in the data's law, where its whole-count output is 0 on every row.
+
+    The lab's 2009 software (ryanGT's SLFR_RTP, ``Motor_Comp_w_accel_fb``) kept Ga's output,
+    θ̂_d and v in int32 arrays: Ga's recursion stored its output as a whole count, truncated,
+    and remembered that. The thesis's Ga (DESIGN.md) adds less than a count per tick, so the
+    stored output stays 0 and the loop runs Gth alone; the header, which names Ga, is true of
+    the software and the data's law is the lead alone.
+
+    Parameters
+    ----------
+    stated : Compensator
+        The header's controller (Gth and Ga).
+    found : Compensator or OpenLoop
+        The data's law.
+    a : ndarray, shape (N,)
+        The logged accelerometer counts.
+    d : int
+        The alignment the data's law reproduces the log at: Ga reads a[k - d] from tick d on.
+
+    Returns
+    -------
+    str or None
+        The words, when ``found`` is the header's Gth alone with its recursion on the stored
+        integer and the header's Ga, its output stored as that integer (truncated or rounded
+        as ``found``'s), is 0 on every row; else None.
+    """
+    ga, recursion = getattr(stated, "ga", None), getattr(found, "recursion", "none")
+    if ga is None or not is_closed_loop(found) or found.ga is not None or recursion not in STORED:
+        return None
+    if not _same(_coefficients(stated)[:2], _coefficients(found)):
+        return None
+    x = np.asarray(a, dtype=float)[:max(len(a) - d, 0)]
+    den = np.asarray(ga.den, dtype=float)
+    out = np.convolve(np.asarray(ga.num, dtype=float) / den[0], x)[:x.size]  # every stored output 0: no feedback term
+    quantize = RECURSIONS[recursion]
+    if not (np.all(np.isfinite(out)) and all(quantize(float(y)) == 0.0 for y in out)):
+        return None
+    lab = " (as the lab's int32 arrays stored it)" if recursion == "trunc" else ""
+    return (f"the header's Ga, its output stored as a {STORED[recursion]} whole count{lab}, is 0 on every row "
+            f"(its largest sum {np.max(np.abs(out), initial=0.0):.2g}): the accelerometer feedback it names did nothing")
 
 
 def named_design(controller, u, theta, v, d: int, dt: float = DT):

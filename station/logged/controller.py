@@ -22,8 +22,8 @@ import numpy as np
 
 from station.analysis.controller_id import (PREFERRED_ALIGNMENT, TOLERANCE, IdentifiedController, at_clamps,
                                            infer_controller, variant_of)
-from station.analysis.header_law import (NEAR_COUNTS, PRINTED_TOLERANCE, SAME_LAW_RTOL, completed_law, named_design,
-                                        same_law)
+from station.analysis.header_law import (NEAR_COUNTS, PRINTED_TOLERANCE, SAME_LAW_RTOL, completed_law, idle_ga,
+                                         named_design, same_law)
 from station.analysis.law_words import ga_text
 from station.analysis.glitches import GLITCH_WORDS, Glitches, isolated_misses, law_past_glitches
 from station.analysis.law_rows import pins_a_law, unpinned_words
@@ -501,9 +501,10 @@ def identify_controller(log: RunLog, skipped=None) -> ControllerId:
         at = f" at alignment {hit.alignment}" if is_closed_loop(hit.controller) else ""
         upto = "" if judged_to is None else f" before row {judged_to}, where n jumps (not judged across it)"
         data_says = f"{hit.law}{at}, reproduces every logged v {_how_close(hit.max_abs_dv, printing)}{upto}"
-        if controller is not None and (hit is completed or same_law(controller, hit.controller)):
-            # what the header states holds; the data complete what it does not (the clamp,
-            # the recursion on the stored integer, coefficients past their printed digits)
+        idle = None if controller is None else idle_ga(controller, hit.controller, a, hit.alignment)
+        if controller is not None and (hit is completed or same_law(controller, hit.controller) or idle):
+            # the header holds; the data complete the rest (clamp, stored integer, digits, a Ga stored as 0)
+            data_says += "" if idle is None else f"; {idle}"
             notes.append(f"the header's controller ({said}) is the data's law, completed from the data: "
                          f"{data_says}")
             return ControllerId(hit.controller, "header", notes, fit, AuditClaim(
@@ -572,8 +573,7 @@ def _header_pid(log: RunLog) -> tuple[float, float, float] | None:
 
 
 def _custom_controller(log: RunLog) -> str | None:
-    """The name of a custom Python controller our log's header records (a spec with
-    neither coefficients nor open loop, e.g. ``{"kind": "custom"}``), else None."""
+    """The name of a custom Python controller our log's header records ({"kind": "custom"}), else None."""
     spec = log.meta.get("controller") if log.format == "station" else None
     if not isinstance(spec, dict) or spec.get("kind") == "open-loop" or "gth" in spec:
         return None

@@ -184,6 +184,9 @@ class AuditCase:
         else None.
     a_zero : float or None
         The accelerometer's zero, written in a but taken off by the loop's Ga ("a_zero"), else None.
+    ga_recursion : {"none", "trunc", "round"}
+        What Ga's recursion remembers of its output: the float, or the whole count the lab's 2009
+        software stored in an int32 array (its θ̂_d = u − that count); not "none": the header names Ga.
     """
 
     name: str
@@ -213,6 +216,7 @@ class AuditCase:
     u_unit: str | None = None
     theta_zero: float | None = None
     a_zero: float | None = None
+    ga_recursion: str = "none"
 
     @property
     def lies(self) -> bool:
@@ -546,7 +550,7 @@ def simulate_audit_case(case: AuditCase, seed: int, substeps: int = 100, accel_n
         ctrl = LabController([case.kp], [1.0], case.limit, case.recursion)
     else:
         ctrl = LabController(*tustin(list(case.num_s), list(case.den_s), DT), case.limit, case.recursion)
-    ga = None if case.ga_s is None else LabController(*tustin(*case.ga_s, DT), math.inf, "none")
+    ga = None if case.ga_s is None else LabController(*tustin(*case.ga_s, DT), math.inf, case.ga_recursion)
     u = reference(case)
     rng = np.random.default_rng([seed, 26])
     noise = rng.normal(0.0, accel_noise, N)
@@ -577,7 +581,8 @@ def header(case: AuditCase) -> list[str]:
         else:
             num, den = tustin(list(case.num_s), list(case.den_s), DT)
         ga = ("[]", "[]")  # no accelerometer feedback named (a lie where the data hold one: "lie:accel_fb")
-        if case.a_zero is not None or case.name.startswith("rows:column") and case.ga_s is not None:  # named
+        if (case.a_zero is not None or case.ga_recursion != "none"
+                or case.name.startswith("rows:column") and case.ga_s is not None):  # named
             ga = tuple(_coeffs(x) for x in tustin(*case.ga_s, DT))
         return ["#SLFR RTP Motor_Comp_w_accel_fb", f"#Gth num={_coeffs(num)}", f"#Gth den={_coeffs(den)}",
                 f"#Ga num={ga[0]}", f"#Ga den={ga[1]}", COLUMNS_ACCEL]
