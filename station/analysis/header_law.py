@@ -111,8 +111,9 @@ def idle_ga(stated, found, a, d: int) -> str | None:
     if not (np.all(np.isfinite(out)) and all(quantize(float(y)) == 0.0 for y in out)):
         return None
     lab = " (as the lab's int32 arrays stored it)" if recursion == "trunc" else ""
+    peak = float(np.max(np.abs(out), initial=0.0))
     return (f"the header's Ga, its output stored as a {STORED[recursion]} whole count{lab}, is 0 on every row "
-            f"(its largest sum {np.max(np.abs(out), initial=0.0):.2g}): the accelerometer feedback it names did nothing")
+            f"(its largest sum {peak:.2g}): the accelerometer feedback it names did nothing")
 
 
 def named_design(controller, u, theta, v, d: int, dt: float = DT):
