@@ -72,6 +72,41 @@ def _same(a: list[np.ndarray], b: list[np.ndarray]) -> bool:
                for x, y in zip(a, b))
 
 
+def gain_words(stated, found, lab_b_lines: bool = False) -> str:
+    """Where the data's law is the header's times a gain: "; the header's law times 1.5".
+
+    ryanGT's Motor_Comp scripts ran v[i] = (b0·e[i] + b1·e[i−1])·gain − a1·v[i−1] and printed
+    ``#b0=``, ``#b1=``, ``#a1=`` but not the gain: a run with gain ≠ 1 contradicts its header by
+    exactly that factor on Gth's numerator.
+
+    Parameters
+    ----------
+    stated, found : Compensator, OpenLoop or None
+        The header's controller and the data's law.
+    lab_b_lines : bool
+        The header printed Gth as Motor_Comp's ``#b0=`` lines (the words then name its gain).
+
+    Returns
+    -------
+    str
+        The words (with their leading "; "), or "" where the data's law is not the header's
+        Gth numerator times one gain ≠ 1 with the same denominator and Ga, or the header's law
+        is a P (its gain is said as kp).
+    """
+    if not (is_closed_loop(stated) and is_closed_loop(found)):
+        return ""
+    a, b = _coefficients(stated), _coefficients(found)
+    if (a is None or b is None or len(a) != len(b) or a[0].shape != b[0].shape or not np.any(a[0])
+            or a[1].size < 2):  # a P law's gain is said as its kp
+        return ""
+    i = int(np.argmax(np.abs(a[0])))
+    g = float(b[0][i] / a[0][i])
+    if not np.isfinite(g) or abs(g - 1.0) <= SAME_LAW_RTOL or not _same([a[0] * g] + a[1:], b):
+        return ""
+    lab = " (Motor_Comp's gain, which its #b0= lines do not print)" if lab_b_lines else ""
+    return f"; the header's law times {g:.6g}{lab}"
+
+
 def idle_ga(stated, found, a, d: int) -> str | None:
     """Why a header's Ga is not in the data's law, where its whole-count output is 0 on every row.
 

@@ -22,8 +22,8 @@ import numpy as np
 
 from station.analysis.controller_id import (PREFERRED_ALIGNMENT, TOLERANCE, IdentifiedController, at_clamps,
                                            infer_controller, variant_of)
-from station.analysis.header_law import (NEAR_COUNTS, PRINTED_TOLERANCE, SAME_LAW_RTOL, completed_law, idle_ga,
-                                         named_design, same_law)
+from station.analysis.header_law import (NEAR_COUNTS, PRINTED_TOLERANCE, SAME_LAW_RTOL, completed_law, gain_words,
+                                         idle_ga, named_design, same_law)
 from station.analysis.law_words import ga_text
 from station.analysis.glitches import GLITCH_WORDS, Glitches, isolated_misses, law_past_glitches
 from station.analysis.law_rows import pins_a_law, unpinned_words
@@ -76,9 +76,8 @@ def _header_number(meta: dict[str, Any], key: str) -> float:
 
 
 def _lab_coefficients(meta: dict[str, Any], notes: list[str]) -> dict[str, Any]:
-    """``meta`` with a Gth read from the lab's own way of printing it, when it has no Gth: the
-    lines ``#b0=``, ``#b1=``, ``#a1=`` of ryanGT's Motor_Comp scripts (their recursion
-    v[i] = b0·e[i] + b1·e[i−1] − a1·v[i−1]) are Gth's z⁻¹ num [b0, b1, …] and den [1, a1, …]."""
+    """``meta`` with a Gth read from ryanGT's Motor_Comp lines ``#b0=``, ``#b1=``, ``#a1=`` when it has
+    none (v[i] = b0·e[i] + b1·e[i−1] − a1·v[i−1]): Gth's z⁻¹ num [b0, b1, …] and den [1, a1, …]."""
     if "Gth" in meta or "b0" not in meta:
         return meta
     num = [_header_number(meta, f"b{k}") for k in range(MAX_ORDER + 2) if f"b{k}" in meta]
@@ -514,6 +513,7 @@ def identify_controller(log: RunLog, skipped=None) -> ControllerId:
                 f"{_how_close(hit.max_abs_dv, printing)}{at}{upto}{aside}"), hit.alignments, cut=cut,
                 judged_to=judged_to, corrupted=glitch)
         if stated:
+            data_says += gain_words(controller, hit.controller, "b0" in log.meta)
             notes.append(f"the header's controller ({said}) does not reproduce the logged v (max |dv| = "
                          f"{_counts(header_dv)}); the data's is used: {data_says}")
             return ControllerId(hit.controller, "inferred (header contradicted)", notes, fit, AuditClaim(
