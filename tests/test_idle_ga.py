@@ -51,6 +51,7 @@ def test_blind_a_header_ga_stored_as_truncated_zero_is_confirmed_and_said_idle(t
     claim = _controller_claim(run)
     assert claim.verdict == "confirmed" and run.source == "header", claim
     assert IDLE in claim.data and "truncated whole count (as the lab's int32 arrays" in claim.data, claim.data
+    assert "the data's law has the header's Gth coefficients" in claim.evidence, claim.evidence
     assert run.reproduced and run.max_abs_dv == 0.0 and run.alignment == alignment
     assert run.controller.ga is None and run.controller.recursion == "trunc"
     assert not [c for c in run.audit.claims if c.verdict == "contradicted"]

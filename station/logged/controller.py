@@ -507,8 +507,8 @@ def identify_controller(log: RunLog, skipped=None) -> ControllerId:
             notes.append(f"the header's controller ({said}) is the data's law, completed from the data: "
                          f"{data_says}")
             return ControllerId(hit.controller, "header", notes, fit, AuditClaim(
-                "controller", said, data_says, "confirmed",
-                f"the data's law has the header's coefficients (to {SAME_LAW_RTOL:g} relative); as printed it "
+                "controller", said, data_says, "confirmed", f"the data's law has the header's {'Gth ' if idle else ''}"
+                f"coefficients (to {SAME_LAW_RTOL:g} relative); as printed it "
                 f"replays v to max |dv| = {_counts(header_dv)}, completed from the data "
                 f"{_how_close(hit.max_abs_dv, printing)}{at}{upto}{aside}"), hit.alignments, cut=cut,
                 judged_to=judged_to, corrupted=glitch)
