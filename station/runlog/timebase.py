@@ -57,6 +57,8 @@ def complete_time_base(data: dict[str, np.ndarray], names: list[str], notes: lis
         The sample time found in t, s: the median step rounded to 1 ns; None with fewer
         than two rows, a non-finite t, or a median step that is not positive.
     """
+    if "n" in names:
+        unwrap_counter(data, "t" in names, notes)
     t, n = data["t"], data["n"]
     if "t" not in names and "n" in names:
         data["t"] = t = n * DT
@@ -74,6 +76,50 @@ def complete_time_base(data: dict[str, np.ndarray], names: list[str], notes: lis
         notes.append(f"t is not evenly spaced (steps {np.min(steps):g} .. {np.max(steps):g} s; "
                      f"median {dt:g} s used)")
     return dt
+
+
+COUNTER_WORD = 65536
+"""The lab's PSoC sends n as one 16-bit word (the legacy protocol, ``../shared/spec/protocol.md``):
+after 32767 (65.5 s at 500 Hz) its two's complement reads −32768 (read unsigned, 65535 then 0)."""
+
+
+def unwrap_counter(data: dict[str, np.ndarray], has_t: bool, notes: list[str]) -> None:
+    """Unwrap a 16-bit tick counter, in place, and say so in ``notes``: rows where n steps by
+    1 − :data:`COUNTER_WORD` (32767 to −32768, or 65535 to 0) are the next tick. The lab's
+    software computed t as n·dt, so a t that steps back by as much there is unwrapped with it.
+    Before, a sweep longer than 65.5 s read as two runs, the second set aside.
+
+    Parameters
+    ----------
+    data : dict of numpy.ndarray
+        The log's columns by standard name (n, and t when ``has_t``), shape (rows,) each.
+    has_t : bool
+        The file has a t column.
+    notes : list of str
+        The reader's notes; appended to.
+    """
+    n = data["n"]
+    if n.size < 2 or not np.all(np.isfinite(n)):
+        return
+    steps = np.diff(n)
+    wraps = np.flatnonzero(steps == 1 - COUNTER_WORD) + 1
+    if not wraps.size:
+        return
+    offset = np.zeros(n.size)
+    for k in wraps:
+        offset[k:] += COUNTER_WORD
+    said = ", ".join(f"{int(k)} ({n[k - 1]:g} to {n[k]:g})" for k in wraps[:3]) + (" ..." if wraps.size > 3 else "")
+    data["n"] = n + offset
+    words = f"n wraps at 16 bits at row {said}: the device's tick counter, unwrapped"
+    t = data["t"]
+    if has_t and np.all(np.isfinite(t)):
+        ticks = steps == 1
+        dt = float(np.median(np.diff(t)[ticks])) if np.any(ticks) else 0.0
+        back = np.diff(t)[wraps - 1]
+        if dt > 0 and np.all(np.abs(back + (COUNTER_WORD - 1) * dt) < 0.5 * dt):
+            data["t"] = t + offset * dt
+            words += f"; t with it (t = n·{dt:g} s)"
+    notes.append(words)
 
 
 MISSING_SHARE = 9.0
