@@ -86,8 +86,8 @@ after 32767 (65.5 s at 500 Hz) its two's complement reads −32768 (read unsigne
 def unwrap_counter(data: dict[str, np.ndarray], has_t: bool, notes: list[str]) -> None:
     """Unwrap a 16-bit tick counter, in place, and say so in ``notes``: rows where n steps by
     1 − :data:`COUNTER_WORD` (32767 to −32768, or 65535 to 0) are the next tick. The lab's
-    software computed t as n·dt, so a t that steps back by as much there is unwrapped with it.
-    Before, a sweep longer than 65.5 s read as two runs, the second set aside.
+    software computed t as n·dt, so a t that steps back by as much there is unwrapped with it
+    (otherwise a run longer than 65.5 s reads as two runs).
 
     Parameters
     ----------
@@ -106,8 +106,8 @@ def unwrap_counter(data: dict[str, np.ndarray], has_t: bool, notes: list[str]) -
     if not wraps.size:
         return
     offset = np.zeros(n.size)
-    for k in wraps:
-        offset[k:] += COUNTER_WORD
+    offset[wraps] = COUNTER_WORD
+    offset = np.cumsum(offset)  # each wrap adds a word to every row after it
     said = ", ".join(f"{int(k)} ({n[k - 1]:g} to {n[k]:g})" for k in wraps[:3]) + (" ..." if wraps.size > 3 else "")
     data["n"] = n + offset
     words = f"n wraps at 16 bits at row {said}: the device's tick counter, unwrapped"
