@@ -26,6 +26,7 @@ from station.logged.audit import AuditClaim
 from station.logged.quantum import QUANTUM_TOLERANCE, count_step, in_counts, quantum_fits, quantum_fits_each
 from station.rig import COUNTS_PER_REV, DT
 from station.runlog import RunLog
+from station.runlog.timebase import WORD
 
 THETA_UNITS = {"milliradians": 2000.0 * math.pi / COUNTS_PER_REV, "degrees": 360.0 / COUNTS_PER_REV,
                "radians": 2.0 * math.pi / COUNTS_PER_REV}
@@ -78,10 +79,6 @@ class TimeBase:
 def _whole(x: np.ndarray) -> bool:
     return bool(np.all(x == np.round(x)))
 
-
-WORD = 65536
-"""One more than the largest unsigned 16-bit word: a two's-complement word x < 0 read as
-unsigned is ``WORD + x`` (the legacy protocol's words, ``../shared/spec/protocol.md``)."""
 
 WORD_COLUMNS = {"u": "u", "v": "v", "theta": "θ", "a": "a", "theta_d_hat": "θ̂d"}
 """Columns of signed counts that a client may have read as unsigned words, by their printed name."""

@@ -78,14 +78,15 @@ def complete_time_base(data: dict[str, np.ndarray], names: list[str], notes: lis
     return dt
 
 
-COUNTER_WORD = 65536
-"""The lab's PSoC sends n as one 16-bit word (the legacy protocol, ``../shared/spec/protocol.md``):
-after 32767 (65.5 s at 500 Hz) its two's complement reads −32768 (read unsigned, 65535 then 0)."""
+WORD = 65536
+"""One more than the largest unsigned 16-bit word, the legacy protocol's (``../shared/spec/protocol.md``):
+a two's-complement word x < 0 read as unsigned is ``WORD + x``; the lab's PSoC sends n as one, so
+after 32767 (65.5 s at 500 Hz) n reads −32768 (read unsigned, 65535 then 0)."""
 
 
 def unwrap_counter(data: dict[str, np.ndarray], has_t: bool, notes: list[str]) -> None:
     """Unwrap a 16-bit tick counter, in place, and say so in ``notes``: rows where n steps by
-    1 − :data:`COUNTER_WORD` (32767 to −32768, or 65535 to 0) are the next tick. The lab's
+    1 − :data:`WORD` (32767 to −32768, or 65535 to 0) are the next tick. The lab's
     software computed t as n·dt, so a t that steps back by as much there is unwrapped with it
     (otherwise a run longer than 65.5 s reads as two runs).
 
@@ -102,11 +103,11 @@ def unwrap_counter(data: dict[str, np.ndarray], has_t: bool, notes: list[str]) -
     if n.size < 2 or not np.all(np.isfinite(n)):
         return
     steps = np.diff(n)
-    wraps = np.flatnonzero(steps == 1 - COUNTER_WORD) + 1
+    wraps = np.flatnonzero(steps == 1 - WORD) + 1
     if not wraps.size:
         return
     offset = np.zeros(n.size)
-    offset[wraps] = COUNTER_WORD
+    offset[wraps] = WORD
     offset = np.cumsum(offset)  # each wrap adds a word to every row after it
     said = ", ".join(f"{int(k)} ({n[k - 1]:g} to {n[k]:g})" for k in wraps[:3]) + (" ..." if wraps.size > 3 else "")
     data["n"] = n + offset
@@ -116,7 +117,7 @@ def unwrap_counter(data: dict[str, np.ndarray], has_t: bool, notes: list[str]) -
         ticks = steps == 1
         dt = float(np.median(np.diff(t)[ticks])) if np.any(ticks) else 0.0
         back = np.diff(t)[wraps - 1]
-        if dt > 0 and np.all(np.abs(back + (COUNTER_WORD - 1) * dt) < 0.5 * dt):
+        if dt > 0 and np.all(np.abs(back + (WORD - 1) * dt) < 0.5 * dt):
             data["t"] = t + offset * dt
             words += f"; t with it (t = n·{dt:g} s)"
     notes.append(words)
