@@ -103,8 +103,11 @@ def _offset_taken_off(log: RunLog, skipped, v: np.ndarray, c: float, rest: int) 
     if not named and dv is not None and law_confirms(trial, skipped) == "header":  # printed coefficients completed
         whose, dv = "the header's law (its printed coefficients completed from the data)", None
     elif not named:  # none named, an open loop's v = u contradicted, or a header lying about the law too
-        found = _data_law_from_rest(log, trial, skipped)
-        zero = None if found is not None or _law_as_written(log, skipped) else check_theta_zero(trial, skipped)
+        zeroed = theta_from_zero(trial) if dv is not None else None  # the header's law from θ's zero, first
+        header_zero = zeroed is not None and header_holds(zeroed, _law_dv(zeroed, skipped), skipped)
+        found = None if header_zero else _data_law_from_rest(log, trial, skipped)
+        zero = (check_theta_zero(trial, skipped) if header_zero else
+                None if found is not None or _law_as_written(log, skipped) else check_theta_zero(trial, skipped))
         if found is None and zero is None:
             return None
         if zero is not None:  # θ from its zero as well: two faults of a script that wrote the device's raw words

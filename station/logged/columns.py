@@ -48,7 +48,7 @@ from station.errors import StationError
 from station.logged.audit import AuditClaim
 from station.logged.column_zeros import (ZEROED_TOO, Columns, check_command_offset, check_theta_zero, law_confirms,
                                          theta_from_zero)
-from station.logged.command_scale import Scaled, law_scale
+from station.logged.command_scale import Scaled, law_line, law_scale
 from station.logged.quantum import CONVERTER_VOLTS, count_step, in_counts, quantum_fits
 from station.logged.controller import (NO_LAW, ControllerId, header_law_dv,
                                        header_reproduces, identify_controller)
@@ -134,6 +134,64 @@ def rewritten_all(log: RunLog, rewrites: tuple[tuple[str, ...], ...]) -> RunLog:
 
 
 def check_columns(log: RunLog, skipped=None) -> Columns:
+    """Check the column line against the header's closed-loop law (:func:`columns_as_named`),
+    and where that law reproduces neither the log nor what the check made of it, also each
+    rewrite of :data:`TRIALS` checked so, when the law lies on a line through v there
+    (:func:`station.logged.command_scale.law_line`): three faults at once (θ negated, from its
+    zero, and v in volts or about an unsigned DAC code's zero).
+
+    Parameters
+    ----------
+    log : RunLog
+    skipped : array_like of bool, optional
+        As :func:`station.logged.controller.identify_controller`.
+
+    Returns
+    -------
+    Columns
+        As :func:`columns_as_named`; a rewrite's claim first, the claims of the check of the
+        rewritten log after it, where only so the header's law reproduces v.
+    """
+    found = columns_as_named(log, skipped)
+    if len(log) < 2 or named_by_header(found, skipped):
+        return found
+    for columns in TRIALS:
+        trial = rewritten(log, columns)
+        if not law_line(trial, skipped):
+            continue
+        inner = columns_as_named(trial, skipped)
+        if inner.claims and named_by_header(inner, skipped):
+            return _swapped_back(log, (columns,), inner.log, header_law_dv(log, skipped),
+                                 "the header's law reproduces v, its columns read as the claims after this one say,",
+                                 inner.identified, also=inner.claims)
+    return found
+
+
+def named_by_header(found: Columns, skipped=None) -> bool:
+    """Whether the header's closed-loop law reproduces a column check's log (its own clamp where
+    v pins no law), or the check's identification confirmed the header.
+
+    Parameters
+    ----------
+    found : Columns
+    skipped : array_like of bool, optional
+        As :func:`station.logged.controller.identify_controller`.
+
+    Returns
+    -------
+    bool
+        False where no closed-loop law named reproduces it (an open-loop header, or none) and no
+        identification confirmed the header.
+    """
+    claim = found.identified.claim if found.identified is not None else None
+    if claim is not None and claim.verdict == "confirmed":
+        return True
+    v = np.asarray(found.log.data["v"], dtype=float)
+    dv = header_law_dv(found.log, skipped, own_clamp=not in_counts(v) and not pins_a_law(v))
+    return dv is not None and dv <= TOLERANCE
+
+
+def columns_as_named(log: RunLog, skipped=None) -> Columns:
     """Check the column line against the header's closed-loop law, or with no header (or an
     open-loop one no law replaces) against the law the data give (:data:`TRIALS`, :data:`PAIRS`;
     a single rewrite whose θ rests off 0 also from that zero, :func:`check_theta_zero`).
@@ -174,7 +232,7 @@ def check_columns(log: RunLog, skipped=None) -> Columns:
     ref = check_reference_unit(log, skipped, as_named) if as_named is not None and unit is None else None
     if ref is not None:
         return Columns((ref.claim,), ref.log, ref.identified)
-    for columns in SWAPS:  # a swap beside v in another unit (the swap's v is not in counts)
+    for columns in TRIALS:  # a swap or θ negated beside v in another unit (the swap's v is not in counts)
         trial = rewritten(log, columns)
         if in_counts(np.asarray(trial.data["v"], dtype=float)):
             continue

@@ -18,6 +18,7 @@ import numpy as np
 from station.analysis.law_rows import TOLERANCE
 from station.control.rerun import (ALIGNMENTS, command_error, is_closed_loop, judged_rows, memory,
                                    replay_commands)
+from station.logged.column_zeros import theta_from_zero
 from station.logged.controller import named_law
 from station.logged.units import replayable_rate
 from station.runlog import RunLog
@@ -89,3 +90,54 @@ def law_scale(log: RunLog, skipped=None) -> Scaled | None:
         if np.all(command_error(ratio * replayed, v, seeded=restarts)[judged] <= TOLERANCE):
             return Scaled(ratio, replayed)
     return None
+
+
+COMMAND_READING_COUNTS = 1.5
+"""Most DAC counts (of the law's, times its unit's size) the logged v may lie off a line through
+the header's law replayed on its own commands for a rewrite to be asked of the whole audit
+(:func:`law_line`): the stored integer's truncation and v's printing, loosely."""
+
+
+def law_line(log: RunLog, skipped=None) -> bool:
+    """Whether the logged v lies on a line (a unit's size and a zero, any of the two) through the
+    header's closed-loop law replayed on its own commands, from θ's first count where θ rests
+    off 0 (:func:`station.logged.column_zeros.theta_from_zero`): a quick test of whether a
+    rewrite of a log's columns leaves only the command's reading and θ's zero to find.
+
+    Parameters
+    ----------
+    log : RunLog
+    skipped : array_like of bool, optional
+        As :func:`station.logged.controller.identify_controller`.
+
+    Returns
+    -------
+    bool
+        True when at some alignment the least-squares line gives every logged v before n first
+        jumps (but at v's extremes: a clamp) within :data:`COMMAND_READING_COUNTS` of the law's
+        counts; False when it does not, when the header names no closed-loop law or when u, θ
+        or v is not finite.
+    """
+    law = named_law(log)
+    data = log.data
+    if (law is None or not is_closed_loop(law) or not replayable_rate(log)
+            or not all(np.all(np.isfinite(data[c])) for c in ("u", "theta", "v"))):
+        return False
+    zeroed = theta_from_zero(log)
+    theta = (zeroed if zeroed is not None else log).data["theta"]
+    v = np.asarray(data["v"], dtype=float)
+    a = np.where(np.isfinite(data["a"]), data["a"], 0.0)
+    restarts = restart_rows(data["n"])
+    first = restarts[0] if restarts else v.size
+    v = v[:first]
+    inside = (v > v.min()) & (v < v.max())  # v at its extremes may be at a clamp the header does not print
+    for d in ALIGNMENTS:
+        replayed, _ = replay_commands(law, data["u"], theta, a, d, skipped)
+        basis = np.column_stack((replayed[:first], np.ones(first)))[inside]
+        if basis.shape[0] < 2 or not np.all(np.isfinite(basis)) or np.ptp(basis[:, 0]) == 0:
+            continue
+        (size, zero), *_ = np.linalg.lstsq(basis, v[inside], rcond=None)
+        miss = np.abs(basis @ (size, zero) - v[inside])
+        if size > 0 and float(np.max(miss)) <= COMMAND_READING_COUNTS * size + 1e-9:
+            return True
+    return False
