@@ -14,6 +14,7 @@ the 500 Hz real-time loop, where numpy's per-call overhead would dominate.
 
 from __future__ import annotations
 
+import functools
 import math
 from collections.abc import Sequence
 
@@ -179,22 +180,34 @@ def tustin(num_s: Sequence[float], den_s: Sequence[float], dt: float = DT) -> tu
         raise ValueError(f"dt must be positive, got {dt}")
     if num_s.size == 0 or den_s.size == 0 or not (np.all(np.isfinite(num_s)) and np.all(np.isfinite(den_s))):
         raise ValueError("num_s and den_s must be non-empty lists of finite numbers")
-    den_s = np.trim_zeros(den_s, "f")
-    if den_s.size == 0:
+    lead = np.flatnonzero(den_s)  # (np.trim_zeros: 60 µs of a tustin called thousands of times a fit)
+    if lead.size == 0:
         raise ValueError("den_s must not be all zeros")
+    den_s = den_s[lead[0]:]
     if num_s.size > den_s.size:
         num_s = np.trim_zeros(num_s, "f")
         if num_s.size > den_s.size:
             raise ValueError("the continuous design is improper (numerator degree > denominator degree)")
     n = den_s.size - 1
     num_s = np.concatenate([np.zeros(n + 1 - num_s.size), num_s])
-    # s = c (z − 1)/(z + 1), c = 2/dt, times (z + 1)^n: the power s^j becomes
-    # c^j (z − 1)^j (z + 1)^(n − j) (numpy's polynomials; scipy.signal takes a second to import)
     num_z, den_z = np.zeros(n + 1), np.zeros(n + 1)
-    c = 2.0 / dt
-    for j in range(n + 1):
-        term = np.polynomial.polynomial.polypow([-1.0, 1.0], j)[::-1] * c**j
-        term = np.convolve(term, np.polynomial.polynomial.polypow([1.0, 1.0], n - j)[::-1])
+    for j, term in enumerate(_bilinear_powers(n, float(dt))):
         num_z += num_s[n - j] * term
         den_z += den_s[n - j] * term
     return num_z / den_z[0], den_z / den_z[0]
+
+
+@functools.lru_cache(maxsize=32)
+def _bilinear_powers(n: int, dt: float) -> tuple[np.ndarray, ...]:
+    """What each power s^j (j = 0..n) becomes under s = c (z − 1)/(z + 1), c = 2/dt, times
+    (z + 1)^n: c^j (z − 1)^j (z + 1)^(n − j), descending powers of z (numpy's polynomials;
+    scipy.signal takes a second to import). Cached: an identification discretizes thousands of
+    candidate denominators of one order (:mod:`station.analysis.accel_law`)."""
+    c = 2.0 / dt
+    terms = []
+    for j in range(n + 1):
+        term = np.polynomial.polynomial.polypow([-1.0, 1.0], j)[::-1] * c**j
+        term = np.convolve(term, np.polynomial.polynomial.polypow([1.0, 1.0], n - j)[::-1])
+        term.flags.writeable = False
+        terms.append(term)
+    return tuple(terms)
