@@ -50,6 +50,7 @@ from station.analysis.accel_law import AccelFeedback, accel_feedback, lagged
 from station.analysis.continuous_design import ContinuousDesign
 from station.analysis.law_rows import TOLERANCE, LawRows, no_dac_command, pinned_law, pins_a_law, tie_rows
 from station.analysis.law_words import law_text
+from station.analysis.memo import by_content
 from station.analysis.sent_law import sent_designs
 from station.control.compensator import SENT, STORED
 from station.control import DAC_LIMIT, Compensator, DiscreteTF, OpenLoop, lead_controller  # DAC_LIMIT: the clamp assumed when v exceeds the rig's ±200
@@ -367,6 +368,7 @@ def aligned_error(u: np.ndarray, theta: np.ndarray, d: int) -> np.ndarray:
     return e
 
 
+@by_content()  # a column check asks again of a rewrite's rewrite (the log itself)
 def infer_controller(u, theta, v, a=None, dt: float = DT, rig_limit: float = CLAMP,
                      alignments=(0, 1), prefer: int | None = PREFERRED_ALIGNMENT,
                      cut: bool = False, restarts=(), accel_only: bool = False) -> IdentifiedController | None:
