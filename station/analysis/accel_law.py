@@ -44,6 +44,30 @@ LOG_POLE = 40.0
 ARX_SLACK = 1e-6
 """Largest ARX residual of a float recursion's law worth factoring, relative to max |v| (at least 1 count)."""
 
+GIVE_UP_EVALUATIONS = 10
+"""Evaluations per parameter after which a search still more than :data:`GIVE_UP_COUNTS` from
+every logged v is abandoned (:func:`_give_up`)."""
+
+GIVE_UP_COUNTS = 1.0
+"""A search's largest miss of a logged v (DAC counts) past which it is not a law that will
+reproduce the log."""
+
+
+def _give_up(n: int):
+    """A :func:`scipy.optimize.least_squares` callback: stop a search of ``n`` parameters still
+    more than :data:`GIVE_UP_COUNTS` from some logged v after :data:`GIVE_UP_EVALUATIONS` per
+    parameter. Measured over the audit's tests and 210 blind logs (613 searches, 2026-11-29):
+    every search that reproduced v (to 1e-6 counts) started within a count of it, every one that
+    came within a count did so within 3.5 evaluations per parameter; the searches that came
+    nowhere near (a law of the wrong order or alignment) ran to scipy's 100 per parameter and
+    took two thirds of the evaluations. The searches that come within a count run as before."""
+    def callback(intermediate_result):
+        if intermediate_result.nfev >= GIVE_UP_EVALUATIONS * n and \
+                np.max(np.abs(intermediate_result.fun)) > GIVE_UP_COUNTS:
+            raise StopIteration
+
+    return callback
+
 
 class AccelFeedback(NamedTuple):
     """An accelerometer feedback Ga found in a log (:func:`accel_feedback`).
@@ -307,7 +331,7 @@ def accel_feedback(u, theta, a, v, d: int, m: int, p: int, limit: float, dt: flo
                     return discretize(np.ones(1), den_s(q), dt, "Tustin")[1]
 
                 fit = least_squares(lambda q, of=of: inner(of(q))[0], q0, method="trf", jac="3-point",
-                                    x_scale="jac", xtol=1e-15, ftol=1e-15, gtol=1e-15)
+                                    x_scale="jac", xtol=1e-15, ftol=1e-15, gtol=1e-15, callback=_give_up(q0.size))
                 if np.all(np.isfinite(fit.x)) and (best is None or fit.cost < best[0]):
                     best = fit.cost, fit.x, of
                 if den_of is None:  # the products' own poles, should no polish be finite
@@ -346,7 +370,8 @@ def accel_feedback(u, theta, a, v, d: int, m: int, p: int, limit: float, dt: flo
                 return w_lags @ bz - np.column_stack([xa[k - i] for i in range(m + 1)]) @ bz + v_lags @ az - target
 
             z0 = np.concatenate((q, num, b, a_th, [0.0] if zero else []))
-            fit = least_squares(law, z0, method="trf", jac="3-point", x_scale="jac", xtol=1e-15, ftol=1e-15, gtol=1e-15)
+            fit = least_squares(law, z0, method="trf", jac="3-point", x_scale="jac", xtol=1e-15, ftol=1e-15, gtol=1e-15,
+                                callback=_give_up(z0.size))
             if np.all(np.isfinite(fit.x)) and np.max(np.abs(fit.fun)) < np.max(np.abs(law(z0))):
                 dz, num, _, _, shift = split(fit.x)
                 den = np.asarray(dz, float) / dz[0]
