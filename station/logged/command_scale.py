@@ -65,11 +65,10 @@ def law_scale(log: RunLog, skipped=None) -> Scaled | None:
         column (Ga's) is judged on the rows before the first jump, and past it v is the logged
         one in counts.
     """
-    law = named_law(log)
-    data = log.data
-    if (law is None or not is_closed_loop(law) or not replayable_rate(log)
-            or not all(np.all(np.isfinite(data[c])) for c in ("u", "theta", "v"))):
+    law = _replayable_law(log)
+    if law is None:
         return None
+    data = log.data
     v = np.asarray(data["v"], dtype=float)
     a = np.where(np.isfinite(data["a"]), data["a"], 0.0)
     restarts = restart_rows(data["n"])
@@ -98,6 +97,16 @@ the header's law replayed on its own commands for a rewrite to be asked of the w
 (:func:`law_line`): the stored integer's truncation and v's printing, loosely."""
 
 
+def _replayable_law(log: RunLog):
+    """The header's closed-loop law where it can be replayed on the log as logged (every tick of a
+    loop, u, θ and v finite); else None."""
+    law = named_law(log)
+    if (law is None or not is_closed_loop(law) or not replayable_rate(log)
+            or not all(np.all(np.isfinite(log.data[c])) for c in ("u", "theta", "v"))):
+        return None
+    return law
+
+
 def law_line(log: RunLog, skipped=None) -> bool:
     """Whether the logged v lies on a line (a unit's size and a zero, any of the two) through the
     header's closed-loop law replayed on its own commands, from θ's first count where θ rests
@@ -118,11 +127,10 @@ def law_line(log: RunLog, skipped=None) -> bool:
         counts; False when it does not, when the header names no closed-loop law or when u, θ
         or v is not finite.
     """
-    law = named_law(log)
-    data = log.data
-    if (law is None or not is_closed_loop(law) or not replayable_rate(log)
-            or not all(np.all(np.isfinite(data[c])) for c in ("u", "theta", "v"))):
+    law = _replayable_law(log)
+    if law is None:
         return False
+    data = log.data
     zeroed = theta_from_zero(log)
     theta = (zeroed if zeroed is not None else log).data["theta"]
     v = np.asarray(data["v"], dtype=float)
