@@ -135,7 +135,8 @@ def main(argv: list[str] | None = None) -> int:
                                  "claim": ours["claim"]}
                 line = f"{ours['seconds']:.2f} s"
                 if theirs is not None:
-                    line += f", baseline {theirs['seconds']:.2f} s, baseline / ours {theirs['seconds'] / ours['seconds']:.2f}"
+                    ratio = theirs["seconds"] / ours["seconds"]
+                    line += f", baseline {theirs['seconds']:.2f} s, baseline / ours {ratio:.2f}"
                 print(line + f"\n    {ours['claim']}", flush=True)
         finally:
             if base is not None:
