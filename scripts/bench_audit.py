@@ -12,7 +12,8 @@ revision, side by side: the seconds of each and baseline / ours.
 
 Logs: the simulated rig's lead + accelerometer step (``station.experiment.run_step``, 0.2 s
 and 1 s) with its header's Ga taken out, and the 1 s one also with the three column faults;
-with ``../shared`` (or ``$STATION_RIG_DATA``), the rig's lead + accelerometer step as logged.
+with ``../shared`` (or ``$STATION_RIG_DATA``), the rig's lead + accelerometer step as logged and
+under an open-loop header (the law and its Ga found in the data).
 
 Usage: ``python scripts/bench_audit.py [--baseline REV] [--rig DIR] [--json FILE]``.
 JSON: ``{"logs": {name: {"ours_s", "baseline_s" | null, "claim"}}}``.
@@ -97,6 +98,10 @@ def make_logs(folder: Path, rig: Path | None) -> dict[str, Path]:
     logs["the same, θ negated from count 59, v in volts"] = faults
     if rig is not None and (rig / RIG_LEAD_ACCEL).is_file():
         logs["the rig's lead + Ga step (#Ga num=[])"] = rig / RIG_LEAD_ACCEL
+        lines = (rig / RIG_LEAD_ACCEL).read_text().split("\n")
+        ol = folder / "rig_lead_accel_ol.txt"
+        ol.write_text("\n".join(["#SLFR RTP OL_Test"] + [x for x in lines[1:] if not x.startswith(("#Gth", "#Ga"))]))
+        logs["the rig's lead + Ga step under an open-loop header"] = ol
     return logs
 
 
