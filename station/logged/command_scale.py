@@ -11,11 +11,15 @@ size, and the replay is v in counts where it gives every logged v to its printin
 
 from __future__ import annotations
 
+import itertools
 from typing import NamedTuple
 
 import numpy as np
 
+from station.analysis.controller_id import with_recursion
 from station.analysis.law_rows import TOLERANCE
+from station.control import Compensator
+from station.control.compensator import SENT, STORED
 from station.control.rerun import (ALIGNMENTS, command_error, is_closed_loop, judged_rows, memory,
                                    replay_commands)
 from station.logged.column_zeros import theta_from_zero
@@ -122,10 +126,11 @@ def law_line(log: RunLog, skipped=None) -> bool:
     Returns
     -------
     bool
-        True when at some alignment the least-squares line gives every logged v before n first
+        True when at some alignment, with the law's recursion as stated or on the stored integer
+        or the whole count sent, the least-squares line gives every logged v before n first
         jumps (but at v's extremes: a clamp) within :data:`COMMAND_READING_COUNTS` of the law's
-        counts; False when it does not, when the header names no closed-loop law or when u, θ
-        or v is not finite.
+        counts; False when it does not, when the header names no closed-loop law, when u, θ
+        or v is not finite, or when the law's command moves by less than a count there.
     """
     law = _replayable_law(log)
     if law is None:
@@ -139,11 +144,15 @@ def law_line(log: RunLog, skipped=None) -> bool:
     first = restarts[0] if restarts else v.size
     v = v[:first]
     inside = (v > v.min()) & (v < v.max())  # v at its extremes may be at a clamp the header does not print
-    for d in ALIGNMENTS:
-        replayed, _ = replay_commands(law, data["u"], theta, a, d, skipped)
+    # as stated, and as lab software ran it: its recursion on the stored integer or the whole count
+    # sent (a float replay of an integer lead drifts from it by up to 1/(1 - pole) counts)
+    forms = [law] + ([with_recursion(law, q) for q in (*STORED, *SENT)]
+                     if isinstance(law, Compensator) and law.recursion == "none" else [])
+    for d, form in itertools.product(ALIGNMENTS, forms):
+        replayed, _ = replay_commands(form, data["u"], theta, a, d, skipped)
         basis = np.column_stack((replayed[:first], np.ones(first)))[inside]
-        if basis.shape[0] < 2 or not np.all(np.isfinite(basis)) or np.ptp(basis[:, 0]) == 0:
-            continue
+        if basis.shape[0] < 2 or not np.all(np.isfinite(basis)) or np.ptp(basis[:, 0]) < 1.0:
+            continue  # (a law that moves its command by less than a count puts any v on a line)
         (size, zero), *_ = np.linalg.lstsq(basis, v[inside], rcond=None)
         miss = np.abs(basis @ (size, zero) - v[inside])
         if size > 0 and float(np.max(miss)) <= COMMAND_READING_COUNTS * size + 1e-9:
