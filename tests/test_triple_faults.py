@@ -36,15 +36,18 @@ def _unit(name: str) -> str:
 
 @pytest.mark.parametrize("name", [P, P_2009, LEAD])
 @pytest.mark.parametrize("command", ["volts", "zero"])
-@pytest.mark.parametrize("column", ["negate", "swap"])
+@pytest.mark.parametrize("column", ["negate", "swap", "negate+swap"])
 def test_three_column_faults_under_a_true_header(rig_data, tmp_path, name, command, column):
+    """Three faults, and four: u and v swapped beside θ negated (:data:`station.logged.columns.PAIRS`,
+    each pair checked as a log of its own too; before, nothing said, or v and θ swapped)."""
     clean = LoggedRun.from_path(rig_data / name)
+    columns = column.split("+")
     run = LoggedRun.from_path(_rewrite(rig_data / name, tmp_path / "three.txt", theta0=59.0,
                                        volts=VOLTS if command == "volts" else None,
                                        zero=2048.0 if command == "zero" else None,
-                                       negate=column == "negate", swap=column == "swap"))
+                                       negate="negate" in columns, swap="swap" in columns))
     said = SAID[command] if command == "zero" else _unit(name)
-    assert _said(run) == {SAID[column], said, THETA0}
+    assert _said(run) == {*(SAID[c] for c in columns), said, THETA0}
     assert run.reproduced and run.source == "header"
     assert run.step_metrics() == clean.step_metrics()
     model = load_model("tmm-fit")
@@ -80,3 +83,15 @@ def test_law_line_is_the_law_through_v_in_any_unit_and_zero(rig_data, tmp_path):
     assert not law_line(read_log(negated))
     open_loop = _rewrite(rig_data / P, tmp_path / "ol.txt", header=["#SLFR RTP OL_Test"], volts=VOLTS)
     assert not law_line(read_log(open_loop))
+
+
+def test_law_line_is_no_line_through_a_law_that_commands_nothing(rig_data, tmp_path):
+    """A header whose law moves its command by less than a count (a fuzzed Gth of gain 1e-9)
+    puts any v on a line at some absurd unit: no line (before, True, and every rewrite of the
+    log was identified again: 21.5 s for a 0.2 s log of the input fuzz, 1.2 s now)."""
+    text = (rig_data / P).read_text().replace("#kp=2.0", "#kp=1e-9")
+    path = tmp_path / "tiny.txt"
+    path.write_text(text)
+    assert "#kp=1e-9" in text
+    assert not law_line(read_log(path))
+    assert not law_line(read_log(_rewrite(path, tmp_path / "tiny_volts.txt", volts=VOLTS)))

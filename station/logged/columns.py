@@ -155,13 +155,13 @@ def check_columns(log: RunLog, skipped=None) -> Columns:
     found = columns_as_named(log, skipped)
     if len(log) < 2 or named_by_header(found, skipped):
         return found
-    for columns in TRIALS:
-        trial = rewritten(log, columns)
+    for rewrites in tuple((c,) for c in TRIALS) + PAIRS:  # one rewrite, then a swap and θ negated
+        trial = rewritten_all(log, rewrites)
         if not law_line(trial, skipped):
             continue
         inner = columns_as_named(trial, skipped)
         if inner.claims and named_by_header(inner, skipped):
-            return _swapped_back(log, (columns,), inner.log, header_law_dv(log, skipped),
+            return _swapped_back(log, rewrites, inner.log, header_law_dv(log, skipped),
                                  "the header's law reproduces v, its columns read as the claims after this one say,",
                                  inner.identified, also=inner.claims)
     return found

@@ -72,7 +72,8 @@ angle with the other sign, or its columns in another order); "zero:command": the
 θ0, beside v in volts ("v_unit"'s; a P's only under its own header) or about a DAC code's midpoint
 ("v_zero"'s): a script that wrote the device's raw words; "three:columns": "zero:command"'s two
 faults under a true header (a P, or a lead on the stored integer), beside θ negated or u and v
-swapped: three column faults at once. A class joined with "+" to
+swapped: three column faults at once; "four:columns": the same with θ negated and u and v swapped
+both (four at once). A class joined with "+" to
 "coulomb_friction" hides that friction too (drawn as :func:`tests.blind.cases.draw` draws it).
 """
 
@@ -97,7 +98,7 @@ CLASSES = ("lie:open_loop", "lie:p_kp", "lie:lead_pole", "lie:accel_fb", "int:tr
            "int:round_d0", "int:round_d1", "session", "lie:sent", "lie:accel_int", "honest:p", "honest:lead_int",
            "honest:lead_sent", "words", "swap", "rows", "a_unit", "v_unit", "printed", "sign", "double", "lie:swap", "pair",
            "v_zero", "u_unit", "theta_zero", "a_zero", "lie:a_zero", "lie:column", "lie:accel_rows", "rows:column",
-           "zero:column", "zero:command", "three:columns")
+           "zero:column", "zero:command", "three:columns", "four:columns")
 """The audit's blind classes, in the validation table's order."""
 
 PHYSICAL = ("coulomb_friction",)
@@ -224,7 +225,7 @@ class AuditCase:
     def lies(self) -> bool:
         """Whether the header names another controller than the data's."""
         if self.name.startswith(("printed", "sign", "double", "v_zero", "u_unit", "theta_zero", "a_zero",
-                                 "lie:a_zero", "zero:column", "zero:command", "three:columns")):
+                                 "lie:a_zero", "zero:column", "zero:command", "three:columns", "four:columns")):
             return self.header == "open-loop"
         if self.name.startswith("lie:accel_rows"):
             return self.header != "none"
@@ -450,11 +451,13 @@ def draw_case(name: str, seed: int) -> AuditCase:
         return AuditCase(**common, **lead, recursion=str(rng.choice(["trunc", "round"])),
                          alignment=int(rng.integers(0, 2)), header="lead" if which < 0.75 else "none",
                          theta_zero=zero, **hidden)
-    if base == "three:columns":  # "zero:command"'s two faults under a true header, θ negated or u and v swapped too
+    if base in ("three:columns", "four:columns"):  # "zero:command"'s two faults, θ negated or u and v swapped too
         zero = float(rng.integers(5, 400)) * float(rng.choice([-1.0, 1.0]))
         hidden = ({"v_zero": float(rng.choice(V_ZEROS))} if rng.random() < 0.5 else
                   {"v_unit": str(rng.choice(sorted(V_UNITS)))})
         more = {"negate": True} if rng.random() < 0.5 else {"swap": ("u", "v")}
+        if base == "four:columns":  # both
+            more = {"negate": True, "swap": ("u", "v")}
         if rng.random() < 0.5:
             return AuditCase(**{**common, "header_kp": kp}, **p_law, recursion="trunc",
                              alignment=int(rng.integers(0, 2)), header="p", theta_zero=zero, **hidden, **more)
