@@ -46,7 +46,7 @@ ARX_SLACK = 1e-6
 
 GIVE_UP_EVALUATIONS = 10
 """Evaluations per parameter after which a search still more than :data:`GIVE_UP_COUNTS` from
-every logged v is abandoned (:func:`_give_up`)."""
+some logged v is abandoned (:func:`_give_up`)."""
 
 GIVE_UP_COUNTS = 1.0
 """A search's largest miss of a logged v (DAC counts) past which it is not a law that will

@@ -301,15 +301,16 @@ def law_variants(controller, v):
     Parameters
     ----------
     controller : Compensator or OpenLoop
-    v : array_like, shape (N,)
-        The logged commands, DAC counts.
+    v : array_like, shape (N,), or None
+        The logged commands, DAC counts; None: every form (v in a unit not yet read).
 
     Yields
     ------
     Compensator or OpenLoop
     """
     yield controller
-    if isinstance(controller, Compensator) and getattr(controller, "recursion", "none") == "none" and whole_counts(v):
+    if isinstance(controller, Compensator) and getattr(controller, "recursion", "none") == "none" and (
+            v is None or whole_counts(v)):
         for q in (*STORED, *SENT):
             yield with_recursion(controller, q)
 

@@ -16,10 +16,8 @@ from typing import NamedTuple
 
 import numpy as np
 
-from station.analysis.controller_id import with_recursion
+from station.analysis.controller_id import law_variants
 from station.analysis.law_rows import TOLERANCE
-from station.control import Compensator
-from station.control.compensator import SENT, STORED
 from station.control.rerun import (ALIGNMENTS, command_error, is_closed_loop, judged_rows, memory,
                                    replay_commands)
 from station.logged.column_zeros import theta_from_zero
@@ -146,9 +144,7 @@ def law_line(log: RunLog, skipped=None) -> bool:
     inside = (v > v.min()) & (v < v.max())  # v at its extremes may be at a clamp the header does not print
     # as stated, and as lab software ran it: its recursion on the stored integer or the whole count
     # sent (a float replay of an integer lead drifts from it by up to 1/(1 - pole) counts)
-    forms = [law] + ([with_recursion(law, q) for q in (*STORED, *SENT)]
-                     if isinstance(law, Compensator) and law.recursion == "none" else [])
-    for d, form in itertools.product(ALIGNMENTS, forms):
+    for d, form in itertools.product(ALIGNMENTS, list(law_variants(law, None))):
         replayed, _ = replay_commands(form, data["u"], theta, a, d, skipped)
         basis = np.column_stack((replayed[:first], np.ones(first)))[inside]
         if basis.shape[0] < 2 or not np.all(np.isfinite(basis)) or np.ptp(basis[:, 0]) < 1.0:
