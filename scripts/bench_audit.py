@@ -29,6 +29,8 @@ import sys
 import tempfile
 from pathlib import Path
 
+from station.outputs import FORCE_HELP, check_outputs, write_json
+
 REPO = Path(__file__).resolve().parents[1]
 RIG_LEAD_ACCEL = "step_response_Gth_comp_Ga_opt_amp_200_duration_1000_opt_case43_SLFR_RTP_Motor_Comp_Gth.txt"
 
@@ -119,7 +121,9 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--baseline", help="a git revision to time beside this tree (a temporary worktree)")
     parser.add_argument("--rig", type=Path, help="the rig's logs (default $STATION_RIG_DATA or ../shared/data/rig)")
     parser.add_argument("--json", type=Path, help="write the results here")
+    parser.add_argument("--force", action="store_true", help=FORCE_HELP)
     args = parser.parse_args(argv)
+    check_outputs([("--json", args.json)], force=args.force, parser=parser)
     rig = args.rig or Path(os.environ.get("STATION_RIG_DATA", REPO.parent / "shared" / "data" / "rig"))
     results = {}
     with tempfile.TemporaryDirectory() as tmp:
@@ -147,7 +151,7 @@ def main(argv: list[str] | None = None) -> int:
             if base is not None:
                 subprocess.run(["git", "-C", str(REPO), "worktree", "remove", "--force", str(base)], check=False)
     if args.json:
-        args.json.write_text(json.dumps({"logs": results}, indent=1))
+        write_json(args.json, {"logs": results})
     return 0
 
 

@@ -28,12 +28,13 @@ Usage: ``python scripts/bench_diagnose.py [--rig DIR] [--blind coulomb_friction=
 from __future__ import annotations
 
 import argparse
-import json
 import os
 import sys
 import tempfile
 import time
 from pathlib import Path
+
+from station.outputs import FORCE_HELP, check_outputs, write_json
 
 REPO = Path(__file__).resolve().parents[1]
 RIG_LOGS = (
@@ -57,10 +58,12 @@ def main(argv: list[str] | None = None) -> int:
                         help="worker processes fitting candidates at once (default: the CPU count, as station "
                              "diagnose)")
     parser.add_argument("--json", type=Path, default=None, help="write the numbers as JSON")
+    parser.add_argument("--force", action="store_true", help=FORCE_HELP)
     parser.add_argument("--identify", nargs="?", const="rig", default=None, metavar="MODEL",
                         help="also time station identify on the lockstep simulated rig serving MODEL (default rig)")
     parser.add_argument("--budget", type=int, default=8, help="identify's budget of designed experiments (default 8)")
     args = parser.parse_args(argv)
+    check_outputs([("--json", args.json)], force=args.force, parser=parser)
 
     with tempfile.TemporaryDirectory(prefix="bench_diagnose_") as tmp:  # the generated logs, identify's runs
         return _bench(args, Path(tmp))
@@ -102,7 +105,7 @@ def _bench(args: argparse.Namespace, tmp: Path) -> int:
     if args.identify is not None:
         doc["identify"] = bench_identify(args.identify, args.budget, tmp / "identify")
     if args.json is not None:
-        args.json.write_text(json.dumps(doc, indent=1))
+        write_json(args.json, doc)
     return 0
 
 

@@ -34,6 +34,7 @@ from pathlib import Path
 from station.experiment import run_step
 from station.ranges import number
 from station.link import LinkLimits
+from station.outputs import FORCE_HELP, check_outputs, write_json
 from station.protocol import PROTOCOLS
 
 
@@ -100,9 +101,11 @@ def main(argv=None) -> int:
     parser.add_argument("--protocols", nargs="+", default=list(PROTOCOLS), choices=PROTOCOLS)
     parser.add_argument("--no-baseline", action="store_true", help="skip the plain-loop baseline runs")
     parser.add_argument("--json", type=Path, default=None)
+    parser.add_argument("--force", action="store_true", help=FORCE_HELP)
     parser.add_argument("--max-lag", type=number(0, 1000, unit="ms"), default=1000 * LinkLimits.max_lag, metavar="MS",
                         help="the station's --max-lag (default 20 ms, the station's own)")
     args = parser.parse_args(argv)
+    check_outputs([("--json", args.json)], force=args.force, parser=parser)
     cases = []
     load_before = os.getloadavg()
     with tempfile.TemporaryDirectory() as tmp, burners(args.burn):
@@ -137,8 +140,8 @@ def main(argv=None) -> int:
     print(f"{args.burn} CPU burner(s); load average {load_before[0]:.1f} before, {load_after[0]:.1f} after "
           f"({os.cpu_count()} CPUs)")
     if args.json:
-        args.json.write_text(json.dumps({"cases": cases, "burn": args.burn, "load_before": load_before,
-                                         "load_after": load_after}, indent=1) + "\n")
+        write_json(args.json, {"cases": cases, "burn": args.burn, "load_before": load_before,
+                                "load_after": load_after})
     return 0
 
 

@@ -24,6 +24,8 @@ import sys
 import tempfile
 from pathlib import Path
 
+from station.outputs import FORCE_HELP, check_outputs, write_json
+
 REPO = Path(__file__).resolve().parents[1]
 
 _CHILD = r"""
@@ -107,7 +109,9 @@ def main(argv=None) -> int:
     parser.add_argument("--replay", action="store_true", help="also measure replay(model=False)")
     parser.add_argument("--keep", action="store_true", help="keep the generated log (printed)")
     parser.add_argument("--json", type=Path, default=None, help="write the results as JSON")
+    parser.add_argument("--force", action="store_true", help=FORCE_HELP)
     args = parser.parse_args(argv)
+    check_outputs([("--json", args.json)], force=args.force, parser=parser)
     tmp = None
     if args.file is None:
         tmp = tempfile.mkdtemp(prefix="bench_read-")
@@ -132,7 +136,7 @@ def main(argv=None) -> int:
         print(f"replay (tmm-fit model): peak {rep_model['peak_mb']:.0f} MB, {rep_model['seconds']:.1f} s")
     print(f"bound 3 x size + 150 MB = {bound:.0f} MB: {'met' if result['ok'] else 'NOT met'}")
     if args.json is not None:
-        args.json.write_text(json.dumps(result, indent=1) + "\n")
+        write_json(args.json, result)
     if tmp is not None:
         if args.keep:
             print(f"kept: {path}")

@@ -36,7 +36,6 @@ Usage: ``python scripts/bench_sim.py [--elements 1 4 10 100] [--baseline-max 10]
 from __future__ import annotations
 
 import argparse
-import json
 import statistics
 import sys
 import tempfile
@@ -47,6 +46,7 @@ import numpy as np
 import scipy.integrate
 
 from station.control import make_controller, pulse_reference, step_reference
+from station.outputs import FORCE_HELP, check_outputs, write_json
 from station.plant import DiscretePlant, closed_loop_spectral_radius, simulate
 from station.rig import DEFAULT_DURATION, DEFAULT_SOFT_LIMIT, DEFAULT_STEP_TICK, DT
 
@@ -250,9 +250,11 @@ def main(argv=None) -> int:
     ap.add_argument("--baseline-max", type=int, default=10, help="odeint baseline for n <= this (0: none)")
     ap.add_argument("--repeats", type=int, default=5)
     ap.add_argument("--json", metavar="FILE")
+    ap.add_argument("--force", action="store_true", help=FORCE_HELP)
     ap.add_argument("--against", metavar="DIR", type=Path, help="compare with another checkout's benchmark")
     ap.add_argument("--rounds", type=int, default=3, help="alternating rounds with --against (median)")
     args = ap.parse_args(argv)
+    check_outputs([("--json", args.json)], force=args.force, parser=ap)
     if args.against is not None:
         if not (args.against / "scripts" / "bench_sim.py").is_file():
             ap.error(f"--against: {args.against} holds no scripts/bench_sim.py")
@@ -260,14 +262,12 @@ def main(argv=None) -> int:
                 "--baseline-max", str(args.baseline_max), "--repeats", str(args.repeats)]
         rows = compare(args.against, same, args.rounds)
         if args.json:
-            with open(args.json, "w") as fh:
-                json.dump({"against": str(args.against), "rows": rows}, fh, indent=1)
+            write_json(args.json, {"against": str(args.against), "rows": rows})
         return 0
     result = bench(args.elements, args.controllers, args.baseline_max, args.repeats)
     result["effects"] = bench_effects(max(args.repeats, 20))
     if args.json:
-        with open(args.json, "w") as fh:
-            json.dump(result, fh, indent=1)
+        write_json(args.json, result)
     return 0
 
 

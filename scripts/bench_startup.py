@@ -28,6 +28,8 @@ import tempfile
 import time
 from pathlib import Path
 
+from station.outputs import FORCE_HELP, check_outputs, write_json
+
 
 def one(env: dict, workdir: Path, model: str | None, i: int) -> dict:
     """One ``station step`` in a fresh process; its first-tick time and wall time, s."""
@@ -49,7 +51,9 @@ def main(argv=None) -> int:
     parser.add_argument("--runs", type=int, default=5, help="runs of each kind (default 5)")
     parser.add_argument("--model", default=None, help="the simulated rig's model (default tmm-fit)")
     parser.add_argument("--json", type=Path, default=None)
+    parser.add_argument("--force", action="store_true", help=FORCE_HELP)
     args = parser.parse_args(argv)
+    check_outputs([("--json", args.json)], force=args.force, parser=parser)
     load_before = os.getloadavg()
     results = {"cold": [], "warm": []}
     with tempfile.TemporaryDirectory() as tmp:
@@ -74,8 +78,8 @@ def main(argv=None) -> int:
     print(f"warm first tick {warm:.2f} s = {warm / 1.0:.2f} x target 1 s (CPU time to it {cpu:.2f} s); "
           f"load average {load_before[0]:.1f} before, {load_after[0]:.1f} after ({os.cpu_count()} CPUs)")
     if args.json:
-        args.json.write_text(json.dumps({"model": args.model, **results, "load_before": load_before,
-                                         "load_after": load_after}, indent=1) + "\n")
+        write_json(args.json, {"model": args.model, **results, "load_before": load_before,
+                                "load_after": load_after})
     return 0
 
 

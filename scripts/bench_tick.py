@@ -227,6 +227,10 @@ def compare(other: Path, argv: list[str], rounds: int) -> list[dict]:
     return rows
 
 
+def _write_json(path: Path, doc: dict) -> None:
+    path.write_text(json.dumps(doc, indent=1) + "\n")
+
+
 def main(argv=None) -> int:
     try:
         from station.ranges import number
@@ -243,7 +247,13 @@ def main(argv=None) -> int:
     ap.add_argument("--rounds", type=number(1, 100, integer=True), default=3,
                     help="alternating rounds with --against (median)")
     ap.add_argument("--json", type=Path, default=None)
+    ap.add_argument("--force", action="store_true", help="replace a --json file that exists")
     args = ap.parse_args(argv)
+    write = _write_json  # a child runs on a checkout that may predate station.outputs
+    if __name__ != "bench_child":
+        from station.outputs import check_outputs, write_json  # lazy: not in the child (above)
+        check_outputs([("--json", args.json)], force=args.force, parser=ap)
+        write = write_json
     same = ["--seconds", str(args.seconds), "--runs", str(args.runs), "--protocols", *args.protocols]
     load = os.getloadavg()[0]
     if args.against is not None:
@@ -265,7 +275,7 @@ def main(argv=None) -> int:
                       f"p90 {v['p90_us']:.1f} us; CPU {v['cpu_us_per_tick']:.1f} us per tick")
     print(f"load average {load:.1f} before, {os.getloadavg()[0]:.1f} after ({os.cpu_count()} CPUs)")
     if args.json:
-        args.json.write_text(json.dumps(result, indent=1) + "\n")
+        write(args.json, result)
     return 0
 
 

@@ -20,10 +20,11 @@ Usage: ``python scripts/bench_tune.py [--jobs N] [--samples N] [--json FILE]``; 
 from __future__ import annotations
 
 import argparse
-import json
 import os
 import time
 from pathlib import Path
+
+from station.outputs import FORCE_HELP, check_outputs, write_json
 
 
 def _s(x) -> str:
@@ -52,7 +53,9 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--jobs", type=int, default=2, help="local worker processes (default 2)")
     parser.add_argument("--samples", type=int, default=20, help="drawn models of the robust design (default 20)")
     parser.add_argument("--json", type=Path, default=None, help="write the numbers as JSON")
+    parser.add_argument("--force", action="store_true", help=FORCE_HELP)
     args = parser.parse_args(argv)
+    check_outputs([("--json", args.json)], force=args.force, parser=parser)
 
     from station.design import Budget, tune
 
@@ -76,8 +79,8 @@ def main(argv: list[str] | None = None) -> int:
     print(f"  robust / one-model time: {ratio:.2f}x; load average {load:.1f} on {os.cpu_count()} CPUs")
     print(f"  target < 60 s for the robust design on 2 cores: {'met' if robust['seconds'] < 60 else 'NOT met'}")
     if args.json is not None:
-        args.json.write_text(json.dumps({"robust": robust, "one_model": one, "ratio": ratio, "jobs": args.jobs,
-                                         "load_average": load}, indent=1) + "\n")
+        write_json(args.json, {"robust": robust, "one_model": one, "ratio": ratio, "jobs": args.jobs,
+                                "load_average": load})
     return 0
 
 

@@ -20,7 +20,6 @@ without ``--controller`` it runs ``station tune --model rig --controller lead-ac
 from __future__ import annotations
 
 import argparse
-import json
 import math
 import os
 import sys
@@ -33,6 +32,7 @@ REPO = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(REPO))
 
 from station.ranges import number  # noqa: E402
+from station.outputs import FORCE_HELP, check_outputs, write_json  # noqa: E402
 
 AMPLITUDE = 200.0
 BAR = {"overshoot_pct": 8.0, "hub_ratio": 0.6, "tip_ratio": 1.5}
@@ -155,7 +155,9 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--jobs", type=number(1, 64, integer=True), default=2, metavar="N",
                         help="processes of the design when it is tuned here (default 2)")
     parser.add_argument("--json", type=Path, default=None, metavar="FILE", help="write the numbers as JSON")
+    parser.add_argument("--force", action="store_true", help=FORCE_HELP)
     args = parser.parse_args(argv)
+    check_outputs([("--json", args.json)], force=args.force, parser=parser)
 
     with tempfile.TemporaryDirectory(prefix="heldout-design-") as tmp:
         controller = args.controller
@@ -186,8 +188,7 @@ def main(argv: list[str] | None = None) -> int:
           f"tip {worst['tip_ratio']:.2f}x, overshoot {worst['overshoot_pct']:.1f} %; load average "
           f"{os.getloadavg()[0]:.1f}")
     if args.json is not None:
-        args.json.write_text(json.dumps({"rigs": rows, "met": met, "bar": BAR, "worst": worst}, indent=1,
-                                        default=str) + "\n")
+        write_json(args.json, {"rigs": rows, "met": met, "bar": BAR, "worst": worst})
     return 0
 
 

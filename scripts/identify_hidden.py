@@ -26,6 +26,7 @@ sys.path.insert(0, str(REPO))
 
 from station.diagnosis.identify.loop import identify  # noqa: E402
 from station.ranges import number  # noqa: E402
+from station.outputs import FORCE_HELP, check_outputs, write_bytes  # noqa: E402
 
 RIGS = {
     "act_K": {"static_friction": 12.0, "coulomb_friction": 5.0, "param:act_K": 0.8},
@@ -98,9 +99,11 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--budget", type=number(0, 100, integer=True), default=8,
                         help="designed experiments after the thesis's four (default 8)")
     parser.add_argument("--out", type=Path, default=None, help="also write the table here")
+    parser.add_argument("--force", action="store_true", help=FORCE_HELP)
     parser.add_argument("--keep", type=Path, default=None, metavar="DIR",
                         help="keep the experiments' logs under DIR/<rig> (default: a temporary folder)")
     args = parser.parse_args(argv)
+    check_outputs([("--out", args.out)], force=args.force, parser=parser)
     rows = []
     with tempfile.TemporaryDirectory(prefix="identify_hidden_") as tmp:
         root = args.keep or Path(tmp)
@@ -113,7 +116,7 @@ def main(argv: list[str] | None = None) -> int:
     text = table(rows, args.budget)
     print(text)
     if args.out is not None:
-        args.out.write_text(text)
+        write_bytes(args.out, text.encode())
     return 0
 
 

@@ -347,7 +347,7 @@ def main(argv=None) -> int:
     args = p.parse_args(argv)
     if args.models_only and (args.save_model or args.effects):
         p.error("--models-only: not with --effects or --save-model (nothing is fitted)")
-    check_outputs([("--save-model", args.save_model)], force=args.force)
+    check_outputs([("--save-model", args.save_model)], force=args.force, parser=p)
     fit_paths = THESIS if args.session == "2014" else SESSION_2009
     unseen = {"unseen 2013-14": OTHER_2014, "2009": SESSION_2009} if args.session == "2014" else \
         {"2013-14": THESIS + OTHER_2014}

@@ -212,7 +212,7 @@ def main(argv=None) -> int:
     p.add_argument("--force", action="store_true", help=FORCE_HELP)
     args = p.parse_args(argv)
     paths = args.logs or [str(RIG / f) for f in SWEEPS]
-    check_outputs([("--figure", args.figure)], [("LOG", f) for f in paths], force=args.force)
+    check_outputs([("--figure", args.figure)], [("LOG", f) for f in paths], force=args.force, parser=p)
     models = [load_model("tmm-fit")] + [load_model(m) for m in (args.model or ["rig"])]
     for m in models:
         effects = ", ".join(f"{k} = {v:.4g}" for k, v in m.effect_dict().items()) or "no effects"

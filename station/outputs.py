@@ -225,7 +225,7 @@ def check_folder(folder: str | Path | None, option: str) -> None:
 
 
 def check_outputs(outputs: Iterable[Output | tuple], inputs: Iterable[Input | tuple] = (),
-                  force: bool = False) -> None:
+                  force: bool = False, parser=None) -> None:
     """Refuse, before anything starts, outputs that would destroy an input, each other or an
     existing file, or that cannot be written (the module's rules 1 and 2).
 
@@ -237,6 +237,8 @@ def check_outputs(outputs: Iterable[Output | tuple], inputs: Iterable[Input | tu
         Every file the command reads; paths that are not existing files are skipped.
     force : bool
         ``--force``: an existing file may be replaced (an input never).
+    parser : argparse.ArgumentParser, optional
+        A script's parser: a refusal is then its one-line usage error (exit 2).
 
     Raises
     ------
@@ -246,6 +248,11 @@ def check_outputs(outputs: Iterable[Output | tuple], inputs: Iterable[Input | tu
         without ``force`` (the message says what else to do: the output's ``remedy``), an
         existing file that is not writable, or in a folder that cannot be created or written.
     """
+    if parser is not None:
+        try:
+            return check_outputs(outputs, inputs, force)
+        except StationError as exc:
+            parser.error(str(exc))
     protected = []
     for label, p in inputs:
         if p is not None and _kind(Path(p)) in ("file", "device"):
