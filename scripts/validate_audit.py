@@ -23,7 +23,8 @@ samples; ``station.logged.LoggedRun`` sees only the file. Judged per case:
   column fault beside rows lost (``rows:column``) is said, and θ from an earlier run's count
   beside θ negated or u and v swapped (``zero:column``) both, and beside v in volts or about a
   DAC code's midpoint (``zero:command``), and with θ negated or u and v swapped as well under a
-  true header (``three:columns``), and with both (``four:columns``);
+  true header (``three:columns``), and with both (``four:columns``), and under an open-loop
+  header or none (``three:open_loop``);
 - reproduced: the controller used reproduces every logged v to the device's quantization
   (1e-6 counts, the logged integer exactly for an integer recursion, half the last printed
   digit for a v printed to fewer digits) at the hidden alignment;
@@ -230,6 +231,8 @@ def table(outcomes: list[Outcome], seeds: str, elapsed: float) -> str:
         "`three:columns`: `zero:command`'s two faults under a true header (P, or a lead on the stored integer) "
         "beside θ negated or u and v swapped — three column faults at once, each said, the header confirmed; "
         "`four:columns`: the same beside θ negated and u and v swapped both — four at once; "
+        "`three:open_loop`: `three:columns`'s three under the lab's session's open-loop header or none — the law "
+        "inferred (a P with v about a DAC code's midpoint, a lead on the stored integer so or in volts), each said; "
         "`int:*`: integer "
         "recursions with no "
         "header (the 2014 layout); `session`: the lab's third session (open-loop header, a lead on the "

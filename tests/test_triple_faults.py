@@ -95,3 +95,26 @@ def test_law_line_is_no_line_through_a_law_that_commands_nothing(rig_data, tmp_p
     assert "#kp=1e-9" in text
     assert not law_line(read_log(path))
     assert not law_line(read_log(_rewrite(path, tmp_path / "tiny_volts.txt", volts=VOLTS)))
+
+
+@pytest.mark.parametrize("name, command, column", [(P, "zero", "negate"), (P_2009, "zero", "swap"),
+                                                   (LEAD, "zero", "swap"), (P, "volts", "swap")])
+def test_three_column_faults_under_an_open_loop_header(rig_data, tmp_path, name, command, column):
+    """The lab's session's header over the three: the law inferred, each fault said. Before, θ negated
+    beside v about 2048 read as an integrator carrying 2166 in its memory ("2(s-4e-11)/(s-8e-13) ...
+    clamp ±2148", the log "cut from a longer run"), v's zero and θ0 unsaid; the lead's swap, nothing."""
+    clean = LoggedRun.from_path(rig_data / name)
+    run = LoggedRun.from_path(_rewrite(rig_data / name, tmp_path / "three.txt", header=["#SLFR RTP OL_Test"],
+                                       theta0=59.0, volts=VOLTS if command == "volts" else None,
+                                       zero=2048.0 if command == "zero" else None,
+                                       negate=column == "negate", swap=column == "swap"))
+    said = _said(run)
+    assert {SAID[column], THETA0} < said and len(said) == 3
+    assert (SAID["zero"] in said) == (command == "zero")
+    assert run.reproduced and run.source == "inferred (header contradicted)"
+    spec = run.controller.spec
+    if name == LEAD:
+        assert spec["design"]["text"] == "20(s+2π·5)/(s+2π·20)"
+    else:  # (a P's v in volts is another kp as much: kp 2 in steps of 2 volts-counts reads as kp 1)
+        assert spec["kind"] == "p" and (command != "zero" or spec["kp"] == (2.0 if name == P else 1.0))
+    assert run.step_metrics() == clean.step_metrics()

@@ -86,6 +86,9 @@ UNKNOWN_UNIT = "v in another unit, its size not found"
 """The "columns" claim's data for a v that is no DAC command as written, in a size the data do
 not give (:func:`check_command_unit`)."""
 
+READ_AS_SAID = "the law the data give reproduces v, the columns read as the claims after this one say,"
+"""How a rewrite's claim says that other columns were read back too (their claims follow it)."""
+
 SHOWN = {"u": "u", "v": "v", "theta": "θ", "a": "a"}
 """How a column's name is printed."""
 
@@ -296,8 +299,9 @@ def _inferred_swap(log: RunLog, skipped) -> Columns:
     """A log that names no controller, open loop, or a law that reproduces it on no rewrite (a
     header that lies about the law as well as the columns): when no law reproduces it as its
     columns are named and one does with two of them exchanged or θ negated, that rewrite (the
-    law inferred on it; θ also read from its rest count where that law then runs from rest:
-    :func:`check_theta_zero`). Of several rewrites of as many faults giving a law, the lowest order;
+    law inferred on it; v also read about a DAC code's zero, and θ from its rest count, where that
+    law then runs from rest: :func:`check_command_offset`, :func:`check_theta_zero`: three faults
+    under an open-loop header). Of several rewrites of as many faults giving a law, the lowest order;
     of those (a P law of gain 1 at alignment 0, v = u − θ, reads the same with θ negated as with v
     and θ exchanged and the gain −1) the one whose θ the nominal model run in closed loop by its law
     gives most closely (:func:`station.logged.rewrite_evidence.model_miss`), then whose θ follows its
@@ -323,8 +327,9 @@ def _inferred_swap(log: RunLog, skipped) -> Columns:
             continue
         if len(rewrites) > 1 and rewrites[0] == ("u", "v") and not tracks_better(trial, log):
             continue
-        if len(rewrites) == 1 and (zero := check_theta_zero(trial, skipped)) is not None and zero.identified:
-            laws.append((rewrites, zero.log, zero.identified, zero.claims))  # θ from its zero too: that law, from rest
+        if len(rewrites) == 1 and (zero := check_command_offset(trial, skipped) or check_theta_zero(trial, skipped)) \
+                is not None and zero.identified:  # v about a DAC code's zero or θ from its count too: that law, from rest
+            laws.append((rewrites, zero.log, zero.identified, zero.claims))
             continue
         try:
             found = identify_controller(trial, skipped)
@@ -341,7 +346,8 @@ def _inferred_swap(log: RunLog, skipped) -> Columns:
     laws = [x for x in laws if _order(x[2].controller) == low]
     rewrites, trial, found, also = min(laws, key=lambda x: (_law_miss(x[1], skipped, x[2]) if len(laws) > 1 else 0.0,
                                                             tracking_error(x[1])))
-    return _swapped_back(log, rewrites, trial, None, ZEROED_TOO if also else f"{found.claim.data}", found, also=also)
+    how = (ZEROED_TOO if also[0].data.startswith("θ") else READ_AS_SAID) if also else f"{found.claim.data}"
+    return _swapped_back(log, rewrites, trial, None, how, found, also=also)
 
 
 def _law_miss(trial: RunLog, skipped, found: ControllerId | None = None) -> float:

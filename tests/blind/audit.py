@@ -73,7 +73,9 @@ angle with the other sign, or its columns in another order); "zero:command": the
 ("v_zero"'s): a script that wrote the device's raw words; "three:columns": "zero:command"'s two
 faults under a true header (a P, or a lead on the stored integer), beside θ negated or u and v
 swapped: three column faults at once; "four:columns": the same with θ negated and u and v swapped
-both (four at once). A class joined with "+" to
+both (four at once); "three:open_loop": "three:columns"'s three under the lab's session's
+open-loop header or none (the law inferred; v about a DAC code's midpoint, or a lead's stored
+integer in volts). A class joined with "+" to
 "coulomb_friction" hides that friction too (drawn as :func:`tests.blind.cases.draw` draws it).
 """
 
@@ -98,7 +100,7 @@ CLASSES = ("lie:open_loop", "lie:p_kp", "lie:lead_pole", "lie:accel_fb", "int:tr
            "int:round_d0", "int:round_d1", "session", "lie:sent", "lie:accel_int", "honest:p", "honest:lead_int",
            "honest:lead_sent", "words", "swap", "rows", "a_unit", "v_unit", "printed", "sign", "double", "lie:swap", "pair",
            "v_zero", "u_unit", "theta_zero", "a_zero", "lie:a_zero", "lie:column", "lie:accel_rows", "rows:column",
-           "zero:column", "zero:command", "three:columns", "four:columns")
+           "zero:column", "zero:command", "three:columns", "four:columns", "three:open_loop")
 """The audit's blind classes, in the validation table's order."""
 
 PHYSICAL = ("coulomb_friction",)
@@ -225,7 +227,8 @@ class AuditCase:
     def lies(self) -> bool:
         """Whether the header names another controller than the data's."""
         if self.name.startswith(("printed", "sign", "double", "v_zero", "u_unit", "theta_zero", "a_zero",
-                                 "lie:a_zero", "zero:column", "zero:command", "three:columns", "four:columns")):
+                                 "lie:a_zero", "zero:column", "zero:command", "three:columns", "four:columns",
+                                 "three:open_loop")):
             return self.header == "open-loop"
         if self.name.startswith("lie:accel_rows"):
             return self.header != "none"
@@ -463,6 +466,17 @@ def draw_case(name: str, seed: int) -> AuditCase:
                              alignment=int(rng.integers(0, 2)), header="p", theta_zero=zero, **hidden, **more)
         return AuditCase(**common, **lead, recursion=str(rng.choice(["trunc", "round"])),
                          alignment=int(rng.integers(0, 2)), header="lead", theta_zero=zero, **hidden, **more)
+    if base == "three:open_loop":  # the same three under an open-loop header or none: the law from the data
+        zero = float(rng.integers(5, 400)) * float(rng.choice([-1.0, 1.0]))
+        more = {"negate": True} if rng.random() < 0.5 else {"swap": ("u", "v")}
+        header = "open-loop" if rng.random() < 0.75 else "none"
+        if rng.random() < 0.5:  # a P's v in volts is another kp as much: about a DAC code's midpoint only
+            return AuditCase(**common, **p_law, recursion="trunc", alignment=int(rng.integers(0, 2)), header=header,
+                             theta_zero=zero, v_zero=float(rng.choice(V_ZEROS)), **more)
+        hidden = ({"v_zero": float(rng.choice(V_ZEROS))} if rng.random() < 0.5 else
+                  {"v_unit": str(rng.choice(sorted(V_UNITS)))})
+        return AuditCase(**common, **lead, recursion=str(rng.choice(["trunc", "round"])),
+                         alignment=int(rng.integers(0, 2)), header=header, theta_zero=zero, **hidden, **more)
     if base == "a_zero":  # a written as read, the loop feeding Ga the reading less its zero
         p, z = 2 * math.pi * 20, 2 * math.pi * 5
         thesis = dict(law="lead", kp=None, num_s=(5 * p / z, 5 * p), den_s=(1.0, p),
