@@ -327,8 +327,9 @@ def _inferred_swap(log: RunLog, skipped) -> Columns:
             continue
         if len(rewrites) > 1 and rewrites[0] == ("u", "v") and not tracks_better(trial, log):
             continue
+        # v about a DAC code's zero, or θ from its count, too: that law, from rest
         if len(rewrites) == 1 and (zero := check_command_offset(trial, skipped) or check_theta_zero(trial, skipped)) \
-                is not None and zero.identified:  # v about a DAC code's zero or θ from its count too: that law, from rest
+                is not None and zero.identified:
             laws.append((rewrites, zero.log, zero.identified, zero.claims))
             continue
         try:
