@@ -103,7 +103,9 @@ def test_pinned_free_converges_to_analytic_from_above():
     for n in (1, 2, 5, 10, 20, 50, 100):
         omega = beam_frequencies(n)[:3]
         m = min(3, omega.size)
-        assert np.all(omega[:m] >= exact[:m] * (1 - 1e-12))  # Rayleigh–Ritz upper bound
+        # Rayleigh–Ritz upper bound, to the eigensolve's rounding: at 100 elements, where the
+        # discretization error is ~1.6e-9, one BLAS thread gave -3.2e-9 for the first mode
+        assert np.all(omega[:m] >= exact[:m] * (1 - 1e-8))
         errors.append(omega[0] - exact[0])
     assert np.all(np.diff(errors) < 0)
     assert beam_frequencies(100)[:3] == pytest.approx(exact, rel=1e-7)
