@@ -328,9 +328,9 @@ def _inferred_swap(log: RunLog, skipped) -> Columns:
         if len(rewrites) > 1 and rewrites[0] == ("u", "v") and not tracks_better(trial, log):
             continue
         # v about a DAC code's zero, or θ from its count, too: that law, from rest
-        if len(rewrites) == 1 and (zero := check_command_offset(trial, skipped) or check_theta_zero(trial, skipped)) \
-                is not None and zero.identified:
-            laws.append((rewrites, zero.log, zero.identified, zero.claims))
+        zero, how = _zero_read(trial, skipped) if len(rewrites) == 1 else (None, "")
+        if zero is not None and zero.identified:
+            laws.append((rewrites, zero.log, zero.identified, zero.claims, how))
             continue
         try:
             found = identify_controller(trial, skipped)
@@ -340,15 +340,25 @@ def _inferred_swap(log: RunLog, skipped) -> Columns:
                 found.source in ("inferred", "inferred (header contradicted)")
                 or (found.source == "header" and is_closed_loop(found.controller)  # its corrupted fields set aside
                     and found.claim is not None and found.claim.verdict == "confirmed")):
-            laws.append((rewrites, trial, found, ()))
+            laws.append((rewrites, trial, found, (), ""))
     if not laws:
         return Columns((), log, cid)
     low = min(_order(x[2].controller) for x in laws)
     laws = [x for x in laws if _order(x[2].controller) == low]
-    rewrites, trial, found, also = min(laws, key=lambda x: (_law_miss(x[1], skipped, x[2]) if len(laws) > 1 else 0.0,
-                                                            tracking_error(x[1])))
-    how = (ZEROED_TOO if also[0].data.startswith("θ") else READ_AS_SAID) if also else f"{found.claim.data}"
-    return _swapped_back(log, rewrites, trial, None, how, found, also=also)
+    rewrites, trial, found, also, how = min(laws, key=lambda x: (_law_miss(x[1], skipped, x[2]) if len(laws) > 1
+                                                                 else 0.0, tracking_error(x[1])))
+    return _swapped_back(log, rewrites, trial, None, how or f"{found.claim.data}", found, also=also)
+
+
+def _zero_read(trial: RunLog, skipped) -> tuple[Columns | None, str]:
+    """A rewrite's column zero and how its claim says so: v about a DAC code's zero (θ's with it
+    where both are: :func:`check_command_offset`, whose claims then follow) else θ from its rest
+    count (:func:`check_theta_zero`); (None, "") when neither."""
+    if (zero := check_command_offset(trial, skipped)) is not None:
+        return zero, READ_AS_SAID
+    if (zero := check_theta_zero(trial, skipped)) is not None:
+        return zero, ZEROED_TOO
+    return None, ""
 
 
 def _law_miss(trial: RunLog, skipped, found: ControllerId | None = None) -> float:
