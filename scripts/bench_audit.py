@@ -13,9 +13,11 @@ revision, side by side: the seconds of each and baseline / ours.
 Logs: the simulated rig's lead + accelerometer step (``station.experiment.run_step``, 0.2 s
 and 1 s) with its header's Ga taken out, and the 1 s one also with the three column faults;
 with ``../shared`` (or ``$STATION_RIG_DATA``), the rig's lead + accelerometer step as logged and
-under an open-loop header (the law and its Ga found in the data).
+under an open-loop header (the law and its Ga found in the data); with ``--blind CLASS/SEED``,
+that log of the audit's blind generator too (``tests.blind.audit.write_audit_case``, e.g.
+``lie:a_zero+coulomb_friction/3``, the slowest of its table).
 
-Usage: ``python scripts/bench_audit.py [--baseline REV] [--rig DIR] [--json FILE]``.
+Usage: ``python scripts/bench_audit.py [--baseline REV] [--rig DIR] [--blind CLASS/SEED ...] [--json FILE]``.
 JSON: ``{"logs": {name: {"ours_s", "baseline_s" | null, "claim"}}}``.
 """
 
@@ -32,6 +34,7 @@ from pathlib import Path
 from station.outputs import FORCE_HELP, check_outputs, write_json
 
 REPO = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(REPO))  # tests.blind (--blind) is not installed with the package
 RIG_LEAD_ACCEL = "step_response_Gth_comp_Ga_opt_amp_200_duration_1000_opt_case43_SLFR_RTP_Motor_Comp_Gth.txt"
 
 _CHILD = r"""
@@ -83,9 +86,9 @@ def _three_faults(text: str) -> str:
     return "\n".join(out)
 
 
-def make_logs(folder: Path, rig: Path | None) -> dict[str, Path]:
-    """The logs benchmarked, written in ``folder``: name -> path."""
-    sys.path.insert(0, str(REPO))
+def make_logs(folder: Path, rig: Path | None, blind: list[tuple[str, int]] = ()) -> dict[str, Path]:
+    """The logs benchmarked, written in ``folder``: name -> path (``blind``: (class, seed) of
+    the audit's blind generator)."""
     from station.experiment import run_step
 
     logs = {}
@@ -104,7 +107,23 @@ def make_logs(folder: Path, rig: Path | None) -> dict[str, Path]:
         ol = folder / "rig_lead_accel_ol.txt"
         ol.write_text("\n".join(["#SLFR RTP OL_Test"] + [x for x in lines[1:] if not x.startswith(("#Gth", "#Ga"))]))
         logs["the rig's lead + Ga step under an open-loop header"] = ol
+    if blind:
+        from tests.blind.audit import write_audit_case  # lazy: the blind generator, only when asked for
+
+        for name, seed in blind:
+            logs[f"blind {name}, seed {seed}"] = write_audit_case(folder / "blind", name, seed)[0]
     return logs
+
+
+def _blind(text: str) -> tuple[str, int]:
+    """``--blind``'s CLASS/SEED, checked: the class one of the generator's."""
+    from tests.blind.audit import CLASSES  # lazy: the blind generator, only when asked for
+
+    name, _, seed = text.rpartition("/")
+    if name.removesuffix("+coulomb_friction") not in CLASSES or not seed.isdigit():
+        raise argparse.ArgumentTypeError(f"expected CLASS/SEED with CLASS one of tests/blind/audit.py's "
+                                         f"(optionally +coulomb_friction) and SEED a whole number, got {text!r}")
+    return name, int(seed)
 
 
 def time_audit(tree: Path, path: Path, warm: Path) -> dict:
@@ -120,6 +139,8 @@ def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--baseline", help="a git revision to time beside this tree (a temporary worktree)")
     parser.add_argument("--rig", type=Path, help="the rig's logs (default $STATION_RIG_DATA or ../shared/data/rig)")
+    parser.add_argument("--blind", type=_blind, action="append", default=[], metavar="CLASS/SEED",
+                        help="also a log of the audit's blind generator, e.g. lie:a_zero+coulomb_friction/3")
     parser.add_argument("--json", type=Path, help="write the results here")
     parser.add_argument("--force", action="store_true", help=FORCE_HELP)
     args = parser.parse_args(argv)
@@ -128,7 +149,7 @@ def main(argv: list[str] | None = None) -> int:
     results = {}
     with tempfile.TemporaryDirectory() as tmp:
         folder = Path(tmp)
-        logs = make_logs(folder, rig if rig.is_dir() else None)
+        logs = make_logs(folder, rig if rig.is_dir() else None, args.blind)
         base = None
         if args.baseline:
             base = folder / "baseline"
