@@ -55,9 +55,10 @@ over a's effect on them), finer than Gauss–Newton on the quantized replay gets
 
 A0_STEP = 0.01
 A0_ITERATIONS = 60
-"""The a0 search where the data's law was fitted with a0 beside it and did not reproduce v
-(:func:`_a0_searched`): Brent's bracket from the joint fit's a0, counts, and its most
-iterations (three blind logs took 25–27 fits, a0 found within 6e-9 counts)."""
+A0_CANDIDATES = 3
+"""The a0 search where no law fitted with a0 beside it reproduced v (:func:`_a0_searched`):
+Brent's bracket from the joint fit's a0, counts, its most iterations (three blind logs took
+25–27 fits, a0 found within 6e-9 counts), and how many of the fits nearest v are searched."""
 
 ZERO_FLOOR = 0.25
 """Least |a| at rest, counts, that :func:`data_accel_zero` reads as a zero not taken off (the
@@ -264,6 +265,8 @@ def data_accel_zero(log: RunLog, skipped=None) -> SensorZeros | None:
     feedback reproduces every logged v from a − a0 (Gth and Ga fitted with a0 beside them,
     :func:`station.analysis.accel_law.accel_feedback`'s ``zero``; a0 within the rest's spread)
     where it does not from a as written, a was logged before the loop took its zero a0 off.
+    Where no such fit reproduces v, a0 is searched alone on the fits nearest it
+    (:func:`_a0_searched`).
 
     Parameters
     ----------
@@ -286,21 +289,32 @@ def data_accel_zero(log: RunLog, skipped=None) -> SensorZeros | None:
     resting, spread = float(np.mean(a[:rest])), 1.0 + 4.0 * float(np.std(a[:rest]))
     orders = [(m, total - m) for total in range(1, 2 * MAX_ORDER + 1)  # the simplest law first
               for m in range(max(0, total - MAX_ORDER), min(total - 1, MAX_ORDER) + 1)]
+    near = []  # (miss, zero, m, p, d, limit, a0): fits within a count of v that do not reproduce it
     for zero, (m, p), d, limit in itertools.product(_theta_zeros(theta), orders, ALIGNMENTS, clamps_to_try(v, CLAMP)):
         ga = accel_feedback(u, theta - zero, a, v, d, m, p, limit, log.dt, zero=True)
         if ga is None or abs(ga.a0 - resting) > spread:
             continue
         if (miss := _gth_miss(u, theta - zero, v, d, m, limit, ga)) > TOLERANCE:
-            if miss > GIVE_UP_COUNTS:
-                continue
-            ga = _a0_searched(u, theta - zero, a, v, d, m, p, limit, log.dt, ga.a0)
-            if ga is None or abs(ga.a0 - resting) > spread:
-                continue
-        found = _data_law(log, theta - zero, a - ga.a0, skipped)
-        if found is not None:
-            trial, cid, as_written = found
-            return _said(log, trial, rest, ga.a0, zero, cid.fit.max_abs_dv, as_written, cid)
+            if miss <= GIVE_UP_COUNTS:
+                near.append((miss, zero, m, p, d, limit, ga.a0))
+            continue
+        if (said := _law_said(log, theta - zero, a, ga.a0, zero, rest, skipped)) is not None:
+            return said
+    for _, zero, m, p, d, limit, a0 in sorted(near, key=lambda x: x[0])[:A0_CANDIDATES]:  # the nearest first
+        ga = _a0_searched(u, theta - zero, a, v, d, m, p, limit, log.dt, a0)
+        if ga is not None and abs(ga.a0 - resting) <= spread and \
+                (said := _law_said(log, theta - zero, a, ga.a0, zero, rest, skipped)) is not None:
+            return said
     return None
+
+
+def _law_said(log: RunLog, theta, a, a0: float, zero: float, rest: int, skipped) -> SensorZeros | None:
+    """:func:`data_accel_zero`'s answer where the data's law on a − a0 (and θ − θ0) reproduces v."""
+    found = _data_law(log, theta, a - a0, skipped)
+    if found is None:
+        return None
+    trial, cid, as_written = found
+    return _said(log, trial, rest, a0, zero, cid.fit.max_abs_dv, as_written, cid)
 
 
 def _gth_miss(u, theta, v, d: int, m: int, limit: float, ga: AccelFeedback) -> float:
