@@ -164,3 +164,26 @@ def test_blind_a_zero_under_a_header_that_names_no_law(tmp_path, case, seed):
     assert run.reproduced and getattr(run.controller, "ga", None) is not None
     assert run.alignment == hidden.alignment or hidden.alignment in run.identified.alignments
     assert run.controller.spec["design"]["text"] == hidden.design_text
+
+
+def test_a0_searched_alone_where_the_joint_fit_stops_short(tmp_path):
+    """The blind generator's lead + Ga of its own (slowest pole −0.064 rad/s), a from its zero
+    17.31, no header: the joint fit of Gth, Ga and a0 stops short of a0 and of v; a0 searched
+    alone finds both (the generator's truth: a0 and Ga's Tustin form)."""
+    from station.analysis.accel_law import accel_feedback
+    from station.analysis.continuous_design import discretize
+    from station.logged.sensor_zeros import TOLERANCE, _a0_searched, _gth_miss
+    from station.runlog import read_log
+    from tests.blind.audit import write_audit_case
+
+    path, hidden = write_audit_case(tmp_path, "lie:a_zero+coulomb_friction", 3)
+    log = read_log(path)
+    u, theta, a, v = (np.asarray(log.data[c], float) for c in ("u", "theta", "a", "v"))
+    d, m, p, limit = hidden.alignment, 1, 3, hidden.limit
+    joint = accel_feedback(u, theta, a, v, d, m, p, limit, log.dt, zero=True)
+    assert TOLERANCE < _gth_miss(u, theta, v, d, m, limit, joint) < 1.0  # near, not reproduced
+    ga = _a0_searched(u, theta, a, v, d, m, p, limit, log.dt, joint.a0)
+    assert ga is not None and abs(ga.a0 - hidden.a_zero) < 1e-6
+    assert _gth_miss(u, theta, v, d, m, limit, ga) <= TOLERANCE
+    _, den = discretize(np.array(hidden.ga_s[0]), np.array(hidden.ga_s[1]), log.dt, "Tustin")
+    assert np.allclose(ga.den, den, rtol=0, atol=1e-7)
