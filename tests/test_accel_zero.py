@@ -182,8 +182,32 @@ def test_a0_searched_alone_where_the_joint_fit_stops_short(tmp_path):
     d, m, p, limit = hidden.alignment, 1, 3, hidden.limit
     joint = accel_feedback(u, theta, a, v, d, m, p, limit, log.dt, zero=True)
     assert TOLERANCE < _gth_miss(u, theta, v, d, m, limit, joint) < 1.0  # near, not reproduced
-    ga = _a0_searched(u, theta, a, v, d, m, p, limit, log.dt, joint.a0)
+    ga = _a0_searched(u, theta, a, v, d, m, p, limit, log.dt, joint.a0, (joint.a0 - 1.0, joint.a0 + 1.0))
     assert ga is not None and abs(ga.a0 - hidden.a_zero) < 1e-6
     assert _gth_miss(u, theta, v, d, m, limit, ga) <= TOLERANCE
     _, den = discretize(np.array(hidden.ga_s[0]), np.array(hidden.ga_s[1]), log.dt, "Tustin")
     assert np.allclose(ga.den, den, rtol=0, atol=1e-7)
+
+
+@pytest.mark.parametrize("slope", [1.0, -1.0])
+def test_a0_search_stays_where_a_rests_on_a_miss_that_falls_on_and_on(monkeypatch, slope):
+    """A scripted miss that falls without end one way (no minimum): the a0 search asks only
+    a0 within its bounds, ends within them in a bounded number of fits and gives no Ga,
+    where Brent's bracket unbounded ran to the float's overflow."""
+    from station.analysis.accel_law import AccelFeedback
+    from station.logged import sensor_zeros
+
+    asked = []
+
+    def fit(u, theta, a, v, d, m, p, limit, dt):
+        asked.append(float(a[0]))
+        return AccelFeedback(np.ones(1), np.ones(1), np.zeros(3), 0.0)
+
+    monkeypatch.setattr(sensor_zeros, "accel_feedback", fit)
+    monkeypatch.setattr(sensor_zeros, "_gth_miss",
+                        lambda u, theta, v, d, m, limit, ga: 0.1 + 10.0 ** (slope * (ga.a0 - 17.0)))
+    zeros = np.zeros(3)
+    got = sensor_zeros._a0_searched(zeros, zeros, zeros, zeros, 0, 1, 1, 1.0, 0.002, 17.0, (16.0, 18.0))
+    a0s = [-x for x in asked]  # a − a0 with a = 0
+    assert got is None
+    assert 0 < len(a0s) <= 2 * sensor_zeros.A0_ITERATIONS and all(16.0 <= x <= 18.0 for x in a0s)

@@ -301,8 +301,8 @@ def data_accel_zero(log: RunLog, skipped=None) -> SensorZeros | None:
         if (said := _law_said(log, theta - zero, a, ga.a0, zero, rest, skipped)) is not None:
             return said
     for _, zero, m, p, d, limit, a0 in sorted(near, key=lambda x: x[0])[:A0_CANDIDATES]:  # the nearest first
-        ga = _a0_searched(u, theta - zero, a, v, d, m, p, limit, log.dt, a0)
-        if ga is not None and abs(ga.a0 - resting) <= spread and \
+        ga = _a0_searched(u, theta - zero, a, v, d, m, p, limit, log.dt, a0, (resting - spread, resting + spread))
+        if ga is not None and \
                 (said := _law_said(log, theta - zero, a, ga.a0, zero, rest, skipped)) is not None:
             return said
     return None
@@ -326,25 +326,41 @@ def _gth_miss(u, theta, v, d: int, m: int, limit: float, ga: AccelFeedback) -> f
 
 
 def _a0_searched(u, theta, a, v, d: int, m: int, p: int, limit: float, dt: float,
-                 a0: float) -> AccelFeedback | None:
+                 a0: float, bounds: tuple[float, float]) -> AccelFeedback | None:
     """a's zero searched alone, Ga fitted anew at each (Brent's method on log10 of
     :func:`_gth_miss`, bracketed from the joint fit's ``a0``), where the joint fit came within
     a count of v but did not reproduce it: a0 and a slow pole of Ga trade against each other
     there (the joint fit ended 7e-5 counts off a0 on a blind log and missed v by 4e-4 counts),
-    where a fixed a0 is well conditioned. The Ga with a0 that reproduces every v, else None."""
+    where a fixed a0 is well conditioned. The search stays within ``bounds`` (counts, where a
+    rests): outside them the miss is raised by the distance, so a miss that falls on and on
+    ends the bracket there, not at the float's overflow. The Ga with a0 that reproduces every
+    v, else None (also where scipy finds no bracket)."""
     from scipy.optimize import minimize_scalar  # lazy: start-up time
 
-    def fitted(x: float) -> AccelFeedback | None:
-        ga = accel_feedback(u, theta, a - x, v, d, m, p, limit, dt)
-        return None if ga is None else AccelFeedback(ga.num, ga.den, ga.x, float(x))
+    low, high = bounds
+    fits: dict[float, tuple[AccelFeedback | None, float]] = {}
+
+    def fitted(x: float) -> tuple[AccelFeedback | None, float]:
+        if x not in fits:
+            ga = accel_feedback(u, theta, a - x, v, d, m, p, limit, dt)
+            ga = None if ga is None else AccelFeedback(ga.num, ga.den, ga.x, float(x))
+            fits[x] = (ga, np.inf if ga is None else _gth_miss(u, theta, v, d, m, limit, ga))
+        return fits[x]
 
     def log_miss(x: float) -> float:
-        ga = fitted(x)
-        return 3.0 if ga is None else float(np.log10(min(_gth_miss(u, theta, v, d, m, limit, ga), 1e3) + 1e-12))
+        if not low <= x <= high:
+            return 3.0 + max(low - x, x - high)  # above any miss within: the bracket ends here
+        return float(np.log10(min(fitted(x)[1], 1e3) + 1e-12))
 
-    best = minimize_scalar(log_miss, bracket=(a0 - A0_STEP, a0), options={"xtol": 1e-10, "maxiter": A0_ITERATIONS})
-    ga = fitted(float(best.x))
-    return ga if ga is not None and _gth_miss(u, theta, v, d, m, limit, ga) <= TOLERANCE else None
+    try:
+        best = minimize_scalar(log_miss, bracket=(a0 - A0_STEP, a0),
+                               options={"xtol": 1e-10, "maxiter": A0_ITERATIONS})
+    except (RuntimeError, ValueError):  # scipy's BracketError: no bracket within the bounds
+        return None
+    if not low <= best.x <= high:
+        return None
+    ga, miss = fitted(float(best.x))
+    return ga if miss <= TOLERANCE else None
 
 
 def _theta_zeros(theta: np.ndarray) -> list[float]:
