@@ -229,3 +229,37 @@ def test_nicest_between(lo, hi, value, digits):
     assert nicest_between(lo, hi) == (value, digits)
     assert nicest_between(hi, lo) is None and nicest_between(math.pi, math.pi + 1e-12) is None
     assert abs(nicest_between(-1.0, 1.0)[0]) == 1.0  # never a gain of 0
+
+
+@pytest.mark.parametrize("seed", range(6))
+@pytest.mark.parametrize("recursion", ["trunc", "round"])
+def test_a_hub_held_still_leaves_the_alignment_to_no_law(seed, recursion):
+    """θ 0 on every row (friction held the hub): u[k] − θ[k] and u[k] − θ[k−1] are one error, so
+    the law the lab ran reproduces the log at both alignments, and both are said, whichever way
+    the law was accepted (exactly, or with rows on a quantization boundary)."""
+    rng = np.random.default_rng(seed)
+    k, p = float(rng.choice([1.0, 1.5, 2.0, 3.0])), float(rng.integers(30, 70))
+    num, den = _scipy_law([k, k * float(rng.integers(4, 25))], [1.0, p], 0.002, "Tustin")
+    lab = LabController(num, den, 200.0, recursion)
+    t = np.arange(2000) * 0.002
+    u = np.round(rng.uniform(20.0, 50.0) * np.sin(2 * np.pi * 5.0 * t))
+    v = np.array([lab.step(x) for x in u])
+    hit = infer_controller(u, np.zeros_like(u), v)
+    assert hit is not None and hit.max_abs_dv == 0.0
+    assert set(hit.alignments) == {0, 1}
+
+
+@pytest.mark.parametrize("seed", [0, 7, 9])
+def test_the_blind_still_hub_under_its_true_header_is_confirmed_at_both_alignments(tmp_path, seed):
+    """The blind generator's `pair+coulomb_friction` logs where friction held the hub at 0 the
+    whole run (its θ written negated is θ itself): the header's law confirmed, the swap said, the
+    alignment left to both, and no sign said for a column of zeros."""
+    from station.logged import LoggedRun
+    from tests.blind.audit import write_audit_case
+
+    path, hidden = write_audit_case(tmp_path, "pair+coulomb_friction", seed)
+    run = LoggedRun.from_path(path)
+    columns = {c.data for c in run.audit.claims if c.claim == "columns" and c.verdict == "contradicted"}
+    assert run.source == "header" and run.reproduced and set(run.identified.alignments) == {0, 1}
+    assert columns == {"θ and a swapped"} and not hidden.negate
+    assert [c.data for c in run.audit.claims if c.claim == "alignment"] == ["alignment 0 and 1 alike"]

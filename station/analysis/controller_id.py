@@ -23,18 +23,16 @@ with its whole count sent and logged (:data:`station.control.compensator.SENT`):
 law is checked that way (:func:`variant_of`), and a continuous design is inferred that way
 when nothing simpler reproduces the log (:func:`_sent_design`).
 
-Coefficients: for a float recursion, linear least squares over the unclamped rows (the
-recursion runs on the clamped v, so the regression is exact there). For an integer
-recursion least squares only comes within the quantization; since the recursion's history
-is the logged integer itself, reproducing every logged v is a set of linear inequalities on
-the coefficients (Q(x) = v ⇔ v ≤ x < v + 1 for a truncated positive v, ...), and a linear
-program (scipy's HiGHS) finds the coefficients deepest inside them. Then the numbers a
-person typed: a P gain with the fewest digits, a law's continuous design
-(:func:`station.analysis.continuous_design.recognize`: Tustin, ZOH, backward or forward
-Euler of a design with round numbers) whose discretization still reproduces the log. A law
-is accepted only when, run as the rig ran it (:func:`station.control.rerun.replay_commands`),
-it reproduces every logged v: to ``tolerance`` (1e-6 DAC counts), the logged integer
-exactly for an integer recursion. The identification claims nothing the data do not prove.
+Coefficients: for a float recursion, least squares over the unclamped rows (exact there: the
+recursion runs on the clamped v). For an integer recursion, whose history is the logged integer
+itself, reproducing every v is a set of linear inequalities (Q(x) = v ⇔ v ≤ x < v + 1 for a
+truncated positive v, ...), and a linear program (scipy's HiGHS) finds the coefficients deepest
+inside them. Then the numbers a person typed: a P gain with the fewest digits, a continuous
+design (:func:`station.analysis.continuous_design.recognize`: Tustin, ZOH, backward or forward
+Euler with round numbers) whose discretization still reproduces the log. A law is accepted only
+when, run as the rig ran it (:func:`station.control.rerun.replay_commands`), it reproduces every
+logged v: to ``tolerance`` (1e-6 DAC counts), the logged integer exactly for an integer
+recursion. The identification claims nothing the data do not prove.
 
 A PID header's law is matched in :mod:`station.analysis.pid_law`; a law whose recursion ran
 on the float while its whole count was logged is recognised in :mod:`station.analysis.sent_law`.
@@ -113,7 +111,7 @@ def clamps_to_try(v: np.ndarray, rig_limit: float) -> list[float]:
 
     Returns
     -------
-    list of float
+    list of float, DAC counts
     """
     vmax = float(np.max(np.abs(v))) if v.size else 0.0
     first = rig_limit if vmax <= rig_limit else max(DAC_LIMIT, vmax)
@@ -263,11 +261,7 @@ def check_law(controller, u, theta, a, v, law: str, alignments, design=None,
         The law's words for reports.
     alignments : sequence of int
     design : ContinuousDesign, optional
-    prefer : int or None
-        As :func:`fit_alignments`.
-    primed : int
-        As :func:`fit_alignments`.
-    restarts : sequence of int
+    prefer, primed, restarts
         As :func:`fit_alignments`.
 
     Returns
@@ -326,13 +320,11 @@ def variant_of(controller, u, theta, a, v, alignments=ALIGNMENTS, skipped=None,
     u, theta, a, v : array_like, shape (N,)
     alignments : sequence of int
     skipped : array_like of bool, optional
-    prefer : int or None
-        As :func:`fit_alignments`.
+    prefer, restarts
+        As :func:`fit_alignments` (``restarts``: rows where the log's ticks jump).
     cut : bool
         The log is a copy cut from a longer run: the law's first rows of history are taken
         as logged (:func:`fit_alignments` ``primed``).
-    restarts : sequence of int
-        Rows where the log's ticks jump (:func:`fit_alignments`).
 
     Returns
     -------
@@ -494,7 +486,8 @@ def replayed_or_tied(ctl, log, law: str, alignments, design, prefer, primed: int
                      c: np.ndarray, recursion: str, d: int) -> IdentifiedController | None:
     """A law found on a log's rows, run as the rig ran it (:func:`check_law`): accepted when it
     reproduces every logged v, or when it differs only on rows whose exact value is a quantization
-    boundary, which the lab's arithmetic decided (:func:`station.analysis.law_rows.tie_rows`).
+    boundary, which the lab's arithmetic decided (:func:`station.analysis.law_rows.tie_rows`);
+    then at every alignment of ``alignments`` where it holds so (a hub that never moves).
 
     Parameters
     ----------
@@ -508,10 +501,7 @@ def replayed_or_tied(ctl, log, law: str, alignments, design, prefer, primed: int
     rows : LawRows
         The log's rows at alignment ``d``.
     c : numpy.ndarray
-        The law's coefficients, [b_0..b_m, a_1..a_m].
-    recursion : {"none", "trunc", "round"}
-    d : int
-        The rows' alignment.
+        [b_0..b_m, a_1..a_m]; ``recursion`` {"none", "trunc", "round"}; ``d`` the rows' alignment.
 
     Returns
     -------
@@ -522,9 +512,19 @@ def replayed_or_tied(ctl, log, law: str, alignments, design, prefer, primed: int
         return hit
     ties = tie_rows(rows, c, recursion)
     if ties:
+        alike = tuple(sorted({d, *(x for x in alignments if x >= 0 and _holds_at(ctl, log, rows, c, recursion, x))}))
         return IdentifiedController(ctl, d, 0.0, np.asarray(log[3], float).copy(), f"{law}, {ties} row(s) on a "
-                                    f"quantization boundary as the lab's arithmetic decided them", design, (d,))
+                                    f"quantization boundary as the lab's arithmetic decided them", design, alike)
     return None
+
+
+def _holds_at(ctl, log, rows: LawRows, c: np.ndarray, recursion: str, d: int) -> bool:
+    """Whether the law ``c`` holds at alignment ``d`` too, as :func:`replayed_or_tied` accepts it."""
+    from scipy.signal import lfilter  # lazy: start-up time
+    u, theta, a, _ = (np.asarray(x, float) for x in log)
+    fed = 0.0 if ctl.ga is None else lfilter(ctl.ga.num, ctl.ga.den, lagged(a, d))  # Ga's, as the thesis's Ga path
+    at = rows.at(aligned_error(u, theta, d) - fed, d)
+    return at.reproduces(c, recursion) or tie_rows(at, c, recursion) > 0
 
 
 def _sent_design(rows: LawRows, e: np.ndarray, d: int, log, dt: float, rig_limit: float, alignments,

@@ -291,5 +291,5 @@ def _completed_at(controller, num, den, order: int, u, theta, a, v, d: int, dt: 
                       shaper=controller.shaper, recursion=controller.recursion)
     limit = controller.limit if rig_limit is None else rig_limit
     words = law_text(order, np.concatenate([num_z, den_z[1:]]), design, dt, controller.recursion, law.limit, limit)
-    return replayed_or_tied(law, (u, theta, a, v), words, (d,), design, prefer, 0, restarts, rows, c,
-                            controller.recursion, d)
+    return replayed_or_tied(law, (u, theta, a, v), words, (d, *(x for x in ALIGNMENTS if x != d)), design, prefer,
+                            0, restarts, rows, c, controller.recursion, d)

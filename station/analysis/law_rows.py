@@ -123,6 +123,7 @@ class LawRows:
 
     def __init__(self, e: np.ndarray, v: np.ndarray, d: int, order: int, limit: float, skip: int = 0,
                  restarts=()):
+        self._given = (v, skip, tuple(restarts))  # for the same law's rows at another alignment (at)
         rows = np.arange(d + skip, v.size)
         if len(restarts):
             rows = np.flatnonzero(judged_rows(v.size, d, skip, restarts, order))
@@ -137,6 +138,12 @@ class LawRows:
         self.printed = printing is not None
         self.tolerance = np.full(self.v.shape, TOLERANCE) if printing is None else \
             TOLERANCE + print_allowance(v, printing, history=True)[rows]
+
+    def at(self, e: np.ndarray, d: int) -> LawRows:
+        """The same log's rows at alignment ``d``, where the law sees the error ``e`` (shape (N,));
+        its order, clamp, rows left out and restarts as these."""
+        v, skip, restarts = self._given
+        return LawRows(e, v, d, self.order, self.limit, skip, restarts)
 
     def predict(self, c: np.ndarray, recursion: str) -> np.ndarray:
         """The commands the law gives, row by row (its history the logged v).
