@@ -179,7 +179,8 @@ class AuditCase:
     digits : int or None
         The significant digits every number is printed to ("printed"), else None (in full).
     negate : bool
-        Whether θ is written with the other sign than the loop fed back ("sign").
+        Whether θ is written with the other sign than the loop fed back ("sign"); after
+        :func:`write_case`, only where that changed θ (a hub held at 0 all run is θ either sign).
     v_zero : float or None
         The zero v is written about (:data:`V_ZEROS`, "v_zero"), else None (about 0).
     u_unit : str or None
@@ -697,6 +698,9 @@ def write_case(folder: Path, case: AuditCase, seed: int) -> tuple[Path, AuditCas
         sim = dataclasses.replace(sim, a=np.asarray(sim.a, dtype=float) + case.a_zero)
     if case.negate:  # a script that wrote the loop's angle with the other sign
         sim = dataclasses.replace(sim, theta=-np.asarray(sim.theta, dtype=float))
+        # as the words' wrapped columns: the fault is in the data only where it changed θ (a hub
+        # friction held at 0 the whole run is the same column either sign)
+        case = dataclasses.replace(case, negate=bool(np.any(sim.theta != 0)))
     if case.swap:
         first, second = case.swap
         sim = dataclasses.replace(sim, **{first: getattr(sim, second), second: getattr(sim, first)})
