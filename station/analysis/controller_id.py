@@ -1,5 +1,4 @@
-"""Which controller made a log: identified from the data when the header does not say, or
-when what it says does not reproduce the logged commands.
+"""Which controller made a log, from the data: where the header names none or its law misses v.
 
 A log holds u, θ and the command v the controller produced. Candidate laws, simplest first,
 each for both alignments d (DESIGN.md "Timing and log rows": v[k] = C(u[k], θ[k-d])):
@@ -7,21 +6,19 @@ each for both alignments d (DESIGN.md "Timing and log rows": v[k] = C(u[k], θ[k
 - open loop, v = u;
 - proportional, v = sat(kp·(u[k] - θ[k-d])), any kp;
 - linear compensators e -> v of order 1 to 3 (a direct-form recursion in z^-1);
-- then, where a moved and v is no whole count, the rig's two-input law: a P or linear Gth
-  of order 0 to 3 with accelerometer feedback Ga of order 0 to 3, θ̂_d = u − Ga(a)
-  (DESIGN.md "Compensators"; :mod:`station.analysis.accel_law` finds Ga, then Gth is found
-  from e = u − θ − Ga(a) as any one-input law). Beside whole-count commands (a recursion on
-  the stored integer, or on the float with its whole count sent) only the thesis's Ga is
-  tried: another Ga's coefficients are not found to the quantization (:mod:`station.analysis.accel_law`).
+- then, where a moved and v is no whole count, the rig's two-input law: a P or linear Gth of order
+  0 to 3 with accelerometer feedback Ga of order 0 to 3, θ̂_d = u − Ga(a) (DESIGN.md "Compensators";
+  :mod:`station.analysis.accel_law` finds Ga, then Gth from e = u − θ − Ga(a) as any one-input law).
+  Beside whole-count commands (on the stored integer, or the float with its whole count sent) only
+  the thesis's Ga is tried: another Ga's coefficients are not found to the quantization.
 
-Each at the rig's clamp (±200, or the DAC's when v exceeds it) or the log's own (a level
-|v| sits at on several rows), and with the recursion as lab software ran it
-(:data:`station.control.compensator.RECURSIONS`): on the float command, or, when every
-logged v is a whole count, on the stored integer (truncated toward zero or rounded), the
-integer then being the command: v[k] = sat(Q(Σ b_i e[k-i] - Σ a_j v[k-j])); or on the float
-with its whole count sent and logged (:data:`station.control.compensator.SENT`): a header's
-law is checked that way (:func:`variant_of`), and a continuous design is inferred that way
-when nothing simpler reproduces the log (:func:`_sent_design`).
+Each at the rig's clamp (±200, or the DAC's when v exceeds it) or the log's own (a level |v| sits
+at on several rows), and with the recursion as lab software ran it
+(:data:`station.control.compensator.RECURSIONS`): on the float command, or, when every logged v is
+a whole count, on the stored integer (truncated toward zero or rounded), the integer then being
+the command: v[k] = sat(Q(Σ b_i e[k-i] - Σ a_j v[k-j])); or on the float with its whole count sent
+and logged (:data:`station.control.compensator.SENT`): a header's law is checked that way
+(:func:`variant_of`), and a design is inferred that way when nothing simpler reproduces the log.
 
 Coefficients: for a float recursion, least squares over the unclamped rows (exact there: the
 recursion runs on the clamped v). For an integer recursion, whose history is the logged integer
@@ -34,8 +31,8 @@ when, run as the rig ran it (:func:`station.control.rerun.replay_commands`), it 
 logged v: to ``tolerance`` (1e-6 DAC counts), the logged integer exactly for an integer
 recursion. The identification claims nothing the data do not prove.
 
-A PID header's law is matched in :mod:`station.analysis.pid_law`; a law whose recursion ran
-on the float while its whole count was logged is recognised in :mod:`station.analysis.sent_law`.
+A PID header's law is matched in :mod:`station.analysis.pid_law`; a law on the float whose whole
+count was logged is recognised in :mod:`station.analysis.sent_law` (:func:`_sent_design`).
 """
 
 from __future__ import annotations
@@ -501,7 +498,10 @@ def replayed_or_tied(ctl, log, law: str, alignments, design, prefer, primed: int
     rows : LawRows
         The log's rows at alignment ``d``.
     c : numpy.ndarray
-        [b_0..b_m, a_1..a_m]; ``recursion`` {"none", "trunc", "round"}; ``d`` the rows' alignment.
+        The law's coefficients, [b_0..b_m, a_1..a_m].
+    recursion : {"none", "trunc", "round"}
+    d : int
+        The rows' alignment.
 
     Returns
     -------

@@ -140,8 +140,16 @@ class LawRows:
             TOLERANCE + print_allowance(v, printing, history=True)[rows]
 
     def at(self, e: np.ndarray, d: int) -> LawRows:
-        """The same log's rows at alignment ``d``, where the law sees the error ``e`` (shape (N,));
-        its order, clamp, rows left out and restarts as these."""
+        """The same log's rows at another alignment: its order, clamp, rows left out and
+        restarts as these.
+
+        Parameters
+        ----------
+        e : numpy.ndarray, shape (N,)
+            The error the law sees at alignment ``d``, counts.
+        d : int
+            The alignment.
+        """
         v, skip, restarts = self._given
         return LawRows(e, v, d, self.order, self.limit, skip, restarts)
 
