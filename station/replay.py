@@ -18,7 +18,7 @@ import numpy as np
 
 from station.analysis.beam import BeamTestReport, analyze_beam_test, model_first_mode
 from station.analysis.metrics import StepMetrics
-from station.analysis.continuous_design import alternatives_phrase
+from station.analysis.design_doubt import alternatives_phrase, span_phrase
 from station.control.compensator import STORED, on_integer
 from station.errors import StationError
 from station.logged import REPRODUCED_TOLERANCE, LoggedRun
@@ -312,7 +312,8 @@ def format_report(report: ReplayReport) -> str:
         spec = report.controller_spec or {}
         name = f"P, kp = {spec['kp']:g}" if spec.get("kind") == "p" and "kp" in spec else report.controller
         lines.append(f"  controller: {name}" + (f" ({source})" if source else "")
-                     + alternatives_phrase(alts, design.get("method", ""), design.get("more_alternatives", 0)))
+                     + alternatives_phrase(alts, design.get("method", ""), design.get("more_alternatives", 0))
+                     + span_phrase(design))
     if report.max_abs_dv is not None:
         lines += ["  " + line for line in reproduction_lines(report.max_abs_dv, report.alignment, report.audit,
                                                              report.judged_to)]

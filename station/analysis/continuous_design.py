@@ -24,7 +24,6 @@ import warnings
 import numpy as np
 from numpy.polynomial import polynomial as P
 
-from station.control.compensator import on_integer
 from station.control.tf import tustin
 
 METHODS = ("Tustin", "ZOH", "backward Euler", "forward Euler")
@@ -69,6 +68,9 @@ class ContinuousDesign:
         For an alternative only: the stored integer its recursion runs on ("trunc" or
         "round") where it differs from the recognised law's ("": the same); a step on the
         stored integer may be reproduced by a truncating law and a rounding one alike.
+    span : DesignSpan or None
+        How far the log pins a first-order design's zero and pole, where not closely
+        (:class:`station.analysis.design_doubt.DesignSpan`).
     """
 
     num_s: tuple[float, ...]
@@ -79,6 +81,7 @@ class ContinuousDesign:
     alternatives: tuple[ContinuousDesign, ...] = ()
     more: int = 0
     recursion: str = ""
+    span: object = None
 
     def discretize(self, dt: float, order: int | None = None) -> tuple[np.ndarray, np.ndarray]:
         """Its z-law at ``dt`` by its method (:func:`discretize`).
@@ -102,12 +105,14 @@ class ContinuousDesign:
         return f"{self.text} (num {fmt(self.num_s)}, den {fmt(self.den_s)} in s; {self.method})"
 
     def to_json(self) -> dict:
-        """``{"num_s", "den_s", "method", "text", "alternatives", "more_alternatives"}``, and
-        ``"recursion"`` where an alternative's stored integer differs from the law's."""
+        """``{"num_s", "den_s", "method", "text", "alternatives", "more_alternatives"}``,
+        ``"recursion"`` where an alternative's stored integer differs from the law's, ``"span"``."""
         out = {"num_s": list(self.num_s), "den_s": list(self.den_s), "method": self.method, "text": self.text,
                "alternatives": [d.to_json() for d in self.alternatives], "more_alternatives": self.more}
         if self.recursion:
             out["recursion"] = self.recursion
+        if self.span is not None:
+            out["span"] = self.span.to_json()
         return out
 
     def with_alternatives(self, other: ContinuousDesign, recursion: str) -> ContinuousDesign:
@@ -130,40 +135,10 @@ class ContinuousDesign:
                  for d in (other, *other.alternatives) if d.digits <= self.digits]
         extra = other.more if other.digits <= self.digits else 0
         pool = list(self.alternatives) + found
-        return replace(self, alternatives=tuple(pool[:MAX_ALTERNATIVES]),
+        span = other.span if self.span is None else self.span.hull(other.span)  # either integer's
+        return replace(self, alternatives=tuple(pool[:MAX_ALTERNATIVES]), span=span,
                        more=self.more + extra + max(len(pool) - MAX_ALTERNATIVES, 0))
 
-
-
-def alternatives_phrase(alternatives, method: str, more: int = 0) -> str:
-    """What is said after a recognised design that its log does not single out:
-    ``" or A or B (ZOH) or C (on the rounded integer) (the log reproduced by each; 2 more as
-    simple)"``, empty without alternatives.
-
-    Parameters
-    ----------
-    alternatives : sequence of (str, str, str)
-        Each alternative's factored form, method and stored integer
-        (:attr:`ContinuousDesign.alternatives`' ``text``, ``method`` and ``recursion``, or
-        their JSON's; "" where the law's).
-    method : str
-        The recognised design's method: an alternative's is said where it differs.
-    more : int
-        How many more were found (:attr:`ContinuousDesign.more`).
-
-    Returns
-    -------
-    str
-    """
-    if not alternatives:
-        return ""
-    texts = []
-    for text, m, recursion in alternatives:
-        how = [m] if m != method else []
-        how += [on_integer(recursion)] if recursion else []
-        texts.append(text + (f" ({', '.join(how)})" if how else ""))
-    tail = f"; {more} more as simple" if more else ""
-    return f" or {' or '.join(texts)} (the log reproduced by each{tail})"
 
 
 def _gbt(num_s, den_s, dt: float, alpha: float) -> tuple[np.ndarray, np.ndarray]:
@@ -502,7 +477,7 @@ def _combos(options, level):
 
 
 def recognize(num_z, den_z, dt: float, gain_interval: GainInterval, methods=METHODS,
-              max_digits: int = MAX_DIGITS) -> ContinuousDesign | None:
+              max_digits: int = MAX_DIGITS, within=None) -> ContinuousDesign | None:
     """The simplest continuous design whose discretization reproduces a log.
 
     For each method, the z-law maps back to s (:func:`to_continuous`); its roots are
@@ -523,6 +498,9 @@ def recognize(num_z, den_z, dt: float, gain_interval: GainInterval, methods=METH
         Discretizations tried (:data:`METHODS`).
     max_digits : int
         Most significant digits of a recognised design's numbers.
+    within : dict, optional
+        For a first-order design's method, the round numbers its zero and pole may be
+        (:func:`station.analysis.design_doubt.round_roots`), tried after those near the fit.
 
     Returns
     -------
@@ -539,6 +517,10 @@ def recognize(num_z, den_z, dt: float, gain_interval: GainInterval, methods=METH
         _, zeros, poles = _roots(back[0], back[1], dt)
         options = [_candidates(r, max_digits) for r in zeros + poles]
         plans.append((method, len(zeros), options, set(), []))
+        within_m = (within or {}).get(method, ())
+        if len(within_m) == len(options) == 2 and len(zeros) == 1 and all(within_m):
+            # the round numbers the log admits anywhere, after those near the fit (the same tried set)
+            plans.append((method, 1, within_m, plans[-1][3], []))
     for level in range(1, max_digits + 1):
         found = []  # every design of this level that reproduces the log, the preferred first
         for method, n_zeros, options, tried, open_ in plans:

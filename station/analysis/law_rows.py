@@ -13,7 +13,8 @@ from fractions import Fraction
 
 import numpy as np
 
-from station.analysis.continuous_design import ContinuousDesign, nicest_between, recognize
+from station.analysis.continuous_design import MAX_DIGITS, ContinuousDesign, nicest_between, recognize
+from station.analysis.design_doubt import design_span, round_roots
 from station.control.rerun import judged_rows, print_allowance, printed_commands
 
 TOLERANCE = 1e-6
@@ -450,14 +451,27 @@ def pinned_law(rows: LawRows, recursion: str, dt: float) -> tuple[np.ndarray, Co
     def interval(num, den):
         return rows.gain_interval(num, den, recursion, BOUNDARY)
 
-    design = recognize(c[:order + 1], np.concatenate(([1.0], c[order + 1:])), dt, interval)
+    span = None
+    if order == 1 and (recursion != "none" or rows.printed):  # how far the rows pin a design at all
+        lo, hi = rows.bounds(recursion)
+        box = 1e3 * max(1.0, float(np.max(np.abs(c))))  # deepest_fit's
+
+        def span_of(method: str):
+            return design_span(rows.X, lo - BOUNDARY, hi + BOUNDARY, dt, method, box)
+        span = span_of("Tustin")
+    within = None if span is None else {"Tustin": [round_roots(r, MAX_DIGITS) for r in (span.zero, span.pole)]}
+    design = recognize(c[:order + 1], np.concatenate(([1.0], c[order + 1:])), dt, interval, within=within)
     if design is None:
         return c, None
     if rows.printed and recursion == "none":
         design = _nearest_first(rows, design, dt)
     num_z, den_z = design.discretize(dt, order)
     inside = nudged_inside(rows, np.concatenate([num_z, den_z[1:]]), c, recursion)
-    return (c, None) if inside is None else (inside, design)
+    if inside is None:
+        return c, None
+    if span is not None or (order == 1 and (recursion != "none" or rows.printed)):
+        design = replace(design, span=span if design.method == "Tustin" else span_of(design.method))
+    return inside, design
 
 
 def nudged_inside(rows: LawRows, exact: np.ndarray, c: np.ndarray, recursion: str) -> np.ndarray | None:

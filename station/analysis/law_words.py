@@ -7,7 +7,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from station.analysis.continuous_design import ContinuousDesign, alternatives_phrase, to_continuous
+from station.analysis.continuous_design import ContinuousDesign, to_continuous
+from station.analysis.design_doubt import alternatives_phrase, span_phrase
 from station.control import DiscreteTF, lead_controller
 from station.control.compensator import recursion_words
 from station.rig import CLAMP
@@ -99,7 +100,7 @@ def law_text(order: int, c: np.ndarray, design: ContinuousDesign | None, dt: flo
     -------
     str
         The P gain, or the design and its discretization, or the z-coefficients; the recursion,
-        the designs the log does not tell apart from it, Ga, and a clamp other than ``rig_limit``.
+        the designs the log does not tell apart from it and how far it pins them, Ga, and a clamp other than ``rig_limit``.
     """
     if order == 0:
         text = f"P, kp = {c[0]:g}"
@@ -114,6 +115,8 @@ def law_text(order: int, c: np.ndarray, design: ContinuousDesign | None, dt: flo
     if design is not None and design.alternatives:  # the log does not tell them apart: said, never hidden
         text += alternatives_phrase([(d.text, d.method, d.recursion) for d in design.alternatives], design.method,
                                     design.more)
+    if design is not None:  # how far the log pins a first-order design at all
+        text += span_phrase(design.to_json())
     if ga is not None:
         text += f", with {ga_text(ga, dt)}"
     if limit != rig_limit:
