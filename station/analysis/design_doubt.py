@@ -179,8 +179,8 @@ def round_roots(span: tuple[float, float], max_digits: int) -> list[tuple[comple
         for digits in range(1, max_digits + 1):
             for decade in range(top - 2 if a <= 0 else math.floor(math.log10(a)), top + 1):
                 step = 10.0 ** (decade - digits + 1)
-                first = max(math.ceil(a / step), 10 ** (digits - 1))
-                last = min(math.floor(b / step), 10 ** digits - 1)
+                first = max(math.ceil(a / step - 1e-9), 10 ** (digits - 1))  # an end that is round: inside
+                last = min(math.floor(b / step + 1e-9), 10 ** digits - 1)
                 if last - first + 1 > WITHIN:
                     continue
                 for k in range(first, last + 1):
@@ -255,7 +255,7 @@ def design_span(X: np.ndarray, lo: np.ndarray, hi: np.ndarray, dt: float, method
         w = [dt * (alpha * r + 1.0 - alpha) for r in pair]
         if min(w) <= 0:
             return None  # across the map's pole (Tustin's z = −1)
-        # a root within the rows' boundary slack of 0 is 0 (an integrator's: z = 1)
-        s_roots = sorted(0.0 if abs(x) < 1e-6 else x for x in ((1.0 - r) / wi for r, wi in zip(pair, w)))
+        # a root within 1e-4 rad/s of 0 is 0 (an integrator's, z = 1, the rows' boundary slack off)
+        s_roots = sorted(0.0 if abs(x) < 1e-4 else x for x in ((1.0 - r) / wi for r, wi in zip(pair, w)))
         roots.append((float(s_roots[0]), float(s_roots[1])))
     return DesignSpan(*roots)
