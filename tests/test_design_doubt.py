@@ -95,6 +95,7 @@ def test_a_sweep_pins_the_design_and_no_span_is_said():
     (((11.8, 12.1), (44.2, 50.0)), 12.0, 48.0, True),     # the pole open
     (((0.0, 13.8), (0.0, 68.8)), 10.0, 50.0, True),
     (((9.95, 10.04), (49.6, 50.2)), 10.0, 50.0, False),
+    (((9.95, 10.04), (67.5, 72.0)), 10.0, 70.0, True),    # 68 as readily typed as 70
     (((9.95, 10.04), (49.6, 50.2)), 10.01, 50.01, True),  # 4 digits: 10.02 and 50.02 inside
 ])
 def test_a_span_is_wide_where_it_holds_another_number_as_round(span, zero, pole, wide):

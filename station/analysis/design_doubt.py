@@ -95,8 +95,9 @@ class DesignSpan:
 
     def wide(self, zero: float, pole: float) -> bool:
         """Whether the span leaves the named zero or pole open: it holds another number with
-        as few significant digits (a zero of 17 in 15.2–18.5 rad/s: 16 and 18 as well; 12 in
-        11.8–12.1: no other).
+        as few significant digits, or two where the named has one (a zero of 17 in 15.2–18.5
+        rad/s: 16 and 18 as well; a pole of 70 in 67.5–72: 68 and more; 12 in 11.8–12.1: no
+        other).
 
         Parameters
         ----------
@@ -111,10 +112,11 @@ class DesignSpan:
 
 
 def _another(x: float, span: tuple[float, float]) -> bool:
-    """Whether ``span`` holds a number other than ``x`` with as few significant digits."""
+    """Whether ``span`` holds a number other than ``x`` with as few significant digits as
+    ``x``, and at least two (a person types 68 rad/s as readily as 70)."""
     if not (x > 0 and math.isfinite(x)):
         return span[1] > span[0]
-    digits = next((d for d in range(1, 16) if float(f"{x:.{d}g}") == x), 15)
+    digits = max(2, next((d for d in range(1, 16) if float(f"{x:.{d}g}") == x), 15))
     unit = 10.0 ** (math.floor(math.log10(x)) - digits + 1)
     first, last = max(math.ceil(span[0] / unit), 1), math.floor(span[1] / unit)
     return last - first >= 1 or (last == first and abs(first * unit - x) > 0.5 * unit)
