@@ -31,6 +31,9 @@ samples; ``station.logged.LoggedRun`` sees only the file. Judged per case:
 - design: the law the data gave is the hidden one: the continuous design (num/den in s, to
   1e-9, Tustin) of a lead, the gain of a P law (not judged where the header's law is
   confirmed: the header's own coefficients are used).
+  Where the audit says the log pins a first-order design only to a span of zeros and poles
+  (``station.analysis.design_doubt.span_phrase``), another design named with the hidden one
+  inside the span said counts too (its own column, and listed).
 
 Bar (issue 26): each in >= 9 of 10 seeds per class. The Markdown section replaces the one
 between ``<!-- validate_audit -->`` markers in docs/diagnosis_validation.md (appended when
@@ -257,7 +260,9 @@ def table(outcomes: list[Outcome], seeds: str, elapsed: float) -> str:
         "to 1e-9, Tustin) or the P gain (— where the header's law is confirmed and used as printed), and "
         "for `lie:accel_fb` and `lie:accel_rows` Ga too (its Tustin inverse's coefficients to 1e-3: DESIGN.md's "
         "are not round "
-        "numbers, and a run pins Ga's slowest pole only so far).",
+        "numbers, and a run pins Ga's slowest pole only so far). Where the log pins a first-order design only to a "
+        "family and says so (the span of its zero and pole, `analysis.design_doubt`), the hidden design inside "
+        "that span counts as named: no audit can name one design of a family that every member reproduces.",
         "",
         "| class | seeds | contradiction right | reproduced | design / gain named | or in the span said | all "
         "| median s |",

@@ -100,7 +100,8 @@ def law_text(order: int, c: np.ndarray, design: ContinuousDesign | None, dt: flo
     -------
     str
         The P gain, or the design and its discretization, or the z-coefficients; the recursion,
-        the designs the log does not tell apart from it and how far it pins them, Ga, and a clamp other than ``rig_limit``.
+        the designs the log does not tell apart from it and how far it pins them, Ga, and a
+        clamp other than ``rig_limit``.
     """
     if order == 0:
         text = f"P, kp = {c[0]:g}"
