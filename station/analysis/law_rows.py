@@ -10,6 +10,7 @@ from __future__ import annotations
 
 from dataclasses import replace
 from fractions import Fraction
+from functools import partial
 
 import numpy as np
 
@@ -425,8 +426,9 @@ def _nearest_first(rows: LawRows, design: ContinuousDesign, dt: float) -> Contin
 def pinned_law(rows: LawRows, recursion: str, dt: float) -> tuple[np.ndarray, ContinuousDesign | None] | None:
     """The law the rows pin: its coefficients (the nicest numbers that still reproduce every
     row) and its continuous design when one is recognised
-    (:func:`station.analysis.continuous_design.recognize`); None when no law of the rows'
-    order reproduces them.
+    (:func:`station.analysis.continuous_design.recognize`; a first-order one on an integer or
+    printed command with its span, :func:`station.analysis.design_doubt.design_span`, whose
+    round numbers are tried too); None when no law of the rows' order reproduces them.
 
     Parameters
     ----------
@@ -451,14 +453,12 @@ def pinned_law(rows: LawRows, recursion: str, dt: float) -> tuple[np.ndarray, Co
     def interval(num, den):
         return rows.gain_interval(num, den, recursion, BOUNDARY)
 
-    span = None
-    if order == 1 and (recursion != "none" or rows.printed):  # how far the rows pin a design at all
+    span_of = None  # how far the rows pin a first-order design at all, by a method's map
+    if order == 1 and (recursion != "none" or rows.printed):
         lo, hi = rows.bounds(recursion)
-        box = 1e3 * max(1.0, float(np.max(np.abs(c))))  # deepest_fit's
-
-        def span_of(method: str):
-            return design_span(rows.X, lo - BOUNDARY, hi + BOUNDARY, dt, method, box)
-        span = span_of("Tustin")
+        span_of = partial(design_span, rows.X, lo - BOUNDARY, hi + BOUNDARY, dt,
+                          box=1e3 * max(1.0, float(np.max(np.abs(c)))))  # deepest_fit's box
+    span = None if span_of is None else span_of("Tustin")
     within = None if span is None else {"Tustin": [round_roots(r, MAX_DIGITS) for r in (span.zero, span.pole)]}
     design = recognize(c[:order + 1], np.concatenate(([1.0], c[order + 1:])), dt, interval, within=within)
     if design is None:
@@ -469,7 +469,7 @@ def pinned_law(rows: LawRows, recursion: str, dt: float) -> tuple[np.ndarray, Co
     inside = nudged_inside(rows, np.concatenate([num_z, den_z[1:]]), c, recursion)
     if inside is None:
         return c, None
-    if span is not None or (order == 1 and (recursion != "none" or rows.printed)):
+    if span_of is not None:
         design = replace(design, span=span if design.method == "Tustin" else span_of(design.method))
     return inside, design
 
