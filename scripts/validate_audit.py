@@ -207,7 +207,7 @@ def run_case(case: str, seed: int) -> Outcome:
     if design_ok is False and hidden.num_s is not None and len(hidden.num_s) == 2 and isinstance(design, dict) \
             and design.get("method") == "Tustin" and span_phrase(design):
         # the log admits a family: the span said holds the hidden zero and pole (the gain follows them)
-        span = DesignSpan(tuple(design["span"]["zero_rad_s"]), tuple(design["span"]["pole_rad_s"]))
+        span = DesignSpan.from_json(design["span"])
         spanned = span.holds(hidden.num_s[1] / hidden.num_s[0], hidden.den_s[1])
         found += f"; {'the hidden inside' if spanned else 'the hidden outside'} the span said{span_phrase(design)[1:]}"
     return Outcome(case, seed, what, found, run.source, contradiction_ok, reproduced, design_ok, seconds,

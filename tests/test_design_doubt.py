@@ -124,7 +124,7 @@ def test_the_blind_session_with_u_and_v_swapped_says_the_family_it_cannot_tell_a
     run = LoggedRun.from_path(path)
     design = run.controller.spec["design"]
     assert run.reproduced and design["method"] == "Tustin"
-    span = DesignSpan(tuple(design["span"]["zero_rad_s"]), tuple(design["span"]["pole_rad_s"]))
+    span = DesignSpan.from_json(design["span"])
     assert span.holds(hidden.num_s[1] / hidden.num_s[0], hidden.den_s[1])
     line = run.audit.lines()[0]
     assert "the log pins it only to a zero in" in line and span_phrase(design)[2:] in line

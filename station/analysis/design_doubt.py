@@ -110,6 +110,17 @@ class DesignSpan:
         """``{"zero_rad_s": [lo, hi], "pole_rad_s": [lo, hi]}``."""
         return {"zero_rad_s": list(self.zero), "pole_rad_s": list(self.pole)}
 
+    @classmethod
+    def from_json(cls, doc: dict) -> DesignSpan:
+        """The span :meth:`to_json` wrote.
+
+        Parameters
+        ----------
+        doc : dict
+            ``{"zero_rad_s": [lo, hi], "pole_rad_s": [lo, hi]}``.
+        """
+        return cls(tuple(doc["zero_rad_s"]), tuple(doc["pole_rad_s"]))
+
 
 def _another(x: float, span: tuple[float, float]) -> bool:
     """Whether ``span`` holds a number other than ``x`` with as few significant digits as
@@ -137,10 +148,10 @@ def span_phrase(design: dict) -> str:
     num, den = (design or {}).get("num_s", ()), (design or {}).get("den_s", ())
     if not span or len(num) != 2 or len(den) != 2 or not num[0]:
         return ""
-    zero, pole = tuple(span["zero_rad_s"]), tuple(span["pole_rad_s"])
-    if not DesignSpan(zero, pole).wide(num[1] / num[0], den[1]):
+    span = DesignSpan.from_json(span)
+    if not span.wide(num[1] / num[0], den[1]):
         return ""
-    return (f"; the log pins it only to a zero in {_outward(zero)} rad/s and a pole in {_outward(pole)} rad/s"
+    return (f"; the log pins it only to a zero in {_outward(span.zero)} rad/s and a pole in {_outward(span.pole)} rad/s"
             " (each alone, over every design that reproduces it)")
 
 
