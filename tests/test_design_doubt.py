@@ -9,7 +9,8 @@ import functools
 import numpy as np
 import pytest
 
-from station.analysis.design_doubt import DesignSpan, design_span, round_roots, span_phrase
+from station.analysis.continuous_design import ContinuousDesign
+from station.analysis.design_doubt import DesignSpan, alternatives_phrase, design_span, round_roots, span_phrase
 from station.analysis.law_rows import BOUNDARY, LawRows
 from station.logged import LoggedRun
 from tests.blind.audit import LabController, write_audit_case
@@ -139,3 +140,41 @@ def test_the_simplest_tustin_design_in_the_family_is_named_over_another_method(t
     design = run.controller.spec["design"]
     assert design["method"] == "Tustin", design["text"]
     assert np.allclose(design["num_s"], hidden.num_s) and np.allclose(design["den_s"], hidden.den_s)
+
+
+def test_one_text_on_one_integer_is_said_once_with_every_method_that_gives_it():
+    alts = [("0.99(s+20)/(s+34)", "ZOH", ""), ("0.99(s+20)/(s+34)", "forward Euler", ""),
+            ("1(s+12)/(s+60)", "Tustin", ""), ("1(s+12)/(s+60)", "Tustin", "round"), ("2(s+3)/(s+9)", "ZOH", "")]
+    phrase = alternatives_phrase(alts, "Tustin", 2)
+    assert phrase.count("0.99(s+20)/(s+34)") == 1 and "0.99(s+20)/(s+34) (ZOH or forward Euler)" in phrase
+    assert phrase.count("1(s+12)/(s+60)") == 2  # on the float and on the rounded integer: two laws
+    assert "2(s+3)/(s+9) (ZOH)" in phrase and phrase.endswith("(the log reproduced by each; 2 more as simple)")
+    assert alternatives_phrase([], "Tustin") == ""
+
+
+def _design(method, span=None):
+    return ContinuousDesign((1.0, 12.0), (1.0, 60.0), method, "1(s+12)/(s+60)", 4, span=span)
+
+
+def test_a_span_is_said_under_a_name_only_where_the_named_design_has_one():
+    # A ZOH name has no span; the other integer's Tustin span bounds other designs, and said
+    # under the ZOH name it would contradict it. Where both have one, it is both's.
+    mine, theirs = DesignSpan((10.0, 14.0), (50.0, 70.0)), DesignSpan((8.0, 13.0), (55.0, 80.0))
+    assert _design("ZOH").with_alternatives(_design("Tustin", theirs), "round").span is None
+    both = _design("Tustin", mine).with_alternatives(_design("Tustin", theirs), "round").span
+    assert both == DesignSpan((8.0, 14.0), (50.0, 80.0))
+    assert _design("Tustin", mine).with_alternatives(_design("ZOH"), "round").span == mine
+
+
+def test_the_blind_case_with_one_design_under_two_methods_says_it_once(tmp_path):
+    # blind `zero:command` seed 9: 0.99(s+20)/(s+34) by ZOH and by forward Euler reproduce the
+    # log as well as the named 1(s+11)/(s+2π·3); the line said the same text twice.
+    path, _ = write_audit_case(tmp_path, "zero:command", 9)
+    run = LoggedRun.from_path(path)
+    design = run.controller.spec["design"]
+    said = {(d["text"], d.get("recursion", "")) for d in design["alternatives"]}
+    assert any(t == "0.99(s+20)/(s+34)" for t, _ in said), design["alternatives"]
+    line = alternatives_phrase([(d["text"], d["method"], d.get("recursion", "")) for d in design["alternatives"]],
+                               design["method"], design["more_alternatives"])  # as replay's controller line says
+    for text in {t for t, _ in said} - {design["text"]}:
+        assert line.count(text) == sum(t == text for t, _ in said), line

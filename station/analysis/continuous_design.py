@@ -118,7 +118,9 @@ class ContinuousDesign:
     def with_alternatives(self, other: ContinuousDesign, recursion: str) -> ContinuousDesign:
         """This design with ``other`` (and its own alternatives), found for a law on another
         stored integer, said beside it: at most :data:`MAX_ALTERNATIVES` in all, those with no
-        more digits than this one.
+        more digits than this one. The span is both integers' where this design has one; it is
+        not taken from ``other`` alone (it would bound another integer's designs, perhaps by
+        another method, under this one's name).
 
         Parameters
         ----------
@@ -135,7 +137,7 @@ class ContinuousDesign:
                  for d in (other, *other.alternatives) if d.digits <= self.digits]
         extra = other.more if other.digits <= self.digits else 0
         pool = list(self.alternatives) + found
-        span = other.span if self.span is None else self.span.hull(other.span)  # either integer's
+        span = None if self.span is None else self.span.hull(other.span)
         return replace(self, alternatives=tuple(pool[:MAX_ALTERNATIVES]), span=span,
                        more=self.more + extra + max(len(pool) - MAX_ALTERNATIVES, 0))
 

@@ -25,7 +25,8 @@ wider than that at those digits pins no number of them."""
 def alternatives_phrase(alternatives, method: str, more: int = 0) -> str:
     """What is said after a recognised design that its log does not single out:
     ``" or A or B (ZOH) or C (on the rounded integer) (the log reproduced by each; 2 more as
-    simple)"``, empty without alternatives.
+    simple)"``, empty without alternatives. One text on one integer is said once, with every
+    method that gives it (``"D (ZOH or forward Euler)"``).
 
     Parameters
     ----------
@@ -44,9 +45,13 @@ def alternatives_phrase(alternatives, method: str, more: int = 0) -> str:
     """
     if not alternatives:
         return ""
-    texts = []
+    methods: dict[tuple[str, str], list[str]] = {}  # one text on one integer is said once, its methods joined
     for text, m, recursion in alternatives:
-        how = [m] if m != method else []
+        seen = methods.setdefault((text, recursion), [])
+        seen += [m] if m not in seen else []
+    texts = []
+    for (text, recursion), ms in methods.items():
+        how = [" or ".join(ms)] if ms != [method] else []
         how += [on_integer(recursion)] if recursion else []
         texts.append(text + (f" ({', '.join(how)})" if how else ""))
     tail = f"; {more} more as simple" if more else ""
