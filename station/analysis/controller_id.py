@@ -40,6 +40,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+from threadpoolctl import threadpool_limits
 
 from station.analysis.accel_law import AccelFeedback, accel_feedback, lagged
 from station.analysis.continuous_design import ContinuousDesign
@@ -51,7 +52,6 @@ from station.control.compensator import SENT, STORED
 from station.control import DAC_LIMIT, Compensator, DiscreteTF, OpenLoop, lead_controller  # DAC_LIMIT: the clamp assumed when v exceeds the rig's ±200
 from station.control.rerun import ALIGNMENTS, AlignmentFit, detect_alignment
 from station.rig import CLAMP, DT
-
 
 MAX_ORDER = 3
 """Highest order of the linear compensators tried."""
@@ -359,6 +359,7 @@ def aligned_error(u: np.ndarray, theta: np.ndarray, d: int) -> np.ndarray:
 
 
 @by_content()  # a column check asks again of a rewrite's rewrite (the log itself)
+@threadpool_limits.wrap(limits=1, user_api="blas")  # small matrices: threads on a busy machine made it 5x slower
 def infer_controller(u, theta, v, a=None, dt: float = DT, rig_limit: float = CLAMP,
                      alignments=(0, 1), prefer: int | None = PREFERRED_ALIGNMENT,
                      cut: bool = False, restarts=(), accel_only: bool = False) -> IdentifiedController | None:
@@ -395,12 +396,11 @@ def infer_controller(u, theta, v, a=None, dt: float = DT, rig_limit: float = CLA
     Returns
     -------
     IdentifiedController or None
-        The simplest law (open loop, P, then linear of order 1..3; a float recursion before
-        an integer one; then Gth with accelerometer feedback Ga) that reproduces every logged v (to :data:`TOLERANCE`; exactly for an
-        integer recursion); None when none does, or the log lacks u, θ or v (NaN), never
-        commands anything, commands nothing but 0 and one level
-        (:func:`station.analysis.law_rows.pins_a_law`), or commands under one count while the
-        hub moved (:func:`station.analysis.law_rows.no_dac_command`: v in another unit).
+        The simplest law (open loop, P, then linear of order 1..3; a float recursion before an integer one;
+        then Gth with accelerometer feedback Ga) that reproduces every logged v (to :data:`TOLERANCE`;
+        exactly for an integer recursion); None when none does, or the log lacks u, θ or v (NaN), never
+        commands anything, commands nothing but 0 and one level (:func:`station.analysis.law_rows.pins_a_law`),
+        or commands under one count while the hub moved (:func:`station.analysis.law_rows.no_dac_command`).
     """
     u = np.asarray(u, dtype=float)
     theta = np.asarray(theta, dtype=float)
