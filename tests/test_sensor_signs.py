@@ -113,7 +113,19 @@ def test_theta_over_a_of_two_is_left_to_the_fit_and_said():
     # accelerometer of gain 0.5: the ratios do not decide; the fit gets encoder_scale
     f = decide_faults([_ev(0.99, 0.99, th_ratio=1.2, a_ratio=0.6)] * 3)
     assert f.effects == {} and f.to_fit == ("encoder_scale",)
-    assert any(c.verdict == "unchecked" and "or the accelerometer's gain" in c.evidence for c in f.claims)
+    assert any(c.verdict == "unchecked" and "or the accelerometer's gain;" in c.evidence for c in f.claims)
+
+
+@pytest.mark.parametrize("th_ratio, a_ratio, friction", [
+    (0.39, 0.76, True),    # blind `session+coulomb_friction` seed 0: no sensor fault, a Coulomb 3-30
+    (1.2, 0.6, False),     # θ faster than the model: no friction does that
+    (0.5, 0.25, False),    # θ over a is 2: friction slows θ more than a, not less
+])
+def test_friction_is_named_beside_the_scales_where_it_gives_the_ratios_seen(th_ratio, a_ratio, friction):
+    # friction holds the hub while the beam rings: θ slower than the model's and than a's
+    f = decide_faults([_ev(0.99, 0.99, th_ratio=th_ratio, a_ratio=a_ratio)] * 3)
+    said = " ".join(c.evidence for c in f.claims if c.verdict == "unchecked")
+    assert "the ratios do not decide it" in said and ("or friction holding the hub" in said) is friction
 
 
 def _ev(th: float | None, a: float | None, th_ratio: float = 1.0, a_ratio: float = 1.0) -> SensorEvidence:

@@ -356,9 +356,11 @@ def decide_faults(evidence: Sequence[SensorEvidence], accel_gain: float | None =
             elif q >= 2.0 / SCALE_TOLERANCE or q <= 0.5 * SCALE_TOLERANCE:
                 # θ off from a by a power of two, but the motion is off too: an encoder of another
                 # resolution beside friction or an actuator gain, or the accelerometer's gain
+                # θ slower than the model and than a: friction holds the hub while the beam rings
+                held = ", or friction holding the hub while the beam rings" if q < 1 and g_th < 1 else ""
                 hint = (f"θ reads {q:.2f}× what a's motion gives (θ's ratio {g_th:.2f}, a's {abs(g_a):.2f}): "
-                        f"an encoder of {q * COUNTS_PER_REV:.0f} counts per revolution, or the accelerometer's gain; "
-                        f"the ratios do not decide it")
+                        f"an encoder of {q * COUNTS_PER_REV:.0f} counts per revolution, or the accelerometer's gain"
+                        f"{held}; the ratios do not decide it")
     bias_claim = drift_claim = None
     biases = [e.accel_bias for e in ev if e.accel_bias is not None and math.isfinite(e.accel_bias)]
     rests = [e.accel_rest for e in ev if e.accel_bias is not None and math.isfinite(e.accel_bias)]
