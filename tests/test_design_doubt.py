@@ -178,3 +178,22 @@ def test_the_blind_case_with_one_design_under_two_methods_says_it_once(tmp_path)
                                design["method"], design["more_alternatives"])  # as replay's controller line says
     for text in {t for t, _ in said} - {design["text"]}:
         assert line.count(text) == sum(t == text for t, _ in said), line
+
+
+def test_the_round_roots_nearest_the_fit_come_first():
+    values = [-f[0].real for f in round_roots((0.0, 70.0), 2, near=40.0)]
+    dist = [abs(np.log(x / 40.0)) for x in values]
+    assert values[0] == 40.0 and dist == sorted(dist)
+    assert sorted(values) == sorted(-f[0].real for f in round_roots((0.0, 70.0), 2))  # the same numbers
+
+
+def test_a_wide_family_is_named_by_its_members_nearest_the_fit(tmp_path):
+    # blind `double` seed 1 (1(s+12)/(s+59) on a 26-count sine): every gain-1 lead of zero/pole
+    # about 0.2 reproduces it; the lowest round numbers were said beside the name
+    # (1(s+0.1)/(s+0.5), 1(s+0.2)/(s+1), 120 times off), now those nearest the fit
+    path, hidden = write_audit_case(tmp_path, "double", 1)
+    design = LoggedRun.from_path(path).controller.spec["design"]
+    zero, pole = hidden.num_s[1] / hidden.num_s[0], hidden.den_s[1]
+    for d in [design, *design["alternatives"]]:
+        z, p = d["num_s"][1] / d["num_s"][0], d["den_s"][1]
+        assert 1 / 4 < z / zero < 4 and 1 / 4 < p / pole < 4, d["text"]

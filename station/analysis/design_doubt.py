@@ -170,7 +170,8 @@ def _outward(pair) -> str:
     return f"{sig(pair[0], False):.3g}–{sig(pair[1], True):.3g}"
 
 
-def round_roots(span: tuple[float, float], max_digits: int) -> list[tuple[complex, str, float, float, int, int]]:
+def round_roots(span: tuple[float, float], max_digits: int,
+                near: float | None = None) -> list[tuple[complex, str, float, float, int, int]]:
     """The roots −x for the round numbers x in a root's span (rad/s, or 2π times Hz), as
     ``continuous_design._forms`` gives them (value, unit, printed real and imaginary parts,
     digits, steps 0), for :func:`~station.analysis.continuous_design.recognize` to try: every
@@ -182,6 +183,9 @@ def round_roots(span: tuple[float, float], max_digits: int) -> list[tuple[comple
         Lowest and highest x, rad/s (:attr:`DesignSpan.zero` or :attr:`DesignSpan.pole`).
     max_digits : int
         Most significant digits.
+    near : float, optional
+        The fit's root, rad/s: the numbers nearest it (by ratio) first, so that of a family's
+        equally simple designs the one nearest the fit is named; else lowest first.
 
     Returns
     -------
@@ -204,6 +208,8 @@ def round_roots(span: tuple[float, float], max_digits: int) -> list[tuple[comple
                 for k in range(first, last + 1):
                     x = float(f"{k * step:.{digits}g}")
                     out.append((complex(-x * scale, 0.0), unit, -x, 0.0, digits + (unit != ""), 0))
+    if near is not None and near > 0.0:  # recognize's combos keep this order among equally simple ones
+        out.sort(key=lambda f: abs(math.log(-f[0].real / near)))
     return out
 
 

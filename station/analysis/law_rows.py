@@ -14,7 +14,7 @@ from functools import partial
 
 import numpy as np
 
-from station.analysis.continuous_design import MAX_DIGITS, ContinuousDesign, nicest_between, recognize
+from station.analysis.continuous_design import MAX_DIGITS, ContinuousDesign, nicest_between, recognize, to_continuous
 from station.analysis.design_doubt import design_span, round_roots
 from station.control.rerun import judged_rows, print_allowance, printed_commands
 
@@ -458,8 +458,11 @@ def pinned_law(rows: LawRows, recursion: str, dt: float) -> tuple[np.ndarray, Co
         lo, hi = rows.bounds(recursion)
         span_of = partial(design_span, rows.X, lo - BOUNDARY, hi + BOUNDARY, dt,
                           box=1e3 * max(1.0, float(np.max(np.abs(c)))))  # deepest_fit's box
-    span = None if span_of is None else span_of("Tustin")
-    within = None if span is None else {"Tustin": [round_roots(r, MAX_DIGITS) for r in (span.zero, span.pole)]}
+    span, within = (None if span_of is None else span_of("Tustin")), None
+    if span is not None:  # the family's round numbers, those nearest the fit's roots first
+        back = to_continuous(c[:2], np.array([1.0, c[2]]), dt, "Tustin")
+        near = (None, None) if back is None else (back[0][1] / back[0][0], back[1][1])
+        within = {"Tustin": [round_roots(r, MAX_DIGITS, x) for r, x in zip((span.zero, span.pole), near)]}
     design = recognize(c[:order + 1], np.concatenate(([1.0], c[order + 1:])), dt, interval, within=within)
     if design is None:
         return c, None
