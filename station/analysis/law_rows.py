@@ -461,7 +461,7 @@ def pinned_law(rows: LawRows, recursion: str, dt: float) -> tuple[np.ndarray, Co
     span, within = (None if span_of is None else span_of("Tustin")), None
     if span is not None:  # the family's round numbers, those nearest the fit's roots first
         back = to_continuous(c[:2], np.array([1.0, c[2]]), dt, "Tustin")
-        near = (None, None) if back is None else (back[0][1] / back[0][0], back[1][1])
+        near = (None, None) if back is None or back[0][0] == 0 else (back[0][1] / back[0][0], back[1][1])
         within = {"Tustin": [round_roots(r, MAX_DIGITS, x) for r, x in zip((span.zero, span.pole), near)]}
     design = recognize(c[:order + 1], np.concatenate(([1.0], c[order + 1:])), dt, interval, within=within)
     if design is None:
